@@ -1,0 +1,222 @@
+"""Attitude representations and conversions (see ``docs/conventions.md``).
+
+* ``C`` — direction cosine matrix C_b^n (body -> ENU navigation), ``v_n = C @ v_b``.
+* ``q`` — unit quaternion q_b^n, scalar first ``[w, x, y, z]``, same rotation as ``C``.
+* ``euler`` — ``[pitch, roll, heading]`` [rad]; ``C = Rz(-heading) Rx(pitch) Ry(roll)``
+  with body axes x right, y forward, z up. Heading is measured from north, positive
+  toward east (clockwise seen from above), in [0, 2*pi).
+* ``rotvec`` — rotation vector (axis * angle) [rad].
+* misalignment ``phi = [phiE, phiN, phiU]`` — platform error angles: the computed
+  attitude is ``C_hat = C_n^n' C`` with ``C_n^n' = exp(-[phi x]) ~ I - [phi x]``.
+
+All functions are vectorised over leading dimensions.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+TWO_PI = 2.0 * np.pi
+
+
+def wrap_pi(a):
+    """Wrap angles to [-pi, pi)."""
+    return (np.asarray(a) + np.pi) % TWO_PI - np.pi
+
+
+def wrap_2pi(a):
+    """Wrap angles to [0, 2*pi)."""
+    return np.asarray(a) % TWO_PI
+
+
+def skew(v):
+    """Skew-symmetric (cross-product) matrix ``[v x]``, shape (..., 3, 3)."""
+    v = np.asarray(v, dtype=float)
+    z = np.zeros_like(v[..., 0])
+    x, y, w = v[..., 0], v[..., 1], v[..., 2]
+    return np.stack(
+        [np.stack([z, -w, y], -1), np.stack([w, z, -x], -1), np.stack([-y, x, z], -1)], -2
+    )
+
+
+def euler_to_dcm(euler):
+    """Euler ``[pitch, roll, heading]`` -> C_b^n, shape (..., 3, 3)."""
+    e = np.asarray(euler, dtype=float)
+    st, ct = np.sin(e[..., 0]), np.cos(e[..., 0])
+    sg, cg = np.sin(e[..., 1]), np.cos(e[..., 1])
+    sp, cp = np.sin(e[..., 2]), np.cos(e[..., 2])
+    # C = Rz(-psi) Rx(theta) Ry(gamma); columns are body x, y, z axes in ENU.
+    c = np.empty(e.shape[:-1] + (3, 3))
+    c[..., 0, 0] = cg * cp + st * sg * sp
+    c[..., 1, 0] = -cg * sp + st * sg * cp
+    c[..., 2, 0] = -ct * sg
+    c[..., 0, 1] = sp * ct
+    c[..., 1, 1] = cp * ct
+    c[..., 2, 1] = st
+    c[..., 0, 2] = sg * cp - st * cg * sp
+    c[..., 1, 2] = -sg * sp - st * cg * cp
+    c[..., 2, 2] = ct * cg
+    return c
+
+
+def dcm_to_euler(C):
+    """C_b^n -> Euler ``[pitch, roll, heading]``; heading in [0, 2*pi)."""
+    C = np.asarray(C, dtype=float)
+    pitch = np.arcsin(np.clip(C[..., 2, 1], -1.0, 1.0))
+    roll = np.arctan2(-C[..., 2, 0], C[..., 2, 2])
+    heading = wrap_2pi(np.arctan2(C[..., 0, 1], C[..., 1, 1]))
+    return np.stack([pitch, roll, heading], axis=-1)
+
+
+def quat_mul(p, q):
+    """Hamilton product ``p * q`` (scalar first)."""
+    p = np.asarray(p, dtype=float)
+    q = np.asarray(q, dtype=float)
+    pw, px, py, pz = p[..., 0], p[..., 1], p[..., 2], p[..., 3]
+    qw, qx, qy, qz = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    return np.stack(
+        [
+            pw * qw - px * qx - py * qy - pz * qz,
+            pw * qx + px * qw + py * qz - pz * qy,
+            pw * qy - px * qz + py * qw + pz * qx,
+            pw * qz + px * qy - py * qx + pz * qw,
+        ],
+        axis=-1,
+    )
+
+
+def quat_conj(q):
+    """Conjugate (inverse of a unit quaternion)."""
+    q = np.asarray(q, dtype=float)
+    return q * np.array([1.0, -1.0, -1.0, -1.0])
+
+
+def quat_to_dcm(q):
+    """Unit quaternion -> DCM."""
+    q = np.asarray(q, dtype=float)
+    w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    c = np.empty(q.shape[:-1] + (3, 3))
+    c[..., 0, 0] = w * w + x * x - y * y - z * z
+    c[..., 0, 1] = 2 * (x * y - w * z)
+    c[..., 0, 2] = 2 * (x * z + w * y)
+    c[..., 1, 0] = 2 * (x * y + w * z)
+    c[..., 1, 1] = w * w - x * x + y * y - z * z
+    c[..., 1, 2] = 2 * (y * z - w * x)
+    c[..., 2, 0] = 2 * (x * z - w * y)
+    c[..., 2, 1] = 2 * (y * z + w * x)
+    c[..., 2, 2] = w * w - x * x - y * y + z * z
+    return c
+
+
+def dcm_to_quat(C):
+    """DCM -> unit quaternion with non-negative scalar part (Shepperd's method)."""
+    C = np.asarray(C, dtype=float)
+    tr = C[..., 0, 0] + C[..., 1, 1] + C[..., 2, 2]
+    cand = np.stack(
+        [
+            np.stack([1 + tr, C[..., 2, 1] - C[..., 1, 2], C[..., 0, 2] - C[..., 2, 0],
+                      C[..., 1, 0] - C[..., 0, 1]], -1),
+            np.stack([C[..., 2, 1] - C[..., 1, 2], 1 + 2 * C[..., 0, 0] - tr,
+                      C[..., 0, 1] + C[..., 1, 0], C[..., 0, 2] + C[..., 2, 0]], -1),
+            np.stack([C[..., 0, 2] - C[..., 2, 0], C[..., 0, 1] + C[..., 1, 0],
+                      1 + 2 * C[..., 1, 1] - tr, C[..., 1, 2] + C[..., 2, 1]], -1),
+            np.stack([C[..., 1, 0] - C[..., 0, 1], C[..., 0, 2] + C[..., 2, 0],
+                      C[..., 1, 2] + C[..., 2, 1], 1 + 2 * C[..., 2, 2] - tr], -1),
+        ],
+        axis=-2,
+    )
+    diag = np.stack([tr, C[..., 0, 0], C[..., 1, 1], C[..., 2, 2]], -1)
+    k = np.argmax(diag, axis=-1)
+    q = np.take_along_axis(cand, k[..., None, None], axis=-2)[..., 0, :]
+    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    return q * np.where(q[..., :1] < 0, -1.0, 1.0)
+
+
+def rotvec_to_quat(r):
+    """Rotation vector -> unit quaternion (accurate for small angles)."""
+    r = np.asarray(r, dtype=float)
+    a = np.linalg.norm(r, axis=-1, keepdims=True)
+    half = 0.5 * a
+    # sin(a/2)/a with a Taylor series near zero.
+    with np.errstate(invalid="ignore", divide="ignore"):
+        k = np.where(a < 1e-6, 0.5 - a * a / 48.0, np.sin(half) / np.where(a == 0, 1, a))
+    return np.concatenate([np.cos(half), k * r], axis=-1)
+
+
+def quat_to_rotvec(q):
+    """Unit quaternion -> rotation vector with angle in [0, pi]."""
+    q = np.asarray(q, dtype=float)
+    q = q * np.where(q[..., :1] < 0, -1.0, 1.0)
+    s = np.linalg.norm(q[..., 1:], axis=-1, keepdims=True)
+    a = 2.0 * np.arctan2(s, q[..., :1])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        k = np.where(s < 1e-9, 2.0 / q[..., :1], a / np.where(s == 0, 1, s))
+    return k * q[..., 1:]
+
+
+def rotvec_to_dcm(r):
+    """Rotation vector -> DCM (Rodrigues' formula)."""
+    return quat_to_dcm(rotvec_to_quat(r))
+
+
+def dcm_to_rotvec(C):
+    """DCM -> rotation vector."""
+    return quat_to_rotvec(dcm_to_quat(C))
+
+
+def euler_to_quat(euler):
+    """Euler ``[pitch, roll, heading]`` -> q_b^n."""
+    return dcm_to_quat(euler_to_dcm(euler))
+
+
+def quat_to_euler(q):
+    """q_b^n -> Euler ``[pitch, roll, heading]``."""
+    return dcm_to_euler(quat_to_dcm(q))
+
+
+def misalignment_dcm(phi):
+    """Exact C_n^n' for platform error angles ``phi`` (rotation by ``-phi``)."""
+    return rotvec_to_dcm(-np.asarray(phi, dtype=float))
+
+
+def apply_misalignment(C, phi):
+    """Computed attitude ``C_hat = C_n^n'(phi) @ C`` for a true attitude ``C``."""
+    return misalignment_dcm(phi) @ np.asarray(C, dtype=float)
+
+
+def misalignment(C_true, C_computed):
+    """Platform error angles ``phi`` such that ``C_computed = exp(-[phi x]) C_true``."""
+    Ct = np.asarray(C_true, dtype=float)
+    return -dcm_to_rotvec(np.asarray(C_computed) @ np.swapaxes(Ct, -1, -2))
+
+
+def euler_difference(e1, e2):
+    """``e1 - e2`` for Euler ``[pitch, roll, heading]``, roll and heading wrapped to +-pi."""
+    d = np.asarray(e1, dtype=float) - np.asarray(e2, dtype=float)
+    return np.concatenate([d[..., :1], wrap_pi(d[..., 1:])], axis=-1)
+
+
+def euler_error_jacobian(euler):
+    """d(Euler error)/d(phi): Euler ``[pitch, roll, heading]`` of ``C_hat`` minus that of ``C``.
+
+    For ``C_hat = (I - [phi x]) C`` (first order)::
+
+        d_pitch   = -cos(psi) phiE + sin(psi) phiN
+        d_roll    = -(sin(psi) phiE + cos(psi) phiN) / cos(theta)
+        d_heading =  phiU - tan(theta) (sin(psi) phiE + cos(psi) phiN)
+
+    These are paper 002's eq. 3 (rows reordered); shape (..., 3, 3).
+    """
+    e = np.asarray(euler, dtype=float)
+    th, psi = e[..., 0], e[..., 2]
+    s, c, ct, tt = np.sin(psi), np.cos(psi), np.cos(th), np.tan(th)
+    z = np.zeros_like(s)
+    one = np.ones_like(s)
+    return np.stack(
+        [
+            np.stack([-c, s, z], -1),
+            np.stack([-s / ct, -c / ct, z], -1),
+            np.stack([-tt * s, -tt * c, one], -1),
+        ],
+        -2,
+    )

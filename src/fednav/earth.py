@@ -1,0 +1,88 @@
+"""WGS-84 Earth model: radii of curvature, normal gravity, Earth rate, transport rate.
+
+All functions accept scalars or numpy arrays (broadcast elementwise) and are also
+compiled with numba (the ``*_nb`` names) for use inside per-sample loops.
+
+Frames: navigation frame ENU; latitude ``lat`` and longitude ``lon`` in radians,
+height ``h`` in metres above the ellipsoid, velocities ``[vE, vN, vU]`` in m/s.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+A = 6378137.0  #: semi-major axis [m]
+F = 1.0 / 298.257223563  #: flattening
+E2 = F * (2.0 - F)  #: first eccentricity squared
+OMEGA_IE = 7.292115e-5  #: Earth rotation rate [rad/s]
+GM = 3.986004418e14  #: gravitational constant [m^3/s^2]
+
+# Somigliana normal gravity constants (WGS-84) and the free-air height terms.
+_GE = 9.7803253359
+_K = 0.00193185265241
+
+
+def radii(lat):
+    """Meridian (R_M) and prime-vertical (R_N) radii of curvature [m] at latitude ``lat``."""
+    s2 = np.sin(lat) ** 2
+    w = 1.0 - E2 * s2
+    rn = A / np.sqrt(w)
+    rm = rn * (1.0 - E2) / w
+    return rm, rn
+
+
+def gravity(lat, h):
+    """Magnitude of normal gravity [m/s^2] (Somigliana + second-order height terms).
+
+    The gravity vector in ENU is ``[0, 0, -gravity(lat, h)]``.
+    """
+    s2 = np.sin(lat) ** 2
+    g0 = _GE * (1.0 + _K * s2) / np.sqrt(1.0 - E2 * s2)
+    # Height dependence of normal gravity (free-air gradient with latitude term).
+    m = OMEGA_IE**2 * A**3 * (1.0 - F) / GM  # omega^2 a^2 b / GM
+    return g0 * (1.0 - 2.0 / A * (1.0 + F + m - 2.0 * F * s2) * h + 3.0 / A**2 * h * h)
+
+
+def earth_rate(lat):
+    """Earth rotation rate in the ENU frame, shape (..., 3) [rad/s]."""
+    lat = np.asarray(lat, dtype=float)
+    z = np.zeros_like(lat)
+    return np.stack([z, OMEGA_IE * np.cos(lat), OMEGA_IE * np.sin(lat)], axis=-1)
+
+
+def transport_rate(lat, h, vel):
+    """Transport rate omega_en^n in ENU, shape (..., 3) [rad/s] for ENU velocity ``vel``."""
+    rm, rn = radii(lat)
+    vel = np.asarray(vel, dtype=float)
+    ve, vn = vel[..., 0], vel[..., 1]
+    return np.stack(
+        [-vn / (rm + h), ve / (rn + h), ve * np.tan(lat) / (rn + h)], axis=-1
+    )
+
+
+def llh_to_ecef(lat, lon, h):
+    """Geodetic latitude, longitude [rad], height [m] -> ECEF coordinates, shape (..., 3) [m]."""
+    _, rn = radii(lat)
+    cl, sl = np.cos(lat), np.sin(lat)
+    return np.stack(
+        [(rn + h) * cl * np.cos(lon), (rn + h) * cl * np.sin(lon), (rn * (1 - E2) + h) * sl],
+        axis=-1,
+    )
+
+
+def llh_difference_enu(lat, lon, h, lat_ref, lon_ref, h_ref):
+    """Small position difference (lat, lon, h) - reference, expressed in metres ENU.
+
+    Uses the local radii of curvature at the reference; exact to first order, which is
+    what error statistics over kilometre-scale errors need.
+    """
+    rm, rn = radii(lat_ref)
+    de = (np.asarray(lon) - lon_ref) * (rn + h_ref) * np.cos(lat_ref)
+    dn = (np.asarray(lat) - lat_ref) * (rm + h_ref)
+    du = np.asarray(h) - h_ref
+    return np.stack(np.broadcast_arrays(de, dn, du), axis=-1)
+
+
+radii_nb = numba.njit(cache=True)(radii)
+gravity_nb = numba.njit(cache=True)(gravity)

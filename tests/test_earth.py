@@ -1,0 +1,40 @@
+import numpy as np
+import pytest
+
+from fednav import earth
+
+
+def test_radii_equator_and_pole():
+    rm, rn = earth.radii(0.0)
+    assert rn == pytest.approx(earth.A)
+    assert rm == pytest.approx(earth.A * (1 - earth.E2))
+    rm, rn = earth.radii(np.pi / 2)
+    assert rm == pytest.approx(rn)  # at the pole both equal a / sqrt(1 - e2)
+    assert rn == pytest.approx(earth.A / np.sqrt(1 - earth.E2))
+
+
+def test_normal_gravity_known_values():
+    # WGS-84 normal gravity: 9.7803253 at the equator, 9.8321849 at the poles.
+    assert earth.gravity(0.0, 0.0) == pytest.approx(9.7803253359, abs=1e-9)
+    assert earth.gravity(np.pi / 2, 0.0) == pytest.approx(9.8321849379, abs=1e-7)
+    # Free-air gradient ~ -3.086e-6 /s^2 per metre.
+    dg = earth.gravity(np.deg2rad(45), 1000.0) - earth.gravity(np.deg2rad(45), 0.0)
+    assert dg == pytest.approx(-3.086e-3, rel=2e-3)
+
+
+def test_rates():
+    lat = np.deg2rad(39.0)
+    w = earth.earth_rate(lat)
+    assert np.linalg.norm(w) == pytest.approx(earth.OMEGA_IE)
+    assert w[0] == 0 and w[2] > 0
+    rm, rn = earth.radii(lat)
+    wen = earth.transport_rate(lat, 0.0, [100.0, 50.0, 0.0])
+    np.testing.assert_allclose(wen, [-50 / rm, 100 / rn, 100 * np.tan(lat) / rn])
+
+
+def test_llh_difference_matches_ecef_distance():
+    lat, lon, h = np.deg2rad(39.0), np.deg2rad(117.0), 500.0
+    d = earth.llh_difference_enu(lat + 1e-6, lon + 2e-6, h + 3, lat, lon, h)
+    dist = np.linalg.norm(earth.llh_to_ecef(lat + 1e-6, lon + 2e-6, h + 3)
+                          - earth.llh_to_ecef(lat, lon, h))
+    assert np.linalg.norm(d) == pytest.approx(dist, rel=1e-5)

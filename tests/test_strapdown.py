@@ -1,0 +1,77 @@
+import numpy as np
+import pytest
+
+from fednav import attitude as att
+from fednav import earth, units
+from fednav.scenarios import paper002
+from fednav.strapdown import BaroLoop, Strapdown
+from fednav.trajectory import Segment, generate
+
+
+def nav_errors(out, tr):
+    lla = out["lla"]
+    dp = earth.llh_difference_enu(lla[:, 0], lla[:, 1], lla[:, 2],
+                                  tr.lla[1:, 0], tr.lla[1:, 1], tr.lla[1:, 2])
+    dv = out["vel"] - tr.vel[1:]
+    phi = att.misalignment(tr.dcm[1:], att.quat_to_dcm(out["q"]))
+    return dp, dv, phi
+
+
+def test_ideal_imu_reproduces_paper002_flight():
+    """Ideal IMU through the mechanization: 1200 s at 400 m/s within 1 m, 0.01 m/s, 1 arcsec."""
+    tr = paper002.load_scenario().trajectory()
+    assert tr.t[-1] == pytest.approx(1200.0)
+    ins = Strapdown(tr.lla[0], tr.vel[0], tr.euler[0], tr.dt)
+    dp, dv, phi = nav_errors(ins.run(tr.dtheta, tr.dv), tr)
+    assert np.abs(dp).max() < 1.0
+    assert np.abs(dv).max() < 0.01
+    assert units.to_arcsec(np.abs(phi).max()) < 1.0
+
+
+def test_schuler_oscillation_period():
+    lat = units.deg(39.0)
+    dt, T = 0.1, 6000.0
+    tr = generate([lat, units.deg(117.0), 0.0], 0.0, [0, 0, 0], [Segment(T)], dt)
+    ins = Strapdown(tr.lla[0], [0.0, 0.1, 0.0], tr.euler[0], dt, baro=BaroLoop(10.0, 3))
+    out = ins.run(tr.dtheta, tr.dv, h_ref=tr.lla[1:, 2])
+    vn = out["vel"][:, 1]
+    t = tr.t[1:]
+    zc = t[np.flatnonzero(np.sign(vn[1:]) != np.sign(vn[:-1]))]
+    assert len(zc) >= 2
+    period = 2 * (zc[1] - zc[0])
+    rm, rn = earth.radii(lat)
+    expected = 2 * np.pi * np.sqrt(np.sqrt(rm * rn) / earth.gravity(lat, 0.0))
+    assert expected / 60 == pytest.approx(84.4, abs=0.3)
+    assert period == pytest.approx(expected, rel=0.01)
+    # Position error amplitude v0 / omega_s.
+    dn = (out["lla"][:, 0] - lat) * (rm)
+    assert np.abs(dn).max() == pytest.approx(0.1 * expected / (2 * np.pi), rel=0.03)
+
+
+def test_baro_loop_bounds_vertical_error():
+    tr = generate([0.6, 2.0, 1000.0], 0.0, [0, 0, 0], [Segment(600.0)], 0.1)
+    ins = Strapdown(tr.lla[0] + [0, 0, 30.0], [0, 0, 0.5], tr.euler[0], 0.1, baro=BaroLoop(10.0, 2))
+    out = ins.run(tr.dtheta, tr.dv, h_ref=tr.lla[1:, 2])
+    assert abs(out["lla"][-1, 2] - 1000.0) < 0.01
+    with pytest.raises(ValueError, match="order"):
+        BaroLoop(10.0, 4).gains()
+
+
+def test_correct_removes_errors():
+    ins = Strapdown([0.6, 2.0, 100.0], [10.0, 0, 0], [0.1, 0.2, 1.0], 0.01)
+    C0, v0, p0 = ins.dcm, ins.vel, ins.lla
+    phi = np.array([1e-4, -2e-4, 3e-4])
+    ins.state[0:4] = att.dcm_to_quat(att.apply_misalignment(C0, phi))
+    ins.state[4:7] += [0.1, 0.2, 0.3]
+    rm, rn = earth.radii(0.6)
+    ins.state[7] += 5.0 / (rm + 100)
+    ins.correct(phi, np.array([0.1, 0.2, 0.3]), np.array([0.0, 5.0, 0.0]))
+    np.testing.assert_allclose(ins.dcm, C0, atol=1e-10)
+    np.testing.assert_allclose(ins.vel, v0, atol=1e-12)
+    np.testing.assert_allclose(ins.lla, p0, atol=1e-12)
+
+
+def test_bad_shapes_are_reported():
+    ins = Strapdown([0.6, 2.0, 100.0], [0, 0, 0], [0, 0, 0], 0.01)
+    with pytest.raises(ValueError, match="dtheta and dv"):
+        ins.run(np.zeros((5, 3)), np.zeros((4, 3)))
