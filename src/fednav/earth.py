@@ -86,3 +86,18 @@ def llh_difference_enu(lat, lon, h, lat_ref, lon_ref, h_ref):
 
 radii_nb = numba.njit(cache=True)(radii)
 gravity_nb = numba.njit(cache=True)(gravity)
+
+
+def gravity_gradient(lat, h):
+    """-d(gravity)/dh [1/s^2]: the vertical-channel instability coefficient (~2g/R)."""
+    s2 = np.sin(lat) ** 2
+    g0 = _GE * (1.0 + _K * s2) / np.sqrt(1.0 - E2 * s2)
+    m = OMEGA_IE**2 * A**3 * (1.0 - F) / GM
+    return g0 * (2.0 / A * (1.0 + F + m - 2.0 * F * s2) - 6.0 / A**2 * h)
+
+
+def gravity_dlat(lat):
+    """d(gravity)/d(latitude) at the ellipsoid surface [m/s^2 per rad]."""
+    s = np.sin(lat)
+    w = 1.0 - E2 * s * s
+    return _GE * np.sin(2 * lat) * (_K / np.sqrt(w) + (1.0 + _K * s * s) * E2 / (2.0 * w**1.5))

@@ -1,0 +1,116 @@
+"""The filter interface every estimator implements.
+
+A filter holds a state ``x`` (n,) and covariance ``P`` (n, n) and offers
+
+* ``predict(process, q_scale=1.0)`` — time update over one interval.  ``process`` gives
+  ``transition(X)`` (rows of X propagated, nonlinear), ``Phi`` (its Jacobian) and ``Qd``
+  (discrete process noise); ``q_scale`` multiplies ``Qd`` (federated sharing, 1/beta);
+* ``update(y, model, nav, R)`` — measurement update with the observed ``y``;
+  ``model`` gives ``h(X, nav)`` (rows) and ``H(nav)``; returns an :class:`Innovation`.
+
+Covariances are kept symmetric; a covariance that is not positive definite raises
+:class:`FilterError` naming the filter and the step.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+from scipy.linalg import LinAlgError, cho_factor, cho_solve
+
+
+class FilterError(RuntimeError):
+    """Numerical failure inside a filter (names the filter and the step)."""
+
+
+class Innovation(NamedTuple):
+    """Residual ``r = y - y_hat``, its covariance ``S`` and the statistic ``r' S^-1 r``."""
+
+    r: np.ndarray
+    S: np.ndarray
+    nis: float
+
+
+@dataclass
+class FunctionProcess:
+    """A process model from plain functions: ``f(x) -> x`` (one state), Jacobian ``F``, ``Q``."""
+
+    f: object
+    Phi: np.ndarray
+    Qd: np.ndarray
+
+    def transition(self, X):
+        return np.array([self.f(x) for x in np.atleast_2d(X)])
+
+
+@dataclass
+class FunctionModel:
+    """A measurement model from plain functions: ``h(x) -> z`` and its Jacobian ``H``."""
+
+    hx: object
+    Hmat: np.ndarray | None = None
+
+    def h(self, X, nav=None):
+        return np.array([np.atleast_1d(self.hx(x)) for x in np.atleast_2d(X)])
+
+    def H(self, nav=None):
+        return self.Hmat
+
+
+def chol(P: np.ndarray, who: str) -> np.ndarray:
+    """Lower Cholesky factor of P, or a :class:`FilterError` naming ``who``."""
+    try:
+        L = np.linalg.cholesky(P)
+    except LinAlgError:
+        L = None
+    if L is None or not np.all(np.isfinite(L)):
+        ev = np.linalg.eigvalsh(0.5 * (P + P.T)) if np.all(np.isfinite(P)) else [np.nan]
+        raise FilterError(f"{who}: covariance is not positive definite "
+                          f"(smallest eigenvalue {np.min(ev):.3g})")
+    return L
+
+
+def solve_spd(S: np.ndarray, B: np.ndarray, who: str) -> np.ndarray:
+    """``S^-1 B`` for symmetric positive-definite S, with a clear error when it is not."""
+    try:
+        return cho_solve(cho_factor(S, lower=True, check_finite=True), B)
+    except (LinAlgError, ValueError) as e:
+        raise FilterError(f"{who}: innovation covariance not positive definite ({e})") from None
+
+
+class Filter(ABC):
+    """Common state, bookkeeping and checks of all estimators."""
+
+    def __init__(self, x0, P0, name: str = "filter"):
+        self.x = np.array(x0, dtype=float)
+        self.P = np.array(P0, dtype=float)
+        n = self.x.shape[0]
+        if self.x.ndim != 1 or self.P.shape != (n, n):
+            raise ValueError(f"{name}: x0 must be (n,) and P0 (n, n); got {self.x.shape} and "
+                             f"{self.P.shape}")
+        if not (np.all(np.isfinite(self.x)) and np.all(np.isfinite(self.P))):
+            raise ValueError(f"{name}: initial state or covariance contains NaN/inf")
+        self.name = name
+        self.step = 0
+        chol(self.P, f"{name} (initial covariance)")
+
+    @property
+    def n(self) -> int:
+        return self.x.shape[0]
+
+    def _who(self, phase: str) -> str:
+        return f"{self.name} {phase} at step {self.step}"
+
+    def _finish(self, phase: str) -> None:
+        self.P = 0.5 * (self.P + self.P.T)
+        if not (np.all(np.isfinite(self.x)) and np.all(np.isfinite(self.P))):
+            raise FilterError(f"{self._who(phase)}: state or covariance became NaN/inf")
+
+    @abstractmethod
+    def predict(self, process, q_scale: float = 1.0) -> None: ...
+
+    @abstractmethod
+    def update(self, y, model, nav=None, R=None) -> Innovation: ...

@@ -1,0 +1,116 @@
+"""Measurement models of the error-state filters (filter side of each sensor).
+
+Every model turns a sensor value and the INS solution at the same instant into the
+*observed residual* ``y = INS-derived - sensor`` and predicts it from the error state:
+``h(X, nav)`` (nonlinear, rows of X in filter units, see :mod:`fednav.error_model`) and
+its Jacobian ``H(nav)``.  Residual units: metres for positions, arc-minutes for angles.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import attitude as att
+from . import earth
+from .error_model import DP, N_STATES, PHI, SCALE
+from .units import ARCMIN
+
+
+@dataclass
+class NavSnapshot:
+    """INS (computed) solution at one instant: lla [rad, rad, m], vel ENU [m/s], C = C_b^n."""
+
+    lla: np.ndarray
+    vel: np.ndarray
+    C: np.ndarray
+
+    @property
+    def euler(self) -> np.ndarray:
+        return att.dcm_to_euler(self.C)
+
+
+def _euler_error(C_hat, X):
+    """Euler of C_hat minus Euler of the attitude corrected by each row's phi (arcmin)."""
+    phi = X[:, PHI] * SCALE[PHI]
+    C_true = att.rotvec_to_dcm(phi) @ C_hat
+    return att.euler_difference(att.dcm_to_euler(C_hat), att.dcm_to_euler(C_true)) / ARCMIN
+
+
+class StarAttitude:
+    """Star sensor: residual = Euler(INS) - Euler(CNS), [pitch, roll, heading] (arcmin).
+
+    First order: ``euler_error_jacobian`` (paper 002, eq. 3).
+    """
+
+    kind = "star"
+    dim = 3
+
+    def residual(self, nav: NavSnapshot, z) -> np.ndarray:
+        return att.euler_difference(nav.euler, z) / ARCMIN
+
+    def h(self, X, nav: NavSnapshot) -> np.ndarray:
+        return _euler_error(nav.C, np.atleast_2d(X))
+
+    def H(self, nav: NavSnapshot) -> np.ndarray:
+        H = np.zeros((3, N_STATES))
+        H[:, PHI] = att.euler_error_jacobian(nav.euler)  # arcmin per arcmin
+        return H
+
+    def R(self, sigma) -> np.ndarray:
+        return np.diag((np.asarray(sigma, dtype=float) / ARCMIN) ** 2)
+
+
+class SarFix:
+    """SAR image matching: residual = [east m, north m, heading arcmin] of INS - SAR."""
+
+    kind = "sar"
+    dim = 3
+
+    def residual(self, nav: NavSnapshot, z) -> np.ndarray:
+        lat, lon, h = nav.lla
+        rm, rn = earth.radii(lat)
+        return np.array([
+            (lon - z[1]) * (rn + h) * np.cos(lat),
+            (lat - z[0]) * (rm + h),
+            att.wrap_pi(nav.euler[2] - z[2]) / ARCMIN,
+        ])
+
+    def h(self, X, nav: NavSnapshot) -> np.ndarray:
+        X = np.atleast_2d(X)
+        return np.column_stack([X[:, 6], X[:, 7], _euler_error(nav.C, X)[:, 2]])
+
+    def H(self, nav: NavSnapshot) -> np.ndarray:
+        H = np.zeros((3, N_STATES))
+        H[0, 6] = H[1, 7] = 1.0
+        H[2, PHI] = att.euler_error_jacobian(nav.euler)[2]
+        return H
+
+    def R(self, sigma) -> np.ndarray:
+        s = np.asarray(sigma, dtype=float)
+        return np.diag([s[0] ** 2, s[1] ** 2, (s[2] / ARCMIN) ** 2])
+
+
+class BaroHeight:
+    """Barometric altimeter as a filter measurement: residual = h(INS) - h(baro) [m]."""
+
+    kind = "baro"
+    dim = 1
+
+    def residual(self, nav: NavSnapshot, z) -> np.ndarray:
+        return np.array([nav.lla[2] - z[0]])
+
+    def h(self, X, nav: NavSnapshot) -> np.ndarray:
+        return np.atleast_2d(X)[:, DP][:, 2:3]
+
+    def H(self, nav: NavSnapshot) -> np.ndarray:
+        H = np.zeros((1, N_STATES))
+        H[0, 8] = 1.0
+        return H
+
+    def R(self, sigma) -> np.ndarray:
+        return np.diag(np.asarray(sigma, dtype=float) ** 2)
+
+
+MODELS = {m.kind: m for m in (StarAttitude(), SarFix(), BaroHeight())}

@@ -1,0 +1,16 @@
+"""Sensor simulation: each sensor turns the truth into time-stamped measurements.
+
+A sensor is a small frozen dataclass with a ``simulate(truth, rng)`` method returning a
+:class:`~fednav.sensors.base.MeasurementSeries`; its filter-side counterpart lives in
+:mod:`fednav.measurements`.  All randomness comes from the ``numpy.random.Generator``
+passed in.
+"""
+
+from .base import MeasurementSeries, sample_times
+from .baro import Barometer
+from .imu import ImuErrors, ImuErrorState, corrupt_imu
+from .sar import SarMatcher
+from .star import StarSensor
+
+__all__ = ["Barometer", "ImuErrorState", "ImuErrors", "MeasurementSeries", "SarMatcher",
+           "StarSensor", "corrupt_imu", "sample_times"]

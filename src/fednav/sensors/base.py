@@ -1,0 +1,45 @@
+"""Time-stamped measurement series shared by all aiding sensors."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass
+class MeasurementSeries:
+    """Measurements of one sensor.
+
+    ``t`` (N,) time the measurement describes [s]; ``t_avail`` (N,) time it becomes
+    available to the filter [s] (equal to ``t`` without latency); ``z`` (N, m) values in
+    the sensor's natural units (radians, metres ...); ``sigma`` (m,) 1-sigma noise;
+    ``kind`` names the measurement model that interprets ``z``.
+    """
+
+    kind: str
+    t: np.ndarray
+    z: np.ndarray
+    sigma: np.ndarray
+    t_avail: np.ndarray | None = None
+
+    def __post_init__(self):
+        self.t = np.asarray(self.t, dtype=float)
+        self.z = np.atleast_2d(np.asarray(self.z, dtype=float))
+        if self.t_avail is None:
+            self.t_avail = self.t.copy()
+        if len(self.t) and np.any(np.diff(self.t) <= 0):
+            raise ValueError(f"{self.kind}: measurement times must be strictly increasing")
+        if self.z.shape[0] != len(self.t):
+            raise ValueError(f"{self.kind}: {len(self.t)} times but {self.z.shape[0]} values")
+        if not np.all(np.isfinite(self.z)):
+            raise ValueError(f"{self.kind}: non-finite measurement values")
+
+
+def sample_times(t_end: float, period: float, t0: float | None = None) -> np.ndarray:
+    """Sample instants ``period, 2*period, ...`` up to ``t_end`` (or starting at ``t0``)."""
+    if period <= 0:
+        raise ValueError(f"sensor period must be positive, got {period}")
+    start = period if t0 is None else t0
+    n = int(np.floor((t_end - start) / period + 1e-9)) + 1
+    return start + period * np.arange(max(n, 0))

@@ -1,0 +1,82 @@
+"""IMU error model: constant bias, white noise, bias random walk, first-order Gauss–Markov.
+
+All quantities SI and per body axis (x right, y forward, z up):
+gyro [rad/s] / [rad/sqrt(s)], accelerometer [m/s^2] / [m/s/sqrt(s)].
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.signal import lfilter
+
+
+@dataclass(frozen=True)
+class ImuErrors:
+    """IMU error specification.
+
+    ``*_bias``: constant bias (array of 3, or a scalar applied to all axes); with
+    ``random_bias`` true it is the 1-sigma of a per-run random draw instead of the value.
+    ``gyro_arw`` [rad/sqrt(s)] and ``accel_vrw`` [m/s/sqrt(s)]: white noise on the rates.
+    ``*_bias_rw``: bias random walk [unit/sqrt(s)].  ``*_markov_sigma`` and
+    ``*_markov_tau``: first-order Gauss–Markov bias (steady-state sigma, correlation time).
+    """
+
+    gyro_bias: float | tuple = 0.0
+    gyro_arw: float = 0.0
+    gyro_bias_rw: float = 0.0
+    gyro_markov_sigma: float = 0.0
+    gyro_markov_tau: float = np.inf
+    accel_bias: float | tuple = 0.0
+    accel_vrw: float = 0.0
+    accel_bias_rw: float = 0.0
+    accel_markov_sigma: float = 0.0
+    accel_markov_tau: float = np.inf
+    random_bias: bool = False
+
+
+@dataclass
+class ImuErrorState:
+    """The realised error of one run: bias time series (N, 3) for gyro and accelerometer."""
+
+    gyro_bias: np.ndarray
+    accel_bias: np.ndarray
+
+
+def _markov(n, dt, sigma, tau, rng):
+    """Stationary first-order Gauss–Markov sequence (n, 3), exact discretisation."""
+    if sigma == 0 or not np.isfinite(tau):
+        return np.zeros((n, 3))
+    a = np.exp(-dt / tau)
+    w = rng.standard_normal((n, 3)) * sigma * np.sqrt(1.0 - a * a)
+    w[0] = rng.standard_normal(3) * sigma  # start in steady state
+    return lfilter([1.0], [1.0, -a], w, axis=0)
+
+
+def corrupt_imu(dtheta, dv, dt: float, errors: ImuErrors, rng: np.random.Generator):
+    """Add the IMU errors to ideal increments; returns (dtheta_meas, dv_meas, ImuErrorState).
+
+    Biases are integrated over each interval as constant; white noise adds
+    ``arw * sqrt(dt)`` per angle increment (``vrw * sqrt(dt)`` per velocity increment).
+    """
+    dtheta = np.asarray(dtheta, dtype=float)
+    dv = np.asarray(dv, dtype=float)
+    n = dtheta.shape[0]
+
+    def bias(const, rw, msig, mtau):
+        c = np.broadcast_to(np.asarray(const, dtype=float), (3,))
+        if errors.random_bias:
+            c = c * rng.standard_normal(3)
+        b = np.tile(c, (n, 1))
+        if rw:
+            b = b + np.cumsum(rng.standard_normal((n, 3)) * rw * np.sqrt(dt), axis=0)
+        return b + _markov(n, dt, msig, mtau, rng)
+
+    gb = bias(errors.gyro_bias, errors.gyro_bias_rw, errors.gyro_markov_sigma,
+              errors.gyro_markov_tau)
+    ab = bias(errors.accel_bias, errors.accel_bias_rw, errors.accel_markov_sigma,
+              errors.accel_markov_tau)
+    dth = dtheta + gb * dt + rng.standard_normal((n, 3)) * errors.gyro_arw * np.sqrt(dt)
+    dvm = dv + ab * dt + rng.standard_normal((n, 3)) * errors.accel_vrw * np.sqrt(dt)
+    return dth, dvm, ImuErrorState(gb, ab)

@@ -1,0 +1,149 @@
+import numpy as np
+import pytest
+from filterpy.kalman import MerweScaledSigmaPoints
+from filterpy.kalman import UnscentedKalmanFilter as FPUKF
+
+from fednav.filters import (FederatedFilter, FilterError, FunctionModel, FunctionProcess,
+                            KalmanFilter, UnscentedKalmanFilter, make_filter, sharing_factors)
+
+DT = 0.1
+
+
+def fx(x):
+    # Nonlinear toy: pendulum-like 2-D system with coupling.
+    return np.array([x[0] + DT * x[1], x[1] - DT * np.sin(x[0]) + 0.01 * x[2] ** 2, 0.99 * x[2]])
+
+
+def hx(x):
+    return np.array([np.hypot(x[0], 2.0), np.arctan2(x[2], 3.0)])
+
+
+Q = np.diag([1e-4, 2e-4, 1e-4])
+R = np.diag([0.01, 0.02])
+
+
+def test_ukf_matches_filterpy():
+    rng = np.random.default_rng(3)
+    x0 = np.array([0.3, -0.1, 0.5])
+    P0 = np.diag([0.1, 0.2, 0.3])
+    pts = MerweScaledSigmaPoints(3, alpha=0.5, beta=2.0, kappa=0.0)
+    ref = FPUKF(dim_x=3, dim_z=2, dt=DT, hx=hx, fx=lambda x, dt: fx(x), points=pts)
+    ref.x, ref.P, ref.Q, ref.R = x0.copy(), P0.copy(), Q, R
+    ukf = UnscentedKalmanFilter(x0, P0, alpha=0.5, beta=2.0, kappa=0.0)
+    proc = FunctionProcess(fx, np.eye(3), Q)
+    model = FunctionModel(hx)
+    for _ in range(20):
+        z = hx(ref.x) + rng.normal(0, 0.1, 2)
+        ref.predict()
+        ref.update(z)
+        ukf.predict(proc)
+        ukf.update(z, model, R=R)
+        np.testing.assert_allclose(ukf.x, ref.x, atol=1e-9)
+        np.testing.assert_allclose(ukf.P, ref.P, atol=1e-9)
+
+
+def linear_problem(seed=0, n=4, m=2):
+    rng = np.random.default_rng(seed)
+    A = np.eye(n) + 0.05 * rng.standard_normal((n, n))
+    H = rng.standard_normal((m, n))
+    return A, H
+
+
+@pytest.mark.parametrize("alpha", [1e-3, 0.5, 1.0])
+def test_ukf_reduces_to_kf_on_linear_problem(alpha):
+    A, H = linear_problem()
+    Qd, Rm = 0.01 * np.eye(4), 0.1 * np.eye(2)
+    proc = FunctionProcess(lambda x: A @ x, A, Qd)
+    model = FunctionModel(lambda x: H @ x, H)
+    x0, P0 = np.ones(4), np.eye(4)
+    kf = KalmanFilter(x0, P0)
+    ukf = UnscentedKalmanFilter(x0, P0, alpha=alpha)
+    rng = np.random.default_rng(1)
+    for _ in range(30):
+        z = rng.standard_normal(2)
+        kf.predict(proc)
+        ukf.predict(proc)
+        i1 = kf.update(z, model, R=Rm)
+        i2 = ukf.update(z, model, R=Rm)
+        assert i1.nis == pytest.approx(i2.nis, rel=1e-6)
+    np.testing.assert_allclose(ukf.x, kf.x, rtol=1e-6, atol=1e-8)
+    np.testing.assert_allclose(ukf.P, kf.P, rtol=1e-6, atol=1e-8)
+
+
+def test_kf_joseph_keeps_psd_with_tiny_R():
+    A, H = linear_problem(2)
+    proc = FunctionProcess(lambda x: A @ x, A, 1e-6 * np.eye(4))
+    model = FunctionModel(lambda x: H @ x, H)
+    kf = KalmanFilter(np.zeros(4), 1e4 * np.eye(4))
+    for _ in range(50):
+        kf.predict(proc)
+        kf.update(np.zeros(2), model, R=1e-10 * np.eye(2))
+        assert np.allclose(kf.P, kf.P.T)
+        assert np.linalg.eigvalsh(kf.P).min() > -1e-12
+
+
+def test_clear_errors():
+    with pytest.raises(FilterError, match="ukf .*not positive definite"):
+        UnscentedKalmanFilter(np.zeros(2), np.array([[1.0, 2.0], [2.0, 1.0]]), name="ukf")
+    with pytest.raises(ValueError, match="NaN"):
+        KalmanFilter(np.array([np.nan, 0.0]), np.eye(2))
+    with pytest.raises(ValueError, match="unknown filter 'pf2'"):
+        make_filter("pf2", np.zeros(2), np.eye(2))
+    ukf = UnscentedKalmanFilter(np.zeros(2), np.eye(2), name="local-1")
+    bad = FunctionProcess(lambda x: x, np.eye(2), -10 * np.eye(2))
+    ukf.predict(bad)
+    with pytest.raises(FilterError, match="local-1 predict at step 2"):
+        ukf.predict(bad)
+
+
+def test_sharing_factor_rules():
+    covs = {"a": np.eye(2), "b": 2 * np.eye(2), "m": 4 * np.eye(2)}
+    eq = sharing_factors(covs, "equal")
+    assert all(v == pytest.approx(1 / 3) for v in eq.values())
+    fx_ = sharing_factors(covs, "fixed", {"a": 2, "b": 1, "m": 1})
+    assert fx_ == pytest.approx({"a": 0.5, "b": 0.25, "m": 0.25})
+    ad = sharing_factors(covs, "adaptive")
+    # tr(P^-1) = 2, 1, 0.5
+    assert ad == pytest.approx({"a": 2 / 3.5, "b": 1 / 3.5, "m": 0.5 / 3.5})
+    with pytest.raises(ValueError, match="unknown sharing rule"):
+        sharing_factors(covs, "magic")
+
+
+@pytest.mark.parametrize("sharing", ["equal", "adaptive"])
+@pytest.mark.parametrize("with_master", [True, False])
+def test_federated_reset_equals_centralized(sharing, with_master):
+    rng = np.random.default_rng(5)
+    n = 4
+    A, _ = linear_problem(3, n)
+    H1, H2 = rng.standard_normal((2, n)), rng.standard_normal((1, n))
+    R1, R2 = np.diag([0.2, 0.3]), np.array([[0.1]])
+    Qd = 0.02 * np.eye(n)
+    proc = FunctionProcess(lambda x: A @ x, A, Qd)
+    m1, m2 = FunctionModel(lambda x: H1 @ x, H1), FunctionModel(lambda x: H2 @ x, H2)
+    mc = FunctionModel(lambda x: np.r_[H1 @ x, H2 @ x], np.vstack([H1, H2]))
+    Rc = np.diag([0.2, 0.3, 0.1])
+    x0, P0 = rng.standard_normal(n), np.eye(n)
+    central = KalmanFilter(x0, P0)
+    fed = FederatedFilter({"one": KalmanFilter(x0, P0), "two": KalmanFilter(x0, P0)},
+                          master=KalmanFilter(x0, P0) if with_master else None,
+                          sharing=sharing)
+    for _ in range(25):
+        z1, z2 = rng.standard_normal(2), rng.standard_normal(1)
+        central.predict(proc)
+        central.update(np.r_[z1, z2], mc, R=Rc)
+        fed.predict(proc)
+        fed.update("one", z1, m1, R=R1)
+        fed.update("two", z2, m2, R=R2)
+        fed.fuse()
+    np.testing.assert_allclose(fed.x, central.x, atol=1e-10)
+    np.testing.assert_allclose(fed.P, central.P, atol=1e-10)
+    assert sum(fed.beta.values()) == pytest.approx(1.0)
+
+
+def test_federated_feedback_zeroes_state():
+    fed = FederatedFilter({"a": KalmanFilter(np.ones(2), np.eye(2))}, sharing="equal")
+    dx = fed.feedback()
+    np.testing.assert_allclose(dx, 1.0)
+    np.testing.assert_allclose(fed.locals["a"].x, 0.0)
+    with pytest.raises(ValueError, match="no local filter named 'zz'"):
+        fed.update("zz", [0.0], None)
