@@ -37,7 +37,6 @@ import numba
 import numpy as np
 
 from . import earth, units
-from .attitude import skew
 
 N_STATES = 18
 PHI, DV, DP, EPS_C, EPS_R, NABLA = (slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12),
@@ -66,92 +65,143 @@ class ImuNoiseModel:
     accel_markov_tau: float = np.inf
 
 
-@numba.njit(cache=True)
-def _rv2dcm(r):
-    a2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2]
-    a = np.sqrt(a2)
-    if a < 1e-6:
+@numba.njit(cache=True, inline="always")
+def _rv2dcm(r0, r1, r2, out):
+    """Rodrigues' formula for the rotation vector (r0, r1, r2), written into ``out``."""
+    a2 = r0 * r0 + r1 * r1 + r2 * r2
+    if a2 < 1e-12:
         s, c = 1.0 - a2 / 6.0, 0.5 - a2 / 24.0
     else:
+        a = np.sqrt(a2)
         s, c = np.sin(a) / a, (1.0 - np.cos(a)) / a2
-    K = np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
-    return np.eye(3) + s * K + c * (K @ K)
+    out[0, 0] = 1.0 - c * (r1 * r1 + r2 * r2)
+    out[1, 1] = 1.0 - c * (r0 * r0 + r2 * r2)
+    out[2, 2] = 1.0 - c * (r0 * r0 + r1 * r1)
+    out[0, 1] = -s * r2 + c * r0 * r1
+    out[1, 0] = s * r2 + c * r0 * r1
+    out[0, 2] = s * r1 + c * r0 * r2
+    out[2, 0] = -s * r1 + c * r0 * r2
+    out[1, 2] = -s * r0 + c * r1 * r2
+    out[2, 1] = s * r0 + c * r1 * r2
 
 
-@numba.njit(cache=True)
-def _dcm2rv(C):
+@numba.njit(cache=True, inline="always")
+def _dcm2rv(C, out):
     tr = C[0, 0] + C[1, 1] + C[2, 2]
     cosa = min(1.0, max(-1.0, 0.5 * (tr - 1.0)))
     a = np.arccos(cosa)
-    v = np.array([C[2, 1] - C[1, 2], C[0, 2] - C[2, 0], C[1, 0] - C[0, 1]])
-    if a < 1e-6:
-        return 0.5 * (1.0 + a * a / 6.0) * v
-    return a / (2.0 * np.sin(a)) * v
+    k = 0.5 * (1.0 + a * a / 6.0) if a < 1e-6 else a / (2.0 * np.sin(a))
+    out[0] = k * (C[2, 1] - C[1, 2])
+    out[1] = k * (C[0, 2] - C[2, 0])
+    out[2] = k * (C[1, 0] - C[0, 1])
+
+
+@numba.njit(cache=True, inline="always")
+def _rotate(E, wl, wr, h, tmp, R):
+    """E <- exp(h [wl x]) E exp(h [wr x])."""
+    _rv2dcm(h * wl[0], h * wl[1], h * wl[2], R)
+    for i in range(3):
+        for j in range(3):
+            tmp[i, j] = R[i, 0] * E[0, j] + R[i, 1] * E[1, j] + R[i, 2] * E[2, j]
+    _rv2dcm(h * wr[0], h * wr[1], h * wr[2], R)
+    for i in range(3):
+        for j in range(3):
+            E[i, j] = tmp[i, 0] * R[0, j] + tmp[i, 1] * R[1, j] + tmp[i, 2] * R[2, j]
 
 
 @numba.njit(cache=True)
-def _cross(a, b):
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
-                     a[0] * b[1] - a[1] * b[0]])
-
-
-@numba.njit(cache=True)
-def _rates(lat, h, v, rm, rn):
+def _rates(x, E, p, C0, out, wl, wr):
+    """Derivative of the non-attitude states into ``out``; attitude rotation rates into
+    ``wl`` (left of E) and ``wr`` (right of E).  ``p`` = [lat0, h0, vE0, vN0, vU0, fE, fN, fU,
+    rm, rn, k1, k2, 1/tau_g, 1/tau_a, g0]."""
+    lat0, h0 = p[0], p[1]
+    fe, fn_, fu = p[5], p[6], p[7]
+    rm, rn, k1, k2, itg, ita, g0 = p[8], p[9], p[10], p[11], p[12], p[13], p[14]
     om = earth.OMEGA_IE
-    w_ie = np.array([0.0, om * np.cos(lat), om * np.sin(lat)])
-    w_en = np.array([-v[1] / (rm + h), v[0] / (rn + h), v[0] * np.tan(lat) / (rn + h)])
-    return w_ie, w_en
+    lat = lat0 - x[7] / (rm + h0)
+    h = h0 - x[8]
+    v0e, v0n, v0u = p[2], p[3], p[4]
+    ve, vn, vu = v0e - x[3], v0n - x[4], v0u - x[5]
+    # Computed (0) and true rates.
+    c0, s0 = np.cos(lat0), np.sin(lat0)
+    c1, s1 = np.cos(lat), np.sin(lat)
+    wie0 = (0.0, om * c0, om * s0)
+    wen0 = (-v0n / (rm + h0), v0e / (rn + h0), v0e * s0 / c0 / (rn + h0))
+    wie1 = (0.0, om * c1, om * s1)
+    wen1 = (-vn / (rm + h), ve / (rn + h), ve * s1 / c1 / (rn + h))
+    e0 = x[9] + x[12]
+    e1 = x[10] + x[13]
+    e2 = x[11] + x[14]
+    for i in range(3):
+        wl[i] = C0[i, 0] * e0 + C0[i, 1] * e1 + C0[i, 2] * e2 - wie0[i] - wen0[i]
+        wr[i] = wie1[i] + wen1[i]
+    # Velocity error: (I - E^T) f + E^T C0 nabla - Coriolis difference + gravity difference.
+    cn0 = C0[0, 0] * x[15] + C0[0, 1] * x[16] + C0[0, 2] * x[17]
+    cn1 = C0[1, 0] * x[15] + C0[1, 1] * x[16] + C0[1, 2] * x[17]
+    cn2 = C0[2, 0] * x[15] + C0[2, 1] * x[16] + C0[2, 2] * x[17]
+    a0, a1, a2 = fe - cn0, fn_ - cn1, fu - cn2
+    a0x = 2 * wie0[0] + wen0[0]
+    a0y = 2 * wie0[1] + wen0[1]
+    a0z = 2 * wie0[2] + wen0[2]
+    a1x = 2 * wie1[0] + wen1[0]
+    a1y = 2 * wie1[1] + wen1[1]
+    a1z = 2 * wie1[2] + wen1[2]
+    cor0 = (a0y * v0u - a0z * v0n) - (a1y * vu - a1z * vn)
+    cor1 = (a0z * v0e - a0x * v0u) - (a1z * ve - a1x * vu)
+    cor2 = (a0x * v0n - a0y * v0e) - (a1x * vn - a1y * ve)
+    out[3] = fe - (E[0, 0] * a0 + E[1, 0] * a1 + E[2, 0] * a2) - cor0
+    out[4] = fn_ - (E[0, 1] * a0 + E[1, 1] * a1 + E[2, 1] * a2) - cor1
+    out[5] = (fu - (E[0, 2] * a0 + E[1, 2] * a1 + E[2, 2] * a2) - cor2
+              - g0 + earth.gravity_nb(lat, h) - k2 * x[8])
+    out[6] = (rn + h0) * c0 * (v0e / ((rn + h0) * c0) - ve / ((rn + h) * c1))
+    out[7] = (rm + h0) * (v0n / (rm + h0) - vn / (rm + h))
+    out[8] = x[5] - k1 * x[8]
+    for i in range(3):
+        out[9 + i] = 0.0
+        out[12 + i] = -itg * x[12 + i]
+        out[15 + i] = -ita * x[15 + i]
 
 
 @numba.njit(cache=True)
-def _vec_rates(x, E, lat0, h0, v0, C0, fn, rm, rn, k1, k2, itg, ita):
-    """Time derivative of the non-attitude states and the attitude rotation rates."""
-    dv = x[3:6]
-    dp = x[6:9]
-    eps = x[9:12] + x[12:15]
-    nab = x[15:18]
-    lat = lat0 - dp[1] / (rm + h0)
-    h = h0 - dp[2]
-    v = v0 - dv
-    wie0, wen0 = _rates(lat0, h0, v0, rm, rn)
-    wie, wen = _rates(lat, h, v, rm, rn)
-    w_left = C0 @ eps - (wie0 + wen0)  # rotation applied on the left of E
-    w_right = wie + wen  # rotation applied on the right of E
-    Et = E.T
-    ddv = (fn - Et @ fn) + Et @ (C0 @ nab)
-    ddv -= _cross(2.0 * wie0 + wen0, v0) - _cross(2.0 * wie + wen, v)
-    ddv[2] += -earth.gravity_nb(lat0, h0) + earth.gravity_nb(lat, h) - k2 * dp[2]
-    ddp = np.empty(3)
-    ddp[0] = (rn + h0) * np.cos(lat0) * (v0[0] / ((rn + h0) * np.cos(lat0))
-                                         - v[0] / ((rn + h) * np.cos(lat)))
-    ddp[1] = (rm + h0) * (v0[1] / (rm + h0) - v[1] / (rm + h))
-    ddp[2] = dv[2] - k1 * dp[2]
-    out = np.zeros(18)
-    out[3:6] = ddv
-    out[6:9] = ddp
-    out[12:15] = -itg * x[12:15]
-    out[15:18] = -ita * x[15:18]
-    return out, w_left, w_right
-
-
-@numba.njit(cache=True)
-def _transition(X, T, nsub, lat0, h0, v0, C0, fn, rm, rn, k1, k2, itg, ita, scale):
-    """Propagate each row of X (filter units) over T seconds with the nonlinear model."""
+def _transition(X, T, nsub, p, C0, scale):
+    """Propagate each row of X (filter units) over T seconds with the nonlinear model
+    (midpoint rule: geometric for the attitude error rotation, RK2 for the rest)."""
     out = np.empty_like(X)
-    hstep = T / nsub
+    hs = T / nsub
+    n = X.shape[1]
+    x = np.empty(n)
+    xm = np.empty(n)
+    d = np.empty(n)
+    E = np.empty((3, 3))
+    Em = np.empty((3, 3))
+    tmp = np.empty((3, 3))
+    R = np.empty((3, 3))
+    wl = np.empty(3)
+    wr = np.empty(3)
+    rv = np.empty(3)
     for i in range(X.shape[0]):
-        x = X[i] * scale
-        E = _rv2dcm(-x[0:3])
+        for j in range(n):
+            x[j] = X[i, j] * scale[j]
+        _rv2dcm(-x[0], -x[1], -x[2], E)
         for _ in range(nsub):
-            d1, wl1, wr1 = _vec_rates(x, E, lat0, h0, v0, C0, fn, rm, rn, k1, k2, itg, ita)
-            xm = x + 0.5 * hstep * d1
-            Em = _rv2dcm(0.5 * hstep * wl1) @ E @ _rv2dcm(0.5 * hstep * wr1)
-            d2, wl2, wr2 = _vec_rates(xm, Em, lat0, h0, v0, C0, fn, rm, rn, k1, k2, itg, ita)
-            x = x + hstep * d2
-            E = _rv2dcm(hstep * wl2) @ E @ _rv2dcm(hstep * wr2)
-        x[0:3] = -_dcm2rv(E)
-        out[i] = x / scale
+            _rates(x, E, p, C0, d, wl, wr)
+            for j in range(3, n):
+                xm[j] = x[j] + 0.5 * hs * d[j]
+            Em[:, :] = E
+            _rotate(Em, wl, wr, 0.5 * hs, tmp, R)
+            _rates(xm, Em, p, C0, d, wl, wr)
+            for j in range(3, n):
+                x[j] += hs * d[j]
+            _rotate(E, wl, wr, hs, tmp, R)
+        _dcm2rv(E, rv)
+        x[0], x[1], x[2] = -rv[0], -rv[1], -rv[2]
+        for j in range(n):
+            out[i, j] = x[j] / scale[j]
     return out
+
+
+def _skew(v) -> np.ndarray:
+    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
 
 
 @dataclass
@@ -183,6 +233,11 @@ class ErrorProcess:
         self.itg = 0.0 if np.isinf(noise.gyro_markov_tau) else 1.0 / noise.gyro_markov_tau
         self.ita = 0.0 if np.isinf(noise.accel_markov_tau) else 1.0 / noise.accel_markov_tau
         self.baro_q = float(baro_q)
+        v, f = np.asarray(nom.vel, float), np.asarray(nom.fn, float)
+        self._params = np.array([nom.lat, nom.h, v[0], v[1], v[2], f[0], f[1], f[2], self.rm,
+                                 self.rn, self.k1, self.k2, self.itg, self.ita,
+                                 earth.gravity(nom.lat, nom.h)])
+        self._C0 = np.ascontiguousarray(nom.C, dtype=float)
         F = self.F_si()
         # Transition matrix: 4th-order Taylor series over T/2, squared (||F T|| < 1 here).
         A = F * (0.5 * T)
@@ -218,14 +273,14 @@ class ErrorProcess:
         dwen_dp[2, 1] = v[0] / (cl**2 * Rn * Rm)
         dwen_dp[2, 2] = -v[0] * tl / Rn**2
         F = np.zeros((N_STATES, N_STATES))
-        F[PHI, PHI] = -skew(w_ie + w_en)
+        F[PHI, PHI] = -_skew(w_ie + w_en)
         F[PHI, DV] = dwen_dv
         F[PHI, DP] = dwie_dp + dwen_dp
         F[PHI, EPS_C] = -C
         F[PHI, EPS_R] = -C
-        F[DV, PHI] = skew(fn)
-        F[DV, DV] = -skew(2 * w_ie + w_en) + skew(v) @ dwen_dv
-        F[DV, DP] = skew(v) @ (2 * dwie_dp + dwen_dp)
+        F[DV, PHI] = _skew(fn)
+        F[DV, DV] = -_skew(2 * w_ie + w_en) + _skew(v) @ dwen_dv
+        F[DV, DP] = _skew(v) @ (2 * dwie_dp + dwen_dp)
         F[5, 8] += earth.gravity_gradient(lat, h) - self.k2
         F[5, 7] -= earth.gravity_dlat(lat) / Rm
         F[DV, NABLA] = C
@@ -257,11 +312,8 @@ class ErrorProcess:
     # ------------------------------------------------------------ filter interface
     def transition(self, X: np.ndarray) -> np.ndarray:
         """Nonlinear propagation of state rows ``X`` (S, 18) in filter units over T."""
-        n = self.nom
         X = np.ascontiguousarray(np.atleast_2d(X), dtype=float)
-        return _transition(X, self.T, self.nsub, n.lat, n.h, np.asarray(n.vel, float),
-                           np.ascontiguousarray(n.C), np.asarray(n.fn, float), self.rm,
-                           self.rn, self.k1, self.k2, self.itg, self.ita, SCALE)
+        return _transition(X, self.T, self.nsub, self._params, self._C0, SCALE)
 
     def linear_transition(self, X: np.ndarray) -> np.ndarray:
         """``Phi @ x`` for each row of X (filter units)."""

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
-from scipy.linalg import LinAlgError, cho_factor, cho_solve
+from numpy.linalg import LinAlgError
 
 
 class FilterError(RuntimeError):
@@ -75,10 +75,14 @@ def chol(P: np.ndarray, who: str) -> np.ndarray:
 
 def solve_spd(S: np.ndarray, B: np.ndarray, who: str) -> np.ndarray:
     """``S^-1 B`` for symmetric positive-definite S, with a clear error when it is not."""
+    if not np.all(np.isfinite(S)):
+        raise FilterError(f"{who}: innovation covariance contains NaN/inf")
     try:
-        return cho_solve(cho_factor(S, lower=True, check_finite=True), B)
-    except (LinAlgError, ValueError) as e:
-        raise FilterError(f"{who}: innovation covariance not positive definite ({e})") from None
+        L = np.linalg.cholesky(S)
+    except LinAlgError:
+        raise FilterError(f"{who}: innovation covariance not positive definite") from None
+    Y = np.linalg.solve(L, B)
+    return np.linalg.solve(L.T, Y)
 
 
 class Filter(ABC):

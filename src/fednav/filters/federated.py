@@ -22,7 +22,7 @@ estimate equals the centralized Kalman filter (tested).
 from __future__ import annotations
 
 import numpy as np
-from scipy.linalg import LinAlgError, cho_factor, cho_solve
+from numpy.linalg import LinAlgError
 
 from .base import Filter, FilterError
 
@@ -49,11 +49,11 @@ def sharing_factors(covs: dict[str, np.ndarray], rule: str = "equal",
 
 def _inv_spd(P, who):
     try:
-        c = cho_factor(P, lower=True)
+        Linv = np.linalg.inv(np.linalg.cholesky(P))
     except LinAlgError:
         raise FilterError(f"federated fusion: covariance of '{who}' is not positive definite") \
             from None
-    return cho_solve(c, np.eye(P.shape[0]))
+    return Linv.T @ Linv
 
 
 class FederatedFilter:

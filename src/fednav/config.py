@@ -1,0 +1,236 @@
+"""Scenario files: YAML validated by pydantic, converted to SI at this edge.
+
+Keys carry their unit in the name (``_deg``, ``_arcsec``, ``_deg_h``, ``_ug``, ``_m``,
+``_s`` ...).  An unknown key, a wrong type or a missing value is reported in one line
+naming the key and the file (:class:`ConfigError`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+from . import units
+from .error_model import ImuNoiseModel
+from .sensors import Barometer, ImuErrors, SarMatcher, StarSensor
+from .strapdown import BaroLoop
+from .trajectory import Segment
+
+
+class ConfigError(ValueError):
+    """A scenario file that cannot be used; the message names the file and the key."""
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class StartConfig(_Model):
+    lat_deg: float = Field(ge=-89.0, le=89.0)
+    lon_deg: float = Field(ge=-180.0, le=360.0)
+    h_m: float
+    speed_mps: float = Field(ge=0.0)
+    heading_deg: float
+    pitch_deg: float = 0.0
+    roll_deg: float = 0.0
+
+
+class SegmentConfig(_Model):
+    duration_s: float = Field(gt=0.0)
+    accel_mps2: float = 0.0
+    pitch_rate_deg_s: float = 0.0
+    roll_rate_deg_s: float = 0.0
+    heading_rate_deg_s: float = 0.0
+    name: str = ""
+
+    def to_segment(self) -> Segment:
+        return Segment(self.duration_s, self.accel_mps2, units.deg(self.pitch_rate_deg_s),
+                       units.deg(self.roll_rate_deg_s), units.deg(self.heading_rate_deg_s),
+                       self.name)
+
+
+class ImuConfig(_Model):
+    """IMU errors.  ``accel_white_ug`` / ``gyro_white_deg_h`` are the 1-sigma of the
+    white noise on each *sample* of specific force / rate (converted to VRW / ARW with
+    the IMU period)."""
+
+    gyro_bias_deg_h: float = 0.0
+    gyro_markov_deg_h: float = 0.0
+    gyro_markov_tau_s: float = Field(default=float("inf"), gt=0.0)
+    gyro_arw_deg_sqrt_h: float = 0.0
+    gyro_white_deg_h: float = 0.0
+    accel_bias_ug: float = 0.0
+    accel_markov_ug: float = 0.0
+    accel_markov_tau_s: float = Field(default=float("inf"), gt=0.0)
+    accel_white_ug: float = 0.0
+    random_bias: bool = False
+
+    def arw(self, dt: float) -> float:
+        return float(np.hypot(units.deg_per_sqrt_h(self.gyro_arw_deg_sqrt_h),
+                              units.deg_per_h(self.gyro_white_deg_h) * np.sqrt(dt)))
+
+    def vrw(self, dt: float) -> float:
+        return float(units.micro_g(self.accel_white_ug) * np.sqrt(dt))
+
+    def errors(self, dt: float) -> ImuErrors:
+        return ImuErrors(
+            gyro_bias=float(units.deg_per_h(self.gyro_bias_deg_h)), gyro_arw=self.arw(dt),
+            gyro_markov_sigma=float(units.deg_per_h(self.gyro_markov_deg_h)),
+            gyro_markov_tau=self.gyro_markov_tau_s,
+            accel_bias=float(units.micro_g(self.accel_bias_ug)), accel_vrw=self.vrw(dt),
+            accel_markov_sigma=float(units.micro_g(self.accel_markov_ug)),
+            accel_markov_tau=self.accel_markov_tau_s, random_bias=self.random_bias)
+
+    def noise_model(self, dt: float) -> ImuNoiseModel:
+        return ImuNoiseModel(
+            gyro_arw=self.arw(dt), accel_vrw=self.vrw(dt),
+            gyro_markov_sigma=float(units.deg_per_h(self.gyro_markov_deg_h)),
+            gyro_markov_tau=self.gyro_markov_tau_s,
+            accel_markov_sigma=float(units.micro_g(self.accel_markov_ug)),
+            accel_markov_tau=self.accel_markov_tau_s)
+
+
+class StarConfig(_Model):
+    sigma_arcsec: float = Field(gt=0.0)
+    period_s: float = Field(gt=0.0)
+
+    def sensor(self) -> StarSensor:
+        return StarSensor(float(units.arcsec(self.sigma_arcsec)), self.period_s)
+
+
+class SarConfig(_Model):
+    sigma_pos_m: float = Field(gt=0.0)
+    sigma_heading_deg: float = Field(gt=0.0)
+    period_s: float = Field(gt=0.0)
+
+    def sensor(self) -> SarMatcher:
+        return SarMatcher(self.sigma_pos_m, float(units.deg(self.sigma_heading_deg)),
+                          self.period_s)
+
+
+class BaroConfig(_Model):
+    sigma_m: float = Field(gt=0.0)
+    period_s: float = Field(gt=0.0)
+    loop_time_constant_s: float = Field(default=20.0, gt=0.0)
+    loop_order: Literal[2, 3] = 2
+
+    def sensor(self) -> Barometer:
+        return Barometer(self.sigma_m, self.period_s)
+
+    def loop(self) -> BaroLoop:
+        return BaroLoop(self.loop_time_constant_s, self.loop_order)
+
+
+class SensorsConfig(_Model):
+    star: StarConfig | None = None
+    sar: SarConfig | None = None
+    baro: BaroConfig | None = None
+
+
+class FilterConfig(_Model):
+    type: Literal["ukf", "kf", "ekf"] = "ukf"
+    period_s: float = Field(default=1.0, gt=0.0)
+    alpha: float = Field(default=1e-3, gt=0.0)
+    beta: float = 2.0
+    kappa: float = 0.0
+    sharing: Literal["equal", "fixed", "adaptive"] = "adaptive"
+    fixed_factors: dict[str, float] | None = None
+    master: bool = True
+    reset: bool = True
+    substeps: int = Field(default=2, ge=1)
+
+
+class InitialErrorConfig(_Model):
+    """1-sigma of the initial INS errors (drawn per run) and of the filter's P0."""
+
+    attitude_arcsec: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    velocity_mps: float = Field(default=0.0, ge=0.0)
+    position_m: float = Field(default=0.0, ge=0.0)
+
+
+class ModeConfig(_Model):
+    name: str
+    aiding: list[Literal["star", "sar"]] = []
+
+
+class Scenario(_Model):
+    paper: str
+    name: str
+    description: str = ""
+    start: StartConfig
+    imu_period_s: float = Field(gt=0.0)
+    segments: list[SegmentConfig] = Field(min_length=1)
+    imu: ImuConfig
+    sensors: SensorsConfig
+    filter: FilterConfig = FilterConfig()
+    initial_errors: InitialErrorConfig = InitialErrorConfig()
+    modes: list[ModeConfig] = Field(min_length=1)
+    stats_period_s: float = Field(default=1.0, gt=0.0)
+
+    @property
+    def duration(self) -> float:
+        return float(sum(s.duration_s for s in self.segments))
+
+    def trajectory(self, max_time: float | None = None):
+        """The true flight (cached per scenario object)."""
+        from .trajectory import generate
+
+        key = ("_traj", max_time)
+        cache = self.__dict__.setdefault("_cache", {})
+        if key not in cache:
+            segs = [s.to_segment() for s in self.segments]
+            if max_time is not None:
+                segs = _truncate(segs, max_time)
+            st = self.start
+            cache[key] = generate(
+                [units.deg(st.lat_deg), units.deg(st.lon_deg), st.h_m], st.speed_mps,
+                [units.deg(st.pitch_deg), units.deg(st.roll_deg), units.deg(st.heading_deg)],
+                segs, self.imu_period_s)
+        return cache[key]
+
+
+def _truncate(segs: list[Segment], max_time: float) -> list[Segment]:
+    out, t = [], 0.0
+    for s in segs:
+        if t >= max_time:
+            break
+        d = min(s.duration, max_time - t)
+        out.append(Segment(d, s.accel, s.pitch_rate, s.roll_rate, s.heading_rate, s.name))
+        t += d
+    return out
+
+
+def _format_error(e: dict) -> str:
+    loc = ".".join(str(p) for p in e["loc"]) or "(top level)"
+    msg = e["msg"]
+    if e["type"] == "extra_forbidden":
+        msg = "unknown key"
+    elif e["type"] == "missing":
+        msg = "missing value"
+    return f"key '{loc}': {msg}"
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    """Read and validate a scenario YAML file (errors: :class:`ConfigError`, one line)."""
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except FileNotFoundError:
+        raise ConfigError(f"scenario file {path}: not found") from None
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as e:
+        raise ConfigError(f"scenario file {path}: not valid YAML ({str(e).splitlines()[0]})") \
+            from None
+    if not isinstance(data, dict):
+        raise ConfigError(f"scenario file {path}: expected a mapping at the top level")
+    try:
+        return Scenario.model_validate(data)
+    except ValidationError as e:
+        errs = e.errors()
+        more = f" (and {len(errs) - 1} more)" if len(errs) > 1 else ""
+        raise ConfigError(f"scenario file {path}: {_format_error(errs[0])}{more}") from None
