@@ -89,5 +89,6 @@ def test_euler_error_jacobian_matches_numerical(euler):
 
 
 def test_wrap():
-    np.testing.assert_allclose(att.wrap_pi([3 * np.pi / 2, -3 * np.pi / 2]), [-np.pi / 2, np.pi / 2])
+    np.testing.assert_allclose(att.wrap_pi([3 * np.pi / 2, -3 * np.pi / 2]),
+                               [-np.pi / 2, np.pi / 2])
     assert att.wrap_2pi(-0.1) == pytest.approx(2 * np.pi - 0.1)

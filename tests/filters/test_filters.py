@@ -3,8 +3,16 @@ import pytest
 from filterpy.kalman import MerweScaledSigmaPoints
 from filterpy.kalman import UnscentedKalmanFilter as FPUKF
 
-from fednav.filters import (FederatedFilter, FilterError, FunctionModel, FunctionProcess,
-                            KalmanFilter, UnscentedKalmanFilter, make_filter, sharing_factors)
+from fednav.filters import (
+    FederatedFilter,
+    FilterError,
+    FunctionModel,
+    FunctionProcess,
+    KalmanFilter,
+    UnscentedKalmanFilter,
+    make_filter,
+    sharing_factors,
+)
 
 DT = 0.1
 

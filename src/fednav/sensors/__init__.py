@@ -6,8 +6,8 @@ A sensor is a small frozen dataclass with a ``simulate(truth, rng)`` method retu
 passed in.
 """
 
-from .base import MeasurementSeries, sample_times
 from .baro import Barometer
+from .base import MeasurementSeries, sample_times
 from .imu import ImuErrors, ImuErrorState, corrupt_imu
 from .sar import SarMatcher
 from .star import StarSensor

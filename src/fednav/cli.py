@@ -1,0 +1,72 @@
+"""Command line: ``fednav reproduce 002`` and friends."""
+
+from __future__ import annotations
+
+import os
+import time
+from pathlib import Path
+
+import typer
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
+
+from . import __version__
+from .config import ConfigError
+
+app = typer.Typer(add_completion=False, no_args_is_help=True,
+                  help="fednav — federated multi-sensor integrated navigation.")
+console = Console()
+
+
+def _paper_module(paper: str):
+    from .scenarios import paper002
+
+    for mod in (paper002,):
+        if paper.lower() in mod.ALIASES:
+            return mod
+    known = ", ".join(a for m in (paper002,) for a in m.ALIASES)
+    raise typer.BadParameter(f"unknown paper '{paper}'; available: {known}")
+
+
+@app.command()
+def reproduce(
+    paper: str = typer.Argument(..., help="paper number or alias, e.g. 002 / cruise-missile"),
+    runs: int = typer.Option(10, min=1, help="Monte Carlo runs"),
+    seed: int = typer.Option(1, help="seed of the first run (run i uses seed + i)"),
+    out: Path = typer.Option(None, help="output folder [default: results/<paper>]"),
+    jobs: int = typer.Option(min(2, os.cpu_count() or 1), min=1, help="worker processes"),
+    scenario: Path = typer.Option(None, help="alternative scenario YAML"),
+    max_time: float = typer.Option(None, help="truncate the flight (smoke runs only)"),
+) -> None:
+    """Reproduce a paper's experiment and print its tables beside the paper's."""
+    from .report import print_tables, summarize, write_outputs
+
+    mod = _paper_module(paper)
+    try:
+        scn = mod.load_scenario(scenario)
+    except ConfigError as e:
+        console.print(f"[red]error:[/red] {e}")
+        raise typer.Exit(2) from None
+    t0 = time.perf_counter()
+    with Progress("[progress.description]{task.description}", BarColumn(),
+                  MofNCompleteColumn(), TimeElapsedColumn(), console=console,
+                  transient=False) as prog:
+        task = prog.add_task(f"paper {mod.PAPER}: {scn.name}", total=runs)
+        rows, series = mod.run_monte_carlo(scn, runs, seed, jobs, max_time,
+                                           progress=lambda: prog.advance(task))
+    out = out or Path("results") / mod.PAPER
+    summary = summarize(rows, mod.PAPER_TABLES, mod.PAPER, runs, seed)
+    print_tables(summary, mod.TABLE_TITLES, console)
+    files = write_outputs(out, summary, rows, series)
+    console.print(f"wrote {', '.join(str(f) for f in files)} "
+                  f"in {time.perf_counter() - t0:.1f} s")
+
+
+@app.command()
+def version() -> None:
+    """Print the fednav version."""
+    console.print(__version__)
+
+
+def main() -> None:  # pragma: no cover
+    app()

@@ -1,0 +1,35 @@
+"""Error statistics over a flight and Monte Carlo summaries with confidence intervals."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import stats
+
+
+def error_stats(err) -> dict[str, np.ndarray]:
+    """Statistics over time (axis 0) of an error series (K, ...).
+
+    ``mean_abs`` (the paper-002 statistic), ``rms``, ``std``, ``max_abs``, ``max``, ``min``.
+    """
+    e = np.asarray(err, dtype=float)
+    if not np.all(np.isfinite(e)):
+        raise ValueError("error_stats: error series contains NaN/inf")
+    return {
+        "mean_abs": np.abs(e).mean(axis=0),
+        "rms": np.sqrt((e**2).mean(axis=0)),
+        "std": e.std(axis=0),
+        "max_abs": np.abs(e).max(axis=0),
+        "max": e.max(axis=0),
+        "min": e.min(axis=0),
+    }
+
+
+def mean_ci95(values) -> tuple[float, float]:
+    """Monte Carlo mean and half-width of its 95 % confidence interval (Student t)."""
+    v = np.asarray(values, dtype=float)
+    n = v.size
+    m = float(v.mean())
+    if n < 2:
+        return m, float("nan")
+    h = float(stats.t.ppf(0.975, n - 1) * v.std(ddof=1) / np.sqrt(n))
+    return m, h

@@ -1,0 +1,115 @@
+"""Reproduction reports: summary.json, per-run CSV, side-by-side tables and error plots."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from rich.console import Console
+from rich.table import Table
+
+from . import units
+from .evaluation import mean_ci95
+
+
+def summarize(rows: list[dict], paper_tables: dict, paper: str, runs: int, seed: int) -> dict:
+    """``summary.json`` structure: tables -> rows -> columns -> {ours, ci95, paper}."""
+    df = pd.DataFrame(rows)
+    tables = {}
+    for tname, trows in paper_tables.items():
+        out_rows = {}
+        for row, cols in trows.items():
+            sub = df[df["mode"] == row]
+            if sub.empty:
+                continue
+            out_rows[row] = {}
+            for col, pv in cols.items():
+                m, h = mean_ci95(sub[col].to_numpy())
+                out_rows[row][col] = {"ours": m, "ci95": h, "paper": pv}
+        tables[tname] = {"rows": out_rows}
+    return {"paper": paper, "runs": runs, "seed": seed, "tables": tables}
+
+
+def _fmt(x: float) -> str:
+    if not np.isfinite(x):
+        return "–"
+    a = abs(x)
+    if a >= 100:
+        return f"{x:.0f}"
+    if a >= 10:
+        return f"{x:.1f}"
+    if a >= 1:
+        return f"{x:.2f}"
+    return f"{x:.3g}"
+
+
+def print_tables(summary: dict, titles: dict[str, str], console: Console | None = None) -> None:
+    """Print each table: our Monte Carlo mean ± 95 % CI beside the paper's value."""
+    console = console or Console()
+    for tname, t in summary["tables"].items():
+        rows = t["rows"]
+        if not rows:
+            continue
+        cols = list(next(iter(rows.values())))
+        tab = Table(title=f"{titles.get(tname, tname)}  (fednav: mean ± 95% CI over "
+                          f"{summary['runs']} runs | paper)")
+        tab.add_column("mode")
+        for c in cols:
+            tab.add_column(c, justify="right")
+        for r, vals in rows.items():
+            cells = []
+            for c in cols:
+                v = vals[c]
+                ratio = v["ours"] / v["paper"] if v["paper"] else float("nan")
+                cells.append(f"{_fmt(v['ours'])} ± {_fmt(v['ci95'])} | {_fmt(v['paper'])}"
+                             f"  (×{ratio:.2f})")
+            tab.add_row(r, *cells)
+        console.print(tab)
+
+
+def write_outputs(out: Path, summary: dict, rows: list[dict], series: dict) -> list[Path]:
+    """Write summary.json, runs.csv and error plots of the first run into ``out``."""
+    out.mkdir(parents=True, exist_ok=True)
+    written = []
+    p = out / "summary.json"
+    p.write_text(json.dumps(summary, indent=2))
+    written.append(p)
+    p = out / "runs.csv"
+    pd.DataFrame(rows).to_csv(p, index=False)
+    written.append(p)
+    if series:
+        written.append(plot_errors(series, out / "errors.png"))
+    return written
+
+
+def plot_errors(series: dict, path: Path) -> Path:
+    """Position, velocity and misalignment errors versus time for each mode (one run)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(3, 3, figsize=(14, 9), sharex=True)
+    labels = [("east pos. [m]", "north pos. [m]", "up pos. [m]"),
+              ("vE [m/s]", "vN [m/s]", "vU [m/s]"),
+              ('phiE ["]', 'phiN ["]', 'phiU ["]')]
+    for mode, r in series.items():
+        data = (r.pos, r.vel, units.to_arcsec(r.att))
+        for i in range(3):
+            for j in range(3):
+                axes[i, j].plot(r.t, data[i][:, j], lw=0.8, label=mode)
+                axes[i, j].set_ylabel(labels[i][j])
+    for ax in axes.ravel():
+        ax.grid(alpha=0.3)
+    for j in range(3):
+        axes[2, j].set_xlabel("time [s]")
+    axes[0, 0].legend(fontsize=8)
+    axes[0, 0].set_yscale("symlog", linthresh=1.0)
+    axes[0, 1].set_yscale("symlog", linthresh=1.0)
+    fig.suptitle("Navigation errors (computed − true), first Monte Carlo run")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path

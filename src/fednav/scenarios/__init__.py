@@ -1,0 +1,10 @@
+"""Paper scenarios: YAML files plus the code that reproduces each paper's tables."""
+
+from pathlib import Path
+
+SCENARIO_DIR = Path(__file__).parent
+
+
+def scenario_path(name: str) -> Path:
+    """Path of a packaged scenario file (``paper002`` -> ``paper002.yaml``)."""
+    return SCENARIO_DIR / f"{name}.yaml"

@@ -1,0 +1,45 @@
+"""Short reproduction smoke runs (seconds); the full reproduction stays out of CI."""
+
+import json
+
+import numpy as np
+from typer.testing import CliRunner
+
+from fednav.cli import app
+from fednav.scenarios import paper002
+from fednav.simulate import make_run_data, run_mode
+
+
+def test_modes_behave_as_the_paper_says_on_a_short_flight():
+    scn = paper002.load_scenario()
+    data = make_run_data(scn, 3, max_time=300.0)
+    res = {m.name: run_mode(scn, list(m.aiding), data, m.name, 300.0) for m in scn.modes}
+    stats = {k: paper002.run_statistics(r) for k, r in res.items()}
+    # SAR fixes bound the position; CNS bounds the attitude; together at least as good.
+    assert stats["SINS/SAR"]["dlambda_m"] < 0.1 * stats["SINS"]["dlambda_m"]
+    assert stats["SINS/CNS"]["phiU_arcsec"] < 2.0
+    assert stats["SINS/CNS/SAR"]["dlambda_m"] < 2.0
+    assert stats["SINS/CNS/SAR"]["phiU_arcsec"] < 2.0
+    # Filter 1-sigma is reported and finite for aided modes.
+    assert np.all(np.isfinite(res["SINS/CNS/SAR"].sigma))
+    b = res["SINS/CNS/SAR"].beta
+    np.testing.assert_allclose(sum(b.values()), 1.0)
+
+
+def test_cli_reproduce_smoke(tmp_path):
+    r = CliRunner().invoke(app, ["reproduce", "cruise-missile", "--runs", "2", "--jobs", "1",
+                                 "--max-time", "60", "--out", str(tmp_path)])
+    assert r.exit_code == 0, r.output
+    s = json.loads((tmp_path / "summary.json").read_text())
+    assert s["paper"] == "002" and s["runs"] == 2 and s["seed"] == 1
+    row = s["tables"]["T2"]["rows"]["SINS/CNS/SAR"]["dlambda_m"]
+    assert set(row) == {"ours", "ci95", "paper"} and row["paper"] == 0.79
+    assert set(s["tables"]["T3"]["rows"]["SINS"]) == {"phiE_arcsec", "phiN_arcsec",
+                                                      "phiU_arcsec"}
+    assert (tmp_path / "errors.png").exists() and (tmp_path / "runs.csv").exists()
+
+
+def test_cli_rejects_unknown_paper():
+    r = CliRunner().invoke(app, ["reproduce", "999"])
+    assert r.exit_code != 0
+    assert "unknown paper '999'" in r.output

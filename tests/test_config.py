@@ -1,0 +1,55 @@
+import pytest
+import yaml
+
+from fednav.config import ConfigError, load_scenario
+from fednav.scenarios import scenario_path
+
+
+def write(tmp_path, mutate):
+    data = yaml.safe_load(scenario_path("paper002").read_text())
+    mutate(data)
+    p = tmp_path / "s.yaml"
+    p.write_text(yaml.safe_dump(data))
+    return p
+
+
+def test_packaged_scenario_loads():
+    s = load_scenario(scenario_path("paper002"))
+    assert s.duration == pytest.approx(1200.0)
+    assert [m.name for m in s.modes] == ["SINS", "SINS/SAR", "SINS/CNS", "SINS/CNS/SAR"]
+
+
+def test_unknown_key(tmp_path):
+    p = write(tmp_path, lambda d: d["sensors"]["sar"].update(sigma_pos=3))
+    with pytest.raises(ConfigError, match=r"s\.yaml: key 'sensors\.sar\.sigma_pos': unknown key"):
+        load_scenario(p)
+
+
+def test_wrong_type(tmp_path):
+    p = write(tmp_path, lambda d: d["start"].update(lat_deg="north"))
+    with pytest.raises(ConfigError, match=r"key 'start\.lat_deg'"):
+        load_scenario(p)
+
+
+def test_missing_value(tmp_path):
+    p = write(tmp_path, lambda d: d.pop("imu_period_s"))
+    with pytest.raises(ConfigError, match=r"key 'imu_period_s': missing value"):
+        load_scenario(p)
+
+
+def test_unknown_filter_name(tmp_path):
+    p = write(tmp_path, lambda d: d["filter"].update(type="pf9"))
+    with pytest.raises(ConfigError, match=r"key 'filter\.type'"):
+        load_scenario(p)
+
+
+def test_missing_file(tmp_path):
+    with pytest.raises(ConfigError, match="not found"):
+        load_scenario(tmp_path / "nope.yaml")
+
+
+def test_error_is_one_line(tmp_path):
+    p = write(tmp_path, lambda d: d["start"].update(bogus=1, lat_deg="x"))
+    with pytest.raises(ConfigError) as e:
+        load_scenario(p)
+    assert "\n" not in str(e.value) and "more" in str(e.value)

@@ -1,0 +1,79 @@
+"""Each measurement model against its truth-based definition.
+
+The INS solution is the truth perturbed by a small error state dx; the noise-free sensor
+measures the truth; the model's residual must equal H dx to first order and h(dx) to
+second order.
+"""
+
+import numpy as np
+import pytest
+
+from fednav import attitude as att
+from fednav import earth, units
+from fednav import error_model as em
+from fednav.measurements import BaroHeight, NavSnapshot, SarFix, StarAttitude
+
+
+def perturbed_nav(euler, dx_si, lla=(0.68, 2.04, 3000.0), vel=(200.0, 150.0, 5.0)):
+    lla = np.array(lla)
+    C = att.euler_to_dcm(euler)
+    rm, rn = earth.radii(lla[0])
+    dp = dx_si[em.DP]
+    nav = NavSnapshot(
+        lla=lla + [dp[1] / (rm + lla[2]), dp[0] / ((rn + lla[2]) * np.cos(lla[0])), dp[2]],
+        vel=np.array(vel) + dx_si[em.DV],
+        C=att.apply_misalignment(C, dx_si[em.PHI]),
+    )
+    return lla, C, nav
+
+
+EULERS = [[0.1, -0.2, units.deg(45)], [0.0, 0.0, units.deg(359.99)],
+          [units.deg(60), 0.3, units.deg(0.01)], [-0.4, 2.9, units.deg(200)]]
+
+
+@pytest.mark.parametrize("euler", EULERS)
+def test_star_model_matches_truth(euler):
+    rng = np.random.default_rng(0)
+    dx = np.zeros(18)
+    dx[em.PHI] = units.arcsec(rng.uniform(-30, 30, 3))
+    lla, C, nav = perturbed_nav(euler, dx)
+    z = att.dcm_to_euler(C)  # perfect star sensor
+    m = StarAttitude()
+    y = m.residual(nav, z)
+    xf = em.from_si(dx)
+    np.testing.assert_allclose(m.h(xf[None], nav)[0], y, atol=1e-9)
+    lin = m.H(nav) @ xf
+    assert np.abs(lin - y).max() < 1e-3 * np.abs(y).max()
+
+
+@pytest.mark.parametrize("euler", EULERS)
+def test_sar_model_matches_truth(euler):
+    dx = np.zeros(18)
+    dx[em.PHI] = units.arcsec([20.0, -10.0, 40.0])
+    dx[em.DP] = [12.0, -7.0, 3.0]
+    lla, C, nav = perturbed_nav(euler, dx)
+    z = np.array([lla[0], lla[1], att.dcm_to_euler(C)[2]])
+    m = SarFix()
+    y = m.residual(nav, z)
+    xf = em.from_si(dx)
+    np.testing.assert_allclose(m.h(xf[None], nav)[0], y, rtol=1e-5, atol=1e-6)
+    np.testing.assert_allclose(m.H(nav) @ xf, y, rtol=1e-3, atol=1e-4)
+
+
+def test_baro_model_matches_truth():
+    dx = np.zeros(18)
+    dx[8] = 4.5
+    lla, C, nav = perturbed_nav([0, 0, 0], dx)
+    m = BaroHeight()
+    y = m.residual(nav, [lla[2]])
+    np.testing.assert_allclose(y, [4.5])
+    np.testing.assert_allclose(m.H(nav) @ em.from_si(dx), y)
+    np.testing.assert_allclose(m.h(em.from_si(dx)[None], nav)[0], y)
+
+
+def test_heading_residual_wraps_at_north():
+    m = StarAttitude()
+    nav = NavSnapshot(np.array([0.6, 2.0, 0.0]), np.zeros(3),
+                      att.euler_to_dcm([0.0, 0.0, units.deg(0.001)]))
+    y = m.residual(nav, [0.0, 0.0, units.deg(359.999)])
+    assert y[2] == pytest.approx(units.to_arcmin(units.deg(0.002)), rel=1e-6)
