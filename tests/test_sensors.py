@@ -32,8 +32,9 @@ def test_star_and_baro_series():
     np.testing.assert_allclose(s.t, [5, 10, 15, 20])
     assert s.z.shape == (4, 3)
     b = Barometer(2.0, 1.0).simulate(tr, rng)
-    h = Barometer.hold(b, np.array([0.5, 1.0, 1.5, 20.0]))
-    assert np.isnan(h[0]) and h[1] == b.z[0, 0] and h[2] == b.z[0, 0] and h[3] == b.z[-1, 0]
+    grid = Barometer.on_imu_grid(b, tr.t[:-1])
+    assert np.count_nonzero(~np.isnan(grid)) == 19  # baro at 1..19 s start an IMU interval
+    assert grid[100] == b.z[0, 0] and np.isnan(grid[101])
 
 
 def test_series_validation():

@@ -46,26 +46,24 @@ def _fmt(x: float) -> str:
 
 
 def print_tables(summary: dict, titles: dict[str, str], console: Console | None = None) -> None:
-    """Print each table: our Monte Carlo mean ± 95 % CI beside the paper's value."""
+    """Print each table, one line per (row, column): our Monte Carlo mean, its 95 % CI,
+    the paper's value and the ratio ours / paper."""
     console = console or Console()
     for tname, t in summary["tables"].items():
         rows = t["rows"]
         if not rows:
             continue
-        cols = list(next(iter(rows.values())))
-        tab = Table(title=f"{titles.get(tname, tname)}  (fednav: mean ± 95% CI over "
-                          f"{summary['runs']} runs | paper)")
-        tab.add_column("mode")
-        for c in cols:
-            tab.add_column(c, justify="right")
+        tab = Table(title=f"{titles.get(tname, tname)}\nfednav: mean ± 95% CI over "
+                          f"{summary['runs']} Monte Carlo runs (seed {summary['seed']})")
+        for c, j in (("row", "left"), ("quantity", "left"), ("fednav", "right"),
+                     ("± 95% CI", "right"), ("paper", "right"), ("fednav/paper", "right")):
+            tab.add_column(c, justify=j)
         for r, vals in rows.items():
-            cells = []
-            for c in cols:
-                v = vals[c]
+            for i, (c, v) in enumerate(vals.items()):
                 ratio = v["ours"] / v["paper"] if v["paper"] else float("nan")
-                cells.append(f"{_fmt(v['ours'])} ± {_fmt(v['ci95'])} | {_fmt(v['paper'])}"
-                             f"  (×{ratio:.2f})")
-            tab.add_row(r, *cells)
+                tab.add_row(r if i == 0 else "", c, _fmt(v["ours"]), _fmt(v["ci95"]),
+                            _fmt(v["paper"]), f"×{ratio:.2f}",
+                            end_section=(i == len(vals) - 1))
         console.print(tab)
 
 

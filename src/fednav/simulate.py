@@ -68,7 +68,7 @@ def make_run_data(scn: Scenario, seed: int, max_time: float | None = None) -> Ru
         cfg = getattr(scn.sensors, name)
         if cfg is not None:
             series[name] = cfg.sensor().simulate(truth, rng)
-    h_ref = (Barometer.hold(series["baro"], truth.t[1:]) if "baro" in series
+    h_ref = (Barometer.on_imu_grid(series["baro"], truth.t[:-1]) if "baro" in series
              else np.full(len(truth.t) - 1, np.nan))
     return RunData(seed, dth, dv, series, h_ref, init_phi, init_dv, init_dp)
 

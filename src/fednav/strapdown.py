@@ -12,7 +12,9 @@ over each IMU interval ``dt`` [s] (body right-forward-up).  Per sample:
 * position: trapezoidal integration of latitude, longitude and height.
 
 The vertical channel can be damped by a barometric height reference through a second-
-or third-order loop (:class:`BaroLoop`).  The state lives in a flat float array so the
+or third-order loop (:class:`BaroLoop`).  The loop is driven by the height difference
+INS - baro formed at each baro sample and held until the next one (holding the baro
+height itself would inject the climb rate times the baro period as an error).  The state lives in a flat float array so the
 same compiled kernel serves open-loop runs and filter loops with feedback.
 """
 
@@ -26,10 +28,11 @@ import numpy as np
 from . import attitude, earth
 
 # Layout of the flat state array.
-_Q, _V, _P, _DTH, _DV, _VPREV, _HAS_PREV, _BARO_INT = (
-    slice(0, 4), slice(4, 7), slice(7, 10), slice(10, 13), slice(13, 16), slice(16, 19), 19, 20
+_Q, _V, _P, _DTH, _DV, _VPREV, _HAS_PREV, _BARO_INT, _BARO_DH = (
+    slice(0, 4), slice(4, 7), slice(7, 10), slice(10, 13), slice(13, 16), slice(16, 19), 19, 20,
+    21,
 )
-STATE_SIZE = 21
+STATE_SIZE = 22
 
 
 @dataclass(frozen=True)
@@ -113,6 +116,7 @@ def _run(state, dtheta, dv, dt, h_ref, gains, out_q, out_v, out_p):
     v_prev = state[16:19].copy()
     has_prev = state[19] > 0.5
     b_int = state[20]
+    dh = state[21]
     om = earth.OMEGA_IE
     for k in range(n):
         dth = dtheta[k]
@@ -146,11 +150,10 @@ def _run(state, dtheta, dv, dt, h_ref, gains, out_q, out_v, out_p):
         dvn = dvn - 0.5 * _cross(zeta, dvn)
         acc = -_cross(2.0 * w_ie + w_en, vm)
         acc[2] -= gmag
-        dh = 0.0
         if not np.isnan(h_ref[k]):
             dh = h - h_ref[k]
-            acc[2] -= gains[1] * dh + b_int
-            b_int += gains[2] * dh * dt
+        acc[2] -= gains[1] * dh + b_int
+        b_int += gains[2] * dh * dt
         v_new = v + dvn + acc * dt
         # Position: trapezoid on velocity.
         h_new = h + 0.5 * dt * (v[2] + v_new[2]) - gains[0] * dh * dt
@@ -180,6 +183,7 @@ def _run(state, dtheta, dv, dt, h_ref, gains, out_q, out_v, out_p):
     state[16:19] = v_prev
     state[19] = 1.0
     state[20] = b_int
+    state[21] = dh
 
 
 class Strapdown:
@@ -222,7 +226,10 @@ class Strapdown:
 
     # --- update ------------------------------------------------------------------
     def run(self, dtheta, dv, h_ref=None, record: bool = True) -> dict[str, np.ndarray] | None:
-        """Integrate IMU increments (N, 3); ``h_ref`` (N,) baro height per sample (NaN = none).
+        """Integrate IMU increments (N, 3).
+
+        ``h_ref`` (N,): baro height measured at the *start* of sample k, NaN where there is
+        no new baro value (the last INS - baro difference is then held).
 
         Returns the navigation state after each sample when ``record`` is true.
         """
@@ -264,3 +271,4 @@ class Strapdown:
         s[7] -= dpos[1] / (rm + h)
         s[8] -= dpos[0] / ((rn + h) * np.cos(lat))
         s[9] -= dpos[2]
+        s[_BARO_DH] -= dpos[2]

@@ -23,10 +23,15 @@ class Barometer:
         return MeasurementSeries("baro", t, z[:, None], np.array([self.sigma]))
 
     @staticmethod
-    def hold(series: MeasurementSeries, t_imu: np.ndarray) -> np.ndarray:
-        """Zero-order hold of the baro heights onto IMU sample times (NaN before the first)."""
-        idx = np.searchsorted(series.t, t_imu, side="right") - 1
+    def on_imu_grid(series: MeasurementSeries, t_imu: np.ndarray) -> np.ndarray:
+        """Baro heights placed on the IMU sample grid for the damping loop.
+
+        Sample k of the result (covering ``(t_imu[k], t_imu[k+1]]``) holds the baro height
+        measured at ``t_imu[k]``, NaN elsewhere.  ``t_imu`` are the IMU interval start times.
+        """
         out = np.full(len(t_imu), np.nan)
-        ok = idx >= 0
-        out[ok] = series.z[idx[ok], 0]
+        idx = np.searchsorted(t_imu, series.t - 1e-9)
+        ok = (idx < len(t_imu)) & (np.abs(t_imu[np.minimum(idx, len(t_imu) - 1)] - series.t)
+                                   < 1e-6)
+        out[idx[ok]] = series.z[ok, 0]
         return out
