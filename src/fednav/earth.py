@@ -84,8 +84,6 @@ def llh_difference_enu(lat, lon, h, lat_ref, lon_ref, h_ref):
     return np.stack(np.broadcast_arrays(de, dn, du), axis=-1)
 
 
-radii_nb = numba.njit(cache=True)(radii)
-gravity_nb = numba.njit(cache=True)(gravity)
 
 
 def gravity_gradient(lat, h):
@@ -101,3 +99,9 @@ def gravity_dlat(lat):
     s = np.sin(lat)
     w = 1.0 - E2 * s * s
     return _GE * np.sin(2 * lat) * (_K / np.sqrt(w) + (1.0 + _K * s * s) * E2 / (2.0 * w**1.5))
+
+
+radii_nb = numba.njit(cache=True)(radii)
+gravity_nb = numba.njit(cache=True)(gravity)
+gravity_gradient_nb = numba.njit(cache=True)(gravity_gradient)
+gravity_dlat_nb = numba.njit(cache=True)(gravity_dlat)

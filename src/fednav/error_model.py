@@ -200,8 +200,103 @@ def _transition(X, T, nsub, p, C0, scale):
     return out
 
 
-def _skew(v) -> np.ndarray:
-    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+@numba.njit(cache=True)
+def _F(p, C):
+    """Continuous linear error dynamics F (SI) at the nominal ``p`` (see ``_rates``)."""
+    lat, h = p[0], p[1]
+    ve, vn, vu = p[2], p[3], p[4]
+    fe, fn, fu = p[5], p[6], p[7]
+    rm, rn, k1, k2, itg, ita = p[8], p[9], p[10], p[11], p[12], p[13]
+    Rm, Rn = rm + h, rn + h
+    sl, cl = np.sin(lat), np.cos(lat)
+    tl = sl / cl
+    om = earth.OMEGA_IE
+    w = np.array([0.0, om * cl, om * sl])  # w_ie
+    wen = np.array([-vn / Rm, ve / Rn, ve * tl / Rn])
+    win = w + wen
+    a = 2.0 * w + wen
+    # d(w_ie)/d(dp), d(w_en)/d(dv), d(w_en)/d(dp) with dp = [dE, dN, dU] in metres.
+    dwie = np.zeros((3, 3))
+    dwie[1, 1] = -om * sl / Rm
+    dwie[2, 1] = om * cl / Rm
+    dwv = np.zeros((3, 3))
+    dwv[0, 1] = -1.0 / Rm
+    dwv[1, 0] = 1.0 / Rn
+    dwv[2, 0] = tl / Rn
+    dwp = np.zeros((3, 3))
+    dwp[0, 2] = vn / Rm**2
+    dwp[1, 2] = -ve / Rn**2
+    dwp[2, 1] = ve / (cl**2 * Rn * Rm)
+    dwp[2, 2] = -ve * tl / Rn**2
+    V = np.array([[0.0, -vu, vn], [vu, 0.0, -ve], [-vn, ve, 0.0]])
+    F = np.zeros((18, 18))
+    # Attitude: phi' = -w_in x phi + dw_in - C eps.
+    F[0, 1], F[0, 2], F[1, 0], F[1, 2], F[2, 0], F[2, 1] = (
+        win[2], -win[1], -win[2], win[0], win[1], -win[0])
+    F[0:3, 3:6] = dwv
+    F[0:3, 6:9] = dwie + dwp
+    F[0:3, 9:12] = -C
+    F[0:3, 12:15] = -C
+    # Velocity: dv' = f x phi + C nabla - (2 w_ie + w_en) x dv + v x (2 dw_ie + dw_en) + dg.
+    F[3, 1], F[3, 2], F[4, 0], F[4, 2], F[5, 0], F[5, 1] = -fu, fn, fu, -fe, -fn, fe
+    F[3:6, 3:6] = V @ dwv
+    F[3, 4] += a[2]
+    F[3, 5] -= a[1]
+    F[4, 3] -= a[2]
+    F[4, 5] += a[0]
+    F[5, 3] += a[1]
+    F[5, 4] -= a[0]
+    F[3:6, 6:9] = V @ (2.0 * dwie + dwp)
+    F[5, 8] += earth.gravity_gradient_nb(lat, h) - k2
+    F[5, 7] -= earth.gravity_dlat_nb(lat) / Rm
+    F[3:6, 15:18] = C
+    # Position (metres).
+    F[6, 3] = 1.0
+    F[6, 7] = ve * tl / Rm
+    F[6, 8] = -ve / Rn
+    F[7, 4] = 1.0
+    F[7, 8] = -vn / Rm
+    F[8, 5] = 1.0
+    F[8, 8] = -k1
+    for i in range(3):
+        F[12 + i, 12 + i] = -itg
+        F[15 + i, 15 + i] = -ita
+    return F
+
+
+@numba.njit(cache=True)
+def _Qc(p, C, q):
+    """Continuous process-noise density (SI); q = [arw, vrw, gyro GM sigma, accel GM sigma,
+    baro noise density]."""
+    k1, k2, itg, ita = p[10], p[11], p[12], p[13]
+    Q = np.zeros((18, 18))
+    Q[0:3, 0:3] = q[0] ** 2 * (C @ C.T)
+    Q[3:6, 3:6] = q[1] ** 2 * (C @ C.T)
+    Q[5, 5] += k2**2 * q[4]
+    Q[8, 8] += k1**2 * q[4]
+    Q[5, 8] = k1 * k2 * q[4]
+    Q[8, 5] = Q[5, 8]
+    for i in range(3):
+        Q[12 + i, 12 + i] = 2.0 * q[2] ** 2 * itg
+        Q[15 + i, 15 + i] = 2.0 * q[3] ** 2 * ita
+    return Q
+
+
+@numba.njit(cache=True)
+def _discretize(p, C, q, T, scale):
+    """Phi (4th-order Taylor over T/2, squared) and Qd (trapezoid), in filter units."""
+    F = _F(p, C)
+    Qc = _Qc(p, C, q)
+    A = F * (0.5 * T)
+    A2 = A @ A
+    half = np.eye(18) + A + A2 @ (np.eye(18) / 2.0 + A / 6.0 + A2 / 24.0)
+    Phi = half @ half
+    Qd = 0.5 * (Phi @ Qc @ Phi.T + Qc) * T
+    for i in range(18):
+        for j in range(18):
+            Phi[i, j] *= scale[j] / scale[i]
+            Qd[i, j] /= scale[i] * scale[j]
+    return Phi, 0.5 * (Qd + Qd.T)
 
 
 @dataclass
@@ -238,76 +333,18 @@ class ErrorProcess:
                                  self.rn, self.k1, self.k2, self.itg, self.ita,
                                  earth.gravity(nom.lat, nom.h)])
         self._C0 = np.ascontiguousarray(nom.C, dtype=float)
-        F = self.F_si()
-        # Transition matrix: 4th-order Taylor series over T/2, squared (||F T|| < 1 here).
-        A = F * (0.5 * T)
-        A2 = A @ A
-        half = np.eye(N_STATES) + A + A2 @ (np.eye(N_STATES) / 2.0 + A / 6.0 + A2 / 24.0)
-        Phi = half @ half
-        Qc = self.Qc_si()
-        Qd = 0.5 * (Phi @ Qc @ Phi.T + Qc) * T
-        s = SCALE
-        self.Phi = Phi * s[None, :] / s[:, None]
-        self.Qd = Qd / np.outer(s, s)
-        self.Qd = 0.5 * (self.Qd + self.Qd.T)
+        self._noise = np.array([noise.gyro_arw, noise.accel_vrw, noise.gyro_markov_sigma,
+                                noise.accel_markov_sigma, self.baro_q])
+        self.Phi, self.Qd = _discretize(self._params, self._C0, self._noise, self.T, SCALE)
 
     # ------------------------------------------------------------------ SI models
     def F_si(self) -> np.ndarray:
         """Continuous-time linear error dynamics (SI units)."""
-        n = self.nom
-        lat, h, v, C, fn = n.lat, n.h, np.asarray(n.vel), n.C, n.fn
-        rm, rn = self.rm, self.rn
-        Rm, Rn = rm + h, rn + h
-        sl, cl, tl = np.sin(lat), np.cos(lat), np.tan(lat)
-        om = earth.OMEGA_IE
-        w_ie = np.array([0.0, om * cl, om * sl])
-        w_en = np.array([-v[1] / Rm, v[0] / Rn, v[0] * tl / Rn])
-        # d(w_ie)/d(dp), d(w_en)/d(dv), d(w_en)/d(dp) with dp = [dE, dN, dU] in metres.
-        dwie_dp = np.zeros((3, 3))
-        dwie_dp[1, 1] = -om * sl / Rm
-        dwie_dp[2, 1] = om * cl / Rm
-        dwen_dv = np.array([[0.0, -1 / Rm, 0.0], [1 / Rn, 0.0, 0.0], [tl / Rn, 0.0, 0.0]])
-        dwen_dp = np.zeros((3, 3))
-        dwen_dp[0, 2] = v[1] / Rm**2
-        dwen_dp[1, 2] = -v[0] / Rn**2
-        dwen_dp[2, 1] = v[0] / (cl**2 * Rn * Rm)
-        dwen_dp[2, 2] = -v[0] * tl / Rn**2
-        F = np.zeros((N_STATES, N_STATES))
-        F[PHI, PHI] = -_skew(w_ie + w_en)
-        F[PHI, DV] = dwen_dv
-        F[PHI, DP] = dwie_dp + dwen_dp
-        F[PHI, EPS_C] = -C
-        F[PHI, EPS_R] = -C
-        F[DV, PHI] = _skew(fn)
-        F[DV, DV] = -_skew(2 * w_ie + w_en) + _skew(v) @ dwen_dv
-        F[DV, DP] = _skew(v) @ (2 * dwie_dp + dwen_dp)
-        F[5, 8] += earth.gravity_gradient(lat, h) - self.k2
-        F[5, 7] -= earth.gravity_dlat(lat) / Rm
-        F[DV, NABLA] = C
-        F[6, 3] = 1.0
-        F[6, 7] = v[0] * tl / Rm
-        F[6, 8] = -v[0] / Rn
-        F[7, 4] = 1.0
-        F[7, 8] = -v[1] / Rm
-        F[8, 5] = 1.0
-        F[8, 8] = -self.k1
-        F[EPS_R, EPS_R] = -self.itg * np.eye(3)
-        F[NABLA, NABLA] = -self.ita * np.eye(3)
-        return F
+        return _F(self._params, self._C0)
 
     def Qc_si(self) -> np.ndarray:
         """Continuous process-noise spectral density (SI units)."""
-        nz = self.noise
-        C = self.nom.C
-        Q = np.zeros((N_STATES, N_STATES))
-        Q[PHI, PHI] = C @ (nz.gyro_arw**2 * np.eye(3)) @ C.T
-        Q[DV, DV] = C @ (nz.accel_vrw**2 * np.eye(3)) @ C.T
-        Q[5, 5] += self.k2**2 * self.baro_q
-        Q[8, 8] += self.k1**2 * self.baro_q
-        Q[5, 8] = Q[8, 5] = self.k1 * self.k2 * self.baro_q
-        Q[EPS_R, EPS_R] = 2.0 * nz.gyro_markov_sigma**2 * self.itg * np.eye(3)
-        Q[NABLA, NABLA] = 2.0 * nz.accel_markov_sigma**2 * self.ita * np.eye(3)
-        return Q
+        return _Qc(self._params, self._C0, self._noise)
 
     # ------------------------------------------------------------ filter interface
     def transition(self, X: np.ndarray) -> np.ndarray:

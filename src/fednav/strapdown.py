@@ -14,8 +14,9 @@ over each IMU interval ``dt`` [s] (body right-forward-up).  Per sample:
 The vertical channel can be damped by a barometric height reference through a second-
 or third-order loop (:class:`BaroLoop`).  The loop is driven by the height difference
 INS - baro formed at each baro sample and held until the next one (holding the baro
-height itself would inject the climb rate times the baro period as an error).  The state lives in a flat float array so the
-same compiled kernel serves open-loop runs and filter loops with feedback.
+height itself would inject the climb rate times the baro period as an error).  The state
+lives in a flat float array so the same compiled kernel serves open-loop runs and filter
+loops with feedback.
 """
 
 from __future__ import annotations
@@ -218,7 +219,7 @@ class Strapdown:
 
     @property
     def dcm(self) -> np.ndarray:
-        return attitude.quat_to_dcm(self.state[_Q])
+        return _q2dcm(self.state[_Q])
 
     @property
     def euler(self) -> np.ndarray:
@@ -262,8 +263,8 @@ class Strapdown:
         error [m/s], ``dpos`` ENU position error [m].
         """
         s = self.state
-        s[_Q] = attitude.quat_mul(attitude.rotvec_to_quat(phi), s[_Q])
-        s[_Q] /= np.linalg.norm(s[_Q])
+        q = _qmul(_rv2q(np.asarray(phi, dtype=float)), s[_Q])
+        s[_Q] = q / np.sqrt(q @ q)
         s[_V] -= dvel
         s[_VPREV] -= dvel
         lat, _, h = s[_P]

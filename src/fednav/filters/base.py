@@ -14,6 +14,7 @@ Covariances are kept symmetric; a covariance that is not positive definite raise
 
 from __future__ import annotations
 
+import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
 from typing import NamedTuple
@@ -108,9 +109,11 @@ class Filter(ABC):
     def _who(self, phase: str) -> str:
         return f"{self.name} {phase} at step {self.step}"
 
-    def _finish(self, phase: str) -> None:
-        self.P = 0.5 * (self.P + self.P.T)
-        if not (np.all(np.isfinite(self.x)) and np.all(np.isfinite(self.P))):
+    def _finish(self, phase: str, symmetrize: bool = True) -> None:
+        if symmetrize:
+            self.P = 0.5 * (self.P + self.P.T)
+        # A sum propagates any NaN/inf: one cheap check for the whole state.
+        if not math.isfinite(self.x.sum() + self.P.sum()):
             raise FilterError(f"{self._who(phase)}: state or covariance became NaN/inf")
 
     @abstractmethod

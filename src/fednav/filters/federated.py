@@ -21,6 +21,7 @@ estimate equals the centralized Kalman filter (tested).
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 from numpy.linalg import LinAlgError
 
@@ -54,6 +55,38 @@ def _inv_spd(P, who):
         raise FilterError(f"federated fusion: covariance of '{who}' is not positive definite") \
             from None
     return Linv.T @ Linv
+
+
+@numba.njit(cache=True)
+def _spd_inverse(P):
+    """Inverse of an SPD matrix via Cholesky; (inverse, ok)."""
+    n = P.shape[0]
+    for i in range(n):
+        if not (P[i, i] > 0.0):
+            return P, False
+    L = np.linalg.cholesky(P)
+    Li = np.linalg.inv(L)
+    return Li.T @ Li, True
+
+
+@numba.njit(cache=True)
+def _fuse(xs, Ps):
+    """Information fusion of k estimates: (x_g, P_g, tr(P_i^-1) (k,), index of failure)."""
+    k, n = xs.shape
+    Ig = np.zeros((n, n))
+    v = np.zeros(n)
+    tr = np.empty(k)
+    for i in range(k):
+        Ii, ok = _spd_inverse(Ps[i])
+        if not ok:
+            return v, Ig, tr, i
+        Ig += Ii
+        v += Ii @ xs[i]
+        tr[i] = np.trace(Ii)
+    Pg, ok = _spd_inverse(0.5 * (Ig + Ig.T))
+    if not ok:
+        return v, Ig, tr, k
+    return Pg @ v, 0.5 * (Pg + Pg.T), tr, -1
 
 
 class FederatedFilter:
@@ -102,19 +135,22 @@ class FederatedFilter:
         use = {k: f for k, f in self.filters.items() if k not in self.isolated}
         if not use:
             raise FilterError("federated fusion: every filter is isolated")
-        infos = {k: _inv_spd(f.P, k) for k, f in use.items()}
-        Ig = sum(infos.values())
-        Pg = _inv_spd(Ig, "fused information")
-        xg = Pg @ sum(infos[k] @ f.x for k, f in use.items())
-        self.x, self.P = xg, 0.5 * (Pg + Pg.T)
+        names = list(use)
+        xs = np.array([use[k].x for k in names])
+        Ps = np.array([use[k].P for k in names])
+        xg, Pg, traces, bad = _fuse(xs, Ps)
+        if bad >= 0:
+            who = names[bad] if bad < len(names) else "fused information"
+            raise FilterError(f"federated fusion: covariance of '{who}' is not positive "
+                              f"definite")
+        self.x, self.P = xg, Pg
         if self.reset:
             if self.sharing == "adaptive":
                 # Only the filters that take part share information; isolated ones keep
                 # running on their own until they pass the test again.
-                tr = {k: np.trace(I) for k, I in infos.items()}
                 budget = 1.0 - sum(self.beta[k] for k in self.isolated)
-                s = sum(tr.values())
-                self.beta.update({k: budget * v / s for k, v in tr.items()})
+                s = traces.sum()
+                self.beta.update({k: budget * t / s for k, t in zip(names, traces, strict=True)})
             for k, f in use.items():
                 f.x = self.x.copy()
                 f.P = self.P / self.beta[k]

@@ -5,14 +5,79 @@ Sigma points ``x``, ``x +- sqrt((n + lam) P)_i`` (columns of the lower Cholesky 
 ``Wc0 = Wm0 + 1 - alpha^2 + beta``, ``Wi = 1 / (2 (n + lam))`` (paper 002, section 1.2).
 
 The measurement update redraws its sigma points from the predicted (x, P), so the
-process noise Q is seen by the measurement (as FilterPy >= 1.4 does).
+process noise Q is seen by the measurement (as FilterPy >= 1.4 does).  The linear algebra
+of both steps runs in numba kernels; only the user's process and measurement functions
+(called once per step on all sigma points) run in Python.
 """
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 
-from .base import Filter, Innovation, chol, solve_spd
+from .base import Filter, FilterError, Innovation
+
+
+@numba.njit(cache=True)
+def _sigma_points(x, P, c):
+    """Rows: x, x + L[:, i], x - L[:, i] with L L' = c P; empty array if not PD."""
+    n = x.shape[0]
+    S = c * P
+    # Cholesky by hand to report failure instead of raising inside numba.
+    L = np.zeros((n, n))
+    for j in range(n):
+        d = S[j, j]
+        for k in range(j):
+            d -= L[j, k] * L[j, k]
+        if not d > 0.0:
+            return np.empty((0, n))
+        L[j, j] = np.sqrt(d)
+        for i in range(j + 1, n):
+            s = S[i, j]
+            for k in range(j):
+                s -= L[i, k] * L[j, k]
+            L[i, j] = s / L[j, j]
+    X = np.empty((2 * n + 1, n))
+    X[0] = x
+    for i in range(n):
+        for j in range(n):
+            X[1 + i, j] = x[j] + L[j, i]
+            X[1 + n + i, j] = x[j] - L[j, i]
+    return X
+
+
+@numba.njit(cache=True)
+def _predict_moments(Y, Wm, Wc, Q):
+    y = Wm @ Y
+    D = Y - y
+    P = (D * Wc.reshape(-1, 1)).T @ D + Q
+    P = 0.5 * (P + P.T)
+    return y, P
+
+
+@numba.njit(cache=True)
+def _update(X, Z, Wm, Wc, x, P, y, R):
+    """UKF measurement update; returns x, P, r, Pzz, nis and an ok flag."""
+    z_hat = Wm @ Z
+    dz = Z - z_hat
+    dx = X - Wm @ X
+    WdZ = dz * Wc.reshape(-1, 1)
+    Pzz = WdZ.T @ dz + R
+    Pzz = 0.5 * (Pzz + Pzz.T)
+    Pxz = (dx * Wc.reshape(-1, 1)).T @ dz
+    m = Pzz.shape[0]
+    for i in range(m):
+        if not (Pzz[i, i] > 0.0):
+            return x, P, z_hat, Pzz, 0.0, False
+    Linv = np.linalg.inv(np.linalg.cholesky(Pzz))
+    Sinv = Linv.T @ Linv
+    K = Pxz @ Sinv
+    r = y - z_hat
+    xn = x + K @ r
+    Pn = P - K @ Pzz @ K.T
+    Pn = 0.5 * (Pn + Pn.T)
+    nis = r @ Sinv @ r
+    return xn, Pn, r, Pzz, nis, True
 
 
 class UnscentedKalmanFilter(Filter):
@@ -31,35 +96,31 @@ class UnscentedKalmanFilter(Filter):
         self.Wc[0] = lam / self.c + 1.0 - alpha**2 + beta
 
     def sigma_points(self, x=None, P=None, phase: str = "sigma points") -> np.ndarray:
-        x = self.x if x is None else x
-        P = self.P if P is None else P
-        L = chol(self.c * P, self._who(phase))
-        return np.vstack([x, x + L.T, x - L.T])
-
-    def _moments(self, Y):
-        y = self.Wm @ Y
-        d = Y - y
-        return y, d, (d * self.Wc[:, None]).T @ d
+        x = self.x if x is None else np.asarray(x, dtype=float)
+        P = self.P if P is None else np.asarray(P, dtype=float)
+        X = _sigma_points(x, P, self.c)
+        if X.shape[0] == 0:
+            ev = np.linalg.eigvalsh(0.5 * (P + P.T)) if np.all(np.isfinite(P)) else [np.nan]
+            raise FilterError(f"{self._who(phase)}: covariance is not positive definite "
+                              f"(smallest eigenvalue {np.min(ev):.3g})")
+        return X
 
     def predict(self, process, q_scale: float = 1.0) -> None:
         self.step += 1
         X = self.sigma_points(phase="predict")
-        Xf = process.transition(X)
-        self.x, _, P = self._moments(Xf)
-        self.P = P + q_scale * process.Qd
-        self._finish("predict")
+        Xf = np.ascontiguousarray(process.transition(X), dtype=float)
+        Q = process.Qd if q_scale == 1.0 else q_scale * process.Qd
+        self.x, self.P = _predict_moments(Xf, self.Wm, self.Wc, np.asarray(Q, dtype=float))
+        self._finish("predict", symmetrize=False)
 
     def update(self, y, model, nav=None, R=None) -> Innovation:
         X = self.sigma_points(phase="update")
-        Z = model.h(X, nav)
-        z_hat, dz, Pzz = self._moments(Z)
-        Pzz = Pzz + R
-        Pzz = 0.5 * (Pzz + Pzz.T)
-        dx = X - self.Wm @ X
-        Pxz = (dx * self.Wc[:, None]).T @ dz
-        K = solve_spd(Pzz, Pxz.T, self._who("update")).T
-        r = np.asarray(y, dtype=float) - z_hat
-        self.x = self.x + K @ r
-        self.P = self.P - K @ Pzz @ K.T
-        self._finish("update")
-        return Innovation(r, Pzz, float(r @ solve_spd(Pzz, r, self._who("update"))))
+        Z = np.ascontiguousarray(model.h(X, nav), dtype=float)
+        x, P, r, Pzz, nis, ok = _update(X, Z, self.Wm, self.Wc, self.x, self.P,
+                                        np.asarray(y, dtype=float), np.asarray(R, dtype=float))
+        if not ok or not np.isfinite(nis):
+            raise FilterError(f"{self._who('update')}: innovation covariance not positive "
+                              f"definite")
+        self.x, self.P = x, P
+        self._finish("update", symmetrize=False)
+        return Innovation(r, Pzz, float(nis))
