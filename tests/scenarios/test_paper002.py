@@ -43,3 +43,25 @@ def test_cli_rejects_unknown_paper():
     r = CliRunner().invoke(app, ["reproduce", "999"])
     assert r.exit_code != 0
     assert "unknown paper '999'" in r.output
+
+
+def test_qualitative_claims_full_flight():
+    """Paper 002's claims on full 1200 s flights (2 Monte Carlo runs, seeds 1-2)."""
+    scn = paper002.load_scenario()
+    rows, _ = paper002.run_monte_carlo(scn, runs=2, seed=1)
+    mean = {}
+    for r in rows:
+        for k, v in r.items():
+            if k not in ("seed", "mode"):
+                mean.setdefault(r["mode"], {}).setdefault(k, []).append(v)
+    m = {mode: {k: np.mean(v) for k, v in cols.items()} for mode, cols in mean.items()}
+    sar, cns, fed = m["SINS/SAR"], m["SINS/CNS"], m["SINS/CNS/SAR"]
+    # SAR corrects position and velocity but not heading.
+    assert sar["dlambda_m"] < 0.01 * m["SINS"]["dlambda_m"]
+    assert sar["phiU_arcsec"] > 5 * cns["phiU_arcsec"]
+    # CNS corrects attitude but the position drifts.
+    assert cns["phiU_arcsec"] < 1.0 and cns["dlambda_m"] > 10 * sar["dlambda_m"]
+    # The federated system is at least as good as the better sub-system on every column
+    # (2 runs only: allow 15 % of Monte Carlo noise).
+    for col in fed:
+        assert fed[col] <= 1.15 * min(sar[col], cns[col]), col
