@@ -42,3 +42,19 @@ def test_series_validation():
         MeasurementSeries("sar", [1.0, 1.0], np.zeros((2, 3)), np.ones(3))
     with pytest.raises(ValueError, match="non-finite"):
         MeasurementSeries("sar", [1.0, 2.0], [[np.nan] * 3, [0] * 3], np.ones(3))
+
+
+def test_imu_per_axis_parameters():
+    rng = np.random.default_rng(2)
+    n, dt = 100_000, 0.01
+    z = np.zeros((n, 3))
+    err = ImuErrors(gyro_bias=(1e-6, 2e-6, 3e-6), accel_vrw=(1e-3, 0.0, 2e-3),
+                    gyro_markov_sigma=(0.0, 1e-5, 0.0), gyro_markov_tau=(np.inf, 20.0, 5.0),
+                    gyro_bias_rw=(0.0, 0.0, 1e-7))
+    dth, dv, st = corrupt_imu(z, z, dt, err, rng)
+    assert np.all(st.gyro_bias[:, 0] == 1e-6)  # constant only
+    assert (st.gyro_bias[:, 1] - 2e-6).std() == pytest.approx(1e-5, rel=0.15)
+    assert np.ptp(st.gyro_bias[:, 2]) > 0  # random walk on z only
+    np.testing.assert_allclose(dv.std(axis=0) / np.sqrt(dt), [1e-3, 0.0, 2e-3], rtol=0.02)
+    with pytest.raises(ValueError, match=r"\(N, 3\)"):
+        corrupt_imu(np.zeros((5, 2)), np.zeros((5, 2)), dt, err, rng)

@@ -87,3 +87,10 @@ def test_baro_loop_does_not_lag_in_a_fast_climb():
     ins = Strapdown(tr.lla[0], tr.vel[0], tr.euler[0], 0.01, baro=BaroLoop(20.0, 2))
     out = ins.run(tr.dtheta, tr.dv, h_ref=h_ref)
     assert np.abs(out["lla"][:, 2] - tr.lla[1:, 2]).max() < 0.01
+
+
+def test_compiled_quat_to_dcm_matches_numpy():
+    from fednav.strapdown import quat_to_dcm_nb
+
+    q = att.euler_to_quat([0.3, -0.2, 4.0])
+    np.testing.assert_allclose(quat_to_dcm_nb(q), att.quat_to_dcm(q), atol=1e-15)

@@ -9,6 +9,7 @@ its Jacobian ``H(nav)``.  Residual units: metres for positions, arc-minutes for 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -26,7 +27,7 @@ class NavSnapshot:
     vel: np.ndarray
     C: np.ndarray
 
-    @property
+    @cached_property
     def euler(self) -> np.ndarray:
         return att.dcm_to_euler(self.C)
 

@@ -19,7 +19,7 @@ from .config import Scenario
 from .filters import FederatedFilter, make_filter
 from .measurements import MODELS, NavSnapshot
 from .sensors import Barometer, MeasurementSeries, corrupt_imu
-from .strapdown import Strapdown
+from .strapdown import Strapdown, quat_to_dcm_nb
 
 
 @dataclass
@@ -161,7 +161,7 @@ def run_mode(scn: Scenario, aiding: list[str], data: RunData, mode: str = "",
         ins.run(dth, dvc, data.h_ref[sl], record=False)
         if fed is not None:
             qm = q0 + ins.q
-            Cm = att.quat_to_dcm(qm / np.linalg.norm(qm))
+            Cm = quat_to_dcm_nb(qm / np.sqrt(qm @ qm))
             nom = em.Nominal(lat=0.5 * (lla0[0] + ins.lla[0]), h=0.5 * (lla0[2] + ins.lla[2]),
                              vel=0.5 * (v0 + ins.vel), C=Cm, fn=Cm @ dvc.sum(axis=0) / T)
             proc = em.ErrorProcess(nom, T, noise, baro_gains, baro_q, scn.filter.substeps)

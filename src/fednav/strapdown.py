@@ -187,6 +187,10 @@ def _run(state, dtheta, dv, dt, h_ref, gains, out_q, out_v, out_p):
     state[21] = dh
 
 
+#: Quaternion -> DCM compiled for per-cycle use (same convention as ``attitude.quat_to_dcm``).
+quat_to_dcm_nb = _q2dcm
+
+
 class Strapdown:
     """Strapdown INS state (attitude quaternion, ENU velocity, lat/lon/h) and its update.
 

@@ -155,3 +155,26 @@ def test_federated_feedback_zeroes_state():
     np.testing.assert_allclose(fed.locals["a"].x, 0.0)
     with pytest.raises(ValueError, match="no local filter named 'zz'"):
         fed.update("zz", [0.0], None)
+
+
+def test_federated_no_reset_keeps_local_estimates():
+    A, _ = linear_problem(4, 2)
+    H = np.array([[1.0, 0.0]])
+    proc = FunctionProcess(lambda x: A @ x, A, 0.01 * np.eye(2))
+    m = FunctionModel(lambda x: H @ x, H)
+    a, b = KalmanFilter(np.zeros(2), np.eye(2)), KalmanFilter(np.ones(2), 2 * np.eye(2))
+    fed = FederatedFilter({"a": a, "b": b}, sharing="equal", reset=False)
+    fed.predict(proc)
+    fed.update("a", [0.5], m, R=np.array([[0.1]]))
+    xa, Pa, xb, Pb = a.x.copy(), a.P.copy(), b.x.copy(), b.P.copy()
+    xg, Pg = fed.fuse()
+    # Locals untouched; the fused estimate is their information-weighted combination.
+    np.testing.assert_array_equal(a.x, xa)
+    np.testing.assert_array_equal(b.P, Pb)
+    Ia, Ib = np.linalg.inv(Pa), np.linalg.inv(Pb)
+    np.testing.assert_allclose(Pg, np.linalg.inv(Ia + Ib), rtol=1e-12)
+    np.testing.assert_allclose(xg, Pg @ (Ia @ xa + Ib @ xb), rtol=1e-12)
+    # Feedback moves every local estimate by the fed-back correction.
+    dx = fed.feedback()
+    np.testing.assert_allclose(a.x, xa - dx)
+    np.testing.assert_allclose(b.x, xb - dx)

@@ -14,9 +14,9 @@ from scipy.signal import lfilter
 
 @dataclass(frozen=True)
 class ImuErrors:
-    """IMU error specification.
+    """IMU error specification; every field is a scalar (all axes) or a per-axis triple.
 
-    ``*_bias``: constant bias (array of 3, or a scalar applied to all axes); with
+    ``*_bias``: constant bias; with
     ``random_bias`` true it is the 1-sigma of a per-run random draw instead of the value.
     ``gyro_arw`` [rad/sqrt(s)] and ``accel_vrw`` [m/s/sqrt(s)]: white noise on the rates.
     ``*_bias_rw``: bias random walk [unit/sqrt(s)].  ``*_markov_sigma`` and
@@ -24,15 +24,15 @@ class ImuErrors:
     """
 
     gyro_bias: float | tuple = 0.0
-    gyro_arw: float = 0.0
-    gyro_bias_rw: float = 0.0
-    gyro_markov_sigma: float = 0.0
-    gyro_markov_tau: float = np.inf
+    gyro_arw: float | tuple = 0.0
+    gyro_bias_rw: float | tuple = 0.0
+    gyro_markov_sigma: float | tuple = 0.0
+    gyro_markov_tau: float | tuple = np.inf
     accel_bias: float | tuple = 0.0
-    accel_vrw: float = 0.0
-    accel_bias_rw: float = 0.0
-    accel_markov_sigma: float = 0.0
-    accel_markov_tau: float = np.inf
+    accel_vrw: float | tuple = 0.0
+    accel_bias_rw: float | tuple = 0.0
+    accel_markov_sigma: float | tuple = 0.0
+    accel_markov_tau: float | tuple = np.inf
     random_bias: bool = False
 
 
@@ -44,32 +44,49 @@ class ImuErrorState:
     accel_bias: np.ndarray
 
 
+def _axes(v) -> np.ndarray:
+    """A scalar or per-axis specification as an array of 3."""
+    return np.broadcast_to(np.asarray(v, dtype=float), (3,)).copy()
+
+
 def _markov(n, dt, sigma, tau, rng):
-    """Stationary first-order Gauss–Markov sequence (n, 3), exact discretisation."""
-    if sigma == 0 or not np.isfinite(tau):
-        return np.zeros((n, 3))
-    a = np.exp(-dt / tau)
-    w = rng.standard_normal((n, 3)) * sigma * np.sqrt(1.0 - a * a)
-    w[0] = rng.standard_normal(3) * sigma  # start in steady state
-    return lfilter([1.0], [1.0, -a], w, axis=0)
+    """Stationary first-order Gauss–Markov sequence (n, 3), exact discretisation.
+
+    ``sigma`` and ``tau`` are per axis (scalars broadcast)."""
+    sigma, tau = _axes(sigma), _axes(tau)
+    out = np.zeros((n, 3))
+    w = rng.standard_normal((n, 3))
+    for i in range(3):
+        if sigma[i] == 0 or not np.isfinite(tau[i]):
+            continue
+        a = np.exp(-dt / tau[i])
+        e = w[:, i] * sigma[i] * np.sqrt(1.0 - a * a)
+        e[0] = w[0, i] * sigma[i]  # start in steady state
+        out[:, i] = lfilter([1.0], [1.0, -a], e)
+    return out
 
 
 def corrupt_imu(dtheta, dv, dt: float, errors: ImuErrors, rng: np.random.Generator):
     """Add the IMU errors to ideal increments; returns (dtheta_meas, dv_meas, ImuErrorState).
 
-    Biases are integrated over each interval as constant; white noise adds
-    ``arw * sqrt(dt)`` per angle increment (``vrw * sqrt(dt)`` per velocity increment).
+    Every parameter may be a scalar (all axes) or a per-axis triple.  Biases are
+    integrated over each interval as constant; white noise adds ``arw * sqrt(dt)`` per
+    angle increment (``vrw * sqrt(dt)`` per velocity increment).
     """
     dtheta = np.asarray(dtheta, dtype=float)
     dv = np.asarray(dv, dtype=float)
     n = dtheta.shape[0]
+    if dtheta.shape != (n, 3) or dv.shape != (n, 3):
+        raise ValueError(f"corrupt_imu: increments must be (N, 3), got {dtheta.shape} and "
+                         f"{dv.shape}")
 
     def bias(const, rw, msig, mtau):
-        c = np.broadcast_to(np.asarray(const, dtype=float), (3,))
+        c = _axes(const)
         if errors.random_bias:
             c = c * rng.standard_normal(3)
         b = np.tile(c, (n, 1))
-        if rw:
+        rw = _axes(rw)
+        if np.any(rw):
             b = b + np.cumsum(rng.standard_normal((n, 3)) * rw * np.sqrt(dt), axis=0)
         return b + _markov(n, dt, msig, mtau, rng)
 
@@ -77,6 +94,6 @@ def corrupt_imu(dtheta, dv, dt: float, errors: ImuErrors, rng: np.random.Generat
               errors.gyro_markov_tau)
     ab = bias(errors.accel_bias, errors.accel_bias_rw, errors.accel_markov_sigma,
               errors.accel_markov_tau)
-    dth = dtheta + gb * dt + rng.standard_normal((n, 3)) * errors.gyro_arw * np.sqrt(dt)
-    dvm = dv + ab * dt + rng.standard_normal((n, 3)) * errors.accel_vrw * np.sqrt(dt)
+    dth = dtheta + gb * dt + rng.standard_normal((n, 3)) * _axes(errors.gyro_arw) * np.sqrt(dt)
+    dvm = dv + ab * dt + rng.standard_normal((n, 3)) * _axes(errors.accel_vrw) * np.sqrt(dt)
     return dth, dvm, ImuErrorState(gb, ab)
