@@ -110,7 +110,27 @@ def _rotate(E, wl, wr, h, tmp, R):
 
 
 @numba.njit(cache=True)
-def _rates(x, E, p, C0, out, wl, wr):
+def _nominal_terms(p):
+    """Terms of ``_rates`` that depend on the nominal only: w_ie0 + w_en0 (3),
+    (2 w_ie0 + w_en0) x v0 (3), cos(lat0)."""
+    lat0, h0, rm, rn = p[0], p[1], p[8], p[9]
+    v0e, v0n, v0u = p[2], p[3], p[4]
+    om = earth.OMEGA_IE
+    c0, s0 = np.cos(lat0), np.sin(lat0)
+    wie = np.array([0.0, om * c0, om * s0])
+    wen = np.array([-v0n / (rm + h0), v0e / (rn + h0), v0e * s0 / c0 / (rn + h0)])
+    a = 2.0 * wie + wen
+    out = np.empty(7)
+    out[0:3] = wie + wen
+    out[3] = a[1] * v0u - a[2] * v0n
+    out[4] = a[2] * v0e - a[0] * v0u
+    out[5] = a[0] * v0n - a[1] * v0e
+    out[6] = c0
+    return out
+
+
+@numba.njit(cache=True)
+def _rates(x, E, p, C0, out, wl, wr, k0):
     """Derivative of the non-attitude states into ``out``; attitude rotation rates into
     ``wl`` (left of E) and ``wr`` (right of E).  ``p`` = [lat0, h0, vE0, vN0, vU0, fE, fN, fU,
     rm, rn, k1, k2, 1/tau_g, 1/tau_a, g0]."""
@@ -122,33 +142,28 @@ def _rates(x, E, p, C0, out, wl, wr):
     h = h0 - x[8]
     v0e, v0n, v0u = p[2], p[3], p[4]
     ve, vn, vu = v0e - x[3], v0n - x[4], v0u - x[5]
-    # Computed (0) and true rates.
-    c0, s0 = np.cos(lat0), np.sin(lat0)
+    # True rates (the computed ones are in k0).
+    c0 = k0[6]
     c1, s1 = np.cos(lat), np.sin(lat)
-    wie0 = (0.0, om * c0, om * s0)
-    wen0 = (-v0n / (rm + h0), v0e / (rn + h0), v0e * s0 / c0 / (rn + h0))
     wie1 = (0.0, om * c1, om * s1)
     wen1 = (-vn / (rm + h), ve / (rn + h), ve * s1 / c1 / (rn + h))
     e0 = x[9] + x[12]
     e1 = x[10] + x[13]
     e2 = x[11] + x[14]
     for i in range(3):
-        wl[i] = C0[i, 0] * e0 + C0[i, 1] * e1 + C0[i, 2] * e2 - wie0[i] - wen0[i]
+        wl[i] = C0[i, 0] * e0 + C0[i, 1] * e1 + C0[i, 2] * e2 - k0[i]
         wr[i] = wie1[i] + wen1[i]
     # Velocity error: (I - E^T) f + E^T C0 nabla - Coriolis difference + gravity difference.
     cn0 = C0[0, 0] * x[15] + C0[0, 1] * x[16] + C0[0, 2] * x[17]
     cn1 = C0[1, 0] * x[15] + C0[1, 1] * x[16] + C0[1, 2] * x[17]
     cn2 = C0[2, 0] * x[15] + C0[2, 1] * x[16] + C0[2, 2] * x[17]
     a0, a1, a2 = fe - cn0, fn_ - cn1, fu - cn2
-    a0x = 2 * wie0[0] + wen0[0]
-    a0y = 2 * wie0[1] + wen0[1]
-    a0z = 2 * wie0[2] + wen0[2]
     a1x = 2 * wie1[0] + wen1[0]
     a1y = 2 * wie1[1] + wen1[1]
     a1z = 2 * wie1[2] + wen1[2]
-    cor0 = (a0y * v0u - a0z * v0n) - (a1y * vu - a1z * vn)
-    cor1 = (a0z * v0e - a0x * v0u) - (a1z * ve - a1x * vu)
-    cor2 = (a0x * v0n - a0y * v0e) - (a1x * vn - a1y * ve)
+    cor0 = k0[3] - (a1y * vu - a1z * vn)
+    cor1 = k0[4] - (a1z * ve - a1x * vu)
+    cor2 = k0[5] - (a1x * vn - a1y * ve)
     out[3] = fe - (E[0, 0] * a0 + E[1, 0] * a1 + E[2, 0] * a2) - cor0
     out[4] = fn_ - (E[0, 1] * a0 + E[1, 1] * a1 + E[2, 1] * a2) - cor1
     out[5] = (fu - (E[0, 2] * a0 + E[1, 2] * a1 + E[2, 2] * a2) - cor2
@@ -179,17 +194,18 @@ def _transition(X, T, nsub, p, C0, scale):
     wl = np.empty(3)
     wr = np.empty(3)
     rv = np.empty(3)
+    k0 = _nominal_terms(p)
     for i in range(X.shape[0]):
         for j in range(n):
             x[j] = X[i, j] * scale[j]
         _rv2dcm(-x[0], -x[1], -x[2], E)
         for _ in range(nsub):
-            _rates(x, E, p, C0, d, wl, wr)
+            _rates(x, E, p, C0, d, wl, wr, k0)
             for j in range(3, n):
                 xm[j] = x[j] + 0.5 * hs * d[j]
             Em[:, :] = E
             _rotate(Em, wl, wr, 0.5 * hs, tmp, R)
-            _rates(xm, Em, p, C0, d, wl, wr)
+            _rates(xm, Em, p, C0, d, wl, wr, k0)
             for j in range(3, n):
                 x[j] += hs * d[j]
             _rotate(E, wl, wr, hs, tmp, R)
@@ -324,14 +340,14 @@ class ErrorProcess:
                  baro_gains=(0.0, 0.0), baro_q: float = 0.0, nsub: int = 2):
         self.nom, self.T, self.noise, self.nsub = nom, float(T), noise, int(nsub)
         self.k1, self.k2 = float(baro_gains[0]), float(baro_gains[1])
-        self.rm, self.rn = earth.radii(nom.lat)
+        self.rm, self.rn = earth.radii_nb(float(nom.lat))
         self.itg = 0.0 if np.isinf(noise.gyro_markov_tau) else 1.0 / noise.gyro_markov_tau
         self.ita = 0.0 if np.isinf(noise.accel_markov_tau) else 1.0 / noise.accel_markov_tau
         self.baro_q = float(baro_q)
         v, f = np.asarray(nom.vel, float), np.asarray(nom.fn, float)
         self._params = np.array([nom.lat, nom.h, v[0], v[1], v[2], f[0], f[1], f[2], self.rm,
                                  self.rn, self.k1, self.k2, self.itg, self.ita,
-                                 earth.gravity(nom.lat, nom.h)])
+                                 earth.gravity_nb(float(nom.lat), float(nom.h))])
         self._C0 = np.ascontiguousarray(nom.C, dtype=float)
         self._noise = np.array([noise.gyro_arw, noise.accel_vrw, noise.gyro_markov_sigma,
                                 noise.accel_markov_sigma, self.baro_q])

@@ -11,6 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from functools import cached_property
 
+import numba
 import numpy as np
 
 from . import attitude as att
@@ -32,11 +33,46 @@ class NavSnapshot:
         return att.dcm_to_euler(self.C)
 
 
+@numba.njit(cache=True)
+def _euler_error_kernel(C_hat, phi, out):
+    """Rows of ``out``: Euler(C_hat) - Euler(exp([phi_i x]) C_hat), [pitch, roll, heading]."""
+    e0p = np.arcsin(min(1.0, max(-1.0, C_hat[2, 1])))
+    e0r = np.arctan2(-C_hat[2, 0], C_hat[2, 2])
+    e0h = np.arctan2(C_hat[0, 1], C_hat[1, 1])
+    for i in range(phi.shape[0]):
+        r0, r1, r2 = phi[i, 0], phi[i, 1], phi[i, 2]
+        a2 = r0 * r0 + r1 * r1 + r2 * r2
+        if a2 < 1e-12:
+            sa, ca = 1.0 - a2 / 6.0, 0.5 - a2 / 24.0
+        else:
+            a = np.sqrt(a2)
+            sa, ca = np.sin(a) / a, (1.0 - np.cos(a)) / a2
+        # Rows 0..2 of R = exp([phi x]) (Rodrigues), times the needed columns of C_hat.
+        R = np.empty((3, 3))
+        R[0, 0] = 1.0 - ca * (r1 * r1 + r2 * r2)
+        R[1, 1] = 1.0 - ca * (r0 * r0 + r2 * r2)
+        R[2, 2] = 1.0 - ca * (r0 * r0 + r1 * r1)
+        R[0, 1] = -sa * r2 + ca * r0 * r1
+        R[1, 0] = sa * r2 + ca * r0 * r1
+        R[0, 2] = sa * r1 + ca * r0 * r2
+        R[2, 0] = -sa * r1 + ca * r0 * r2
+        R[1, 2] = -sa * r0 + ca * r1 * r2
+        R[2, 1] = sa * r0 + ca * r1 * r2
+        C = R @ C_hat
+        p = np.arcsin(min(1.0, max(-1.0, C[2, 1])))
+        r = np.arctan2(-C[2, 0], C[2, 2])
+        h = np.arctan2(C[0, 1], C[1, 1])
+        out[i, 0] = e0p - p
+        out[i, 1] = (e0r - r + np.pi) % (2 * np.pi) - np.pi
+        out[i, 2] = (e0h - h + np.pi) % (2 * np.pi) - np.pi
+
+
 def _euler_error(C_hat, X):
     """Euler of C_hat minus Euler of the attitude corrected by each row's phi (arcmin)."""
-    phi = X[:, PHI] * SCALE[PHI]
-    C_true = att.rotvec_to_dcm(phi) @ C_hat
-    return att.euler_difference(att.dcm_to_euler(C_hat), att.dcm_to_euler(C_true)) / ARCMIN
+    phi = np.ascontiguousarray(X[:, PHI] * SCALE[PHI])
+    out = np.empty((phi.shape[0], 3))
+    _euler_error_kernel(np.ascontiguousarray(C_hat, dtype=float), phi, out)
+    return out / ARCMIN
 
 
 class StarAttitude:

@@ -19,7 +19,7 @@ from .config import Scenario
 from .filters import FederatedFilter, make_filter
 from .measurements import MODELS, NavSnapshot
 from .sensors import Barometer, MeasurementSeries, corrupt_imu
-from .strapdown import Strapdown, quat_to_dcm_nb
+from .strapdown import STATE_LLA, STATE_Q, STATE_VEL, Strapdown, quat_to_dcm_nb
 
 
 @dataclass
@@ -147,23 +147,22 @@ def run_mode(scn: Scenario, aiding: list[str], data: RunData, mode: str = "",
     sched = {a: _schedule(data.series[a], T, n_cycles) for a in aiding}
     comp_g = np.zeros(3)
     comp_a = np.zeros(3)
-    lla = np.empty((n_cycles, 3))
-    vel = np.empty((n_cycles, 3))
-    quat = np.empty((n_cycles, 4))
-    sigma = np.full((n_cycles, em.N_STATES), np.nan)
+    states = np.empty((n_cycles, ins.state.size))  # INS state after each cycle
+    var = np.full((n_cycles, em.N_STATES), np.nan)  # fused covariance diagonal (filter units)
     betas = {k: np.empty(n_cycles) for k in (fed.filters if fed else {})}
     for k in range(n_cycles):
         sl = slice(k * n_per, (k + 1) * n_per)
         dth = data.dtheta[sl] - comp_g * dt
         dvc = data.dv[sl] - comp_a * dt
-        if fed is not None:
-            lla0, v0, q0 = ins.lla, ins.vel, ins.q
+        s0 = ins.state.copy() if fed is not None else None
         ins.run(dth, dvc, data.h_ref[sl], record=False)
         if fed is not None:
-            qm = q0 + ins.q
+            s1 = ins.state
+            qm = s0[STATE_Q] + s1[STATE_Q]
             Cm = quat_to_dcm_nb(qm / np.sqrt(qm @ qm))
-            nom = em.Nominal(lat=0.5 * (lla0[0] + ins.lla[0]), h=0.5 * (lla0[2] + ins.lla[2]),
-                             vel=0.5 * (v0 + ins.vel), C=Cm, fn=Cm @ dvc.sum(axis=0) / T)
+            pm = 0.5 * (s0[STATE_LLA] + s1[STATE_LLA])
+            nom = em.Nominal(lat=pm[0], h=pm[2], vel=0.5 * (s0[STATE_VEL] + s1[STATE_VEL]),
+                             C=Cm, fn=Cm @ dvc.sum(axis=0) / T)
             proc = em.ErrorProcess(nom, T, noise, baro_gains, baro_q, scn.filter.substeps)
             fed.predict(proc)
             nav = None
@@ -175,14 +174,16 @@ def run_mode(scn: Scenario, aiding: list[str], data: RunData, mode: str = "",
                     model = MODELS[a]
                     fed.update(a, model.residual(nav, s.z[i]), model, nav, model.R(s.sigma))
             fed.fuse()
-            sigma[k] = np.sqrt(np.diag(fed.P)) * em.SCALE
+            var[k] = np.diagonal(fed.P)
             for name, b in fed.beta.items():
                 betas[name][k] = b
             dx = em.to_si(fed.feedback())
             ins.correct(dx[em.PHI], dx[em.DV], dx[em.DP])
             comp_g += dx[em.EPS_C] + dx[em.EPS_R]
             comp_a += dx[em.NABLA]
-        lla[k], vel[k], quat[k] = ins.lla, ins.vel, ins.q
+        states[k] = ins.state
+    lla, vel, quat = states[:, STATE_LLA], states[:, STATE_VEL], states[:, STATE_Q]
+    sigma = np.sqrt(var) * em.SCALE
     idx = (np.arange(n_cycles) + 1) * n_per
     t = truth.t[idx]
     tl = truth.lla[idx]

@@ -21,6 +21,7 @@ loops with feedback.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numba
@@ -34,6 +35,8 @@ _Q, _V, _P, _DTH, _DV, _VPREV, _HAS_PREV, _BARO_INT, _BARO_DH = (
     21,
 )
 STATE_SIZE = 22
+#: Public views into :attr:`Strapdown.state`: quaternion q_b^n, ENU velocity, lat/lon/h.
+STATE_Q, STATE_VEL, STATE_LLA = _Q, _V, _P
 
 
 @dataclass(frozen=True)
@@ -187,6 +190,24 @@ def _run(state, dtheta, dv, dt, h_ref, gains, out_q, out_v, out_p):
     state[21] = dh
 
 
+@numba.njit(cache=True)
+def _correct(state, phi, dvel, dpos):
+    q = _qmul(_rv2q(phi), state[0:4])
+    state[0:4] = q / np.sqrt(q[0] ** 2 + q[1] ** 2 + q[2] ** 2 + q[3] ** 2)
+    for i in range(3):
+        state[4 + i] -= dvel[i]
+        state[16 + i] -= dvel[i]
+    lat, h = state[7], state[9]
+    rm, rn = earth.radii_nb(lat)
+    state[7] -= dpos[1] / (rm + h)
+    state[8] -= dpos[0] / ((rn + h) * np.cos(lat))
+    state[9] -= dpos[2]
+    state[21] -= dpos[2]
+
+
+_NO_Q = np.empty((0, 4))
+_NO_3 = np.empty((0, 3))
+
 #: Quaternion -> DCM compiled for per-cycle use (same convention as ``attitude.quat_to_dcm``).
 quat_to_dcm_nb = _q2dcm
 
@@ -248,13 +269,16 @@ class Strapdown:
             )
         if h_ref is None or self.baro is None:
             h_ref = np.full(n, np.nan)
-        h_ref = np.ascontiguousarray(h_ref, dtype=float)
-        if h_ref.shape != (n,):
-            raise ValueError(f"Strapdown.run: h_ref must be ({n},), got {h_ref.shape}")
-        m = n if record else 0
-        out_q, out_v, out_p = np.empty((m, 4)), np.empty((m, 3)), np.empty((m, 3))
+        else:
+            h_ref = np.ascontiguousarray(h_ref, dtype=float)
+            if h_ref.shape != (n,):
+                raise ValueError(f"Strapdown.run: h_ref must be ({n},), got {h_ref.shape}")
+        if record:
+            out_q, out_v, out_p = np.empty((n, 4)), np.empty((n, 3)), np.empty((n, 3))
+        else:
+            out_q, out_v, out_p = _NO_Q, _NO_3, _NO_3
         _run(self.state, dtheta, dv, self.dt, h_ref, self._gains, out_q, out_v, out_p)
-        if not np.all(np.isfinite(self.state)):
+        if not math.isfinite(self.state.sum()):
             raise FloatingPointError("Strapdown.run: navigation state became non-finite")
         if record:
             return {"q": out_q, "vel": out_v, "lla": out_p}
@@ -266,14 +290,5 @@ class Strapdown:
         ``phi`` platform error angles [rad] (C_hat = exp(-[phi x]) C), ``dvel`` ENU velocity
         error [m/s], ``dpos`` ENU position error [m].
         """
-        s = self.state
-        q = _qmul(_rv2q(np.asarray(phi, dtype=float)), s[_Q])
-        s[_Q] = q / np.sqrt(q @ q)
-        s[_V] -= dvel
-        s[_VPREV] -= dvel
-        lat, _, h = s[_P]
-        rm, rn = earth.radii(lat)
-        s[7] -= dpos[1] / (rm + h)
-        s[8] -= dpos[0] / ((rn + h) * np.cos(lat))
-        s[9] -= dpos[2]
-        s[_BARO_DH] -= dpos[2]
+        _correct(self.state, np.asarray(phi, dtype=float), np.asarray(dvel, dtype=float),
+                 np.asarray(dpos, dtype=float))

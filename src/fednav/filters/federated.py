@@ -59,14 +59,40 @@ def _inv_spd(P, who):
 
 @numba.njit(cache=True)
 def _spd_inverse(P):
-    """Inverse of an SPD matrix via Cholesky; (inverse, ok)."""
+    """Inverse of an SPD matrix via its Cholesky factor (explicit loops: no LAPACK call
+    overhead at these sizes); returns (inverse, ok)."""
     n = P.shape[0]
-    for i in range(n):
-        if not (P[i, i] > 0.0):
+    L = np.zeros((n, n))
+    for j in range(n):
+        d = P[j, j]
+        for k in range(j):
+            d -= L[j, k] * L[j, k]
+        if not d > 0.0:
             return P, False
-    L = np.linalg.cholesky(P)
-    Li = np.linalg.inv(L)
-    return Li.T @ Li, True
+        L[j, j] = np.sqrt(d)
+        for i in range(j + 1, n):
+            s = P[i, j]
+            for k in range(j):
+                s -= L[i, k] * L[j, k]
+            L[i, j] = s / L[j, j]
+    # W = L^-1 (lower triangular), then P^-1 = W' W.
+    W = np.zeros((n, n))
+    for i in range(n):
+        W[i, i] = 1.0 / L[i, i]
+        for j in range(i):
+            s = 0.0
+            for k in range(j, i):
+                s -= L[i, k] * W[k, j]
+            W[i, j] = s / L[i, i]
+    out = np.zeros((n, n))
+    for i in range(n):
+        for j in range(i + 1):
+            s = 0.0
+            for k in range(i, n):
+                s += W[k, i] * W[k, j]
+            out[i, j] = s
+            out[j, i] = s
+    return out, True
 
 
 @numba.njit(cache=True)

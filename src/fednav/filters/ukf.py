@@ -52,7 +52,7 @@ def _predict_moments(Y, Wm, Wc, Q):
     D = Y - y
     P = (D * Wc.reshape(-1, 1)).T @ D + Q
     P = 0.5 * (P + P.T)
-    return y, P
+    return y, P, np.isfinite(y.sum() + P.sum())
 
 
 @numba.njit(cache=True)
@@ -110,8 +110,9 @@ class UnscentedKalmanFilter(Filter):
         X = self.sigma_points(phase="predict")
         Xf = np.ascontiguousarray(process.transition(X), dtype=float)
         Q = process.Qd if q_scale == 1.0 else q_scale * process.Qd
-        self.x, self.P = _predict_moments(Xf, self.Wm, self.Wc, np.asarray(Q, dtype=float))
-        self._finish("predict", symmetrize=False)
+        self.x, self.P, ok = _predict_moments(Xf, self.Wm, self.Wc, np.asarray(Q, dtype=float))
+        if not ok:
+            raise FilterError(f"{self._who('predict')}: state or covariance became NaN/inf")
 
     def update(self, y, model, nav=None, R=None) -> Innovation:
         X = self.sigma_points(phase="update")
