@@ -55,13 +55,13 @@ def _markov(n, dt, sigma, tau, rng):
     ``sigma`` and ``tau`` are per axis (scalars broadcast)."""
     sigma, tau = _axes(sigma), _axes(tau)
     out = np.zeros((n, 3))
-    w = rng.standard_normal((n, 3))
     for i in range(3):
         if sigma[i] == 0 or not np.isfinite(tau[i]):
-            continue
+            continue  # no draw: a disabled process leaves the random stream untouched
         a = np.exp(-dt / tau[i])
-        e = w[:, i] * sigma[i] * np.sqrt(1.0 - a * a)
-        e[0] = w[0, i] * sigma[i]  # start in steady state
+        w = rng.standard_normal(n)
+        e = w * sigma[i] * np.sqrt(1.0 - a * a)
+        e[0] = w[0] * sigma[i]  # start in steady state
         out[:, i] = lfilter([1.0], [1.0, -a], e)
     return out
 
