@@ -37,6 +37,7 @@ import numba
 import numpy as np
 
 from . import earth, units
+from .kernels import rotvec_to_dcm
 
 N_STATES = 18
 PHI, DV, DP, EPS_C, EPS_R, NABLA = (slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12),
@@ -66,26 +67,6 @@ class ImuNoiseModel:
 
 
 @numba.njit(cache=True, inline="always")
-def _rv2dcm(r0, r1, r2, out):
-    """Rodrigues' formula for the rotation vector (r0, r1, r2), written into ``out``."""
-    a2 = r0 * r0 + r1 * r1 + r2 * r2
-    if a2 < 1e-12:
-        s, c = 1.0 - a2 / 6.0, 0.5 - a2 / 24.0
-    else:
-        a = np.sqrt(a2)
-        s, c = np.sin(a) / a, (1.0 - np.cos(a)) / a2
-    out[0, 0] = 1.0 - c * (r1 * r1 + r2 * r2)
-    out[1, 1] = 1.0 - c * (r0 * r0 + r2 * r2)
-    out[2, 2] = 1.0 - c * (r0 * r0 + r1 * r1)
-    out[0, 1] = -s * r2 + c * r0 * r1
-    out[1, 0] = s * r2 + c * r0 * r1
-    out[0, 2] = s * r1 + c * r0 * r2
-    out[2, 0] = -s * r1 + c * r0 * r2
-    out[1, 2] = -s * r0 + c * r1 * r2
-    out[2, 1] = s * r0 + c * r1 * r2
-
-
-@numba.njit(cache=True, inline="always")
 def _dcm2rv(C, out):
     tr = C[0, 0] + C[1, 1] + C[2, 2]
     cosa = min(1.0, max(-1.0, 0.5 * (tr - 1.0)))
@@ -99,11 +80,11 @@ def _dcm2rv(C, out):
 @numba.njit(cache=True, inline="always")
 def _rotate(E, wl, wr, h, tmp, R):
     """E <- exp(h [wl x]) E exp(h [wr x])."""
-    _rv2dcm(h * wl[0], h * wl[1], h * wl[2], R)
+    rotvec_to_dcm(h * wl[0], h * wl[1], h * wl[2], R)
     for i in range(3):
         for j in range(3):
             tmp[i, j] = R[i, 0] * E[0, j] + R[i, 1] * E[1, j] + R[i, 2] * E[2, j]
-    _rv2dcm(h * wr[0], h * wr[1], h * wr[2], R)
+    rotvec_to_dcm(h * wr[0], h * wr[1], h * wr[2], R)
     for i in range(3):
         for j in range(3):
             E[i, j] = tmp[i, 0] * R[0, j] + tmp[i, 1] * R[1, j] + tmp[i, 2] * R[2, j]
@@ -198,7 +179,7 @@ def _transition(X, T, nsub, p, C0, scale):
     for i in range(X.shape[0]):
         for j in range(n):
             x[j] = X[i, j] * scale[j]
-        _rv2dcm(-x[0], -x[1], -x[2], E)
+        rotvec_to_dcm(-x[0], -x[1], -x[2], E)
         for _ in range(nsub):
             _rates(x, E, p, C0, d, wl, wr, k0)
             for j in range(3, n):

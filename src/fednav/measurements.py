@@ -17,6 +17,7 @@ import numpy as np
 from . import attitude as att
 from . import earth
 from .error_model import DP, N_STATES, PHI, SCALE
+from .kernels import rotvec_to_dcm
 from .units import ARCMIN
 
 
@@ -39,25 +40,9 @@ def _euler_error_kernel(C_hat, phi, out):
     e0p = np.arcsin(min(1.0, max(-1.0, C_hat[2, 1])))
     e0r = np.arctan2(-C_hat[2, 0], C_hat[2, 2])
     e0h = np.arctan2(C_hat[0, 1], C_hat[1, 1])
+    R = np.empty((3, 3))
     for i in range(phi.shape[0]):
-        r0, r1, r2 = phi[i, 0], phi[i, 1], phi[i, 2]
-        a2 = r0 * r0 + r1 * r1 + r2 * r2
-        if a2 < 1e-12:
-            sa, ca = 1.0 - a2 / 6.0, 0.5 - a2 / 24.0
-        else:
-            a = np.sqrt(a2)
-            sa, ca = np.sin(a) / a, (1.0 - np.cos(a)) / a2
-        # Rows 0..2 of R = exp([phi x]) (Rodrigues), times the needed columns of C_hat.
-        R = np.empty((3, 3))
-        R[0, 0] = 1.0 - ca * (r1 * r1 + r2 * r2)
-        R[1, 1] = 1.0 - ca * (r0 * r0 + r2 * r2)
-        R[2, 2] = 1.0 - ca * (r0 * r0 + r1 * r1)
-        R[0, 1] = -sa * r2 + ca * r0 * r1
-        R[1, 0] = sa * r2 + ca * r0 * r1
-        R[0, 2] = sa * r1 + ca * r0 * r2
-        R[2, 0] = -sa * r1 + ca * r0 * r2
-        R[1, 2] = -sa * r0 + ca * r1 * r2
-        R[2, 1] = sa * r0 + ca * r1 * r2
+        rotvec_to_dcm(phi[i, 0], phi[i, 1], phi[i, 2], R)
         C = R @ C_hat
         p = np.arcsin(min(1.0, max(-1.0, C[2, 1])))
         r = np.arctan2(-C[2, 0], C[2, 2])

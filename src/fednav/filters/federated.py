@@ -25,6 +25,7 @@ import numba
 import numpy as np
 from numpy.linalg import LinAlgError
 
+from ..kernels import cholesky_lower
 from .base import Filter, FilterError
 
 
@@ -62,19 +63,9 @@ def _spd_inverse(P):
     """Inverse of an SPD matrix via its Cholesky factor (explicit loops: no LAPACK call
     overhead at these sizes); returns (inverse, ok)."""
     n = P.shape[0]
-    L = np.zeros((n, n))
-    for j in range(n):
-        d = P[j, j]
-        for k in range(j):
-            d -= L[j, k] * L[j, k]
-        if not d > 0.0:
-            return P, False
-        L[j, j] = np.sqrt(d)
-        for i in range(j + 1, n):
-            s = P[i, j]
-            for k in range(j):
-                s -= L[i, k] * L[j, k]
-            L[i, j] = s / L[j, j]
+    L, ok = cholesky_lower(P)
+    if not ok:
+        return P, False
     # W = L^-1 (lower triangular), then P^-1 = W' W.
     W = np.zeros((n, n))
     for i in range(n):

@@ -15,6 +15,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from ..kernels import cholesky_lower
 from .base import Filter, FilterError, Innovation
 
 
@@ -22,21 +23,9 @@ from .base import Filter, FilterError, Innovation
 def _sigma_points(x, P, c):
     """Rows: x, x + L[:, i], x - L[:, i] with L L' = c P; empty array if not PD."""
     n = x.shape[0]
-    S = c * P
-    # Cholesky by hand to report failure instead of raising inside numba.
-    L = np.zeros((n, n))
-    for j in range(n):
-        d = S[j, j]
-        for k in range(j):
-            d -= L[j, k] * L[j, k]
-        if not d > 0.0:
-            return np.empty((0, n))
-        L[j, j] = np.sqrt(d)
-        for i in range(j + 1, n):
-            s = S[i, j]
-            for k in range(j):
-                s -= L[i, k] * L[j, k]
-            L[i, j] = s / L[j, j]
+    L, ok = cholesky_lower(c * P)
+    if not ok:
+        return np.empty((0, n))
     X = np.empty((2 * n + 1, n))
     X[0] = x
     for i in range(n):

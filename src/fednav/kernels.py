@@ -1,0 +1,53 @@
+"""Small numba kernels shared by the compiled hot paths.
+
+Note: numba's on-disk cache is per source file; a kernel changed here is not seen by
+cached callers in other modules until their cache files (``__pycache__/*.nbi|*.nbc``) are
+removed.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+
+@numba.njit(cache=True, inline="always")
+def rotvec_to_dcm(r0, r1, r2, out):
+    """Rodrigues' formula for the rotation vector (r0, r1, r2) [rad], written into ``out``."""
+    a2 = r0 * r0 + r1 * r1 + r2 * r2
+    if a2 < 1e-12:
+        s, c = 1.0 - a2 / 6.0, 0.5 - a2 / 24.0
+    else:
+        a = np.sqrt(a2)
+        s, c = np.sin(a) / a, (1.0 - np.cos(a)) / a2
+    out[0, 0] = 1.0 - c * (r1 * r1 + r2 * r2)
+    out[1, 1] = 1.0 - c * (r0 * r0 + r2 * r2)
+    out[2, 2] = 1.0 - c * (r0 * r0 + r1 * r1)
+    out[0, 1] = -s * r2 + c * r0 * r1
+    out[1, 0] = s * r2 + c * r0 * r1
+    out[0, 2] = s * r1 + c * r0 * r2
+    out[2, 0] = -s * r1 + c * r0 * r2
+    out[1, 2] = -s * r0 + c * r1 * r2
+    out[2, 1] = s * r0 + c * r1 * r2
+
+
+@numba.njit(cache=True)
+def cholesky_lower(S):
+    """Lower Cholesky factor of a symmetric matrix; (L, ok) with ok False when S is not
+    positive definite (no exception inside compiled code, explicit loops: no LAPACK call
+    overhead at navigation-filter sizes)."""
+    n = S.shape[0]
+    L = np.zeros((n, n))
+    for j in range(n):
+        d = S[j, j]
+        for k in range(j):
+            d -= L[j, k] * L[j, k]
+        if not d > 0.0:
+            return L, False
+        L[j, j] = np.sqrt(d)
+        for i in range(j + 1, n):
+            s = S[i, j]
+            for k in range(j):
+                s -= L[i, k] * L[j, k]
+            L[i, j] = s / L[j, j]
+    return L, True
