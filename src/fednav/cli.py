@@ -45,7 +45,7 @@ def reproduce(
     try:
         scn = mod.load_scenario(scenario)
     except ConfigError as e:
-        console.print(f"[red]error:[/red] {e}")
+        typer.echo(f"error: {e}", err=True)
         raise typer.Exit(2) from None
     t0 = time.perf_counter()
     with Progress("[progress.description]{task.description}", BarColumn(),

@@ -231,6 +231,7 @@ def load_scenario(path: str | Path) -> Scenario:
     try:
         return Scenario.model_validate(data)
     except ValidationError as e:
-        errs = e.errors()
+        # An unknown key is usually a misspelt one: report it before the "missing" it causes.
+        errs = sorted(e.errors(), key=lambda x: x["type"] != "extra_forbidden")
         more = f" (and {len(errs) - 1} more)" if len(errs) > 1 else ""
         raise ConfigError(f"scenario file {path}: {_format_error(errs[0])}{more}") from None

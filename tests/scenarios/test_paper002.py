@@ -3,6 +3,7 @@
 import json
 
 import numpy as np
+import pytest
 from typer.testing import CliRunner
 
 from fednav.cli import app
@@ -65,3 +66,31 @@ def test_qualitative_claims_full_flight():
     # (2 runs only: allow 15 % of Monte Carlo noise).
     for col in fed:
         assert fed[col] <= 1.15 * min(sar[col], cns[col]), col
+
+
+def test_kf_in_the_navigation_loop_matches_ukf(tmp_path):
+    """The linear KF (error state, Joseph form) runs the same federated system; with small
+    errors it should do as well as the UKF."""
+    import yaml
+
+    from fednav.config import load_scenario
+    from fednav.scenarios import scenario_path
+
+    data_yaml = yaml.safe_load(scenario_path("paper002").read_text())
+    data_yaml["filter"]["type"] = "kf"
+    p = tmp_path / "kf.yaml"
+    p.write_text(yaml.safe_dump(data_yaml))
+    scn_kf, scn_ukf = load_scenario(p), paper002.load_scenario()
+    d = make_run_data(scn_ukf, 5, max_time=300.0)
+    kf = paper002.run_statistics(run_mode(scn_kf, ["star", "sar"], d, max_time=300.0))
+    ukf = paper002.run_statistics(run_mode(scn_ukf, ["star", "sar"], d, max_time=300.0))
+    for col in kf:
+        assert kf[col] == pytest.approx(ukf[col], rel=0.05), col
+
+
+def test_cli_reports_bad_scenario_in_one_line(tmp_path):
+    p = tmp_path / "bad.yaml"
+    p.write_text("paper: '002'\nname: x\nbogus: 1\n")
+    r = CliRunner().invoke(app, ["reproduce", "002", "--scenario", str(p)])
+    assert r.exit_code == 2
+    assert "bad.yaml" in r.output and "key 'bogus': unknown key" in r.output
