@@ -77,3 +77,21 @@ def test_heading_residual_wraps_at_north():
                       att.euler_to_dcm([0.0, 0.0, units.deg(0.001)]))
     y = m.residual(nav, [0.0, 0.0, units.deg(359.999)])
     assert y[2] == pytest.approx(units.to_arcmin(units.deg(0.002)), rel=1e-6)
+
+
+def test_gnss_model_matches_truth():
+    from fednav.measurements import GnssPosVel
+
+    dx = np.zeros(18)
+    dx[em.DP] = [4.0, -3.0, 2.0]
+    dx[em.DV] = [0.1, -0.2, 0.05]
+    lla, C, nav = perturbed_nav([0.1, 0.0, 1.0], dx)
+    z = np.r_[lla, np.array([200.0, 150.0, 5.0])]  # perfect GNSS: true position, velocity
+    m = GnssPosVel()
+    y = m.residual(nav, z)
+    np.testing.assert_allclose(y, np.r_[dx[em.DP], dx[em.DV]], rtol=1e-6, atol=1e-9)
+    xf = em.from_si(dx)
+    np.testing.assert_allclose(m.H(nav) @ xf, y, rtol=1e-6, atol=1e-9)
+    np.testing.assert_allclose(m.h(xf[None], nav)[0], y, rtol=1e-6, atol=1e-9)
+    np.testing.assert_allclose(np.diag(m.R([8.0, 7.0, 6.0, 0.2, 0.3, 0.4])),
+                               [49.0, 64.0, 36.0, 0.04, 0.09, 0.16])

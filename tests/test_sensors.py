@@ -59,3 +59,21 @@ def test_imu_per_axis_parameters():
     np.testing.assert_allclose(dv.std(axis=0) / np.sqrt(dt), [1e-3, 0.0, 2e-3], rtol=0.02)
     with pytest.raises(ValueError, match=r"\(N, 3\)"):
         corrupt_imu(np.zeros((5, 2)), np.zeros((5, 2)), dt, err, rng)
+
+
+def test_gnss_and_sar_noise_statistics():
+    from fednav import earth
+    from fednav.sensors import Gnss, SarMatcher
+
+    tr = generate([0.6, 2.0, 100.0], 50.0, [0, 0, 0.5], [Segment(2000.0)], 0.1)
+    rng = np.random.default_rng(4)
+    g = Gnss((8.0, 5.0, 10.0), 0.2, 1.0).simulate(tr, rng)
+    truth = tr.at(g.t)
+    d = earth.llh_difference_enu(g.z[:, 0], g.z[:, 1], g.z[:, 2], *truth["lla"].T)
+    # sigma follows z: north, east, up.
+    np.testing.assert_allclose(d.std(axis=0), [5.0, 8.0, 10.0], rtol=0.06)
+    np.testing.assert_allclose((g.z[:, 3:] - truth["vel"]).std(axis=0), 0.2, rtol=0.06)
+    np.testing.assert_allclose(g.sigma, [8.0, 5.0, 10.0, 0.2, 0.2, 0.2])
+    s = SarMatcher(3.0, units.deg(0.1), 1.0).simulate(tr, rng)
+    d = earth.llh_difference_enu(s.z[:, 0], s.z[:, 1], 0.0, *tr.at(s.t)["lla"][:, :2].T, 0.0)
+    np.testing.assert_allclose(d[:, :2].std(axis=0), 3.0, rtol=0.06)

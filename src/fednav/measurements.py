@@ -110,8 +110,8 @@ class SarFix:
         return H
 
     def R(self, sigma) -> np.ndarray:
-        s = np.asarray(sigma, dtype=float)
-        return np.diag([s[0] ** 2, s[1] ** 2, (s[2] / ARCMIN) ** 2])
+        s = np.asarray(sigma, dtype=float)  # [north m, east m, heading rad], as z
+        return np.diag([s[1] ** 2, s[0] ** 2, (s[2] / ARCMIN) ** 2])
 
 
 class BaroHeight:
@@ -135,4 +135,30 @@ class BaroHeight:
         return np.diag(np.asarray(sigma, dtype=float) ** 2)
 
 
-MODELS = {m.kind: m for m in (StarAttitude(), SarFix(), BaroHeight())}
+class GnssPosVel:
+    """GNSS position and velocity: residual = INS - GNSS, ``[dE, dN, dU] m, [dvE, dvN, dvU]``."""
+
+    kind = "gnss"
+    dim = 6
+    _cols = np.array([6, 7, 8, 3, 4, 5])
+
+    def residual(self, nav: NavSnapshot, z) -> np.ndarray:
+        lat, lon, h = nav.lla
+        rm, rn = earth.radii(lat)
+        return np.r_[(lon - z[1]) * (rn + h) * np.cos(lat), (lat - z[0]) * (rm + h),
+                     h - z[2], np.asarray(nav.vel) - z[3:6]]
+
+    def h(self, X, nav: NavSnapshot) -> np.ndarray:
+        return np.atleast_2d(X)[:, self._cols]
+
+    def H(self, nav: NavSnapshot) -> np.ndarray:
+        H = np.zeros((6, N_STATES))
+        H[np.arange(6), self._cols] = 1.0
+        return H
+
+    def R(self, sigma) -> np.ndarray:
+        s = np.asarray(sigma, dtype=float)  # [north, east, up m, vE, vN, vU], as z
+        return np.diag(np.r_[s[1], s[0], s[2], s[3:6]] ** 2)
+
+
+MODELS = {m.kind: m for m in (StarAttitude(), SarFix(), BaroHeight(), GnssPosVel())}

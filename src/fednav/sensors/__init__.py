@@ -8,9 +8,10 @@ passed in.
 
 from .baro import Barometer
 from .base import MeasurementSeries, sample_times
+from .gnss import Gnss
 from .imu import ImuErrors, ImuErrorState, corrupt_imu
 from .sar import SarMatcher
 from .star import StarSensor
 
-__all__ = ["Barometer", "ImuErrorState", "ImuErrors", "MeasurementSeries", "SarMatcher",
+__all__ = ["Barometer", "Gnss", "ImuErrorState", "ImuErrors", "MeasurementSeries", "SarMatcher",
            "StarSensor", "corrupt_imu", "sample_times"]

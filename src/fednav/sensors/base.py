@@ -13,8 +13,9 @@ class MeasurementSeries:
 
     ``t`` (N,) time the measurement describes [s]; ``t_avail`` (N,) time it becomes
     available to the filter [s] (equal to ``t`` without latency); ``z`` (N, m) values in
-    the sensor's natural units (radians, metres ...); ``sigma`` (m,) 1-sigma noise;
-    ``kind`` names the measurement model that interprets ``z``.
+    the sensor's natural units (radians, metres ...); ``sigma`` (m,) 1-sigma noise of each
+    component of ``z``, in metric units for latitude/longitude (north/east metres), else in
+    the component's own units; ``kind`` names the measurement model that interprets ``z``.
     """
 
     kind: str
@@ -34,6 +35,19 @@ class MeasurementSeries:
             raise ValueError(f"{self.kind}: {len(self.t)} times but {self.z.shape[0]} values")
         if not np.all(np.isfinite(self.z)):
             raise ValueError(f"{self.kind}: non-finite measurement values")
+
+
+def position_noise_to_llh(lla, d_neu):
+    """Add metric offsets ``d_neu`` = (north, east, up) [m] to positions ``lla`` (N, 3)."""
+    from ..earth import radii
+
+    lla = np.asarray(lla, dtype=float)
+    d = np.asarray(d_neu, dtype=float)
+    rm, rn = radii(lla[..., 0])
+    h = lla[..., 2]
+    return np.stack([lla[..., 0] + d[..., 0] / (rm + h),
+                     lla[..., 1] + d[..., 1] / ((rn + h) * np.cos(lla[..., 0])),
+                     h + d[..., 2]], axis=-1)
 
 
 def sample_times(t_end: float, period: float, t0: float | None = None) -> np.ndarray:

@@ -6,9 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import earth
 from ..attitude import wrap_2pi
-from .base import MeasurementSeries, sample_times
+from .base import MeasurementSeries, position_noise_to_llh, sample_times
 
 
 @dataclass(frozen=True)
@@ -16,7 +15,7 @@ class SarMatcher:
     """Fix ``[lat, lon, heading]`` with horizontal position noise ``sigma_pos`` [m]
     (each axis) and heading noise ``sigma_heading`` [rad], every ``period`` [s].
 
-    ``sigma`` of the series is ``[sigma_east_m, sigma_north_m, sigma_heading]``.
+    ``sigma`` of the series follows ``z``: ``[north m, east m, heading rad]``.
     """
 
     sigma_pos: float
@@ -26,13 +25,13 @@ class SarMatcher:
     def simulate(self, truth, rng: np.random.Generator) -> MeasurementSeries:
         t = sample_times(truth.t[-1], self.period, truth.t[0] + self.period)
         tr = truth.at(t)
-        lat, lon, h = tr["lla"].T
-        rm, rn = earth.radii(lat)
         n = rng.standard_normal((len(t), 3))
-        z = np.column_stack([
-            lat + n[:, 1] * self.sigma_pos / (rm + h),
-            lon + n[:, 0] * self.sigma_pos / ((rn + h) * np.cos(lat)),
-            wrap_2pi(tr["euler"][:, 2] + n[:, 2] * self.sigma_heading),
-        ])
+        # (north, east) from draws 1 and 0: the draw order of earlier releases, so seeded
+        # runs reproduce exactly.
+        d = np.column_stack([n[:, 1] * self.sigma_pos, n[:, 0] * self.sigma_pos,
+                             np.zeros(len(t))])
+        pos = position_noise_to_llh(tr["lla"], d)
+        z = np.column_stack([pos[:, 0], pos[:, 1],
+                             wrap_2pi(tr["euler"][:, 2] + n[:, 2] * self.sigma_heading)])
         return MeasurementSeries("sar", t, z,
                                  np.array([self.sigma_pos, self.sigma_pos, self.sigma_heading]))

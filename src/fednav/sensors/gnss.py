@@ -1,0 +1,33 @@
+"""GNSS receiver: position (latitude, longitude, height) and ENU velocity fixes."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .base import MeasurementSeries, position_noise_to_llh, sample_times
+
+
+@dataclass(frozen=True)
+class Gnss:
+    """Fix ``[lat, lon, h, vE, vN, vU]`` every ``period`` [s] with white noise.
+
+    ``sigma_pos`` [m]: scalar, or ``(north, east, up)``; ``sigma_vel`` [m/s]: scalar or
+    ``(east, north, up)``.  The series' ``sigma`` follows ``z``:
+    ``[north m, east m, up m, vE, vN, vU]``.
+    """
+
+    sigma_pos: float | tuple
+    sigma_vel: float | tuple
+    period: float
+
+    def simulate(self, truth, rng: np.random.Generator) -> MeasurementSeries:
+        t = sample_times(truth.t[-1], self.period, truth.t[0] + self.period)
+        tr = truth.at(t)
+        sp = np.broadcast_to(np.asarray(self.sigma_pos, dtype=float), (3,))
+        sv = np.broadcast_to(np.asarray(self.sigma_vel, dtype=float), (3,))
+        npos = rng.standard_normal((len(t), 3)) * sp
+        z = np.column_stack([position_noise_to_llh(tr["lla"], npos),
+                             tr["vel"] + rng.standard_normal((len(t), 3)) * sv])
+        return MeasurementSeries("gnss", t, z, np.r_[sp, sv])
