@@ -8,10 +8,11 @@ passed in.
 
 from .baro import Barometer
 from .base import MeasurementSeries, sample_times
+from .faults import Fault, inject_faults
 from .gnss import Gnss
 from .imu import ImuErrors, ImuErrorState, corrupt_imu
 from .sar import SarMatcher
 from .star import StarSensor
 
-__all__ = ["Barometer", "Gnss", "ImuErrorState", "ImuErrors", "MeasurementSeries", "SarMatcher",
-           "StarSensor", "corrupt_imu", "sample_times"]
+__all__ = ["Barometer", "Fault", "Gnss", "ImuErrorState", "ImuErrors", "MeasurementSeries",
+           "SarMatcher", "StarSensor", "corrupt_imu", "inject_faults", "sample_times"]
