@@ -16,7 +16,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from . import units
 from .error_model import ImuNoiseModel
-from .sensors import Barometer, ImuErrors, SarMatcher, StarSensor
+from .sensors import Barometer, Fault, Gnss, ImuErrors, SarMatcher, StarSensor
 from .strapdown import BaroLoop
 from .trajectory import Segment
 
@@ -125,10 +125,39 @@ class BaroConfig(_Model):
         return BaroLoop(self.loop_time_constant_s, self.loop_order)
 
 
+class GnssConfig(_Model):
+    """GNSS position sigma (north, east, up) [m] or one value, velocity sigma [m/s]."""
+
+    sigma_pos_m: float | tuple[float, float, float]
+    sigma_vel_mps: float | tuple[float, float, float]
+    period_s: float = Field(gt=0.0)
+
+    def sensor(self) -> Gnss:
+        return Gnss(self.sigma_pos_m, self.sigma_vel_mps, self.period_s)
+
+
 class SensorsConfig(_Model):
     star: StarConfig | None = None
     sar: SarConfig | None = None
+    gnss: GnssConfig | None = None
     baro: BaroConfig | None = None
+
+
+class FaultConfig(_Model):
+    """Additive sensor fault: ``size_sigma`` times the sensor sigma on ``components``
+    (indices into the sensor's measurement; all when omitted), ``step`` or ``ramp``."""
+
+    sensor: Literal["star", "sar", "gnss", "baro"]
+    start_s: float
+    end_s: float
+    size_sigma: float | list[float]
+    kind: Literal["step", "ramp"] = "step"
+    components: list[int] | None = None
+
+    def fault(self) -> Fault:
+        size = self.size_sigma if isinstance(self.size_sigma, float) else tuple(self.size_sigma)
+        comps = None if self.components is None else tuple(self.components)
+        return Fault(self.sensor, self.start_s, self.end_s, size, self.kind, comps)
 
 
 class FilterConfig(_Model):
@@ -142,6 +171,7 @@ class FilterConfig(_Model):
     master: bool = True
     reset: bool = True
     substeps: int = Field(default=2, ge=1)
+    fdi_alpha: float | None = Field(default=None, gt=0.0, lt=1.0)
 
 
 class InitialErrorConfig(_Model):
@@ -154,7 +184,7 @@ class InitialErrorConfig(_Model):
 
 class ModeConfig(_Model):
     name: str
-    aiding: list[Literal["star", "sar"]] = []
+    aiding: list[Literal["star", "sar", "gnss"]] = []
 
 
 class Scenario(_Model):
@@ -169,6 +199,7 @@ class Scenario(_Model):
     filter: FilterConfig = FilterConfig()
     initial_errors: InitialErrorConfig = InitialErrorConfig()
     modes: list[ModeConfig] = Field(min_length=1)
+    faults: list[FaultConfig] = []
     stats_period_s: float = Field(default=1.0, gt=0.0)
 
     @property

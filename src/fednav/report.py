@@ -111,3 +111,31 @@ def plot_errors(series: dict, path: Path) -> Path:
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return path
+
+
+def plot_fdi(fdi: pd.DataFrame, path: Path, title: str = "") -> Path:
+    """Chi-square statistic of every local filter against its threshold, isolations marked."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    locals_ = list(dict.fromkeys(fdi["local"]))
+    fig, axes = plt.subplots(len(locals_), 1, figsize=(11, 2.6 * len(locals_)), sharex=True,
+                             squeeze=False)
+    for ax, name in zip(axes[:, 0], locals_, strict=True):
+        d = fdi[fdi["local"] == name]
+        ax.semilogy(d["t"], d["statistic"], lw=0.8, label=f"{name}: T = r' S^-1 r")
+        if d["threshold"].notna().any():
+            ax.plot(d["t"], d["threshold"], "k--", lw=1, label="threshold")
+        iso = d[d["isolated"]]
+        ax.plot(iso["t"], iso["statistic"], "r.", ms=3, label="isolated")
+        ax.set_ylabel("statistic")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8, loc="upper right")
+    axes[-1, 0].set_xlabel("time [s]")
+    fig.suptitle(title or "Chi-square fault detection")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path

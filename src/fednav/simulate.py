@@ -11,6 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+import pandas as pd
 
 from . import attitude as att
 from . import earth, units
@@ -18,7 +19,7 @@ from . import error_model as em
 from .config import Scenario
 from .filters import FederatedFilter, make_filter
 from .measurements import MODELS, NavSnapshot
-from .sensors import Barometer, MeasurementSeries, corrupt_imu
+from .sensors import Barometer, MeasurementSeries, corrupt_imu, inject_faults
 from .strapdown import STATE_LLA, STATE_Q, STATE_VEL, Strapdown, quat_to_dcm_nb
 
 
@@ -42,7 +43,9 @@ class RunResult:
 
     ``pos`` ENU [m], ``vel`` ENU [m/s], ``att`` platform angles phiE, phiN, phiU [rad];
     ``sigma`` filter 1-sigma of the 18 states in SI (NaN without a filter);
-    ``beta`` sharing factors per filter epoch.
+    ``beta`` sharing factors per filter epoch; ``fdi`` one row per local measurement:
+    time, local filter, chi-square statistic, degrees of freedom, threshold (NaN when
+    detection is off) and whether the local filter was isolated.
     """
 
     mode: str
@@ -52,6 +55,7 @@ class RunResult:
     att: np.ndarray
     sigma: np.ndarray
     beta: dict[str, np.ndarray] = field(default_factory=dict)
+    fdi: pd.DataFrame | None = None
 
 
 def make_run_data(scn: Scenario, seed: int, max_time: float | None = None) -> RunData:
@@ -64,10 +68,11 @@ def make_run_data(scn: Scenario, seed: int, max_time: float | None = None) -> Ru
     init_dp = rng.standard_normal(3) * ie.position_m
     dth, dv, _ = corrupt_imu(truth.dtheta, truth.dv, truth.dt, scn.imu.errors(truth.dt), rng)
     series = {}
-    for name in ("star", "sar", "baro"):
+    faults = [f.fault() for f in scn.faults]
+    for name in ("star", "sar", "gnss", "baro"):
         cfg = getattr(scn.sensors, name)
         if cfg is not None:
-            series[name] = cfg.sensor().simulate(truth, rng)
+            series[name] = inject_faults(cfg.sensor().simulate(truth, rng), faults)
     h_ref = (Barometer.on_imu_grid(series["baro"], truth.t[:-1]) if "baro" in series
              else np.full(len(truth.t) - 1, np.nan))
     return RunData(seed, dth, dv, series, h_ref, init_phi, init_dv, init_dp)
@@ -109,7 +114,7 @@ def _build_filter(scn: Scenario, aiding: list[str]) -> FederatedFilter:
         master = make_filter(f.type, np.zeros(em.N_STATES), P0, **opts)
         master.name = f"{f.type} master"
     return FederatedFilter(locals_, master, sharing=f.sharing, fixed=f.fixed_factors,
-                           reset=f.reset)
+                           reset=f.reset, fdi_alpha=f.fdi_alpha)
 
 
 def _schedule(series: MeasurementSeries, T: float, n_cycles: int) -> list[list[int]]:
@@ -172,7 +177,8 @@ def run_mode(scn: Scenario, aiding: list[str], data: RunData, mode: str = "",
                         nav = NavSnapshot(ins.lla, ins.vel, ins.dcm)
                     s = data.series[a]
                     model = MODELS[a]
-                    fed.update(a, model.residual(nav, s.z[i]), model, nav, model.R(s.sigma))
+                    fed.update(a, model.residual(nav, s.z[i]), model, nav, model.R(s.sigma),
+                               t=truth.t[(k + 1) * n_per])
             fed.fuse()
             var[k] = np.diagonal(fed.P)
             for name, b in fed.beta.items():
@@ -192,8 +198,12 @@ def run_mode(scn: Scenario, aiding: list[str], data: RunData, mode: str = "",
     vel_err = vel - truth.vel[idx]
     att_err = att.misalignment(truth.dcm[idx], att.quat_to_dcm(quat))
     keep = _stats_epochs(t, scn.stats_period_s)
+    fdi = None
+    if fed is not None:
+        fdi = pd.DataFrame(fed.log, columns=["t", "local", "statistic", "dof", "threshold",
+                                             "isolated"])
     return RunResult(mode, t[keep], pos_err[keep], vel_err[keep], att_err[keep], sigma[keep],
-                     {k: v[keep] for k, v in betas.items()})
+                     {k: v[keep] for k, v in betas.items()}, fdi)
 
 
 def _stats_epochs(t, period):

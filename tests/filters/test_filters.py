@@ -178,3 +178,53 @@ def test_federated_no_reset_keeps_local_estimates():
     dx = fed.feedback()
     np.testing.assert_allclose(a.x, xa - dx)
     np.testing.assert_allclose(b.x, xb - dx)
+
+
+@pytest.mark.parametrize("cls", [KalmanFilter, UnscentedKalmanFilter])
+def test_gate_rejects_outlier_without_changing_state(cls):
+    H = np.eye(2)
+    m = FunctionModel(lambda x: H @ x, H)
+    f = cls(np.zeros(2), np.eye(2))
+    x0, P0 = f.x.copy(), f.P.copy()
+    inn = f.update([10.0, 0.0], m, R=np.eye(2), gate=10.0)  # T = 100 / 2 = 50 > 10
+    assert not inn.accepted and inn.nis == pytest.approx(50.0)
+    np.testing.assert_array_equal(f.x, x0)
+    np.testing.assert_array_equal(f.P, P0)
+    inn = f.update([1.0, 0.0], m, R=np.eye(2), gate=10.0)  # T = 0.5 passes
+    assert inn.accepted and f.x[0] == pytest.approx(0.5)
+
+
+def test_chi_square_thresholds_of_paper_003():
+    fed = FederatedFilter({"a": KalmanFilter(np.zeros(2), np.eye(2))}, fdi_alpha=0.005)
+    assert fed.threshold(6) == pytest.approx(18.55, abs=0.01)  # paper: 18.5 (GNSS)
+    assert fed.threshold(3) == pytest.approx(12.84, abs=0.01)  # paper: 12.8 (CNS)
+    assert np.isnan(FederatedFilter({"a": KalmanFilter(np.zeros(2), np.eye(2))}).threshold(3))
+    with pytest.raises(ValueError, match="fdi_alpha"):
+        FederatedFilter({"a": KalmanFilter(np.zeros(2), np.eye(2))}, fdi_alpha=1.5)
+
+
+def test_federated_isolates_faulty_local_and_returns():
+    """A biased sensor is isolated while the bias is on and taken back when it ends; the
+    fused estimate stays with the healthy sensor."""
+    rng = np.random.default_rng(8)
+    A = np.eye(2)
+    proc = FunctionProcess(lambda x: A @ x, A, 1e-4 * np.eye(2))
+    H = np.eye(2)
+    m = FunctionModel(lambda x: H @ x, H)
+    R = 0.01 * np.eye(2)
+    fed = FederatedFilter({"good": KalmanFilter(np.zeros(2), np.eye(2)),
+                           "bad": KalmanFilter(np.zeros(2), np.eye(2))},
+                          sharing="equal", fdi_alpha=0.005)
+    truth = np.array([1.0, -1.0])
+    for k in range(60):
+        fed.predict(proc)
+        fed.update("good", truth + rng.normal(0, 0.1, 2), m, R=R, t=k)
+        bias = 5 * 0.1 if 20 <= k < 40 else 0.0
+        fed.update("bad", truth + bias + rng.normal(0, 0.1, 2), m, R=R, t=k)
+        fed.fuse()
+        if 25 <= k < 40:
+            assert np.abs(fed.x - truth).max() < 0.1
+    iso = {t: i for t, name, _, _, _, i in fed.log if name == "bad"}
+    assert all(iso[k] for k in range(20, 40))  # detected at onset, isolated throughout
+    assert not any(iso[k] for k in range(41, 60))  # automatic return
+    assert sum(iso[k] for k in range(20)) <= 1  # false alarms near alpha

@@ -5,8 +5,10 @@ A filter holds a state ``x`` (n,) and covariance ``P`` (n, n) and offers
 * ``predict(process, q_scale=1.0)`` — time update over one interval.  ``process`` gives
   ``transition(X)`` (rows of X propagated, nonlinear), ``Phi`` (its Jacobian) and ``Qd``
   (discrete process noise); ``q_scale`` multiplies ``Qd`` (federated sharing, 1/beta);
-* ``update(y, model, nav, R)`` — measurement update with the observed ``y``;
+* ``update(y, model, nav, R, gate=None)`` — measurement update with the observed ``y``;
   ``model`` gives ``h(X, nav)`` (rows) and ``H(nav)``; returns an :class:`Innovation`.
+  With a ``gate``, a measurement whose statistic ``r' S^-1 r`` exceeds it is not applied
+  (chi-square fault detection; the innovation is still returned).
 
 Covariances are kept symmetric; a covariance that is not positive definite raises
 :class:`FilterError` naming the filter and the step.
@@ -28,11 +30,13 @@ class FilterError(RuntimeError):
 
 
 class Innovation(NamedTuple):
-    """Residual ``r = y - y_hat``, its covariance ``S`` and the statistic ``r' S^-1 r``."""
+    """Residual ``r = y - y_hat``, its covariance ``S``, the statistic ``r' S^-1 r`` and
+    whether the update was applied (False when the statistic exceeded the gate)."""
 
     r: np.ndarray
     S: np.ndarray
     nis: float
+    accepted: bool = True
 
 
 @dataclass
@@ -120,4 +124,4 @@ class Filter(ABC):
     def predict(self, process, q_scale: float = 1.0) -> None: ...
 
     @abstractmethod
-    def update(self, y, model, nav=None, R=None) -> Innovation: ...
+    def update(self, y, model, nav=None, R=None, gate: float | None = None) -> Innovation: ...

@@ -22,16 +22,20 @@ class KalmanFilter(Filter):
         self.P = Phi @ self.P @ Phi.T + q_scale * process.Qd
         self._finish("predict")
 
-    def update(self, y, model, nav=None, R=None) -> Innovation:
+    def update(self, y, model, nav=None, R=None, gate: float | None = None) -> Innovation:
         H = model.H(nav)
         y_hat = model.h(self.x[None], nav)[0]
         r = np.asarray(y, dtype=float) - y_hat
         PHt = self.P @ H.T
         S = H @ PHt + R
         S = 0.5 * (S + S.T)
-        K = solve_spd(S, PHt.T, self._who("update")).T
+        who = self._who("update")
+        nis = float(r @ solve_spd(S, r, who))
+        if gate is not None and nis > gate:
+            return Innovation(r, S, nis, False)
+        K = solve_spd(S, PHt.T, who).T
         self.x = self.x + K @ r
         IKH = np.eye(self.n) - K @ H
         self.P = IKH @ self.P @ IKH.T + K @ R @ K.T
         self._finish("update")
-        return Innovation(r, S, float(r @ solve_spd(S, r, self._who("update"))))
+        return Innovation(r, S, nis)

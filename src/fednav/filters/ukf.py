@@ -103,7 +103,7 @@ class UnscentedKalmanFilter(Filter):
         if not ok:
             raise FilterError(f"{self._who('predict')}: state or covariance became NaN/inf")
 
-    def update(self, y, model, nav=None, R=None) -> Innovation:
+    def update(self, y, model, nav=None, R=None, gate: float | None = None) -> Innovation:
         X = self.sigma_points(phase="update")
         Z = np.ascontiguousarray(model.h(X, nav), dtype=float)
         x, P, r, Pzz, nis, ok = _update(X, Z, self.Wm, self.Wc, self.x, self.P,
@@ -111,6 +111,8 @@ class UnscentedKalmanFilter(Filter):
         if not ok or not np.isfinite(nis):
             raise FilterError(f"{self._who('update')}: innovation covariance not positive "
                               f"definite")
+        if gate is not None and nis > gate:
+            return Innovation(r, Pzz, float(nis), False)
         self.x, self.P = x, P
         self._finish("update", symmetrize=False)
         return Innovation(r, Pzz, float(nis))
