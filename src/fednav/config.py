@@ -161,7 +161,7 @@ class FaultConfig(_Model):
 
 
 class FilterConfig(_Model):
-    type: Literal["ukf", "kf", "ekf"] = "ukf"
+    type: Literal["ukf", "sukf", "kf", "ekf"] = "ukf"
     period_s: float = Field(default=1.0, gt=0.0)
     alpha: float = Field(default=1e-3, gt=0.0)
     beta: float = 2.0

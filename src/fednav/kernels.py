@@ -51,3 +51,31 @@ def cholesky_lower(S):
                 s -= L[i, k] * L[j, k]
             L[i, j] = s / L[j, j]
     return L, True
+
+
+@numba.njit(cache=True)
+def spd_inverse(P):
+    """Inverse of an SPD matrix via its Cholesky factor (explicit loops: no LAPACK call
+    overhead at these sizes); returns (inverse, ok)."""
+    n = P.shape[0]
+    L, ok = cholesky_lower(P)
+    if not ok:
+        return P, False
+    # W = L^-1 (lower triangular), then P^-1 = W' W.
+    W = np.zeros((n, n))
+    for i in range(n):
+        W[i, i] = 1.0 / L[i, i]
+        for j in range(i):
+            s = 0.0
+            for k in range(j, i):
+                s -= L[i, k] * W[k, j]
+            W[i, j] = s / L[i, i]
+    out = np.zeros((n, n))
+    for i in range(n):
+        for j in range(i + 1):
+            s = 0.0
+            for k in range(i, n):
+                s += W[k, i] * W[k, j]
+            out[i, j] = s
+            out[j, i] = s
+    return out, True

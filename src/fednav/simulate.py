@@ -105,7 +105,8 @@ def initial_covariance(scn: Scenario) -> np.ndarray:
 def _build_filter(scn: Scenario, aiding: list[str]) -> FederatedFilter:
     f = scn.filter
     P0 = initial_covariance(scn)
-    opts = {"alpha": f.alpha, "beta": f.beta, "kappa": f.kappa} if f.type == "ukf" else {}
+    opts = ({"alpha": f.alpha, "beta": f.beta, "kappa": f.kappa}
+            if f.type in ("ukf", "sukf") else {})
     locals_ = {a: make_filter(f.type, np.zeros(em.N_STATES), P0, **opts) for a in aiding}
     for a, flt in locals_.items():
         flt.name = f"{f.type} local '{a}'"

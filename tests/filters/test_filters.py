@@ -228,3 +228,24 @@ def test_federated_isolates_faulty_local_and_returns():
     assert all(iso[k] for k in range(20, 40))  # detected at onset, isolated throughout
     assert not any(iso[k] for k in range(41, 60))  # automatic return
     assert sum(iso[k] for k in range(20)) <= 1  # false alarms near alpha
+
+
+@pytest.mark.parametrize("alpha", [1e-3, 0.5])
+def test_simplified_ukf_equals_full_ukf_for_linear_measurements(alpha):
+    from fednav.filters import SimplifiedUKF
+
+    H = np.array([[1.0, 0.0, 0.5], [0.0, 2.0, 0.0]])
+    proc = FunctionProcess(fx, np.eye(3), Q)  # nonlinear process
+    model = FunctionModel(lambda x: H @ x, H)  # linear measurement
+    x0, P0 = np.array([0.3, -0.1, 0.5]), np.diag([0.1, 0.2, 0.3])
+    full, simple = UnscentedKalmanFilter(x0, P0, alpha=alpha), SimplifiedUKF(x0, P0, alpha=alpha)
+    rng = np.random.default_rng(6)
+    for _ in range(25):
+        z = rng.normal(0, 0.3, 2)
+        full.predict(proc)
+        simple.predict(proc)
+        a, b = full.update(z, model, R=R), simple.update(z, model, R=R)
+        assert a.nis == pytest.approx(b.nis, rel=1e-6)
+    np.testing.assert_allclose(simple.x, full.x, rtol=1e-7, atol=1e-10)
+    np.testing.assert_allclose(simple.P, full.P, rtol=1e-6, atol=1e-10)
+    assert make_filter("sukf", x0, P0).__class__ is SimplifiedUKF

@@ -4,14 +4,15 @@ federated filter that combines them."""
 from .base import Filter, FilterError, FunctionModel, FunctionProcess, Innovation
 from .federated import FederatedFilter, sharing_factors
 from .kf import KalmanFilter
-from .ukf import UnscentedKalmanFilter
+from .ukf import SimplifiedUKF, UnscentedKalmanFilter
 
 #: Names accepted in scenario files.
-REGISTRY = {"kf": KalmanFilter, "ekf": KalmanFilter, "ukf": UnscentedKalmanFilter}
+REGISTRY = {"kf": KalmanFilter, "ekf": KalmanFilter, "ukf": UnscentedKalmanFilter,
+            "sukf": SimplifiedUKF}
 
 
 def make_filter(name: str, x0, P0, **options) -> Filter:
-    """Build a filter by its registry name (``kf``, ``ekf``, ``ukf``)."""
+    """Build a filter by its registry name (``kf``, ``ekf``, ``ukf``, ``sukf``)."""
     try:
         cls = REGISTRY[name.lower()]
     except KeyError:
@@ -22,5 +23,5 @@ def make_filter(name: str, x0, P0, **options) -> Filter:
 
 
 __all__ = ["FederatedFilter", "Filter", "FilterError", "FunctionModel", "FunctionProcess",
-           "Innovation", "KalmanFilter", "REGISTRY", "UnscentedKalmanFilter", "make_filter",
-           "sharing_factors"]
+           "Innovation", "KalmanFilter", "REGISTRY", "SimplifiedUKF", "UnscentedKalmanFilter",
+           "make_filter", "sharing_factors"]

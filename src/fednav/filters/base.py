@@ -78,18 +78,6 @@ def chol(P: np.ndarray, who: str) -> np.ndarray:
     return L
 
 
-def solve_spd(S: np.ndarray, B: np.ndarray, who: str) -> np.ndarray:
-    """``S^-1 B`` for symmetric positive-definite S, with a clear error when it is not."""
-    if not np.all(np.isfinite(S)):
-        raise FilterError(f"{who}: innovation covariance contains NaN/inf")
-    try:
-        L = np.linalg.cholesky(S)
-    except LinAlgError:
-        raise FilterError(f"{who}: innovation covariance not positive definite") from None
-    Y = np.linalg.solve(L, B)
-    return np.linalg.solve(L.T, Y)
-
-
 class Filter(ABC):
     """Common state, bookkeeping and checks of all estimators."""
 

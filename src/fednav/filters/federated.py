@@ -37,7 +37,7 @@ import numpy as np
 from numpy.linalg import LinAlgError
 from scipy.stats import chi2
 
-from ..kernels import cholesky_lower
+from ..kernels import spd_inverse
 from .base import Filter, FilterError
 
 
@@ -71,34 +71,6 @@ def _inv_spd(P, who):
 
 
 @numba.njit(cache=True)
-def _spd_inverse(P):
-    """Inverse of an SPD matrix via its Cholesky factor (explicit loops: no LAPACK call
-    overhead at these sizes); returns (inverse, ok)."""
-    n = P.shape[0]
-    L, ok = cholesky_lower(P)
-    if not ok:
-        return P, False
-    # W = L^-1 (lower triangular), then P^-1 = W' W.
-    W = np.zeros((n, n))
-    for i in range(n):
-        W[i, i] = 1.0 / L[i, i]
-        for j in range(i):
-            s = 0.0
-            for k in range(j, i):
-                s -= L[i, k] * W[k, j]
-            W[i, j] = s / L[i, i]
-    out = np.zeros((n, n))
-    for i in range(n):
-        for j in range(i + 1):
-            s = 0.0
-            for k in range(i, n):
-                s += W[k, i] * W[k, j]
-            out[i, j] = s
-            out[j, i] = s
-    return out, True
-
-
-@numba.njit(cache=True)
 def _fuse(xs, Ps):
     """Information fusion of k estimates: (x_g, P_g, tr(P_i^-1) (k,), index of failure)."""
     k, n = xs.shape
@@ -106,13 +78,13 @@ def _fuse(xs, Ps):
     v = np.zeros(n)
     tr = np.empty(k)
     for i in range(k):
-        Ii, ok = _spd_inverse(Ps[i])
+        Ii, ok = spd_inverse(Ps[i])
         if not ok:
             return v, Ig, tr, i
         Ig += Ii
         v += Ii @ xs[i]
         tr[i] = np.trace(Ii)
-    Pg, ok = _spd_inverse(0.5 * (Ig + Ig.T))
+    Pg, ok = spd_inverse(0.5 * (Ig + Ig.T))
     if not ok:
         return v, Ig, tr, k
     return Pg @ v, 0.5 * (Pg + Pg.T), tr, -1

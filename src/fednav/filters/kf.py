@@ -2,9 +2,27 @@
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 
-from .base import Filter, Innovation, solve_spd
+from ..kernels import spd_inverse
+from .base import Filter, FilterError, Innovation
+
+
+@numba.njit(cache=True)
+def _joseph_update(x, P, H, r, R):
+    """K = P H' S^-1, x + K r, P = (I - K H) P (I - K H)' + K R K'; returns
+    (x, P, S, r' S^-1 r, ok)."""
+    PHt = P @ H.T
+    S = H @ PHt + R
+    S = 0.5 * (S + S.T)
+    Sinv, ok = spd_inverse(S)
+    if not ok:
+        return x, P, S, 0.0, False
+    K = PHt @ Sinv
+    IKH = np.eye(x.shape[0]) - K @ H
+    Pn = IKH @ P @ IKH.T + K @ R @ K.T
+    return x + K @ r, 0.5 * (Pn + Pn.T), S, r @ Sinv @ r, True
 
 
 class KalmanFilter(Filter):
@@ -23,19 +41,14 @@ class KalmanFilter(Filter):
         self._finish("predict")
 
     def update(self, y, model, nav=None, R=None, gate: float | None = None) -> Innovation:
-        H = model.H(nav)
-        y_hat = model.h(self.x[None], nav)[0]
-        r = np.asarray(y, dtype=float) - y_hat
-        PHt = self.P @ H.T
-        S = H @ PHt + R
-        S = 0.5 * (S + S.T)
-        who = self._who("update")
-        nis = float(r @ solve_spd(S, r, who))
+        H = np.ascontiguousarray(model.H(nav), dtype=float)
+        r = np.asarray(y, dtype=float) - model.h(self.x[None], nav)[0]
+        x, P, S, nis, ok = _joseph_update(self.x, self.P, H, r, np.asarray(R, dtype=float))
+        if not ok:
+            raise FilterError(f"{self._who('update')}: innovation covariance not positive "
+                              f"definite")
         if gate is not None and nis > gate:
             return Innovation(r, S, nis, False)
-        K = solve_spd(S, PHt.T, who).T
-        self.x = self.x + K @ r
-        IKH = np.eye(self.n) - K @ H
-        self.P = IKH @ self.P @ IKH.T + K @ R @ K.T
-        self._finish("update")
+        self.x, self.P = x, P
+        self._finish("update", symmetrize=False)
         return Innovation(r, S, nis)

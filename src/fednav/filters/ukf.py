@@ -17,6 +17,7 @@ import numpy as np
 
 from ..kernels import cholesky_lower
 from .base import Filter, FilterError, Innovation
+from .kf import KalmanFilter
 
 
 @numba.njit(cache=True)
@@ -116,3 +117,15 @@ class UnscentedKalmanFilter(Filter):
         self.x, self.P = x, P
         self._finish("update", symmetrize=False)
         return Innovation(r, Pzz, float(nis))
+
+
+class SimplifiedUKF(UnscentedKalmanFilter):
+    """UKF time update with the linear Kalman measurement update (paper 003, section 2.1).
+
+    For a linear measurement ``z = H x + v`` the sigma points of the measurement update
+    add nothing: ``z_hat = H x``, ``Pzz = H P H' + R``, ``Pxz = P H'`` give the same result
+    as the full UKF at the cost of one small matrix product.  Uses ``model.H`` only; the
+    covariance update is the Joseph form of :class:`~fednav.filters.kf.KalmanFilter`.
+    """
+
+    update = KalmanFilter.update
