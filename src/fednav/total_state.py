@@ -1,0 +1,192 @@
+"""Total-state (direct) filtering of the navigation state (paper 003).
+
+The filter estimates the navigation state itself — attitude, ENU velocity, position —
+instead of the INS error.  Its mean *is* the INS (:class:`~fednav.strapdown.Strapdown`),
+propagated by the mechanization at the full IMU rate.  Uncertainty lives on the tangent
+space ``d = [phi (3), dv (3), dp (3)]`` in filter units (arc-minutes, m/s, metres ENU):
+
+* ``X [+] d``: attitude ``C = exp([phi x]) C_X`` (a rotation of the navigation frame by
+  ``phi``), ``v = v_X + dv``, position moved by ``dp`` metres east/north/up;
+* ``Y [-] X``: the ``d`` with ``X [+] d = Y``; the attitude part is ``log(C_Y C_X')`` —
+  recovered platform angles, never a difference of Euler angles (paper 003, eq. 27–29;
+  fednav uses the exact exponential where the paper writes the small-angle matrix).
+
+Time update (augmented UKF, paper 003 section 2.1): sigma points over
+``[d (9), w (6)]`` with covariance ``blockdiag(P, Q_w)``, ``w`` = gyro and accelerometer
+error over the interval [rad/s, m/s^2].  Every sigma point is flown through the same
+strapdown kernel over the interval (one coarse step with the interval's summed
+increments, minus its ``w``); the central point is flown the same way, and only the
+deviations ``chi_i [-] chi_0`` are kept and re-applied around the full-rate INS.  The
+coarse step's own (common-mode) error therefore cancels.  Measurement updates are linear
+on the tangent space (the simplified UKF), see :class:`GnssTotal` and :class:`StarTotal`.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from . import attitude as att
+from . import earth
+from .error_model import SCALE
+from .kernels import cholesky_lower
+from .strapdown import STATE_LLA, STATE_Q, STATE_SIZE, STATE_VEL, Strapdown, _run
+
+N_NAV = 9
+N_NOISE = 6
+#: Filter units of the tangent coordinates [phi (arcmin), v (m/s), p (m)].
+TSCALE = SCALE[:N_NAV]
+
+
+def boxplus(states: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """``X [+] d`` for INS state rows (S, STATE_SIZE) and tangent rows d (S, 9) (filter units)."""
+    out = np.array(states, dtype=float, copy=True)
+    d = np.atleast_2d(d) * TSCALE
+    C = att.quat_to_dcm(out[:, STATE_Q])
+    out[:, STATE_Q] = att.dcm_to_quat(att.rotvec_to_dcm(d[:, 0:3]) @ C)
+    out[:, STATE_VEL] += d[:, 3:6]
+    lla = out[:, STATE_LLA]
+    rm, rn = earth.radii(lla[:, 0])
+    h = lla[:, 2]
+    out[:, 7] = lla[:, 0] + d[:, 7] / (rm + h)
+    out[:, 8] = lla[:, 1] + d[:, 6] / ((rn + h) * np.cos(lla[:, 0]))
+    out[:, 9] = h + d[:, 8]
+    return out
+
+
+def boxminus(states: np.ndarray, ref: np.ndarray) -> np.ndarray:
+    """``Y [-] X`` for state rows Y (S, STATE_SIZE) and one reference state X (filter units)."""
+    Y = np.atleast_2d(states)
+    Cy = att.quat_to_dcm(Y[:, STATE_Q])
+    Cx = att.quat_to_dcm(ref[STATE_Q])
+    phi = att.dcm_to_rotvec(Cy @ Cx.T)
+    dv = Y[:, STATE_VEL] - ref[STATE_VEL]
+    lla, r = Y[:, STATE_LLA], ref[STATE_LLA]
+    dp = earth.llh_difference_enu(lla[:, 0], lla[:, 1], lla[:, 2], r[0], r[1], r[2])
+    return np.column_stack([phi, dv, dp]) / TSCALE
+
+
+def attitude_innovation(C_meas, C_est) -> np.ndarray:
+    """Rotation [rad] from the estimated to the measured attitude, ``log(C_meas C_est')``.
+
+    Valid at any heading (no 0/360 wrap) and any pitch (no Euler singularity)."""
+    return att.dcm_to_rotvec(np.asarray(C_meas) @ np.swapaxes(np.asarray(C_est), -1, -2))
+
+
+@numba.njit(cache=True)
+def _fly_coarse(states, dth, dv, noise, T, gains):
+    """One strapdown step of length T for each state row with its own IMU error."""
+    nan = np.full(1, np.nan)
+    o4 = np.empty((0, 4))
+    o3 = np.empty((0, 3))
+    a = np.empty((1, 3))
+    b = np.empty((1, 3))
+    for i in range(states.shape[0]):
+        for j in range(3):
+            a[0, j] = dth[j] - noise[i, j] * T
+            b[0, j] = dv[j] - noise[i, 3 + j] * T
+        _run(states[i], a, b, T, nan, gains, o4, o3, o3)
+
+
+class TotalStateUKF:
+    """Augmented UKF on the navigation state, mean = the INS (see module docstring).
+
+    ``ins``: the strapdown navigator that carries the mean; ``P0`` (9, 9) tangent
+    covariance (filter units); ``Qw`` (6, 6) covariance of the gyro [rad/s] and
+    accelerometer [m/s^2] error averaged over one filter interval.
+    """
+
+    def __init__(self, ins: Strapdown, P0, Qw, alpha: float = 1e-3, beta: float = 2.0,
+                 kappa: float = 0.0, name: str = "total-state ukf"):
+        self.ins, self.name = ins, name
+        self.P = np.array(P0, dtype=float)
+        self.Qw = np.array(Qw, dtype=float)
+        if self.P.shape != (N_NAV, N_NAV) or self.Qw.shape != (N_NOISE, N_NOISE):
+            raise ValueError(f"{name}: P0 must be (9, 9) and Qw (6, 6)")
+        if not np.allclose(self.Qw, self.Qw.T) or np.linalg.eigvalsh(self.Qw).min() < 0:
+            raise ValueError(f"{name}: Qw must be symmetric positive semi-definite")
+        n = N_NAV + N_NOISE
+        lam = alpha**2 * (n + kappa) - n
+        self.c = n + lam
+        self.Wm = np.full(2 * n + 1, 0.5 / self.c)
+        self.Wc = self.Wm.copy()
+        self.Wm[0] = lam / self.c
+        self.Wc[0] = lam / self.c + 1.0 - alpha**2 + beta
+        # PSD square root of c Qw (zero noise components allowed).
+        ev, V = np.linalg.eigh(self.c * self.Qw)
+        self._Lw = V * np.sqrt(np.clip(ev, 0.0, None))
+        self.step = 0
+
+    def predict(self, dtheta, dv, h_ref=None) -> None:
+        """Time update over one interval of IMU increments (N, 3) (already compensated)."""
+        self.step += 1
+        n = N_NAV + N_NOISE
+        Lp, ok = cholesky_lower(self.c * self.P)
+        if not ok:
+            raise FloatingPointError(f"{self.name} predict at step {self.step}: covariance is "
+                                     f"not positive definite")
+        L = np.zeros((n, n))  # blockdiag(P, Qw): factor the blocks separately
+        L[:N_NAV, :N_NAV] = Lp
+        L[N_NAV:, N_NAV:] = self._Lw
+        D = np.vstack([np.zeros(n), L.T, -L.T])
+        start = self.ins.state.copy()
+        chi = boxplus(np.tile(start, (len(D), 1)), D[:, :N_NAV])
+        chi[:, 10:20] = 0.0  # coarse steps: no previous-sample coning/sculling terms
+        T = self.ins.dt * len(dtheta)
+        _fly_coarse(chi, np.asarray(dtheta).sum(axis=0), np.asarray(dv).sum(axis=0),
+                    np.ascontiguousarray(D[:, N_NAV:]), T, self.ins._gains)
+        dev = boxminus(chi, chi[0])
+        mean = self.Wm @ dev
+        r = dev - mean
+        self.P = (r * self.Wc[:, None]).T @ r
+        self.P = 0.5 * (self.P + self.P.T)
+        self.ins.run(dtheta, dv, h_ref, record=False)  # the mean at full IMU rate
+        self.apply(mean)
+
+    def apply(self, d) -> None:
+        """Move the mean by tangent ``d`` (filter units): ``X <- X [+] d``."""
+        self.ins.state[:] = boxplus(self.ins.state[None], d)[0]
+        # keep the velocity history used by the strapdown's midpoint extrapolation
+        self.ins.state[16:19] += np.asarray(d)[3:6] * TSCALE[3:6]
+
+
+class GnssTotal:
+    """GNSS on the total state: residual ``GNSS [-] X`` = [0, 0, 0, dv (3), dp ENU (3)]
+    (only the velocity and position parts are observed); linear ``H = [0 I]``."""
+
+    kind = "gnss"
+    dim = 6
+    H = np.hstack([np.zeros((6, 3)), np.eye(6)])
+
+    def residual(self, state, z) -> np.ndarray:
+        lat, lon, h = state[STATE_LLA]
+        dp = earth.llh_difference_enu(z[0], z[1], z[2], lat, lon, h)
+        return np.r_[np.asarray(z[3:6]) - state[STATE_VEL], dp] / TSCALE[3:9]
+
+    def R(self, sigma) -> np.ndarray:
+        s = np.asarray(sigma, dtype=float)  # [north, east, up m, vE, vN, vU] as z
+        return np.diag(np.r_[s[3:6], s[1], s[0], s[2]] ** 2)
+
+
+class StarTotal:
+    """Star sensor on the total state: residual = ``log(C_cns C_est')`` (arc-minutes);
+    ``H = [I 0]``.  The Euler-angle noise of the sensor maps to the rotation space with
+    the inverse of :func:`~fednav.attitude.euler_error_jacobian`."""
+
+    kind = "star"
+    dim = 3
+    H = np.hstack([np.eye(3), np.zeros((3, 6))])
+
+    def residual(self, state, z) -> np.ndarray:
+        C_est = att.quat_to_dcm(state[STATE_Q])
+        return attitude_innovation(att.euler_to_dcm(z), C_est) / TSCALE[0]
+
+    def R_at(self, state, sigma) -> np.ndarray:
+        e = att.quat_to_euler(state[STATE_Q])
+        Ji = np.linalg.inv(att.euler_error_jacobian(e))
+        Re = np.diag((np.asarray(sigma, dtype=float) / TSCALE[0]) ** 2)
+        return Ji @ Re @ Ji.T
+
+
+def empty_state() -> np.ndarray:
+    return np.zeros(STATE_SIZE)
