@@ -4,7 +4,7 @@ import pytest
 from fednav import attitude as att
 from fednav import units
 from fednav.strapdown import Strapdown
-from fednav.total_state import TSCALE, StarTotal, attitude_innovation, boxminus, boxplus
+from fednav.total_state import StarTotal, attitude_innovation, boxminus, boxplus
 
 
 def ins_at(euler, lla=(0.5, 2.0, 100.0), vel=(10.0, 20.0, 1.0)):

@@ -56,13 +56,16 @@ class SegmentConfig(_Model):
 class ImuConfig(_Model):
     """IMU errors.  ``accel_white_ug`` / ``gyro_white_deg_h`` are the 1-sigma of the
     white noise on each *sample* of specific force / rate (converted to VRW / ARW with
-    the IMU period)."""
+    the IMU period).  ``*_bias_rw_*_sqrt_h``: bias random walk, the bias grows by that
+    much (1-sigma) per square-root hour."""
 
     gyro_bias_deg_h: float = 0.0
     gyro_markov_deg_h: float = 0.0
     gyro_markov_tau_s: float = Field(default=float("inf"), gt=0.0)
     gyro_arw_deg_sqrt_h: float = 0.0
     gyro_white_deg_h: float = 0.0
+    gyro_bias_rw_deg_h_sqrt_h: float = 0.0
+    accel_bias_rw_ug_sqrt_h: float = 0.0
     accel_bias_ug: float = 0.0
     accel_markov_ug: float = 0.0
     accel_markov_tau_s: float = Field(default=float("inf"), gt=0.0)
@@ -76,9 +79,16 @@ class ImuConfig(_Model):
     def vrw(self, dt: float) -> float:
         return float(units.micro_g(self.accel_white_ug) * np.sqrt(dt))
 
+    def gyro_rw(self) -> float:
+        return float(units.deg_per_h(self.gyro_bias_rw_deg_h_sqrt_h) / np.sqrt(units.HOUR))
+
+    def accel_rw(self) -> float:
+        return float(units.micro_g(self.accel_bias_rw_ug_sqrt_h) / np.sqrt(units.HOUR))
+
     def errors(self, dt: float) -> ImuErrors:
         return ImuErrors(
             gyro_bias=float(units.deg_per_h(self.gyro_bias_deg_h)), gyro_arw=self.arw(dt),
+            gyro_bias_rw=self.gyro_rw(), accel_bias_rw=self.accel_rw(),
             gyro_markov_sigma=float(units.deg_per_h(self.gyro_markov_deg_h)),
             gyro_markov_tau=self.gyro_markov_tau_s,
             accel_bias=float(units.micro_g(self.accel_bias_ug)), accel_vrw=self.vrw(dt),
@@ -87,7 +97,8 @@ class ImuConfig(_Model):
 
     def noise_model(self, dt: float) -> ImuNoiseModel:
         return ImuNoiseModel(
-            gyro_arw=self.arw(dt), accel_vrw=self.vrw(dt),
+            gyro_arw=self.arw(dt), accel_vrw=self.vrw(dt), gyro_bias_rw=self.gyro_rw(),
+            accel_bias_rw=self.accel_rw(),
             gyro_markov_sigma=float(units.deg_per_h(self.gyro_markov_deg_h)),
             gyro_markov_tau=self.gyro_markov_tau_s,
             accel_markov_sigma=float(units.micro_g(self.accel_markov_ug)),

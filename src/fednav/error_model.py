@@ -54,12 +54,16 @@ SCALE = np.r_[np.full(3, units.ARCMIN), np.ones(6), np.full(6, units.deg_per_h(1
 class ImuNoiseModel:
     """What the filter assumes about the IMU (SI units, per axis, isotropic).
 
-    gyro_arw [rad/sqrt(s)], accel_vrw [m/s/sqrt(s)]; Markov sigma and tau for the gyro
+    gyro_arw [rad/sqrt(s)], accel_vrw [m/s/sqrt(s)]; bias random walks gyro_bias_rw
+    [rad/s/sqrt(s)] and accel_bias_rw [m/s^2/sqrt(s)] (on the constant-bias states);
+    Markov sigma and tau for the gyro
     drift [rad/s, s] and accelerometer bias [m/s^2, s] (tau = inf: constant bias).
     """
 
     gyro_arw: float = 0.0
     accel_vrw: float = 0.0
+    gyro_bias_rw: float = 0.0
+    accel_bias_rw: float = 0.0
     gyro_markov_sigma: float = 0.0
     gyro_markov_tau: float = np.inf
     accel_markov_sigma: float = 0.0
@@ -264,7 +268,7 @@ def _F(p, C):
 @numba.njit(cache=True)
 def _Qc(p, C, q):
     """Continuous process-noise density (SI); q = [arw, vrw, gyro GM sigma, accel GM sigma,
-    baro noise density]."""
+    baro noise density, gyro bias random walk, accel bias random walk]."""
     k1, k2, itg, ita = p[10], p[11], p[12], p[13]
     Q = np.zeros((18, 18))
     Q[0:3, 0:3] = q[0] ** 2 * (C @ C.T)
@@ -274,8 +278,9 @@ def _Qc(p, C, q):
     Q[5, 8] = k1 * k2 * q[4]
     Q[8, 5] = Q[5, 8]
     for i in range(3):
+        Q[9 + i, 9 + i] = q[5] ** 2
         Q[12 + i, 12 + i] = 2.0 * q[2] ** 2 * itg
-        Q[15 + i, 15 + i] = 2.0 * q[3] ** 2 * ita
+        Q[15 + i, 15 + i] = 2.0 * q[3] ** 2 * ita + q[6] ** 2
     return Q
 
 
@@ -331,7 +336,8 @@ class ErrorProcess:
                                  earth.gravity_nb(float(nom.lat), float(nom.h))])
         self._C0 = np.ascontiguousarray(nom.C, dtype=float)
         self._noise = np.array([noise.gyro_arw, noise.accel_vrw, noise.gyro_markov_sigma,
-                                noise.accel_markov_sigma, self.baro_q])
+                                noise.accel_markov_sigma, self.baro_q, noise.gyro_bias_rw,
+                                noise.accel_bias_rw])
         self.Phi, self.Qd = _discretize(self._params, self._C0, self._noise, self.T, SCALE)
 
     # ------------------------------------------------------------------ SI models

@@ -249,3 +249,23 @@ def test_simplified_ukf_equals_full_ukf_for_linear_measurements(alpha):
     np.testing.assert_allclose(simple.x, full.x, rtol=1e-7, atol=1e-10)
     np.testing.assert_allclose(simple.P, full.P, rtol=1e-6, atol=1e-10)
     assert make_filter("sukf", x0, P0).__class__ is SimplifiedUKF
+
+
+def test_share_then_update_equals_centralized():
+    """Master time update + share (paper 003) + local linear updates + fusion = central KF."""
+    rng = np.random.default_rng(9)
+    P = np.diag([1.0, 2.0, 3.0])
+    H1, H2 = np.array([[1.0, 0, 0], [0, 1.0, 0]]), np.array([[0, 0, 1.0]])
+    R1, R2 = np.diag([0.2, 0.3]), np.array([[0.4]])
+    z1, z2 = rng.normal(size=2), rng.normal(size=1)
+    central = KalmanFilter(np.zeros(3), P)
+    central.update(np.r_[z1, z2], FunctionModel(lambda x: np.r_[H1 @ x, H2 @ x],
+                                                np.vstack([H1, H2])), R=np.diag([0.2, 0.3, 0.4]))
+    fed = FederatedFilter({"a": KalmanFilter(np.zeros(3), P), "b": KalmanFilter(np.zeros(3), P)},
+                          sharing="equal")
+    fed.share(np.zeros(3), P)
+    fed.update("a", z1, FunctionModel(lambda x: H1 @ x, H1), R=R1)
+    fed.update("b", z2, FunctionModel(lambda x: H2 @ x, H2), R=R2)
+    x, Pg = fed.fuse()
+    np.testing.assert_allclose(x, central.x, atol=1e-12)
+    np.testing.assert_allclose(Pg, central.P, atol=1e-12)

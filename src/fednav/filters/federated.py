@@ -122,6 +122,15 @@ class FederatedFilter:
                 f.x = self.x.copy()
                 f.P = self.P / self.beta[k]
 
+    def share(self, x, P) -> None:
+        """Distribute an externally time-updated estimate (paper 003: the master does the
+        time update): every filter gets ``x`` and ``P / beta_i``."""
+        x = np.asarray(x, dtype=float)
+        for k, f in self.filters.items():
+            f.x = x.copy()
+            f.P = np.asarray(P, dtype=float) / self.beta[k]
+            f.step += 1
+
     def predict(self, process) -> None:
         """Time update of every filter with its share of the process noise."""
         for k, f in self.filters.items():
