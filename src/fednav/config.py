@@ -172,7 +172,7 @@ class FaultConfig(_Model):
 
 
 class FilterConfig(_Model):
-    type: Literal["ukf", "sukf", "kf", "ekf"] = "ukf"
+    type: Literal["ukf", "sukf", "kf", "ekf"] = "ukf"  # error-state filters
     period_s: float = Field(default=1.0, gt=0.0)
     alpha: float = Field(default=1e-3, gt=0.0)
     beta: float = 2.0
@@ -193,9 +193,17 @@ class InitialErrorConfig(_Model):
     position_m: float = Field(default=0.0, ge=0.0)
 
 
+FilterType = Literal["ukf", "sukf", "kf", "ekf", "total-ukf"]
+
+
 class ModeConfig(_Model):
+    """A mode: which aiding sensors feed local filters, and (optionally) a filter type
+    that overrides ``filter.type`` for this mode (``total-ukf``: the total-state
+    federated UKF of paper 003)."""
+
     name: str
     aiding: list[Literal["star", "sar", "gnss"]] = []
+    filter: FilterType | None = None
 
 
 class Scenario(_Model):

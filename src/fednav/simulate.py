@@ -17,10 +17,13 @@ from . import attitude as att
 from . import earth, units
 from . import error_model as em
 from .config import Scenario
-from .filters import FederatedFilter, make_filter
+from .filters import FederatedFilter, KalmanFilter, make_filter
 from .measurements import MODELS, NavSnapshot
 from .sensors import Barometer, MeasurementSeries, corrupt_imu, inject_faults
 from .strapdown import STATE_LLA, STATE_Q, STATE_VEL, Strapdown, quat_to_dcm_nb
+from .total_state import GnssTotal, StarTotal, TotalStateUKF
+
+TOTAL_MODELS = {"gnss": GnssTotal(), "star": StarTotal()}
 
 
 @dataclass
@@ -56,6 +59,7 @@ class RunResult:
     sigma: np.ndarray
     beta: dict[str, np.ndarray] = field(default_factory=dict)
     fdi: pd.DataFrame | None = None
+    euler: np.ndarray | None = None  # Euler [pitch, roll, heading] estimated - true [rad]
 
 
 def make_run_data(scn: Scenario, seed: int, max_time: float | None = None) -> RunData:
@@ -102,18 +106,18 @@ def initial_covariance(scn: Scenario) -> np.ndarray:
     return np.diag(sd**2)
 
 
-def _build_filter(scn: Scenario, aiding: list[str]) -> FederatedFilter:
+def _build_filter(scn: Scenario, aiding: list[str], ftype: str) -> FederatedFilter:
     f = scn.filter
     P0 = initial_covariance(scn)
     opts = ({"alpha": f.alpha, "beta": f.beta, "kappa": f.kappa}
-            if f.type in ("ukf", "sukf") else {})
-    locals_ = {a: make_filter(f.type, np.zeros(em.N_STATES), P0, **opts) for a in aiding}
+            if ftype in ("ukf", "sukf") else {})
+    locals_ = {a: make_filter(ftype, np.zeros(em.N_STATES), P0, **opts) for a in aiding}
     for a, flt in locals_.items():
-        flt.name = f"{f.type} local '{a}'"
+        flt.name = f"{ftype} local '{a}'"
     master = None
     if f.master and len(aiding) > 1:
-        master = make_filter(f.type, np.zeros(em.N_STATES), P0, **opts)
-        master.name = f"{f.type} master"
+        master = make_filter(ftype, np.zeros(em.N_STATES), P0, **opts)
+        master.name = f"{ftype} master"
     return FederatedFilter(locals_, master, sharing=f.sharing, fixed=f.fixed_factors,
                            reset=f.reset, fdi_alpha=f.fdi_alpha)
 
@@ -130,8 +134,14 @@ def _schedule(series: MeasurementSeries, T: float, n_cycles: int) -> list[list[i
 
 
 def run_mode(scn: Scenario, aiding: list[str], data: RunData, mode: str = "",
-             max_time: float | None = None) -> RunResult:
-    """Fly one mode (list of aiding sensors; empty = free SINS) on the run's data."""
+             max_time: float | None = None, filter_type: str | None = None) -> RunResult:
+    """Fly one mode (list of aiding sensors; empty = free SINS) on the run's data.
+
+    ``filter_type`` overrides the scenario's; ``total-ukf`` runs :func:`run_total_state`.
+    """
+    ftype = filter_type or scn.filter.type
+    if ftype == "total-ukf":
+        return run_total_state(scn, aiding, data, mode, max_time)
     truth = scn.trajectory(max_time)
     dt = truth.dt
     T = scn.filter.period_s
@@ -145,7 +155,7 @@ def run_mode(scn: Scenario, aiding: list[str], data: RunData, mode: str = "",
             raise ValueError(f"scenario {scn.name}: mode '{mode}' uses sensor '{a}' which the "
                              f"scenario does not configure")
     ins = _initial_ins(scn, truth, data)
-    fed = _build_filter(scn, aiding) if aiding else None
+    fed = _build_filter(scn, aiding, ftype) if aiding else None
     noise = scn.imu.noise_model(dt)
     baro_gains = ins._gains[:2]
     baro = scn.sensors.baro
@@ -189,24 +199,111 @@ def run_mode(scn: Scenario, aiding: list[str], data: RunData, mode: str = "",
             comp_g += dx[em.EPS_C] + dx[em.EPS_R]
             comp_a += dx[em.NABLA]
         states[k] = ins.state
-    lla, vel, quat = states[:, STATE_LLA], states[:, STATE_VEL], states[:, STATE_Q]
     sigma = np.sqrt(var) * em.SCALE
+    return _result(scn, truth, n_per, states, mode, sigma,
+                   betas, fed.log if fed is not None else None)
+
+
+def _result(scn, truth, n_per, states, mode, sigma, betas, log) -> RunResult:
+    """Errors of the INS states recorded after each filter cycle against the truth."""
+    n_cycles = len(states)
+    lla, vel, quat = states[:, STATE_LLA], states[:, STATE_VEL], states[:, STATE_Q]
     idx = (np.arange(n_cycles) + 1) * n_per
     t = truth.t[idx]
     tl = truth.lla[idx]
     pos_err = earth.llh_difference_enu(lla[:, 0], lla[:, 1], lla[:, 2], tl[:, 0], tl[:, 1],
                                        tl[:, 2])
     vel_err = vel - truth.vel[idx]
-    att_err = att.misalignment(truth.dcm[idx], att.quat_to_dcm(quat))
+    C = att.quat_to_dcm(quat)
+    att_err = att.misalignment(truth.dcm[idx], C)
+    euler_err = att.euler_difference(att.dcm_to_euler(C), truth.euler[idx])
     keep = _stats_epochs(t, scn.stats_period_s)
     fdi = None
-    if fed is not None:
-        fdi = pd.DataFrame(fed.log, columns=["t", "local", "statistic", "dof", "threshold",
-                                             "isolated"])
+    if log is not None:
+        fdi = pd.DataFrame(log, columns=["t", "local", "statistic", "dof", "threshold",
+                                         "isolated"])
     return RunResult(mode, t[keep], pos_err[keep], vel_err[keep], att_err[keep], sigma[keep],
-                     {k: v[keep] for k, v in betas.items()}, fdi)
+                     {k: v[keep] for k, v in betas.items()}, fdi, euler_err[keep])
+
+
+class _Linear:
+    """A linear measurement model ``y = H x`` in the filter interface."""
+
+    def __init__(self, H):
+        self.Hm = H
+
+    def h(self, X, nav=None):
+        return np.atleast_2d(X) @ self.Hm.T
+
+    def H(self, nav=None):
+        return self.Hm
+
+
+def total_state_noise(scn: Scenario, T: float, dt: float) -> np.ndarray:
+    """Qw of the total-state UKF: variance of the gyro / accelerometer error averaged over
+    one filter interval.  The filter has no bias states, so the bias (constant + Markov +
+    random walk at half the flight) is treated as part of that error (documented
+    approximation of a filter without instrument states)."""
+    imu = scn.imu
+    noise = imu.noise_model(dt)
+    half = 0.5 * scn.duration
+    gb2 = (units.deg_per_h(imu.gyro_bias_deg_h) ** 2 + noise.gyro_markov_sigma**2
+           + noise.gyro_bias_rw**2 * half)
+    ab2 = (units.micro_g(imu.accel_bias_ug) ** 2 + noise.accel_markov_sigma**2
+           + noise.accel_bias_rw**2 * half)
+    return np.diag(np.r_[np.full(3, noise.gyro_arw**2 / T + gb2),
+                         np.full(3, noise.accel_vrw**2 / T + ab2)])
+
+
+def run_total_state(scn: Scenario, aiding: list[str], data: RunData, mode: str = "",
+                    max_time: float | None = None) -> RunResult:
+    """Paper 003's federated total-state UKF: the master time-updates the navigation state
+    (augmented UKF through the mechanization), shares ``P / beta_j`` with the local
+    filters, which update linearly (simplified UKF) with their sensor; the fused
+    correction moves the navigation state (which is the INS)."""
+    truth = scn.trajectory(max_time)
+    dt, T = truth.dt, scn.filter.period_s
+    n_per = round(T / dt)
+    n_cycles = (len(truth.t) - 1) // n_per
+    for a in aiding:
+        if a not in data.series or a not in TOTAL_MODELS:
+            raise ValueError(f"scenario {scn.name}: mode '{mode}' uses sensor '{a}' which the "
+                             f"scenario or the total-state filter does not provide")
+    ins = _initial_ins(scn, truth, data)
+    f = scn.filter
+    ukf = TotalStateUKF(ins, initial_covariance(scn)[:9, :9], total_state_noise(scn, T, dt),
+                        f.alpha, f.beta, f.kappa)
+    fed = FederatedFilter({a: KalmanFilter(np.zeros(9), np.eye(9), name=f"local '{a}'")
+                           for a in aiding}, None, sharing="equal" if f.sharing == "adaptive"
+                          else f.sharing, fixed=f.fixed_factors, reset=True,
+                          fdi_alpha=f.fdi_alpha)
+    sched = {a: _schedule(data.series[a], T, n_cycles) for a in aiding}
+    models = {a: (TOTAL_MODELS[a], _Linear(TOTAL_MODELS[a].H)) for a in aiding}
+    states = np.empty((n_cycles, ins.state.size))
+    var = np.empty((n_cycles, em.N_STATES))
+    var[:, 9:] = np.nan
+    for k in range(n_cycles):
+        sl = slice(k * n_per, (k + 1) * n_per)
+        ukf.predict(data.dtheta[sl], data.dv[sl], data.h_ref[sl])
+        fed.share(np.zeros(9), ukf.P)
+        tk = truth.t[(k + 1) * n_per]
+        for a in aiding:
+            model, lin = models[a]
+            s = data.series[a]
+            for i in sched[a][k]:
+                R = (model.R_at(ins.state, s.sigma) if hasattr(model, "R_at")
+                     else model.R(s.sigma))
+                fed.update(a, model.residual(ins.state, s.z[i]), lin, None, R, t=tk)
+        dx, P = fed.fuse()
+        ukf.apply(dx)
+        ukf.P = P
+        var[k, :9] = np.diagonal(P)
+        states[k] = ins.state
+    sigma = np.sqrt(var) * em.SCALE
+    return _result(scn, truth, n_per, states, mode, sigma, {}, fed.log)
 
 
 def _stats_epochs(t, period):
+    """Filter epochs that fall on the statistics grid (every ``period`` seconds)."""
     ph = np.mod(t + 1e-9, period)
     return ph < 1e-6
