@@ -183,6 +183,7 @@ class FilterConfig(_Model):
     reset: bool = True
     substeps: int = Field(default=2, ge=1)
     fdi_alpha: float | None = Field(default=None, gt=0.0, lt=1.0)
+    instrument_states: bool = True  # False: error-state filter of the 9 navigation errors
 
 
 class InitialErrorConfig(_Model):
@@ -204,6 +205,16 @@ class ModeConfig(_Model):
     name: str
     aiding: list[Literal["star", "sar", "gnss"]] = []
     filter: FilterType | None = None
+    instrument_states: bool | None = None  # overrides filter.instrument_states
+
+
+class FaultExperimentConfig(_Model):
+    """A second experiment on the first ``duration_s`` of the flight with ``fault``
+    injected, flown with and without fault isolation (paper 003)."""
+
+    duration_s: float = Field(gt=0.0)
+    fault: FaultConfig
+    mode: str  # name of the mode (in ``modes``) that flies it
 
 
 class Scenario(_Model):
@@ -219,6 +230,7 @@ class Scenario(_Model):
     initial_errors: InitialErrorConfig = InitialErrorConfig()
     modes: list[ModeConfig] = Field(min_length=1)
     faults: list[FaultConfig] = []
+    fault_experiment: FaultExperimentConfig | None = None
     stats_period_s: float = Field(default=1.0, gt=0.0)
 
     @property

@@ -79,3 +79,59 @@ def spd_inverse(P):
             out[i, j] = s
             out[j, i] = s
     return out, True
+
+
+@numba.njit(cache=True)
+def rotvec_to_quat(r):
+    """Rotation vector -> unit quaternion (scalar first)."""
+    a2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2]
+    a = np.sqrt(a2)
+    if a < 1e-8:
+        c = 1.0 - a2 / 8.0
+        s = 0.5 - a2 / 48.0
+    else:
+        c = np.cos(0.5 * a)
+        s = np.sin(0.5 * a) / a
+    return np.array([c, s * r[0], s * r[1], s * r[2]])
+
+
+@numba.njit(cache=True)
+def quat_mul(p, q):
+    """Hamilton product (scalar first)."""
+    return np.array([
+        p[0] * q[0] - p[1] * q[1] - p[2] * q[2] - p[3] * q[3],
+        p[0] * q[1] + p[1] * q[0] + p[2] * q[3] - p[3] * q[2],
+        p[0] * q[2] - p[1] * q[3] + p[2] * q[0] + p[3] * q[1],
+        p[0] * q[3] + p[1] * q[2] - p[2] * q[1] + p[3] * q[0],
+    ])
+
+
+@numba.njit(cache=True)
+def quat_to_dcm(q):
+    """Unit quaternion -> DCM."""
+    w, x, y, z = q[0], q[1], q[2], q[3]
+    c = np.empty((3, 3))
+    c[0, 0] = w * w + x * x - y * y - z * z
+    c[0, 1] = 2 * (x * y - w * z)
+    c[0, 2] = 2 * (x * z + w * y)
+    c[1, 0] = 2 * (x * y + w * z)
+    c[1, 1] = w * w - x * x + y * y - z * z
+    c[1, 2] = 2 * (y * z - w * x)
+    c[2, 0] = 2 * (x * z - w * y)
+    c[2, 1] = 2 * (y * z + w * x)
+    c[2, 2] = w * w - x * x - y * y + z * z
+    return c
+
+
+@numba.njit(cache=True)
+def quat_to_rotvec(q):
+    """Unit quaternion -> rotation vector (angle in [0, pi])."""
+    w, x, y, z = q[0], q[1], q[2], q[3]
+    if w < 0.0:
+        w, x, y, z = -w, -x, -y, -z
+    s = np.sqrt(x * x + y * y + z * z)
+    if s < 1e-9:
+        k = 2.0 / w
+    else:
+        k = 2.0 * np.arctan2(s, w) / s
+    return np.array([k * x, k * y, k * z])

@@ -92,8 +92,12 @@ def _initial_ins(scn: Scenario, truth, data: RunData) -> Strapdown:
     return Strapdown(lla, truth.vel[0] + data.init_dv, att.dcm_to_euler(C), truth.dt, baro)
 
 
-def initial_covariance(scn: Scenario) -> np.ndarray:
-    """Filter P0 (filter units) from the scenario's initial errors and IMU specification."""
+def initial_covariance(scn: Scenario, instrument_states: bool = True) -> np.ndarray:
+    """Filter P0 (filter units) from the scenario's initial errors and IMU specification.
+
+    Without instrument states the gyro/accelerometer error states keep a negligible
+    variance and no process noise, so the filter estimates the 9 navigation errors only.
+    """
     ie, imu = scn.initial_errors, scn.imu
     sd = np.r_[
         units.arcsec(np.asarray(ie.attitude_arcsec)), np.full(3, ie.velocity_mps),
@@ -103,12 +107,15 @@ def initial_covariance(scn: Scenario) -> np.ndarray:
         np.full(3, units.micro_g(max(imu.accel_bias_ug, imu.accel_markov_ug))),
     ]
     sd = np.maximum(sd / em.SCALE, 1e-6)  # keep P0 positive definite for states set to 0
+    if not instrument_states:
+        sd[9:] = 1e-6
     return np.diag(sd**2)
 
 
-def _build_filter(scn: Scenario, aiding: list[str], ftype: str) -> FederatedFilter:
+def _build_filter(scn: Scenario, aiding: list[str], ftype: str,
+                  instrument_states: bool) -> FederatedFilter:
     f = scn.filter
-    P0 = initial_covariance(scn)
+    P0 = initial_covariance(scn, instrument_states)
     opts = ({"alpha": f.alpha, "beta": f.beta, "kappa": f.kappa}
             if ftype in ("ukf", "sukf") else {})
     locals_ = {a: make_filter(ftype, np.zeros(em.N_STATES), P0, **opts) for a in aiding}
@@ -134,12 +141,16 @@ def _schedule(series: MeasurementSeries, T: float, n_cycles: int) -> list[list[i
 
 
 def run_mode(scn: Scenario, aiding: list[str], data: RunData, mode: str = "",
-             max_time: float | None = None, filter_type: str | None = None) -> RunResult:
+             max_time: float | None = None, filter_type: str | None = None,
+             instrument_states: bool | None = None) -> RunResult:
     """Fly one mode (list of aiding sensors; empty = free SINS) on the run's data.
 
-    ``filter_type`` overrides the scenario's; ``total-ukf`` runs :func:`run_total_state`.
+    ``filter_type`` and ``instrument_states`` override the scenario's; ``total-ukf`` runs
+    :func:`run_total_state`.  Without instrument states, the IMU bias is treated as noise
+    exactly as the total-state filter does (:func:`total_state_noise`).
     """
     ftype = filter_type or scn.filter.type
+    inst = scn.filter.instrument_states if instrument_states is None else instrument_states
     if ftype == "total-ukf":
         return run_total_state(scn, aiding, data, mode, max_time)
     truth = scn.trajectory(max_time)
@@ -155,8 +166,12 @@ def run_mode(scn: Scenario, aiding: list[str], data: RunData, mode: str = "",
             raise ValueError(f"scenario {scn.name}: mode '{mode}' uses sensor '{a}' which the "
                              f"scenario does not configure")
     ins = _initial_ins(scn, truth, data)
-    fed = _build_filter(scn, aiding, ftype) if aiding else None
+    fed = _build_filter(scn, aiding, ftype, inst) if aiding else None
     noise = scn.imu.noise_model(dt)
+    if not inst:
+        qw = np.diag(total_state_noise(scn, T, dt))
+        noise = em.ImuNoiseModel(gyro_arw=float(np.sqrt(qw[0] * T)),
+                                 accel_vrw=float(np.sqrt(qw[3] * T)))
     baro_gains = ins._gains[:2]
     baro = scn.sensors.baro
     baro_q = baro.sigma_m**2 * baro.period_s if baro is not None else 0.0
@@ -196,8 +211,9 @@ def run_mode(scn: Scenario, aiding: list[str], data: RunData, mode: str = "",
                 betas[name][k] = b
             dx = em.to_si(fed.feedback())
             ins.correct(dx[em.PHI], dx[em.DV], dx[em.DP])
-            comp_g += dx[em.EPS_C] + dx[em.EPS_R]
-            comp_a += dx[em.NABLA]
+            if inst:
+                comp_g += dx[em.EPS_C] + dx[em.EPS_R]
+                comp_a += dx[em.NABLA]
         states[k] = ins.state
     sigma = np.sqrt(var) * em.SCALE
     return _result(scn, truth, n_per, states, mode, sigma,
@@ -307,3 +323,10 @@ def _stats_epochs(t, period):
     """Filter epochs that fall on the statistics grid (every ``period`` seconds)."""
     ph = np.mod(t + 1e-9, period)
     return ph < 1e-6
+
+
+def run_configured_mode(scn: Scenario, mode, data: RunData,
+                        max_time: float | None = None) -> RunResult:
+    """Run a :class:`~fednav.config.ModeConfig` of the scenario."""
+    return run_mode(scn, list(mode.aiding), data, mode.name, max_time, mode.filter,
+                    mode.instrument_states)

@@ -28,6 +28,9 @@ import numba
 import numpy as np
 
 from . import attitude, earth
+from .kernels import quat_mul as _qmul
+from .kernels import quat_to_dcm as _q2dcm
+from .kernels import rotvec_to_quat as _rv2q
 
 # Layout of the flat state array.
 _Q, _V, _P, _DTH, _DV, _VPREV, _HAS_PREV, _BARO_INT, _BARO_DH = (
@@ -67,45 +70,6 @@ class BaroLoop:
 def _cross(a, b):
     return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
                      a[0] * b[1] - a[1] * b[0]])
-
-
-@numba.njit(cache=True)
-def _rv2q(r):
-    a2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2]
-    a = np.sqrt(a2)
-    if a < 1e-8:
-        c = 1.0 - a2 / 8.0
-        s = 0.5 - a2 / 48.0
-    else:
-        c = np.cos(0.5 * a)
-        s = np.sin(0.5 * a) / a
-    return np.array([c, s * r[0], s * r[1], s * r[2]])
-
-
-@numba.njit(cache=True)
-def _qmul(p, q):
-    return np.array([
-        p[0] * q[0] - p[1] * q[1] - p[2] * q[2] - p[3] * q[3],
-        p[0] * q[1] + p[1] * q[0] + p[2] * q[3] - p[3] * q[2],
-        p[0] * q[2] - p[1] * q[3] + p[2] * q[0] + p[3] * q[1],
-        p[0] * q[3] + p[1] * q[2] - p[2] * q[1] + p[3] * q[0],
-    ])
-
-
-@numba.njit(cache=True)
-def _q2dcm(q):
-    w, x, y, z = q[0], q[1], q[2], q[3]
-    c = np.empty((3, 3))
-    c[0, 0] = w * w + x * x - y * y - z * z
-    c[0, 1] = 2 * (x * y - w * z)
-    c[0, 2] = 2 * (x * z + w * y)
-    c[1, 0] = 2 * (x * y + w * z)
-    c[1, 1] = w * w - x * x + y * y - z * z
-    c[1, 2] = 2 * (y * z - w * x)
-    c[2, 0] = 2 * (x * z - w * y)
-    c[2, 1] = 2 * (y * z + w * x)
-    c[2, 2] = w * w - x * x - y * y + z * z
-    return c
 
 
 @numba.njit(cache=True)

@@ -29,7 +29,7 @@ import numpy as np
 from . import attitude as att
 from . import earth
 from .error_model import SCALE
-from .kernels import cholesky_lower
+from .kernels import cholesky_lower, quat_mul, quat_to_rotvec, rotvec_to_quat
 from .strapdown import STATE_LLA, STATE_Q, STATE_SIZE, STATE_VEL, Strapdown, _run
 
 N_NAV = 9
@@ -38,32 +38,57 @@ N_NOISE = 6
 TSCALE = SCALE[:N_NAV]
 
 
-def boxplus(states: np.ndarray, d: np.ndarray) -> np.ndarray:
-    """``X [+] d`` for INS state rows (S, STATE_SIZE) and tangent rows d (S, 9) (filter units)."""
-    out = np.array(states, dtype=float, copy=True)
-    d = np.atleast_2d(d) * TSCALE
-    C = att.quat_to_dcm(out[:, STATE_Q])
-    out[:, STATE_Q] = att.dcm_to_quat(att.rotvec_to_dcm(d[:, 0:3]) @ C)
-    out[:, STATE_VEL] += d[:, 3:6]
-    lla = out[:, STATE_LLA]
-    rm, rn = earth.radii(lla[:, 0])
-    h = lla[:, 2]
-    out[:, 7] = lla[:, 0] + d[:, 7] / (rm + h)
-    out[:, 8] = lla[:, 1] + d[:, 6] / ((rn + h) * np.cos(lla[:, 0]))
-    out[:, 9] = h + d[:, 8]
+@numba.njit(cache=True)
+def _boxplus(states, d, scale):
+    out = states.copy()
+    for i in range(states.shape[0]):
+        dd = d[i] * scale
+        q = quat_mul(rotvec_to_quat(dd[0:3]), states[i, 0:4])
+        out[i, 0:4] = q / np.sqrt(q @ q)
+        for j in range(3):
+            out[i, 4 + j] += dd[3 + j]
+        lat, h = states[i, 7], states[i, 9]
+        rm, rn = earth.radii_nb(lat)
+        out[i, 7] = lat + dd[7] / (rm + h)
+        out[i, 8] = states[i, 8] + dd[6] / ((rn + h) * np.cos(lat))
+        out[i, 9] = h + dd[8]
     return out
 
 
+@numba.njit(cache=True)
+def _boxminus(states, ref, scale):
+    n = states.shape[0]
+    out = np.empty((n, 9))
+    qc = ref[0:4].copy()
+    qc[1:] = -qc[1:]
+    rm, rn = earth.radii_nb(ref[7])
+    for i in range(n):
+        phi = quat_to_rotvec(quat_mul(states[i, 0:4], qc))
+        out[i, 0:3] = phi
+        for j in range(3):
+            out[i, 3 + j] = states[i, 4 + j] - ref[4 + j]
+        out[i, 6] = (states[i, 8] - ref[8]) * (rn + ref[9]) * np.cos(ref[7])
+        out[i, 7] = (states[i, 7] - ref[7]) * (rm + ref[9])
+        out[i, 8] = states[i, 9] - ref[9]
+        for j in range(9):
+            out[i, j] /= scale[j]
+    return out
+
+
+def boxplus(states: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """``X [+] d`` for INS state rows (S, STATE_SIZE) and tangent rows d (S, 9) (filter units)."""
+    states = np.ascontiguousarray(np.atleast_2d(states), dtype=float)
+    d = np.ascontiguousarray(np.atleast_2d(d), dtype=float)
+    return _boxplus(states, d, TSCALE)
+
+
 def boxminus(states: np.ndarray, ref: np.ndarray) -> np.ndarray:
-    """``Y [-] X`` for state rows Y (S, STATE_SIZE) and one reference state X (filter units)."""
-    Y = np.atleast_2d(states)
-    Cy = att.quat_to_dcm(Y[:, STATE_Q])
-    Cx = att.quat_to_dcm(ref[STATE_Q])
-    phi = att.dcm_to_rotvec(Cy @ Cx.T)
-    dv = Y[:, STATE_VEL] - ref[STATE_VEL]
-    lla, r = Y[:, STATE_LLA], ref[STATE_LLA]
-    dp = earth.llh_difference_enu(lla[:, 0], lla[:, 1], lla[:, 2], r[0], r[1], r[2])
-    return np.column_stack([phi, dv, dp]) / TSCALE
+    """``Y [-] X`` for state rows Y (S, STATE_SIZE) and one reference state X (filter units).
+
+    Position differences use the reference's radii of curvature (first order in the
+    difference, as the error statistics do)."""
+    states = np.ascontiguousarray(np.atleast_2d(states), dtype=float)
+    return _boxminus(states, np.ascontiguousarray(ref, dtype=float), TSCALE)
 
 
 def attitude_innovation(C_meas, C_est) -> np.ndarray:
@@ -145,7 +170,8 @@ class TotalStateUKF:
 
     def apply(self, d) -> None:
         """Move the mean by tangent ``d`` (filter units): ``X <- X [+] d``."""
-        self.ins.state[:] = boxplus(self.ins.state[None], d)[0]
+        self.ins.state[:] = _boxplus(self.ins.state[None], np.asarray(d, dtype=float)[None],
+                                     TSCALE)[0]
         # keep the velocity history used by the strapdown's midpoint extrapolation
         self.ins.state[16:19] += np.asarray(d)[3:6] * TSCALE[3:6]
 

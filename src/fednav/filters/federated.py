@@ -115,6 +115,7 @@ class FederatedFilter:
         if fdi_alpha is not None and not 0.0 < fdi_alpha < 1.0:
             raise ValueError(f"fdi_alpha must be in (0, 1), got {fdi_alpha}")
         self.fdi_alpha = fdi_alpha
+        self._thresholds: dict[int, float] = {}
         #: One entry per local measurement: t, local, statistic, dof, threshold, isolated.
         self.log: list[tuple] = []
         if reset:
@@ -140,7 +141,9 @@ class FederatedFilter:
         """Chi-square detection threshold for ``dof`` measurement components (NaN if off)."""
         if self.fdi_alpha is None:
             return float("nan")
-        return float(chi2.ppf(1.0 - self.fdi_alpha, dof))
+        if dof not in self._thresholds:
+            self._thresholds[dof] = float(chi2.ppf(1.0 - self.fdi_alpha, dof))
+        return self._thresholds[dof]
 
     def update(self, local: str, y, model, nav=None, R=None, t: float = float("nan")):
         """Measurement update of local filter ``local`` (at time ``t``, for the log), with

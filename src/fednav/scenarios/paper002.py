@@ -7,13 +7,12 @@ Columns: ``dlambda_m`` / ``dL_m`` = east / north position error [m], ``dVx_mps``
 
 from __future__ import annotations
 
-from concurrent.futures import ProcessPoolExecutor
-
 from .. import units
 from ..config import Scenario
 from ..config import load_scenario as _load
 from ..evaluation import error_stats
-from ..simulate import make_run_data, run_mode
+from ..montecarlo import run_seeds
+from ..simulate import make_run_data, run_configured_mode
 from . import scenario_path
 
 PAPER = "002"
@@ -59,7 +58,7 @@ def one_run(args) -> tuple[list[dict], dict]:
     data = make_run_data(scn, seed, max_time)
     rows, series = [], {}
     for m in scn.modes:
-        res = run_mode(scn, list(m.aiding), data, m.name, max_time)
+        res = run_configured_mode(scn, m, data, max_time)
         rows.append({"seed": seed, "mode": m.name, **run_statistics(res)})
         series[m.name] = res
     return rows, series
@@ -71,24 +70,8 @@ def run_monte_carlo(scn: Scenario, runs: int, seed: int, jobs: int = 1,
 
     Returns (list of per-run rows, error series of the first run).
     """
-    args = [(scn, seed + i, max_time) for i in range(runs)]
-    rows, first = [], None
-    if jobs > 1 and runs > 1:
-        with ProcessPoolExecutor(max_workers=jobs) as ex:
-            results = ex.map(one_run, args)
-            for i, (r, s) in enumerate(results):
-                rows.extend(r)
-                first = s if i == 0 else first
-                if progress:
-                    progress()
-    else:
-        for i, a in enumerate(args):
-            r, s = one_run(a)
-            rows.extend(r)
-            first = s if i == 0 else first
-            if progress:
-                progress()
-    return rows, first
+    out = run_seeds(one_run, [(scn, seed + i, max_time) for i in range(runs)], jobs, progress)
+    return [r for rows, _ in out for r in rows], out[0][1]
 
 
 def mode_order(scn: Scenario) -> list[str]:

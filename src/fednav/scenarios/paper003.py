@@ -1,0 +1,236 @@
+"""Paper 003 — federated UKF (total state) vs federated linear KF; chi-square FDI.
+
+Table 1: max, min and std over the flight of the nine errors (east/north/up position,
+ENU velocity, roll/pitch/heading Euler errors) for the federated UKF (``FUKF``) and the
+federated linear KF (``FKF``); improvement percentages; the fault experiment (first
+1000 s, 5-sigma GNSS step fault) with and without isolation.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.stats import chi2
+
+from .. import units
+from ..config import Scenario
+from ..config import load_scenario as _load
+from ..evaluation import mean_ci95
+from ..montecarlo import run_seeds
+from ..simulate import make_run_data, run_configured_mode
+from . import scenario_path
+
+PAPER = "003"
+ALIASES = ("003", "federated-ukf")
+COLS = ("lon_m", "lat_m", "h_m", "vE_mps", "vN_mps", "vU_mps", "roll_deg", "pitch_deg",
+        "yaw_deg")
+STATS = ("max", "min", "std")
+PAPER_T1 = {
+    "FUKF": {"max": (5.06, 4.56, 4.19, 0.19, 0.18, 0.10, 0.26, 0.24, 0.24),
+             "min": (-7.04, -6.11, -4.29, -0.18, -0.33, -0.13, -0.24, -0.22, -0.24),
+             "std": (1.57, 1.47, 1.17, 0.073, 0.077, 0.042, 0.07, 0.07, 0.07)},
+    "FKF": {"max": (7.01, 6.51, 9.24, 0.47, 0.35, 0.39, 0.35, 0.34, 0.35),
+            "min": (-9.35, -8.53, -6.39, -0.38, -0.45, -0.29, -0.37, -0.36, -0.32),
+            "std": (2.46, 2.27, 1.96, 0.11, 0.11, 0.09, 0.09, 0.09, 0.09)},
+}
+#: Improvement of FUKF over FKF the paper states (position, velocity, attitude) [%].
+PAPER_IMPROVEMENT = {"position": 25.8, "velocity": 38.8, "attitude": 22.2}
+GROUPS = {"position": COLS[0:3], "velocity": COLS[3:6], "attitude": COLS[6:9]}
+
+
+def load_scenario(path=None) -> Scenario:
+    return _load(path or scenario_path("paper003"))
+
+
+def error_table(result) -> np.ndarray:
+    """(K, 9) errors in the Table-1 columns: east, north, up [m]; vE, vN, vU [m/s];
+    roll, pitch, heading Euler errors [deg]."""
+    e = units.to_deg(result.euler)
+    return np.column_stack([result.pos, result.vel, e[:, 1], e[:, 0], e[:, 2]])
+
+
+def run_statistics(result) -> dict[str, float]:
+    e = error_table(result)
+    out = {}
+    for i, c in enumerate(COLS):
+        out[f"{c}.max"] = float(e[:, i].max())
+        out[f"{c}.min"] = float(e[:, i].min())
+        out[f"{c}.std"] = float(e[:, i].std())
+    return out
+
+
+def improvement(fukf: dict, fkf: dict) -> dict[str, float]:
+    """1 - mean(std FUKF) / mean(std FKF) per group, in per cent."""
+    return {g: 100.0 * (1.0 - np.mean([fukf[f"{c}.std"] for c in cols])
+                        / np.mean([fkf[f"{c}.std"] for c in cols]))
+            for g, cols in GROUPS.items()}
+
+
+def fault_metrics(result, start: float, end: float, alpha: float, period: float) -> dict:
+    """Detection delay, isolation coverage, false-alarm rate (against the chi-square
+    threshold, whether or not isolation was on) and position error in the fault window."""
+    f = result.fdi
+    g = f[f["local"] == "gnss"]
+    thr = chi2.ppf(1.0 - alpha, int(g["dof"].iloc[0]))
+    flagged = g["statistic"].to_numpy() > thr
+    t = g["t"].to_numpy()
+    inside = (t >= start) & (t <= end)
+    outside = (t < start) | (t > end + period)
+    hits = t[inside & flagged]
+    win = (result.t >= start) & (result.t <= end)
+    return {
+        "detect_delay_s": float(hits[0] - start) if len(hits) else float("nan"),
+        "detected_fraction": float(flagged[inside].mean()),
+        "isolated_fraction": float(g["isolated"].to_numpy()[inside].mean()),
+        "false_alarm_rate": float(flagged[outside].mean()),
+        "pos_err_rms_fault_window_m": float(np.sqrt((result.pos[win] ** 2).sum(axis=1).mean())),
+    }
+
+
+def one_run(args):
+    scn, seed, max_time = args
+    data = make_run_data(scn, seed, max_time)
+    rows, series = [], {}
+    for m in scn.modes:
+        res = run_configured_mode(scn, m, data, max_time)
+        rows.append({"seed": seed, "mode": m.name, **run_statistics(res)})
+        series[m.name] = res
+    fault_rows, fault_series = [], {}
+    fe = scn.fault_experiment
+    if fe is not None:
+        fscn = scn.model_copy(update={"faults": [fe.fault]})
+        T = min(fe.duration_s, max_time or fe.duration_s)
+        fdata = make_run_data(fscn, seed, T)
+        mode = next(m for m in scn.modes if m.name == fe.mode)
+        alpha = scn.filter.fdi_alpha or 0.005
+        for name, a in (("isolated", alpha), ("not_isolated", None)):
+            s2 = fscn.model_copy(update={"filter": fscn.filter.model_copy(
+                update={"fdi_alpha": a})})
+            res = run_configured_mode(s2, mode, fdata, T)
+            fault_rows.append({"seed": seed, "case": name,
+                               **fault_metrics(res, fe.fault.start_s, fe.fault.end_s, alpha,
+                                               scn.filter.period_s)})
+            fault_series[name] = res
+    return rows, series, fault_rows, fault_series
+
+
+def reproduce(scn: Scenario, runs: int, seed: int, jobs: int = 1,
+              max_time: float | None = None, progress=None) -> dict:
+    out = run_seeds(one_run, [(scn, seed + i, max_time) for i in range(runs)], jobs, progress)
+    rows = [r for o in out for r in o[0]]
+    fault_rows = [r for o in out for r in o[2]]
+    return {"rows": rows, "fault_rows": fault_rows, "series": out[0][1],
+            "fault_series": out[0][3], "summary": summarize(rows, fault_rows, runs, seed)}
+
+
+def summarize(rows: list[dict], fault_rows: list[dict], runs: int, seed: int) -> dict:
+    import pandas as pd
+
+    df = pd.DataFrame(rows)
+    T1 = {"rows": {}}
+    for mode in ("FUKF", "FKF"):
+        sub = df[df["mode"] == mode]
+        T1["rows"][mode] = {
+            c: {s: dict(zip(("ours", "ci95"), mean_ci95(sub[f"{c}.{s}"]), strict=True))
+                | {"paper": PAPER_T1[mode][s][i]} for s in STATS}
+            for i, c in enumerate(COLS)}
+    # Improvement per run (common random numbers), then its Monte Carlo mean.
+    per_seed = {}
+    for sd, g in df.groupby("seed"):
+        r = {m: g[g["mode"] == m].iloc[0].to_dict() for m in ("FUKF", "FKF")}
+        per_seed[sd] = improvement(r["FUKF"], r["FKF"])
+    paper_tab = {
+        m: {f"{c}.std": PAPER_T1[m]["std"][i] for i, c in enumerate(COLS)} for m in PAPER_T1}
+    from_table = improvement(paper_tab["FUKF"], paper_tab["FKF"])
+    imp = {"rows": {g: {"improvement_pct": dict(zip(("ours", "ci95"), mean_ci95(
+        [v[g] for v in per_seed.values()]), strict=True)) | {
+        "paper": PAPER_IMPROVEMENT[g], "paper_table_same_rule": from_table[g]}}
+        for g in GROUPS}}
+    # Same-information analysis: group std for every mode flown.
+    analysis = {"rows": {}}
+    for mode, sub in df.groupby("mode", sort=False):
+        analysis["rows"][mode] = {
+            f"{g}_std": dict(zip(("ours", "ci95"), mean_ci95(
+                np.mean([sub[f"{c}.std"] for c in cols], axis=0)), strict=True))
+            | {"paper": None} for g, cols in GROUPS.items()}
+    tables = {"T1": T1, "improvement": imp, "analysis": analysis}
+    if fault_rows:
+        fd = pd.DataFrame(fault_rows)
+        tables["fault"] = {"rows": {
+            case: {c: dict(zip(("ours", "ci95"), mean_ci95(g[c]), strict=True))
+                   | {"paper": None}
+                   for c in ("detect_delay_s", "detected_fraction", "isolated_fraction",
+                             "false_alarm_rate", "pos_err_rms_fault_window_m")}
+            for case, g in fd.groupby("case", sort=False)}}
+    return {"paper": PAPER, "runs": runs, "seed": seed, "tables": tables}
+
+
+def _fmt(x) -> str:
+    if x is None or not np.isfinite(x):
+        return "–"
+    a = abs(x)
+    return f"{x:.0f}" if a >= 100 else f"{x:.2f}" if a >= 1 else f"{x:.3g}"
+
+
+def print_summary(summary: dict, console) -> None:
+    from rich.table import Table
+
+    t = summary["tables"]
+    tab = Table(title=f"Table 1 — error max / min / std over the flight\nfednav: mean over "
+                      f"{summary['runs']} Monte Carlo runs (seed {summary['seed']}) | paper")
+    tab.add_column("filter")
+    tab.add_column("stat")
+    for c in COLS:
+        tab.add_column(c, justify="right")
+    for mode, cols in t["T1"]["rows"].items():
+        for j, s in enumerate(STATS):
+            tab.add_row(mode if j == 0 else "", s,
+                        *[f"{_fmt(cols[c][s]['ours'])} | {_fmt(cols[c][s]['paper'])}"
+                          for c in COLS], end_section=(j == 2))
+    console.print(tab)
+    tab = Table(title="Improvement of FUKF over FKF (1 - mean std FUKF / mean std FKF)")
+    for c in ("group", "fednav %", "± 95% CI", "paper (stated) %", "paper (its Table 1) %"):
+        tab.add_column(c, justify="right")
+    for g, v in t["improvement"]["rows"].items():
+        v = v["improvement_pct"]
+        tab.add_row(g, _fmt(v["ours"]), _fmt(v["ci95"]), _fmt(v["paper"]),
+                    _fmt(v["paper_table_same_rule"]))
+    console.print(tab)
+    tab = Table(title="Analysis — mean std per group for every mode (FKF-9: error-state KF "
+                      "with the FUKF's information)")
+    for c in ("mode", "position m", "velocity m/s", "attitude deg"):
+        tab.add_column(c, justify="right")
+    for mode, v in t["analysis"]["rows"].items():
+        tab.add_row(mode, *[f"{_fmt(v[k]['ours'])} ± {_fmt(v[k]['ci95'])}"
+                            for k in ("position_std", "velocity_std", "attitude_std")])
+    console.print(tab)
+    if "fault" in t:
+        tab = Table(title="Fault experiment — 5-sigma GNSS step fault (FUKF)")
+        cols = ("detect_delay_s", "detected_fraction", "isolated_fraction",
+                "false_alarm_rate", "pos_err_rms_fault_window_m")
+        tab.add_column("case")
+        for c in cols:
+            tab.add_column(c, justify="right")
+        for case, v in t["fault"]["rows"].items():
+            tab.add_row(case, *[f"{_fmt(v[c]['ours'])} ± {_fmt(v[c]['ci95'])}" for c in cols])
+        console.print(tab)
+
+
+def write_outputs(out, rep: dict) -> list:
+    import json
+
+    import pandas as pd
+
+    from ..report import plot_errors, plot_fdi
+
+    out.mkdir(parents=True, exist_ok=True)
+    files = [out / "summary.json", out / "runs.csv", out / "errors.png"]
+    files[0].write_text(json.dumps(rep["summary"], indent=2))
+    pd.DataFrame(rep["rows"]).to_csv(files[1], index=False)
+    plot_errors(rep["series"], files[2])
+    if rep["fault_rows"]:
+        files.append(out / "fault_runs.csv")
+        pd.DataFrame(rep["fault_rows"]).to_csv(files[-1], index=False)
+        files.append(plot_fdi(rep["fault_series"]["isolated"].fdi, out / "fdi.png",
+                              "Fault experiment: chi-square statistics, 5-sigma GNSS fault"))
+        files.append(plot_errors(rep["fault_series"], out / "fault_errors.png"))
+    return files
