@@ -18,19 +18,24 @@ app = typer.Typer(add_completion=False, no_args_is_help=True,
 console = Console()
 
 
-def _paper_module(paper: str):
-    from .scenarios import paper002
+def _papers():
+    from .scenarios import paper002, paper003
 
-    for mod in (paper002,):
+    return (paper002, paper003)
+
+
+def _paper_module(paper: str):
+    for mod in _papers():
         if paper.lower() in mod.ALIASES:
             return mod
-    known = ", ".join(a for m in (paper002,) for a in m.ALIASES)
+    known = ", ".join(a for m in _papers() for a in m.ALIASES)
     raise typer.BadParameter(f"unknown paper '{paper}'; available: {known}")
 
 
 @app.command()
 def reproduce(
-    paper: str = typer.Argument(..., help="paper number or alias, e.g. 002 / cruise-missile"),
+    paper: str = typer.Argument(..., help="paper number or alias: 002 / cruise-missile, "
+                                          "003 / federated-ukf"),
     runs: int = typer.Option(10, min=1, help="Monte Carlo runs"),
     seed: int = typer.Option(1, help="seed of the first run (run i uses seed + i)"),
     out: Path = typer.Option(None, help="output folder [default: results/<paper>]"),
@@ -39,8 +44,6 @@ def reproduce(
     max_time: float = typer.Option(None, help="truncate the flight (smoke runs only)"),
 ) -> None:
     """Reproduce a paper's experiment and print its tables beside the paper's."""
-    from .report import print_tables, summarize, write_outputs
-
     mod = _paper_module(paper)
     try:
         scn = mod.load_scenario(scenario)
@@ -52,12 +55,11 @@ def reproduce(
                   MofNCompleteColumn(), TimeElapsedColumn(), console=console,
                   transient=False) as prog:
         task = prog.add_task(f"paper {mod.PAPER}: {scn.name}", total=runs)
-        rows, series = mod.run_monte_carlo(scn, runs, seed, jobs, max_time,
-                                           progress=lambda: prog.advance(task))
+        rep = mod.reproduce(scn, runs, seed, jobs, max_time,
+                            progress=lambda: prog.advance(task))
+    mod.print_summary(rep["summary"], console)
     out = out or Path("results") / mod.PAPER
-    summary = summarize(rows, mod.PAPER_TABLES, mod.PAPER, runs, seed)
-    print_tables(summary, mod.TABLE_TITLES, console)
-    files = write_outputs(out, summary, rows, series)
+    files = mod.write_outputs(out, rep)
     console.print(f"wrote {', '.join(str(f) for f in files)} "
                   f"in {time.perf_counter() - t0:.1f} s")
 

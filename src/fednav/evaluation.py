@@ -27,7 +27,10 @@ def error_stats(err) -> dict[str, np.ndarray]:
 def mean_ci95(values) -> tuple[float, float]:
     """Monte Carlo mean and half-width of its 95 % confidence interval (Student t)."""
     v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v)]  # e.g. a fault window outside a truncated flight
     n = v.size
+    if n == 0:
+        return float("nan"), float("nan")
     m = float(v.mean())
     if n < 2:
         return m, float("nan")

@@ -74,9 +74,27 @@ def run_monte_carlo(scn: Scenario, runs: int, seed: int, jobs: int = 1,
     return [r for rows, _ in out for r in rows], out[0][1]
 
 
-def mode_order(scn: Scenario) -> list[str]:
-    return [m.name for m in scn.modes]
+def reproduce(scn: Scenario, runs: int, seed: int, jobs: int = 1,
+              max_time: float | None = None, progress=None) -> dict:
+    """Monte Carlo reproduction: per-run rows, the first run's series and the summary."""
+    from ..report import summarize
+
+    rows, series = run_monte_carlo(scn, runs, seed, jobs, max_time, progress)
+    return {"rows": rows, "series": series,
+            "summary": summarize(rows, PAPER_TABLES, PAPER, runs, seed)}
 
 
-__all__ = ["ALIASES", "PAPER", "PAPER_TABLES", "TABLE_TITLES", "load_scenario", "mode_order",
-           "run_monte_carlo", "run_statistics"]
+def print_summary(summary: dict, console) -> None:
+    from ..report import print_tables
+
+    print_tables(summary, TABLE_TITLES, console)
+
+
+def write_outputs(out, rep: dict) -> list:
+    from ..report import write_outputs as _write
+
+    return _write(out, rep["summary"], rep["rows"], rep["series"])
+
+
+__all__ = ["ALIASES", "PAPER", "PAPER_TABLES", "TABLE_TITLES", "load_scenario",
+           "print_summary", "reproduce", "run_monte_carlo", "run_statistics", "write_outputs"]

@@ -77,12 +77,16 @@ def fault_metrics(result, start: float, end: float, alpha: float, period: float)
     outside = (t < start) | (t > end + period)
     hits = t[inside & flagged]
     win = (result.t >= start) & (result.t <= end)
+
+    def mean(x):
+        return float(np.mean(x)) if len(x) else float("nan")
+
     return {
         "detect_delay_s": float(hits[0] - start) if len(hits) else float("nan"),
-        "detected_fraction": float(flagged[inside].mean()),
-        "isolated_fraction": float(g["isolated"].to_numpy()[inside].mean()),
-        "false_alarm_rate": float(flagged[outside].mean()),
-        "pos_err_rms_fault_window_m": float(np.sqrt((result.pos[win] ** 2).sum(axis=1).mean())),
+        "detected_fraction": mean(flagged[inside]),
+        "isolated_fraction": mean(g["isolated"].to_numpy()[inside]),
+        "false_alarm_rate": mean(flagged[outside]),
+        "pos_err_rms_fault_window_m": float(np.sqrt(mean((result.pos[win] ** 2).sum(axis=1)))),
     }
 
 
