@@ -60,17 +60,47 @@ def test_time_update_matches_linear_error_model():
                   [Segment(1.0, accel=1.0, pitch_rate=0.01, heading_rate=0.02)], 0.02)
     ins = Strapdown(tr.lla[0], tr.vel[0], tr.euler[0], tr.dt)
     sd = np.array([5.0, 5.0, 20.0, 0.1, 0.1, 0.1, 5.0, 5.0, 5.0])  # arcmin, m/s, m
-    P0 = np.diag(sd**2)
+    P0 = np.diag(np.r_[sd**2, np.full(6, 1e-12)])
     f = TotalStateUKF(ins, P0, np.zeros((6, 6)))
     f.predict(tr.dtheta, tr.dv)
     # Linear model on the same nominal (mid-interval truth).
     C = att.euler_to_dcm(tr.euler[25])
     nom = em.Nominal(lat=tr.lla[25, 0], h=tr.lla[25, 2], vel=tr.vel[25], C=C,
                      fn=C @ tr.dv.sum(axis=0))
-    Phi = em.ErrorProcess(nom, 1.0, em.ImuNoiseModel()).Phi[:9, :9]
-    expected = Phi @ P0 @ Phi.T
-    np.testing.assert_allclose(f.P, expected, rtol=2e-3, atol=2e-3 * np.abs(expected).max())
+    # Tangent d = true [-] computed = S x_err: attitude keeps its sign, v and p flip.
+    S = np.diag(np.r_[np.ones(3), -np.ones(6)])
+    Phi = S @ em.ErrorProcess(nom, 1.0, em.ImuNoiseModel()).Phi[:9, :9] @ S
+    expected = Phi @ P0[:9, :9] @ Phi.T
+    # Tight enough to see the sign of the attitude-velocity cross terms (~0.07 here).
+    np.testing.assert_allclose(f.P[:9, :9], expected, rtol=2e-3, atol=2e-3)
+    assert np.abs(expected[0:3, 3:6]).max() > 0.02
     # The mean is the INS flown over the interval (sigma-point mean deviation ~ 0).
     ref = Strapdown(tr.lla[0], tr.vel[0], tr.euler[0], tr.dt)
     ref.run(tr.dtheta, tr.dv, record=False)
     np.testing.assert_allclose(f.ins.lla, ref.lla, atol=1e-9)
+
+
+def test_bias_states_propagate_like_the_error_model():
+    """Gyro/accelerometer error states: their effect on attitude and velocity over one
+    interval matches the error model's Phi (the -C eps and C nabla blocks)."""
+    from fednav import error_model as em
+    from fednav.total_state import TotalStateUKF
+    from fednav.trajectory import Segment, generate
+
+    tr = generate([0.5, 2.0, 1000.0], 150.0, [0.05, 0.2, 1.0], [Segment(1.0)], 0.02)
+    P0 = np.diag(np.r_[np.full(9, 1e-8), np.full(6, 1.0)])  # 1 deg/h, 1 mg
+    f = TotalStateUKF(Strapdown(tr.lla[0], tr.vel[0], tr.euler[0], tr.dt), P0,
+                      np.zeros((6, 6)))
+    f.predict(tr.dtheta, tr.dv)
+    C = att.euler_to_dcm(tr.euler[25])
+    nom = em.Nominal(lat=tr.lla[25, 0], h=tr.lla[25, 2], vel=tr.vel[25], C=C,
+                     fn=C @ tr.dv.sum(axis=0))
+    Phi = em.ErrorProcess(nom, 1.0, em.ImuNoiseModel()).Phi
+    cols = np.r_[9:12, 15:18]
+    # Cross-covariance nav x bias = S Phi[nav, bias] P_bb with S = diag(+1 x3, -1 x6):
+    # tangent d = true [-] computed keeps the attitude sign and flips v and p.
+    S = np.r_[np.ones(3), -np.ones(6)][:, None]
+    # (2e-6-level second-order terms, accelerometer bias -> velocity -> transport rate ->
+    # attitude within the same second, are below what one coarse step represents.)
+    np.testing.assert_allclose(f.P[:9, 9:], S * Phi[:9, cols], rtol=0.02, atol=1e-5)
+    assert np.abs(Phi[:9, cols]).max() > 1e-2

@@ -183,7 +183,6 @@ class FilterConfig(_Model):
     reset: bool = True
     substeps: int = Field(default=2, ge=1)
     fdi_alpha: float | None = Field(default=None, gt=0.0, lt=1.0)
-    instrument_states: bool = True  # False: error-state filter of the 9 navigation errors
 
 
 class InitialErrorConfig(_Model):
@@ -205,7 +204,6 @@ class ModeConfig(_Model):
     name: str
     aiding: list[Literal["star", "sar", "gnss"]] = []
     filter: FilterType | None = None
-    instrument_states: bool | None = None  # overrides filter.instrument_states
 
 
 class FaultExperimentConfig(_Model):

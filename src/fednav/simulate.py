@@ -92,12 +92,8 @@ def _initial_ins(scn: Scenario, truth, data: RunData) -> Strapdown:
     return Strapdown(lla, truth.vel[0] + data.init_dv, att.dcm_to_euler(C), truth.dt, baro)
 
 
-def initial_covariance(scn: Scenario, instrument_states: bool = True) -> np.ndarray:
-    """Filter P0 (filter units) from the scenario's initial errors and IMU specification.
-
-    Without instrument states the gyro/accelerometer error states keep a negligible
-    variance and no process noise, so the filter estimates the 9 navigation errors only.
-    """
+def initial_covariance(scn: Scenario) -> np.ndarray:
+    """Filter P0 (filter units) from the scenario's initial errors and IMU specification."""
     ie, imu = scn.initial_errors, scn.imu
     sd = np.r_[
         units.arcsec(np.asarray(ie.attitude_arcsec)), np.full(3, ie.velocity_mps),
@@ -107,15 +103,12 @@ def initial_covariance(scn: Scenario, instrument_states: bool = True) -> np.ndar
         np.full(3, units.micro_g(max(imu.accel_bias_ug, imu.accel_markov_ug))),
     ]
     sd = np.maximum(sd / em.SCALE, 1e-6)  # keep P0 positive definite for states set to 0
-    if not instrument_states:
-        sd[9:] = 1e-6
     return np.diag(sd**2)
 
 
-def _build_filter(scn: Scenario, aiding: list[str], ftype: str,
-                  instrument_states: bool) -> FederatedFilter:
+def _build_filter(scn: Scenario, aiding: list[str], ftype: str) -> FederatedFilter:
     f = scn.filter
-    P0 = initial_covariance(scn, instrument_states)
+    P0 = initial_covariance(scn)
     opts = ({"alpha": f.alpha, "beta": f.beta, "kappa": f.kappa}
             if ftype in ("ukf", "sukf") else {})
     locals_ = {a: make_filter(ftype, np.zeros(em.N_STATES), P0, **opts) for a in aiding}
@@ -141,16 +134,12 @@ def _schedule(series: MeasurementSeries, T: float, n_cycles: int) -> list[list[i
 
 
 def run_mode(scn: Scenario, aiding: list[str], data: RunData, mode: str = "",
-             max_time: float | None = None, filter_type: str | None = None,
-             instrument_states: bool | None = None) -> RunResult:
+             max_time: float | None = None, filter_type: str | None = None) -> RunResult:
     """Fly one mode (list of aiding sensors; empty = free SINS) on the run's data.
 
-    ``filter_type`` and ``instrument_states`` override the scenario's; ``total-ukf`` runs
-    :func:`run_total_state`.  Without instrument states, the IMU bias is treated as noise
-    exactly as the total-state filter does (:func:`total_state_noise`).
+    ``filter_type`` overrides the scenario's; ``total-ukf`` runs :func:`run_total_state`.
     """
     ftype = filter_type or scn.filter.type
-    inst = scn.filter.instrument_states if instrument_states is None else instrument_states
     if ftype == "total-ukf":
         return run_total_state(scn, aiding, data, mode, max_time)
     truth = scn.trajectory(max_time)
@@ -166,12 +155,8 @@ def run_mode(scn: Scenario, aiding: list[str], data: RunData, mode: str = "",
             raise ValueError(f"scenario {scn.name}: mode '{mode}' uses sensor '{a}' which the "
                              f"scenario does not configure")
     ins = _initial_ins(scn, truth, data)
-    fed = _build_filter(scn, aiding, ftype, inst) if aiding else None
+    fed = _build_filter(scn, aiding, ftype) if aiding else None
     noise = scn.imu.noise_model(dt)
-    if not inst:
-        qw = np.diag(total_state_noise(scn, T, dt))
-        noise = em.ImuNoiseModel(gyro_arw=float(np.sqrt(qw[0] * T)),
-                                 accel_vrw=float(np.sqrt(qw[3] * T)))
     baro_gains = ins._gains[:2]
     baro = scn.sensors.baro
     baro_q = baro.sigma_m**2 * baro.period_s if baro is not None else 0.0
@@ -211,9 +196,8 @@ def run_mode(scn: Scenario, aiding: list[str], data: RunData, mode: str = "",
                 betas[name][k] = b
             dx = em.to_si(fed.feedback())
             ins.correct(dx[em.PHI], dx[em.DV], dx[em.DP])
-            if inst:
-                comp_g += dx[em.EPS_C] + dx[em.EPS_R]
-                comp_a += dx[em.NABLA]
+            comp_g += dx[em.EPS_C] + dx[em.EPS_R]
+            comp_a += dx[em.NABLA]
         states[k] = ins.state
     sigma = np.sqrt(var) * em.SCALE
     return _result(scn, truth, n_per, states, mode, sigma,
@@ -255,20 +239,27 @@ class _Linear:
         return self.Hm
 
 
-def total_state_noise(scn: Scenario, T: float, dt: float) -> np.ndarray:
-    """Qw of the total-state UKF: variance of the gyro / accelerometer error averaged over
-    one filter interval.  The filter has no bias states, so the bias (constant + Markov +
-    random walk at half the flight) is treated as part of that error (documented
-    approximation of a filter without instrument states)."""
-    imu = scn.imu
-    noise = imu.noise_model(dt)
-    half = 0.5 * scn.duration
-    gb2 = (units.deg_per_h(imu.gyro_bias_deg_h) ** 2 + noise.gyro_markov_sigma**2
-           + noise.gyro_bias_rw**2 * half)
-    ab2 = (units.micro_g(imu.accel_bias_ug) ** 2 + noise.accel_markov_sigma**2
-           + noise.accel_bias_rw**2 * half)
-    return np.diag(np.r_[np.full(3, noise.gyro_arw**2 / T + gb2),
-                         np.full(3, noise.accel_vrw**2 / T + ab2)])
+def total_state_models(scn: Scenario, T: float, dt: float):
+    """P0 (15, 15), Qw (6, 6), Qb (6, 6) and bias decay (6,) of the total-state UKF.
+
+    Bias states (filter units deg/h, mg) start from the scenario's constant/Markov bias
+    sigma and follow a first-order Gauss–Markov process with the scenario's correlation
+    time (random walk when it is infinite), driven by the bias random walk and the Markov
+    noise; ``Qw`` is the white gyro/accelerometer noise averaged over one interval.
+    """
+    noise = scn.imu.noise_model(dt)
+    P18 = initial_covariance(scn)
+    idx = np.r_[0:9, 9:12, 15:18]
+    P0 = P18[np.ix_(idx, idx)]
+    decay = np.r_[np.full(3, np.exp(-T / noise.gyro_markov_tau)),
+                  np.full(3, np.exp(-T / noise.accel_markov_tau))]
+    qb = np.r_[np.full(3, noise.gyro_bias_rw**2 * T
+                       + (1 - decay[0] ** 2) * noise.gyro_markov_sigma**2),
+               np.full(3, noise.accel_bias_rw**2 * T
+                       + (1 - decay[3] ** 2) * noise.accel_markov_sigma**2)]
+    bscale = np.r_[em.SCALE[9:12], em.SCALE[15:18]]
+    Qw = np.diag(np.r_[np.full(3, noise.gyro_arw**2 / T), np.full(3, noise.accel_vrw**2 / T)])
+    return P0, Qw, np.diag(qb / bscale**2), decay
 
 
 def run_total_state(scn: Scenario, aiding: list[str], data: RunData, mode: str = "",
@@ -287,21 +278,20 @@ def run_total_state(scn: Scenario, aiding: list[str], data: RunData, mode: str =
                              f"scenario or the total-state filter does not provide")
     ins = _initial_ins(scn, truth, data)
     f = scn.filter
-    ukf = TotalStateUKF(ins, initial_covariance(scn)[:9, :9], total_state_noise(scn, T, dt),
-                        f.alpha, f.beta, f.kappa)
-    fed = FederatedFilter({a: KalmanFilter(np.zeros(9), np.eye(9), name=f"local '{a}'")
+    P0, Qw, Qb, decay = total_state_models(scn, T, dt)
+    ukf = TotalStateUKF(ins, P0, Qw, Qb, decay, f.alpha, f.beta, f.kappa)
+    fed = FederatedFilter({a: KalmanFilter(np.zeros(15), np.eye(15), name=f"local '{a}'")
                            for a in aiding}, None, sharing="equal" if f.sharing == "adaptive"
                           else f.sharing, fixed=f.fixed_factors, reset=True,
                           fdi_alpha=f.fdi_alpha)
     sched = {a: _schedule(data.series[a], T, n_cycles) for a in aiding}
     models = {a: (TOTAL_MODELS[a], _Linear(TOTAL_MODELS[a].H)) for a in aiding}
     states = np.empty((n_cycles, ins.state.size))
-    var = np.empty((n_cycles, em.N_STATES))
-    var[:, 9:] = np.nan
+    var = np.full((n_cycles, em.N_STATES), np.nan)
     for k in range(n_cycles):
         sl = slice(k * n_per, (k + 1) * n_per)
         ukf.predict(data.dtheta[sl], data.dv[sl], data.h_ref[sl])
-        fed.share(np.zeros(9), ukf.P)
+        fed.share(np.zeros(15), ukf.P)
         tk = truth.t[(k + 1) * n_per]
         for a in aiding:
             model, lin = models[a]
@@ -313,7 +303,7 @@ def run_total_state(scn: Scenario, aiding: list[str], data: RunData, mode: str =
         dx, P = fed.fuse()
         ukf.apply(dx)
         ukf.P = P
-        var[k, :9] = np.diagonal(P)
+        var[k, np.r_[0:12, 15:18]] = np.diagonal(P)
         states[k] = ins.state
     sigma = np.sqrt(var) * em.SCALE
     return _result(scn, truth, n_per, states, mode, sigma, {}, fed.log)
@@ -328,5 +318,4 @@ def _stats_epochs(t, period):
 def run_configured_mode(scn: Scenario, mode, data: RunData,
                         max_time: float | None = None) -> RunResult:
     """Run a :class:`~fednav.config.ModeConfig` of the scenario."""
-    return run_mode(scn, list(mode.aiding), data, mode.name, max_time, mode.filter,
-                    mode.instrument_states)
+    return run_mode(scn, list(mode.aiding), data, mode.name, max_time, mode.filter)

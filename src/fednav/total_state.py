@@ -8,17 +8,29 @@ space ``d = [phi (3), dv (3), dp (3)]`` in filter units (arc-minutes, m/s, metre
 * ``X [+] d``: attitude ``C = exp([phi x]) C_X`` (a rotation of the navigation frame by
   ``phi``), ``v = v_X + dv``, position moved by ``dp`` metres east/north/up;
 * ``Y [-] X``: the ``d`` with ``X [+] d = Y``; the attitude part is ``log(C_Y C_X')`` —
+  (with Y the truth and X the INS, ``d = S x_err`` for the error state of
+  :mod:`fednav.error_model`, ``S = diag(+1 x3, -1 x6)``: same attitude sign, opposite
+  velocity/position sign);
   recovered platform angles, never a difference of Euler angles (paper 003, eq. 27–29;
   fednav uses the exact exponential where the paper writes the small-angle matrix).
 
+The filter state is augmented with the gyro and accelerometer errors ``b`` (6, body
+axes), carried and estimated as first-order Gauss–Markov processes (random walk when the
+correlation time is infinite): paper 003's "9 + 6 gyro/accelerometer first-order Markov"
+= 15 states.  Coloured (Markov) noise can only be represented by carrying it as states;
+a 9-state filter that treats the random-walking bias as white noise becomes inconsistent
+and, with chi-square fault detection on, rejects good measurements and diverges (seen
+and documented in docs/paper003.md).
+
 Time update (augmented UKF, paper 003 section 2.1): sigma points over
-``[d (9), w (6)]`` with covariance ``blockdiag(P, Q_w)``, ``w`` = gyro and accelerometer
-error over the interval [rad/s, m/s^2].  Every sigma point is flown through the same
-strapdown kernel over the interval (one coarse step with the interval's summed
-increments, minus its ``w``); the central point is flown the same way, and only the
-deviations ``chi_i [-] chi_0`` are kept and re-applied around the full-rate INS.  The
-coarse step's own (common-mode) error therefore cancels.  Measurement updates are linear
-on the tangent space (the simplified UKF), see :class:`GnssTotal` and :class:`StarTotal`.
+``[d (9), db (6), w (6)]`` with covariance ``blockdiag(P, Q_w)``, ``w`` = white gyro and
+accelerometer noise averaged over the interval [rad/s, m/s^2].  Every sigma point is
+flown through the same strapdown kernel over the interval (one coarse step with the
+interval's summed increments, minus its IMU error ``b + db + w``); the central point is
+flown the same way, and only the deviations ``chi_i [-] chi_0`` are kept and re-applied
+around the full-rate INS.  The coarse step's own (common-mode) error therefore cancels.
+Measurement updates are linear on the tangent space (the simplified UKF), see
+:class:`GnssTotal` and :class:`StarTotal`.
 """
 
 from __future__ import annotations
@@ -30,12 +42,16 @@ from . import attitude as att
 from . import earth
 from .error_model import SCALE
 from .kernels import cholesky_lower, quat_mul, quat_to_rotvec, rotvec_to_quat
-from .strapdown import STATE_LLA, STATE_Q, STATE_SIZE, STATE_VEL, Strapdown, _run
+from .strapdown import STATE_LLA, STATE_Q, STATE_VEL, Strapdown, _run
 
 N_NAV = 9
+N_BIAS = 6
+N_STATE = N_NAV + N_BIAS
 N_NOISE = 6
 #: Filter units of the tangent coordinates [phi (arcmin), v (m/s), p (m)].
 TSCALE = SCALE[:N_NAV]
+#: Filter units of the bias states [gyro (deg/h), accelerometer (mg)].
+BSCALE = np.r_[SCALE[9:12], SCALE[15:18]]
 
 
 @numba.njit(cache=True)
@@ -114,23 +130,28 @@ def _fly_coarse(states, dth, dv, noise, T, gains):
 
 
 class TotalStateUKF:
-    """Augmented UKF on the navigation state, mean = the INS (see module docstring).
+    """Augmented UKF on the navigation state and IMU errors (see module docstring).
 
-    ``ins``: the strapdown navigator that carries the mean; ``P0`` (9, 9) tangent
-    covariance (filter units); ``Qw`` (6, 6) covariance of the gyro [rad/s] and
-    accelerometer [m/s^2] error averaged over one filter interval.
+    ``ins``: the strapdown navigator that carries the navigation mean; ``P0`` (15, 15)
+    covariance of ``[d (9), b (6)]`` in filter units; ``Qw`` (6, 6) covariance of the white
+    gyro [rad/s] and accelerometer [m/s^2] noise averaged over one filter interval;
+    ``bias_decay`` (6,) ``exp(-T / tau)`` of the bias processes (1 = random walk) and
+    ``Qb`` (6, 6) their driving noise over one interval (filter units).
     """
 
-    def __init__(self, ins: Strapdown, P0, Qw, alpha: float = 1e-3, beta: float = 2.0,
-                 kappa: float = 0.0, name: str = "total-state ukf"):
+    def __init__(self, ins: Strapdown, P0, Qw, Qb=None, bias_decay=None, alpha: float = 1e-3,
+                 beta: float = 2.0, kappa: float = 0.0, name: str = "total-state ukf"):
         self.ins, self.name = ins, name
         self.P = np.array(P0, dtype=float)
         self.Qw = np.array(Qw, dtype=float)
-        if self.P.shape != (N_NAV, N_NAV) or self.Qw.shape != (N_NOISE, N_NOISE):
-            raise ValueError(f"{name}: P0 must be (9, 9) and Qw (6, 6)")
+        self.Qb = np.zeros((N_BIAS, N_BIAS)) if Qb is None else np.array(Qb, dtype=float)
+        self.decay = np.ones(N_BIAS) if bias_decay is None else np.asarray(bias_decay, float)
+        if self.P.shape != (N_STATE, N_STATE) or self.Qw.shape != (N_NOISE, N_NOISE):
+            raise ValueError(f"{name}: P0 must be (15, 15) and Qw (6, 6)")
         if not np.allclose(self.Qw, self.Qw.T) or np.linalg.eigvalsh(self.Qw).min() < 0:
             raise ValueError(f"{name}: Qw must be symmetric positive semi-definite")
-        n = N_NAV + N_NOISE
+        self.b = np.zeros(N_BIAS)  # estimated IMU errors, SI [rad/s x3, m/s^2 x3]
+        n = N_STATE + N_NOISE
         lam = alpha**2 * (n + kappa) - n
         self.c = n + lam
         self.Wm = np.full(2 * n + 1, 0.5 / self.c)
@@ -142,47 +163,57 @@ class TotalStateUKF:
         self._Lw = V * np.sqrt(np.clip(ev, 0.0, None))
         self.step = 0
 
+    def compensate(self, dtheta, dv):
+        """IMU increments with the estimated errors removed."""
+        dt = self.ins.dt
+        return (np.asarray(dtheta) - self.b[:3] * dt, np.asarray(dv) - self.b[3:] * dt)
+
     def predict(self, dtheta, dv, h_ref=None) -> None:
-        """Time update over one interval of IMU increments (N, 3) (already compensated)."""
+        """Time update over one interval of raw IMU increments (N, 3)."""
         self.step += 1
-        n = N_NAV + N_NOISE
+        n = N_STATE + N_NOISE
         Lp, ok = cholesky_lower(self.c * self.P)
         if not ok:
             raise FloatingPointError(f"{self.name} predict at step {self.step}: covariance is "
                                      f"not positive definite")
         L = np.zeros((n, n))  # blockdiag(P, Qw): factor the blocks separately
-        L[:N_NAV, :N_NAV] = Lp
-        L[N_NAV:, N_NAV:] = self._Lw
+        L[:N_STATE, :N_STATE] = Lp
+        L[N_STATE:, N_STATE:] = self._Lw
         D = np.vstack([np.zeros(n), L.T, -L.T])
+        dth, dvc = self.compensate(dtheta, dv)
         start = self.ins.state.copy()
         chi = boxplus(np.tile(start, (len(D), 1)), D[:, :N_NAV])
         chi[:, 10:20] = 0.0  # coarse steps: no previous-sample coning/sculling terms
-        T = self.ins.dt * len(dtheta)
-        _fly_coarse(chi, np.asarray(dtheta).sum(axis=0), np.asarray(dv).sum(axis=0),
-                    np.ascontiguousarray(D[:, N_NAV:]), T, self.ins._gains)
-        dev = boxminus(chi, chi[0])
+        T = self.ins.dt * len(dth)
+        err = D[:, N_NAV:N_STATE] * BSCALE + D[:, N_STATE:]  # bias deviation + white noise
+        _fly_coarse(chi, dth.sum(axis=0), dvc.sum(axis=0), np.ascontiguousarray(err), T,
+                    self.ins._gains)
+        dev = np.hstack([boxminus(chi, chi[0]), D[:, N_NAV:N_STATE] * self.decay])
         mean = self.Wm @ dev
         r = dev - mean
         self.P = (r * self.Wc[:, None]).T @ r
+        self.P[N_NAV:, N_NAV:] += self.Qb
         self.P = 0.5 * (self.P + self.P.T)
-        self.ins.run(dtheta, dv, h_ref, record=False)  # the mean at full IMU rate
+        self.ins.run(dth, dvc, h_ref, record=False)  # the navigation mean at full IMU rate
+        self.b *= self.decay
         self.apply(mean)
 
     def apply(self, d) -> None:
-        """Move the mean by tangent ``d`` (filter units): ``X <- X [+] d``."""
-        self.ins.state[:] = _boxplus(self.ins.state[None], np.asarray(d, dtype=float)[None],
-                                     TSCALE)[0]
+        """Move the estimate by ``d`` (15, filter units): ``X <- X [+] d``, ``b += db``."""
+        d = np.asarray(d, dtype=float)
+        self.ins.state[:] = _boxplus(self.ins.state[None], d[None, :N_NAV], TSCALE)[0]
         # keep the velocity history used by the strapdown's midpoint extrapolation
-        self.ins.state[16:19] += np.asarray(d)[3:6] * TSCALE[3:6]
+        self.ins.state[16:19] += d[3:6] * TSCALE[3:6]
+        self.b += d[N_NAV:N_STATE] * BSCALE
 
 
 class GnssTotal:
-    """GNSS on the total state: residual ``GNSS [-] X`` = [0, 0, 0, dv (3), dp ENU (3)]
-    (only the velocity and position parts are observed); linear ``H = [0 I]``."""
+    """GNSS on the total state: residual ``GNSS [-] X`` = [dv (3), dp ENU (3)] (filter
+    units); linear ``H = [0 I 0]``."""
 
     kind = "gnss"
     dim = 6
-    H = np.hstack([np.zeros((6, 3)), np.eye(6)])
+    H = np.hstack([np.zeros((6, 3)), np.eye(6), np.zeros((6, N_BIAS))])
 
     def residual(self, state, z) -> np.ndarray:
         lat, lon, h = state[STATE_LLA]
@@ -196,12 +227,12 @@ class GnssTotal:
 
 class StarTotal:
     """Star sensor on the total state: residual = ``log(C_cns C_est')`` (arc-minutes);
-    ``H = [I 0]``.  The Euler-angle noise of the sensor maps to the rotation space with
+    ``H = [I 0 0]``.  The Euler-angle noise of the sensor maps to the rotation space with
     the inverse of :func:`~fednav.attitude.euler_error_jacobian`."""
 
     kind = "star"
     dim = 3
-    H = np.hstack([np.eye(3), np.zeros((3, 6))])
+    H = np.hstack([np.eye(3), np.zeros((3, 6 + N_BIAS))])
 
     def residual(self, state, z) -> np.ndarray:
         C_est = att.quat_to_dcm(state[STATE_Q])
@@ -213,6 +244,3 @@ class StarTotal:
         Re = np.diag((np.asarray(sigma, dtype=float) / TSCALE[0]) ** 2)
         return Ji @ Re @ Ji.T
 
-
-def empty_state() -> np.ndarray:
-    return np.zeros(STATE_SIZE)

@@ -56,18 +56,20 @@ def test_reproduce_summary_shape_and_fault_experiment(short, tmp_path):
         assert (tmp_path / f).exists()
 
 
-def test_same_information_gives_the_same_answer():
-    """The total-state UKF and an error-state KF with the same (navigation-only) states and
-    the same bias-as-noise model agree closely: linearisation error is negligible here."""
+def test_total_state_ukf_and_error_state_kf_agree():
+    """With the same information (navigation + IMU-error states, same sensors) the
+    total-state UKF and the error-state linear KF agree closely: linearisation error is
+    negligible in this scenario (docs/paper003.md)."""
     from fednav.simulate import make_run_data, run_configured_mode
 
     scn = load_scenario(scenario_path("paper003"))
-    data = make_run_data(scn, 4, max_time=300.0)
+    data = make_run_data(scn, 4, max_time=600.0)
     modes = {m.name: m for m in scn.modes}
-    st = {k: paper003.run_statistics(run_configured_mode(scn, modes[k], data, 300.0))
-          for k in ("FUKF", "FKF-9")}
-    for c in paper003.COLS:
-        assert st["FUKF"][f"{c}.std"] == pytest.approx(st["FKF-9"][f"{c}.std"], rel=0.05), c
+    st = {k: paper003.run_statistics(run_configured_mode(scn, modes[k], data, 600.0))
+          for k in ("FUKF", "FKF")}
+    imp = paper003.improvement(st["FUKF"], st["FKF"])
+    for g, v in imp.items():
+        assert abs(v) < 25.0, (g, v)
 
 
 def test_improvement_rule_reproduces_paper_table_numbers():

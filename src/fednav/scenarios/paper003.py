@@ -199,8 +199,7 @@ def print_summary(summary: dict, console) -> None:
         tab.add_row(g, _fmt(v["ours"]), _fmt(v["ci95"]), _fmt(v["paper"]),
                     _fmt(v["paper_table_same_rule"]))
     console.print(tab)
-    tab = Table(title="Analysis — mean std per group for every mode (FKF-9: error-state KF "
-                      "with the FUKF's information)")
+    tab = Table(title="Mean std per group for every mode")
     for c in ("mode", "position m", "velocity m/s", "attitude deg"):
         tab.add_column(c, justify="right")
     for mode, v in t["analysis"]["rows"].items():
