@@ -22,3 +22,10 @@ def test_cholesky_lower():
     assert not ok
     _, ok = cholesky_lower(np.array([[np.nan, 0.0], [0.0, 1.0]]))
     assert not ok
+
+
+def test_compiled_euler_to_dcm_matches_attitude():
+    from fednav.kernels import euler_to_dcm
+
+    for e in ([0.3, -0.2, 4.0], [1.5, 3.0, 0.1], [0.0, 0.0, 0.0]):
+        np.testing.assert_allclose(euler_to_dcm(*e), att.euler_to_dcm(e), atol=1e-15)

@@ -37,7 +37,7 @@ import numba
 import numpy as np
 
 from . import earth, units
-from .kernels import rotvec_to_dcm
+from .kernels import dcm_to_rotvec, rotvec_to_dcm
 
 N_STATES = 18
 PHI, DV, DP, EPS_C, EPS_R, NABLA = (slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12),
@@ -68,17 +68,6 @@ class ImuNoiseModel:
     gyro_markov_tau: float = np.inf
     accel_markov_sigma: float = 0.0
     accel_markov_tau: float = np.inf
-
-
-@numba.njit(cache=True, inline="always")
-def _dcm2rv(C, out):
-    tr = C[0, 0] + C[1, 1] + C[2, 2]
-    cosa = min(1.0, max(-1.0, 0.5 * (tr - 1.0)))
-    a = np.arccos(cosa)
-    k = 0.5 * (1.0 + a * a / 6.0) if a < 1e-6 else a / (2.0 * np.sin(a))
-    out[0] = k * (C[2, 1] - C[1, 2])
-    out[1] = k * (C[0, 2] - C[2, 0])
-    out[2] = k * (C[1, 0] - C[0, 1])
 
 
 @numba.njit(cache=True, inline="always")
@@ -194,7 +183,7 @@ def _transition(X, T, nsub, p, C0, scale):
             for j in range(3, n):
                 x[j] += hs * d[j]
             _rotate(E, wl, wr, hs, tmp, R)
-        _dcm2rv(E, rv)
+        dcm_to_rotvec(E, rv)
         x[0], x[1], x[2] = -rv[0], -rv[1], -rv[2]
         for j in range(n):
             out[i, j] = x[j] / scale[j]

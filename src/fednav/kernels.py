@@ -135,3 +135,34 @@ def quat_to_rotvec(q):
     else:
         k = 2.0 * np.arctan2(s, w) / s
     return np.array([k * x, k * y, k * z])
+
+
+@numba.njit(cache=True, inline="always")
+def dcm_to_rotvec(C, out):
+    """Rotation vector of the DCM ``C`` [rad], written into ``out``."""
+    tr = C[0, 0] + C[1, 1] + C[2, 2]
+    cosa = min(1.0, max(-1.0, 0.5 * (tr - 1.0)))
+    a = np.arccos(cosa)
+    k = 0.5 * (1.0 + a * a / 6.0) if a < 1e-6 else a / (2.0 * np.sin(a))
+    out[0] = k * (C[2, 1] - C[1, 2])
+    out[1] = k * (C[0, 2] - C[2, 0])
+    out[2] = k * (C[1, 0] - C[0, 1])
+
+
+@numba.njit(cache=True)
+def euler_to_dcm(pitch, roll, heading):
+    """Compiled scalar twin of :func:`fednav.attitude.euler_to_dcm` (tested equal)."""
+    st, ct = np.sin(pitch), np.cos(pitch)
+    sg, cg = np.sin(roll), np.cos(roll)
+    sp, cp = np.sin(heading), np.cos(heading)
+    c = np.empty((3, 3))
+    c[0, 0] = cg * cp + st * sg * sp
+    c[1, 0] = -cg * sp + st * sg * cp
+    c[2, 0] = -ct * sg
+    c[0, 1] = sp * ct
+    c[1, 1] = cp * ct
+    c[2, 1] = st
+    c[0, 2] = sg * cp - st * cg * sp
+    c[1, 2] = -sg * sp - st * cg * cp
+    c[2, 2] = ct * cg
+    return c

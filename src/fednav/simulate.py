@@ -297,9 +297,8 @@ def run_total_state(scn: Scenario, aiding: list[str], data: RunData, mode: str =
             model, lin = models[a]
             s = data.series[a]
             for i in sched[a][k]:
-                R = (model.R_at(ins.state, s.sigma) if hasattr(model, "R_at")
-                     else model.R(s.sigma))
-                fed.update(a, model.residual(ins.state, s.z[i]), lin, None, R, t=tk)
+                y, R = model.terms(ins.state, s.z[i], s.sigma)
+                fed.update(a, y, lin, None, R, t=tk)
         dx, P = fed.fuse()
         ukf.apply(dx)
         ukf.P = P

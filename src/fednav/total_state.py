@@ -41,7 +41,15 @@ import numpy as np
 from . import attitude as att
 from . import earth
 from .error_model import SCALE
-from .kernels import cholesky_lower, quat_mul, quat_to_rotvec, rotvec_to_quat
+from .kernels import (
+    cholesky_lower,
+    dcm_to_rotvec,
+    euler_to_dcm,
+    quat_mul,
+    quat_to_dcm,
+    quat_to_rotvec,
+    rotvec_to_quat,
+)
 from .strapdown import STATE_LLA, STATE_Q, STATE_VEL, Strapdown, _run
 
 N_NAV = 9
@@ -224,6 +232,27 @@ class GnssTotal:
         s = np.asarray(sigma, dtype=float)  # [north, east, up m, vE, vN, vU] as z
         return np.diag(np.r_[s[3:6], s[1], s[0], s[2]] ** 2)
 
+    def terms(self, state, z, sigma) -> tuple[np.ndarray, np.ndarray]:
+        return self.residual(state, z), self.R(sigma)
+
+
+@numba.njit(cache=True)
+def _star_terms(q_est, z, sigma, unit):
+    """Residual log(C_cns C_est') and its covariance from Euler-angle noise ``sigma``
+    (both in units of ``unit`` radians)."""
+    C_est = quat_to_dcm(q_est)
+    M = euler_to_dcm(z[0], z[1], z[2]) @ C_est.T
+    r = np.empty(3)
+    dcm_to_rotvec(M, r)
+    # Euler angles of the estimate and d(Euler)/d(phi) (attitude.euler_error_jacobian).
+    th = np.arcsin(min(1.0, max(-1.0, C_est[2, 1])))
+    psi = np.arctan2(C_est[0, 1], C_est[1, 1])
+    s, c, ct, tt = np.sin(psi), np.cos(psi), np.cos(th), np.tan(th)
+    J = np.array([[-c, s, 0.0], [-s / ct, -c / ct, 0.0], [-tt * s, -tt * c, 1.0]])
+    Ji = np.linalg.inv(J)
+    Re = np.diag((sigma / unit) ** 2)
+    return r / unit, Ji @ Re @ Ji.T
+
 
 class StarTotal:
     """Star sensor on the total state: residual = ``log(C_cns C_est')`` (arc-minutes);
@@ -234,13 +263,13 @@ class StarTotal:
     dim = 3
     H = np.hstack([np.eye(3), np.zeros((3, 6 + N_BIAS))])
 
+    def terms(self, state, z, sigma) -> tuple[np.ndarray, np.ndarray]:
+        """(residual, R) at once (one compiled call)."""
+        return _star_terms(np.ascontiguousarray(state[STATE_Q]), np.asarray(z, dtype=float),
+                           np.asarray(sigma, dtype=float), TSCALE[0])
+
     def residual(self, state, z) -> np.ndarray:
-        C_est = att.quat_to_dcm(state[STATE_Q])
-        return attitude_innovation(att.euler_to_dcm(z), C_est) / TSCALE[0]
+        return self.terms(state, z, np.ones(3))[0]
 
     def R_at(self, state, sigma) -> np.ndarray:
-        e = att.quat_to_euler(state[STATE_Q])
-        Ji = np.linalg.inv(att.euler_error_jacobian(e))
-        Re = np.diag((np.asarray(sigma, dtype=float) / TSCALE[0]) ** 2)
-        return Ji @ Re @ Ji.T
-
+        return self.terms(state, att.quat_to_euler(state[STATE_Q]), sigma)[1]
