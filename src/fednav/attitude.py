@@ -14,6 +14,8 @@ All functions are vectorised over leading dimensions.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 TWO_PI = 2.0 * np.pi
@@ -208,6 +210,10 @@ def euler_error_jacobian(euler):
     These are paper 002's eq. 3 (rows reordered); shape (..., 3, 3).
     """
     e = np.asarray(euler, dtype=float)
+    if e.ndim == 1:  # one attitude: plain floats, no stacking
+        s, c = math.sin(e[2]), math.cos(e[2])
+        ct, tt = math.cos(e[0]), math.tan(e[0])
+        return np.array([[-c, s, 0.0], [-s / ct, -c / ct, 0.0], [-tt * s, -tt * c, 1.0]])
     th, psi = e[..., 0], e[..., 2]
     s, c, ct, tt = np.sin(psi), np.cos(psi), np.cos(th), np.tan(th)
     z = np.zeros_like(s)

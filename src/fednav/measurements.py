@@ -145,8 +145,9 @@ class GnssPosVel:
     def residual(self, nav: NavSnapshot, z) -> np.ndarray:
         lat, lon, h = nav.lla
         rm, rn = earth.radii(lat)
-        return np.r_[(lon - z[1]) * (rn + h) * np.cos(lat), (lat - z[0]) * (rm + h),
-                     h - z[2], np.asarray(nav.vel) - z[3:6]]
+        v = nav.vel
+        return np.array([(lon - z[1]) * (rn + h) * np.cos(lat), (lat - z[0]) * (rm + h),
+                         h - z[2], v[0] - z[3], v[1] - z[4], v[2] - z[5]])
 
     def h(self, X, nav: NavSnapshot) -> np.ndarray:
         return np.atleast_2d(X)[:, self._cols]
@@ -158,7 +159,7 @@ class GnssPosVel:
 
     def R(self, sigma) -> np.ndarray:
         s = np.asarray(sigma, dtype=float)  # [north, east, up m, vE, vN, vU], as z
-        return np.diag(np.r_[s[1], s[0], s[2], s[3:6]] ** 2)
+        return np.diag(s[[1, 0, 2, 3, 4, 5]] ** 2)
 
 
 MODELS = {m.kind: m for m in (StarAttitude(), SarFix(), BaroHeight(), GnssPosVel())}

@@ -10,6 +10,14 @@ from .base import Filter, FilterError, Innovation
 
 
 @numba.njit(cache=True)
+def _propagate(Phi, P, Q, q_scale):
+    """Phi P Phi' + q_scale Q, symmetrised; ok False if it is not finite."""
+    Pn = Phi @ P @ Phi.T + q_scale * Q
+    Pn = 0.5 * (Pn + Pn.T)
+    return Pn, np.isfinite(Pn.sum())
+
+
+@numba.njit(cache=True)
 def _joseph_update(x, P, H, r, R):
     """K = P H' S^-1, x + K r, P = (I - K H) P (I - K H)' + K R K'; returns
     (x, P, S, r' S^-1 r, ok)."""
@@ -36,9 +44,10 @@ class KalmanFilter(Filter):
     def predict(self, process, q_scale: float = 1.0) -> None:
         self.step += 1
         self.x = process.transition(self.x[None])[0]
-        Phi = process.Phi
-        self.P = Phi @ self.P @ Phi.T + q_scale * process.Qd
-        self._finish("predict")
+        self.P, ok = _propagate(np.ascontiguousarray(process.Phi, dtype=float), self.P,
+                                np.ascontiguousarray(process.Qd, dtype=float), q_scale)
+        if not ok or not np.all(np.isfinite(self.x)):
+            raise FilterError(f"{self._who('predict')}: state or covariance became NaN/inf")
 
     def update(self, y, model, nav=None, R=None, gate: float | None = None) -> Innovation:
         H = np.ascontiguousarray(model.H(nav), dtype=float)
