@@ -24,6 +24,8 @@ from .strapdown import STATE_LLA, STATE_Q, STATE_VEL, Strapdown, quat_to_dcm_nb
 from .total_state import GnssTotal, StarTotal, TotalStateUKF
 
 TOTAL_MODELS = {"gnss": GnssTotal(), "star": StarTotal()}
+#: Positions of the total-state filter's 15 states in the 18-state error layout.
+_NAV_BIAS = np.r_[0:12, 15:18]
 
 
 @dataclass
@@ -249,8 +251,7 @@ def total_state_models(scn: Scenario, T: float, dt: float):
     """
     noise = scn.imu.noise_model(dt)
     P18 = initial_covariance(scn)
-    idx = np.r_[0:9, 9:12, 15:18]
-    P0 = P18[np.ix_(idx, idx)]
+    P0 = P18[np.ix_(_NAV_BIAS, _NAV_BIAS)]
     decay = np.r_[np.full(3, np.exp(-T / noise.gyro_markov_tau)),
                   np.full(3, np.exp(-T / noise.accel_markov_tau))]
     qb = np.r_[np.full(3, noise.gyro_bias_rw**2 * T
@@ -302,7 +303,7 @@ def run_total_state(scn: Scenario, aiding: list[str], data: RunData, mode: str =
         dx, P = fed.fuse()
         ukf.apply(dx)
         ukf.P = P
-        var[k, np.r_[0:12, 15:18]] = np.diagonal(P)
+        var[k, _NAV_BIAS] = np.diagonal(P)
         states[k] = ins.state
     sigma = np.sqrt(var) * em.SCALE
     return _result(scn, truth, n_per, states, mode, sigma, {}, fed.log)

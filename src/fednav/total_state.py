@@ -50,7 +50,7 @@ from .kernels import (
     quat_to_rotvec,
     rotvec_to_quat,
 )
-from .strapdown import STATE_LLA, STATE_Q, STATE_VEL, Strapdown, _run
+from .strapdown import STATE_Q, STATE_VEL, Strapdown, _run
 
 N_NAV = 9
 N_BIAS = 6
@@ -224,13 +224,16 @@ class GnssTotal:
     H = np.hstack([np.zeros((6, 3)), np.eye(6), np.zeros((6, N_BIAS))])
 
     def residual(self, state, z) -> np.ndarray:
-        lat, lon, h = state[STATE_LLA]
-        dp = earth.llh_difference_enu(z[0], z[1], z[2], lat, lon, h)
-        return np.r_[np.asarray(z[3:6]) - state[STATE_VEL], dp] / TSCALE[3:9]
+        lat, lon, h = state[7], state[8], state[9]
+        rm, rn = earth.radii_nb(lat)
+        v = state[STATE_VEL]
+        return np.array([z[3] - v[0], z[4] - v[1], z[5] - v[2],
+                         (z[1] - lon) * (rn + h) * np.cos(lat), (z[0] - lat) * (rm + h),
+                         z[2] - h]) / TSCALE[3:9]
 
     def R(self, sigma) -> np.ndarray:
         s = np.asarray(sigma, dtype=float)  # [north, east, up m, vE, vN, vU] as z
-        return np.diag(np.r_[s[3:6], s[1], s[0], s[2]] ** 2)
+        return np.diag(s[[3, 4, 5, 1, 0, 2]] ** 2)
 
     def terms(self, state, z, sigma) -> tuple[np.ndarray, np.ndarray]:
         return self.residual(state, z), self.R(sigma)
