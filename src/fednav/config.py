@@ -183,6 +183,7 @@ class FilterConfig(_Model):
     reset: bool = True
     substeps: int = Field(default=2, ge=1)
     fdi_alpha: float | None = Field(default=None, gt=0.0, lt=1.0)
+    fdi_recovery: int = Field(default=1, ge=1)  # consecutive passes to return after isolation
 
 
 class InitialErrorConfig(_Model):

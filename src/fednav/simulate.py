@@ -121,7 +121,8 @@ def _build_filter(scn: Scenario, aiding: list[str], ftype: str) -> FederatedFilt
         master = make_filter(ftype, np.zeros(em.N_STATES), P0, **opts)
         master.name = f"{ftype} master"
     return FederatedFilter(locals_, master, sharing=f.sharing, fixed=f.fixed_factors,
-                           reset=f.reset, fdi_alpha=f.fdi_alpha)
+                           reset=f.reset, fdi_alpha=f.fdi_alpha,
+                           fdi_recovery=f.fdi_recovery)
 
 
 def _schedule(series: MeasurementSeries, T: float, n_cycles: int) -> list[list[int]]:
@@ -284,7 +285,7 @@ def run_total_state(scn: Scenario, aiding: list[str], data: RunData, mode: str =
     fed = FederatedFilter({a: KalmanFilter(np.zeros(15), np.eye(15), name=f"local '{a}'")
                            for a in aiding}, None, sharing="equal" if f.sharing == "adaptive"
                           else f.sharing, fixed=f.fixed_factors, reset=True,
-                          fdi_alpha=f.fdi_alpha)
+                          fdi_alpha=f.fdi_alpha, fdi_recovery=f.fdi_recovery)
     sched = {a: _schedule(data.series[a], T, n_cycles) for a in aiding}
     models = {a: (TOTAL_MODELS[a], _Linear(TOTAL_MODELS[a].H)) for a in aiding}
     states = np.empty((n_cycles, ins.state.size))

@@ -269,3 +269,20 @@ def test_share_then_update_equals_centralized():
     x, Pg = fed.fuse()
     np.testing.assert_allclose(x, central.x, atol=1e-12)
     np.testing.assert_allclose(Pg, central.P, atol=1e-12)
+
+
+def test_fdi_recovery_needs_consecutive_passes():
+    H = np.eye(1)
+    m = FunctionModel(lambda x: H @ x, H)
+    fed = FederatedFilter({"a": KalmanFilter(np.zeros(1), np.eye(1))}, sharing="equal",
+                          fdi_alpha=0.005, fdi_recovery=3)
+    R = 0.01 * np.eye(1)
+    seq = [0.0, 50.0, 0.0, 50.0, 0.0, 0.0, 0.0, 0.0]  # fault, lone pass, fault, 4 passes
+    iso = []
+    for k, z in enumerate(seq):
+        fed.share(np.zeros(1), np.eye(1))
+        iso.append(fed.update("a", [z], m, R=R, t=k).accepted is False)
+    # The lone pass at k=2 does not bring it back; it returns at the third pass in a row.
+    assert iso == [False, True, True, True, True, True, False, False]
+    with pytest.raises(ValueError, match="fdi_recovery"):
+        FederatedFilter({"a": KalmanFilter(np.zeros(1), np.eye(1))}, fdi_recovery=0)

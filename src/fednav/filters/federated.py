@@ -95,7 +95,8 @@ class FederatedFilter:
 
     def __init__(self, locals: dict[str, Filter], master: Filter | None = None,
                  sharing: str = "adaptive", fixed: dict[str, float] | None = None,
-                 reset: bool = True, fdi_alpha: float | None = None):
+                 reset: bool = True, fdi_alpha: float | None = None,
+                 fdi_recovery: int = 1):
         if not locals:
             raise ValueError("federated filter needs at least one local filter")
         self.locals = dict(locals)
@@ -115,6 +116,10 @@ class FederatedFilter:
         if fdi_alpha is not None and not 0.0 < fdi_alpha < 1.0:
             raise ValueError(f"fdi_alpha must be in (0, 1), got {fdi_alpha}")
         self.fdi_alpha = fdi_alpha
+        if fdi_recovery < 1:
+            raise ValueError(f"fdi_recovery must be >= 1, got {fdi_recovery}")
+        self.fdi_recovery = fdi_recovery
+        self._passes = dict.fromkeys(self.locals, fdi_recovery)  # consecutive passes
         self._thresholds: dict[int, float] = {}
         #: One entry per local measurement: t, local, statistic, dof, threshold, isolated.
         self.log: list[tuple] = []
@@ -155,7 +160,16 @@ class FederatedFilter:
                 from None
         dof = len(np.atleast_1d(y))
         thr = self.threshold(dof)
-        inn = f.update(y, model, nav, R, gate=None if self.fdi_alpha is None else thr)
+        if self.fdi_alpha is None:
+            inn = f.update(y, model, nav, R)
+        elif self._passes[local] + 1 < self.fdi_recovery:
+            # Recently isolated: test only, and come back after fdi_recovery passes in a row.
+            inn = f.update(y, model, nav, R, gate=-1.0)
+            passed = inn.nis <= thr
+            self._passes[local] = self._passes[local] + 1 if passed else 0
+        else:
+            inn = f.update(y, model, nav, R, gate=thr)
+            self._passes[local] = self.fdi_recovery if inn.accepted else 0
         self.log.append((t, local, inn.nis, dof, thr, not inn.accepted))
         return inn
 
