@@ -45,17 +45,12 @@ def bench_strapdown():
           f"fresh process: import {imp:.2f} s, first call {first:.3f} s (numba cache)")
 
 
-def bench_ukf(n=16, m=3):
-    from filterpy.kalman import MerweScaledSigmaPoints
-    from filterpy.kalman import UnscentedKalmanFilter as FPUKF
-
-    from fednav.filters import FunctionModel, FunctionProcess, UnscentedKalmanFilter
-
-    rng = np.random.default_rng(0)
+def toy_models(n, m, seed, linear_h=None):
+    """A batched nonlinear process and a linear measurement of the filter interface."""
+    rng = np.random.default_rng(seed)
     A = np.eye(n) + 0.01 * rng.standard_normal((n, n))
-    H = rng.standard_normal((m, n))
-    Q, R = 1e-3 * np.eye(n), 1e-2 * np.eye(m)
-    z = rng.standard_normal(m)
+    H = linear_h if linear_h is not None else rng.standard_normal((m, n))
+    Q = 1e-3 * np.eye(n)
 
     class Proc:  # batched nonlinear process, as fednav's error model provides
         Phi, Qd = A, Q
@@ -72,6 +67,19 @@ def bench_ukf(n=16, m=3):
         @staticmethod
         def H(nav=None):
             return H
+
+    return A, H, Q, Proc, Model, rng
+
+
+def bench_ukf(n=16, m=3):
+    from filterpy.kalman import MerweScaledSigmaPoints
+    from filterpy.kalman import UnscentedKalmanFilter as FPUKF
+
+    from fednav.filters import FunctionModel, FunctionProcess, UnscentedKalmanFilter
+
+    A, H, Q, Proc, Model, rng = toy_models(n, m, 0)
+    R = 1e-2 * np.eye(m)
+    z = rng.standard_normal(m)
 
     ours = UnscentedKalmanFilter(np.zeros(n), np.eye(n), alpha=1e-3)
 
@@ -113,28 +121,11 @@ def bench_simplified_ukf(n=15, m=6):
 
     from fednav.filters import SimplifiedUKF, UnscentedKalmanFilter
 
-    rng = np.random.default_rng(1)
-    A = np.eye(n) + 0.01 * rng.standard_normal((n, n))
-    H = np.zeros((m, n))
-    H[np.arange(m), np.arange(m)] = 1.0
-    Q, R = 1e-3 * np.eye(n), 1e-2 * np.eye(m)
+    Hs = np.zeros((m, n))
+    Hs[np.arange(m), np.arange(m)] = 1.0
+    A, H, Q, Proc, Model, rng = toy_models(n, m, 1, linear_h=Hs)
+    R = 1e-2 * np.eye(m)
     z = rng.standard_normal(m)
-
-    class Proc:
-        Phi, Qd = A, Q
-
-        @staticmethod
-        def transition(X):
-            return X @ A.T + 1e-3 * np.sin(X)
-
-    class Model:
-        @staticmethod
-        def h(X, nav=None):
-            return X @ H.T
-
-        @staticmethod
-        def H(nav=None):
-            return H
 
     def stepper(f):
         def step():

@@ -316,6 +316,12 @@ def _stats_epochs(t, period):
     return ph < 1e-6
 
 
+def run_all_modes(scn: Scenario, data: RunData,
+                  max_time: float | None = None) -> dict[str, RunResult]:
+    """Every mode of the scenario flown on the same run data, by mode name."""
+    return {m.name: run_configured_mode(scn, m, data, max_time) for m in scn.modes}
+
+
 def run_configured_mode(scn: Scenario, mode, data: RunData,
                         max_time: float | None = None) -> RunResult:
     """Run a :class:`~fednav.config.ModeConfig` of the scenario."""

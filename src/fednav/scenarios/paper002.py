@@ -12,7 +12,7 @@ from ..config import Scenario
 from ..config import load_scenario as _load
 from ..evaluation import error_stats
 from ..montecarlo import run_seeds
-from ..simulate import make_run_data, run_configured_mode
+from ..simulate import make_run_data, run_all_modes
 from . import scenario_path
 
 PAPER = "002"
@@ -55,12 +55,8 @@ def run_statistics(result) -> dict[str, float]:
 def one_run(args) -> tuple[list[dict], dict]:
     """All modes of one Monte Carlo run; returns per-mode statistics and the error series."""
     scn, seed, max_time = args
-    data = make_run_data(scn, seed, max_time)
-    rows, series = [], {}
-    for m in scn.modes:
-        res = run_configured_mode(scn, m, data, max_time)
-        rows.append({"seed": seed, "mode": m.name, **run_statistics(res)})
-        series[m.name] = res
+    series = run_all_modes(scn, make_run_data(scn, seed, max_time), max_time)
+    rows = [{"seed": seed, "mode": k, **run_statistics(r)} for k, r in series.items()]
     return rows, series
 
 

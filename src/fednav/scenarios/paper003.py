@@ -16,7 +16,7 @@ from ..config import Scenario
 from ..config import load_scenario as _load
 from ..evaluation import mean_ci95
 from ..montecarlo import run_seeds
-from ..simulate import make_run_data, run_configured_mode
+from ..simulate import make_run_data, run_all_modes, run_configured_mode
 from . import scenario_path
 
 PAPER = "003"
@@ -92,12 +92,8 @@ def fault_metrics(result, start: float, end: float, alpha: float, period: float)
 
 def one_run(args):
     scn, seed, max_time = args
-    data = make_run_data(scn, seed, max_time)
-    rows, series = [], {}
-    for m in scn.modes:
-        res = run_configured_mode(scn, m, data, max_time)
-        rows.append({"seed": seed, "mode": m.name, **run_statistics(res)})
-        series[m.name] = res
+    series = run_all_modes(scn, make_run_data(scn, seed, max_time), max_time)
+    rows = [{"seed": seed, "mode": k, **run_statistics(r)} for k, r in series.items()]
     fault_rows, fault_series = [], {}
     fe = scn.fault_experiment
     if fe is not None:
