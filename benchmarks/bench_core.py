@@ -46,11 +46,18 @@ def bench_strapdown():
 
 
 def toy_models(n, m, seed, linear_h=None):
-    """A batched nonlinear process and a linear measurement of the filter interface."""
+    """A batched nonlinear process, a linear measurement, and FilterPy's UKF on the same
+    problem with the same sigma-point settings (alpha 1e-3, beta 2, kappa 0)."""
+    from filterpy.kalman import MerweScaledSigmaPoints
+    from filterpy.kalman import UnscentedKalmanFilter as FPUKF
+
+    from fednav.filters import LinearModel
+
     rng = np.random.default_rng(seed)
     A = np.eye(n) + 0.01 * rng.standard_normal((n, n))
     H = linear_h if linear_h is not None else rng.standard_normal((m, n))
-    Q = 1e-3 * np.eye(n)
+    Q, R = 1e-3 * np.eye(n), 1e-2 * np.eye(m)
+    z = rng.standard_normal(m)
 
     class Proc:  # batched nonlinear process, as fednav's error model provides
         Phi, Qd = A, Q
@@ -59,42 +66,27 @@ def toy_models(n, m, seed, linear_h=None):
         def transition(X):
             return X @ A.T + 1e-3 * np.sin(X)
 
-    class Model:
-        @staticmethod
-        def h(X, nav=None):
-            return X @ H.T
-
-        @staticmethod
-        def H(nav=None):
-            return H
-
-    return A, H, Q, Proc, Model, rng
-
-
-def bench_ukf(n=16, m=3):
-    from filterpy.kalman import MerweScaledSigmaPoints
-    from filterpy.kalman import UnscentedKalmanFilter as FPUKF
-
-    from fednav.filters import FunctionModel, FunctionProcess, UnscentedKalmanFilter
-
-    A, H, Q, Proc, Model, rng = toy_models(n, m, 0)
-    R = 1e-2 * np.eye(m)
-    z = rng.standard_normal(m)
-
-    ours = UnscentedKalmanFilter(np.zeros(n), np.eye(n), alpha=1e-3)
-
-    def step_ours():
-        ours.predict(Proc)
-        ours.update(z, Model, R=R)
-
-    pts = MerweScaledSigmaPoints(n, alpha=1e-3, beta=2.0, kappa=0.0)
     ref = FPUKF(dim_x=n, dim_z=m, dt=1.0, hx=lambda x: H @ x,
-                fx=lambda x, dt: A @ x + 1e-3 * np.sin(x), points=pts)
+                fx=lambda x, dt: A @ x + 1e-3 * np.sin(x),
+                points=MerweScaledSigmaPoints(n, alpha=1e-3, beta=2.0, kappa=0.0))
     ref.Q, ref.R = Q, R
 
     def step_ref():
         ref.predict()
         ref.update(z)
+
+    return A, H, Q, R, z, Proc, LinearModel(H), step_ref
+
+
+def bench_ukf(n=16, m=3):
+    from fednav.filters import FunctionModel, FunctionProcess, UnscentedKalmanFilter
+
+    A, H, Q, R, z, Proc, Model, step_ref = toy_models(n, m, 0)
+    ours = UnscentedKalmanFilter(np.zeros(n), np.eye(n), alpha=1e-3)
+
+    def step_ours():
+        ours.predict(Proc)
+        ours.update(z, Model, R=R)
 
     # Per-point Python callbacks (FunctionProcess) for an apples-to-apples comparison too.
     ours_cb = UnscentedKalmanFilter(np.zeros(n), np.eye(n), alpha=1e-3)
@@ -116,31 +108,17 @@ def bench_ukf(n=16, m=3):
 def bench_simplified_ukf(n=15, m=6):
     """Paper 003's simplified UKF (linear measurement update) vs the full UKF and FilterPy,
     at the paper's augmented dimension (15) with a 6-component linear GNSS measurement."""
-    from filterpy.kalman import MerweScaledSigmaPoints
-    from filterpy.kalman import UnscentedKalmanFilter as FPUKF
-
     from fednav.filters import SimplifiedUKF, UnscentedKalmanFilter
 
     Hs = np.zeros((m, n))
     Hs[np.arange(m), np.arange(m)] = 1.0
-    A, H, Q, Proc, Model, rng = toy_models(n, m, 1, linear_h=Hs)
-    R = 1e-2 * np.eye(m)
-    z = rng.standard_normal(m)
+    A, H, Q, R, z, Proc, Model, step_ref = toy_models(n, m, 1, linear_h=Hs)
 
     def stepper(f):
         def step():
             f.predict(Proc)
             f.update(z, Model, R=R)
         return step
-
-    pts = MerweScaledSigmaPoints(n, alpha=1e-3, beta=2.0, kappa=0.0)
-    ref = FPUKF(dim_x=n, dim_z=m, dt=1.0, hx=lambda x: H @ x,
-                fx=lambda x, dt: A @ x + 1e-3 * np.sin(x), points=pts)
-    ref.Q, ref.R = Q, R
-
-    def step_ref():
-        ref.predict()
-        ref.update(z)
 
     t_s = best_of(stepper(SimplifiedUKF(np.zeros(n), np.eye(n))), 5, 300)
     t_f = best_of(stepper(UnscentedKalmanFilter(np.zeros(n), np.eye(n))), 5, 300)

@@ -53,3 +53,12 @@ def test_error_is_one_line(tmp_path):
     with pytest.raises(ConfigError) as e:
         load_scenario(p)
     assert "\n" not in str(e.value) and "more" in str(e.value)
+
+
+def test_fault_experiment_requires_detection_level(tmp_path):
+    d = yaml.safe_load(scenario_path("paper003").read_text())
+    d["filter"].pop("fdi_alpha")
+    p = tmp_path / "s.yaml"
+    p.write_text(yaml.safe_dump(d))
+    with pytest.raises(ConfigError, match="fdi_alpha"):
+        load_scenario(p)

@@ -59,3 +59,12 @@ def test_Qd_symmetric_psd():
     assert np.linalg.eigvalsh(p.Qd).min() > -1e-12 * np.abs(p.Qd).max()
     assert p.Qd[12, 12] == pytest.approx(
         2 * 1.0e-6 / 1800.0 * (1.0), rel=1e-2)  # (0.001 deg/h)^2 * 2/tau in (deg/h)^2
+
+
+def test_si_conversions_and_noise_density():
+    p = make_process()
+    Qc = p.Qc_si()
+    assert np.allclose(Qc, Qc.T) and Qc[12, 12] > 0  # Markov drift driving noise
+    P = np.diag(np.arange(1.0, 19.0))
+    np.testing.assert_allclose(np.diag(em.cov_to_si(P)), np.arange(1.0, 19.0) * em.SCALE**2)
+    np.testing.assert_allclose(em.from_si(em.to_si(np.ones(18))), 1.0)

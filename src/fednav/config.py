@@ -12,7 +12,7 @@ from typing import Literal
 
 import numpy as np
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from . import units
 from .error_model import ImuNoiseModel
@@ -231,6 +231,13 @@ class Scenario(_Model):
     faults: list[FaultConfig] = []
     fault_experiment: FaultExperimentConfig | None = None
     stats_period_s: float = Field(default=1.0, gt=0.0)
+
+    @model_validator(mode="after")
+    def _fault_experiment_needs_detection(self):
+        if self.fault_experiment is not None and self.filter.fdi_alpha is None:
+            raise ValueError("fault_experiment needs filter.fdi_alpha (the detection "
+                             "significance level)")
+        return self
 
     @property
     def duration(self) -> float:

@@ -17,7 +17,7 @@ from . import attitude as att
 from . import earth, units
 from . import error_model as em
 from .config import Scenario
-from .filters import FederatedFilter, KalmanFilter, make_filter
+from .filters import FederatedFilter, KalmanFilter, LinearModel, make_filter
 from .measurements import MODELS, NavSnapshot
 from .sensors import Barometer, MeasurementSeries, corrupt_imu, inject_faults
 from .strapdown import STATE_LLA, STATE_Q, STATE_VEL, Strapdown, quat_to_dcm_nb
@@ -89,7 +89,7 @@ def _initial_ins(scn: Scenario, truth, data: RunData) -> Strapdown:
     rm, rn = earth.radii(lat)
     dp = data.init_dp
     lla = np.array([lat + dp[1] / (rm + h), lon + dp[0] / ((rn + h) * np.cos(lat)), h + dp[2]])
-    C = att.apply_misalignment(truth.dcm[0], data.init_phi)
+    C = att.apply_misalignment(att.euler_to_dcm(truth.euler[0]), data.init_phi)
     baro = scn.sensors.baro.loop() if scn.sensors.baro is not None else None
     return Strapdown(lla, truth.vel[0] + data.init_dv, att.dcm_to_euler(C), truth.dt, baro)
 
@@ -160,7 +160,7 @@ def run_mode(scn: Scenario, aiding: list[str], data: RunData, mode: str = "",
     ins = _initial_ins(scn, truth, data)
     fed = _build_filter(scn, aiding, ftype) if aiding else None
     noise = scn.imu.noise_model(dt)
-    baro_gains = ins._gains[:2]
+    baro_gains = ins.baro_gains[:2]
     baro = scn.sensors.baro
     baro_q = baro.sigma_m**2 * baro.period_s if baro is not None else 0.0
     sched = {a: _schedule(data.series[a], T, n_cycles) for a in aiding}
@@ -218,7 +218,7 @@ def _result(scn, truth, n_per, states, mode, sigma, betas, log) -> RunResult:
                                        tl[:, 2])
     vel_err = vel - truth.vel[idx]
     C = att.quat_to_dcm(quat)
-    att_err = att.misalignment(truth.dcm[idx], C)
+    att_err = att.misalignment(att.euler_to_dcm(truth.euler[idx]), C)
     euler_err = att.euler_difference(att.dcm_to_euler(C), truth.euler[idx])
     keep = _stats_epochs(t, scn.stats_period_s)
     fdi = None
@@ -227,19 +227,6 @@ def _result(scn, truth, n_per, states, mode, sigma, betas, log) -> RunResult:
                                          "isolated"])
     return RunResult(mode, t[keep], pos_err[keep], vel_err[keep], att_err[keep], sigma[keep],
                      {k: v[keep] for k, v in betas.items()}, fdi, euler_err[keep])
-
-
-class _Linear:
-    """A linear measurement model ``y = H x`` in the filter interface."""
-
-    def __init__(self, H):
-        self.Hm = H
-
-    def h(self, X, nav=None):
-        return np.atleast_2d(X) @ self.Hm.T
-
-    def H(self, nav=None):
-        return self.Hm
 
 
 def total_state_models(scn: Scenario, T: float, dt: float):
@@ -287,7 +274,7 @@ def run_total_state(scn: Scenario, aiding: list[str], data: RunData, mode: str =
                           else f.sharing, fixed=f.fixed_factors, reset=True,
                           fdi_alpha=f.fdi_alpha, fdi_recovery=f.fdi_recovery)
     sched = {a: _schedule(data.series[a], T, n_cycles) for a in aiding}
-    models = {a: (TOTAL_MODELS[a], _Linear(TOTAL_MODELS[a].H)) for a in aiding}
+    models = {a: (TOTAL_MODELS[a], LinearModel(TOTAL_MODELS[a].H)) for a in aiding}
     states = np.empty((n_cycles, ins.state.size))
     var = np.full((n_cycles, em.N_STATES), np.nan)
     for k in range(n_cycles):

@@ -195,6 +195,11 @@ class Strapdown:
 
     # --- read access -------------------------------------------------------------
     @property
+    def baro_gains(self) -> np.ndarray:
+        """Vertical-loop gains [k1, k2, k3] (zeros without a baro loop)."""
+        return self._gains.copy()
+
+    @property
     def q(self) -> np.ndarray:
         return self.state[_Q].copy()
 

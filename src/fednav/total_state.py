@@ -195,7 +195,7 @@ class TotalStateUKF:
         T = self.ins.dt * len(dth)
         err = D[:, N_NAV:N_STATE] * BSCALE + D[:, N_STATE:]  # bias deviation + white noise
         _fly_coarse(chi, dth.sum(axis=0), dvc.sum(axis=0), np.ascontiguousarray(err), T,
-                    self.ins._gains)
+                    self.ins.baro_gains)
         dev = np.hstack([boxminus(chi, chi[0]), D[:, N_NAV:N_STATE] * self.decay])
         mean = self.Wm @ dev
         r = dev - mean

@@ -1,7 +1,7 @@
 """Estimators behind one interface (:class:`~fednav.filters.base.Filter`) and the
 federated filter that combines them."""
 
-from .base import Filter, FilterError, FunctionModel, FunctionProcess, Innovation
+from .base import Filter, FilterError, FunctionModel, FunctionProcess, Innovation, LinearModel
 from .federated import FederatedFilter, sharing_factors
 from .kf import KalmanFilter
 from .ukf import SimplifiedUKF, UnscentedKalmanFilter
@@ -23,5 +23,5 @@ def make_filter(name: str, x0, P0, **options) -> Filter:
 
 
 __all__ = ["FederatedFilter", "Filter", "FilterError", "FunctionModel", "FunctionProcess",
-           "Innovation", "KalmanFilter", "REGISTRY", "SimplifiedUKF", "UnscentedKalmanFilter",
-           "make_filter", "sharing_factors"]
+           "Innovation", "KalmanFilter", "LinearModel", "REGISTRY", "SimplifiedUKF",
+           "UnscentedKalmanFilter", "make_filter", "sharing_factors"]

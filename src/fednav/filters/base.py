@@ -22,7 +22,8 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
-from numpy.linalg import LinAlgError
+
+from ..kernels import cholesky_lower
 
 
 class FilterError(RuntimeError):
@@ -65,16 +66,32 @@ class FunctionModel:
         return self.Hmat
 
 
+@dataclass
+class LinearModel:
+    """A linear measurement model ``y = H x``, batched over the rows of X."""
+
+    Hmat: np.ndarray
+
+    def h(self, X, nav=None):
+        return np.atleast_2d(X) @ self.Hmat.T
+
+    def H(self, nav=None):
+        return self.Hmat
+
+
+def not_pd_error(P: np.ndarray, who: str) -> FilterError:
+    """The error for a covariance that is not positive definite (with its smallest
+    eigenvalue, for diagnosis)."""
+    ev = np.linalg.eigvalsh(0.5 * (P + P.T)) if np.all(np.isfinite(P)) else [np.nan]
+    return FilterError(f"{who}: covariance is not positive definite "
+                       f"(smallest eigenvalue {np.min(ev):.3g})")
+
+
 def chol(P: np.ndarray, who: str) -> np.ndarray:
     """Lower Cholesky factor of P, or a :class:`FilterError` naming ``who``."""
-    try:
-        L = np.linalg.cholesky(P)
-    except LinAlgError:
-        L = None
-    if L is None or not np.all(np.isfinite(L)):
-        ev = np.linalg.eigvalsh(0.5 * (P + P.T)) if np.all(np.isfinite(P)) else [np.nan]
-        raise FilterError(f"{who}: covariance is not positive definite "
-                          f"(smallest eigenvalue {np.min(ev):.3g})")
+    L, ok = cholesky_lower(np.ascontiguousarray(P, dtype=float))
+    if not ok:
+        raise not_pd_error(P, who)
     return L
 
 

@@ -34,7 +34,6 @@ from __future__ import annotations
 
 import numba
 import numpy as np
-from numpy.linalg import LinAlgError
 from scipy.stats import chi2
 
 from ..kernels import spd_inverse
@@ -55,19 +54,16 @@ def sharing_factors(covs: dict[str, np.ndarray], rule: str = "equal",
             raise ValueError("fixed sharing factors must be positive")
         return {k: fixed[k] / s for k in names}
     if rule == "adaptive":
-        tr = {k: np.trace(_inv_spd(P, k)) for k, P in covs.items()}
+        tr = {}
+        for k, P in covs.items():
+            Pinv, ok = spd_inverse(np.ascontiguousarray(P, dtype=float))
+            if not ok:
+                raise FilterError(f"adaptive sharing: covariance of '{k}' is not positive "
+                                  f"definite")
+            tr[k] = np.trace(Pinv)
         s = sum(tr.values())
         return {k: tr[k] / s for k in names}
     raise ValueError(f"unknown sharing rule '{rule}'; choose equal, fixed or adaptive")
-
-
-def _inv_spd(P, who):
-    try:
-        Linv = np.linalg.inv(np.linalg.cholesky(P))
-    except LinAlgError:
-        raise FilterError(f"federated fusion: covariance of '{who}' is not positive definite") \
-            from None
-    return Linv.T @ Linv
 
 
 @numba.njit(cache=True)

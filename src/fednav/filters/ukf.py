@@ -16,7 +16,7 @@ import numba
 import numpy as np
 
 from ..kernels import cholesky_lower
-from .base import Filter, FilterError, Innovation
+from .base import Filter, FilterError, Innovation, not_pd_error
 from .kf import KalmanFilter
 
 
@@ -90,9 +90,7 @@ class UnscentedKalmanFilter(Filter):
         P = self.P if P is None else np.asarray(P, dtype=float)
         X = _sigma_points(x, P, self.c)
         if X.shape[0] == 0:
-            ev = np.linalg.eigvalsh(0.5 * (P + P.T)) if np.all(np.isfinite(P)) else [np.nan]
-            raise FilterError(f"{self._who(phase)}: covariance is not positive definite "
-                              f"(smallest eigenvalue {np.min(ev):.3g})")
+            raise not_pd_error(P, self._who(phase))
         return X
 
     def predict(self, process, q_scale: float = 1.0) -> None:

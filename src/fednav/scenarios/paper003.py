@@ -101,7 +101,7 @@ def one_run(args):
         T = min(fe.duration_s, max_time or fe.duration_s)
         fdata = make_run_data(fscn, seed, T)
         mode = next(m for m in scn.modes if m.name == fe.mode)
-        alpha = scn.filter.fdi_alpha or 0.005
+        alpha = scn.filter.fdi_alpha  # required by the scenario validation
         for name, a in (("isolated", alpha), ("not_isolated", None)):
             s2 = fscn.model_copy(update={"filter": fscn.filter.model_copy(
                 update={"fdi_alpha": a})})
