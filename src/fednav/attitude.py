@@ -64,6 +64,10 @@ def euler_to_dcm(euler):
 def dcm_to_euler(C):
     """C_b^n -> Euler ``[pitch, roll, heading]``; heading in [0, 2*pi)."""
     C = np.asarray(C, dtype=float)
+    if C.ndim == 2:  # one attitude: plain floats (called once per filter epoch)
+        h = math.atan2(C[0, 1], C[1, 1])
+        return np.array([math.asin(min(1.0, max(-1.0, C[2, 1]))),
+                         math.atan2(-C[2, 0], C[2, 2]), h % TWO_PI])
     pitch = np.arcsin(np.clip(C[..., 2, 1], -1.0, 1.0))
     roll = np.arctan2(-C[..., 2, 0], C[..., 2, 2])
     heading = wrap_2pi(np.arctan2(C[..., 0, 1], C[..., 1, 1]))

@@ -137,6 +137,55 @@ def _fly_coarse(states, dth, dv, noise, T, gains):
         _run(states[i], a, b, T, nan, gains, o4, o3, o3)
 
 
+@numba.njit(cache=True)
+def _predict(state, dth, dv, h_ref, dt, gains, P, c, Lw, Wm, Wc, decay, Qb, tscale, bscale):
+    """The augmented-UKF time update (see the module docstring) in one compiled call.
+
+    Flies the sigma points (coarse step) and the full-rate navigation mean (``state`` in
+    place); returns (P, mean tangent correction (15,), ok)."""
+    n_s, n_w = P.shape[0], Lw.shape[0]
+    n = n_s + n_w
+    Lp, ok = cholesky_lower(c * P)
+    if not ok:
+        return P, np.zeros(n_s), False
+    L = np.zeros((n, n))  # blockdiag(P, Qw): factor the blocks separately
+    L[:n_s, :n_s] = Lp
+    L[n_s:, n_s:] = Lw
+    D = np.zeros((2 * n + 1, n))
+    D[1:n + 1] = L.T
+    D[n + 1:] = -L.T
+    chi = np.empty((2 * n + 1, state.shape[0]))
+    for i in range(2 * n + 1):
+        chi[i] = state
+    chi = _boxplus(chi, np.ascontiguousarray(D[:, :N_NAV]), tscale)
+    chi[:, 10:20] = 0.0  # coarse steps: no previous-sample coning/sculling terms
+    T = dt * dth.shape[0]
+    err = np.empty((2 * n + 1, N_BIAS))
+    for i in range(2 * n + 1):
+        for j in range(N_BIAS):  # bias deviation + white noise [SI]
+            err[i, j] = D[i, N_NAV + j] * bscale[j] + D[i, n_s + j]
+    dth_sum = np.zeros(3)
+    dv_sum = np.zeros(3)
+    for k in range(dth.shape[0]):
+        dth_sum += dth[k]
+        dv_sum += dv[k]
+    _fly_coarse(chi, dth_sum, dv_sum, err, T, gains)
+    dev = np.empty((2 * n + 1, n_s))
+    dev[:, :N_NAV] = _boxminus(chi, chi[0].copy(), tscale)
+    for i in range(2 * n + 1):
+        for j in range(N_BIAS):
+            dev[i, N_NAV + j] = D[i, N_NAV + j] * decay[j]
+    mean = Wm @ dev
+    r = dev - mean
+    Pn = (r * Wc.reshape(-1, 1)).T @ r
+    Pn[N_NAV:, N_NAV:] += Qb
+    Pn = 0.5 * (Pn + Pn.T)
+    o4 = np.empty((0, 4))
+    o3 = np.empty((0, 3))
+    _run(state, dth, dv, dt, h_ref, gains, o4, o3, o3)  # the navigation mean at full rate
+    return Pn, mean, True
+
+
 class TotalStateUKF:
     """Augmented UKF on the navigation state and IMU errors (see module docstring).
 
@@ -179,30 +228,21 @@ class TotalStateUKF:
     def predict(self, dtheta, dv, h_ref=None) -> None:
         """Time update over one interval of raw IMU increments (N, 3)."""
         self.step += 1
-        n = N_STATE + N_NOISE
-        Lp, ok = cholesky_lower(self.c * self.P)
+        dth, dvc = self.compensate(dtheta, dv)
+        n = len(dth)
+        h_ref = (np.full(n, np.nan) if h_ref is None or self.ins.baro is None
+                 else np.ascontiguousarray(h_ref, dtype=float))
+        P, mean, ok = _predict(self.ins.state, np.ascontiguousarray(dth),
+                               np.ascontiguousarray(dvc), h_ref, self.ins.dt,
+                               self.ins.baro_gains, self.P, self.c, self._Lw, self.Wm,
+                               self.Wc, self.decay, self.Qb, TSCALE, BSCALE)
         if not ok:
             raise FloatingPointError(f"{self.name} predict at step {self.step}: covariance is "
                                      f"not positive definite")
-        L = np.zeros((n, n))  # blockdiag(P, Qw): factor the blocks separately
-        L[:N_STATE, :N_STATE] = Lp
-        L[N_STATE:, N_STATE:] = self._Lw
-        D = np.vstack([np.zeros(n), L.T, -L.T])
-        dth, dvc = self.compensate(dtheta, dv)
-        start = self.ins.state.copy()
-        chi = boxplus(np.tile(start, (len(D), 1)), D[:, :N_NAV])
-        chi[:, 10:20] = 0.0  # coarse steps: no previous-sample coning/sculling terms
-        T = self.ins.dt * len(dth)
-        err = D[:, N_NAV:N_STATE] * BSCALE + D[:, N_STATE:]  # bias deviation + white noise
-        _fly_coarse(chi, dth.sum(axis=0), dvc.sum(axis=0), np.ascontiguousarray(err), T,
-                    self.ins.baro_gains)
-        dev = np.hstack([boxminus(chi, chi[0]), D[:, N_NAV:N_STATE] * self.decay])
-        mean = self.Wm @ dev
-        r = dev - mean
-        self.P = (r * self.Wc[:, None]).T @ r
-        self.P[N_NAV:, N_NAV:] += self.Qb
-        self.P = 0.5 * (self.P + self.P.T)
-        self.ins.run(dth, dvc, h_ref, record=False)  # the navigation mean at full IMU rate
+        if not np.isfinite(self.ins.state.sum() + P.sum()):
+            raise FloatingPointError(f"{self.name} predict at step {self.step}: state or "
+                                     f"covariance became NaN/inf")
+        self.P = P
         self.b *= self.decay
         self.apply(mean)
 
