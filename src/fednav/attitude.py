@@ -34,6 +34,9 @@ def wrap_2pi(a):
 def skew(v):
     """Skew-symmetric (cross-product) matrix ``[v x]``, shape (..., 3, 3)."""
     v = np.asarray(v, dtype=float)
+    if v.ndim == 1:  # one vector: plain floats
+        x, y, w = float(v[0]), float(v[1]), float(v[2])
+        return np.array([[0.0, -w, y], [w, 0.0, -x], [-y, x, 0.0]])
     z = np.zeros_like(v[..., 0])
     x, y, w = v[..., 0], v[..., 1], v[..., 2]
     return np.stack(

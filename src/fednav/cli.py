@@ -1,7 +1,8 @@
-"""Command line: ``fednav reproduce 002`` and friends."""
+"""Command line: ``fednav reproduce 002``, ``fednav process navego`` and friends."""
 
 from __future__ import annotations
 
+import json
 import os
 import time
 from pathlib import Path
@@ -11,7 +12,7 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
 
 from . import __version__
-from .config import ConfigError
+from .config import ConfigError, load_model
 
 app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="fednav — federated multi-sensor integrated navigation.")
@@ -62,6 +63,102 @@ def reproduce(
     files = mod.write_outputs(out, rep)
     console.print(f"wrote {', '.join(str(f) for f in files)} "
                   f"in {time.perf_counter() - t0:.1f} s")
+
+
+process_app = typer.Typer(no_args_is_help=True,
+                          help="Process real sensor data (INS/GNSS[/velocity], smoother).")
+app.add_typer(process_app, name="process")
+
+
+def _run_process(read, imu, gnss, velocity, ref, smooth, out, config) -> None:
+    from . import process_output
+    from .io import DataError
+    from .process import ProcessConfig, process
+
+    try:
+        cfg = ProcessConfig() if config is None else load_model(config, ProcessConfig,
+                                                                "processing config")
+        data = read(cfg)
+        res = process(data["imu"], data["gnss"], data["velocity"], cfg, smooth)
+        files = process_output.write(out, res, data["ref"], {
+            "imu": str(imu), "gnss": str(gnss),
+            "velocity": None if velocity is None else str(velocity),
+            "reference": None if ref is None else str(ref),
+            "config": None if config is None else str(config), "smooth": smooth})
+    except (ConfigError, DataError, ValueError) as e:
+        typer.echo(f"error: {e}", err=True)
+        raise typer.Exit(2) from None
+    s = json.loads(files[-1].read_text())
+    _print_process(s)
+    console.print(f"wrote {', '.join(str(f) for f in files)}")
+
+
+def _print_process(s: dict) -> None:
+    from rich.table import Table
+
+    console.print(f"{s['epochs']} filter epochs in {s['run_time_s']:.2f} s")
+    for name, c in s["consistency"].items():
+        console.print(f"  local '{name}': mean NIS/dof {c['nis_per_dof']:.2f}, isolated "
+                      f"{100 * c['isolated_fraction']:.1f} % of {c['measurements']}")
+    for key in ("rmse", "rmse_smoothed"):
+        if key in s:
+            tab = Table(title=f"{key.replace('_', ' ')} against the reference")
+            for k in s[key]:
+                tab.add_column(k, justify="right")
+            tab.add_row(*(f"{v:.3f}" for v in s[key].values()))
+            console.print(tab)
+
+
+_OUT = typer.Option(Path("results/process"), help="output folder")
+_SMOOTH = typer.Option(False, "--smooth", help="also run the RTS smoother")
+_CONFIG = typer.Option(None, help="processing config YAML (noise figures, options)")
+
+
+@process_app.command("navego")
+def process_navego(
+    imu: Path = typer.Option(..., help="NaveGo IMU .mat"),
+    gnss: Path = typer.Option(..., help="NaveGo GNSS .mat"),
+    visual: Path = typer.Option(None, help="NaveGo visual-odometry .mat (velocity)"),
+    ref: Path = typer.Option(None, help="NaveGo reference .mat (for RMSE)"),
+    smooth: bool = _SMOOTH, out: Path = _OUT, config: Path = _CONFIG,
+) -> None:
+    """Loosely coupled INS/GNSS (+ visual velocity) on NaveGo .mat files."""
+    from .io import (
+        read_navego_gnss,
+        read_navego_imu,
+        read_navego_reference,
+        read_navego_visual,
+    )
+
+    def read(cfg):
+        return {"imu": read_navego_imu(imu), "gnss": read_navego_gnss(gnss),
+                "velocity": None if visual is None else read_navego_visual(visual),
+                "ref": None if ref is None else read_navego_reference(ref)}
+
+    _run_process(read, imu, gnss, visual, ref, smooth, out, config)
+
+
+@process_app.command("csv")
+def process_csv(
+    imu: Path = typer.Option(..., help="IMU CSV (docs/data-formats.md)"),
+    gnss: Path = typer.Option(..., help="GNSS CSV"),
+    velocity: Path = typer.Option(None, help="velocity-sensor CSV"),
+    ref: Path = typer.Option(None, help="reference CSV (for RMSE)"),
+    smooth: bool = _SMOOTH, out: Path = _OUT, config: Path = _CONFIG,
+) -> None:
+    """Loosely coupled INS/GNSS (+ velocity sensor) on fednav CSV files; the IMU noise
+    figures and GNSS sigmas come from --config."""
+    from .io import read_gnss_csv, read_imu_csv, read_reference_csv, read_velocity_csv
+
+    def read(cfg):
+        g = read_gnss_csv(gnss, cfg.gnss_sigma_pos_m or (5.0, 5.0, 5.0),
+                          cfg.gnss_sigma_vel_mps or (0.1, 0.1, 0.1),
+                          cfg.gnss_lever_m or (0.0, 0.0, 0.0))
+        return {"imu": read_imu_csv(imu), "gnss": g,
+                "velocity": None if velocity is None else read_velocity_csv(velocity),
+                "ref": None if ref is None else read_reference_csv(ref)}
+
+    _run_process(read, imu, gnss, velocity, ref, smooth, out, config)
 
 
 @app.command()

@@ -282,24 +282,32 @@ def _format_error(e: dict) -> str:
     return f"key '{loc}': {msg}"
 
 
-def load_scenario(path: str | Path) -> Scenario:
-    """Read and validate a scenario YAML file (errors: :class:`ConfigError`, one line)."""
+def load_model(path: str | Path, model: type[BaseModel], what: str = "scenario"):
+    """Read a YAML file into the pydantic ``model`` (errors: :class:`ConfigError`, one line
+    naming the file and the key)."""
     path = Path(path)
     try:
         text = path.read_text()
     except FileNotFoundError:
-        raise ConfigError(f"scenario file {path}: not found") from None
+        raise ConfigError(f"{what} file {path}: not found") from None
     try:
         data = yaml.safe_load(text)
     except yaml.YAMLError as e:
-        raise ConfigError(f"scenario file {path}: not valid YAML ({str(e).splitlines()[0]})") \
+        raise ConfigError(f"{what} file {path}: not valid YAML ({str(e).splitlines()[0]})") \
             from None
+    if data is None:
+        data = {}
     if not isinstance(data, dict):
-        raise ConfigError(f"scenario file {path}: expected a mapping at the top level")
+        raise ConfigError(f"{what} file {path}: expected a mapping at the top level")
     try:
-        return Scenario.model_validate(data)
+        return model.model_validate(data)
     except ValidationError as e:
         # An unknown key is usually a misspelt one: report it before the "missing" it causes.
         errs = sorted(e.errors(), key=lambda x: x["type"] != "extra_forbidden")
         more = f" (and {len(errs) - 1} more)" if len(errs) > 1 else ""
-        raise ConfigError(f"scenario file {path}: {_format_error(errs[0])}{more}") from None
+        raise ConfigError(f"{what} file {path}: {_format_error(errs[0])}{more}") from None
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    """Read and validate a scenario YAML file (errors: :class:`ConfigError`, one line)."""
+    return load_model(path, Scenario, "scenario")

@@ -8,7 +8,7 @@ its Jacobian ``H(nav)``.  Residual units: metres for positions, arc-minutes for 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 
 import numba
@@ -28,6 +28,8 @@ class NavSnapshot:
     lla: np.ndarray
     vel: np.ndarray
     C: np.ndarray
+    omega_b: np.ndarray | None = None  # body angular rate w_ib [rad/s] (lever-arm terms)
+    lever_cache: dict = field(default_factory=dict, repr=False, compare=False)
 
     @cached_property
     def euler(self) -> np.ndarray:
@@ -135,31 +137,88 @@ class BaroHeight:
         return np.diag(np.asarray(sigma, dtype=float) ** 2)
 
 
+def _lever_terms(nav: NavSnapshot, lever) -> tuple[np.ndarray, np.ndarray]:
+    """Lever-arm offsets in ENU of a sensor at ``lever`` (body, m): position ``C l`` [m]
+    and velocity ``C (w_ib x l)`` [m/s] (the ``w_in x C l`` term, < 1e-4 m/s per metre of
+    lever, is left out)."""
+    key = id(lever)
+    if key not in nav.lever_cache:
+        lx, ly, lz = lever
+        wx, wy, wz = (0.0, 0.0, 0.0) if nav.omega_b is None else nav.omega_b
+        wl = np.array([wy * lz - wz * ly, wz * lx - wx * lz, wx * ly - wy * lx])
+        nav.lever_cache[key] = (nav.C @ lever, nav.C @ wl, lever)  # keep lever alive
+    return nav.lever_cache[key][:2]
+
+
 class GnssPosVel:
-    """GNSS position and velocity: residual = INS - GNSS, ``[dE, dN, dU] m, [dvE, dvN, dvU]``."""
+    """GNSS position and velocity of an antenna at ``lever`` (body right-forward-up, m)
+    from the IMU: residual = INS-derived antenna - GNSS, ``[dE, dN, dU] m, [dvE, dvN, dvU]``.
+
+    The INS-derived antenna position is ``p + C l``; with ``C_hat = exp(-[phi x]) C`` its
+    error is ``dp + [(C l) x] phi`` (and likewise ``[(C (w x l)) x] phi`` for the
+    velocity), so a lever arm makes attitude observable from GNSS (tested numerically)."""
 
     kind = "gnss"
     dim = 6
     _cols = np.array([6, 7, 8, 3, 4, 5])
 
+    def __init__(self, lever=(0.0, 0.0, 0.0)):
+        self.lever = np.asarray(lever, dtype=float)
+        self._has_lever = bool(np.any(self.lever))
+
     def residual(self, nav: NavSnapshot, z) -> np.ndarray:
         lat, lon, h = nav.lla
         rm, rn = earth.radii(lat)
         v = nav.vel
-        return np.array([(lon - z[1]) * (rn + h) * np.cos(lat), (lat - z[0]) * (rm + h),
-                         h - z[2], v[0] - z[3], v[1] - z[4], v[2] - z[5]])
+        r = np.array([(lon - z[1]) * (rn + h) * np.cos(lat), (lat - z[0]) * (rm + h),
+                      h - z[2], v[0] - z[3], v[1] - z[4], v[2] - z[5]])
+        if self._has_lever:
+            dp, dv = _lever_terms(nav, self.lever)
+            r[:3] += dp
+            r[3:] += dv
+        return r
 
     def h(self, X, nav: NavSnapshot) -> np.ndarray:
-        return np.atleast_2d(X)[:, self._cols]
+        return np.atleast_2d(X) @ self.H(nav).T
 
     def H(self, nav: NavSnapshot) -> np.ndarray:
         H = np.zeros((6, N_STATES))
         H[np.arange(6), self._cols] = 1.0
+        if self._has_lever:
+            dp, dv = _lever_terms(nav, self.lever)
+            H[0:3, PHI] = att.skew(dp) * ARCMIN
+            H[3:6, PHI] = att.skew(dv) * ARCMIN
         return H
 
     def R(self, sigma) -> np.ndarray:
         s = np.asarray(sigma, dtype=float)  # [north, east, up m, vE, vN, vU], as z
         return np.diag(s[[1, 0, 2, 3, 4, 5]] ** 2)
+
+
+class VelocityENU:
+    """A velocity sensor (visual odometry, DVL ...) at ``lever`` (body, m): residual =
+    INS-derived sensor velocity - measured, ENU [m/s]; ``R`` is the sensor's covariance."""
+
+    kind = "velocity"
+    dim = 3
+
+    def __init__(self, lever=(0.0, 0.0, 0.0)):
+        self.lever = np.asarray(lever, dtype=float)
+
+    def residual(self, nav: NavSnapshot, z) -> np.ndarray:
+        return nav.vel + _lever_terms(nav, self.lever)[1] - np.asarray(z, dtype=float)
+
+    def h(self, X, nav: NavSnapshot) -> np.ndarray:
+        return np.atleast_2d(X) @ self.H(nav).T
+
+    def H(self, nav: NavSnapshot) -> np.ndarray:
+        H = np.zeros((3, N_STATES))
+        H[:, 3:6] = np.eye(3)
+        H[:, PHI] = att.skew(_lever_terms(nav, self.lever)[1]) * ARCMIN
+        return H
+
+    def R(self, cov) -> np.ndarray:
+        return np.asarray(cov, dtype=float)
 
 
 MODELS = {m.kind: m for m in (StarAttitude(), SarFix(), BaroHeight(), GnssPosVel())}

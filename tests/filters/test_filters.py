@@ -9,6 +9,7 @@ from fednav.filters import (
     FunctionModel,
     FunctionProcess,
     KalmanFilter,
+    LinearModel,
     UnscentedKalmanFilter,
     make_filter,
     sharing_factors,
@@ -286,3 +287,17 @@ def test_fdi_recovery_needs_consecutive_passes():
     assert iso == [False, True, True, True, True, True, False, False]
     with pytest.raises(ValueError, match="fdi_recovery"):
         FederatedFilter({"a": KalmanFilter(np.zeros(1), np.eye(1))}, fdi_recovery=0)
+
+
+def test_fdi_level_per_local_filter():
+    """Detection on one local filter only: the other applies every measurement."""
+    f = {k: KalmanFilter(np.zeros(2), np.eye(2)) for k in ("a", "b")}
+    fed = FederatedFilter(f, sharing="equal", fdi_alpha={"b": 0.01})
+    model = LinearModel(np.eye(2))
+    big = np.array([50.0, -50.0])  # far outside the 1-sigma prior
+    assert fed.update("a", big, model, R=np.eye(2) * 0.01).accepted
+    assert not fed.update("b", big, model, R=np.eye(2) * 0.01).accepted
+    assert np.isnan(fed.threshold(2, "a"))
+    assert fed.threshold(2, "b") == pytest.approx(9.21, abs=0.01)
+    with pytest.raises(ValueError, match="'c', which is not a local filter"):
+        FederatedFilter(f, fdi_alpha={"c": 0.01})

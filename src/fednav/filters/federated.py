@@ -19,7 +19,8 @@ information each filter gained.  With fusion-reset and a linear model the federa
 estimate equals the centralized Kalman filter (tested).
 
 Fault detection and isolation (paper 003, section 2.3), available to every local filter
-of every configuration: with ``fdi_alpha`` set, each local measurement's statistic
+of every configuration: with ``fdi_alpha`` set (one level for all local filters, or a
+dict by local filter name), each local measurement's statistic
 ``T = r' S^-1 r`` (``r`` the residual against the filter's prediction, ``S`` its
 covariance) is compared with the chi-square quantile ``chi2.ppf(1 - alpha, m)``; above
 it, the local filter's measurement is left out (the filter is isolated for that epoch)
@@ -91,7 +92,7 @@ class FederatedFilter:
 
     def __init__(self, locals: dict[str, Filter], master: Filter | None = None,
                  sharing: str = "adaptive", fixed: dict[str, float] | None = None,
-                 reset: bool = True, fdi_alpha: float | None = None,
+                 reset: bool = True, fdi_alpha: float | dict[str, float] | None = None,
                  fdi_recovery: int = 1):
         if not locals:
             raise ValueError("federated filter needs at least one local filter")
@@ -109,14 +110,22 @@ class FederatedFilter:
         self.x = first.x.copy()
         self.P = first.P.copy()
         self.isolated: set[str] = set()
-        if fdi_alpha is not None and not 0.0 < fdi_alpha < 1.0:
-            raise ValueError(f"fdi_alpha must be in (0, 1), got {fdi_alpha}")
+        alphas = (dict(fdi_alpha) if isinstance(fdi_alpha, dict)
+                  else dict.fromkeys(self.locals, fdi_alpha))
+        for k, a in alphas.items():
+            if k not in self.locals:
+                raise ValueError(f"fdi_alpha given for '{k}', which is not a local filter "
+                                 f"(have {list(self.locals)})")
+            if a is not None and not 0.0 < a < 1.0:
+                raise ValueError(f"fdi_alpha must be in (0, 1), got {a} for '{k}'")
+        #: Chi-square test level per local filter (None: no detection for that filter).
+        self.fdi_alphas = {k: alphas.get(k) for k in self.locals}
         self.fdi_alpha = fdi_alpha
         if fdi_recovery < 1:
             raise ValueError(f"fdi_recovery must be >= 1, got {fdi_recovery}")
         self.fdi_recovery = fdi_recovery
         self._passes = dict.fromkeys(self.locals, fdi_recovery)  # consecutive passes
-        self._thresholds: dict[int, float] = {}
+        self._thresholds: dict[tuple, float] = {}
         #: One entry per local measurement: t, local, statistic, dof, threshold, isolated.
         self.log: list[tuple] = []
         if reset:
@@ -138,13 +147,16 @@ class FederatedFilter:
         for k, f in self.filters.items():
             f.predict(process, q_scale=1.0 / self.beta[k] if self.reset else 1.0)
 
-    def threshold(self, dof: int) -> float:
-        """Chi-square detection threshold for ``dof`` measurement components (NaN if off)."""
-        if self.fdi_alpha is None:
+    def threshold(self, dof: int, local: str | None = None) -> float:
+        """Chi-square detection threshold for ``dof`` measurement components of local filter
+        ``local`` (default: the first), NaN where detection is off."""
+        alpha = self.fdi_alphas[local if local is not None else next(iter(self.locals))]
+        if alpha is None:
             return float("nan")
-        if dof not in self._thresholds:
-            self._thresholds[dof] = float(chi2.ppf(1.0 - self.fdi_alpha, dof))
-        return self._thresholds[dof]
+        key = (dof, alpha)
+        if key not in self._thresholds:
+            self._thresholds[key] = float(chi2.ppf(1.0 - alpha, dof))
+        return self._thresholds[key]
 
     def update(self, local: str, y, model, nav=None, R=None, t: float = float("nan")):
         """Measurement update of local filter ``local`` (at time ``t``, for the log), with
@@ -155,8 +167,8 @@ class FederatedFilter:
             raise ValueError(f"no local filter named '{local}' (have {list(self.locals)})") \
                 from None
         dof = len(np.atleast_1d(y))
-        thr = self.threshold(dof)
-        if self.fdi_alpha is None:
+        thr = self.threshold(dof, local)
+        if self.fdi_alphas[local] is None:
             inn = f.update(y, model, nav, R)
         elif self._passes[local] + 1 < self.fdi_recovery:
             # Recently isolated: test only, and come back after fdi_recovery passes in a row.

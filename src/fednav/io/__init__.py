@@ -1,0 +1,25 @@
+"""Readers for real sensor data: NaveGo ``.mat`` structs and fednav's plain CSV layout.
+
+Everything is converted at the boundary into fednav's frames and units (see
+``docs/conventions.md`` and ``docs/data-formats.md``): body right-forward-up, ENU
+velocities, heading from north toward east, SI units.  A bad file raises
+:class:`DataError` with one line naming the file and the field.
+"""
+
+from .csvdata import read_gnss_csv, read_imu_csv, read_reference_csv, read_velocity_csv
+from .data import DataError, GnssData, ImuData, ImuErrors, Reference, VelocityData
+from .navego import (
+    FRD_TO_RFU,
+    navego_euler_to_fednav,
+    read_navego_gnss,
+    read_navego_imu,
+    read_navego_reference,
+    read_navego_visual,
+)
+
+__all__ = [
+    "DataError", "FRD_TO_RFU", "GnssData", "ImuData", "ImuErrors", "Reference",
+    "VelocityData", "navego_euler_to_fednav", "read_gnss_csv", "read_imu_csv",
+    "read_navego_gnss", "read_navego_imu", "read_navego_reference", "read_navego_visual",
+    "read_reference_csv", "read_velocity_csv",
+]

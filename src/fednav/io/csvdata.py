@@ -1,0 +1,109 @@
+"""fednav's plain CSV layout for IMU, GNSS, velocity and reference data.
+
+One header row; column names carry their unit; body axes right-forward-up, ENU
+velocities, degrees for latitude/longitude/angles (the edge convention of the CLI).
+The layouts are documented in ``docs/data-formats.md``:
+
+* IMU: ``t_s, gyro_x_radps, gyro_y_radps, gyro_z_radps, accel_x_mps2, accel_y_mps2,
+  accel_z_mps2``;
+* GNSS: ``t_s, lat_deg, lon_deg, h_m`` [``, vE_mps, vN_mps, vU_mps``];
+* velocity: ``t_s, vE_mps, vN_mps, vU_mps, sigma_vE_mps, sigma_vN_mps, sigma_vU_mps``;
+* reference: ``t_s, lat_deg, lon_deg, h_m, vE_mps, vN_mps, vU_mps``
+  [``, pitch_deg, roll_deg, heading_deg``].
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from .. import units
+from .data import DataError, GnssData, ImuData, Reference, VelocityData, check_time
+
+IMU_COLUMNS = ("t_s", "gyro_x_radps", "gyro_y_radps", "gyro_z_radps", "accel_x_mps2",
+               "accel_y_mps2", "accel_z_mps2")
+POS_COLUMNS = ("lat_deg", "lon_deg", "h_m")
+VEL_COLUMNS = ("vE_mps", "vN_mps", "vU_mps")
+VEL_SIGMA_COLUMNS = ("sigma_vE_mps", "sigma_vN_mps", "sigma_vU_mps")
+EULER_COLUMNS = ("pitch_deg", "roll_deg", "heading_deg")
+
+
+def _read(path, kind: str, required: tuple) -> tuple[str, pd.DataFrame]:
+    path = Path(path)
+    if not path.is_file():
+        raise DataError(f"{kind} file {path}: not found")
+    try:
+        df = pd.read_csv(path, skipinitialspace=True)
+    except Exception as e:  # pandas raises several types for unreadable content
+        raise DataError(f"{kind} file {path}: not a readable CSV file ({e})") from None
+    src = str(path)
+    missing = [c for c in required if c not in df.columns]
+    if missing:
+        raise DataError(f"{src}: missing column(s) {', '.join(missing)} "
+                        f"(have {', '.join(map(str, df.columns))})")
+    for c in df.columns:
+        if c in required or c in VEL_COLUMNS + EULER_COLUMNS + VEL_SIGMA_COLUMNS:
+            v = pd.to_numeric(df[c], errors="coerce")
+            bad = v.isna().to_numpy()
+            if bad.any():
+                raise DataError(f"{src}: column '{c}' has a missing or non-numeric value "
+                                f"at data row {int(np.argmax(bad)) + 1}")
+            df[c] = v
+    check_time(src, df["t_s"].to_numpy(dtype=float), "t_s")
+    return src, df
+
+
+def _cols(df, names) -> np.ndarray:
+    return df[list(names)].to_numpy(dtype=float)
+
+
+def _has(df, names) -> bool:
+    return all(c in df.columns for c in names)
+
+
+def read_imu_csv(path) -> ImuData:
+    """IMU CSV (rates in rad/s, specific force in m/s^2, body right-forward-up)."""
+    src, df = _read(path, "IMU", IMU_COLUMNS)
+    return ImuData(src, df["t_s"].to_numpy(float), _cols(df, IMU_COLUMNS[1:4]),
+                   _cols(df, IMU_COLUMNS[4:7]))
+
+
+def _lla(df) -> np.ndarray:
+    p = _cols(df, POS_COLUMNS)
+    return np.column_stack([units.deg(p[:, 0]), units.deg(p[:, 1]), p[:, 2]])
+
+
+def read_gnss_csv(path, sigma_pos=(5.0, 5.0, 5.0), sigma_vel=(0.1, 0.1, 0.1),
+                  lever=(0.0, 0.0, 0.0)) -> GnssData:
+    """GNSS CSV; the noise figures [north, east, up] m / [E, N, U] m/s and the antenna
+    lever arm (body right-forward-up, m) come from the caller (the processing config)."""
+    src, df = _read(path, "GNSS", ("t_s",) + POS_COLUMNS)
+    vel = _cols(df, VEL_COLUMNS) if _has(df, VEL_COLUMNS) else None
+    return GnssData(src, df["t_s"].to_numpy(float), _lla(df), vel, np.asarray(sigma_pos),
+                    np.asarray(sigma_vel), np.asarray(lever))
+
+
+def read_velocity_csv(path, lever=(0.0, 0.0, 0.0)) -> VelocityData:
+    """Velocity CSV (ENU m/s with per-axis 1-sigma)."""
+    src, df = _read(path, "velocity", ("t_s",) + VEL_COLUMNS + VEL_SIGMA_COLUMNS)
+    sig = _cols(df, VEL_SIGMA_COLUMNS)
+    cov = np.zeros((len(df), 3, 3))
+    cov[:, np.arange(3), np.arange(3)] = sig**2
+    return VelocityData(src, df["t_s"].to_numpy(float), _cols(df, VEL_COLUMNS), cov,
+                        np.asarray(lever))
+
+
+def read_reference_csv(path) -> Reference:
+    """Reference trajectory CSV (attitude columns optional)."""
+    src, df = _read(path, "reference", ("t_s",) + POS_COLUMNS + VEL_COLUMNS)
+    euler = units.deg(_cols(df, EULER_COLUMNS)) if _has(df, EULER_COLUMNS) else None
+    return Reference(src, df["t_s"].to_numpy(float), _lla(df), _cols(df, VEL_COLUMNS), euler)
+
+
+def write_csv(path, columns: dict[str, np.ndarray]) -> Path:
+    """Write named columns as a CSV file (used for solutions and for tests)."""
+    path = Path(path)
+    pd.DataFrame(columns).to_csv(path, index=False, float_format="%.10g")
+    return path

@@ -1,0 +1,187 @@
+"""Real-data processing pipeline on simulated data with known truth (fednav's generator),
+and the ``fednav process`` command line."""
+
+import json
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from fednav import earth, units
+from fednav.cli import app
+from fednav.io.csvdata import IMU_COLUMNS, write_csv
+from fednav.io.data import GnssData, ImuData, ImuErrors, Reference
+from fednav.process import ProcessConfig, coarse_level, errors_against, process, rmse
+from fednav.sensors import ImuErrors as SimImuErrors
+from fednav.sensors import corrupt_imu
+from fednav.trajectory import Segment, generate
+
+LEVER = np.array([0.6, -1.2, 0.4])  # antenna: right, aft, up of the IMU [m]
+
+
+def make_flight():
+    """A 240 s drive with turns, 100 Hz IMU, 5 Hz GNSS at an antenna lever arm."""
+    segs = [Segment(20.0), Segment(10.0, accel=1.0), Segment(30.0, heading_rate=units.deg(3)),
+            Segment(40.0), Segment(30.0, heading_rate=units.deg(-4)), Segment(10.0, accel=-0.5),
+            Segment(50.0, heading_rate=units.deg(2)), Segment(50.0)]
+    truth = generate(np.array([units.deg(45.0), units.deg(-75.0), 50.0]), 7.0,
+                     [0.0, 0.0, units.deg(45.0)], segs, 0.01)
+    rng = np.random.default_rng(7)
+    sim = SimImuErrors(gyro_bias=units.deg_per_h(50.0), accel_bias=units.milli_g(2.0),
+                       gyro_arw=units.deg_per_sqrt_h(0.2), accel_vrw=1e-3)
+    dth, dv, _ = corrupt_imu(truth.dtheta, truth.dv, truth.dt, sim, rng)
+    errs = ImuErrors(*[np.full(3, v) for v in (units.deg_per_sqrt_h(0.2), 1e-3,
+                                               units.deg_per_h(50.0), units.milli_g(2.0),
+                                               1e-6, 1e-5, 1000.0, 1000.0)])
+    imu = ImuData("sim-imu", truth.t[1:], dth / truth.dt, dv / truth.dt, errs,
+                  truth.euler[1] + units.deg(np.array([0.5, -0.5, 2.0])),
+                  units.deg(np.array([1.0, 1.0, 3.0])))
+    tg = np.arange(0.2, truth.t[-1], 0.2)
+    tr = truth.at(tg)
+    from fednav import attitude as att
+
+    C = att.euler_to_dcm(tr["euler"])
+    d = C @ LEVER
+    rm, rn = earth.radii(tr["lla"][:, 0])
+    ant = tr["lla"] + np.column_stack([d[:, 1] / (rm + tr["lla"][:, 2]),
+                                       d[:, 0] / ((rn + tr["lla"][:, 2]) *
+                                                  np.cos(tr["lla"][:, 0])), d[:, 2]])
+    # antenna velocity v + C (w_ib x l), body rate from the true increments
+    k = np.rint(tg / truth.dt).astype(int)
+    w = truth.dtheta[k - 1] / truth.dt
+    vant = tr["vel"] + np.einsum("kij,kj->ki", C, np.cross(w, LEVER))
+    sp, sv = 1.0, 0.05
+    noise_p = rng.standard_normal((len(tg), 3)) * sp
+    ant[:, 0] += noise_p[:, 0] / (rm + tr["lla"][:, 2])
+    ant[:, 1] += noise_p[:, 1] / ((rn + tr["lla"][:, 2]) * np.cos(tr["lla"][:, 0]))
+    ant[:, 2] += noise_p[:, 2]
+    vant += rng.standard_normal((len(tg), 3)) * sv
+    gnss = GnssData("sim-gnss", tg, ant, vant, np.full(3, sp), np.full(3, sv), LEVER)
+    ref = Reference("truth", truth.t, truth.lla, truth.vel, truth.euler)
+    return imu, gnss, ref
+
+
+@pytest.fixture(scope="module")
+def flight():
+    return make_flight()
+
+
+@pytest.fixture(scope="module")
+def result(flight):
+    imu, gnss, _ = flight
+    return process(imu, gnss, None, ProcessConfig(), smooth=True)
+
+
+def test_forward_filter_tracks_the_truth(flight, result):
+    e = errors_against(result.forward, flight[2])
+    r = rmse(e)
+    assert max(r["north_m"], r["east_m"], r["down_m"]) < 0.3
+    assert max(r["vn_mps"], r["ve_mps"], r["vd_mps"]) < 0.03
+    assert r["roll_deg"] < 0.15 and r["pitch_deg"] < 0.15
+    # heading starts 2 deg off and converges once the vehicle accelerates and turns
+    late = rmse({k: v[e["t"] > 60] for k, v in e.items()})
+    assert late["yaw_deg"] < 0.4
+
+
+def test_smoother_improves_position_velocity_and_attitude(flight, result):
+    f = rmse(errors_against(result.forward, flight[2]))
+    s = rmse(errors_against(result.smoothed, flight[2]))
+    for k in ("north_m", "east_m", "down_m", "vn_mps", "ve_mps", "roll_deg", "pitch_deg"):
+        assert s[k] < f[k], k
+
+
+def test_filter_is_consistent(result):
+    from fednav.process_output import consistency
+
+    c = consistency(result.forward)["gnss"]
+    assert 0.6 < c["nis_per_dof"] < 1.6
+
+
+def test_ignoring_the_lever_arm_costs_accuracy(flight, result):
+    """End-to-end check of the lever-arm sign: zero lever -> clearly worse position."""
+    imu, gnss, ref = flight
+    wrong = process(imu, gnss, None, ProcessConfig(gnss_lever_m=(0.0, 0.0, 0.0)))
+    good = rmse(errors_against(result.forward, ref))
+    bad = rmse(errors_against(wrong.forward, ref))
+    assert bad["north_m"] + bad["east_m"] > 1.5 * (good["north_m"] + good["east_m"])
+
+
+def test_coarse_levelling_signs():
+    # nose up by 5 deg: gravity reaction tilts toward +y (forward) in the body frame
+    g = 9.8
+    f = [0.0, g * np.sin(units.deg(5.0)), g * np.cos(units.deg(5.0))]
+    np.testing.assert_allclose(units.to_deg(coarse_level(f)[:2]), [5.0, 0.0], atol=1e-9)
+    f = [-g * np.sin(units.deg(4.0)), 0.0, g * np.cos(units.deg(4.0))]  # right wing down
+    np.testing.assert_allclose(units.to_deg(coarse_level(f)[:2]), [0.0, 4.0], atol=1e-9)
+
+
+def test_cli_process_csv_end_to_end(tmp_path, flight):
+    imu, gnss, ref = flight
+    cols = {"t_s": imu.t}
+    for j, c in enumerate(IMU_COLUMNS[1:4]):
+        cols[c] = imu.gyro[:, j]
+    for j, c in enumerate(IMU_COLUMNS[4:7]):
+        cols[c] = imu.accel[:, j]
+    write_csv(tmp_path / "imu.csv", cols)
+    write_csv(tmp_path / "gnss.csv", {
+        "t_s": gnss.t, "lat_deg": units.to_deg(gnss.lla[:, 0]),
+        "lon_deg": units.to_deg(gnss.lla[:, 1]), "h_m": gnss.lla[:, 2],
+        "vE_mps": gnss.vel[:, 0], "vN_mps": gnss.vel[:, 1], "vU_mps": gnss.vel[:, 2]})
+    write_csv(tmp_path / "ref.csv", {
+        "t_s": ref.t, "lat_deg": units.to_deg(ref.lla[:, 0]),
+        "lon_deg": units.to_deg(ref.lla[:, 1]), "h_m": ref.lla[:, 2],
+        "vE_mps": ref.vel[:, 0], "vN_mps": ref.vel[:, 1], "vU_mps": ref.vel[:, 2],
+        "pitch_deg": units.to_deg(ref.euler[:, 0]), "roll_deg": units.to_deg(ref.euler[:, 1]),
+        "heading_deg": units.to_deg(ref.euler[:, 2])})
+    e = imu.errors
+    (tmp_path / "cfg.yaml").write_text(
+        f"imu: {{gyro_arw_rad_sqrt_s: {e.gyro_arw[0]}, accel_vrw_mps_sqrt_s: "
+        f"{e.accel_vrw[0]}, gyro_bias_radps: {e.gyro_bias[0]}, accel_bias_mps2: "
+        f"{e.accel_bias[0]}, gyro_markov_radps: 1.0e-6, accel_markov_mps2: 1.0e-5, "
+        f"gyro_tau_s: 1000, accel_tau_s: 1000}}\n"
+        f"gnss_sigma_pos_m: [1, 1, 1]\ngnss_sigma_vel_mps: [0.05, 0.05, 0.05]\n"
+        f"gnss_lever_m: [{LEVER[0]}, {LEVER[1]}, {LEVER[2]}]\ninitial_attitude: coarse\n"
+        f"coarse_heading_deg: 46\n")
+    out = tmp_path / "out"
+    res = CliRunner().invoke(app, ["process", "csv", "--imu", str(tmp_path / "imu.csv"),
+                                   "--gnss", str(tmp_path / "gnss.csv"), "--ref",
+                                   str(tmp_path / "ref.csv"), "--smooth", "--out", str(out),
+                                   "--config", str(tmp_path / "cfg.yaml")])
+    assert res.exit_code == 0, res.output
+    s = json.loads((out / "summary.json").read_text())
+    assert set(s["rmse"]) == {"north_m", "east_m", "down_m", "vn_mps", "ve_mps", "vd_mps",
+                              "roll_deg", "pitch_deg", "yaw_deg"}
+    assert s["rmse"]["north_m"] < 1.0 and s["run_time_s"] > 0
+    assert (out / "solution.csv").is_file() and (out / "solution_smoothed.csv").is_file()
+    assert (out / "errors.png").is_file()
+
+
+@pytest.mark.parametrize(("cfg", "message"), [
+    ("imu: {gyro_arw: 1}\n", "key 'imu.gyro_arw': unknown key"),
+    ("fdi_alpha: {gps: 0.01}\n", "unknown local filter"),
+])
+def test_cli_bad_config_is_one_line(tmp_path, flight, cfg, message):
+    imu, gnss, _ = flight
+    (tmp_path / "cfg.yaml").write_text(cfg)
+    cols = {"t_s": imu.t[:500]}
+    for j, c in enumerate(IMU_COLUMNS[1:]):
+        cols[c] = (imu.gyro if j < 3 else imu.accel)[:500, j % 3]
+    write_csv(tmp_path / "imu.csv", cols)
+    write_csv(tmp_path / "gnss.csv", {
+        "t_s": gnss.t[:20], "lat_deg": units.to_deg(gnss.lla[:20, 0]),
+        "lon_deg": units.to_deg(gnss.lla[:20, 1]), "h_m": gnss.lla[:20, 2],
+        "vE_mps": gnss.vel[:20, 0], "vN_mps": gnss.vel[:20, 1], "vU_mps": gnss.vel[:20, 2]})
+    res = CliRunner().invoke(app, ["process", "csv", "--imu", str(tmp_path / "imu.csv"),
+                                   "--gnss", str(tmp_path / "gnss.csv"), "--out",
+                                   str(tmp_path / "o"), "--config", str(tmp_path / "cfg.yaml")])
+    assert res.exit_code == 2
+    assert message in res.output and "Traceback" not in res.output
+
+
+def test_csv_without_noise_figures_names_the_key(tmp_path, flight):
+    imu, gnss, _ = flight
+    bare = ImuData("bare.csv", imu.t, imu.gyro, imu.accel)
+    from fednav.io import DataError
+
+    with pytest.raises(DataError, match="bare.csv: no IMU error figures.*imu.gyro_arw"):
+        process(bare, gnss)
