@@ -16,7 +16,17 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 
 from . import units
 from .error_model import ImuNoiseModel
-from .sensors import Barometer, Fault, Gnss, ImuErrors, SarMatcher, StarSensor
+from .sensors import (
+    Barometer,
+    Fault,
+    Gnss,
+    ImuErrors,
+    Latency,
+    SarMatcher,
+    SarVelocity,
+    StarSensor,
+    measurement_times,
+)
 from .strapdown import BaroLoop
 from .trajectory import Segment
 
@@ -105,43 +115,116 @@ class ImuConfig(_Model):
             accel_markov_tau=self.accel_markov_tau_s)
 
 
-class StarConfig(_Model):
-    sigma_arcsec: float = Field(gt=0.0)
+class TimingConfig(_Model):
+    """When a sensor's measurements become available and how the filter treats the delay.
+
+    Latency: ``latency_s`` (fixed), ``latency_range_s`` [lo, hi] (uniform per measurement)
+    or ``latency_list_s`` (cycled); none = available when taken.  ``sequential``: the next
+    measurement starts when the previous one ends (instead of every ``period_s``).
+    ``delay_compensation``: ``none`` (use the delayed value as if current),
+    ``curve_fit`` (polynomial of ``curve_fit_degree`` through the last
+    ``curve_fit_points`` values, extrapolated to the epoch of use), ``ins_increment``
+    (paper 004 eq. 6: add the INS increment since the capture instant) or ``recompute``
+    (re-run the filter from the capture epoch; the exact, costly reference).
+    """
+
+    latency_s: float | None = Field(default=None, ge=0.0)
+    latency_range_s: tuple[float, float] | None = None
+    latency_list_s: list[float] | None = None
+    sequential: bool = False
+    delay_compensation: Literal["none", "curve_fit", "ins_increment", "recompute"] = "none"
+    curve_fit_degree: Literal[1, 2, 3] = 2
+    curve_fit_points: int = Field(default=4, ge=2)
+
+    @model_validator(mode="after")
+    def _one_latency(self):
+        given = [x is not None for x in (self.latency_s, self.latency_range_s,
+                                         self.latency_list_s)]
+        if sum(given) > 1:
+            raise ValueError("give only one of latency_s, latency_range_s, latency_list_s")
+        if self.latency_range_s is not None and not (
+                0.0 <= self.latency_range_s[0] <= self.latency_range_s[1]):
+            raise ValueError("latency_range_s must be [low, high] with 0 <= low <= high")
+        if self.sequential and not any(given):
+            raise ValueError("sequential timing needs a latency")
+        if self.curve_fit_points < self.curve_fit_degree + 1:
+            raise ValueError("curve_fit_points must be at least curve_fit_degree + 1")
+        return self
+
+    def latency(self) -> Latency:
+        if self.latency_range_s is not None:
+            return Latency.uniform(*self.latency_range_s)
+        if self.latency_list_s is not None:
+            return Latency.from_list(self.latency_list_s)
+        return Latency.fixed(self.latency_s or 0.0)
+
+
+class _SensorConfig(_Model):
+    """Common to every aiding sensor: its period and timing."""
+
     period_s: float = Field(gt=0.0)
+    timing: TimingConfig = TimingConfig()
+
+    def simulate(self, truth, rng):
+        """The sensor's measurements over the flight, with their timing."""
+        tm = self.timing
+        if tm.latency().is_zero and not tm.sequential:
+            return self.sensor().simulate(truth, rng)
+        t, ta = measurement_times(float(truth.t[0]), float(truth.t[-1]), self.period_s,
+                                  tm.latency(), tm.sequential, rng, truth.dt)
+        return self.sensor().simulate(truth, rng, t, ta)
+
+
+class StarConfig(_SensorConfig):
+    sigma_arcsec: float = Field(gt=0.0)
 
     def sensor(self) -> StarSensor:
         return StarSensor(float(units.arcsec(self.sigma_arcsec)), self.period_s)
 
 
-class SarConfig(_Model):
+class SarConfig(_SensorConfig):
+    """SAR image-matching fix: position and heading."""
+
     sigma_pos_m: float = Field(gt=0.0)
     sigma_heading_deg: float = Field(gt=0.0)
-    period_s: float = Field(gt=0.0)
 
     def sensor(self) -> SarMatcher:
         return SarMatcher(self.sigma_pos_m, float(units.deg(self.sigma_heading_deg)),
                           self.period_s)
 
 
-class BaroConfig(_Model):
+class SarVelocityConfig(_SensorConfig):
+    """SAR sequential-image velocity (east, north)."""
+
+    sigma_mps: float = Field(gt=0.0)
+
+    def sensor(self) -> SarVelocity:
+        return SarVelocity(self.sigma_mps, self.period_s)
+
+
+class BaroConfig(_SensorConfig):
+    """Barometric altimeter: damps the INS vertical channel (``damping_loop``) and/or aids
+    the filter as a measurement (``baro`` in a mode's aiding)."""
+
     sigma_m: float = Field(gt=0.0)
-    period_s: float = Field(gt=0.0)
+    damping_loop: bool = True
     loop_time_constant_s: float = Field(default=20.0, gt=0.0)
     loop_order: Literal[2, 3] = 2
 
     def sensor(self) -> Barometer:
         return Barometer(self.sigma_m, self.period_s)
 
-    def loop(self) -> BaroLoop:
+    def loop(self) -> BaroLoop | None:
+        if not self.damping_loop:
+            return None
         return BaroLoop(self.loop_time_constant_s, self.loop_order)
 
 
-class GnssConfig(_Model):
+class GnssConfig(_SensorConfig):
     """GNSS position sigma (north, east, up) [m] or one value, velocity sigma [m/s]."""
 
     sigma_pos_m: float | tuple[float, float, float]
     sigma_vel_mps: float | tuple[float, float, float]
-    period_s: float = Field(gt=0.0)
 
     def sensor(self) -> Gnss:
         return Gnss(self.sigma_pos_m, self.sigma_vel_mps, self.period_s)
@@ -152,13 +235,14 @@ class SensorsConfig(_Model):
     sar: SarConfig | None = None
     gnss: GnssConfig | None = None
     baro: BaroConfig | None = None
+    sarvel: SarVelocityConfig | None = None
 
 
 class FaultConfig(_Model):
     """Additive sensor fault: ``size_sigma`` times the sensor sigma on ``components``
     (indices into the sensor's measurement; all when omitted), ``step`` or ``ramp``."""
 
-    sensor: Literal["star", "sar", "gnss", "baro"]
+    sensor: Literal["star", "sar", "gnss", "baro", "sarvel"]
     start_s: float
     end_s: float
     size_sigma: float | list[float]
@@ -172,7 +256,12 @@ class FaultConfig(_Model):
 
 
 class FilterConfig(_Model):
+    """``architecture``: ``federated`` (one local filter per aiding sensor, fused) or
+    ``centralized`` (one filter; at each epoch H and R are stacked from the sensors that
+    delivered since the last epoch)."""
+
     type: Literal["ukf", "sukf", "kf", "ekf"] = "ukf"  # error-state filters
+    architecture: Literal["federated", "centralized"] = "federated"
     period_s: float = Field(default=1.0, gt=0.0)
     alpha: float = Field(default=1e-3, gt=0.0)
     beta: float = 2.0
@@ -200,11 +289,13 @@ FilterType = Literal["ukf", "sukf", "kf", "ekf", "total-ukf"]
 class ModeConfig(_Model):
     """A mode: which aiding sensors feed local filters, and (optionally) a filter type
     that overrides ``filter.type`` for this mode (``total-ukf``: the total-state
-    federated UKF of paper 003)."""
+    federated UKF of paper 003) and a delay strategy for its delayed sensors (paper 004)."""
 
     name: str
-    aiding: list[Literal["star", "sar", "gnss"]] = []
+    aiding: list[Literal["star", "sar", "gnss", "sarvel", "baro"]] = []
     filter: FilterType | None = None
+    # overrides timing.delay_compensation of every aiding sensor that has a latency
+    delay_compensation: Literal["none", "curve_fit", "ins_increment", "recompute"] | None = None
 
 
 class FaultExperimentConfig(_Model):

@@ -221,4 +221,42 @@ class VelocityENU:
         return np.asarray(cov, dtype=float)
 
 
-MODELS = {m.kind: m for m in (StarAttitude(), SarFix(), BaroHeight(), GnssPosVel())}
+class SarVelocityEN:
+    """SAR sequential-image velocity: residual = ``[vE, vN]`` INS - SAR [m/s]."""
+
+    kind = "sarvel"
+    dim = 2
+    _H = np.zeros((2, N_STATES))
+    _H[0, 3] = _H[1, 4] = 1.0
+
+    def residual(self, nav: NavSnapshot, z) -> np.ndarray:
+        return np.asarray(nav.vel[:2], dtype=float) - np.asarray(z, dtype=float)
+
+    def h(self, X, nav: NavSnapshot) -> np.ndarray:
+        return np.atleast_2d(X)[:, 3:5]
+
+    def H(self, nav: NavSnapshot) -> np.ndarray:
+        return self._H
+
+    def R(self, sigma) -> np.ndarray:
+        return np.diag(np.asarray(sigma, dtype=float) ** 2)
+
+
+class StackedModel:
+    """Several measurement models of the same epoch as one: ``h`` and ``H`` stacked in the
+    given order (the residuals and a block-diagonal R are stacked by the caller).  This is
+    how a centralized filter assembles H and R from whichever sensors delivered."""
+
+    def __init__(self, models):
+        self.models = list(models)
+        self.dim = sum(m.dim for m in self.models)
+
+    def h(self, X, nav: NavSnapshot) -> np.ndarray:
+        return np.hstack([m.h(X, nav) for m in self.models])
+
+    def H(self, nav: NavSnapshot) -> np.ndarray:
+        return np.vstack([m.H(nav) for m in self.models])
+
+
+MODELS = {m.kind: m for m in (StarAttitude(), SarFix(), BaroHeight(), GnssPosVel(),
+                              SarVelocityEN())}

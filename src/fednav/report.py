@@ -32,8 +32,8 @@ def summarize(rows: list[dict], paper_tables: dict, paper: str, runs: int, seed:
     return {"paper": paper, "runs": runs, "seed": seed, "tables": tables}
 
 
-def _fmt(x: float) -> str:
-    if not np.isfinite(x):
+def _fmt(x: float | None) -> str:
+    if x is None or not np.isfinite(x):
         return "–"
     a = abs(x)
     if a >= 100:
@@ -60,9 +60,9 @@ def print_tables(summary: dict, titles: dict[str, str], console: Console | None 
             tab.add_column(c, justify=j)
         for r, vals in rows.items():
             for i, (c, v) in enumerate(vals.items()):
-                ratio = v["ours"] / v["paper"] if v["paper"] else float("nan")
+                ratio = f"×{v['ours'] / v['paper']:.2f}" if v["paper"] else "–"
                 tab.add_row(r if i == 0 else "", c, _fmt(v["ours"]), _fmt(v["ci95"]),
-                            _fmt(v["paper"]), f"×{ratio:.2f}",
+                            _fmt(v["paper"]), ratio,
                             end_section=(i == len(vals) - 1))
         console.print(tab)
 

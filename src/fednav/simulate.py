@@ -12,13 +12,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
+import scipy.linalg
 
 from . import attitude as att
 from . import earth, units
 from . import error_model as em
 from .config import Scenario
+from .delays import ANGLE_COLUMNS, InsIncrements, curve_fit_value
 from .filters import FederatedFilter, KalmanFilter, LinearModel, make_filter
-from .measurements import MODELS, NavSnapshot
+from .measurements import MODELS, NavSnapshot, StackedModel
 from .sensors import Barometer, MeasurementSeries, corrupt_imu, inject_faults
 from .strapdown import STATE_LLA, STATE_Q, STATE_VEL, Strapdown, quat_to_dcm_nb
 from .total_state import GnssTotal, StarTotal, TotalStateUKF
@@ -75,12 +77,13 @@ def make_run_data(scn: Scenario, seed: int, max_time: float | None = None) -> Ru
     dth, dv, _ = corrupt_imu(truth.dtheta, truth.dv, truth.dt, scn.imu.errors(truth.dt), rng)
     series = {}
     faults = [f.fault() for f in scn.faults]
-    for name in ("star", "sar", "gnss", "baro"):
+    for name in ("star", "sar", "gnss", "baro", "sarvel"):
         cfg = getattr(scn.sensors, name)
         if cfg is not None:
-            series[name] = inject_faults(cfg.sensor().simulate(truth, rng), faults)
-    h_ref = (Barometer.on_imu_grid(series["baro"], truth.t[:-1]) if "baro" in series
-             else np.full(len(truth.t) - 1, np.nan))
+            series[name] = inject_faults(cfg.simulate(truth, rng), faults)
+    baro = scn.sensors.baro
+    h_ref = (Barometer.on_imu_grid(series["baro"], truth.t[:-1])
+             if baro is not None and baro.damping_loop else np.full(len(truth.t) - 1, np.nan))
     return RunData(seed, dth, dv, series, h_ref, init_phi, init_dv, init_dp)
 
 
@@ -113,11 +116,12 @@ def _build_filter(scn: Scenario, aiding: list[str], ftype: str) -> FederatedFilt
     P0 = initial_covariance(scn)
     opts = ({"alpha": f.alpha, "beta": f.beta, "kappa": f.kappa}
             if ftype in ("ukf", "sukf") else {})
-    locals_ = {a: make_filter(ftype, np.zeros(em.N_STATES), P0, **opts) for a in aiding}
+    names = ["central"] if f.architecture == "centralized" else aiding
+    locals_ = {a: make_filter(ftype, np.zeros(em.N_STATES), P0, **opts) for a in names}
     for a, flt in locals_.items():
         flt.name = f"{ftype} local '{a}'"
     master = None
-    if f.master and len(aiding) > 1:
+    if f.master and len(locals_) > 1:
         master = make_filter(ftype, np.zeros(em.N_STATES), P0, **opts)
         master.name = f"{ftype} master"
     return FederatedFilter(locals_, master, sharing=f.sharing, fixed=f.fixed_factors,
@@ -125,10 +129,12 @@ def _build_filter(scn: Scenario, aiding: list[str], ftype: str) -> FederatedFilt
                            fdi_recovery=f.fdi_recovery)
 
 
-def _schedule(series: MeasurementSeries, T: float, n_cycles: int) -> list[list[int]]:
+def _schedule(series: MeasurementSeries, T: float, n_cycles: int,
+              times: np.ndarray | None = None) -> list[list[int]]:
     """Measurement indices to use at the end of each filter cycle (first cycle ending at or
-    after the measurement becomes available)."""
-    k = np.ceil(series.t_avail / T - 1e-9).astype(int) - 1
+    after the measurement becomes available, or after ``times`` when given)."""
+    t = series.t_avail if times is None else times
+    k = np.ceil(t / T - 1e-9).astype(int) - 1
     out: list[list[int]] = [[] for _ in range(n_cycles)]
     for i, kk in enumerate(k):
         if 0 <= kk < n_cycles:
@@ -136,11 +142,119 @@ def _schedule(series: MeasurementSeries, T: float, n_cycles: int) -> list[list[i
     return out
 
 
+class _ClosedLoop:
+    """SINS + error-state (federated or centralized) filter with feedback, one filter
+    cycle at a time, on one run's data; measurements carry their timing and are treated
+    by their sensor's delay strategy (:mod:`fednav.delays`)."""
+
+    def __init__(self, scn: Scenario, aiding: list[str], data: RunData, ftype: str, truth,
+                 delay: str | None = None):
+        self.scn, self.aiding, self.data = scn, aiding, data
+        self.dt, self.T = truth.dt, scn.filter.period_s
+        self.n_per = round(self.T / self.dt)
+        self.t_epoch = truth.t[0] + self.T * np.arange(len(truth.t) // self.n_per + 2)
+        self.ins = _initial_ins(scn, truth, data)
+        self.fed = _build_filter(scn, aiding, ftype) if aiding else None
+        self.central = scn.filter.architecture == "centralized"
+        self.noise = scn.imu.noise_model(self.dt)
+        self.baro_gains = self.ins.baro_gains[:2]
+        baro = scn.sensors.baro
+        self.baro_q = (baro.sigma_m**2 * baro.period_s
+                       if baro is not None and baro.damping_loop else 0.0)
+        self.comp_g = np.zeros(3)
+        self.comp_a = np.zeros(3)
+        self.timing = {}
+        for a in aiding:
+            tm = getattr(scn.sensors, a).timing
+            if delay is not None and not (tm.latency().is_zero and not tm.sequential):
+                tm = tm.model_copy(update={"delay_compensation": delay})
+            self.timing[a] = tm
+        self.incs = None
+        if any(tm.delay_compensation in ("ins_increment", "recompute")
+               for tm in self.timing.values()):
+            self.incs = InsIncrements((len(truth.t) - 1) // self.n_per, truth.t[0], self.T)
+
+    def snapshot(self) -> tuple:
+        return (self.ins.state.copy(), self.fed.snapshot(), self.comp_g.copy(),
+                self.comp_a.copy())
+
+    def restore(self, snap: tuple) -> None:
+        state, fed, g, a = snap
+        self.ins.state[:] = state
+        self.fed.restore(fed)
+        self.comp_g, self.comp_a = g.copy(), a.copy()
+
+    def _residual(self, a: str, i: int, how: str, nav: NavSnapshot, k: int) -> np.ndarray:
+        s = self.data.series[a]
+        model = MODELS[a]
+        if how in ("ins_increment", "recompute"):
+            return model.residual(self.incs.carry_back(nav, k + 1, s.t[i]), s.z[i])
+        if how == "curve_fit":
+            tm = self.timing[a]
+            known = np.flatnonzero(s.t_avail <= self.t_epoch[k + 1] + 1e-9)
+            known = known[np.argsort(s.t[known], kind="stable")]
+            z = curve_fit_value(s.t[known], s.z[known], self.t_epoch[k + 1],
+                                tm.curve_fit_degree, tm.curve_fit_points,
+                                ANGLE_COLUMNS.get(a, ()))
+            return model.residual(nav, z)
+        return model.residual(nav, s.z[i])
+
+    def cycle(self, k: int, meas: list[tuple[str, int, str]]) -> None:
+        """Filter cycle ``k`` (ends at epoch k+1) applying ``meas`` = (sensor, index, how)."""
+        n_per, T, dt = self.n_per, self.T, self.dt
+        sl = slice(k * n_per, (k + 1) * n_per)
+        dth = self.data.dtheta[sl] - self.comp_g * dt
+        dvc = self.data.dv[sl] - self.comp_a * dt
+        ins, fed = self.ins, self.fed
+        s0 = ins.state.copy() if fed is not None else None
+        ins.run(dth, dvc, self.data.h_ref[sl], record=False)
+        if fed is None:
+            return
+        s1 = ins.state
+        qm = s0[STATE_Q] + s1[STATE_Q]
+        Cm = quat_to_dcm_nb(qm / np.sqrt(qm @ qm))
+        if self.incs is not None:
+            self.incs.record(k + 1, s0[STATE_LLA], s0[STATE_VEL], quat_to_dcm_nb(s0[STATE_Q]),
+                             s1[STATE_LLA], s1[STATE_VEL], ins.dcm)
+        pm = 0.5 * (s0[STATE_LLA] + s1[STATE_LLA])
+        nom = em.Nominal(lat=pm[0], h=pm[2], vel=0.5 * (s0[STATE_VEL] + s1[STATE_VEL]),
+                         C=Cm, fn=Cm @ dvc.sum(axis=0) / T)
+        proc = em.ErrorProcess(nom, T, self.noise, self.baro_gains, self.baro_q,
+                               self.scn.filter.substeps)
+        fed.predict(proc)
+        if meas:
+            nav = NavSnapshot(ins.lla, ins.vel, ins.dcm)
+            t = self.t_epoch[k + 1]
+            if self.central:
+                ys, models, Rs = [], [], []
+                for a, i, how in meas:
+                    ys.append(self._residual(a, i, how, nav, k))
+                    models.append(MODELS[a])
+                    Rs.append(MODELS[a].R(self.data.series[a].sigma))
+                fed.update("central", np.concatenate(ys), StackedModel(models), nav,
+                           scipy.linalg.block_diag(*Rs), t=t)
+            else:
+                for a, i, how in meas:
+                    model = MODELS[a]
+                    fed.update(a, self._residual(a, i, how, nav, k), model, nav,
+                               model.R(self.data.series[a].sigma), t=t)
+        fed.fuse()
+        dx = em.to_si(fed.feedback())
+        ins.correct(dx[em.PHI], dx[em.DV], dx[em.DP])
+        self.comp_g += dx[em.EPS_C] + dx[em.EPS_R]
+        self.comp_a += dx[em.NABLA]
+
+
 def run_mode(scn: Scenario, aiding: list[str], data: RunData, mode: str = "",
-             max_time: float | None = None, filter_type: str | None = None) -> RunResult:
+             max_time: float | None = None, filter_type: str | None = None,
+             delay: str | None = None) -> RunResult:
     """Fly one mode (list of aiding sensors; empty = free SINS) on the run's data.
 
     ``filter_type`` overrides the scenario's; ``total-ukf`` runs :func:`run_total_state`.
+    ``delay`` overrides the delay strategy of every aiding sensor with a latency.
+    Each aiding sensor's measurements are used at the first filter epoch after they
+    become available, treated by the sensor's ``timing.delay_compensation``; with
+    ``recompute`` the filter is re-run from the epoch of the capture instant.
     """
     ftype = filter_type or scn.filter.type
     if ftype == "total-ukf":
@@ -157,51 +271,51 @@ def run_mode(scn: Scenario, aiding: list[str], data: RunData, mode: str = "",
         if a not in data.series:
             raise ValueError(f"scenario {scn.name}: mode '{mode}' uses sensor '{a}' which the "
                              f"scenario does not configure")
-    ins = _initial_ins(scn, truth, data)
-    fed = _build_filter(scn, aiding, ftype) if aiding else None
-    noise = scn.imu.noise_model(dt)
-    baro_gains = ins.baro_gains[:2]
-    baro = scn.sensors.baro
-    baro_q = baro.sigma_m**2 * baro.period_s if baro is not None else 0.0
-    sched = {a: _schedule(data.series[a], T, n_cycles) for a in aiding}
-    comp_g = np.zeros(3)
-    comp_a = np.zeros(3)
-    states = np.empty((n_cycles, ins.state.size))  # INS state after each cycle
+    loop = _ClosedLoop(scn, aiding, data, ftype, truth, delay)
+    fed = loop.fed
+    how = {a: loop.timing[a].delay_compensation for a in aiding}
+    t0 = truth.t[0]
+    sched = {a: _schedule(data.series[a], T, n_cycles, data.series[a].t_avail - t0)
+             for a in aiding}
+    recompute = [a for a in aiding if how[a] == "recompute"]
+    capture = {a: np.ceil((data.series[a].t - t0) / T - 1e-9).astype(int) - 1
+               for a in recompute}
+    avail = {a: np.ceil((data.series[a].t_avail - t0) / T - 1e-9).astype(int) - 1
+             for a in recompute}
+
+    def planned(m: int, now: int) -> list[tuple[str, int, str]]:
+        out = []
+        for a in aiding:
+            if a in capture:  # everything known by `now` that was captured in cycle m
+                idx = np.flatnonzero((np.maximum(capture[a], 0) == m) & (avail[a] <= now))
+                out += [(a, int(i), "recompute") for i in idx]
+            else:
+                out += [(a, i, how[a]) for i in sched[a][m]]
+        return out
+
+    states = np.empty((n_cycles, loop.ins.state.size))  # INS state after each cycle
     var = np.full((n_cycles, em.N_STATES), np.nan)  # fused covariance diagonal (filter units)
     betas = {k: np.empty(n_cycles) for k in (fed.filters if fed else {})}
+    snaps: list = [None] * n_cycles
+    first = loop.snapshot() if recompute and fed is not None else None
     for k in range(n_cycles):
-        sl = slice(k * n_per, (k + 1) * n_per)
-        dth = data.dtheta[sl] - comp_g * dt
-        dvc = data.dv[sl] - comp_a * dt
-        s0 = ins.state.copy() if fed is not None else None
-        ins.run(dth, dvc, data.h_ref[sl], record=False)
+        j = k
+        for a in recompute:
+            for i in sched[a][k]:
+                j = min(j, max(int(capture[a][i]), 0))
+        if j < k:  # re-run the filter from the capture cycle with what is known now
+            loop.restore(snaps[j - 1] if j > 0 else first)
+            for m in range(j, k):
+                loop.cycle(m, planned(m, k))
+                snaps[m] = loop.snapshot()
+        loop.cycle(k, planned(k, k) if fed is not None else [])
+        if first is not None:
+            snaps[k] = loop.snapshot()
         if fed is not None:
-            s1 = ins.state
-            qm = s0[STATE_Q] + s1[STATE_Q]
-            Cm = quat_to_dcm_nb(qm / np.sqrt(qm @ qm))
-            pm = 0.5 * (s0[STATE_LLA] + s1[STATE_LLA])
-            nom = em.Nominal(lat=pm[0], h=pm[2], vel=0.5 * (s0[STATE_VEL] + s1[STATE_VEL]),
-                             C=Cm, fn=Cm @ dvc.sum(axis=0) / T)
-            proc = em.ErrorProcess(nom, T, noise, baro_gains, baro_q, scn.filter.substeps)
-            fed.predict(proc)
-            nav = None
-            for a in aiding:
-                for i in sched[a][k]:
-                    if nav is None:
-                        nav = NavSnapshot(ins.lla, ins.vel, ins.dcm)
-                    s = data.series[a]
-                    model = MODELS[a]
-                    fed.update(a, model.residual(nav, s.z[i]), model, nav, model.R(s.sigma),
-                               t=truth.t[(k + 1) * n_per])
-            fed.fuse()
             var[k] = np.diagonal(fed.P)
             for name, b in fed.beta.items():
                 betas[name][k] = b
-            dx = em.to_si(fed.feedback())
-            ins.correct(dx[em.PHI], dx[em.DV], dx[em.DP])
-            comp_g += dx[em.EPS_C] + dx[em.EPS_R]
-            comp_a += dx[em.NABLA]
-        states[k] = ins.state
+        states[k] = loop.ins.state
     sigma = np.sqrt(var) * em.SCALE
     return _result(scn, truth, n_per, states, mode, sigma,
                    betas, fed.log if fed is not None else None)
@@ -312,4 +426,5 @@ def run_all_modes(scn: Scenario, data: RunData,
 def run_configured_mode(scn: Scenario, mode, data: RunData,
                         max_time: float | None = None) -> RunResult:
     """Run a :class:`~fednav.config.ModeConfig` of the scenario."""
-    return run_mode(scn, list(mode.aiding), data, mode.name, max_time, mode.filter)
+    return run_mode(scn, list(mode.aiding), data, mode.name, max_time, mode.filter,
+                    mode.delay_compensation)

@@ -207,6 +207,22 @@ class FederatedFilter:
                 f.P = self.P / self.beta[k]
         return self.x, self.P
 
+    def snapshot(self) -> tuple:
+        """Everything the filter carries from epoch to epoch (for re-running from the past,
+        :meth:`restore`); the log keeps its entries up to this point."""
+        return ([(f.x.copy(), f.P.copy(), f.step) for f in self.filters.values()],
+                self.x.copy(), self.P.copy(), dict(self.beta), set(self.isolated),
+                dict(self._passes), len(self.log))
+
+    def restore(self, snap: tuple) -> None:
+        """Return to a :meth:`snapshot` (log entries made since are dropped)."""
+        filters, self.x, self.P, beta, isolated, passes, n_log = snap
+        for f, (x, P, step) in zip(self.filters.values(), filters, strict=True):
+            f.x, f.P, f.step = x.copy(), P.copy(), step
+        self.x, self.P = self.x.copy(), self.P.copy()
+        self.beta, self.isolated, self._passes = dict(beta), set(isolated), dict(passes)
+        del self.log[n_log:]
+
     def feedback(self) -> np.ndarray:
         """Hand the fused error estimate to the navigation system and zero it in the filters.
 

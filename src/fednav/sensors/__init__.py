@@ -11,8 +11,10 @@ from .base import MeasurementSeries, sample_times
 from .faults import Fault, inject_faults
 from .gnss import Gnss
 from .imu import ImuErrors, ImuErrorState, corrupt_imu
-from .sar import SarMatcher
+from .sar import SarMatcher, SarVelocity
 from .star import StarSensor
+from .timing import Latency, measurement_times, sequential_times
 
-__all__ = ["Barometer", "Fault", "Gnss", "ImuErrorState", "ImuErrors", "MeasurementSeries",
-           "SarMatcher", "StarSensor", "corrupt_imu", "inject_faults", "sample_times"]
+__all__ = ["Barometer", "Fault", "Gnss", "ImuErrorState", "ImuErrors", "Latency",
+           "MeasurementSeries", "SarMatcher", "SarVelocity", "StarSensor", "corrupt_imu",
+           "inject_faults", "measurement_times", "sample_times", "sequential_times"]

@@ -16,11 +16,13 @@ class Barometer:
     sigma: float
     period: float
 
-    def simulate(self, truth, rng: np.random.Generator) -> MeasurementSeries:
-        t = sample_times(truth.t[-1], self.period, truth.t[0] + self.period)
+    def simulate(self, truth, rng: np.random.Generator, t=None,
+                 t_avail=None) -> MeasurementSeries:
+        if t is None:
+            t = sample_times(truth.t[-1], self.period, truth.t[0] + self.period)
         h = truth.at(t)["lla"][:, 2]
         z = h + rng.standard_normal(len(t)) * self.sigma
-        return MeasurementSeries("baro", t, z[:, None], np.array([self.sigma]))
+        return MeasurementSeries("baro", t, z[:, None], np.array([self.sigma]), t_avail)
 
     @staticmethod
     def on_imu_grid(series: MeasurementSeries, t_imu: np.ndarray) -> np.ndarray:

@@ -29,6 +29,12 @@ class MeasurementSeries:
         self.z = np.atleast_2d(np.asarray(self.z, dtype=float))
         if self.t_avail is None:
             self.t_avail = self.t.copy()
+        self.t_avail = np.asarray(self.t_avail, dtype=float)
+        if self.t_avail.shape != self.t.shape:
+            raise ValueError(f"{self.kind}: {len(self.t)} times but {len(self.t_avail)} "
+                             f"availability times")
+        if np.any(self.t_avail < self.t - 1e-9):
+            raise ValueError(f"{self.kind}: a measurement is available before it is taken")
         if len(self.t) and np.any(np.diff(self.t) <= 0):
             raise ValueError(f"{self.kind}: measurement times must be strictly increasing")
         if self.z.shape[0] != len(self.t):

@@ -22,12 +22,14 @@ class Gnss:
     sigma_vel: float | tuple
     period: float
 
-    def simulate(self, truth, rng: np.random.Generator) -> MeasurementSeries:
-        t = sample_times(truth.t[-1], self.period, truth.t[0] + self.period)
+    def simulate(self, truth, rng: np.random.Generator, t=None,
+                 t_avail=None) -> MeasurementSeries:
+        if t is None:
+            t = sample_times(truth.t[-1], self.period, truth.t[0] + self.period)
         tr = truth.at(t)
         sp = np.broadcast_to(np.asarray(self.sigma_pos, dtype=float), (3,))
         sv = np.broadcast_to(np.asarray(self.sigma_vel, dtype=float), (3,))
         npos = rng.standard_normal((len(t), 3)) * sp
         z = np.column_stack([position_noise_to_llh(tr["lla"], npos),
                              tr["vel"] + rng.standard_normal((len(t), 3)) * sv])
-        return MeasurementSeries("gnss", t, z, np.r_[sp, sv])
+        return MeasurementSeries("gnss", t, z, np.r_[sp, sv], t_avail)

@@ -22,8 +22,11 @@ class SarMatcher:
     sigma_heading: float
     period: float
 
-    def simulate(self, truth, rng: np.random.Generator) -> MeasurementSeries:
-        t = sample_times(truth.t[-1], self.period, truth.t[0] + self.period)
+    def simulate(self, truth, rng: np.random.Generator, t=None,
+                 t_avail=None) -> MeasurementSeries:
+        """Fixes every ``period``, or at the capture times ``t`` (available at ``t_avail``)."""
+        if t is None:
+            t = sample_times(truth.t[-1], self.period, truth.t[0] + self.period)
         tr = truth.at(t)
         n = rng.standard_normal((len(t), 3))
         # (north, east) from draws 1 and 0: the draw order of earlier releases, so seeded
@@ -34,4 +37,22 @@ class SarMatcher:
         z = np.column_stack([pos[:, 0], pos[:, 1],
                              wrap_2pi(tr["euler"][:, 2] + n[:, 2] * self.sigma_heading)])
         return MeasurementSeries("sar", t, z,
-                                 np.array([self.sigma_pos, self.sigma_pos, self.sigma_heading]))
+                                 np.array([self.sigma_pos, self.sigma_pos, self.sigma_heading]),
+                                 t_avail)
+
+
+@dataclass(frozen=True)
+class SarVelocity:
+    """Sequential-image velocity ``[vE, vN]`` [m/s] with white noise ``sigma`` (each axis),
+    every ``period`` [s] or at given capture times."""
+
+    sigma: float
+    period: float
+
+    def simulate(self, truth, rng: np.random.Generator, t=None,
+                 t_avail=None) -> MeasurementSeries:
+        if t is None:
+            t = sample_times(truth.t[-1], self.period, truth.t[0] + self.period)
+        v = truth.at(t)["vel"][:, :2]
+        z = v + rng.standard_normal(v.shape) * self.sigma
+        return MeasurementSeries("sarvel", t, z, np.array([self.sigma, self.sigma]), t_avail)

@@ -17,10 +17,12 @@ class StarSensor:
     sigma: float | tuple
     period: float
 
-    def simulate(self, truth, rng: np.random.Generator) -> MeasurementSeries:
-        t = sample_times(truth.t[-1], self.period, truth.t[0] + self.period)
+    def simulate(self, truth, rng: np.random.Generator, t=None,
+                 t_avail=None) -> MeasurementSeries:
+        if t is None:
+            t = sample_times(truth.t[-1], self.period, truth.t[0] + self.period)
         e = truth.at(t)["euler"]
         sig = np.broadcast_to(np.asarray(self.sigma, dtype=float), (3,))
         z = e + rng.standard_normal(e.shape) * sig
         z[:, 2] = wrap_2pi(z[:, 2])
-        return MeasurementSeries("star", t, z, sig.copy())
+        return MeasurementSeries("star", t, z, sig.copy(), t_avail)
