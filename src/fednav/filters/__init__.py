@@ -1,14 +1,17 @@
 """Estimators behind one interface (:class:`~fednav.filters.base.Filter`) and the
 federated filter that combines them."""
 
+from .adaptive import RobustAdaptiveUKF, SageHusaEKF, igg3_weights
 from .base import Filter, FilterError, FunctionModel, FunctionProcess, Innovation, LinearModel
+from .constrained import ConstrainedEKF, ConstrainedUKF, project
 from .federated import FederatedFilter, sharing_factors
 from .kf import KalmanFilter
 from .ukf import SimplifiedUKF, UnscentedKalmanFilter
 
 #: Names accepted in scenario files.
 REGISTRY = {"kf": KalmanFilter, "ekf": KalmanFilter, "ukf": UnscentedKalmanFilter,
-            "sukf": SimplifiedUKF}
+            "sukf": SimplifiedUKF, "cukf": ConstrainedUKF, "cekf": ConstrainedEKF,
+            "aekf": SageHusaEKF, "raukf": RobustAdaptiveUKF}
 
 
 def make_filter(name: str, x0, P0, **options) -> Filter:
@@ -22,6 +25,8 @@ def make_filter(name: str, x0, P0, **options) -> Filter:
     return cls(x0, P0, name=name.lower(), **options)
 
 
-__all__ = ["FederatedFilter", "Filter", "FilterError", "FunctionModel", "FunctionProcess",
-           "Innovation", "KalmanFilter", "LinearModel", "REGISTRY", "SimplifiedUKF",
-           "UnscentedKalmanFilter", "make_filter", "sharing_factors"]
+__all__ = ["ConstrainedEKF", "ConstrainedUKF", "FederatedFilter", "Filter", "FilterError",
+           "FunctionModel", "FunctionProcess", "Innovation", "KalmanFilter", "LinearModel",
+           "REGISTRY", "RobustAdaptiveUKF", "SageHusaEKF", "SimplifiedUKF",
+           "UnscentedKalmanFilter", "igg3_weights", "make_filter", "project",
+           "sharing_factors"]

@@ -1,0 +1,114 @@
+"""Adaptive and robust filters: Sage–Husa EKF (AEKF) and robust adaptive UKF (RAUKF).
+
+**Sage–Husa measurement-noise estimation** (Sage & Husa, "Adaptive filtering with unknown
+prior statistics", JACC 1969; fading-memory form as in Gao et al. and most INS texts).
+For each measurement type (``model.kind``), at its k-th update, with innovation
+``r = y - y_hat`` and predicted measurement covariance ``H P H'`` (UKF: ``Pzz - R``)::
+
+    d_k = (1 - b) / (1 - b^(k+1))                  fading factor b (default 0.97)
+    R_k = (1 - d_k) R_(k-1) + d_k (r r' - H P H')
+
+Safeguard (the difference can make ``R_k`` indefinite): the symmetric part is
+eigen-decomposed and every eigenvalue raised to at least ``r_floor`` (default 0.1) times
+the smallest eigenvalue of the nominal R, so R stays positive definite.  R starts from
+the nominal R the caller passes.
+
+**Robust adaptive UKF** — the UKF with the adapted R, made robust by IGG-III equivalent
+weights (Yang, Song & Xu, "Robust estimator for correlated observations based on
+bifactor equivalent weights", J. Geodesy 76, 2002): each innovation component is
+standardized, ``v_i = |r_i| / sqrt(S_ii)``, and its noise variance divided by ::
+
+    w_i = 1                                   v_i <= k0
+    w_i = (k0 / v_i) ((k1 - v_i) / (k1 - k0))^2   k0 < v_i <= k1
+    w_i = 1e-8 (practically rejected)         v_i > k1          (k0 = 1.5, k1 = 4.5)
+
+(``R_eq = W^-1/2 R W^-1/2``).  The Sage–Husa step uses the down-weighted innovation
+``sqrt(w) r`` so that an outlier inflates neither the state nor the noise estimate.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .base import Innovation
+from .kf import KalmanFilter
+from .ukf import UnscentedKalmanFilter, _sigma_points
+
+
+def igg3_weights(v, k0: float = 1.5, k1: float = 4.5) -> np.ndarray:
+    """IGG-III equivalent-weight factors for standardized residuals ``v`` (>= 0)."""
+    v = np.abs(np.asarray(v, dtype=float))
+    w = np.ones_like(v)
+    mid = (v > k0) & (v <= k1)
+    w[mid] = (k0 / v[mid]) * ((k1 - v[mid]) / (k1 - k0)) ** 2
+    w[v > k1] = 1e-8
+    return np.maximum(w, 1e-8)
+
+
+class _SageHusa:
+    """Per-measurement-type fading-memory estimate of R."""
+
+    def __init__(self, fading: float = 0.97, r_floor: float = 0.1):
+        if not 0.0 < fading < 1.0:
+            raise ValueError(f"Sage-Husa fading factor must be in (0, 1), got {fading}")
+        self.b, self.floor = fading, r_floor
+        self.R: dict = {}
+        self.k: dict = {}
+
+    def current(self, key, R_nominal) -> np.ndarray:
+        return self.R.get(key, np.asarray(R_nominal, dtype=float))
+
+    def adapt(self, key, R_nominal, r, HPHt) -> np.ndarray:
+        R_nominal = np.asarray(R_nominal, dtype=float)
+        k = self.k.get(key, 0)
+        d = (1.0 - self.b) / (1.0 - self.b ** (k + 1))
+        R = (1.0 - d) * self.current(key, R_nominal) + d * (np.outer(r, r) - HPHt)
+        R = 0.5 * (R + R.T)
+        w, V = np.linalg.eigh(R)
+        lo = self.floor * np.linalg.eigvalsh(R_nominal).min()
+        R = (V * np.maximum(w, lo)) @ V.T
+        self.R[key], self.k[key] = R, k + 1
+        return R
+
+
+class SageHusaEKF(KalmanFilter):
+    """EKF whose measurement noise is estimated online (AEKF); see the module docstring."""
+
+    def __init__(self, x0, P0, name: str = "aekf", fading: float = 0.97,
+                 r_floor: float = 0.1):
+        super().__init__(x0, P0, name)
+        self.sh = _SageHusa(fading, r_floor)
+
+    def update(self, y, model, nav=None, R=None, gate: float | None = None) -> Innovation:
+        H = np.asarray(model.H(nav), dtype=float)
+        r = np.asarray(y, dtype=float) - model.h(self.x[None], nav)[0]
+        key = getattr(model, "kind", type(model).__name__)
+        Ra = self.sh.adapt(key, R, r, H @ self.P @ H.T)
+        return super().update(y, model, nav, Ra, gate)
+
+
+class RobustAdaptiveUKF(UnscentedKalmanFilter):
+    """UKF with IGG-III robust equivalent weights and Sage–Husa R adaptation (RAUKF)."""
+
+    def __init__(self, x0, P0, name: str = "raukf", alpha: float = 1e-3, beta: float = 2.0,
+                 kappa: float = 0.0, fading: float = 0.97, r_floor: float = 0.1,
+                 k0: float = 1.5, k1: float = 4.5):
+        super().__init__(x0, P0, name, alpha, beta, kappa)
+        self.sh = _SageHusa(fading, r_floor)
+        self.k0, self.k1 = k0, k1
+
+    def update(self, y, model, nav=None, R=None, gate: float | None = None) -> Innovation:
+        X = _sigma_points(self.x, self.P, self.c)
+        if X.shape[0] == 0:
+            X = self.sigma_points(phase="update")  # raises the not-PD error
+        Z = np.asarray(model.h(X, nav), dtype=float)
+        z_hat = self.Wm @ Z
+        dZ = Z - z_hat
+        Pzz0 = (dZ * self.Wc[:, None]).T @ dZ
+        r = np.asarray(y, dtype=float) - z_hat
+        key = getattr(model, "kind", type(model).__name__)
+        Rc = self.sh.current(key, R)
+        w = igg3_weights(r / np.sqrt(np.diag(Pzz0 + Rc)), self.k0, self.k1)
+        Ra = self.sh.adapt(key, R, np.sqrt(w) * r, Pzz0)
+        s = 1.0 / np.sqrt(w)
+        return super().update(y, model, nav, Ra * np.outer(s, s), gate)
