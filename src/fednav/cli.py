@@ -20,9 +20,9 @@ console = Console()
 
 
 def _papers():
-    from .scenarios import paper002, paper003, paper004
+    from .scenarios import paper000, paper002, paper003, paper004
 
-    return (paper002, paper003, paper004)
+    return (paper000, paper002, paper003, paper004)
 
 
 def _paper_module(paper: str):
@@ -35,8 +35,9 @@ def _paper_module(paper: str):
 
 @app.command()
 def reproduce(
-    paper: str = typer.Argument(..., help="paper number or alias: 002 / cruise-missile, "
-                                          "003 / federated-ukf, 004 / sar-delay"),
+    paper: str = typer.Argument(..., help="paper number or alias: 000 / airship, "
+                                          "002 / cruise-missile, 003 / federated-ukf, "
+                                          "004 / sar-delay"),
     runs: int = typer.Option(10, min=1, help="Monte Carlo runs"),
     seed: int = typer.Option(1, help="seed of the first run (run i uses seed + i)"),
     out: Path = typer.Option(None, help="output folder [default: results/<paper>]"),

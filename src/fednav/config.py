@@ -17,6 +17,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 from . import units
 from .error_model import ImuNoiseModel
 from .sensors import (
+    AirData,
     Barometer,
     Fault,
     Gnss,
@@ -29,6 +30,7 @@ from .sensors import (
 )
 from .strapdown import BaroLoop
 from .trajectory import Segment
+from .wind import Episode, WindField
 
 
 class ConfigError(ValueError):
@@ -80,6 +82,7 @@ class ImuConfig(_Model):
     accel_markov_ug: float = 0.0
     accel_markov_tau_s: float = Field(default=float("inf"), gt=0.0)
     accel_white_ug: float = 0.0
+    accel_vrw_ug_sqrt_hz: float = 0.0   # white noise as a density (ug/sqrt(Hz))
     random_bias: bool = False
 
     def arw(self, dt: float) -> float:
@@ -87,7 +90,8 @@ class ImuConfig(_Model):
                               units.deg_per_h(self.gyro_white_deg_h) * np.sqrt(dt)))
 
     def vrw(self, dt: float) -> float:
-        return float(units.micro_g(self.accel_white_ug) * np.sqrt(dt))
+        return float(np.hypot(units.micro_g(self.accel_white_ug) * np.sqrt(dt),
+                              units.micro_g(self.accel_vrw_ug_sqrt_hz)))
 
     def gyro_rw(self) -> float:
         return float(units.deg_per_h(self.gyro_bias_rw_deg_h_sqrt_h) / np.sqrt(units.HOUR))
@@ -202,6 +206,18 @@ class SarVelocityConfig(_SensorConfig):
         return SarVelocity(self.sigma_mps, self.period_s)
 
 
+class AirDataConfig(_SensorConfig):
+    """Air data (horizontal airspeed) and the wind estimate the wind constraint uses."""
+
+    sigma_airspeed_mps: float = Field(gt=0.0)
+    wind_sigma_mps: float = Field(default=0.0, ge=0.0)
+    wind_bias_mps: tuple[float, float] = (0.0, 0.0)  # (east, north) error of the estimate
+
+    def sensor(self) -> AirData:
+        return AirData(self.sigma_airspeed_mps, max(self.wind_sigma_mps, 1e-6),
+                       self.wind_bias_mps, self.period_s)
+
+
 class BaroConfig(_SensorConfig):
     """Barometric altimeter: damps the INS vertical channel (``damping_loop``) and/or aids
     the filter as a measurement (``baro`` in a mode's aiding)."""
@@ -236,13 +252,14 @@ class SensorsConfig(_Model):
     gnss: GnssConfig | None = None
     baro: BaroConfig | None = None
     sarvel: SarVelocityConfig | None = None
+    airdata: AirDataConfig | None = None
 
 
 class FaultConfig(_Model):
     """Additive sensor fault: ``size_sigma`` times the sensor sigma on ``components``
     (indices into the sensor's measurement; all when omitted), ``step`` or ``ramp``."""
 
-    sensor: Literal["star", "sar", "gnss", "baro", "sarvel"]
+    sensor: Literal["star", "sar", "gnss", "baro", "sarvel", "airdata"]
     start_s: float
     end_s: float
     size_sigma: float | list[float]
@@ -260,7 +277,7 @@ class FilterConfig(_Model):
     ``centralized`` (one filter; at each epoch H and R are stacked from the sensors that
     delivered since the last epoch)."""
 
-    type: Literal["ukf", "sukf", "kf", "ekf"] = "ukf"  # error-state filters
+    type: Literal["ukf", "sukf", "kf", "ekf", "cukf", "cekf", "aekf", "raukf"] = "ukf"
     architecture: Literal["federated", "centralized"] = "federated"
     period_s: float = Field(default=1.0, gt=0.0)
     alpha: float = Field(default=1e-3, gt=0.0)
@@ -280,10 +297,11 @@ class InitialErrorConfig(_Model):
 
     attitude_arcsec: tuple[float, float, float] = (0.0, 0.0, 0.0)
     velocity_mps: float = Field(default=0.0, ge=0.0)
-    position_m: float = Field(default=0.0, ge=0.0)
+    position_m: float | tuple[float, float, float] = 0.0  # one value or (east, north, up)
 
 
-FilterType = Literal["ukf", "sukf", "kf", "ekf", "total-ukf"]
+FilterType = Literal["ukf", "sukf", "kf", "ekf", "cukf", "cekf", "aekf", "raukf",
+                     "total-ukf"]
 
 
 class ModeConfig(_Model):
@@ -296,6 +314,34 @@ class ModeConfig(_Model):
     filter: FilterType | None = None
     # overrides timing.delay_compensation of every aiding sensor that has a latency
     delay_compensation: Literal["none", "curve_fit", "ins_increment", "recompute"] | None = None
+    # equality constraint applied in every local filter each epoch (needs sensors.airdata)
+    constraint: Literal["wind"] | None = None
+
+
+class WindEpisodeConfig(_Model):
+    start_s: float = Field(ge=0.0)
+    end_s: float
+    speed_range_mps: tuple[float, float]
+    from_range_deg: tuple[float, float]
+    change_interval_s: float = Field(gt=0.0)
+
+
+class WindConfig(_Model):
+    """Wind field (``fednav.wind``): constant wind from ``from_deg`` (meteorological, 270 =
+    west wind) plus random episodes; one realisation per scenario (``seed``)."""
+
+    speed_mps: float = Field(ge=0.0)
+    from_deg: float
+    ramp_s: float = Field(default=10.0, gt=0.0)
+    episodes: list[WindEpisodeConfig] = []
+    seed: int = 0
+
+    def field(self) -> WindField:
+        eps = [Episode(e.start_s, e.end_s, e.speed_range_mps,
+                       (units.deg(e.from_range_deg[0]), units.deg(e.from_range_deg[1])),
+                       e.change_interval_s) for e in self.episodes]
+        return WindField(self.speed_mps, units.deg(self.from_deg), eps, self.ramp_s,
+                         np.random.default_rng(self.seed))
 
 
 class FaultExperimentConfig(_Model):
@@ -322,6 +368,13 @@ class Scenario(_Model):
     faults: list[FaultConfig] = []
     fault_experiment: FaultExperimentConfig | None = None
     stats_period_s: float = Field(default=1.0, gt=0.0)
+    wind: WindConfig | None = None  # segments then describe the flight through the air
+
+    @model_validator(mode="after")
+    def _constraint_needs_air_data(self):
+        if any(m.constraint == "wind" for m in self.modes) and self.sensors.airdata is None:
+            raise ValueError("a mode with constraint: wind needs sensors.airdata")
+        return self
 
     @model_validator(mode="after")
     def _fault_experiment_needs_detection(self):
@@ -338,7 +391,9 @@ class Scenario(_Model):
         """The true flight (cached per scenario object)."""
         from .trajectory import generate
 
-        key = ("_traj", max_time)
+        # Keyed by what defines the flight: copies made with model_copy share this dict.
+        key = ("_traj", max_time, self.model_dump_json(
+            include={"start", "segments", "imu_period_s", "wind"}))
         cache = self.__dict__.setdefault("_cache", {})
         if key not in cache:
             segs = [s.to_segment() for s in self.segments]
@@ -348,7 +403,8 @@ class Scenario(_Model):
             cache[key] = generate(
                 [units.deg(st.lat_deg), units.deg(st.lon_deg), st.h_m], st.speed_mps,
                 [units.deg(st.pitch_deg), units.deg(st.roll_deg), units.deg(st.heading_deg)],
-                segs, self.imu_period_s)
+                segs, self.imu_period_s,
+                wind=None if self.wind is None else self.wind.field())
         return cache[key]
 
 

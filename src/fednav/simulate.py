@@ -20,7 +20,7 @@ from . import error_model as em
 from .config import Scenario
 from .delays import ANGLE_COLUMNS, InsIncrements, curve_fit_value
 from .filters import FederatedFilter, KalmanFilter, LinearModel, make_filter
-from .measurements import MODELS, NavSnapshot, StackedModel
+from .measurements import MODELS, NavSnapshot, StackedModel, WindConstraint
 from .sensors import Barometer, MeasurementSeries, corrupt_imu, inject_faults
 from .strapdown import STATE_LLA, STATE_Q, STATE_VEL, Strapdown, quat_to_dcm_nb
 from .total_state import GnssTotal, StarTotal, TotalStateUKF
@@ -73,11 +73,11 @@ def make_run_data(scn: Scenario, seed: int, max_time: float | None = None) -> Ru
     ie = scn.initial_errors
     init_phi = rng.standard_normal(3) * units.arcsec(np.asarray(ie.attitude_arcsec))
     init_dv = rng.standard_normal(3) * ie.velocity_mps
-    init_dp = rng.standard_normal(3) * ie.position_m
+    init_dp = rng.standard_normal(3) * np.asarray(ie.position_m, dtype=float)
     dth, dv, _ = corrupt_imu(truth.dtheta, truth.dv, truth.dt, scn.imu.errors(truth.dt), rng)
     series = {}
     faults = [f.fault() for f in scn.faults]
-    for name in ("star", "sar", "gnss", "baro", "sarvel"):
+    for name in ("star", "sar", "gnss", "baro", "sarvel", "airdata"):
         cfg = getattr(scn.sensors, name)
         if cfg is not None:
             series[name] = inject_faults(cfg.simulate(truth, rng), faults)
@@ -102,7 +102,7 @@ def initial_covariance(scn: Scenario) -> np.ndarray:
     ie, imu = scn.initial_errors, scn.imu
     sd = np.r_[
         units.arcsec(np.asarray(ie.attitude_arcsec)), np.full(3, ie.velocity_mps),
-        np.full(3, ie.position_m),
+        np.broadcast_to(np.asarray(ie.position_m, dtype=float), (3,)),
         np.full(3, units.deg_per_h(imu.gyro_bias_deg_h)),
         np.full(3, units.deg_per_h(imu.gyro_markov_deg_h)),
         np.full(3, units.micro_g(max(imu.accel_bias_ug, imu.accel_markov_ug))),
@@ -115,7 +115,7 @@ def _build_filter(scn: Scenario, aiding: list[str], ftype: str) -> FederatedFilt
     f = scn.filter
     P0 = initial_covariance(scn)
     opts = ({"alpha": f.alpha, "beta": f.beta, "kappa": f.kappa}
-            if ftype in ("ukf", "sukf") else {})
+            if ftype in ("ukf", "sukf", "cukf", "raukf") else {})
     names = ["central"] if f.architecture == "centralized" else aiding
     locals_ = {a: make_filter(ftype, np.zeros(em.N_STATES), P0, **opts) for a in names}
     for a, flt in locals_.items():
@@ -148,7 +148,7 @@ class _ClosedLoop:
     by their sensor's delay strategy (:mod:`fednav.delays`)."""
 
     def __init__(self, scn: Scenario, aiding: list[str], data: RunData, ftype: str, truth,
-                 delay: str | None = None):
+                 delay: str | None = None, constraint: str | None = None):
         self.scn, self.aiding, self.data = scn, aiding, data
         self.dt, self.T = truth.dt, scn.filter.period_s
         self.n_per = round(self.T / self.dt)
@@ -169,6 +169,9 @@ class _ClosedLoop:
             if delay is not None and not (tm.latency().is_zero and not tm.sequential):
                 tm = tm.model_copy(update={"delay_compensation": delay})
             self.timing[a] = tm
+        self.constraint = constraint
+        if constraint is not None and "airdata" not in data.series:
+            raise ValueError(f"scenario {scn.name}: the wind constraint needs sensors.airdata")
         self.incs = None
         if any(tm.delay_compensation in ("ins_increment", "recompute")
                for tm in self.timing.values()):
@@ -198,6 +201,18 @@ class _ClosedLoop:
                                 ANGLE_COLUMNS.get(a, ()))
             return model.residual(nav, z)
         return model.residual(nav, s.z[i])
+
+    def _wind_constraint(self, k: int) -> None:
+        """The air-data wind constraint (latest air data available) in every local filter."""
+        s = self.data.series["airdata"]
+        i = int(np.searchsorted(s.t_avail, self.t_epoch[k + 1] + 1e-9)) - 1
+        if i < 0:
+            return
+        nav = NavSnapshot(self.ins.lla, self.ins.vel, self.ins.dcm)
+        model = WindConstraint(s.z[i, 0])
+        d, R = model.residual(nav, s.z[i]), model.R(s.sigma, nav)
+        for name in self.fed.locals:
+            self.fed.update(name, d, model, nav, R, t=self.t_epoch[k + 1])
 
     def cycle(self, k: int, meas: list[tuple[str, int, str]]) -> None:
         """Filter cycle ``k`` (ends at epoch k+1) applying ``meas`` = (sensor, index, how)."""
@@ -238,6 +253,8 @@ class _ClosedLoop:
                     model = MODELS[a]
                     fed.update(a, self._residual(a, i, how, nav, k), model, nav,
                                model.R(self.data.series[a].sigma), t=t)
+        if self.constraint == "wind":
+            self._wind_constraint(k)
         fed.fuse()
         dx = em.to_si(fed.feedback())
         ins.correct(dx[em.PHI], dx[em.DV], dx[em.DP])
@@ -247,11 +264,12 @@ class _ClosedLoop:
 
 def run_mode(scn: Scenario, aiding: list[str], data: RunData, mode: str = "",
              max_time: float | None = None, filter_type: str | None = None,
-             delay: str | None = None) -> RunResult:
+             delay: str | None = None, constraint: str | None = None) -> RunResult:
     """Fly one mode (list of aiding sensors; empty = free SINS) on the run's data.
 
     ``filter_type`` overrides the scenario's; ``total-ukf`` runs :func:`run_total_state`.
-    ``delay`` overrides the delay strategy of every aiding sensor with a latency.
+    ``delay`` overrides the delay strategy of every aiding sensor with a latency;
+    ``constraint="wind"`` applies the air-data wind constraint in every local filter.
     Each aiding sensor's measurements are used at the first filter epoch after they
     become available, treated by the sensor's ``timing.delay_compensation``; with
     ``recompute`` the filter is re-run from the epoch of the capture instant.
@@ -271,7 +289,7 @@ def run_mode(scn: Scenario, aiding: list[str], data: RunData, mode: str = "",
         if a not in data.series:
             raise ValueError(f"scenario {scn.name}: mode '{mode}' uses sensor '{a}' which the "
                              f"scenario does not configure")
-    loop = _ClosedLoop(scn, aiding, data, ftype, truth, delay)
+    loop = _ClosedLoop(scn, aiding, data, ftype, truth, delay, constraint)
     fed = loop.fed
     how = {a: loop.timing[a].delay_compensation for a in aiding}
     t0 = truth.t[0]
@@ -427,4 +445,4 @@ def run_configured_mode(scn: Scenario, mode, data: RunData,
                         max_time: float | None = None) -> RunResult:
     """Run a :class:`~fednav.config.ModeConfig` of the scenario."""
     return run_mode(scn, list(mode.aiding), data, mode.name, max_time, mode.filter,
-                    mode.delay_compensation)
+                    mode.delay_compensation, mode.constraint)

@@ -58,6 +58,7 @@ class Trajectory:
     dv: np.ndarray
     dt: float
     segment_index: np.ndarray = field(repr=False)
+    wind: np.ndarray | None = field(default=None, repr=False)  # (N+1, 3) ENU [m/s]
 
     @property
     def dcm(self) -> np.ndarray:
@@ -68,7 +69,9 @@ class Trajectory:
         idx = np.rint((np.asarray(times) - self.t[0]) / self.dt).astype(int)
         if np.any(idx < 0) or np.any(idx >= len(self.t)):
             raise ValueError("Trajectory.at: requested time outside the trajectory")
-        return {"lla": self.lla[idx], "vel": self.vel[idx], "euler": self.euler[idx]}
+        wind = np.zeros((len(idx), 3)) if self.wind is None else self.wind[idx]
+        return {"lla": self.lla[idx], "vel": self.vel[idx], "euler": self.euler[idx],
+                "wind": wind}
 
 
 def _kinematics(t, t0, seg, v0, e0):
@@ -101,9 +104,20 @@ def body_rate_from_euler_rates(euler, euler_rates):
     )
 
 
-def _imu_at(t, t0, seg, v0, e0, lla):
+def _kinematics_wind(t, t0, seg, v0, e0, wind):
+    """:func:`_kinematics` of the air-relative motion plus the wind (ground = air + wind)."""
+    speed, euler, vel, acc = _kinematics(t, t0, seg, v0, e0)
+    if wind is not None:
+        shape = vel.shape
+        w, dw = wind(np.asarray(t, dtype=float).ravel())
+        vel = vel + w.reshape(shape)
+        acc = acc + dw.reshape(shape)
+    return speed, euler, vel, acc
+
+
+def _imu_at(t, t0, seg, v0, e0, lla, wind=None):
     """Ideal gyro rate omega_ib^b and specific force f^b at times ``t`` (with ``lla``)."""
-    _, euler, vel, acc = _kinematics(t, t0, seg, v0, e0)
+    _, euler, vel, acc = _kinematics_wind(t, t0, seg, v0, e0, wind)
     rates = np.broadcast_to([seg.pitch_rate, seg.roll_rate, seg.heading_rate], euler.shape)
     w_nb = body_rate_from_euler_rates(euler, rates)
     lat, h = lla[..., 0], lla[..., 2]
@@ -128,11 +142,15 @@ def generate(
     euler0,
     segments: list[Segment],
     dt: float,
+    wind=None,
 ) -> Trajectory:
     """Fly ``segments`` from ``lla0`` (lat, lon [rad], h [m]) at ``speed0`` [m/s].
 
     ``euler0`` = initial [pitch, roll, heading] [rad]; ``dt`` = IMU sample period [s].
-    Every segment duration must be a whole number of samples.
+    Every segment duration must be a whole number of samples.  With ``wind`` (a
+    :class:`~fednav.wind.WindField`, or any ``t -> (w, dw/dt)`` ENU), the segments describe
+    the motion *through the air mass* (speed = airspeed, body axes along the air
+    velocity) and the ground velocity is air velocity + wind.
     """
     if dt <= 0:
         raise ValueError(f"trajectory: IMU period dt must be positive, got {dt}")
@@ -155,7 +173,7 @@ def generate(
             raise ValueError(f"trajectory: segment {i} ({seg.name}) makes the speed negative")
 
         def rhs(t, y, t0=t0, seg=seg, v=v, e=e):
-            _, _, vel, _ = _kinematics(np.array([t]), t0, seg, v, e)
+            _, _, vel, _ = _kinematics_wind(np.array([t]), t0, seg, v, e, wind)
             ve, vn, vu = vel[0]
             rm, rn = earth.radii(y[0])
             return [vn / (rm + y[2]), ve / ((rn + y[2]) * np.cos(y[0])), vu]
@@ -166,13 +184,13 @@ def generate(
             raise RuntimeError(f"trajectory: position integration failed in segment {i}")
         tk = t0 + dt * np.arange(n + 1)
         tk[-1] = t0 + n * dt
-        _, ek, vk, _ = _kinematics(tk, t0, seg, v, e)
+        _, ek, vk, _ = _kinematics_wind(tk, t0, seg, v, e, wind)
         lk = sol.sol(tk).T
         # Quadrature nodes inside each sample interval.
         a, b = tk[:-1, None], tk[1:, None]
         tn = 0.5 * (a + b) + 0.5 * (b - a) * _GL_NODES[None, :]
         ln = sol.sol(tn.ravel()).T.reshape(n, len(_GL_NODES), 3)
-        w_ib, f_b = _imu_at(tn, t0, seg, v, e, ln)
+        w_ib, f_b = _imu_at(tn, t0, seg, v, e, ln, wind)
         wts = 0.5 * dt * _GL_WEIGHTS[None, :, None]
         dths.append((w_ib * wts).sum(axis=1))
         dvs.append((f_b * wts).sum(axis=1))
@@ -189,8 +207,10 @@ def generate(
         t0 = tk[-1]
     euler = np.concatenate(eulers)
     euler[:, 2] = wrap_2pi(euler[:, 2])
+    t_all = np.concatenate(ts)
     return Trajectory(
-        t=np.concatenate(ts), lla=np.concatenate(llas), vel=np.concatenate(vels),
+        t=t_all, lla=np.concatenate(llas), vel=np.concatenate(vels),
         euler=euler, dtheta=np.concatenate(dths), dv=np.concatenate(dvs), dt=dt,
         segment_index=np.concatenate(segidx),
+        wind=None if wind is None else wind(t_all)[0],
     )

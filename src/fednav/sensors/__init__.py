@@ -6,6 +6,7 @@ A sensor is a small frozen dataclass with a ``simulate(truth, rng)`` method retu
 passed in.
 """
 
+from .airdata import AirData
 from .baro import Barometer
 from .base import MeasurementSeries, sample_times
 from .faults import Fault, inject_faults
@@ -15,6 +16,6 @@ from .sar import SarMatcher, SarVelocity
 from .star import StarSensor
 from .timing import Latency, measurement_times, sequential_times
 
-__all__ = ["Barometer", "Fault", "Gnss", "ImuErrorState", "ImuErrors", "Latency",
+__all__ = ["AirData", "Barometer", "Fault", "Gnss", "ImuErrorState", "ImuErrors", "Latency",
            "MeasurementSeries", "SarMatcher", "SarVelocity", "StarSensor", "corrupt_imu",
            "inject_faults", "measurement_times", "sample_times", "sequential_times"]
