@@ -106,6 +106,16 @@ def test_ignoring_the_lever_arm_costs_accuracy(flight, result):
     assert bad["north_m"] + bad["east_m"] > 1.5 * (good["north_m"] + good["east_m"])
 
 
+def test_coarse_heading_from_the_gnss_course(flight):
+    from fednav.process import gnss_course
+
+    _, gnss, ref = flight
+    assert units.to_deg(gnss_course(gnss, 1.0)) == pytest.approx(45.0, abs=2.0)
+    still = GnssData("still", gnss.t, gnss.lla, gnss.vel * 0.0, gnss.sigma_pos,
+                     gnss.sigma_vel, gnss.lever)
+    assert gnss_course(still, 1.0) is None
+
+
 def test_coarse_levelling_signs():
     # nose up by 5 deg: gravity reaction tilts toward +y (forward) in the body frame
     g = 9.8
@@ -140,8 +150,7 @@ def test_cli_process_csv_end_to_end(tmp_path, flight):
         f"{e.accel_bias[0]}, gyro_markov_radps: 1.0e-6, accel_markov_mps2: 1.0e-5, "
         f"gyro_tau_s: 1000, accel_tau_s: 1000}}\n"
         f"gnss_sigma_pos_m: [1, 1, 1]\ngnss_sigma_vel_mps: [0.05, 0.05, 0.05]\n"
-        f"gnss_lever_m: [{LEVER[0]}, {LEVER[1]}, {LEVER[2]}]\ninitial_attitude: coarse\n"
-        f"coarse_heading_deg: 46\n")
+        f"gnss_lever_m: [{LEVER[0]}, {LEVER[1]}, {LEVER[2]}]\ninitial_attitude: coarse\n")
     out = tmp_path / "out"
     res = CliRunner().invoke(app, ["process", "csv", "--imu", str(tmp_path / "imu.csv"),
                                    "--gnss", str(tmp_path / "gnss.csv"), "--ref",

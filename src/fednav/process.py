@@ -60,7 +60,9 @@ class ProcessConfig(BaseModel):
     gnss_lever_m: _V3 | None = None  # body right-forward-up; default: the file's
     initial_attitude: str = Field("file", pattern="^(file|coarse)$")
     initial_attitude_sigma_deg: _V3 | None = None  # [pitch, roll, heading]
-    coarse_heading_deg: float = 0.0  # heading for coarse alignment (levelling only)
+    # coarse alignment heading; None: the GNSS course over coarse_seconds when the vehicle
+    # moves faster than 0.5 m/s then (forward motion assumed), else 0
+    coarse_heading_deg: float | None = None
     coarse_seconds: float = Field(1.0, gt=0)
     # chi-square test level: one for every local filter, or by name {gnss: .., velocity: ..}
     fdi_alpha: float | dict[str, float] | None = None
@@ -139,7 +141,18 @@ def coarse_level(accel_mean, heading: float = 0.0) -> np.ndarray:
     return np.array([pitch, roll, heading])
 
 
-def _initial_attitude(imu: ImuData, cfg: ProcessConfig, dt: float):
+def gnss_course(gnss: GnssData, seconds: float, min_speed: float = 0.5) -> float | None:
+    """Mean course over ground [rad, from north toward east] over the first ``seconds``
+    of GNSS velocity, or None when the vehicle is slower than ``min_speed`` [m/s]."""
+    if gnss.vel is None:
+        return None
+    v = gnss.vel[gnss.t <= gnss.t[0] + seconds, :2].mean(axis=0)
+    if np.hypot(*v) < min_speed:
+        return None
+    return float(np.arctan2(v[0], v[1]) % (2 * np.pi))
+
+
+def _initial_attitude(imu: ImuData, gnss: GnssData, cfg: ProcessConfig, dt: float):
     sig = None if cfg.initial_attitude_sigma_deg is None else units.deg(
         np.asarray(cfg.initial_attitude_sigma_deg))
     if cfg.initial_attitude == "file" and imu.initial_euler is not None:
@@ -147,7 +160,11 @@ def _initial_attitude(imu: ImuData, cfg: ProcessConfig, dt: float):
         sig = imu.initial_euler_sigma if sig is None else sig
     else:
         n = max(1, int(round(cfg.coarse_seconds / dt)))
-        euler = coarse_level(imu.accel[:n].mean(axis=0), units.deg(cfg.coarse_heading_deg))
+        if cfg.coarse_heading_deg is not None:
+            heading = float(units.deg(cfg.coarse_heading_deg))
+        else:
+            heading = gnss_course(gnss, cfg.coarse_seconds) or 0.0
+        euler = coarse_level(imu.accel[:n].mean(axis=0), heading)
     if sig is None:
         sig = units.deg(np.array([2.0, 2.0, 10.0]))
     return euler, sig
@@ -186,7 +203,7 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
     g_sigma = np.r_[sig_pos, sig_vel]
 
     # Initial state: first GNSS fix (antenna moved to the IMU), its velocity, attitude.
-    euler0, att_sig = _initial_attitude(imu, cfg, dt)
+    euler0, att_sig = _initial_attitude(imu, gnss, cfg, dt)
     C0 = att.euler_to_dcm(euler0)
     lla0 = gnss.lla[0].copy()
     rm, rn = earth.radii(lla0[0])

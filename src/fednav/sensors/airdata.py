@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .base import MeasurementSeries, sample_times
+from .base import MeasurementSeries, flight_times
 
 
 @dataclass(frozen=True)
@@ -29,8 +29,7 @@ class AirData:
 
     def simulate(self, truth, rng: np.random.Generator, t=None,
                  t_avail=None) -> MeasurementSeries:
-        if t is None:
-            t = sample_times(truth.t[-1], self.period, truth.t[0] + self.period)
+        t = flight_times(truth, self.period, t)
         tr = truth.at(t)
         air = tr["vel"][:, :2] - tr["wind"][:, :2]
         n = rng.standard_normal((len(t), 3))

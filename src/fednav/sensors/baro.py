@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .base import MeasurementSeries, sample_times
+from .base import MeasurementSeries, flight_times
 
 
 @dataclass(frozen=True)
@@ -18,8 +18,7 @@ class Barometer:
 
     def simulate(self, truth, rng: np.random.Generator, t=None,
                  t_avail=None) -> MeasurementSeries:
-        if t is None:
-            t = sample_times(truth.t[-1], self.period, truth.t[0] + self.period)
+        t = flight_times(truth, self.period, t)
         h = truth.at(t)["lla"][:, 2]
         z = h + rng.standard_normal(len(t)) * self.sigma
         return MeasurementSeries("baro", t, z[:, None], np.array([self.sigma]), t_avail)

@@ -63,3 +63,10 @@ def sample_times(t_end: float, period: float, t0: float | None = None) -> np.nda
     start = period if t0 is None else t0
     n = int(np.floor((t_end - start) / period + 1e-9)) + 1
     return start + period * np.arange(max(n, 0))
+
+
+def flight_times(truth, period: float, t=None) -> np.ndarray:
+    """``t`` when given (explicit capture times), else every ``period`` over the flight."""
+    if t is not None:
+        return np.asarray(t, dtype=float)
+    return sample_times(truth.t[-1], period, truth.t[0] + period)

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .base import MeasurementSeries, position_noise_to_llh, sample_times
+from .base import MeasurementSeries, flight_times, position_noise_to_llh
 
 
 @dataclass(frozen=True)
@@ -24,8 +24,7 @@ class Gnss:
 
     def simulate(self, truth, rng: np.random.Generator, t=None,
                  t_avail=None) -> MeasurementSeries:
-        if t is None:
-            t = sample_times(truth.t[-1], self.period, truth.t[0] + self.period)
+        t = flight_times(truth, self.period, t)
         tr = truth.at(t)
         sp = np.broadcast_to(np.asarray(self.sigma_pos, dtype=float), (3,))
         sv = np.broadcast_to(np.asarray(self.sigma_vel, dtype=float), (3,))

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..attitude import wrap_2pi
-from .base import MeasurementSeries, position_noise_to_llh, sample_times
+from .base import MeasurementSeries, flight_times, position_noise_to_llh
 
 
 @dataclass(frozen=True)
@@ -25,8 +25,7 @@ class SarMatcher:
     def simulate(self, truth, rng: np.random.Generator, t=None,
                  t_avail=None) -> MeasurementSeries:
         """Fixes every ``period``, or at the capture times ``t`` (available at ``t_avail``)."""
-        if t is None:
-            t = sample_times(truth.t[-1], self.period, truth.t[0] + self.period)
+        t = flight_times(truth, self.period, t)
         tr = truth.at(t)
         n = rng.standard_normal((len(t), 3))
         # (north, east) from draws 1 and 0: the draw order of earlier releases, so seeded
@@ -51,8 +50,7 @@ class SarVelocity:
 
     def simulate(self, truth, rng: np.random.Generator, t=None,
                  t_avail=None) -> MeasurementSeries:
-        if t is None:
-            t = sample_times(truth.t[-1], self.period, truth.t[0] + self.period)
+        t = flight_times(truth, self.period, t)
         v = truth.at(t)["vel"][:, :2]
         z = v + rng.standard_normal(v.shape) * self.sigma
         return MeasurementSeries("sarvel", t, z, np.array([self.sigma, self.sigma]), t_avail)

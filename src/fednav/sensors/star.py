@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..attitude import wrap_2pi
-from .base import MeasurementSeries, sample_times
+from .base import MeasurementSeries, flight_times
 
 
 @dataclass(frozen=True)
@@ -19,8 +19,7 @@ class StarSensor:
 
     def simulate(self, truth, rng: np.random.Generator, t=None,
                  t_avail=None) -> MeasurementSeries:
-        if t is None:
-            t = sample_times(truth.t[-1], self.period, truth.t[0] + self.period)
+        t = flight_times(truth, self.period, t)
         e = truth.at(t)["euler"]
         sig = np.broadcast_to(np.asarray(self.sigma, dtype=float), (3,))
         z = e + rng.standard_normal(e.shape) * sig
