@@ -362,3 +362,27 @@ def cov_to_si(P):
 def from_si(x):
     """SI -> filter units for a state vector."""
     return np.asarray(x) / SCALE
+
+
+def interval_process(s0, s1, dv_sum, T: float, noise: ImuNoiseModel, baro_gains=(0.0, 0.0),
+                     baro_q: float = 0.0, nsub: int = 2) -> ErrorProcess:
+    """The error model over one filter interval of the strapdown INS, linearised at the
+    interval's midpoint: ``s0``, ``s1`` the INS state (:mod:`fednav.strapdown` layout)
+    at its start and end, ``dv_sum`` the compensated velocity increments summed over it
+    (body, m/s)."""
+    from .strapdown import STATE_LLA, STATE_Q, STATE_VEL, quat_to_dcm_nb
+
+    qm = s0[STATE_Q] + s1[STATE_Q]
+    Cm = quat_to_dcm_nb(qm / np.sqrt(qm @ qm))
+    pm = 0.5 * (s0[STATE_LLA] + s1[STATE_LLA])
+    nom = Nominal(lat=pm[0], h=pm[2], vel=0.5 * (s0[STATE_VEL] + s1[STATE_VEL]), C=Cm,
+                  fn=Cm @ dv_sum / T)
+    return ErrorProcess(nom, T, noise, baro_gains, baro_q, nsub)
+
+
+def apply_feedback(ins, dx) -> tuple[np.ndarray, np.ndarray]:
+    """Remove the estimated errors ``dx`` (filter units) from the INS ``ins``; returns the
+    gyro [rad/s] and accelerometer [m/s^2] corrections to add to the IMU compensation."""
+    d = to_si(dx)
+    ins.correct(d[PHI], d[DV], d[DP])
+    return d[EPS_C] + d[EPS_R], d[NABLA]

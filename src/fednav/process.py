@@ -27,7 +27,7 @@ from .filters import FederatedFilter, KalmanFilter
 from .io.data import DataError, GnssData, ImuData, Reference, VelocityData
 from .measurements import GnssPosVel, NavSnapshot, VelocityENU
 from .smoother import rts_errors
-from .strapdown import STATE_LLA, STATE_Q, STATE_VEL, Strapdown, _correct, quat_to_dcm_nb
+from .strapdown import STATE_LLA, STATE_Q, STATE_VEL, Strapdown, _correct
 
 _V3 = tuple[float, float, float]
 #: Names of the local filters of the processing federated filter.
@@ -253,13 +253,8 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
         dvc = fb[sl] - comp_a * dt
         s0 = ins.state.copy()
         ins.run(dth, dvc, record=False)
-        s1 = ins.state
-        qm = s0[STATE_Q] + s1[STATE_Q]
-        Cm = quat_to_dcm_nb(qm / np.sqrt(qm @ qm))
-        pm = 0.5 * (s0[STATE_LLA] + s1[STATE_LLA])
-        nom = em.Nominal(lat=pm[0], h=pm[2], vel=0.5 * (s0[STATE_VEL] + s1[STATE_VEL]), C=Cm,
-                         fn=Cm @ dvc.sum(axis=0) / T)
-        proc = em.ErrorProcess(nom, T, noise, nsub=cfg.substeps)
+        proc = em.interval_process(s0, ins.state, dvc.sum(axis=0), T, noise,
+                                   nsub=cfg.substeps)
         fed.predict(proc)
         Phis[k], Qs[k] = proc.Phi, proc.Qd
         omega = dth.sum(axis=0) / T
@@ -277,12 +272,10 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
                 fed.update(name, model.residual(nav, z), model, nav, R, t=tm[i])
         fed.fuse()
         P_post[k] = fed.P
-        dx = fed.feedback()
-        dxs[k] = dx
-        d = em.to_si(dx)
-        ins.correct(d[em.PHI], d[em.DV], d[em.DP])
-        comp_g += d[em.EPS_C] + d[em.EPS_R]
-        comp_a += d[em.NABLA]
+        dxs[k] = fed.feedback()
+        dg, da = em.apply_feedback(ins, dxs[k])
+        comp_g += dg
+        comp_a += da
         states[k] = ins.state
     forward = _solution(t_ep, states, P_post, omegas, "forward", fed.log)
     smoothed = None

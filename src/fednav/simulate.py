@@ -226,17 +226,12 @@ class _ClosedLoop:
         if fed is None:
             return
         s1 = ins.state
-        qm = s0[STATE_Q] + s1[STATE_Q]
-        Cm = quat_to_dcm_nb(qm / np.sqrt(qm @ qm))
         if self.incs is not None:
             self.incs.record(k + 1, s0[STATE_LLA], s0[STATE_VEL], quat_to_dcm_nb(s0[STATE_Q]),
                              s1[STATE_LLA], s1[STATE_VEL], ins.dcm)
-        pm = 0.5 * (s0[STATE_LLA] + s1[STATE_LLA])
-        nom = em.Nominal(lat=pm[0], h=pm[2], vel=0.5 * (s0[STATE_VEL] + s1[STATE_VEL]),
-                         C=Cm, fn=Cm @ dvc.sum(axis=0) / T)
-        proc = em.ErrorProcess(nom, T, self.noise, self.baro_gains, self.baro_q,
-                               self.scn.filter.substeps)
-        fed.predict(proc)
+        fed.predict(em.interval_process(s0, s1, dvc.sum(axis=0), T, self.noise,
+                                        self.baro_gains, self.baro_q,
+                                        self.scn.filter.substeps))
         if meas:
             nav = NavSnapshot(ins.lla, ins.vel, ins.dcm)
             t = self.t_epoch[k + 1]
@@ -256,10 +251,9 @@ class _ClosedLoop:
         if self.constraint == "wind":
             self._wind_constraint(k)
         fed.fuse()
-        dx = em.to_si(fed.feedback())
-        ins.correct(dx[em.PHI], dx[em.DV], dx[em.DP])
-        self.comp_g += dx[em.EPS_C] + dx[em.EPS_R]
-        self.comp_a += dx[em.NABLA]
+        dg, da = em.apply_feedback(ins, fed.feedback())
+        self.comp_g += dg
+        self.comp_a += da
 
 
 def run_mode(scn: Scenario, aiding: list[str], data: RunData, mode: str = "",
