@@ -128,35 +128,37 @@ def bench_simplified_ukf(n=15, m=6):
           f"(x{t_r / t_s:.1f})")
 
 
-def bench_full_run():
-    from fednav.scenarios import paper002
+def _time_modes(paper, modes: dict[str, tuple]):
+    """Best-of-3 warm wall time of each (aiding, filter type) mode of ``paper``, and of the
+    free SINS on the same loop (the baseline)."""
     from fednav.simulate import make_run_data, run_mode
 
-    scn = paper002.load_scenario()
+    scn = paper.load_scenario()
     data = make_run_data(scn, 1)
-    run_mode(scn, ["star", "sar"], data)  # warm
-    t = best_of(lambda: run_mode(scn, ["star", "sar"], data), 3)
-    t_sins = best_of(lambda: run_mode(scn, [], data), 3)
+    out = {}
+    for name, (aid, ft) in {**modes, "SINS": ([], None)}.items():
+        run_mode(scn, aid, data, filter_type=ft)  # warm
+        out[name] = best_of(lambda aid=aid, ft=ft: run_mode(scn, aid, data, filter_type=ft), 3)
+    return out
+
+
+def bench_full_run():
+    from fednav.scenarios import paper002
+
+    t = _time_modes(paper002, {"CNS/SAR": (["star", "sar"], None)})
     print(f"paper-002 SINS/CNS/SAR 1200 s run (120 000 IMU samples, 1200 cycles, two local "
-          f"UKFs + master): {t:.2f} s warm; free SINS on the same loop {t_sins:.2f} s "
-          f"(filter share x{t / t_sins:.1f})")
+          f"UKFs + master): {t['CNS/SAR']:.2f} s warm; free SINS on the same loop "
+          f"{t['SINS']:.2f} s (filter share x{t['CNS/SAR'] / t['SINS']:.1f})")
 
 
 def bench_paper003_run():
     from fednav.scenarios import paper003
-    from fednav.simulate import make_run_data, run_mode
 
-    scn = paper003.load_scenario()
-    data = make_run_data(scn, 1)
     aid = ["gnss", "star"]
-    for ft in ("total-ukf", "kf"):
-        run_mode(scn, aid, data, filter_type=ft)  # warm
-    t_u = best_of(lambda: run_mode(scn, aid, data, filter_type="total-ukf"), 3)
-    t_k = best_of(lambda: run_mode(scn, aid, data, filter_type="kf"), 3)
-    t_sins = best_of(lambda: run_mode(scn, [], data), 3)
+    t = _time_modes(paper003, {"FUKF": (aid, "total-ukf"), "FKF": (aid, "kf")})
     print(f"paper-003 3600 s federated run (180 000 IMU samples, 3600 cycles): FUKF "
-          f"{t_u:.2f} s, FKF {t_k:.2f} s warm; free SINS on the same loop {t_sins:.2f} s "
-          f"(FUKF x{t_u / t_sins:.1f})")
+          f"{t['FUKF']:.2f} s, FKF {t['FKF']:.2f} s warm; free SINS on the same loop "
+          f"{t['SINS']:.2f} s (FUKF x{t['FUKF'] / t['SINS']:.1f})")
 
 
 if __name__ == "__main__":

@@ -19,28 +19,16 @@ def test_packaged_scenario_loads():
     assert [m.name for m in s.modes] == ["SINS", "SINS/SAR", "SINS/CNS", "SINS/CNS/SAR"]
 
 
-def test_unknown_key(tmp_path):
-    p = write(tmp_path, lambda d: d["sensors"]["sar"].update(sigma_pos=3))
-    with pytest.raises(ConfigError, match=r"s\.yaml: key 'sensors\.sar\.sigma_pos': unknown key"):
-        load_scenario(p)
-
-
-def test_wrong_type(tmp_path):
-    p = write(tmp_path, lambda d: d["start"].update(lat_deg="north"))
-    with pytest.raises(ConfigError, match=r"key 'start\.lat_deg'"):
-        load_scenario(p)
-
-
-def test_missing_value(tmp_path):
-    p = write(tmp_path, lambda d: d.pop("imu_period_s"))
-    with pytest.raises(ConfigError, match=r"key 'imu_period_s': missing value"):
-        load_scenario(p)
-
-
-def test_unknown_filter_name(tmp_path):
-    p = write(tmp_path, lambda d: d["filter"].update(type="pf9"))
-    with pytest.raises(ConfigError, match=r"key 'filter\.type'"):
-        load_scenario(p)
+@pytest.mark.parametrize(("mutate", "message"), [
+    (lambda d: d["sensors"]["sar"].update(sigma_pos=3),
+     r"s\.yaml: key 'sensors\.sar\.sigma_pos': unknown key"),
+    (lambda d: d["start"].update(lat_deg="north"), r"key 'start\.lat_deg'"),
+    (lambda d: d.pop("imu_period_s"), r"key 'imu_period_s': missing value"),
+    (lambda d: d["filter"].update(type="pf9"), r"key 'filter\.type'"),
+], ids=["unknown key", "wrong type", "missing value", "unknown filter name"])
+def test_bad_scenario_is_one_line(tmp_path, mutate, message):
+    with pytest.raises(ConfigError, match=message):
+        load_scenario(write(tmp_path, mutate))
 
 
 def test_missing_file(tmp_path):

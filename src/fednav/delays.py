@@ -71,15 +71,7 @@ class InsIncrements:
             dp = dp + frac * fp
             dv = dv + frac * fv
             R = R @ rotvec_to_dcm(frac * dcm_to_rotvec(fR))
-        return NavSnapshot(move_enu(nav.lla, -dp), nav.vel - dv, R.T @ nav.C, nav.omega_b)
-
-
-def move_enu(lla, d_enu) -> np.ndarray:
-    """Position ``lla`` moved by ``d_enu`` metres (east, north, up)."""
-    lat, lon, h = lla
-    rm, rn = earth.radii(lat)
-    return np.array([lat + d_enu[1] / (rm + h), lon + d_enu[0] / ((rn + h) * np.cos(lat)),
-                     h + d_enu[2]])
+        return NavSnapshot(earth.move_enu(nav.lla, -dp), nav.vel - dv, R.T @ nav.C, nav.omega_b)
 
 
 def curve_fit_value(t_hist, z_hist, t_eval: float, degree: int, points: int,

@@ -71,6 +71,18 @@ def llh_to_ecef(lat, lon, h):
     )
 
 
+def move_enu(lla, d_enu) -> np.ndarray:
+    """Positions ``lla`` (..., 3) moved by ``d_enu`` (..., 3) metres east, north, up (the
+    inverse of :func:`llh_difference_enu`, radii of curvature at ``lla``)."""
+    lla = np.asarray(lla, dtype=float)
+    d = np.asarray(d_enu, dtype=float)
+    lat, h = lla[..., 0], lla[..., 2]
+    rm, rn = radii(lat)
+    return np.stack([lat + d[..., 1] / (rm + h),
+                     lla[..., 1] + d[..., 0] / ((rn + h) * np.cos(lat)),
+                     h + d[..., 2]], axis=-1)
+
+
 def llh_difference_enu(lat, lon, h, lat_ref, lon_ref, h_ref):
     """Small position difference (lat, lon, h) - reference, expressed in metres ENU.
 

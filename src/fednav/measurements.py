@@ -8,7 +8,7 @@ its Jacobian ``H(nav)``.  Residual units: metres for positions, arc-minutes for 
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import cached_property
 
 import numba
@@ -29,7 +29,6 @@ class NavSnapshot:
     vel: np.ndarray
     C: np.ndarray
     omega_b: np.ndarray | None = None  # body angular rate w_ib [rad/s] (lever-arm terms)
-    lever_cache: dict = field(default_factory=dict, repr=False, compare=False)
 
     @cached_property
     def euler(self) -> np.ndarray:
@@ -141,13 +140,10 @@ def _lever_terms(nav: NavSnapshot, lever) -> tuple[np.ndarray, np.ndarray]:
     """Lever-arm offsets in ENU of a sensor at ``lever`` (body, m): position ``C l`` [m]
     and velocity ``C (w_ib x l)`` [m/s] (the ``w_in x C l`` term, < 1e-4 m/s per metre of
     lever, is left out)."""
-    key = id(lever)
-    if key not in nav.lever_cache:
-        lx, ly, lz = lever
-        wx, wy, wz = (0.0, 0.0, 0.0) if nav.omega_b is None else nav.omega_b
-        wl = np.array([wy * lz - wz * ly, wz * lx - wx * lz, wx * ly - wy * lx])
-        nav.lever_cache[key] = (nav.C @ lever, nav.C @ wl, lever)  # keep lever alive
-    return nav.lever_cache[key][:2]
+    lx, ly, lz = lever
+    wx, wy, wz = (0.0, 0.0, 0.0) if nav.omega_b is None else nav.omega_b
+    wl = np.array([wy * lz - wz * ly, wz * lx - wx * lz, wx * ly - wy * lx])  # w x l
+    return nav.C @ lever, nav.C @ wl
 
 
 class GnssPosVel:

@@ -205,11 +205,7 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
     # Initial state: first GNSS fix (antenna moved to the IMU), its velocity, attitude.
     euler0, att_sig = _initial_attitude(imu, gnss, cfg, dt)
     C0 = att.euler_to_dcm(euler0)
-    lla0 = gnss.lla[0].copy()
-    rm, rn = earth.radii(lla0[0])
-    d_enu = C0 @ lever
-    lla0 += [-d_enu[1] / (rm + lla0[2]), -d_enu[0] / ((rn + lla0[2]) * np.cos(lla0[0])),
-             -d_enu[2]]
+    lla0 = earth.move_enu(gnss.lla[0], -(C0 @ lever))
     ins = Strapdown(lla0, gnss.vel[0], euler0, dt)
     sd0 = np.r_[att_sig, sig_vel, sig_pos[[1, 0, 2]], np.full(3, gb),
                 np.full(3, noise.gyro_markov_sigma), np.full(3, max(ab, noise.accel_markov_sigma))]
@@ -264,7 +260,7 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
             order, bounds = todo[name]
             for i in order[bounds[k]:bounds[k + 1]]:
                 lag = t_ep[k] - tm[i]
-                nav = NavSnapshot(_move_back(lla, vel, lag), vel, C, omega)
+                nav = NavSnapshot(earth.move_enu(lla, -lag * vel), vel, C, omega)
                 if name == "gnss":
                     z, R = gnss_z(gnss, i), model.R(g_sigma)
                 else:
@@ -294,16 +290,6 @@ def gnss_z(gnss: GnssData, i: int) -> np.ndarray:
     return np.concatenate((gnss.lla[i], gnss.vel[i]))
 
 
-def _move_back(lla, vel, lag: float) -> np.ndarray:
-    """Position ``lag`` seconds earlier at constant ENU velocity."""
-    if lag == 0.0:
-        return lla
-    rm, rn = earth.radii(lla[0])
-    return np.array([lla[0] - vel[1] * lag / (rm + lla[2]),
-                     lla[1] - vel[0] * lag / ((rn + lla[2]) * np.cos(lla[0])),
-                     lla[2] - vel[2] * lag])
-
-
 def _solution(t, states, P, omega, label, log=None) -> Solution:
     sd = np.sqrt(np.diagonal(P, axis1=1, axis2=2)[:, :9]) * em.SCALE[:9]
     euler = att.quat_to_euler(states[:, STATE_Q])
@@ -325,10 +311,7 @@ def errors_against(sol: Solution, ref: Reference) -> dict[str, np.ndarray]:
     lla, vel = sol.lla, sol.vel
     if np.any(ref.lever):
         C = att.euler_to_dcm(sol.euler)
-        d = C @ ref.lever
-        rm, rn = earth.radii(lla[:, 0])
-        lla = lla + np.column_stack([d[:, 1] / (rm + lla[:, 2]),
-                                     d[:, 0] / ((rn + lla[:, 2]) * np.cos(lla[:, 0])), d[:, 2]])
+        lla = earth.move_enu(lla, C @ ref.lever)
         vel = vel + np.einsum("kij,kj->ki", C, np.cross(sol.omega, ref.lever))
     lla = interp(lla)
     vel = interp(vel)

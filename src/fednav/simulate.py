@@ -88,10 +88,7 @@ def make_run_data(scn: Scenario, seed: int, max_time: float | None = None) -> Ru
 
 
 def _initial_ins(scn: Scenario, truth, data: RunData) -> Strapdown:
-    lat, lon, h = truth.lla[0]
-    rm, rn = earth.radii(lat)
-    dp = data.init_dp
-    lla = np.array([lat + dp[1] / (rm + h), lon + dp[0] / ((rn + h) * np.cos(lat)), h + dp[2]])
+    lla = earth.move_enu(truth.lla[0], data.init_dp)
     C = att.apply_misalignment(att.euler_to_dcm(truth.euler[0]), data.init_phi)
     baro = scn.sensors.baro.loop() if scn.sensors.baro is not None else None
     return Strapdown(lla, truth.vel[0] + data.init_dv, att.dcm_to_euler(C), truth.dt, baro)
@@ -129,14 +126,18 @@ def _build_filter(scn: Scenario, aiding: list[str], ftype: str) -> FederatedFilt
                            fdi_recovery=f.fdi_recovery)
 
 
+def _cycle_of(t, t0: float, T: float) -> np.ndarray:
+    """Index of the filter cycle that ends at or after each time ``t`` (cycle k ends at
+    ``t0 + (k + 1) T``)."""
+    return np.ceil((np.asarray(t) - t0) / T - 1e-9).astype(int) - 1
+
+
 def _schedule(series: MeasurementSeries, T: float, n_cycles: int,
-              times: np.ndarray | None = None) -> list[list[int]]:
+              t0: float = 0.0) -> list[list[int]]:
     """Measurement indices to use at the end of each filter cycle (first cycle ending at or
-    after the measurement becomes available, or after ``times`` when given)."""
-    t = series.t_avail if times is None else times
-    k = np.ceil(t / T - 1e-9).astype(int) - 1
+    after the measurement becomes available)."""
     out: list[list[int]] = [[] for _ in range(n_cycles)]
-    for i, kk in enumerate(k):
+    for i, kk in enumerate(_cycle_of(series.t_avail, t0, T)):
         if 0 <= kk < n_cycles:
             out[kk].append(i)
     return out
@@ -194,8 +195,7 @@ class _ClosedLoop:
             return model.residual(self.incs.carry_back(nav, k + 1, s.t[i]), s.z[i])
         if how == "curve_fit":
             tm = self.timing[a]
-            known = np.flatnonzero(s.t_avail <= self.t_epoch[k + 1] + 1e-9)
-            known = known[np.argsort(s.t[known], kind="stable")]
+            known = np.flatnonzero(s.t_avail <= self.t_epoch[k + 1] + 1e-9)  # t increases
             z = curve_fit_value(s.t[known], s.z[known], self.t_epoch[k + 1],
                                 tm.curve_fit_degree, tm.curve_fit_points,
                                 ANGLE_COLUMNS.get(a, ()))
@@ -287,13 +287,10 @@ def run_mode(scn: Scenario, aiding: list[str], data: RunData, mode: str = "",
     fed = loop.fed
     how = {a: loop.timing[a].delay_compensation for a in aiding}
     t0 = truth.t[0]
-    sched = {a: _schedule(data.series[a], T, n_cycles, data.series[a].t_avail - t0)
-             for a in aiding}
+    sched = {a: _schedule(data.series[a], T, n_cycles, t0) for a in aiding}
     recompute = [a for a in aiding if how[a] == "recompute"]
-    capture = {a: np.ceil((data.series[a].t - t0) / T - 1e-9).astype(int) - 1
-               for a in recompute}
-    avail = {a: np.ceil((data.series[a].t_avail - t0) / T - 1e-9).astype(int) - 1
-             for a in recompute}
+    capture = {a: _cycle_of(data.series[a].t, t0, T) for a in recompute}
+    avail = {a: _cycle_of(data.series[a].t_avail, t0, T) for a in recompute}
 
     def planned(m: int, now: int) -> list[tuple[str, int, str]]:
         out = []

@@ -17,7 +17,6 @@ removed from the stored solution.  All arrays in the filter's units.
 from __future__ import annotations
 
 import numpy as np
-import scipy.linalg
 
 
 def rts_errors(P_post, Phi, Q, dx) -> tuple[np.ndarray, np.ndarray]:
@@ -38,16 +37,12 @@ def rts_errors(P_post, Phi, Q, dx) -> tuple[np.ndarray, np.ndarray]:
     P_prior = 0.5 * (P_prior + np.swapaxes(P_prior, 1, 2))
     # A_k = P+_k Phi' (P-)^-1  <=>  P- A_k' = Phi P+_k  (P- symmetric), batched.
     try:
-        cho = np.linalg.cholesky(P_prior)
+        np.linalg.cholesky(P_prior)  # every predicted covariance must be PD
     except np.linalg.LinAlgError:
         bad = next(k for k in range(N) if np.linalg.eigvalsh(P_prior[k])[0] <= 0)
         raise np.linalg.LinAlgError(f"RTS smoother: predicted covariance at epoch {bad + 1} "
                                     f"is not positive definite") from None
-    rhs = Phi[1:] @ P_post[:-1]
-    At = np.empty_like(rhs)
-    for k in range(N):
-        At[k] = scipy.linalg.cho_solve((cho[k], True), rhs[k], check_finite=False)
-    A = np.swapaxes(At, 1, 2)
+    A = np.swapaxes(np.linalg.solve(P_prior, Phi[1:] @ P_post[:-1]), 1, 2)
     e = np.zeros((N + 1, n))
     Ps = np.empty_like(P_post)
     Ps[N] = P_post[N]

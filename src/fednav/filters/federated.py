@@ -120,7 +120,6 @@ class FederatedFilter:
                 raise ValueError(f"fdi_alpha must be in (0, 1), got {a} for '{k}'")
         #: Chi-square test level per local filter (None: no detection for that filter).
         self.fdi_alphas = {k: alphas.get(k) for k in self.locals}
-        self.fdi_alpha = fdi_alpha
         if fdi_recovery < 1:
             raise ValueError(f"fdi_recovery must be >= 1, got {fdi_recovery}")
         self.fdi_recovery = fdi_recovery

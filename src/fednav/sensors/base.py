@@ -45,15 +45,9 @@ class MeasurementSeries:
 
 def position_noise_to_llh(lla, d_neu):
     """Add metric offsets ``d_neu`` = (north, east, up) [m] to positions ``lla`` (N, 3)."""
-    from ..earth import radii
+    from ..earth import move_enu
 
-    lla = np.asarray(lla, dtype=float)
-    d = np.asarray(d_neu, dtype=float)
-    rm, rn = radii(lla[..., 0])
-    h = lla[..., 2]
-    return np.stack([lla[..., 0] + d[..., 0] / (rm + h),
-                     lla[..., 1] + d[..., 1] / ((rn + h) * np.cos(lla[..., 0])),
-                     h + d[..., 2]], axis=-1)
+    return move_enu(lla, np.asarray(d_neu, dtype=float)[..., [1, 0, 2]])
 
 
 def sample_times(t_end: float, period: float, t0: float | None = None) -> np.ndarray:
