@@ -6,16 +6,17 @@ from .base import Filter, FilterError, FunctionModel, FunctionProcess, Innovatio
 from .constrained import ConstrainedEKF, ConstrainedUKF, project
 from .federated import FederatedFilter, sharing_factors
 from .kf import KalmanFilter
+from .particle import ParticleFilter, systematic_resample
 from .ukf import SimplifiedUKF, UnscentedKalmanFilter
 
 #: Names accepted in scenario files.
 REGISTRY = {"kf": KalmanFilter, "ekf": KalmanFilter, "ukf": UnscentedKalmanFilter,
             "sukf": SimplifiedUKF, "cukf": ConstrainedUKF, "cekf": ConstrainedEKF,
-            "aekf": SageHusaEKF, "raukf": RobustAdaptiveUKF}
+            "aekf": SageHusaEKF, "raukf": RobustAdaptiveUKF, "pf": ParticleFilter}
 
 
 def make_filter(name: str, x0, P0, **options) -> Filter:
-    """Build a filter by its registry name (``kf``, ``ekf``, ``ukf``, ``sukf``)."""
+    """Build a filter by its registry name (``kf``, ``ekf``, ``ukf``, ``sukf``, ``pf`` ...)."""
     try:
         cls = REGISTRY[name.lower()]
     except KeyError:
@@ -27,6 +28,6 @@ def make_filter(name: str, x0, P0, **options) -> Filter:
 
 __all__ = ["ConstrainedEKF", "ConstrainedUKF", "FederatedFilter", "Filter", "FilterError",
            "FunctionModel", "FunctionProcess", "Innovation", "KalmanFilter", "LinearModel",
-           "REGISTRY", "RobustAdaptiveUKF", "SageHusaEKF", "SimplifiedUKF",
+           "ParticleFilter", "REGISTRY", "RobustAdaptiveUKF", "SageHusaEKF", "SimplifiedUKF",
            "UnscentedKalmanFilter", "igg3_weights", "make_filter", "project",
-           "sharing_factors"]
+           "sharing_factors", "systematic_resample"]

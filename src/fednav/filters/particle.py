@@ -1,0 +1,224 @@
+"""SIR particle filter (paper 001, section 1.2) behind the common filter interface.
+
+* **Time update** — every particle is drawn from the transition prior:
+  ``x_k^i = f(x_{k-1}^i) + w^i``, ``w^i ~ N(0, q_scale Qd)``; ``f`` is
+  ``process.transition`` called once on the whole particle set (a compiled kernel for the
+  navigation models).
+* **Measurement update** — ``log w_k^i = log w_{k-1}^i + log p(y | x_k^i)`` in the log
+  domain (normalised by log-sum-exp, so no weight underflows to zero unless every
+  likelihood is exactly zero).  The likelihood is Gaussian in ``y - h(x)`` with ``R``, or
+  ``model.loglik(y, X, nav, R)`` when the measurement model supplies one (a heavy-tailed
+  sensor, or an exact residual on a manifold).
+* **Estimate** ``x = sum w^i x^i``, ``P = sum w^i (x^i - x)(x^i - x)'`` — taken *before*
+  resampling (lower variance).
+* **Resampling** — systematic, when the effective sample size ``1 / sum w_i^2`` falls below
+  ``resample_threshold * N``; optional **roughening** (Gordon, Salmond & Smith 1993):
+  after resampling, every component ``j`` is jittered by ``N(0, (K E_j N^(-1/n))^2)``
+  with ``E_j`` the spread of the particles in that component and ``K = roughening``.
+* **Setting the estimate from outside** (federated fusion and reset, feedback): assigning
+  ``x`` shifts the particle cloud rigidly; assigning ``P`` marks the set for redrawing
+  from ``N(x, P)`` before its next use — the paper's step "re-sample every local filter's
+  particle set from the fused result".
+* **Degeneracy** is reported, never turned into NaN: a :class:`FilterError` when every
+  likelihood is zero (or not finite), when the effective sample size has stayed below
+  ``collapse_fraction * N`` for ``max_collapsed`` updates in a row, or when the particle
+  covariance is not positive definite (an impoverished set); :attr:`ess_log` keeps the
+  effective sample size of every update.
+
+Attitude-carrying models keep particles on the tangent space of the navigation
+solution (error states), so every particle is a valid rotation by construction (see
+:mod:`fednav.launch.errors`).
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from ..kernels import cholesky_lower
+from .base import Filter, FilterError, Innovation, chol
+
+
+@numba.njit(cache=True)
+def systematic_resample(w, u0):
+    """Indices of a systematic resampling of normalised weights ``w`` (N,) with the offset
+    ``u0`` in [0, 1): particle i is copied floor(N w_i) or ceil(N w_i) times."""
+    n = w.shape[0]
+    idx = np.empty(n, dtype=np.int64)
+    c = w[0]
+    j = 0
+    for i in range(n):
+        u = (u0 + i) / n
+        while u > c and j < n - 1:
+            j += 1
+            c += w[j]
+        idx[i] = j
+    return idx
+
+
+def psd_sqrt(Q: np.ndarray) -> np.ndarray:
+    """A square root ``L`` with ``L L' = Q`` of a symmetric positive semi-definite matrix
+    (Cholesky when it exists, else the eigen-decomposition with negative rounding noise
+    clipped) — process noise is often singular (no noise on position)."""
+    L, ok = cholesky_lower(np.ascontiguousarray(Q, dtype=float))
+    if ok:
+        return L
+    ev, V = np.linalg.eigh(0.5 * (Q + Q.T))
+    if ev.min() < -1e-9 * max(1.0, abs(ev.max())):
+        raise FilterError(f"process noise is not positive semi-definite (eigenvalue "
+                          f"{ev.min():.3g})")
+    return V * np.sqrt(np.clip(ev, 0.0, None))
+
+
+class ParticleFilter(Filter):
+    """SIR particle filter.
+
+    ``n_particles`` N; ``rng`` a :class:`numpy.random.Generator` or a seed (every draw comes
+    from it: runs are reproducible); ``resample_threshold`` resample when ESS < this * N
+    (1.0 = every update, 0 = never); ``roughening`` K (0 = off); ``collapse_fraction`` and
+    ``max_collapsed`` the degeneracy rule.
+    """
+
+    def __init__(self, x0, P0, name: str = "pf", n_particles: int = 1000,
+                 rng: np.random.Generator | int = 0, resample_threshold: float = 0.5,
+                 roughening: float = 0.0, collapse_fraction: float = 0.01,
+                 max_collapsed: int = 20):
+        if int(n_particles) != n_particles or n_particles < 2:
+            raise ValueError(f"{name}: n_particles must be an integer >= 2, got {n_particles}")
+        if not 0.0 <= resample_threshold <= 1.0:
+            raise ValueError(f"{name}: resample_threshold must be in [0, 1], got "
+                             f"{resample_threshold}")
+        if roughening < 0:
+            raise ValueError(f"{name}: roughening must be >= 0, got {roughening}")
+        if max_collapsed < 1 or not 0.0 < collapse_fraction < 1.0:
+            raise ValueError(f"{name}: need max_collapsed >= 1 and 0 < collapse_fraction < 1")
+        self.N = int(n_particles)
+        self.rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+        self.resample_threshold = float(resample_threshold)
+        self.roughening = float(roughening)
+        self.collapse_fraction = float(collapse_fraction)
+        self.max_collapsed = int(max_collapsed)
+        self.particles: np.ndarray | None = None
+        self.weights = np.full(self.N, 1.0 / self.N)
+        self._pending = True
+        #: Effective sample size at every measurement update (before any resampling).
+        self.ess_log: list[float] = []
+        self.resamples = 0
+        self._collapsed = 0
+        super().__init__(x0, P0, name)
+
+    # --- the estimate, settable from outside ------------------------------------------
+    @property
+    def x(self) -> np.ndarray:
+        return self._x
+
+    @x.setter
+    def x(self, value) -> None:
+        value = np.array(value, dtype=float)
+        if self.particles is not None and not self._pending:
+            self.particles += value - self._x
+        self._x = value
+
+    @property
+    def P(self) -> np.ndarray:
+        return self._P
+
+    @P.setter
+    def P(self, value) -> None:
+        self._P = np.array(value, dtype=float)
+        self._pending = True
+
+    def _materialise(self, phase: str) -> np.ndarray:
+        """The particle set, drawn from N(x, P) (equal weights) if a redraw is pending."""
+        if self._pending:
+            L = chol(self._P, self._who(phase))
+            self.particles = self._x + self.rng.standard_normal((self.N, self.n)) @ L.T
+            self.weights = np.full(self.N, 1.0 / self.N)
+            self._pending = False
+        return self.particles
+
+    def _estimate(self, phase: str) -> None:
+        w, X = self.weights, self.particles
+        x = w @ X
+        D = X - x
+        P = (D * w[:, None]).T @ D
+        P = 0.5 * (P + P.T)
+        if not np.isfinite(x.sum() + P.sum()):
+            raise FilterError(f"{self._who(phase)}: particles became NaN/inf")
+        self._x, self._P = x, P
+
+    # --- filter interface ---------------------------------------------------------------
+    def predict(self, process, q_scale: float = 1.0) -> None:
+        self.step += 1
+        X = self._materialise("predict")
+        Xf = np.asarray(process.transition(X), dtype=float)
+        if Xf.shape != X.shape:
+            raise FilterError(f"{self._who('predict')}: transition returned shape "
+                              f"{Xf.shape} for particles {X.shape}")
+        L = psd_sqrt(q_scale * np.asarray(process.Qd, dtype=float))
+        self.particles = Xf + self.rng.standard_normal(X.shape) @ L.T
+        self._estimate("predict")
+
+    def update(self, y, model, nav=None, R=None, gate: float | None = None) -> Innovation:
+        X = self._materialise("update")
+        y = np.atleast_1d(np.asarray(y, dtype=float))
+        R = np.atleast_2d(np.asarray(R, dtype=float))
+        Z = np.asarray(model.h(X, nav), dtype=float).reshape(self.N, -1)
+        w = self.weights
+        z_hat = w @ Z
+        dZ = Z - z_hat
+        S = (dZ * w[:, None]).T @ dZ + R
+        S = 0.5 * (S + S.T)
+        r = y - z_hat
+        Ls = chol(S, self._who("update (innovation covariance)"))
+        v = np.linalg.solve(Ls, r)
+        nis = float(v @ v)
+        if gate is not None and nis > gate:
+            return Innovation(r, S, nis, False)
+        if hasattr(model, "loglik"):
+            ll = np.asarray(model.loglik(y, X, nav, R), dtype=float)
+        else:
+            Lr = chol(R, self._who("update (measurement noise)"))
+            E = np.linalg.solve(Lr, (y - Z).T)
+            ll = -0.5 * (E * E).sum(axis=0)
+        logw = np.log(w) + ll
+        m = np.max(logw)
+        if not np.isfinite(m) or np.isnan(logw).any():
+            raise FilterError(f"{self._who('update')}: every particle weight is zero or "
+                              f"not finite (likelihood underflow: the measurement lies "
+                              f"outside the particle cloud, NIS {nis:.3g})")
+        w = np.exp(logw - m)
+        w /= w.sum()
+        self.weights = w
+        ess = 1.0 / float(w @ w)
+        self.ess_log.append(ess)
+        self._collapsed = self._collapsed + 1 if ess < self.collapse_fraction * self.N else 0
+        if self._collapsed >= self.max_collapsed:
+            raise FilterError(f"{self._who('update')}: particle set degenerate — effective "
+                              f"sample size below {self.collapse_fraction * self.N:.3g} of "
+                              f"{self.N} for {self._collapsed} updates in a row (last "
+                              f"{ess:.2f}); use more particles, roughening or a broader "
+                              f"proposal")
+        self._estimate("update")
+        if ess < self.resample_threshold * self.N:
+            self._resample()
+        try:
+            chol(self._P, "")
+        except FilterError:
+            distinct = len(np.unique(self.particles, axis=0))
+            raise FilterError(f"{self._who('update')}: particle covariance not positive "
+                              f"definite (effective sample size {ess:.2f} of {self.N}, "
+                              f"{distinct} distinct particles): degenerate or impoverished "
+                              f"set; use more particles or roughening") from None
+        return Innovation(r, S, nis)
+
+    def _resample(self) -> None:
+        idx = systematic_resample(self.weights, float(self.rng.random()))
+        X = self.particles[idx]
+        if self.roughening > 0:
+            spread = X.max(axis=0) - X.min(axis=0)
+            sig = self.roughening * spread * self.N ** (-1.0 / self.n)
+            X = X + self.rng.standard_normal(X.shape) * sig
+        self.particles = X
+        self.weights = np.full(self.N, 1.0 / self.N)
+        self.resamples += 1
