@@ -56,6 +56,29 @@ def systematic_resample(w, u0):
     return idx
 
 
+@numba.njit(cache=True)
+def weighted_moments(X, w):
+    """Weighted mean (n,) and covariance (n, n) of particles X (N, n) with weights w."""
+    N, n = X.shape
+    x = np.zeros(n)
+    for i in range(N):
+        for j in range(n):
+            x[j] += w[i] * X[i, j]
+    P = np.zeros((n, n))
+    d = np.empty(n)
+    for i in range(N):
+        for j in range(n):
+            d[j] = X[i, j] - x[j]
+        for j in range(n):
+            wd = w[i] * d[j]
+            for k in range(j + 1):
+                P[j, k] += wd * d[k]
+    for j in range(n):
+        for k in range(j):
+            P[k, j] = P[j, k]
+    return x, P
+
+
 def psd_sqrt(Q: np.ndarray) -> np.ndarray:
     """A square root ``L`` with ``L L' = Q`` of a symmetric positive semi-definite matrix
     (Cholesky when it exists, else the eigen-decomposition with negative rounding noise
@@ -138,11 +161,7 @@ class ParticleFilter(Filter):
         return self.particles
 
     def _estimate(self, phase: str) -> None:
-        w, X = self.weights, self.particles
-        x = w @ X
-        D = X - x
-        P = (D * w[:, None]).T @ D
-        P = 0.5 * (P + P.T)
+        x, P = weighted_moments(self.particles, self.weights)
         if not np.isfinite(x.sum() + P.sum()):
             raise FilterError(f"{self._who(phase)}: particles became NaN/inf")
         self._x, self._P = x, P

@@ -17,8 +17,8 @@ increments ``dtheta_k`` [rad], ``dv_k`` [m/s] over ``dt`` [s]:
 
 The state is a flat array so the same kernel serves open-loop runs and filter loops with
 feedback; a call over one filter interval also returns what the error model needs: the
-summed LI specific-force increment, and the attitude and position at the interval's
-middle sample.
+summed LI specific-force increment and its integral over the interval, and the attitude,
+position and velocity at the interval's middle sample.
 """
 
 from __future__ import annotations
@@ -31,7 +31,9 @@ import numpy as np
 from .frame import LaunchFrame, gravitation_li_xyz
 
 STATE_SIZE = 17  # q (4), v (3), r (3), dtheta_prev (3), dv_prev (3), has_prev
-AUX_SIZE = 13  # dv_li sum (3), q at the middle sample (4), r there (3), v there (3)
+#: Interval summary: dv_li sum (3), q at the middle sample (4), r there (3), v there (3),
+#: and the double integral of the LI specific force over the interval (3) [m].
+AUX_SIZE = 16
 
 
 @numba.njit(cache=True)
@@ -45,6 +47,7 @@ def _run(state, dtheta, dv, dt, r0, Ce, degree, out_q, out_v, out_r, aux):
     bx0, by0, bz0 = state[13], state[14], state[15]
     has_prev = state[16] > 0.5
     sx = sy = sz = 0.0
+    dx = dy = dz = 0.0
     mid = n // 2
     for k in range(n):
         if k == mid and aux.shape[0] > 0:
@@ -84,6 +87,9 @@ def _run(state, dtheta, dv, dt, r0, Ce, degree, out_q, out_v, out_r, aux):
         wx = c00 * ux + c01 * uy + c02 * uz
         wy = c10 * ux + c11 * uy + c12 * uz
         wz = c20 * ux + c21 * uy + c22 * uz
+        dx += (sx + 0.5 * wx) * dt
+        dy += (sy + 0.5 * wy) * dt
+        dz += (sz + 0.5 * wz) * dt
         sx += wx
         sy += wy
         sz += wz
@@ -121,6 +127,7 @@ def _run(state, dtheta, dv, dt, r0, Ce, degree, out_q, out_v, out_r, aux):
             out_r[k, 0], out_r[k, 1], out_r[k, 2] = rx, ry, rz
     if aux.shape[0] > 0:
         aux[0], aux[1], aux[2] = sx, sy, sz
+        aux[13], aux[14], aux[15] = dx, dy, dz
     state[0], state[1], state[2], state[3] = q0, q1, q2, q3
     state[4], state[5], state[6] = vx, vy, vz
     state[7], state[8], state[9] = rx, ry, rz
@@ -186,7 +193,8 @@ class LaunchStrapdown:
 
     def interval(self, dtheta, dv) -> np.ndarray:
         """Integrate one filter interval without recording; returns the ``AUX_SIZE`` summary
-        (summed LI specific-force increment, q, r and v at the middle sample)."""
+        (summed LI specific-force increment, q, r and v at the middle sample, and the
+        double integral of the LI specific force)."""
         aux = np.empty(AUX_SIZE)
         _run(self.state, dtheta, dv, self.dt, *self._consts, _NO_Q, _NO_3, _NO_3, aux)
         self._finite()
