@@ -20,9 +20,9 @@ console = Console()
 
 
 def _papers():
-    from .scenarios import paper000, paper002, paper003, paper004
+    from .scenarios import paper000, paper001, paper002, paper003, paper004
 
-    return (paper000, paper002, paper003, paper004)
+    return (paper000, paper001, paper002, paper003, paper004)
 
 
 def _paper_module(paper: str):
@@ -36,29 +36,42 @@ def _paper_module(paper: str):
 @app.command()
 def reproduce(
     paper: str = typer.Argument(..., help="paper number or alias: 000 / airship, "
-                                          "002 / cruise-missile, 003 / federated-ukf, "
-                                          "004 / sar-delay"),
+                                          "001 / launch-frame, 002 / cruise-missile, "
+                                          "003 / federated-ukf, 004 / sar-delay"),
     runs: int = typer.Option(10, min=1, help="Monte Carlo runs"),
     seed: int = typer.Option(1, help="seed of the first run (run i uses seed + i)"),
     out: Path = typer.Option(None, help="output folder [default: results/<paper>]"),
     jobs: int = typer.Option(min(2, os.cpu_count() or 1), min=1, help="worker processes"),
     scenario: Path = typer.Option(None, help="alternative scenario YAML"),
     max_time: float = typer.Option(None, help="truncate the flight (smoke runs only)"),
+    particles: int = typer.Option(None, help="particles per local particle filter "
+                                             "(paper 001; default from the scenario)"),
 ) -> None:
     """Reproduce a paper's experiment and print its tables beside the paper's."""
     mod = _paper_module(paper)
+    extra = {}
+    if particles is not None:
+        if not hasattr(mod, "n_tasks"):
+            typer.echo(f"error: --particles applies to paper 001 only, not {mod.PAPER}",
+                       err=True)
+            raise typer.Exit(2)
+        if particles < 10:
+            typer.echo(f"error: --particles must be at least 10, got {particles}", err=True)
+            raise typer.Exit(2)
+        extra["particles"] = particles
     try:
         scn = mod.load_scenario(scenario)
     except ConfigError as e:
         typer.echo(f"error: {e}", err=True)
         raise typer.Exit(2) from None
     t0 = time.perf_counter()
+    total = mod.n_tasks(scn, runs) if hasattr(mod, "n_tasks") else runs
     with Progress("[progress.description]{task.description}", BarColumn(),
                   MofNCompleteColumn(), TimeElapsedColumn(), console=console,
                   transient=False) as prog:
-        task = prog.add_task(f"paper {mod.PAPER}: {scn.name}", total=runs)
+        task = prog.add_task(f"paper {mod.PAPER}: {scn.name}", total=total)
         rep = mod.reproduce(scn, runs, seed, jobs, max_time,
-                            progress=lambda: prog.advance(task))
+                            progress=lambda: prog.advance(task), **extra)
     mod.print_summary(rep["summary"], console)
     out = out or Path("results") / mod.PAPER
     files = mod.write_outputs(out, rep)

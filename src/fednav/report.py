@@ -54,15 +54,17 @@ def print_tables(summary: dict, titles: dict[str, str], console: Console | None 
         if not rows:
             continue
         tab = Table(title=f"{titles.get(tname, tname)}\nfednav: mean ± 95% CI over "
-                          f"{summary['runs']} Monte Carlo runs (seed {summary['seed']})")
+                          f"{t.get('runs', summary['runs'])} Monte Carlo runs (seed "
+                          f"{summary['seed']})")
         for c, j in (("row", "left"), ("quantity", "left"), ("fednav", "right"),
                      ("± 95% CI", "right"), ("paper", "right"), ("fednav/paper", "right")):
             tab.add_column(c, justify=j)
         for r, vals in rows.items():
             for i, (c, v) in enumerate(vals.items()):
-                ratio = f"×{v['ours'] / v['paper']:.2f}" if v["paper"] else "–"
+                pv = v.get("paper")
+                ratio = f"×{v['ours'] / pv:.2f}" if pv else "–"
                 tab.add_row(r if i == 0 else "", c, _fmt(v["ours"]), _fmt(v["ci95"]),
-                            _fmt(v["paper"]), ratio,
+                            _fmt(pv), ratio,
                             end_section=(i == len(vals) - 1))
         console.print(tab)
 

@@ -6,7 +6,9 @@ Cycle (Carlson's federated filter, paper 002 eq. 13–15, paper 003 eq. 16–22)
    ``Q_i = Q / beta_i``;
 2. local filters measurement-update with their own sensors (the master has none);
 3. global fusion ``P_g = (sum P_i^-1)^-1``, ``x_g = P_g sum P_i^-1 x_i`` over the filters
-   that are not isolated;
+   that are not isolated (when a local filter's covariance is a sample estimate — a
+   particle filter — the fused covariance is corrected for the bias that fusing noisy
+   covariances introduces, :func:`_sampling_bias_correction`);
 4. ``reset`` mode: ``x_i = x_g``, ``P_i = P_g / beta_i``.  ``no_reset`` mode: locals keep
    their own estimates (the fused result is output only).
 
@@ -85,6 +87,41 @@ def _fuse(xs, Ps):
     if not ok:
         return v, Ig, tr, k
     return Pg @ v, 0.5 * (Pg + Pg.T), tr, -1
+
+
+def _sampling_bias_correction(Pg, Ps, dofs, names) -> np.ndarray:
+    """Remove the second-order bias of ``P_g = (sum P_i^-1)^-1`` when some ``P_i`` are sample
+    covariances with ``dof_i`` degrees of freedom (particle filters).
+
+    With ``P_i = Sigma_i^(1/2) (I + E_i) Sigma_i^(1/2)`` and Wishart-like noise
+    (``E[E M E] = (M + tr(M) I) / dof``), a second-order expansion gives
+    ``E[P_g] = P - sum_i [(n + 1) P A_i P - P A_i P A_i P - tr(P A_i) P A_i P] / dof_i``
+    (``A_i = Sigma_i^-1``, ``P`` the true fused covariance).  The bracket vanishes where
+    one filter carries all the information and is ``P/dof`` for two equal scalar filters;
+    uncorrected, the deficit compounds every fusion-reset cycle and the fused covariance
+    collapses.  The plug-in estimate of the bias (``A_i = P_i^-1``, ``P = P_g``) is added
+    back.
+    """
+    n = Pg.shape[0]
+    corr = np.zeros_like(Pg)
+    for P, dof, name in zip(Ps, dofs, names, strict=True):
+        if dof is None:
+            continue
+        if dof <= n + 1:
+            raise FilterError(f"federated fusion: '{name}' has {dof + 1:.1f} effective "
+                              f"samples, too few to estimate a covariance of {n} states")
+        A, ok = spd_inverse(np.ascontiguousarray(P))
+        if not ok:
+            raise FilterError(f"federated fusion: covariance of '{name}' is not positive "
+                              f"definite")
+        PA = Pg @ A
+        PAP = PA @ Pg
+        corr += ((n + 1 - np.trace(PA)) * PAP - PA @ PAP) / dof
+    out = Pg + 0.5 * (corr + corr.T)
+    if not np.all(np.isfinite(out)) or np.linalg.eigvalsh(out).min() <= 0:
+        raise FilterError("federated fusion: sampling-bias correction left the fused "
+                          "covariance not positive definite")
+    return out
 
 
 class FederatedFilter:
@@ -193,6 +230,9 @@ class FederatedFilter:
             who = names[bad] if bad < len(names) else "fused information"
             raise FilterError(f"federated fusion: covariance of '{who}' is not positive "
                               f"definite")
+        dofs = [getattr(use[k], "covariance_dof", None) for k in names]
+        if any(d is not None for d in dofs):
+            Pg = _sampling_bias_correction(Pg, Ps, dofs, names)
         self.x, self.P = xg, Pg
         if self.reset:
             if self.sharing == "adaptive":

@@ -9,12 +9,28 @@
   likelihood is exactly zero).  The likelihood is Gaussian in ``y - h(x)`` with ``R``, or
   ``model.loglik(y, X, nav, R)`` when the measurement model supplies one (a heavy-tailed
   sensor, or an exact residual on a manifold).
-* **Estimate** ``x = sum w^i x^i``, ``P = sum w^i (x^i - x)(x^i - x)'`` — taken *before*
-  resampling (lower variance).
+* **Estimate** ``x = sum w^i x^i``, ``P = sum w^i (x^i - x)(x^i - x)' / (1 - sum w_i^2)``
+  (the unbiased weighted covariance; Bessel's correction for equal weights) — taken
+  *before* resampling (lower variance).
 * **Resampling** — systematic, when the effective sample size ``1 / sum w_i^2`` falls below
   ``resample_threshold * N``; optional **roughening** (Gordon, Salmond & Smith 1993):
   after resampling, every component ``j`` is jittered by ``N(0, (K E_j N^(-1/n))^2)``
   with ``E_j`` the spread of the particles in that component and ``K = roughening``.
+* **Progressive correction** (optional; Musso, Oudjane & Le Gland 2001, "Improving
+  regularised particle filters"): when one update would leave fewer than
+  ``progressive_ess * N`` effective particles (a precise measurement meeting a wide
+  cloud: the first star fix after a long period of large attitude uncertainty), the
+  likelihood is applied in tempered stages ``p(y|x)^lambda_s`` with ``sum lambda_s = 1``,
+  each ``lambda_s`` the largest that keeps the effective sample size at that level
+  (bisection); between stages the set is resampled and moved with the Liu–West shrinkage
+  kernel ``x <- a x + (1 - a) x_bar + h L eps`` (``a = sqrt(1 - h^2)``, ``L L' =`` the
+  weighted covariance, ``h`` the regularised-PF bandwidth ``(4 / (N (n + 2)))^(1/(n+4))``),
+  which keeps the weighted mean and covariance, so states the measurement does not
+  inform are not inflated.  The number of stages is recorded in :attr:`stage_log`.
+* **Covariance for fusion** — the estimate's covariance is a weighted *sample*
+  covariance; :attr:`covariance_dof` (Kish's effective sample size of the estimate minus
+  one) tells a federated filter how noisy it is, so the fusion can remove the bias that
+  inverting noisy covariances introduces (:func:`~fednav.filters.federated.fuse`).
 * **Setting the estimate from outside** (federated fusion and reset, feedback): assigning
   ``x`` shifts the particle cloud rigidly; assigning ``P`` marks the set for redrawing
   from ``N(x, P)`` before its next use — the paper's step "re-sample every local filter's
@@ -99,13 +115,15 @@ class ParticleFilter(Filter):
     ``n_particles`` N; ``rng`` a :class:`numpy.random.Generator` or a seed (every draw comes
     from it: runs are reproducible); ``resample_threshold`` resample when ESS < this * N
     (1.0 = every update, 0 = never); ``roughening`` K (0 = off); ``collapse_fraction`` and
-    ``max_collapsed`` the degeneracy rule.
+    ``max_collapsed`` the degeneracy rule; ``progressive`` (with ``progressive_ess`` and
+    ``max_stages``) progressive correction of updates that would collapse the set.
     """
 
     def __init__(self, x0, P0, name: str = "pf", n_particles: int = 1000,
                  rng: np.random.Generator | int = 0, resample_threshold: float = 0.5,
                  roughening: float = 0.0, collapse_fraction: float = 0.01,
-                 max_collapsed: int = 20):
+                 max_collapsed: int = 20, progressive: bool = False,
+                 progressive_ess: float = 0.5, max_stages: int = 200):
         if int(n_particles) != n_particles or n_particles < 2:
             raise ValueError(f"{name}: n_particles must be an integer >= 2, got {n_particles}")
         if not 0.0 <= resample_threshold <= 1.0:
@@ -121,6 +139,13 @@ class ParticleFilter(Filter):
         self.roughening = float(roughening)
         self.collapse_fraction = float(collapse_fraction)
         self.max_collapsed = int(max_collapsed)
+        if not 0.0 < progressive_ess < 1.0 or max_stages < 1:
+            raise ValueError(f"{name}: need 0 < progressive_ess < 1 and max_stages >= 1")
+        self.progressive = bool(progressive)
+        self.progressive_ess = float(progressive_ess)
+        self.max_stages = int(max_stages)
+        #: Number of tempering stages of every update (1 = a plain SIR update).
+        self.stage_log: list[int] = []
         self.particles: np.ndarray | None = None
         self.weights = np.full(self.N, 1.0 / self.N)
         self._pending = True
@@ -151,6 +176,11 @@ class ParticleFilter(Filter):
         self._P = np.array(value, dtype=float)
         self._pending = True
 
+    @property
+    def covariance_dof(self) -> float:
+        """Degrees of freedom of the covariance estimate: effective sample size - 1."""
+        return getattr(self, "_est_ess", float(self.N)) - 1.0
+
     def _materialise(self, phase: str) -> np.ndarray:
         """The particle set, drawn from N(x, P) (equal weights) if a redraw is pending."""
         if self._pending:
@@ -162,6 +192,11 @@ class ParticleFilter(Filter):
 
     def _estimate(self, phase: str) -> None:
         x, P = weighted_moments(self.particles, self.weights)
+        # Unbiased weighted covariance (reliability weights: divide by 1 - sum w^2).
+        sw2 = float(self.weights @ self.weights)
+        if sw2 < 1.0 - 1e-12:  # (one particle left: P stays 0, reported as degenerate)
+            P = P / (1.0 - sw2)
+        self._est_ess = 1.0 / sw2
         if not np.isfinite(x.sum() + P.sum()):
             raise FilterError(f"{self._who(phase)}: particles became NaN/inf")
         self._x, self._P = x, P
@@ -194,22 +229,13 @@ class ParticleFilter(Filter):
         nis = float(v @ v)
         if gate is not None and nis > gate:
             return Innovation(r, S, nis, False)
-        if hasattr(model, "loglik"):
-            ll = np.asarray(model.loglik(y, X, nav, R), dtype=float)
-        else:
-            Lr = chol(R, self._who("update (measurement noise)"))
-            E = np.linalg.solve(Lr, (y - Z).T)
-            ll = -0.5 * (E * E).sum(axis=0)
-        logw = np.log(w) + ll
-        m = np.max(logw)
-        if not np.isfinite(m) or np.isnan(logw).any():
-            raise FilterError(f"{self._who('update')}: every particle weight is zero or "
-                              f"not finite (likelihood underflow: the measurement lies "
-                              f"outside the particle cloud, NIS {nis:.3g})")
-        w = np.exp(logw - m)
-        w /= w.sum()
+        ll = self._loglik(y, X, Z, model, nav, R)
+        w, ess = self._reweight(w, ll, nis)
+        stages = 1
+        if self.progressive and ess < self.progressive_ess * self.N:
+            w, ess, stages = self._progressive(y, model, nav, R, ll, nis)
+        self.stage_log.append(stages)
         self.weights = w
-        ess = 1.0 / float(w @ w)
         self.ess_log.append(ess)
         self._collapsed = self._collapsed + 1 if ess < self.collapse_fraction * self.N else 0
         if self._collapsed >= self.max_collapsed:
@@ -230,6 +256,63 @@ class ParticleFilter(Filter):
                               f"{distinct} distinct particles): degenerate or impoverished "
                               f"set; use more particles or roughening") from None
         return Innovation(r, S, nis)
+
+    def _loglik(self, y, X, Z, model, nav, R) -> np.ndarray:
+        if hasattr(model, "loglik"):
+            return np.asarray(model.loglik(y, X, nav, R), dtype=float)
+        if Z is None:
+            Z = np.asarray(model.h(X, nav), dtype=float).reshape(self.N, -1)
+        Lr = chol(R, self._who("update (measurement noise)"))
+        E = np.linalg.solve(Lr, (y - Z).T)
+        return -0.5 * (E * E).sum(axis=0)
+
+    def _reweight(self, w, ll, nis) -> tuple[np.ndarray, float]:
+        logw = np.log(w) + ll
+        m = np.max(logw)
+        if not np.isfinite(m) or np.isnan(logw).any():
+            raise FilterError(f"{self._who('update')}: every particle weight is zero or "
+                              f"not finite (likelihood underflow: the measurement lies "
+                              f"outside the particle cloud, NIS {nis:.3g})")
+        w = np.exp(logw - m)
+        w /= w.sum()
+        return w, 1.0 / float(w @ w)
+
+    def _progressive(self, y, model, nav, R, ll, nis) -> tuple[np.ndarray, float, int]:
+        """Tempered update in stages (see the module docstring); returns the final
+        weights, their effective sample size and the number of stages."""
+        target = self.progressive_ess * self.N
+        h = (4.0 / (self.N * (self.n + 2))) ** (1.0 / (self.n + 4))
+        a = np.sqrt(1.0 - h * h)
+        w = self.weights
+        remaining = 1.0
+        for stage in range(1, self.max_stages + 1):
+            w_full, ess_full = self._reweight(w, remaining * ll, nis)
+            if ess_full >= target or stage == self.max_stages:
+                if ess_full < target:
+                    raise FilterError(
+                        f"{self._who('update')}: progressive correction did not converge "
+                        f"in {self.max_stages} stages (effective sample size "
+                        f"{ess_full:.1f} of {self.N})")
+                return w_full, ess_full, stage
+            lo, hi = 0.0, remaining
+            for _ in range(40):
+                mid = 0.5 * (lo + hi)
+                if self._reweight(w, mid * ll, nis)[1] >= target:
+                    lo = mid
+                else:
+                    hi = mid
+            lam = max(lo, 1e-12 * remaining)
+            w, _ = self._reweight(w, lam * ll, nis)
+            remaining -= lam
+            # Resample, then move with the Liu-West kernel (keeps mean and covariance).
+            x_bar, P = weighted_moments(self.particles, w)
+            L = psd_sqrt(P)
+            X = self.particles[systematic_resample(w, float(self.rng.random()))]
+            X = a * X + (1.0 - a) * x_bar + h * self.rng.standard_normal(X.shape) @ L.T
+            self.particles = X
+            w = np.full(self.N, 1.0 / self.N)
+            ll = self._loglik(y, X, None, model, nav, R)
+        raise AssertionError("unreachable")
 
     def _resample(self) -> None:
         idx = systematic_resample(self.weights, float(self.rng.random()))

@@ -71,6 +71,7 @@ class LaunchResult:
     sigma: np.ndarray          # (K, 9) filter 1-sigma of att [rad], pos, vel
     run_time_s: float
     min_ess: float = float("nan")
+    max_stages: int = 1
 
     def rms(self) -> dict[str, float]:
         out = {}
@@ -137,7 +138,8 @@ def _make_locals(kind: str, scn: LaunchScenario, P0, seed: int, particles: int |
         return {name: ParticleFilter(x0, P0, name=f"pf/{name}", n_particles=N,
                                      rng=np.random.default_rng([seed, 2, i]),
                                      resample_threshold=fo.resample_threshold,
-                                     roughening=fo.roughening)
+                                     roughening=fo.roughening,
+                                     progressive=fo.progressive_correction)
                 for i, name in enumerate(("gps", "cns"))}
     if kind == "ekf":
         return {name: KalmanFilter(x0, P0, name=f"ekf/{name}") for name in ("gps", "cns")}
@@ -203,9 +205,10 @@ def run(scn: LaunchScenario, data: LaunchData, kind: str, max_time: float | None
     j = (np.arange(K) + 1) * per
     att = misalignment(tr.C[j], quat_to_dcm(q_hat))
     pos, vel = r_hat - tr.r[j], v_hat - tr.v[j]
-    min_ess = float("nan")
+    min_ess, stages = float("nan"), 1
     if kind == "pf":
         logs = [e for f in fed.locals.values() for e in f.ess_log]
         min_ess = float(min(logs)) if logs else float("nan")
+        stages = max((s for f in fed.locals.values() for s in f.stage_log), default=1)
     return LaunchResult(kind.upper(), ts, att, pos, vel, sig, time.perf_counter() - t_start,
-                        min_ess)
+                        min_ess, stages)

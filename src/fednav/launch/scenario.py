@@ -83,6 +83,7 @@ class FilterOptions(_Model):
     """Federated filter: two local filters (GPS, CNS), fusion and reset every cycle.
 
     ``particles`` per local PF; ``resample_threshold`` (ESS / N); ``roughening`` K;
+    ``progressive_correction`` tempered updates when one update would collapse the set;
     ``sharing`` equal (beta = 1/2) or adaptive; ``pf_gps_likelihood`` gaussian, or mixture
     (the PF uses the GPS outlier model); ``ekf_gate_alpha`` chi-square test level on the
     EKF's GPS local filter (none: off).
@@ -91,6 +92,7 @@ class FilterOptions(_Model):
     particles: int = Field(default=1000, ge=10)
     resample_threshold: float = Field(default=0.5, ge=0.0, le=1.0)
     roughening: float = Field(default=0.0, ge=0.0)
+    progressive_correction: bool = True
     sharing: Literal["equal", "adaptive"] = "equal"
     pf_gps_likelihood: Literal["gaussian", "mixture"] = "gaussian"
     ekf_gate_alpha: float | None = Field(default=None, gt=0.0, lt=1.0)

@@ -1,0 +1,258 @@
+"""Paper 001 — SINS/GPS/CNS in the launch inertial frame: federated PF vs federated EKF.
+
+Tables:
+
+* ``T1`` (the paper's Table 1): RMS error over the flight of the attitude error
+  (misalignment, LI axes) [arcsec], position and velocity (LI axes) per run, mean over
+  runs, for the federated PF (``PF``) and the federated EKF (``EKF``) on the same data;
+* ``particles``: the federated PF with N = 100 ... 3000 particles per local filter — 3-D
+  position RMS [m], 3-D attitude RMS [arcsec] (``sqrt(mean |e|^2)`` over the flight) and
+  seconds per run;
+* ``regime``: the same 3-D figures for PF and EKF under the scenario's ``regimes`` (large
+  initial attitude errors with a late star sensor, sparse GPS, heavy-tailed GPS ...).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .. import units
+from ..evaluation import mean_ci95
+from ..filters import FilterError
+from ..launch.navigate import make_data, run
+from ..launch.scenario import LaunchScenario, load_launch_scenario
+from ..montecarlo import run_seeds
+from . import scenario_path
+
+PAPER = "001"
+ALIASES = ("001", "launch-frame")
+COLS = ("att_x_arcsec", "att_y_arcsec", "att_z_arcsec", "pos_x_m", "pos_y_m", "pos_z_m",
+        "vel_x_mps", "vel_y_mps", "vel_z_mps")
+_P = {"PF": (4.731, 4.081, 4.790, 3.437, 2.363, 2.760, 0.095, 0.076, 0.047),
+      "EKF": (6.808, 6.339, 7.249, 3.910, 3.043, 4.029, 0.145, 0.109, 0.152)}
+PAPER_TABLES = {"T1": {k: dict(zip(COLS, v, strict=True)) for k, v in _P.items()}}
+TABLE_TITLES = {
+    "T1": "Table 1 — RMS error over the flight, federated PF vs federated EKF (LI axes)",
+    "particles": "Federated PF: particles per local filter (3-D RMS over the flight)",
+    "regime": "When does the PF pay? PF vs EKF under other conditions (3-D RMS)",
+}
+
+
+def load_scenario(path=None) -> LaunchScenario:
+    return load_launch_scenario(path or scenario_path("paper001"))
+
+
+def rms3(result) -> tuple[float, float]:
+    """3-D RMS over the flight: position [m], attitude [arcsec]."""
+    pos = float(np.sqrt((result.pos**2).sum(axis=1).mean()))
+    att = float(np.sqrt((result.att**2).sum(axis=1).mean()) / units.ARCSEC)
+    return pos, att
+
+
+def _run(scn, data, kind, max_time, particles=None):
+    """One filter run, or the FilterError that stopped it (a diverged or degenerate
+    filter is a result of the experiment, recorded, not a crash of the reproduction)."""
+    try:
+        return run(scn, data, kind, max_time, particles=particles)
+    except FilterError as e:
+        return str(e)
+
+
+def _failed(r) -> bool:
+    return isinstance(r, str)
+
+
+def _task(args):
+    """One unit of work: ('T1', scn, seed) | ('particles', scn, seed, N) |
+    ('regime', scn, seed, name)."""
+    kind, scn, seed, extra, max_time = args
+    data = make_data(scn, seed, max_time)
+    nan = float("nan")
+    if kind == "particles":
+        r = _run(scn, data, "pf", max_time, particles=extra)
+        pos, att = (nan, nan) if _failed(r) else rms3(r)
+        return [{"table": kind, "seed": seed, "mode": f"N = {extra}", "pos_rms_m": pos,
+                 "att_rms_arcsec": att,
+                 "seconds_per_run": nan if _failed(r) else r.run_time_s,
+                 "failure": r if _failed(r) else ""}], None
+    res = {k: _run(scn, data, k, max_time) for k in ("pf", "ekf")}
+    if kind == "T1":
+        rows = [{"table": kind, "seed": seed, "mode": k.upper(),
+                 **(dict.fromkeys(COLS, nan) if _failed(r) else r.rms()),
+                 "seconds_per_run": nan if _failed(r) else r.run_time_s,
+                 "min_ess": nan if _failed(r) else r.min_ess,
+                 "failure": r if _failed(r) else ""}
+                for k, r in res.items()]
+        return rows, {k: r for k, r in res.items() if not _failed(r)}
+    (pp, pa), (ep, ea) = ((nan, nan) if _failed(res[k]) else rms3(res[k])
+                          for k in ("pf", "ekf"))
+    fail = "; ".join(r for r in res.values() if _failed(r))
+    return [{"table": kind, "seed": seed, "mode": extra, "pf_pos_rms_m": pp,
+             "ekf_pos_rms_m": ep, "pf_att_rms_arcsec": pa, "ekf_att_rms_arcsec": ea,
+             "failure": fail}], None
+
+
+def tasks(scn: LaunchScenario, runs: int, seed: int, max_time=None,
+          particles: int | None = None) -> list[tuple]:
+    """Every unit of work of a reproduction, in a fixed order."""
+    if particles is not None:
+        scn = scn.model_copy(update={"filters": scn.filters.model_copy(
+            update={"particles": particles})})
+    out = [("T1", scn, seed + i, None, max_time) for i in range(runs)]
+    for n in scn.particle_sweep:
+        out += [("particles", scn, seed + i, n, max_time)
+                for i in range(scn.particle_sweep_runs)]
+    for reg in scn.regimes:
+        s = scn.with_regime(reg)
+        if particles is not None:
+            s = s.model_copy(update={"filters": s.filters.model_copy(
+                update={"particles": particles})})
+        out += [("regime", s, seed + i, reg.name, max_time) for i in range(scn.regime_runs)]
+    return out
+
+
+def n_tasks(scn: LaunchScenario, runs: int) -> int:
+    return (runs + len(scn.particle_sweep) * scn.particle_sweep_runs
+            + len(scn.regimes) * scn.regime_runs)
+
+
+def _table(rows: list[dict], table: str, cols: tuple[str, ...]) -> dict:
+    out: dict[str, dict] = {}
+    for r in rows:
+        if r["table"] == table:
+            out.setdefault(r["mode"], []).append(r)
+    return {name: {c: dict(zip(("ours", "ci95"), mean_ci95([r[c] for r in rs]),
+                               strict=True)) for c in cols}
+            for name, rs in out.items()}
+
+
+def reproduce(scn: LaunchScenario, runs: int, seed: int, jobs: int = 1,
+              max_time: float | None = None, progress=None,
+              particles: int | None = None) -> dict:
+    from ..report import summarize
+
+    work = tasks(scn, runs, seed, max_time, particles)
+    out = run_seeds(_task, work, jobs, progress)
+    rows = [r for o in out for r in o[0]]
+    t1 = [r for r in rows if r["table"] == "T1"]
+    summary = summarize(t1, PAPER_TABLES, PAPER, runs, seed)
+    summary["particles_per_local_filter"] = particles or scn.filters.particles
+    summary["tables"]["particles"] = {"runs": scn.particle_sweep_runs, "rows": _table(
+        rows, "particles", ("pos_rms_m", "att_rms_arcsec", "seconds_per_run"))}
+    summary["tables"]["regime"] = {"runs": scn.regime_runs, "rows": _table(
+        rows, "regime", ("pf_pos_rms_m", "ekf_pos_rms_m", "pf_att_rms_arcsec",
+                         "ekf_att_rms_arcsec"))}
+    summary["seconds_per_run"] = {k: mean_ci95([r["seconds_per_run"] for r in t1
+                                                if r["mode"] == k])[0] for k in ("PF", "EKF")}
+    #: Filter runs that stopped with a FilterError (left out of the means).
+    summary["failures"] = [{"table": r["table"], "row": r["mode"], "seed": r["seed"],
+                            "error": r["failure"]} for r in rows if r["failure"]]
+    return {"rows": rows, "series": out[0][1], "summary": summary, "scenario": scn,
+            "max_time": max_time}
+
+
+def print_summary(summary: dict, console) -> None:
+    from ..report import print_tables
+
+    print_tables(summary, TABLE_TITLES, console)
+    s = summary["seconds_per_run"]
+    for f in summary["failures"]:
+        console.print(f"[yellow]failed run[/] ({f['table']}, {f['row']}, seed {f['seed']}): "
+                      f"{f['error']}")
+    console.print(f"seconds per run: federated PF {s['PF']:.2f} "
+                  f"({summary['particles_per_local_filter']} particles per local filter), "
+                  f"federated EKF {s['EKF']:.2f}")
+
+
+def plot_errors(series: dict, path):
+    """PF and EKF errors (first run) with the fused filters' 3-sigma."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(3, 3, figsize=(14, 9), sharex=True)
+    rows = (("att", 1.0 / units.ARCSEC, '["]', 0), ("pos", 1.0, "[m]", 3),
+            ("vel", 1.0, "[m/s]", 6))
+    colors = {"pf": "C0", "ekf": "C3"}
+    for i, (key, k, unit, s0) in enumerate(rows):
+        for j, ax_name in enumerate("xyz"):
+            ax = axes[i, j]
+            for name, r in series.items():
+                ax.plot(r.t, getattr(r, key)[:, j] * k, lw=0.8, color=colors[name],
+                        label=f"{name.upper()} error")
+                ax.plot(r.t, 3 * r.sigma[:, s0 + j] * k, lw=0.6, ls="--", color=colors[name],
+                        label=f"{name.upper()} ±3σ")
+                ax.plot(r.t, -3 * r.sigma[:, s0 + j] * k, lw=0.6, ls="--", color=colors[name])
+            ax.set_ylabel(f"{key} {ax_name} {unit}")
+            ax.grid(alpha=0.3)
+    for j in range(3):
+        axes[2, j].set_xlabel("time since launch [s]")
+    axes[0, 0].legend(fontsize=7, ncol=2)
+    for ax in axes[0]:
+        ax.set_ylim(-40, 40)
+    fig.suptitle("Launch-frame navigation errors (computed − true), first Monte Carlo run")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def plot_ascent(scn: LaunchScenario, path, max_time=None):
+    """The ascent: trajectory in the launch plane, altitude, speed, programme, thrust."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    tr = scn.trajectory(max_time)
+    prof = scn.profile(max_time)
+    lla = tr.lla()
+    phi, psi, _, _ = prof.angles(tr.t)
+    fig, ax = plt.subplots(2, 2, figsize=(12, 8))
+    ax[0, 0].plot(tr.r[:, 0] / 1e3, tr.r[:, 1] / 1e3, label="x-y (launch plane)")
+    ax[0, 0].plot(tr.r[:, 0] / 1e3, tr.r[:, 2] / 1e3, label="x-z (out of plane)")
+    ax[0, 0].set_xlabel("LI x (downrange) [km]")
+    ax[0, 0].set_ylabel("LI y / z [km]")
+    ax[0, 0].legend()
+    ax[0, 1].plot(tr.t, lla[:, 2] / 1e3, label="height [km]")
+    ax[0, 1].plot(tr.t, np.linalg.norm(tr.v, axis=1) / 1e3, label="LI speed [km/s]")
+    ax[0, 1].set_xlabel("time [s]")
+    ax[0, 1].legend()
+    ax[1, 0].plot(tr.t, units.to_deg(phi), label="pitch programme φ [deg]")
+    ax[1, 0].plot(tr.t, 10 * units.to_deg(psi), label="yaw programme ψ ×10 [deg]")
+    ax[1, 0].set_xlabel("time [s]")
+    ax[1, 0].legend()
+    ax[1, 1].plot(tr.t, prof.thrust(tr.t), label="thrust acceleration [m/s²]")
+    ax[1, 1].set_xlabel("time [s]")
+    ax[1, 1].legend()
+    for a in ax.ravel():
+        a.grid(alpha=0.3)
+    fig.suptitle(f"Paper 001 ascent: {scn.launch.lat_deg}°N {scn.launch.lon_deg}°E, "
+                 f"azimuth {scn.launch.azimuth_deg}°, LI frame x downrange, y up, z = x × y")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def write_outputs(out, rep: dict) -> list:
+    import json
+
+    import pandas as pd
+
+    out.mkdir(parents=True, exist_ok=True)
+    files = []
+    p = out / "summary.json"
+    p.write_text(json.dumps(rep["summary"], indent=2))
+    files.append(p)
+    p = out / "runs.csv"
+    pd.DataFrame(rep["rows"]).to_csv(p, index=False)
+    files.append(p)
+    files.append(plot_errors(rep["series"], out / "errors.png"))
+    files.append(plot_ascent(rep["scenario"], out / "ascent.png", rep["max_time"]))
+    return files
+
+
+__all__ = ["ALIASES", "PAPER", "PAPER_TABLES", "TABLE_TITLES", "load_scenario", "n_tasks",
+           "print_summary", "reproduce", "write_outputs"]
