@@ -9,7 +9,9 @@ Tables:
   position RMS [m], 3-D attitude RMS [arcsec] (``sqrt(mean |e|^2)`` over the flight) and
   seconds per run;
 * ``regime``: the same 3-D figures for PF and EKF under the scenario's ``regimes`` (large
-  initial attitude errors with a late star sensor, sparse GPS, heavy-tailed GPS ...).
+  initial attitude errors with a late star sensor, sparse GPS, heavy-tailed GPS ...), and
+  the fraction of runs in which each filter lost track (final 3-D position error above
+  :data:`LOST_M`, or a filter failure).
 """
 
 from __future__ import annotations
@@ -31,6 +33,8 @@ COLS = ("att_x_arcsec", "att_y_arcsec", "att_z_arcsec", "pos_x_m", "pos_y_m", "p
 _P = {"PF": (4.731, 4.081, 4.790, 3.437, 2.363, 2.760, 0.095, 0.076, 0.047),
       "EKF": (6.808, 6.339, 7.249, 3.910, 3.043, 4.029, 0.145, 0.109, 0.152)}
 PAPER_TABLES = {"T1": {k: dict(zip(COLS, v, strict=True)) for k, v in _P.items()}}
+#: A run has "lost track" when its final 3-D position error exceeds this [m].
+LOST_M = 1000.0
 TABLE_TITLES = {
     "T1": "Table 1 — RMS error over the flight, federated PF vs federated EKF (LI axes)",
     "particles": "Federated PF: particles per local filter (3-D RMS over the flight)",
@@ -86,9 +90,12 @@ def _task(args):
         return rows, {k: r for k, r in res.items() if not _failed(r)}
     (pp, pa), (ep, ea) = ((nan, nan) if _failed(res[k]) else rms3(res[k])
                           for k in ("pf", "ekf"))
+    lost = {k: 1.0 if _failed(r) or np.linalg.norm(r.pos[-1]) > LOST_M else 0.0
+            for k, r in res.items()}
     fail = "; ".join(r for r in res.values() if _failed(r))
     return [{"table": kind, "seed": seed, "mode": extra, "pf_pos_rms_m": pp,
              "ekf_pos_rms_m": ep, "pf_att_rms_arcsec": pa, "ekf_att_rms_arcsec": ea,
+             "pf_lost_fraction": lost["pf"], "ekf_lost_fraction": lost["ekf"],
              "failure": fail}], None
 
 
@@ -141,7 +148,7 @@ def reproduce(scn: LaunchScenario, runs: int, seed: int, jobs: int = 1,
         rows, "particles", ("pos_rms_m", "att_rms_arcsec", "seconds_per_run"))}
     summary["tables"]["regime"] = {"runs": scn.regime_runs, "rows": _table(
         rows, "regime", ("pf_pos_rms_m", "ekf_pos_rms_m", "pf_att_rms_arcsec",
-                         "ekf_att_rms_arcsec"))}
+                         "ekf_att_rms_arcsec", "pf_lost_fraction", "ekf_lost_fraction"))}
     summary["seconds_per_run"] = {k: mean_ci95([r["seconds_per_run"] for r in t1
                                                 if r["mode"] == k])[0] for k in ("PF", "EKF")}
     #: Filter runs that stopped with a FilterError (left out of the means).
