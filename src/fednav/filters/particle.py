@@ -72,27 +72,14 @@ def systematic_resample(w, u0):
     return idx
 
 
-@numba.njit(cache=True)
-def weighted_moments(X, w):
-    """Weighted mean (n,) and covariance (n, n) of particles X (N, n) with weights w."""
-    N, n = X.shape
-    x = np.zeros(n)
-    for i in range(N):
-        for j in range(n):
-            x[j] += w[i] * X[i, j]
-    P = np.zeros((n, n))
-    d = np.empty(n)
-    for i in range(N):
-        for j in range(n):
-            d[j] = X[i, j] - x[j]
-        for j in range(n):
-            wd = w[i] * d[j]
-            for k in range(j + 1):
-                P[j, k] += wd * d[k]
-    for j in range(n):
-        for k in range(j):
-            P[k, j] = P[j, k]
-    return x, P
+def weighted_moments(X: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Weighted mean (n,) and covariance ``sum w (x - x_bar)(x - x_bar)'`` (n, n) of the
+    particles X (N, n) with normalised weights w (two BLAS products: faster than a
+    compiled loop at these sizes)."""
+    x = w @ X
+    D = X - x
+    P = (D * w[:, None]).T @ D
+    return x, 0.5 * (P + P.T)
 
 
 def psd_sqrt(Q: np.ndarray) -> np.ndarray:
