@@ -7,12 +7,14 @@ from .constrained import ConstrainedEKF, ConstrainedUKF, project
 from .federated import FederatedFilter, sharing_factors
 from .kf import KalmanFilter
 from .particle import ParticleFilter, systematic_resample
+from .quadrature import AdaptiveSparseGridFilter, SparseGridFilter
 from .ukf import SimplifiedUKF, UnscentedKalmanFilter
 
 #: Names accepted in scenario files.
 REGISTRY = {"kf": KalmanFilter, "ekf": KalmanFilter, "ukf": UnscentedKalmanFilter,
             "sukf": SimplifiedUKF, "cukf": ConstrainedUKF, "cekf": ConstrainedEKF,
-            "aekf": SageHusaEKF, "raukf": RobustAdaptiveUKF, "pf": ParticleFilter}
+            "aekf": SageHusaEKF, "raukf": RobustAdaptiveUKF, "pf": ParticleFilter,
+            "sghqf": SparseGridFilter, "aasghqf": AdaptiveSparseGridFilter}
 
 
 def make_filter(name: str, x0, P0, **options) -> Filter:
@@ -26,8 +28,8 @@ def make_filter(name: str, x0, P0, **options) -> Filter:
     return cls(x0, P0, name=name.lower(), **options)
 
 
-__all__ = ["ConstrainedEKF", "ConstrainedUKF", "FederatedFilter", "Filter", "FilterError",
-           "FunctionModel", "FunctionProcess", "Innovation", "KalmanFilter", "LinearModel",
-           "ParticleFilter", "REGISTRY", "RobustAdaptiveUKF", "SageHusaEKF", "SimplifiedUKF",
-           "UnscentedKalmanFilter", "igg3_weights", "make_filter", "project",
-           "sharing_factors", "systematic_resample"]
+__all__ = ["AdaptiveSparseGridFilter", "ConstrainedEKF", "ConstrainedUKF", "FederatedFilter",
+           "Filter", "FilterError", "FunctionModel", "FunctionProcess", "Innovation",
+           "KalmanFilter", "LinearModel", "ParticleFilter", "REGISTRY", "RobustAdaptiveUKF",
+           "SageHusaEKF", "SimplifiedUKF", "SparseGridFilter", "UnscentedKalmanFilter",
+           "igg3_weights", "make_filter", "project", "sharing_factors", "systematic_resample"]

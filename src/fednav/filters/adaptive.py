@@ -13,6 +13,20 @@ eigen-decomposed and every eigenvalue raised to at least ``r_floor`` (default 0.
 the smallest eigenvalue of the nominal R, so R stays positive definite.  R starts from
 the nominal R the caller passes.
 
+**Sage–Husa process-noise estimation** (optional, ``adapt_q=True``; same fading weights,
+one step per filter cycle)::
+
+    Q_k = (1 - d_k) Q_(k-1) + d_k (K r r' K' + P_k - (P_k|k-1 - Q_(k-1)))
+
+with ``K r = x_k - x_k|k-1`` (the correction the cycle's updates applied), ``P_k`` the
+updated covariance and ``P_k|k-1 - Q_(k-1)`` the propagated covariance without the noise
+(so the rule works for the EKF and the sigma-point filters alike).  ``Q`` starts from the
+process model's ``Qd``; the estimate is kept symmetric positive semi-definite (negative
+eigenvalues clipped to 0).  It estimates the noise actually driving the filter's error —
+the classic use is a mis-specified ``Q``.  Q and R cannot both be estimated from the same
+innovations in general (a too-small Q and a too-large R explain them equally well): with
+``adapt_q``, fix the noise you know with ``adapt_r=False``.
+
 **Robust adaptive UKF** — the UKF with the adapted R, made robust by IGG-III equivalent
 weights (Yang, Song & Xu, "Robust estimator for correlated observations based on
 bifactor equivalent weights", J. Geodesy 76, 2002): each innovation component is
@@ -74,31 +88,83 @@ class _SageHusa:
         return R
 
 
-class SageHusaEKF(KalmanFilter):
-    """EKF whose measurement noise is estimated online (AEKF); see the module docstring."""
+class _ProcessWithQ:
+    """A process model with its noise replaced by the current estimate."""
+
+    def __init__(self, process, Q):
+        self._p, self.Qd = process, Q
+        self.Phi = process.Phi
+
+    def transition(self, X):
+        return self._p.transition(X)
+
+
+class QAdaptation:
+    """Mixin: Sage–Husa estimation of the process noise Q (module docstring)."""
+
+    def _init_q(self, adapt_q: bool, fading: float) -> None:
+        self.adapt_q = bool(adapt_q)
+        self.q_fading = fading
+        self.Qhat: np.ndarray | None = None
+        self._q_cycle: tuple | None = None
+        self._q_k = 0
+
+    def predict(self, process, q_scale: float = 1.0) -> None:
+        if not self.adapt_q:
+            return super().predict(process, q_scale)
+        if self.Qhat is None:
+            self.Qhat = np.array(process.Qd, dtype=float)
+        super().predict(_ProcessWithQ(process, self.Qhat), q_scale)
+        # (Q before this cycle, x and P_k|k-1 without the noise, the scale applied)
+        self._q_cycle = (self.Qhat.copy(), self.x.copy(), self.P - q_scale * self.Qhat,
+                         q_scale)
+        self._q_k += 1
+
+    def _adapt_q_after_update(self) -> None:
+        if not self.adapt_q or self._q_cycle is None:
+            return
+        Q0, x_prior, P_noq, q_scale = self._q_cycle
+        dx = self.x - x_prior
+        Qs = (np.outer(dx, dx) + self.P - P_noq) / q_scale
+        d = (1.0 - self.q_fading) / (1.0 - self.q_fading ** self._q_k)
+        Q = (1.0 - d) * Q0 + d * 0.5 * (Qs + Qs.T)
+        w, V = np.linalg.eigh(Q)
+        self.Qhat = (V * np.maximum(w, 0.0)) @ V.T
+
+
+class SageHusaEKF(QAdaptation, KalmanFilter):
+    """EKF whose measurement noise (and, with ``adapt_q``, process noise) is estimated
+    online (AEKF); see the module docstring."""
 
     def __init__(self, x0, P0, name: str = "aekf", fading: float = 0.97,
-                 r_floor: float = 0.1):
+                 r_floor: float = 0.1, adapt_q: bool = False, adapt_r: bool = True):
         super().__init__(x0, P0, name)
         self.sh = _SageHusa(fading, r_floor)
+        self.adapt_r = bool(adapt_r)
+        self._init_q(adapt_q, fading)
 
     def update(self, y, model, nav=None, R=None, gate: float | None = None) -> Innovation:
         H = np.asarray(model.H(nav), dtype=float)
         r = np.asarray(y, dtype=float) - model.h(self.x[None], nav)[0]
         key = getattr(model, "kind", type(model).__name__)
-        Ra = self.sh.adapt(key, R, r, H @ self.P @ H.T)
-        return super().update(y, model, nav, Ra, gate)
+        Ra = self.sh.adapt(key, R, r, H @ self.P @ H.T) if self.adapt_r else R
+        inn = super().update(y, model, nav, Ra, gate)
+        if inn.accepted:
+            self._adapt_q_after_update()
+        return inn
 
 
-class RobustAdaptiveUKF(UnscentedKalmanFilter):
-    """UKF with IGG-III robust equivalent weights and Sage–Husa R adaptation (RAUKF)."""
+class RobustAdaptiveUKF(QAdaptation, UnscentedKalmanFilter):
+    """UKF with IGG-III robust equivalent weights and Sage–Husa R (and, with ``adapt_q``,
+    Q) adaptation (RAUKF)."""
 
     def __init__(self, x0, P0, name: str = "raukf", alpha: float = 1e-3, beta: float = 2.0,
                  kappa: float = 0.0, fading: float = 0.97, r_floor: float = 0.1,
-                 k0: float = 1.5, k1: float = 4.5):
+                 k0: float = 1.5, k1: float = 4.5, adapt_q: bool = False):
         super().__init__(x0, P0, name, alpha, beta, kappa)
         self.sh = _SageHusa(fading, r_floor)
         self.k0, self.k1 = k0, k1
+        self._init_q(adapt_q, fading)
 
     def update(self, y, model, nav=None, R=None, gate: float | None = None) -> Innovation:
         X = _sigma_points(self.x, self.P, self.c)
@@ -117,4 +183,7 @@ class RobustAdaptiveUKF(UnscentedKalmanFilter):
         # would bias R low, then down-weight ever more: the two must not feed each other).
         Ra = self.sh.adapt(key, R, r, Pzz0) if v.max() <= self.k1 else Rc
         s = 1.0 / np.sqrt(w)
-        return super().update(y, model, nav, Ra * np.outer(s, s), gate)
+        inn = super().update(y, model, nav, Ra * np.outer(s, s), gate)
+        if inn.accepted:
+            self._adapt_q_after_update()
+        return inn
