@@ -46,26 +46,31 @@ def reproduce(
     max_time: float = typer.Option(None, help="truncate the flight (smoke runs only)"),
     particles: int = typer.Option(None, help="particles per local particle filter "
                                              "(paper 001; default from the scenario)"),
+    t4_runs: int = typer.Option(None, "--t4-runs", help="Monte Carlo runs of Table 4 "
+                                                         "(paper 002; default min(runs, 3))"),
 ) -> None:
     """Reproduce a paper's experiment and print its tables beside the paper's."""
     mod = _paper_module(paper)
     extra = {}
-    if particles is not None:
-        if not hasattr(mod, "n_tasks"):
-            typer.echo(f"error: --particles applies to paper 001 only, not {mod.PAPER}",
+    for opt, value, only, low in (("--particles", particles, "001", 10),
+                                  ("--t4-runs", t4_runs, "002", 1)):
+        if value is None:
+            continue
+        if mod.PAPER != only:
+            typer.echo(f"error: {opt} applies to paper {only} only, not {mod.PAPER}",
                        err=True)
             raise typer.Exit(2)
-        if particles < 10:
-            typer.echo(f"error: --particles must be at least 10, got {particles}", err=True)
+        if value < low:
+            typer.echo(f"error: {opt} must be at least {low}, got {value}", err=True)
             raise typer.Exit(2)
-        extra["particles"] = particles
+        extra[opt.strip("-").replace("-", "_")] = value
     try:
         scn = mod.load_scenario(scenario)
     except ConfigError as e:
         typer.echo(f"error: {e}", err=True)
         raise typer.Exit(2) from None
     t0 = time.perf_counter()
-    total = mod.n_tasks(scn, runs) if hasattr(mod, "n_tasks") else runs
+    total = mod.n_tasks(scn, runs, **extra) if hasattr(mod, "n_tasks") else runs
     with Progress("[progress.description]{task.description}", BarColumn(),
                   MofNCompleteColumn(), TimeElapsedColumn(), console=console,
                   transient=False) as prog:

@@ -277,7 +277,8 @@ class FilterConfig(_Model):
     ``centralized`` (one filter; at each epoch H and R are stacked from the sensors that
     delivered since the last epoch)."""
 
-    type: Literal["ukf", "sukf", "kf", "ekf", "cukf", "cekf", "aekf", "raukf"] = "ukf"
+    type: Literal["ukf", "sukf", "kf", "ekf", "cukf", "cekf", "aekf", "raukf", "sghqf",
+                  "aasghqf"] = "ukf"
     architecture: Literal["federated", "centralized"] = "federated"
     period_s: float = Field(default=1.0, gt=0.0)
     alpha: float = Field(default=1e-3, gt=0.0)
@@ -290,6 +291,7 @@ class FilterConfig(_Model):
     substeps: int = Field(default=2, ge=1)
     fdi_alpha: float | None = Field(default=None, gt=0.0, lt=1.0)
     fdi_recovery: int = Field(default=1, ge=1)  # consecutive passes to return after isolation
+    grid_level: int = Field(default=3, ge=1, le=5)  # sparse-grid accuracy level (sghqf, aasghqf)
 
 
 class InitialErrorConfig(_Model):
@@ -301,7 +303,7 @@ class InitialErrorConfig(_Model):
 
 
 FilterType = Literal["ukf", "sukf", "kf", "ekf", "cukf", "cekf", "aekf", "raukf",
-                     "total-ukf"]
+                     "sghqf", "aasghqf", "total-ukf"]
 
 
 class ModeConfig(_Model):

@@ -62,7 +62,8 @@ def print_tables(summary: dict, titles: dict[str, str], console: Console | None 
         for r, vals in rows.items():
             for i, (c, v) in enumerate(vals.items()):
                 pv = v.get("paper")
-                ratio = f"×{v['ours'] / pv:.2f}" if pv else "–"
+                q = v["ours"] / pv if pv else None
+                ratio = "–" if q is None else f"×{q:.2f}" if abs(q) < 100 else f"×{q:.3g}"
                 tab.add_row(r if i == 0 else "", c, _fmt(v["ours"]), _fmt(v["ci95"]),
                             _fmt(pv), ratio,
                             end_section=(i == len(vals) - 1))

@@ -112,7 +112,8 @@ def _build_filter(scn: Scenario, aiding: list[str], ftype: str) -> FederatedFilt
     f = scn.filter
     P0 = initial_covariance(scn)
     opts = ({"alpha": f.alpha, "beta": f.beta, "kappa": f.kappa}
-            if ftype in ("ukf", "sukf", "cukf", "raukf") else {})
+            if ftype in ("ukf", "sukf", "cukf", "raukf") else
+            {"level": f.grid_level} if ftype in ("sghqf", "aasghqf") else {})
     names = ["central"] if f.architecture == "centralized" else aiding
     locals_ = {a: make_filter(ftype, np.zeros(em.N_STATES), P0, **opts) for a in names}
     for a, flt in locals_.items():

@@ -38,6 +38,33 @@ def test_cli_reproduce_smoke(tmp_path):
     assert set(s["tables"]["T3"]["rows"]["SINS"]) == {"phiE_arcsec", "phiN_arcsec",
                                                       "phiU_arcsec"}
     assert (tmp_path / "errors.png").exists() and (tmp_path / "runs.csv").exists()
+    # Table 1: every state, the paper's 16 keys plus the two vertical-channel extras.
+    t1 = s["tables"]["T1"]["rows"]
+    assert set(t1) == set(paper002.PAPER_T1) | {"dVU", "dh"}
+    assert t1["phiE"]["degree"]["paper"] == 8.67 and t1["dh"]["degree"]["paper"] is None
+    assert {"degree", "degree_filter_units", "sigma_shrink"} == set(t1["phiU"])
+    phases = set(s["observability_phases"]["si"])   # the phases inside the 60 s flight
+    assert {"climb pitch-up", "climb"} <= phases <= {g.name for g in
+                                                     paper002.load_scenario().segments}
+    # Table 4: three filters on the same runs (default min(runs, 3) = 2 runs).
+    t4 = s["tables"]["T4"]
+    assert set(t4["rows"]) == {"SGHQF", "AASGHQF", "UKF"} and t4["runs"] == 2
+    assert set(t4["rows"]["UKF"]) == {"att_arcsec", "vel_mps", "pos_m", "ms_per_cycle"}
+    assert t4["rows"]["SGHQF"]["ms_per_cycle"]["paper"] == 8.7
+    # The sparse grid and the UKF agree on this nearly linear error model.
+    assert np.isclose(t4["rows"]["SGHQF"]["pos_m"]["ours"], t4["rows"]["UKF"]["pos_m"]["ours"],
+                      rtol=1e-3)
+
+
+def test_t4_runs_option(tmp_path):
+    r = CliRunner().invoke(app, ["reproduce", "002", "--runs", "1", "--t4-runs", "1",
+                                 "--jobs", "1", "--max-time", "20", "--out", str(tmp_path)])
+    assert r.exit_code == 0, r.output
+    assert json.loads((tmp_path / "summary.json").read_text())["tables"]["T4"]["runs"] == 1
+    bad = CliRunner().invoke(app, ["reproduce", "001", "--t4-runs", "2"])
+    assert bad.exit_code == 2 and "applies to paper 002 only" in bad.output
+    bad = CliRunner().invoke(app, ["reproduce", "002", "--t4-runs", "0"])
+    assert bad.exit_code == 2 and "at least 1" in bad.output
 
 
 def test_cli_rejects_unknown_paper():

@@ -118,7 +118,7 @@ def tasks(scn: LaunchScenario, runs: int, seed: int, max_time=None,
     return out
 
 
-def n_tasks(scn: LaunchScenario, runs: int) -> int:
+def n_tasks(scn: LaunchScenario, runs: int, **_) -> int:
     return (runs + len(scn.particle_sweep) * scn.particle_sweep_runs
             + len(scn.regimes) * scn.regime_runs)
 

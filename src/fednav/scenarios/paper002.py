@@ -1,11 +1,23 @@
-"""Paper 002 — SINS/CNS/SAR for a cruise missile: Tables 2 and 3.
+"""Paper 002 — SINS/CNS/SAR for a cruise missile: Tables 1 to 4.
 
-Statistic (paper): errors sampled every 1 s, absolute value averaged over the flight.
-Columns: ``dlambda_m`` / ``dL_m`` = east / north position error [m], ``dVx_mps`` /
-``dVy_mps`` = east / north velocity error [m/s], ``phiE/N/U_arcsec`` misalignment.
+* Table 1 — observability degree of every error state for the SINS/CNS/SAR measurement
+  set over the flight (:mod:`fednav.observability`): the paper's SVD degree (SI units,
+  velocity error = 1) beside the same in filter units and the unit-free covariance
+  degree ``sigma(0) / sigma(T)``; per flight phase in ``observability_phases``.
+* Tables 2 and 3 — statistic (paper): errors sampled every 1 s, absolute value averaged
+  over the flight.  Columns: ``dlambda_m`` / ``dL_m`` = east / north position error [m],
+  ``dVx_mps`` / ``dVy_mps`` = east / north velocity error [m/s], ``phiE/N/U_arcsec``
+  misalignment.
+* Table 4 — SINS/CNS/SAR with UKF, SGHQF and AASGHQF local filters on the same runs
+  (``t4_runs`` of them): ``att_arcsec`` = mean of the three misalignment columns,
+  ``vel_mps`` = mean of the two horizontal velocity columns, ``pos_m`` = mean of the two
+  horizontal position columns (each the paper's mean absolute error), ``ms_per_cycle``
+  the run's wall time per filter cycle, measured in the same process for all three.
 """
 
 from __future__ import annotations
+
+import numpy as np
 
 from .. import units
 from ..config import Scenario
@@ -32,9 +44,29 @@ PAPER_TABLES = {
         "SINS/CNS/SAR": {"phiE_arcsec": 0.60, "phiN_arcsec": 0.73, "phiU_arcsec": 0.75},
     },
 }
+#: Table 1 (paper): observability degree, normalised to the velocity error.
+PAPER_T1 = {"phiE": 8.67, "phiN": 8.67, "phiU": 8.62, "dVE": 1.0, "dVN": 1.0, "dL": 8.2,
+            "dlambda": 8.2, "eps_cx": 5.31e-5, "eps_cy": 5.31e-5, "eps_cz": 4.31e-5,
+            "eps_rx": 2.38e-6, "eps_ry": 2.69e-6, "eps_rz": 2.72e-6, "nabla_cx": 6.29e-5,
+            "nabla_cy": 6.32e-6, "nabla_cz": 6.87e-6}
+#: fednav state (error_model.STATE_NAMES) -> Table 1 key; dvU and dh are fednav's extras.
+T1_KEYS = {"phiE": "phiE", "phiN": "phiN", "phiU": "phiU", "dvE": "dVE", "dvN": "dVN",
+           "dvU": "dVU", "dE": "dlambda", "dN": "dL", "dU": "dh", "eps_cx": "eps_cx",
+           "eps_cy": "eps_cy", "eps_cz": "eps_cz", "eps_rx": "eps_rx", "eps_ry": "eps_ry",
+           "eps_rz": "eps_rz", "nabla_x": "nabla_cx", "nabla_y": "nabla_cy",
+           "nabla_z": "nabla_cz"}
+#: Table 4 (paper): attitude ", velocity m/s, position m, time per cycle [s -> ms].
+T4_FILTERS = ("SGHQF", "AASGHQF", "UKF")
+PAPER_T4 = {"SGHQF": (0.6, 0.012, 0.80, 8.7), "AASGHQF": (0.58, 0.011, 0.75, 6.8),
+            "UKF": (0.62, 0.014, 0.85, 2.1)}
+T4_COLS = ("att_arcsec", "vel_mps", "pos_m", "ms_per_cycle")
 TABLE_TITLES = {
+    "T1": "Table 1 — observability degree, SINS/CNS/SAR (SVD: velocity error = 1; "
+          "covariance: sigma(0)/sigma(T))",
     "T2": "Table 2 — mean absolute position / velocity error",
     "T3": "Table 3 — mean absolute misalignment (arc-seconds)",
+    "T4": "Table 4 — SINS/CNS/SAR with UKF, sparse-grid (SGHQF) and adaptive anisotropic "
+          "sparse-grid (AASGHQF) local filters",
 }
 
 
@@ -60,6 +92,126 @@ def one_run(args) -> tuple[list[dict], dict]:
     return rows, series
 
 
+def _nominal(tr, k):
+    """Error-model linearisation point from the truth at sample k."""
+    from ..attitude import euler_to_dcm
+    from ..error_model import Nominal
+
+    C = euler_to_dcm(tr.euler[k])
+    return Nominal(lat=tr.lla[k, 0], h=tr.lla[k, 2], vel=tr.vel[k], C=C,
+                   fn=C @ tr.dv[min(k, len(tr.dv) - 1)] / tr.dt)
+
+
+def _measurement_H(scn: Scenario, nav):
+    from ..measurements import SarFix, StarAttitude
+
+    out = []
+    if scn.sensors.star is not None:
+        out.append((StarAttitude().H(nav), StarAttitude().R(
+            float(units.arcsec(scn.sensors.star.sigma_arcsec)) * np.ones(3)),
+            scn.sensors.star.period_s))
+    if scn.sensors.sar is not None:
+        c = scn.sensors.sar
+        out.append((SarFix().H(nav), SarFix().R(
+            [c.sigma_pos_m, c.sigma_pos_m, float(units.deg(c.sigma_heading_deg))]),
+            c.period_s))
+    return out
+
+
+def observability(scn: Scenario, max_time: float | None = None) -> dict:
+    """Table 1 (whole flight) and the SVD degree per flight phase (one PWCS segment per
+    scenario segment, linearised at its middle), for the star + SAR measurement set."""
+    from .. import error_model as em
+    from ..measurements import NavSnapshot
+    from ..observability import covariance_degree, stripped_observability_matrix, svd_degree
+    from ..simulate import initial_covariance
+    from ..strapdown import Strapdown
+
+    tr = scn.trajectory(max_time)
+    noise = scn.imu.noise_model(tr.dt)
+    baro = scn.sensors.baro.loop() if scn.sensors.baro is not None else None
+    gains = Strapdown(tr.lla[0], tr.vel[0], tr.euler[0], tr.dt, baro).baro_gains[:2]
+    T = scn.filter.period_s
+
+    def proc(k):
+        return em.ErrorProcess(_nominal(tr, k), T, noise, gains)
+
+    def nav(k):
+        return NavSnapshot(tr.lla[k], tr.vel[k], _nominal(tr, k).C)
+
+    # H and F in SI: the H rows of the measurement models map angles in the same unit on
+    # both sides and metres to metres, so only the columns need the state scale.
+    def H_si(k):
+        return np.vstack([H for H, _, _ in _measurement_H(scn, nav(k))]) / em.SCALE
+
+    bounds = np.cumsum([0.0] + [g.duration_s for g in scn.segments])
+    bounds = bounds[bounds <= tr.t[-1] + 1e-9]
+    mids = [int(round(0.5 * (a + b) / tr.dt)) for a, b in zip(bounds[:-1], bounds[1:],
+                                                               strict=True)]
+    Fs = [proc(k).F_si() for k in mids]
+    Hs = [H_si(k) for k in mids]
+    ref = em.STATE_NAMES.index("dvE")
+    deg_si, _ = svd_degree(stripped_observability_matrix(Fs, Hs), ref)
+    # The same in filter units: state j scaled by SCALE_j (columns of O times SCALE).
+    Of = stripped_observability_matrix(Fs, Hs) * em.SCALE
+    deg_f, _ = svd_degree(Of, ref)
+    phases = {"si": {}, "filter_units": {}}
+    for g, F, H in zip(scn.segments, Fs, Hs, strict=False):
+        O1 = stripped_observability_matrix([F], [H])
+        for unit, O in (("si", O1), ("filter_units", O1 * em.SCALE)):
+            d, _ = svd_degree(O, ref)
+            phases[unit][g.name] = {T1_KEYS[n]: float(v)
+                                    for n, v in zip(em.STATE_NAMES, d, strict=True)}
+    # Covariance degree: the KF covariance recursion with every star and SAR fix.
+    per = round(T / tr.dt)
+    n_cyc = (len(tr.t) - 1) // per
+
+    def steps():
+        for c in range(n_cyc):
+            k = (c + 1) * per
+            p = proc(k - per // 2)
+            t = tr.t[k]
+            meas = [(H, R) for H, R, period in _measurement_H(scn, nav(k))
+                    if abs(t / period - round(t / period)) < 1e-6]
+            yield p.Phi, p.Qd, meas
+
+    shrink = covariance_degree(initial_covariance(scn), steps())
+    rows = {}
+    for i, n in enumerate(em.STATE_NAMES):
+        key = T1_KEYS[n]
+        rows[key] = {"degree": {"ours": float(deg_si[i]), "ci95": None,
+                                "paper": PAPER_T1.get(key)},
+                     "degree_filter_units": {"ours": float(deg_f[i]), "ci95": None},
+                     "sigma_shrink": {"ours": float(shrink[i]), "ci95": None}}
+    return {"rows": rows, "phases": phases}
+
+
+def one_run_t4(args) -> list[dict]:
+    """Table 4: SINS/CNS/SAR with each filter on one run's data, timed alike."""
+    import time
+
+    from ..config import ModeConfig
+    from ..simulate import run_configured_mode
+
+    scn, seed, max_time = args
+    data = make_run_data(scn, seed, max_time)
+    aiding = next(m for m in scn.modes if m.name == "SINS/CNS/SAR").aiding
+    rows = []
+    for name in T4_FILTERS:
+        mode = ModeConfig(name=name, aiding=aiding, filter=name.lower())
+        t0 = time.perf_counter()
+        r = run_configured_mode(scn, mode, data, max_time)
+        el = time.perf_counter() - t0
+        st = run_statistics(r)
+        rows.append({"seed": seed, "mode": name,
+                     "att_arcsec": (st["phiE_arcsec"] + st["phiN_arcsec"]
+                                    + st["phiU_arcsec"]) / 3,
+                     "vel_mps": (st["dVx_mps"] + st["dVy_mps"]) / 2,
+                     "pos_m": (st["dlambda_m"] + st["dL_m"]) / 2,
+                     "ms_per_cycle": 1e3 * el / len(r.t)})
+    return rows
+
+
 def run_monte_carlo(scn: Scenario, runs: int, seed: int, jobs: int = 1,
                     max_time: float | None = None, progress=None):
     """Run ``runs`` Monte Carlo runs with seeds ``seed, seed+1, ...``.
@@ -70,14 +222,32 @@ def run_monte_carlo(scn: Scenario, runs: int, seed: int, jobs: int = 1,
     return [r for rows, _ in out for r in rows], out[0][1]
 
 
+def n_tasks(scn: Scenario, runs: int, t4_runs: int | None = None, **_) -> int:
+    return runs + (min(runs, 3) if t4_runs is None else t4_runs)
+
+
 def reproduce(scn: Scenario, runs: int, seed: int, jobs: int = 1,
-              max_time: float | None = None, progress=None) -> dict:
-    """Monte Carlo reproduction: per-run rows, the first run's series and the summary."""
+              max_time: float | None = None, progress=None,
+              t4_runs: int | None = None) -> dict:
+    """Monte Carlo reproduction: per-run rows, the first run's series and the summary
+    (Tables 2-3 over ``runs`` runs, Table 4 over the first ``t4_runs`` of them — default
+    min(runs, 3) — and Table 1, which needs no Monte Carlo)."""
     from ..report import summarize
 
     rows, series = run_monte_carlo(scn, runs, seed, jobs, max_time, progress)
-    return {"rows": rows, "series": series,
-            "summary": summarize(rows, PAPER_TABLES, PAPER, runs, seed)}
+    summary = summarize(rows, PAPER_TABLES, PAPER, runs, seed)
+    n4 = min(runs, 3) if t4_runs is None else t4_runs
+    rows4 = [r for o in run_seeds(one_run_t4, [(scn, seed + i, max_time) for i in range(n4)],
+                                  jobs, progress) for r in o]
+    t4 = summarize(rows4, {"T4": {k: dict(zip(T4_COLS, v, strict=True))
+                                  for k, v in PAPER_T4.items()}}, PAPER, n4, seed)
+    obs = observability(scn, max_time)
+    tables = {"T1": {"rows": obs["rows"]}, **summary["tables"],
+              "T4": {"runs": n4, **t4["tables"]["T4"]}}
+    summary["tables"] = tables
+    summary["observability_phases"] = obs["phases"]
+    return {"rows": rows + [{**r, "table": "T4"} for r in rows4], "series": series,
+            "summary": summary}
 
 
 def print_summary(summary: dict, console) -> None:
@@ -92,5 +262,6 @@ def write_outputs(out, rep: dict) -> list:
     return _write(out, rep["summary"], rep["rows"], rep["series"])
 
 
-__all__ = ["ALIASES", "PAPER", "PAPER_TABLES", "TABLE_TITLES", "load_scenario",
-           "print_summary", "reproduce", "run_monte_carlo", "run_statistics", "write_outputs"]
+__all__ = ["ALIASES", "PAPER", "PAPER_TABLES", "TABLE_TITLES", "load_scenario", "n_tasks",
+           "observability", "print_summary", "reproduce", "run_monte_carlo", "run_statistics",
+           "write_outputs"]
