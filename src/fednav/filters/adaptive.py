@@ -47,6 +47,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..kernels import cholesky_lower
 from .base import Innovation
 from .kf import KalmanFilter
 from .ukf import UnscentedKalmanFilter, _sigma_points
@@ -71,9 +72,19 @@ class _SageHusa:
         self.b, self.floor = fading, r_floor
         self.R: dict = {}
         self.k: dict = {}
+        self._lo: dict = {}
 
     def current(self, key, R_nominal) -> np.ndarray:
         return self.R.get(key, np.asarray(R_nominal, dtype=float))
+
+    def _floor(self, key, R_nominal) -> float:
+        """``r_floor`` times the smallest eigenvalue of the nominal R (cached per key)."""
+        tag = R_nominal.tobytes()
+        hit = self._lo.get(key)
+        if hit is None or hit[0] != tag:
+            hit = (tag, self.floor * np.linalg.eigvalsh(R_nominal).min())
+            self._lo[key] = hit
+        return hit[1]
 
     def adapt(self, key, R_nominal, r, HPHt) -> np.ndarray:
         R_nominal = np.asarray(R_nominal, dtype=float)
@@ -81,9 +92,12 @@ class _SageHusa:
         d = (1.0 - self.b) / (1.0 - self.b ** (k + 1))
         R = (1.0 - d) * self.current(key, R_nominal) + d * (np.outer(r, r) - HPHt)
         R = 0.5 * (R + R.T)
-        w, V = np.linalg.eigh(R)
-        lo = self.floor * np.linalg.eigvalsh(R_nominal).min()
-        R = (V * np.maximum(w, lo)) @ V.T
+        lo = self._floor(key, R_nominal)
+        # Every eigenvalue >= lo exactly when R - lo I has a Cholesky factor: project
+        # (eigen-decomposition) only when the floor is active.
+        if not cholesky_lower(R - lo * np.eye(len(R)))[1]:
+            w, V = np.linalg.eigh(R)
+            R = (V * np.maximum(w, lo)) @ V.T
         self.R[key], self.k[key] = R, k + 1
         return R
 

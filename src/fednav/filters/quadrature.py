@@ -31,9 +31,9 @@ from __future__ import annotations
 import numpy as np
 
 from .adaptive import QAdaptation, _SageHusa
-from .base import Filter, Innovation, chol
+from .base import Filter, FilterError, Innovation, chol
 from .sparse_grid import sparse_grid
-from .ukf import UnscentedKalmanFilter
+from .ukf import UnscentedKalmanFilter, _update
 
 
 class SparseGridFilter(UnscentedKalmanFilter):
@@ -87,14 +87,22 @@ class AdaptiveSparseGridFilter(QAdaptation, SparseGridFilter):
 
     def update(self, y, model, nav=None, R=None, gate: float | None = None) -> Innovation:
         X = self.sigma_points(phase="update")
-        Z = np.asarray(model.h(X, nav), dtype=float)
+        Z = np.ascontiguousarray(model.h(X, nav), dtype=float)
         z_hat = self.Wm @ Z
         dZ = Z - z_hat
         Pzz0 = (dZ * self.Wc[:, None]).T @ dZ
-        r = np.asarray(y, dtype=float) - z_hat
+        y = np.asarray(y, dtype=float)
         key = getattr(model, "kind", type(model).__name__)
-        Ra = self.sh.adapt(key, R, r, Pzz0)
-        inn = super().update(y, model, nav, Ra, gate)
-        if inn.accepted:
-            self._adapt_q_after_update()
-        return inn
+        Ra = self.sh.adapt(key, R, y - z_hat, Pzz0)
+        # The UKF update with the points and predicted measurements already at hand.
+        x, P, r, Pzz, nis, ok = _update(X, Z, self.Wm, self.Wc, self.x, self.P, y, Ra)
+        if not ok or not np.isfinite(nis):
+            raise FilterError(f"{self._who('update')}: innovation covariance not positive "
+                              f"definite")
+        if gate is not None and nis > gate:
+            return Innovation(r, Pzz, float(nis), False)
+        self.x, self.P = x, P
+        self._finish("update", symmetrize=False)
+        chol(self.P, self._who("update"))
+        self._adapt_q_after_update()
+        return Innovation(r, Pzz, float(nis))
