@@ -64,7 +64,7 @@ def print_tables(summary: dict, titles: dict[str, str], console: Console | None 
                 pv = v.get("paper")
                 q = v["ours"] / pv if pv else None
                 ratio = "–" if q is None else f"×{q:.2f}" if abs(q) < 100 else f"×{q:.3g}"
-                tab.add_row(r if i == 0 else "", c, _fmt(v["ours"]), _fmt(v["ci95"]),
+                tab.add_row(r if i == 0 else "", c, _fmt(v["ours"]), _fmt(v.get("ci95")),
                             _fmt(pv), ratio,
                             end_section=(i == len(vals) - 1))
         console.print(tab)

@@ -42,6 +42,7 @@ def test_cli_reproduce_smoke(tmp_path):
     t1 = s["tables"]["T1"]["rows"]
     assert set(t1) == set(paper002.PAPER_T1) | {"dVU", "dh"}
     assert t1["phiE"]["degree"]["paper"] == 8.67 and t1["dh"]["degree"]["paper"] is None
+    assert set(t1["phiE"]["degree"]) == {"ours", "paper"}
     assert {"degree", "degree_filter_units", "sigma_shrink"} == set(t1["phiU"])
     phases = set(s["observability_phases"]["si"])   # the phases inside the 60 s flight
     assert {"climb pitch-up", "climb"} <= phases <= {g.name for g in

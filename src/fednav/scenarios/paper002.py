@@ -179,10 +179,9 @@ def observability(scn: Scenario, max_time: float | None = None) -> dict:
     rows = {}
     for i, n in enumerate(em.STATE_NAMES):
         key = T1_KEYS[n]
-        rows[key] = {"degree": {"ours": float(deg_si[i]), "ci95": None,
-                                "paper": PAPER_T1.get(key)},
-                     "degree_filter_units": {"ours": float(deg_f[i]), "ci95": None},
-                     "sigma_shrink": {"ours": float(shrink[i]), "ci95": None}}
+        rows[key] = {"degree": {"ours": float(deg_si[i]), "paper": PAPER_T1.get(key)},
+                     "degree_filter_units": {"ours": float(deg_f[i])},
+                     "sigma_shrink": {"ours": float(shrink[i])}}
     return {"rows": rows, "phases": phases}
 
 
