@@ -48,6 +48,9 @@ def reproduce(
                                              "(paper 001; default from the scenario)"),
     t4_runs: int = typer.Option(None, "--t4-runs", help="Monte Carlo runs of Table 4 "
                                                          "(paper 002; default min(runs, 3))"),
+    fresh: bool = typer.Option(False, "--fresh", help="discard the runs stored in --out"),
+    dask: str = typer.Option(None, "--dask", help="Dask scheduler address (tcp://HOST:PORT) "
+                                                  "to run on instead of local processes"),
 ) -> None:
     """Reproduce a paper's experiment and print its tables beside the paper's."""
     mod = _paper_module(paper)
@@ -64,21 +67,33 @@ def reproduce(
             typer.echo(f"error: {opt} must be at least {low}, got {value}", err=True)
             raise typer.Exit(2)
         extra[opt.strip("-").replace("-", "_")] = value
+    from .campaign import Campaign, CampaignError
+
+    out = out or Path("results") / mod.PAPER
     try:
         scn = mod.load_scenario(scenario)
-    except ConfigError as e:
+        camp = Campaign(out, mod.PAPER, scn, seed, fresh, dask)
+    except (ConfigError, CampaignError) as e:
         typer.echo(f"error: {e}", err=True)
         raise typer.Exit(2) from None
+    except OSError as e:
+        typer.echo(f"error: output folder {out}: {e.strerror}", err=True)
+        raise typer.Exit(2) from None
+    extra["campaign"] = camp
     t0 = time.perf_counter()
     total = mod.n_tasks(scn, runs, **extra) if hasattr(mod, "n_tasks") else runs
+    from rich.progress import TimeRemainingColumn
     with Progress("[progress.description]{task.description}", BarColumn(),
-                  MofNCompleteColumn(), TimeElapsedColumn(), console=console,
-                  transient=False) as prog:
+                  MofNCompleteColumn(), TimeElapsedColumn(), TimeRemainingColumn(),
+                  console=console, transient=False) as prog:
         task = prog.add_task(f"paper {mod.PAPER}: {scn.name}", total=total)
         rep = mod.reproduce(scn, runs, seed, jobs, max_time,
                             progress=lambda: prog.advance(task), **extra)
+    rep["summary"]["campaign"] = camp.summary()
     mod.print_summary(rep["summary"], console)
-    out = out or Path("results") / mod.PAPER
+    c = camp.summary()
+    console.print(f"campaign {out}: {c['runs_computed']} units of work computed, "
+                  f"{c['runs_reused']} reused ({c['engine']})")
     files = mod.write_outputs(out, rep)
     console.print(f"wrote {', '.join(str(f) for f in files)} "
                   f"in {time.perf_counter() - t0:.1f} s")

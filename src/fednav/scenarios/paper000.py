@@ -81,10 +81,11 @@ def one_run(args):
 
 
 def reproduce(scn: Scenario, runs: int, seed: int, jobs: int = 1,
-              max_time: float | None = None, progress=None) -> dict:
+              max_time: float | None = None, progress=None, campaign=None) -> dict:
     from ..report import summarize
 
-    out = run_seeds(one_run, [(scn, seed + i, max_time) for i in range(runs)], jobs, progress)
+    out = run_seeds(one_run, [(scn, seed + i, max_time) for i in range(runs)], jobs, progress,
+                    campaign)
     rows = [r for o in out for r in o[0]]
     tables = dict(PAPER_TABLES)
     tables["limitation"] = {k: dict.fromkeys(COLS) for k in LIMITATION}

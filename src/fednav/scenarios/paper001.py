@@ -134,12 +134,12 @@ def _table(rows: list[dict], table: str, cols: tuple[str, ...]) -> dict:
 
 
 def reproduce(scn: LaunchScenario, runs: int, seed: int, jobs: int = 1,
-              max_time: float | None = None, progress=None,
+              max_time: float | None = None, progress=None, campaign=None,
               particles: int | None = None) -> dict:
     from ..report import summarize
 
     work = tasks(scn, runs, seed, max_time, particles)
-    out = run_seeds(_task, work, jobs, progress)
+    out = run_seeds(_task, work, jobs, progress, campaign)
     rows = [r for o in out for r in o[0]]
     t1 = [r for r in rows if r["table"] == "T1"]
     summary = summarize(t1, PAPER_TABLES, PAPER, runs, seed)

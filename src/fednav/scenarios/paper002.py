@@ -212,12 +212,13 @@ def one_run_t4(args) -> list[dict]:
 
 
 def run_monte_carlo(scn: Scenario, runs: int, seed: int, jobs: int = 1,
-                    max_time: float | None = None, progress=None):
+                    max_time: float | None = None, progress=None, campaign=None):
     """Run ``runs`` Monte Carlo runs with seeds ``seed, seed+1, ...``.
 
     Returns (list of per-run rows, error series of the first run).
     """
-    out = run_seeds(one_run, [(scn, seed + i, max_time) for i in range(runs)], jobs, progress)
+    out = run_seeds(one_run, [(scn, seed + i, max_time) for i in range(runs)], jobs, progress,
+                    campaign)
     return [r for rows, _ in out for r in rows], out[0][1]
 
 
@@ -226,18 +227,18 @@ def n_tasks(scn: Scenario, runs: int, t4_runs: int | None = None, **_) -> int:
 
 
 def reproduce(scn: Scenario, runs: int, seed: int, jobs: int = 1,
-              max_time: float | None = None, progress=None,
+              max_time: float | None = None, progress=None, campaign=None,
               t4_runs: int | None = None) -> dict:
     """Monte Carlo reproduction: per-run rows, the first run's series and the summary
     (Tables 2-3 over ``runs`` runs, Table 4 over the first ``t4_runs`` of them — default
     min(runs, 3) — and Table 1, which needs no Monte Carlo)."""
     from ..report import summarize
 
-    rows, series = run_monte_carlo(scn, runs, seed, jobs, max_time, progress)
+    rows, series = run_monte_carlo(scn, runs, seed, jobs, max_time, progress, campaign)
     summary = summarize(rows, PAPER_TABLES, PAPER, runs, seed)
     n4 = min(runs, 3) if t4_runs is None else t4_runs
     rows4 = [r for o in run_seeds(one_run_t4, [(scn, seed + i, max_time) for i in range(n4)],
-                                  jobs, progress) for r in o]
+                                  jobs, progress, campaign) for r in o]
     t4 = summarize(rows4, {"T4": {k: dict(zip(T4_COLS, v, strict=True))
                                   for k, v in PAPER_T4.items()}}, PAPER, n4, seed)
     obs = observability(scn, max_time)

@@ -114,8 +114,9 @@ def one_run(args):
 
 
 def reproduce(scn: Scenario, runs: int, seed: int, jobs: int = 1,
-              max_time: float | None = None, progress=None) -> dict:
-    out = run_seeds(one_run, [(scn, seed + i, max_time) for i in range(runs)], jobs, progress)
+              max_time: float | None = None, progress=None, campaign=None) -> dict:
+    out = run_seeds(one_run, [(scn, seed + i, max_time) for i in range(runs)], jobs, progress,
+                    campaign)
     rows = [r for o in out for r in o[0]]
     fault_rows = [r for o in out for r in o[2]]
     return {"rows": rows, "fault_rows": fault_rows, "series": out[0][1],

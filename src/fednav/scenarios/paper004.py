@@ -109,16 +109,17 @@ def sweep_run(args):
 
 
 def reproduce(scn: Scenario, runs: int, seed: int, jobs: int = 1,
-              max_time: float | None = None, progress=None) -> dict:
+              max_time: float | None = None, progress=None, campaign=None) -> dict:
     from ..report import summarize
 
-    out = run_seeds(one_run, [(scn, seed + i, max_time) for i in range(runs)], jobs, progress)
+    out = run_seeds(one_run, [(scn, seed + i, max_time) for i in range(runs)], jobs, progress,
+                    campaign)
     rows = [r for o in out for r in o[0]]
     summary = summarize(rows, PAPER_TABLES, PAPER, runs, seed)
     summary["tables"]["cost"] = {"rows": _cost(rows)}
     n_sweep = min(runs, 4)
     sw = run_seeds(sweep_run, [(scn, seed + i, max_time, f) for f in SWEEP
-                               for i in range(n_sweep)], jobs)
+                               for i in range(n_sweep)], jobs, None, campaign)
     sweep_rows = [r for o in sw for r in o]
     summary["tables"]["sweep"] = {"rows": _sweep(sweep_rows), "runs": n_sweep}
     return {"rows": rows, "series": out[0][1], "sweep_rows": sweep_rows, "summary": summary}

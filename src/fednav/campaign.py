@@ -1,0 +1,380 @@
+"""Monte Carlo campaigns: a result folder that fills up run by run, resumable, on Dask.
+
+A campaign folder ``DIR`` holds
+
+* ``DIR/campaign.json`` — the manifest: paper, scenario content hash, first seed, fednav
+  version and creation time.  Running the same reproduction again with the same ``DIR``
+  reuses every unit of work already stored; a different paper, scenario or seed is refused
+  with a one-line :class:`CampaignError` (``--fresh`` starts over);
+* ``DIR/runs/<key>.nc`` — one NetCDF file per unit of work (a Monte Carlo run of a paper,
+  or one run of a sweep): the per-run statistics tables and the error time series of every
+  mode at the statistics epochs (1 Hz in the papers).  ``<key>`` is a hash of the work
+  function and its arguments (scenario content, seed, options), so a larger ``--runs``
+  only adds keys.  Each file is written to a temporary name and renamed: a campaign killed
+  at any moment never leaves a half-written file that would later be read as complete.
+
+**Why NetCDF.**  One self-contained file per run makes "write, then rename" atomic and
+resumption a directory listing; xarray, pandas, MATLAB, Julia and ``ncdump`` read it; and
+SciPy's NetCDF-3 writer, already a dependency, is enough (no HDF5 or Zarr library).  A
+Zarr store would suit one growing array better, but renaming its directory of chunks is
+no simpler and adds a dependency.
+
+:func:`open_runs` gives the whole campaign as an :class:`xarray.Dataset` with dimensions
+``run``, ``mode``, ``time``, ``axis`` (errors ``pos`` [m], ``vel`` [m/s], ``att`` [rad],
+computed minus true) and ``run``, ``mode`` (every numeric per-run statistic).
+
+**Engines.**  ``jobs = 1``: in this process.  ``jobs > 1``: a local Dask cluster of worker
+processes (one thread each, BLAS single-threaded).  ``address``: an existing Dask
+distributed scheduler (``tcp://host:port``), whose workers may be on other machines.
+Results depend only on each unit's arguments, so every engine gives the same files and
+tables.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from collections.abc import Callable
+from dataclasses import fields, is_dataclass
+from datetime import UTC, datetime
+from pathlib import Path
+
+import numpy as np
+
+
+class CampaignError(ValueError):
+    """A campaign folder that cannot be used as asked (one line: the folder and why)."""
+
+
+# --------------------------------------------------------------------- keys and manifest
+def _canonical(obj) -> str:
+    """A stable text form of a work unit's arguments (pydantic models by content)."""
+    if hasattr(obj, "model_dump_json"):
+        return obj.model_dump_json()
+    if isinstance(obj, tuple | list):
+        return "[" + ",".join(_canonical(o) for o in obj) + "]"
+    if isinstance(obj, float):
+        return repr(obj)
+    return json.dumps(obj, default=str, sort_keys=True)
+
+
+def work_key(fn: Callable, args) -> str:
+    h = hashlib.sha256(f"{fn.__module__}.{fn.__qualname__}|{_canonical(args)}".encode())
+    return h.hexdigest()[:20]
+
+
+def scenario_hash(scn) -> str:
+    return hashlib.sha256(_canonical(scn).encode()).hexdigest()[:16]
+
+
+class Campaign:
+    """The campaign folder ``out`` of ``paper`` with scenario ``scn`` and first ``seed``."""
+
+    def __init__(self, out: Path, paper: str, scn, seed: int, fresh: bool = False,
+                 address: str | None = None):
+        from . import __version__
+
+        self.out = Path(out)
+        if self.out.exists() and not self.out.is_dir():
+            raise CampaignError(f"campaign folder {self.out}: exists and is not a folder")
+        self.runs_dir = self.out / "runs"
+        manifest = {"paper": paper, "scenario_hash": scenario_hash(scn), "seed": int(seed),
+                    "fednav_version": __version__}
+        path = self.out / "campaign.json"
+        if fresh and self.runs_dir.exists():
+            for f in self.runs_dir.iterdir():
+                f.unlink()
+        if path.exists() and not fresh:
+            old = json.loads(path.read_text())
+            for k in ("paper", "scenario_hash", "seed"):
+                if old.get(k) != manifest[k]:
+                    raise CampaignError(
+                        f"campaign folder {self.out}: made with {k} {old.get(k)}, not "
+                        f"{manifest[k]} (use another --out, or --fresh to start over)")
+            manifest["created"] = old.get("created")
+        else:
+            manifest["created"] = datetime.now(UTC).isoformat(timespec="seconds")
+        self.runs_dir.mkdir(parents=True, exist_ok=True)
+        _atomic_write_text(path, json.dumps(manifest, indent=2))
+        self.manifest = manifest
+        self.address = address
+        self.computed = 0
+        self.reused = 0
+        self.engine = "in-process"
+
+    def path(self, key: str) -> Path:
+        return self.runs_dir / f"{key}.nc"
+
+    def load(self, key: str):
+        import xarray as xr
+
+        with xr.open_dataset(self.path(key), engine="scipy") as ds:
+            return decode(ds.load())
+
+    def save(self, key: str, result) -> None:
+        ds = encode(result)
+        tmp = self.runs_dir / f".{key}.{os.getpid()}.tmp"
+        ds.to_netcdf(tmp, engine="scipy")
+        os.replace(tmp, self.path(key))
+
+    def summary(self) -> dict:
+        return {"runs_total": self.computed + self.reused, "runs_computed": self.computed,
+                "runs_reused": self.reused, "engine": self.engine}
+
+
+def _atomic_write_text(path: Path, text: str) -> None:
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    tmp.write_text(text)
+    os.replace(tmp, path)
+
+
+# ----------------------------------------------------------------------------- engines
+def _single_threaded() -> None:
+    from threadpoolctl import threadpool_limits
+
+    threadpool_limits(1)
+
+
+def run_units(fn: Callable, args: list, jobs: int = 1, progress: Callable | None = None,
+              campaign: Campaign | None = None) -> list:
+    """``[fn(a) for a in args]`` in order; units already in ``campaign`` are read back,
+    the others computed (in this process, on a local Dask cluster of ``jobs`` worker
+    processes, or on the campaign's Dask scheduler) and stored as they finish;
+    ``progress()`` after each unit, reused or computed."""
+    keys = [work_key(fn, a) for a in args]
+    out: list = [None] * len(args)
+    todo = []
+    for i, k in enumerate(keys):
+        if campaign is not None and campaign.path(k).exists():
+            out[i] = campaign.load(k)
+            campaign.reused += 1
+            if progress:
+                progress()
+        else:
+            todo.append(i)
+
+    def done(i, result):
+        out[i] = result
+        if campaign is not None:
+            campaign.save(keys[i], result)
+            campaign.computed += 1
+        if progress:
+            progress()
+
+    address = campaign.address if campaign is not None else None
+    if not todo:
+        return out
+    if address is None and (jobs <= 1 or len(todo) == 1):
+        for i in todo:
+            done(i, fn(args[i]))
+        return out
+    from distributed import Client, LocalCluster, as_completed
+
+    if address is not None:
+        client, cluster = Client(address, timeout="30s"), None
+        engine = f"dask {address}"
+    else:
+        cluster = LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True,
+                               dashboard_address=None, silence_logs=40)
+        client = Client(cluster)
+        engine = f"dask local, {jobs} worker processes"
+    if campaign is not None:
+        campaign.engine = engine
+    try:
+        client.run(_single_threaded)
+        futs = {client.submit(fn, args[i], key=f"{fn.__name__}-{keys[i]}", pure=False): i
+                for i in todo}
+        for fut in as_completed(futs):
+            done(futs[fut], fut.result())
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+    return out
+
+
+# ------------------------------------------------------------------------------- codec
+def _table_vars(prefix: str, rows: list[dict], data: dict, meta: dict) -> None:
+    cols: list[str] = []
+    for r in rows:
+        cols += [c for c in r if c not in cols]
+    dim = f"{prefix}_row"
+    types = {}
+    for j, c in enumerate(cols):
+        vals = [r.get(c) for r in rows]
+        kinds = {type(v).__name__ for v in vals if v is not None}
+        if kinds <= {"str"}:
+            types[c] = "str"
+            data[f"{prefix}_c{j}"] = ((dim,), np.array(["" if v is None else v for v in vals],
+                                                      dtype=object))
+        else:
+            types[c] = "bool" if kinds <= {"bool", "bool_"} else \
+                "int" if kinds <= {"int", "int64", "int32"} else "float"
+            data[f"{prefix}_c{j}"] = ((dim,), np.array([np.nan if v is None else float(v)
+                                                       for v in vals], dtype=float))
+    meta.update({"kind": "table", "columns": cols, "types": types, "n": len(rows)})
+
+
+def _table_from(ds, prefix: str, meta: dict) -> list[dict]:
+    conv = {"str": str, "int": lambda v: int(v), "bool": lambda v: bool(v), "float": float}
+    cols = [(c, ds[f"{prefix}_c{j}"].values, conv[meta["types"][c]])
+            for j, c in enumerate(meta["columns"])]
+    return [{c: f(v[i]) for c, v, f in cols} for i in range(meta["n"])]
+
+
+def _result_vars(prefix: str, obj, data: dict) -> dict:
+    """One result object (RunResult, LaunchResult, ...): arrays as variables, scalars and
+    None in the metadata."""
+    meta = {"class": f"{type(obj).__module__}:{type(obj).__qualname__}", "fields": {}}
+    for f in fields(obj):
+        v = getattr(obj, f.name)
+        name = f"{prefix}_{f.name}"
+        if v is None:
+            meta["fields"][f.name] = {"kind": "none"}
+        elif isinstance(v, np.ndarray):
+            dims = tuple(f"{name}_d{k}" for k in range(v.ndim))
+            data[name] = (dims, v)
+            meta["fields"][f.name] = {"kind": "array"}
+        elif isinstance(v, dict):
+            keys = list(v)
+            for k, a in enumerate(keys):
+                data[f"{name}_k{k}"] = ((f"{name}_k{k}_d0",), np.asarray(v[a], dtype=float))
+            meta["fields"][f.name] = {"kind": "dict", "keys": keys}
+        elif hasattr(v, "to_dict") and hasattr(v, "columns"):  # pandas DataFrame
+            sub: dict = {}
+            _table_vars(name, v.to_dict("records"), data, sub)
+            meta["fields"][f.name] = {**sub, "kind": "frame"}
+        else:
+            meta["fields"][f.name] = {"kind": "scalar", "value": v if not isinstance(
+                v, np.generic) else v.item()}
+    return meta
+
+
+def _result_from(ds, prefix: str, meta: dict):
+    import importlib
+
+    mod, qual = meta["class"].split(":")
+    cls = getattr(importlib.import_module(mod), qual)
+    kw = {}
+    for name, m in meta["fields"].items():
+        key = f"{prefix}_{name}"
+        if m["kind"] == "none":
+            kw[name] = None
+        elif m["kind"] == "array":
+            kw[name] = ds[key].values
+        elif m["kind"] == "dict":
+            kw[name] = {a: ds[f"{key}_k{k}"].values for k, a in enumerate(m["keys"])}
+        elif m["kind"] == "frame":
+            import pandas as pd
+
+            kw[name] = pd.DataFrame(_table_from(ds, key, m), columns=m["columns"])
+        else:
+            kw[name] = m["value"]
+    return cls(**kw)
+
+
+def encode(result):
+    """A unit's result — a table (list of dicts), a dict of result dataclasses, None, or a
+    tuple of those — as an :class:`xarray.Dataset` (exact round trip with :func:`decode`)."""
+    import xarray as xr
+
+    parts = list(result) if isinstance(result, tuple) else [result]
+    data: dict = {}
+    metas = []
+    for i, part in enumerate(parts):
+        p = f"p{i}"
+        if part is None:
+            metas.append({"kind": "none"})
+        elif isinstance(part, list):
+            meta: dict = {}
+            _table_vars(p, part, data, meta)
+            metas.append(meta)
+        elif isinstance(part, dict) and all(is_dataclass(v) for v in part.values()):
+            names = list(part)
+            metas.append({"kind": "series", "names": names,
+                          "items": [_result_vars(f"{p}_s{j}", part[n], data)
+                                    for j, n in enumerate(names)]})
+        else:
+            raise TypeError(f"campaign: cannot store a result part of type {type(part)}")
+    attrs = {"fednav_structure": json.dumps({"tuple": isinstance(result, tuple),
+                                             "parts": metas})}
+    return xr.Dataset({k: xr.Variable(d, v) for k, (d, v) in data.items()}, attrs=attrs)
+
+
+def decode(ds):
+    s = json.loads(ds.attrs["fednav_structure"])
+    parts = []
+    for i, m in enumerate(s["parts"]):
+        p = f"p{i}"
+        if m["kind"] == "none":
+            parts.append(None)
+        elif m["kind"] == "table":
+            parts.append(_table_from(ds, p, m))
+        else:
+            parts.append({n: _result_from(ds, f"{p}_s{j}", it)
+                          for j, (n, it) in enumerate(zip(m["names"], m["items"],
+                                                          strict=True))})
+    return tuple(parts) if s["tuple"] else parts[0]
+
+
+# ---------------------------------------------------------------------------- analysis
+def open_runs(path) -> xarray.Dataset:  # noqa: F821
+    """The campaign in ``path`` as one :class:`xarray.Dataset`.
+
+    Dimensions ``run`` (one per stored Monte Carlo run that has error series, by seed),
+    ``mode``, ``time`` [s], ``axis``; variables ``pos``, ``vel``, ``att`` (errors, computed
+    minus true; NaN where a mode has no sample) and every numeric column of the run's
+    statistics table as ``stat_<column>`` (``run``, ``mode``).
+    """
+    import xarray as xr
+
+    runs_dir = Path(path) / "runs"
+    if not runs_dir.is_dir():
+        raise CampaignError(f"campaign folder {path}: no runs/ folder (not a campaign)")
+    per_run = []
+    for f in sorted(runs_dir.glob("*.nc")):
+        with xr.open_dataset(f, engine="scipy") as ds:
+            res = decode(ds.load())
+        parts = list(res) if isinstance(res, tuple) else [res]
+        table = next((p for p in parts if isinstance(p, list)), None)
+        series = next((p for p in parts if isinstance(p, dict)), None)
+        if not series or not table:
+            continue
+        seed = table[0].get("seed")
+        per_run.append((seed, table, series))
+    if not per_run:
+        raise CampaignError(f"campaign folder {path}: no stored run has error series")
+    per_run.sort(key=lambda r: (r[0] is None, r[0]))
+    modes = list(dict.fromkeys(m for _, _, s in per_run for m in s))
+    times = np.unique(np.concatenate([np.round(r.t, 6) for _, _, s in per_run
+                                      for r in s.values()]))
+    shape = (len(per_run), len(modes), len(times), 3)
+    out = {k: np.full(shape, np.nan) for k in ("pos", "vel", "att")}
+    stat_cols = [c for c, v in per_run[0][1][0].items()
+                 if isinstance(v, float | int) and not isinstance(v, bool) and c != "seed"]
+    stats = {c: np.full(shape[:2], np.nan) for c in stat_cols}
+    for i, (_, table, series) in enumerate(per_run):
+        for j, m in enumerate(modes):
+            r = series.get(m)
+            if r is None:
+                continue
+            idx = np.searchsorted(times, np.round(r.t, 6))
+            for k in out:
+                out[k][i, j, idx] = getattr(r, k)
+        for row in table:
+            if row.get("mode") in modes:
+                j = modes.index(row["mode"])
+                for c in stat_cols:
+                    if c in row:
+                        stats[c][i, j] = row[c]
+    dims4 = ("run", "mode", "time", "axis")
+    ds = xr.Dataset({k: (dims4, v) for k, v in out.items()},
+                    coords={"run": [r[0] for r in per_run], "mode": modes, "time": times,
+                            "axis": ["x", "y", "z"]})
+    for c, v in stats.items():
+        ds[f"stat_{c}"] = (("run", "mode"), v)
+    manifest = Path(path) / "campaign.json"
+    if manifest.exists():
+        ds.attrs.update({k: str(v) for k, v in json.loads(manifest.read_text()).items()})
+    return ds

@@ -1,0 +1,122 @@
+"""Campaign store and engines: resumable, atomic, identical tables whatever the engine."""
+
+import json
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+from fednav.campaign import Campaign, CampaignError, decode, encode, open_runs, run_units
+from fednav.cli import app
+from fednav.scenarios import paper000, paper003
+
+ARGS = ["--runs", "2", "--max-time", "30", "--jobs", "1"]
+
+
+def _reproduce(out, *extra):
+    r = CliRunner().invoke(app, ["reproduce", "002", *ARGS, "--out", str(out), *extra])
+    assert r.exit_code == 0, r.output
+    return json.loads((out / "summary.json").read_text())
+
+
+def _tables(s):
+    t = json.loads(json.dumps(s["tables"]))
+    for row in t["T4"]["rows"].values():   # wall-clock timings differ between runs
+        row.pop("ms_per_cycle")
+    return t
+
+
+def test_codec_round_trip_with_frames_and_dicts():
+    scn = paper003.load_scenario()
+    res = paper003.one_run((scn, 3, 40.0))
+    back = decode(encode(res))
+    assert pd.DataFrame(back[0]).equals(pd.DataFrame(res[0]))
+    assert pd.DataFrame(back[2]).equals(pd.DataFrame(res[2]))     # NaN-aware
+    for k, r in res[1].items():
+        b = back[1][k]
+        assert np.array_equal(b.pos, r.pos) and np.array_equal(b.sigma, r.sigma, equal_nan=True)
+        assert b.mode == r.mode and set(b.beta) == set(r.beta)
+    f0, f1 = res[3]["isolated"].fdi, back[3]["isolated"].fdi
+    assert list(f0.columns) == list(f1.columns) and np.allclose(f0["statistic"],
+                                                                f1["statistic"])
+    assert f1["isolated"].dtype == bool and f1["local"].iloc[0] == f0["local"].iloc[0]
+
+
+def test_resume_computes_only_missing_runs_and_gives_identical_tables(tmp_path):
+    whole = _reproduce(tmp_path / "whole")
+    part = tmp_path / "part"
+    _reproduce(part)
+    runs = sorted((part / "runs").glob("*.nc"))
+    runs[0].unlink()                                          # a run lost ...
+    (part / "runs" / f".{runs[1].stem}.123.tmp").write_text("half-written")  # ... a kill
+    s = _reproduce(part)
+    assert s["campaign"]["runs_computed"] == 1 and s["campaign"]["runs_reused"] == 3
+    assert _tables(s) == _tables(whole)
+    ds = open_runs(part)
+    assert set(ds.dims) == {"run", "mode", "time", "axis"} and list(ds.run.values) == [1, 2]
+    assert "SINS/CNS/SAR" in list(ds.mode.values) and np.isfinite(ds.pos).any()
+
+
+def test_other_seed_or_scenario_refused_in_one_line_and_fresh(tmp_path):
+    out = tmp_path / "c"
+    _reproduce(out)
+    r = CliRunner().invoke(app, ["reproduce", "002", *ARGS, "--seed", "5", "--out", str(out)])
+    assert r.exit_code == 2 and "made with seed 1, not 5" in r.output
+    assert len(r.output.strip().splitlines()) == 1
+    s = _reproduce(out, "--seed", "5", "--fresh")
+    assert s["campaign"]["runs_reused"] == 0
+    with pytest.raises(CampaignError, match="scenario_hash"):
+        Campaign(out, "002", paper000.load_scenario(), 5)
+    f = tmp_path / "file"
+    f.write_text("x")
+    r = CliRunner().invoke(app, ["reproduce", "002", *ARGS, "--out", str(f)])
+    assert r.exit_code == 2 and "not a folder" in r.output
+
+
+def _units(jobs=1, campaign=None):
+    scn = paper000.load_scenario()
+    return run_units(paper000.one_run, [(scn, s, 20.0) for s in (1, 2, 3)], jobs,
+                     campaign=campaign)
+
+
+@pytest.mark.slow
+def test_local_dask_cluster_gives_identical_results(tmp_path):
+    scn = paper000.load_scenario()
+    camp = Campaign(tmp_path, "000", scn, 1)
+    a = _units(1)
+    b = _units(2, camp)
+    assert camp.engine.startswith("dask local") and camp.computed == 3
+    assert [r[0] for r in a] == [r[0] for r in b]
+
+
+@pytest.mark.slow
+def test_dask_scheduler_and_worker_subprocesses(tmp_path):
+    bindir = Path(sys.executable).parent
+    sfile = tmp_path / "scheduler.json"
+    procs = [subprocess.Popen([str(bindir / "dask"), "scheduler", "--host", "127.0.0.1",
+                               "--port", "0", "--no-dashboard", "--scheduler-file",
+                               str(sfile)], stdout=subprocess.DEVNULL,
+                              stderr=subprocess.DEVNULL)]
+    try:
+        for _ in range(100):
+            if sfile.exists() and sfile.stat().st_size:
+                break
+            time.sleep(0.2)
+        address = json.loads(sfile.read_text())["address"]
+        procs.append(subprocess.Popen([str(bindir / "dask"), "worker", address,
+                                       "--nthreads", "1", "--nworkers", "2",
+                                       "--no-dashboard"], stdout=subprocess.DEVNULL,
+                                      stderr=subprocess.DEVNULL))
+        camp = Campaign(tmp_path / "c", "000", paper000.load_scenario(), 1, address=address)
+        b = _units(campaign=camp)
+        assert camp.engine == f"dask {address}" and camp.computed == 3
+        assert [r[0] for r in _units(1)] == [r[0] for r in b]
+    finally:
+        for p in reversed(procs):
+            p.terminate()
+            p.wait(timeout=30)
