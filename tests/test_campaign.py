@@ -87,9 +87,9 @@ def _units(jobs=1, campaign=None):
 @pytest.mark.slow
 def test_local_dask_cluster_gives_identical_results(tmp_path):
     scn = paper000.load_scenario()
-    camp = Campaign(tmp_path, "000", scn, 1)
     a = _units(1)
-    b = _units(2, camp)
+    with Campaign(tmp_path, "000", scn, 1) as camp:
+        b = _units(2, camp)
     assert camp.engine.startswith("dask local") and camp.computed == 3
     assert [r[0] for r in a] == [r[0] for r in b]
 
@@ -112,8 +112,9 @@ def test_dask_scheduler_and_worker_subprocesses(tmp_path):
                                        "--nthreads", "1", "--nworkers", "2",
                                        "--no-dashboard"], stdout=subprocess.DEVNULL,
                                       stderr=subprocess.DEVNULL))
-        camp = Campaign(tmp_path / "c", "000", paper000.load_scenario(), 1, address=address)
-        b = _units(campaign=camp)
+        with Campaign(tmp_path / "c", "000", paper000.load_scenario(), 1,
+                      address=address) as camp:
+            b = _units(campaign=camp)
         assert camp.engine == f"dask {address}" and camp.computed == 3
         assert [r[0] for r in _units(1)] == [r[0] for r in b]
     finally:

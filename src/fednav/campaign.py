@@ -102,6 +102,28 @@ class Campaign:
         self.computed = 0
         self.reused = 0
         self.engine = "in-process"
+        self._client = None
+        self._cluster = None
+
+    def client(self, jobs: int):
+        """The campaign's Dask client, started once and kept for all its work."""
+        if self._client is None:
+            self._client, self._cluster, self.engine = _start_client(self.address, jobs)
+        return self._client
+
+    def close(self) -> None:
+        """Stop the Dask client (and the local cluster it started)."""
+        if self._client is not None:
+            self._client.close()
+            if self._cluster is not None:
+                self._cluster.close()
+            self._client = self._cluster = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
 
     def path(self, key: str) -> Path:
         return self.runs_dir / f"{key}.nc"
@@ -169,29 +191,45 @@ def run_units(fn: Callable, args: list, jobs: int = 1, progress: Callable | None
         for i in todo:
             done(i, fn(args[i]))
         return out
-    from distributed import Client, LocalCluster, as_completed
+    from distributed import as_completed
 
-    if address is not None:
-        client, cluster = Client(address, timeout="30s"), None
-        engine = f"dask {address}"
-    else:
-        cluster = LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True,
-                               dashboard_address=None, silence_logs=40)
-        client = Client(cluster)
-        engine = f"dask local, {jobs} worker processes"
     if campaign is not None:
-        campaign.engine = engine
+        client, own = campaign.client(jobs), None
+    else:
+        client, cluster, _ = _start_client(None, jobs)
+        own = (client, cluster)
     try:
-        client.run(_single_threaded)
         futs = {client.submit(fn, args[i], key=f"{fn.__name__}-{keys[i]}", pure=False): i
                 for i in todo}
         for fut in as_completed(futs):
             done(futs[fut], fut.result())
     finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
+        if own is not None:
+            own[0].close()
+            own[1].close()
     return out
+
+
+def _start_client(address: str | None, jobs: int):
+    """(client, local cluster or None, engine description)."""
+    from distributed import Client, LocalCluster
+
+    if address is not None:
+        client, cluster, engine = Client(address, timeout="30s"), None, f"dask {address}"
+    else:
+        import sys
+
+        import dask
+
+        # fork (Linux): workers inherit the parent's imported modules and loaded numba
+        # functions instead of re-importing them (spawn costs ~2 s per worker).
+        method = "fork" if sys.platform.startswith("linux") else "spawn"
+        with dask.config.set({"distributed.worker.multiprocessing-method": method}):
+            cluster = LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True,
+                                   dashboard_address=None, silence_logs=40)
+        client, engine = Client(cluster), f"dask local, {jobs} worker processes"
+    client.run(_single_threaded)
+    return client, cluster, engine
 
 
 # ------------------------------------------------------------------------------- codec

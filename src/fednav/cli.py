@@ -87,8 +87,9 @@ def reproduce(
                   MofNCompleteColumn(), TimeElapsedColumn(), TimeRemainingColumn(),
                   console=console, transient=False) as prog:
         task = prog.add_task(f"paper {mod.PAPER}: {scn.name}", total=total)
-        rep = mod.reproduce(scn, runs, seed, jobs, max_time,
-                            progress=lambda: prog.advance(task), **extra)
+        with camp:
+            rep = mod.reproduce(scn, runs, seed, jobs, max_time,
+                                progress=lambda: prog.advance(task), **extra)
     rep["summary"]["campaign"] = camp.summary()
     mod.print_summary(rep["summary"], console)
     c = camp.summary()
