@@ -42,8 +42,10 @@ from pathlib import Path
 
 import numpy as np
 
+from .errors import FednavError
 
-class CampaignError(ValueError):
+
+class CampaignError(FednavError, ValueError):
     """A campaign folder that cannot be used as asked (one line: the folder and why)."""
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 import time
@@ -9,14 +10,35 @@ from pathlib import Path
 
 import typer
 from rich.console import Console
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
 
 from . import __version__
-from .config import ConfigError, load_model
+from .errors import FednavError
 
 app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="fednav — federated multi-sensor integrated navigation.")
 console = Console()
+_state = {"debug": False}
+
+
+@app.callback()
+def _options(debug: bool = typer.Option(False, "--debug",
+                                        help="show the traceback of an error")) -> None:
+    _state["debug"] = debug
+
+
+def _one_line_errors(command):
+    """fednav's own errors end a command with their one-line message and exit status 2
+    (the traceback only with ``--debug``)."""
+    @functools.wraps(command)
+    def run(*args, **kwargs):
+        try:
+            return command(*args, **kwargs)
+        except FednavError as e:
+            if _state["debug"]:
+                raise
+            typer.echo(f"error: {e}", err=True)
+            raise typer.Exit(2) from None
+    return run
 
 
 def _papers():
@@ -34,6 +56,7 @@ def _paper_module(paper: str):
 
 
 @app.command()
+@_one_line_errors
 def reproduce(
     paper: str = typer.Argument(..., help="paper number or alias: 000 / airship, "
                                           "001 / launch-frame, 002 / cruise-missile, "
@@ -67,22 +90,26 @@ def reproduce(
             typer.echo(f"error: {opt} must be at least {low}, got {value}", err=True)
             raise typer.Exit(2)
         extra[opt.strip("-").replace("-", "_")] = value
-    from .campaign import Campaign, CampaignError
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        TimeElapsedColumn,
+        TimeRemainingColumn,
+    )
+
+    from .campaign import Campaign
 
     out = out or Path("results") / mod.PAPER
     try:
         scn = mod.load_scenario(scenario)
         camp = Campaign(out, mod.PAPER, scn, seed, fresh, dask)
-    except (ConfigError, CampaignError) as e:
-        typer.echo(f"error: {e}", err=True)
-        raise typer.Exit(2) from None
     except OSError as e:
         typer.echo(f"error: output folder {out}: {e.strerror}", err=True)
         raise typer.Exit(2) from None
     extra["campaign"] = camp
     t0 = time.perf_counter()
     total = mod.n_tasks(scn, runs, **extra) if hasattr(mod, "n_tasks") else runs
-    from rich.progress import TimeRemainingColumn
     with Progress("[progress.description]{task.description}", BarColumn(),
                   MofNCompleteColumn(), TimeElapsedColumn(), TimeRemainingColumn(),
                   console=console, transient=False) as prog:
@@ -96,6 +123,9 @@ def reproduce(
     console.print(f"campaign {out}: {c['runs_computed']} units of work computed, "
                   f"{c['runs_reused']} reused ({c['engine']})")
     files = mod.write_outputs(out, rep)
+    from .html_report import write_report
+
+    files.append(write_report(out))
     console.print(f"wrote {', '.join(str(f) for f in files)} "
                   f"in {time.perf_counter() - t0:.1f} s")
 
@@ -107,7 +137,7 @@ app.add_typer(process_app, name="process")
 
 def _run_process(read, imu, gnss, velocity, ref, smooth, out, config) -> None:
     from . import process_output
-    from .io import DataError
+    from .config import load_model
     from .process import ProcessConfig, process
 
     try:
@@ -120,7 +150,7 @@ def _run_process(read, imu, gnss, velocity, ref, smooth, out, config) -> None:
             "velocity": None if velocity is None else str(velocity),
             "reference": None if ref is None else str(ref),
             "config": None if config is None else str(config), "smooth": smooth})
-    except (ConfigError, DataError, ValueError) as e:
+    except (FednavError, ValueError) as e:
         typer.echo(f"error: {e}", err=True)
         raise typer.Exit(2) from None
     s = json.loads(files[-1].read_text())
@@ -150,6 +180,7 @@ _CONFIG = typer.Option(None, help="processing config YAML (noise figures, option
 
 
 @process_app.command("navego")
+@_one_line_errors
 def process_navego(
     imu: Path = typer.Option(..., help="NaveGo IMU .mat"),
     gnss: Path = typer.Option(..., help="NaveGo GNSS .mat"),
@@ -174,6 +205,7 @@ def process_navego(
 
 
 @process_app.command("csv")
+@_one_line_errors
 def process_csv(
     imu: Path = typer.Option(..., help="IMU CSV (docs/data-formats.md)"),
     gnss: Path = typer.Option(..., help="GNSS CSV"),
@@ -194,6 +226,15 @@ def process_csv(
                 "ref": None if ref is None else read_reference_csv(ref)}
 
     _run_process(read, imu, gnss, velocity, ref, smooth, out, config)
+
+
+@app.command()
+@_one_line_errors
+def report(folder: Path = typer.Argument(..., help="a fednav reproduce output folder")) -> None:
+    """Write FOLDER/report.html: tables beside the paper's, plots, run metadata."""
+    from .html_report import write_report
+
+    console.print(f"wrote {write_report(folder)}")
 
 
 @app.command()

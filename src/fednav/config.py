@@ -16,6 +16,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 
 from . import units
 from .error_model import ImuNoiseModel
+from .errors import FednavError
 from .sensors import (
     AirData,
     Barometer,
@@ -33,7 +34,7 @@ from .trajectory import Segment
 from .wind import Episode, WindField
 
 
-class ConfigError(ValueError):
+class ConfigError(FednavError, ValueError):
     """A scenario file that cannot be used; the message names the file and the key."""
 
 

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy import stats
 
 
 def error_stats(err) -> dict[str, np.ndarray]:
@@ -34,5 +33,7 @@ def mean_ci95(values) -> tuple[float, float]:
     m = float(v.mean())
     if n < 2:
         return m, float("nan")
+    from scipy import stats
+
     h = float(stats.t.ppf(0.975, n - 1) * v.std(ddof=1) / np.sqrt(n))
     return m, h

@@ -10,10 +10,11 @@ from fednav.scenarios import paper000
 from fednav.simulate import make_run_data, run_configured_mode
 
 
-def test_cli_reproduce_000_smoke(tmp_path):
+def test_cli_reproduce_000_smoke(tmp_path, report_complete):
     r = CliRunner().invoke(app, ["reproduce", "airship", "--runs", "1", "--jobs", "1",
                                  "--max-time", "40", "--out", str(tmp_path)])
     assert r.exit_code == 0, r.output
+    report_complete(tmp_path)
     s = json.loads((tmp_path / "summary.json").read_text())
     t1 = s["tables"]["T1"]["rows"]
     assert set(t1) == {"AEKF/none", "AEKF/wind", "RAUKF/none", "RAUKF/wind", "CUKF/none",

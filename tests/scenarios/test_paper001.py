@@ -26,12 +26,13 @@ def _small_scenario(tmp_path):
     return p
 
 
-def test_cli_reproduce_001_smoke(tmp_path):
+def test_cli_reproduce_001_smoke(tmp_path, report_complete):
     out = tmp_path / "out dir"  # a path with a space
     r = CliRunner().invoke(app, ["reproduce", "launch-frame", "--runs", "2", "--jobs", "1",
                                  "--max-time", "30", "--particles", "200", "--scenario",
                                  str(_small_scenario(tmp_path)), "--out", str(out)])
     assert r.exit_code == 0, r.output
+    report_complete(out)
     s = json.loads((out / "summary.json").read_text())
     t1 = s["tables"]["T1"]["rows"]
     assert set(t1) == {"PF", "EKF"}

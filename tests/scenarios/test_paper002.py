@@ -27,10 +27,11 @@ def test_modes_behave_as_the_paper_says_on_a_short_flight():
     np.testing.assert_allclose(sum(b.values()), 1.0)
 
 
-def test_cli_reproduce_smoke(tmp_path):
+def test_cli_reproduce_smoke(tmp_path, report_complete):
     r = CliRunner().invoke(app, ["reproduce", "cruise-missile", "--runs", "2", "--jobs", "1",
                                  "--max-time", "60", "--out", str(tmp_path)])
     assert r.exit_code == 0, r.output
+    report_complete(tmp_path)
     s = json.loads((tmp_path / "summary.json").read_text())
     assert s["paper"] == "002" and s["runs"] == 2 and s["seed"] == 1
     row = s["tables"]["T2"]["rows"]["SINS/CNS/SAR"]["dlambda_m"]

@@ -30,11 +30,12 @@ def test_thresholds_and_scenario():
     assert scn.fault_experiment.fault.start_s == 401 and scn.filter.fdi_alpha == 0.005
 
 
-def test_reproduce_summary_shape_and_fault_experiment(short, tmp_path):
+def test_reproduce_summary_shape_and_fault_experiment(short, tmp_path, report_complete):
     r = CliRunner().invoke(app, ["reproduce", "federated-ukf", "--runs", "2", "--jobs", "1",
                                  "--max-time", "200", "--scenario", str(short),
                                  "--out", str(tmp_path)])
     assert r.exit_code == 0, r.output
+    report_complete(tmp_path)
     s = json.loads((tmp_path / "summary.json").read_text())
     assert s["paper"] == "003" and s["runs"] == 2
     t1 = s["tables"]["T1"]["rows"]

@@ -11,10 +11,11 @@ from fednav.scenarios import paper004
 from fednav.simulate import make_run_data, run_all_modes
 
 
-def test_cli_reproduce_004_smoke(tmp_path):
+def test_cli_reproduce_004_smoke(tmp_path, report_complete):
     r = CliRunner().invoke(app, ["reproduce", "sar-delay", "--runs", "1", "--jobs", "1",
                                  "--max-time", "80", "--out", str(tmp_path)])
     assert r.exit_code == 0, r.output
+    report_complete(tmp_path)
     s = json.loads((tmp_path / "summary.json").read_text())
     t1, t2 = s["tables"]["T1"]["rows"], s["tables"]["T2"]["rows"]
     rows = {"uncompensated", "curve_fit", "ins_increment", "recompute"}

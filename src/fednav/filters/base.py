@@ -23,10 +23,11 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..errors import FednavError
 from ..kernels import cholesky_lower
 
 
-class FilterError(RuntimeError):
+class FilterError(FednavError, RuntimeError):
     """Numerical failure inside a filter (names the filter and the step)."""
 
 

@@ -37,7 +37,6 @@ from __future__ import annotations
 
 import numba
 import numpy as np
-from scipy.stats import chi2
 
 from ..kernels import spd_inverse
 from .base import Filter, FilterError
@@ -191,6 +190,8 @@ class FederatedFilter:
             return float("nan")
         key = (dof, alpha)
         if key not in self._thresholds:
+            from scipy.stats import chi2
+
             self._thresholds[key] = float(chi2.ppf(1.0 - alpha, dof))
         return self._thresholds[key]
 

@@ -10,8 +10,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..errors import FednavError
 
-class DataError(ValueError):
+
+class DataError(FednavError, ValueError):
     """A sensor data file that cannot be used (one line naming the file and the field)."""
 
 

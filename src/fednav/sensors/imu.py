@@ -9,7 +9,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.signal import lfilter
 
 
 @dataclass(frozen=True)
@@ -53,6 +52,8 @@ def _markov(n, dt, sigma, tau, rng):
     """Stationary first-order Gauss–Markov sequence (n, 3), exact discretisation.
 
     ``sigma`` and ``tau`` are per axis (scalars broadcast)."""
+    from scipy.signal import lfilter  # heavy import, only where used
+
     sigma, tau = _axes(sigma), _axes(tau)
     out = np.zeros((n, 3))
     for i in range(3):

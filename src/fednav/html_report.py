@@ -1,0 +1,188 @@
+"""``report.html``: one self-contained page for a reproduction folder.
+
+The page holds every table of ``summary.json`` beside the paper's values (the ratio
+fednav / paper is coloured when it lies outside ×3 either way), the error plots of the
+folder embedded as base64 PNG, and the run metadata (fednav version, scenario hash,
+seeds, engine, times) from ``campaign.json`` and ``summary.json``. Nothing is fetched
+from the network: the file can be mailed or archived as it is.
+"""
+
+from __future__ import annotations
+
+import base64
+import json
+import math
+from datetime import UTC, datetime
+from html import escape
+from pathlib import Path
+
+from .errors import FednavError
+
+FAR = 3.0  # ratios outside [1/FAR, FAR] are flagged
+
+_CSS = """
+body{font-family:system-ui,-apple-system,Segoe UI,Roboto,sans-serif;margin:2em auto;
+max-width:1100px;color:#222;line-height:1.4}
+h1{font-size:1.6em;margin-bottom:.2em}h2{font-size:1.2em;margin-top:2em}
+table{border-collapse:collapse;margin:.5em 0 1em 0;font-size:.92em}
+th,td{border-bottom:1px solid #ddd;padding:.25em .7em;text-align:right}
+th{background:#f3f3f3}td.l,th.l{text-align:left}
+tr.first td{border-top:2px solid #bbb}
+td.far{background:#fbd5d0;color:#8a1c10;font-weight:600}
+td.near{color:#1d6b2f}
+dl{display:grid;grid-template-columns:max-content auto;gap:.2em 1.2em}dt{font-weight:600}
+img{max-width:100%;border:1px solid #ddd;margin:.5em 0}
+.note{color:#666;font-size:.9em}pre{background:#f7f7f7;padding:.8em;overflow:auto}
+"""
+
+
+class ReportError(FednavError, ValueError):
+    """A folder that holds no reproduction to report on."""
+
+
+def _num(x) -> str:
+    if x is None or isinstance(x, bool) or not isinstance(x, int | float):
+        return "–" if x is None else escape(str(x))
+    if not math.isfinite(x):
+        return "–"
+    a = abs(x)
+    if a >= 100:
+        return f"{x:.0f}"
+    if a >= 10:
+        return f"{x:.1f}"
+    if a >= 1:
+        return f"{x:.2f}"
+    return f"{x:.3g}"
+
+
+def _leaves(cell: dict, prefix: str = ""):
+    """(quantity, {ours, ci95, paper, ...}) for a table cell; nested cells (paper 003's
+    column -> statistic -> value) are flattened to ``column / statistic``."""
+    if "ours" in cell:
+        yield prefix, cell
+        return
+    for k, v in cell.items():
+        if isinstance(v, dict):
+            yield from _leaves(v, f"{prefix} / {k}" if prefix else str(k))
+
+
+def _ratio(ours, paper) -> tuple[str, str]:
+    """(text, css class) of fednav / paper."""
+    if not isinstance(ours, int | float) or not isinstance(paper, int | float) or not paper:
+        return "–", ""
+    if not (math.isfinite(ours) and math.isfinite(paper)):
+        return "–", ""
+    q = ours / paper
+    text = f"×{q:.2f}" if abs(q) < 100 else f"×{q:.3g}"
+    far = q <= 0 or q > FAR or q < 1.0 / FAR
+    return text, "far" if far else "near"
+
+
+def table_html(name: str, table: dict, title: str, runs, seed) -> str:
+    """One summary table as HTML: row, quantity, fednav, ± 95 % CI, paper, ratio."""
+    spread = any(v.get("ci95") is not None for cols in table["rows"].values()
+                 for _, v in _leaves(cols))
+    what = (f"mean ± 95 % CI over {table.get('runs', runs)} Monte Carlo runs (seed {seed})"
+            if spread else "one computation, no Monte Carlo spread")
+    head = (f"<h2>{escape(title)}</h2><p class='note'>fednav: {escape(what)}; ratio "
+            f"fednav / paper coloured when outside ×{FAR:g}</p>")
+    out = [head, f"<table id='table-{escape(name)}'><tr><th class='l'>row</th>"
+                 "<th class='l'>quantity</th><th>fednav</th><th>± 95 % CI</th>"
+                 "<th>paper</th><th>fednav / paper</th></tr>"]
+    for row, cols in table["rows"].items():
+        leaves = list(_leaves(cols))
+        for i, (q, v) in enumerate(leaves):
+            text, cls = _ratio(v.get("ours"), v.get("paper"))
+            first = " class='first'" if i == 0 else ""
+            out.append(f"<tr{first}><td class='l'>{escape(str(row)) if i == 0 else ''}</td>"
+                       f"<td class='l'>{escape(q)}</td><td>{_num(v.get('ours'))}</td>"
+                       f"<td>{_num(v.get('ci95'))}</td><td>{_num(v.get('paper'))}</td>"
+                       f"<td class='{cls}'>{text}</td></tr>")
+    out.append("</table>")
+    return "\n".join(out)
+
+
+def _titles(paper: str) -> dict:
+    from .scenarios import paper000, paper001, paper002, paper003, paper004
+
+    for mod in (paper000, paper001, paper002, paper003, paper004):
+        if mod.PAPER == paper:
+            return getattr(mod, "TABLE_TITLES", {})
+    return {}
+
+
+def _image(path: Path) -> str:
+    data = base64.b64encode(path.read_bytes()).decode("ascii")
+    return (f"<figure><img alt='{escape(path.name)}' src='data:image/png;base64,{data}'>"
+            f"<figcaption class='note'>{escape(path.name)}</figcaption></figure>")
+
+
+def render(folder: Path) -> str:
+    """The HTML text of the report on reproduction folder ``folder``."""
+    folder = Path(folder)
+    sfile = folder / "summary.json"
+    if not sfile.is_file():
+        raise ReportError(f"{folder}: no summary.json (not a fednav reproduce folder, or "
+                          "its run did not finish)")
+    try:
+        summary = json.loads(sfile.read_text())
+        tables = summary["tables"]
+    except (json.JSONDecodeError, KeyError, TypeError) as e:
+        raise ReportError(f"{sfile}: not a fednav summary ({e})") from None
+    manifest = {}
+    mfile = folder / "campaign.json"
+    if mfile.is_file():
+        try:
+            manifest = json.loads(mfile.read_text())
+        except json.JSONDecodeError:
+            manifest = {}
+    paper = str(summary.get("paper", "?"))
+    titles = _titles(paper)
+    runs, seed = summary.get("runs"), summary.get("seed")
+    camp = summary.get("campaign", {})
+    seeds = (f"{seed} … {seed + runs - 1} (run i uses seed + i)"
+             if isinstance(seed, int) and isinstance(runs, int) else str(seed))
+    meta = {
+        "paper": paper,
+        "fednav version": manifest.get("fednav_version", "?"),
+        "scenario hash": manifest.get("scenario_hash", "?"),
+        "seeds": seeds,
+        "Monte Carlo runs": runs,
+        "engine": camp.get("engine", "?"),
+        "units of work": (f"{camp.get('runs_total', '?')} ({camp.get('runs_computed', '?')} "
+                          f"computed, {camp.get('runs_reused', '?')} reused)"),
+        "campaign created": manifest.get("created", "?"),
+        "summary written": datetime.fromtimestamp(sfile.stat().st_mtime, UTC)
+                                   .isoformat(timespec="seconds"),
+        "folder": str(folder.resolve()),
+    }
+    parts = ["<!doctype html><html lang='en'><head><meta charset='utf-8'>",
+             f"<title>fednav — paper {escape(paper)}</title><style>{_CSS}</style></head><body>",
+             f"<h1>fednav reproduction of paper {escape(paper)}</h1>",
+             "<dl>" + "".join(f"<dt>{escape(k)}</dt><dd>{escape(str(v))}</dd>"
+                              for k, v in meta.items()) + "</dl>"]
+    for name, t in tables.items():
+        if isinstance(t, dict) and t.get("rows"):
+            parts.append(table_html(name, t, titles.get(name, name), runs, seed))
+    images = sorted(folder.glob("*.png"))
+    if images:
+        parts.append("<h2>Plots</h2>")
+        parts.extend(_image(p) for p in images)
+    rest = {k: v for k, v in summary.items()
+            if k not in ("paper", "runs", "seed", "tables", "campaign")}
+    if rest:
+        parts.append("<h2>Other results in summary.json</h2><details><summary>show"
+                     f"</summary><pre>{escape(json.dumps(rest, indent=1))}</pre></details>")
+    parts.append("</body></html>")
+    return "\n".join(parts)
+
+
+def write_report(folder: Path) -> Path:
+    """Write ``folder/report.html`` (written to a temporary name, then renamed)."""
+    folder = Path(folder)
+    text = render(folder)
+    path = folder / "report.html"
+    tmp = folder / ".report.html.tmp"
+    tmp.write_text(text, encoding="utf-8")
+    tmp.replace(path)
+    return path
