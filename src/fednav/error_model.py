@@ -38,6 +38,7 @@ import numpy as np
 
 from . import earth, units
 from .kernels import dcm_to_rotvec, rotvec_to_dcm
+from .kernels import quat_to_dcm as _quat_to_dcm
 
 N_STATES = 18
 PHI, DV, DP, EPS_C, EPS_R, NABLA = (slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12),
@@ -369,15 +370,40 @@ def interval_process(s0, s1, dv_sum, T: float, noise: ImuNoiseModel, baro_gains=
     """The error model over one filter interval of the strapdown INS, linearised at the
     interval's midpoint: ``s0``, ``s1`` the INS state (:mod:`fednav.strapdown` layout)
     at its start and end, ``dv_sum`` the compensated velocity increments summed over it
-    (body, m/s)."""
-    from .strapdown import STATE_LLA, STATE_Q, STATE_VEL, quat_to_dcm_nb
+    (body, m/s).  One compiled call builds the nominal point, Phi and Qd."""
+    self = ErrorProcess.__new__(ErrorProcess)
+    self.T, self.noise, self.nsub = float(T), noise, int(nsub)
+    self.k1, self.k2 = float(baro_gains[0]), float(baro_gains[1])
+    self.itg = 0.0 if np.isinf(noise.gyro_markov_tau) else 1.0 / noise.gyro_markov_tau
+    self.ita = 0.0 if np.isinf(noise.accel_markov_tau) else 1.0 / noise.accel_markov_tau
+    self.baro_q = float(baro_q)
+    self._noise = np.array([noise.gyro_arw, noise.accel_vrw, noise.gyro_markov_sigma,
+                            noise.accel_markov_sigma, self.baro_q, noise.gyro_bias_rw,
+                            noise.accel_bias_rw])
+    self._params, self._C0, self.Phi, self.Qd = _interval(
+        np.asarray(s0, dtype=float), np.asarray(s1, dtype=float),
+        np.asarray(dv_sum, dtype=float), self.T, self.k1, self.k2, self.itg, self.ita,
+        self._noise, SCALE)
+    pr = self._params
+    self.rm, self.rn = pr[8], pr[9]
+    self.nom = Nominal(lat=pr[0], h=pr[1], vel=pr[2:5].copy(), C=self._C0, fn=pr[5:8].copy())
+    return self
 
-    qm = s0[STATE_Q] + s1[STATE_Q]
-    Cm = quat_to_dcm_nb(qm / np.sqrt(qm @ qm))
-    pm = 0.5 * (s0[STATE_LLA] + s1[STATE_LLA])
-    nom = Nominal(lat=pm[0], h=pm[2], vel=0.5 * (s0[STATE_VEL] + s1[STATE_VEL]), C=Cm,
-                  fn=Cm @ dv_sum / T)
-    return ErrorProcess(nom, T, noise, baro_gains, baro_q, nsub)
+
+@numba.njit(cache=True)
+def _interval(s0, s1, dv_sum, T, k1, k2, itg, ita, noise, scale):
+    """Nominal parameters, C_b^n, Phi and Qd of one INS interval (see interval_process)."""
+    qm = s0[0:4] + s1[0:4]
+    Cm = _quat_to_dcm(qm / np.sqrt(qm @ qm))
+    lat = 0.5 * (s0[7] + s1[7])
+    h = 0.5 * (s0[9] + s1[9])
+    f = Cm @ dv_sum / T
+    rm, rn = earth.radii_nb(lat)
+    params = np.array([lat, h, 0.5 * (s0[4] + s1[4]), 0.5 * (s0[5] + s1[5]),
+                       0.5 * (s0[6] + s1[6]), f[0], f[1], f[2], rm, rn, k1, k2, itg, ita,
+                       earth.gravity_nb(lat, h)])
+    Phi, Qd = _discretize(params, Cm, noise, T, scale)
+    return params, Cm, Phi, Qd
 
 
 def apply_feedback(ins, dx) -> tuple[np.ndarray, np.ndarray]:

@@ -74,81 +74,129 @@ def _cross(a, b):
 
 @numba.njit(cache=True)
 def _run(state, dtheta, dv, dt, h_ref, gains, out_q, out_v, out_p):
+    # Scalar arithmetic throughout: no array is allocated per sample.
     n = dtheta.shape[0]
     record = out_q.shape[0] == n
-    q = state[0:4].copy()
-    v = state[4:7].copy()
-    p = state[7:10].copy()
-    dth_prev = state[10:13].copy()
-    dv_prev = state[13:16].copy()
-    v_prev = state[16:19].copy()
+    q0, q1, q2, q3 = state[0], state[1], state[2], state[3]
+    ve, vn, vu = state[4], state[5], state[6]
+    lat, lon, h = state[7], state[8], state[9]
+    px, py, pz = state[10], state[11], state[12]  # previous angle increment
+    ux, uy, uz = state[13], state[14], state[15]  # previous velocity increment
+    wpe, wpn, wpu = state[16], state[17], state[18]  # previous velocity
     has_prev = state[19] > 0.5
     b_int = state[20]
     dh = state[21]
     om = earth.OMEGA_IE
     for k in range(n):
-        dth = dtheta[k]
-        dvk = dv[k]
-        lat, lon, h = p[0], p[1], p[2]
+        ax, ay, az = dtheta[k, 0], dtheta[k, 1], dtheta[k, 2]
+        bx, by, bz = dv[k, 0], dv[k, 1], dv[k, 2]
         # Midpoint extrapolation of velocity and position.
         if has_prev:
-            vm = v + 0.5 * (v - v_prev)
+            me, mn, mu = ve + 0.5 * (ve - wpe), vn + 0.5 * (vn - wpn), vu + 0.5 * (vu - wpu)
         else:
-            vm = v.copy()
+            me, mn, mu = ve, vn, vu
         rm, rn = earth.radii_nb(lat)
-        lat_m = lat + 0.5 * dt * vm[1] / (rm + h)
-        h_m = h + 0.5 * dt * vm[2]
+        lat_m = lat + 0.5 * dt * mn / (rm + h)
+        h_m = h + 0.5 * dt * mu
         rm, rn = earth.radii_nb(lat_m)
-        sl, cl = np.sin(lat_m), np.cos(lat_m)
-        w_ie = np.array([0.0, om * cl, om * sl])
-        w_en = np.array([-vm[1] / (rm + h_m), vm[0] / (rn + h_m), vm[0] * sl / cl / (rn + h_m)])
-        w_in = w_ie + w_en
+        sl, cl = math.sin(lat_m), math.cos(lat_m)
+        iee, ien, ieu = 0.0, om * cl, om * sl
+        ene = -mn / (rm + h_m)
+        enn = me / (rn + h_m)
+        enu = me * sl / cl / (rn + h_m)
+        ine, inn, inu = iee + ene, ien + enn, ieu + enu
         gmag = earth.gravity_nb(lat_m, h_m)
         # Coning and sculling (current + previous sample).
         if has_prev:
-            phi = dth + _cross(dth_prev, dth) / 12.0
-            scul = (_cross(dth_prev, dvk) + _cross(dv_prev, dth)) / 12.0
+            fx = ax + (py * az - pz * ay) / 12.0
+            fy = ay + (pz * ax - px * az) / 12.0
+            fz = az + (px * ay - py * ax) / 12.0
+            sx = ((py * bz - pz * by) + (uy * az - uz * ay)) / 12.0
+            sy = ((pz * bx - px * bz) + (uz * ax - ux * az)) / 12.0
+            sz = ((px * by - py * bx) + (ux * ay - uy * ax)) / 12.0
         else:
-            phi = dth.copy()
-            scul = np.zeros(3)
-        dvb = dvk + 0.5 * _cross(dth, dvk) + scul
-        C = _q2dcm(q)
-        dvn = C @ dvb
-        zeta = w_in * dt
-        dvn = dvn - 0.5 * _cross(zeta, dvn)
-        acc = -_cross(2.0 * w_ie + w_en, vm)
-        acc[2] -= gmag
-        if not np.isnan(h_ref[k]):
+            fx, fy, fz = ax, ay, az
+            sx, sy, sz = 0.0, 0.0, 0.0
+        cx = bx + 0.5 * (ay * bz - az * by) + sx
+        cy = by + 0.5 * (az * bx - ax * bz) + sy
+        cz = bz + 0.5 * (ax * by - ay * bx) + sz
+        # C_b^n from the quaternion.
+        c00 = q0 * q0 + q1 * q1 - q2 * q2 - q3 * q3
+        c01 = 2 * (q1 * q2 - q0 * q3)
+        c02 = 2 * (q1 * q3 + q0 * q2)
+        c10 = 2 * (q1 * q2 + q0 * q3)
+        c11 = q0 * q0 - q1 * q1 + q2 * q2 - q3 * q3
+        c12 = 2 * (q2 * q3 - q0 * q1)
+        c20 = 2 * (q1 * q3 - q0 * q2)
+        c21 = 2 * (q2 * q3 + q0 * q1)
+        c22 = q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3
+        ne = c00 * cx + c01 * cy + c02 * cz
+        nn = c10 * cx + c11 * cy + c12 * cz
+        nu = c20 * cx + c21 * cy + c22 * cz
+        ze, zn, zu = ine * dt, inn * dt, inu * dt
+        de = ne - 0.5 * (zn * nu - zu * nn)
+        dn = nn - 0.5 * (zu * ne - ze * nu)
+        du = nu - 0.5 * (ze * nn - zn * ne)
+        we, wn, wu = 2.0 * iee + ene, 2.0 * ien + enn, 2.0 * ieu + enu
+        acc_e = -(wn * mu - wu * mn)
+        acc_n = -(wu * me - we * mu)
+        acc_u = -(we * mn - wn * me)
+        acc_u -= gmag
+        if not math.isnan(h_ref[k]):
             dh = h - h_ref[k]
-        acc[2] -= gains[1] * dh + b_int
+        acc_u -= gains[1] * dh + b_int
         b_int += gains[2] * dh * dt
-        v_new = v + dvn + acc * dt
+        ve_n = ve + de + acc_e * dt
+        vn_n = vn + dn + acc_n * dt
+        vu_n = vu + du + acc_u * dt
         # Position: trapezoid on velocity.
-        h_new = h + 0.5 * dt * (v[2] + v_new[2]) - gains[0] * dh * dt
+        h_new = h + 0.5 * dt * (vu + vu_n) - gains[0] * dh * dt
         h_a = 0.5 * (h + h_new)
-        lat_new = lat + 0.5 * dt * (v[1] + v_new[1]) / (rm + h_a)
+        lat_new = lat + 0.5 * dt * (vn + vn_n) / (rm + h_a)
         lat_a = 0.5 * (lat + lat_new)
         rm2, rn2 = earth.radii_nb(lat_a)
-        lon_new = lon + 0.5 * dt * (v[0] + v_new[0]) / ((rn2 + h_a) * np.cos(lat_a))
-        # Attitude: body rotation then navigation-frame rotation.
-        q = _qmul(_rv2q(-zeta), _qmul(q, _rv2q(phi)))
-        q = q / np.sqrt(q[0] ** 2 + q[1] ** 2 + q[2] ** 2 + q[3] ** 2)
-        v_prev = v
-        v = v_new
-        p = np.array([lat_new, lon_new, h_new])
-        dth_prev = dth.copy()
-        dv_prev = dvk.copy()
+        lon_new = lon + 0.5 * dt * (ve + ve_n) / ((rn2 + h_a) * math.cos(lat_a))
+        # Attitude: q <- r(-zeta) * q * r(phi) (body rotation, then navigation frame).
+        a2 = fx * fx + fy * fy + fz * fz
+        a = math.sqrt(a2)
+        if a < 1e-8:
+            rc, rs = 1.0 - a2 / 8.0, 0.5 - a2 / 48.0
+        else:
+            rc, rs = math.cos(0.5 * a), math.sin(0.5 * a) / a
+        r1, r2, r3 = rs * fx, rs * fy, rs * fz
+        t0 = q0 * rc - q1 * r1 - q2 * r2 - q3 * r3
+        t1 = q0 * r1 + q1 * rc + q2 * r3 - q3 * r2
+        t2 = q0 * r2 - q1 * r3 + q2 * rc + q3 * r1
+        t3 = q0 * r3 + q1 * r2 - q2 * r1 + q3 * rc
+        a2 = ze * ze + zn * zn + zu * zu
+        a = math.sqrt(a2)
+        if a < 1e-8:
+            rc, rs = 1.0 - a2 / 8.0, 0.5 - a2 / 48.0
+        else:
+            rc, rs = math.cos(0.5 * a), math.sin(0.5 * a) / a
+        r1, r2, r3 = -rs * ze, -rs * zn, -rs * zu
+        q0 = rc * t0 - r1 * t1 - r2 * t2 - r3 * t3
+        q1 = rc * t1 + r1 * t0 + r2 * t3 - r3 * t2
+        q2 = rc * t2 - r1 * t3 + r2 * t0 + r3 * t1
+        q3 = rc * t3 + r1 * t2 - r2 * t1 + r3 * t0
+        qn = math.sqrt(q0 ** 2 + q1 ** 2 + q2 ** 2 + q3 ** 2)
+        q0, q1, q2, q3 = q0 / qn, q1 / qn, q2 / qn, q3 / qn
+        wpe, wpn, wpu = ve, vn, vu
+        ve, vn, vu = ve_n, vn_n, vu_n
+        lat, lon, h = lat_new, lon_new, h_new
+        px, py, pz = ax, ay, az
+        ux, uy, uz = bx, by, bz
         has_prev = True
         if record:
-            out_q[k] = q
-            out_v[k] = v
-            out_p[k] = p
-    state[0:4] = q
-    state[4:7] = v
-    state[7:10] = p
-    state[10:13] = dth_prev
-    state[13:16] = dv_prev
-    state[16:19] = v_prev
+            out_q[k, 0], out_q[k, 1], out_q[k, 2], out_q[k, 3] = q0, q1, q2, q3
+            out_v[k, 0], out_v[k, 1], out_v[k, 2] = ve, vn, vu
+            out_p[k, 0], out_p[k, 1], out_p[k, 2] = lat, lon, h
+    state[0], state[1], state[2], state[3] = q0, q1, q2, q3
+    state[4], state[5], state[6] = ve, vn, vu
+    state[7], state[8], state[9] = lat, lon, h
+    state[10], state[11], state[12] = px, py, pz
+    state[13], state[14], state[15] = ux, uy, uz
+    state[16], state[17], state[18] = wpe, wpn, wpu
     state[19] = 1.0
     state[20] = b_int
     state[21] = dh
