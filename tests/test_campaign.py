@@ -121,3 +121,38 @@ def test_dask_scheduler_and_worker_subprocesses(tmp_path):
         for p in reversed(procs):
             p.terminate()
             p.wait(timeout=30)
+
+
+@pytest.mark.slow
+def test_kill_9_at_random_moments_then_resume_gives_identical_tables(tmp_path):
+    """kill -9 a real `fednav reproduce` (and its process group) at several moments; every
+    run file left behind is complete, and resuming gives the uninterrupted tables."""
+    import os
+    import signal
+
+    whole = _reproduce(tmp_path / "whole")
+    out = tmp_path / "killed"
+    cmd = [str(Path(sys.executable).parent / "fednav"), "reproduce", "002", *ARGS,
+           "--out", str(out)]
+    rng = np.random.default_rng(0)
+    kills = 0
+    for _ in range(4):
+        p = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                             start_new_session=True)
+        n0 = len(list(out.glob("runs/*.nc")))
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline and len(list(out.glob("runs/*.nc"))) == n0 \
+                and p.poll() is None:
+            time.sleep(0.02)
+        time.sleep(rng.uniform(0.0, 1.5))     # somewhere inside the next unit of work
+        if p.poll() is None:
+            os.killpg(p.pid, signal.SIGKILL)
+            kills += 1
+        p.wait()
+        for f in out.glob("runs/*.nc"):       # whatever is there opens as a whole run
+            open_runs(out)
+            assert f.stat().st_size > 0
+    assert kills >= 1
+    s = _reproduce(out)
+    assert s["campaign"]["runs_computed"] + s["campaign"]["runs_reused"] == 4
+    assert _tables(s) == _tables(whole)

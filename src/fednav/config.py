@@ -33,6 +33,21 @@ from .strapdown import BaroLoop
 from .trajectory import Segment
 from .wind import Episode, WindField
 
+_FLIGHTS: dict = {}
+
+
+def cached_flight(key, make):
+    """The truth of a flight, computed once per process and flight definition ``key``.
+
+    The cache lives in the process, not in the scenario object, so scenarios shipped to
+    worker processes stay small (a 1200 s flight at 100 Hz is 16 MB); forked workers
+    inherit what the parent computed.  At most 8 flights are kept."""
+    if key not in _FLIGHTS:
+        if len(_FLIGHTS) >= 8:
+            del _FLIGHTS[next(iter(_FLIGHTS))]
+        _FLIGHTS[key] = make()
+    return _FLIGHTS[key]
+
 
 class ConfigError(FednavError, ValueError):
     """A scenario file that cannot be used; the message names the file and the key."""
@@ -395,20 +410,20 @@ class Scenario(_Model):
         from .trajectory import generate
 
         # Keyed by what defines the flight: copies made with model_copy share this dict.
-        key = ("_traj", max_time, self.model_dump_json(
+        key = (type(self).__name__, max_time, self.model_dump_json(
             include={"start", "segments", "imu_period_s", "wind"}))
-        cache = self.__dict__.setdefault("_cache", {})
-        if key not in cache:
+        def make():
             segs = [s.to_segment() for s in self.segments]
             if max_time is not None:
                 segs = _truncate(segs, max_time)
             st = self.start
-            cache[key] = generate(
+            return generate(
                 [units.deg(st.lat_deg), units.deg(st.lon_deg), st.h_m], st.speed_mps,
                 [units.deg(st.pitch_deg), units.deg(st.roll_deg), units.deg(st.heading_deg)],
                 segs, self.imu_period_s,
                 wind=None if self.wind is None else self.wind.field())
-        return cache[key]
+
+        return cached_flight(key, make)
 
 
 def _truncate(segs: list[Segment], max_time: float) -> list[Segment]:

@@ -13,7 +13,7 @@ from typing import Literal
 from pydantic import Field, field_validator, model_validator
 
 from .. import units
-from ..config import ImuConfig, _Model, load_model
+from ..config import ImuConfig, _Model, cached_flight, load_model
 from .frame import LaunchFrame
 from .trajectory import AscentProfile, Burn, LaunchTrajectory, Manoeuvre, generate
 
@@ -164,13 +164,10 @@ class LaunchScenario(_Model):
 
     def trajectory(self, max_time: float | None = None) -> LaunchTrajectory:
         """The ascent's truth and ideal IMU (cached per flight definition)."""
-        key = ("_traj", max_time, self.model_dump_json(
+        key = (type(self).__name__, max_time, self.model_dump_json(
             include={"launch", "duration_s", "imu_period_s", "gravity_degree", "pitch0_deg",
                      "burns", "pitch_programme", "yaw_programme"}))
-        cache = self.__dict__.setdefault("_cache", {})
-        if key not in cache:
-            cache[key] = generate(self.profile(max_time), self.imu_period_s)
-        return cache[key]
+        return cached_flight(key, lambda: generate(self.profile(max_time), self.imu_period_s))
 
     def with_regime(self, regime: RegimeConfig) -> LaunchScenario:
         upd = {k: getattr(regime, k) for k in ("gps", "star", "initial_error", "filters")

@@ -1,0 +1,136 @@
+"""Campaign speed (run by hand: ``python benchmarks/bench_campaign.py [--runs N]``).
+
+Prints, for paper 002 (1200 s flight, four modes: SINS, SINS/SAR, SINS/CNS,
+SINS/CNS/SAR with federated UKF local filters):
+
+* seconds per Monte Carlo run of fednav, one core, warm;
+* the seconds FilterPy's UKF needs for **the same filter steps** of that run — every
+  predict and update fednav's local filters made, replayed through
+  ``filterpy.kalman.UnscentedKalmanFilter`` with the same sigma-point settings, the same
+  process (fednav's compiled error transition, called per sigma point as FilterPy does)
+  and the same measurement functions — measured in this invocation; and the ratio;
+* the wall time of an N-run campaign with the default local Dask workers, and the import
+  time of the command line.
+
+Ratios only: nothing here is asserted in tests.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+
+def record_steps(scn, seed):
+    """Run one Monte Carlo run of paper 002 and record every UKF step it made."""
+    from fednav.filters.ukf import UnscentedKalmanFilter as UKF
+    from fednav.scenarios import paper002
+
+    steps = []
+    predict, update = UKF.predict, UKF.update
+
+    def rec_predict(self, process, q_scale=1.0):
+        steps.append(("p", id(self), self.x.copy(), self.P.copy(), process, q_scale))
+        return predict(self, process, q_scale)
+
+    def rec_update(self, y, model, nav=None, R=None, gate=None):
+        steps.append(("u", id(self), self.x.copy(), self.P.copy(), (y, model, nav, R)))
+        return update(self, y, model, nav, R, gate)
+
+    UKF.predict, UKF.update = rec_predict, rec_update
+    try:
+        t0 = time.perf_counter()
+        paper002.one_run((scn, seed, None))
+        t = time.perf_counter() - t0
+    finally:
+        UKF.predict, UKF.update = predict, update
+    return t, steps
+
+
+def filterpy_replay(steps, alpha=1e-3, beta=2.0, kappa=0.0):
+    """Seconds FilterPy's UKF takes for the recorded steps (state set before each step,
+    so every step sees the covariance fednav's filter saw)."""
+    from filterpy.kalman import MerweScaledSigmaPoints
+    from filterpy.kalman import UnscentedKalmanFilter as FPUKF
+
+    n = steps[0][2].size
+    filters = {}
+    total = 0.0
+    for s in steps:
+        key = s[1]
+        if key not in filters:
+            pts = MerweScaledSigmaPoints(n, alpha=alpha, beta=beta, kappa=kappa)
+            filters[key] = {}
+            filters[key]["pts"] = pts
+        pts = filters[key]["pts"]
+        x, P = s[2], s[3]
+        if s[0] == "p":
+            process, q_scale = s[4], s[5]
+            f = FPUKF(dim_x=n, dim_z=1, dt=process.T, points=pts,
+                      fx=lambda v, dt, pr=process: pr.transition(v[None])[0],
+                      hx=lambda v: v[:1])
+            f.x, f.P, f.Q = x.copy(), P.copy(), q_scale * process.Qd
+            t0 = time.perf_counter()
+            f.predict()
+            total += time.perf_counter() - t0
+        else:
+            y, model, nav, R = s[4]
+            m = np.atleast_1d(y).size
+            f = FPUKF(dim_x=n, dim_z=m, dt=1.0, points=pts, fx=lambda v, dt: v,
+                      hx=lambda v, mo=model, na=nav: mo.h(v[None], na)[0])
+            f.x, f.P, f.R = x.copy(), P.copy(), np.asarray(R, float)
+            # FilterPy's update uses the sigma points of its last predict: draw them.
+            f.sigmas_f = pts.sigma_points(x, P)
+            t0 = time.perf_counter()
+            f.update(np.asarray(y, float))
+            total += time.perf_counter() - t0
+    return total
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--runs", type=int, default=20, help="runs of the campaign timing")
+    args = ap.parse_args()
+    from fednav.scenarios import paper002
+
+    scn = paper002.load_scenario()
+    paper002.one_run((scn, 1, None))  # warm (numba cache, trajectory cache)
+    times = []
+    for seed in (2, 3, 4):
+        t0 = time.perf_counter()
+        paper002.one_run((scn, seed, None))
+        times.append(time.perf_counter() - t0)
+    t_run = min(times)
+    _, steps = record_steps(scn, 2)
+    n_p = sum(s[0] == "p" for s in steps)
+    n_u = len(steps) - n_p
+    t_fp = filterpy_replay(steps)
+    print(f"paper 002, one run (1200 s, 4 modes), one core: fednav {t_run:.2f} s "
+          f"(best of 3); FilterPy UKF for the same {n_p} predicts + {n_u} updates "
+          f"{t_fp:.2f} s -> fednav whole run / FilterPy filter steps = x{t_run / t_fp:.2f}")
+    imp = min(float(subprocess.run(
+        [sys.executable, "-c", "import time; t=time.perf_counter(); import fednav.cli; "
+                               "print(time.perf_counter()-t)"],
+        capture_output=True, text=True, check=True).stdout) for _ in range(3))
+    print(f"import fednav.cli: {imp:.3f} s (best of 3)")
+    with tempfile.TemporaryDirectory() as d:
+        jobs = min(2, os.cpu_count() or 1)
+        t0 = time.perf_counter()
+        fednav = str(Path(sys.executable).parent / "fednav")
+        subprocess.run([fednav, "reproduce", "002", "--runs",
+                        str(args.runs), "--jobs", str(jobs), "--out", d], check=True,
+                       capture_output=True)
+        t = time.perf_counter() - t0
+    print(f"fednav reproduce 002 --runs {args.runs} --jobs {jobs}: {t:.1f} s wall "
+          f"(Tables 1-4, includes start-up and the 3 Table-4 runs)")
+
+
+if __name__ == "__main__":
+    main()
