@@ -137,9 +137,11 @@ class Campaign:
             return decode(ds.load())
 
     def save(self, key: str, result) -> None:
-        ds = encode(result)
+        # Encoded to bytes, not to a path: xarray would take a Dask-distributed write lock
+        # (two scheduler round trips per variable) whenever a Dask client is active.
+        data = encode(result).to_netcdf(engine="scipy")
         tmp = self.runs_dir / f".{key}.{os.getpid()}.tmp"
-        ds.to_netcdf(tmp, engine="scipy")
+        tmp.write_bytes(bytes(data))
         os.replace(tmp, self.path(key))
 
     def summary(self) -> dict:
