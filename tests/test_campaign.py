@@ -75,7 +75,8 @@ def test_other_seed_or_scenario_refused_in_one_line_and_fresh(tmp_path):
     f = tmp_path / "file"
     f.write_text("x")
     r = CliRunner().invoke(app, ["reproduce", "002", *ARGS, "--out", str(f)])
-    assert r.exit_code == 2 and "not a folder" in r.output
+    assert r.exit_code == 2 and "a file of that name exists" in r.output
+    assert (out / "summary.json").exists()  # refused input leaves the result alone
 
 
 def _units(jobs=1, campaign=None):

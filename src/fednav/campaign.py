@@ -34,7 +34,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 from collections.abc import Callable
 from dataclasses import fields, is_dataclass
 from datetime import UTC, datetime
@@ -42,6 +41,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .atomic import write_bytes, write_text
 from .errors import FednavError
 
 
@@ -98,7 +98,7 @@ class Campaign:
         else:
             manifest["created"] = datetime.now(UTC).isoformat(timespec="seconds")
         self.runs_dir.mkdir(parents=True, exist_ok=True)
-        _atomic_write_text(path, json.dumps(manifest, indent=2))
+        write_text(path, json.dumps(manifest, indent=2))
         self.manifest = manifest
         self.address = address
         self.computed = 0
@@ -140,19 +140,11 @@ class Campaign:
         # Encoded to bytes, not to a path: xarray would take a Dask-distributed write lock
         # (two scheduler round trips per variable) whenever a Dask client is active.
         data = encode(result).to_netcdf(engine="scipy")
-        tmp = self.runs_dir / f".{key}.{os.getpid()}.tmp"
-        tmp.write_bytes(bytes(data))
-        os.replace(tmp, self.path(key))
+        write_bytes(self.path(key), bytes(data))
 
     def summary(self) -> dict:
         return {"runs_total": self.computed + self.reused, "runs_computed": self.computed,
                 "runs_reused": self.reused, "engine": self.engine}
-
-
-def _atomic_write_text(path: Path, text: str) -> None:
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
 
 
 # ----------------------------------------------------------------------------- engines

@@ -98,15 +98,13 @@ def reproduce(
         TimeRemainingColumn,
     )
 
+    from .atomic import clear_results
     from .campaign import Campaign
 
-    out = out or Path("results") / mod.PAPER
-    try:
-        scn = mod.load_scenario(scenario)
-        camp = Campaign(out, mod.PAPER, scn, seed, fresh, dask)
-    except OSError as e:
-        typer.echo(f"error: output folder {out}: {e.strerror}", err=True)
-        raise typer.Exit(2) from None
+    out = _output_folder(out or Path("results") / mod.PAPER)
+    scn = mod.load_scenario(scenario)
+    camp = Campaign(out, mod.PAPER, scn, seed, fresh, dask)
+    clear_results(out)
     extra["campaign"] = camp
     t0 = time.perf_counter()
     total = mod.n_tasks(scn, runs, **extra) if hasattr(mod, "n_tasks") else runs
@@ -135,15 +133,39 @@ process_app = typer.Typer(no_args_is_help=True,
 app.add_typer(process_app, name="process")
 
 
+def _output_folder(out: Path) -> Path:
+    """Create the output folder, or end with a one-line error if that is impossible.
+
+    Once the inputs are validated and a run starts, the commands remove the previous
+    run's result markers (:func:`fednav.atomic.clear_results`), so a run that fails never
+    leaves an older summary.json looking like its own result; input refused before that
+    leaves the previous result as it was."""
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        probe = out / f".fednav-write-test.{os.getpid()}"
+        probe.write_bytes(b"")
+        probe.unlink()
+    except FileExistsError:
+        typer.echo(f"error: output folder {out}: a file of that name exists", err=True)
+        raise typer.Exit(2) from None
+    except OSError as e:
+        typer.echo(f"error: output folder {out}: {e.strerror or e}", err=True)
+        raise typer.Exit(2) from None
+    return out
+
+
 def _run_process(read, imu, gnss, velocity, ref, smooth, out, config) -> None:
     from . import process_output
+    from .atomic import clear_results
     from .config import load_model
     from .process import ProcessConfig, process
 
+    out = _output_folder(out)
     try:
         cfg = ProcessConfig() if config is None else load_model(config, ProcessConfig,
                                                                 "processing config")
         data = read(cfg)
+        clear_results(out)
         res = process(data["imu"], data["gnss"], data["velocity"], cfg, smooth)
         files = process_output.write(out, res, data["ref"], {
             "imu": str(imu), "gnss": str(gnss),

@@ -178,11 +178,7 @@ def render(folder: Path) -> str:
 
 
 def write_report(folder: Path) -> Path:
-    """Write ``folder/report.html`` (written to a temporary name, then renamed)."""
-    folder = Path(folder)
-    text = render(folder)
-    path = folder / "report.html"
-    tmp = folder / ".report.html.tmp"
-    tmp.write_text(text, encoding="utf-8")
-    tmp.replace(path)
-    return path
+    """Write ``folder/report.html`` (atomically: :mod:`fednav.atomic`)."""
+    from .atomic import write_text
+
+    return write_text(Path(folder) / "report.html", render(folder))

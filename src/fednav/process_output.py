@@ -9,6 +9,7 @@ import numpy as np
 import pandas as pd
 
 from . import units
+from .atomic import save_figure, write_text
 from .io.csvdata import write_csv
 from .io.data import Reference
 from .process import ProcessResult, Solution, errors_against, rmse
@@ -101,7 +102,7 @@ def plot(res: ProcessResult, ref: Reference | None, path: Path) -> Path:
         for ax in axes[1]:
             ax.set_xlabel("t [s]")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path)
     plt.close(fig)
     return path
 
@@ -116,6 +117,6 @@ def write(out: Path, res: ProcessResult, ref: Reference | None, inputs: dict) ->
     files.append(plot(res, ref, out / ("errors.png" if ref is not None else "trajectory.png")))
     s = summary(res, ref, inputs)
     p = out / "summary.json"
-    p.write_text(json.dumps(s, indent=2))
+    write_text(p, json.dumps(s, indent=2))
     files.append(p)
     return files

@@ -11,6 +11,7 @@ from rich.console import Console
 from rich.table import Table
 
 from . import units
+from .atomic import save_figure, write_frame, write_text
 from .evaluation import mean_ci95
 
 
@@ -73,15 +74,10 @@ def print_tables(summary: dict, titles: dict[str, str], console: Console | None 
 def write_outputs(out: Path, summary: dict, rows: list[dict], series: dict) -> list[Path]:
     """Write summary.json, runs.csv and error plots of the first run into ``out``."""
     out.mkdir(parents=True, exist_ok=True)
-    written = []
-    p = out / "summary.json"
-    p.write_text(json.dumps(summary, indent=2))
-    written.append(p)
-    p = out / "runs.csv"
-    pd.DataFrame(rows).to_csv(p, index=False)
-    written.append(p)
+    written = [write_frame(pd.DataFrame(rows), out / "runs.csv")]
     if series:
         written.append(plot_errors(series, out / "errors.png"))
+    written.insert(0, write_text(out / "summary.json", json.dumps(summary, indent=2)))
     return written
 
 
@@ -111,7 +107,7 @@ def plot_errors(series: dict, path: Path) -> Path:
     axes[0, 1].set_yscale("symlog", linthresh=1.0)
     fig.suptitle("Navigation errors (computed − true), first Monte Carlo run")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path)
     plt.close(fig)
     return path
 
@@ -139,6 +135,6 @@ def plot_fdi(fdi: pd.DataFrame, path: Path, title: str = "") -> Path:
     axes[-1, 0].set_xlabel("time [s]")
     fig.suptitle(title or "Chi-square fault detection")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path)
     plt.close(fig)
     return path

@@ -20,6 +20,7 @@ import numpy as np
 import pandas as pd
 
 from .. import units
+from ..atomic import write_frame
 from .data import DataError, GnssData, ImuData, Reference, VelocityData, check_time
 
 IMU_COLUMNS = ("t_s", "gyro_x_radps", "gyro_y_radps", "gyro_z_radps", "accel_x_mps2",
@@ -105,5 +106,5 @@ def read_reference_csv(path) -> Reference:
 def write_csv(path, columns: dict[str, np.ndarray]) -> Path:
     """Write named columns as a CSV file (used for solutions and for tests)."""
     path = Path(path)
-    pd.DataFrame(columns).to_csv(path, index=False, float_format="%.10g")
+    write_frame(pd.DataFrame(columns), path, float_format="%.10g")
     return path

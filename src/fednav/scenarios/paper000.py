@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..atomic import save_figure
 from ..config import Scenario
 from ..config import load_scenario as _load
 from ..montecarlo import run_seeds
@@ -124,7 +125,7 @@ def plot_window(series: dict, path, window=WINDOW):
     axes[0].legend(fontsize=8, ncol=3)
     fig.suptitle(f"Errors during the wind window {window[0]:g}–{window[1]:g} s (first run)")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path)
     plt.close(fig)
     return path
 

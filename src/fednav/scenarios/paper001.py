@@ -19,6 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import units
+from ..atomic import save_figure, write_frame, write_text
 from ..evaluation import mean_ci95
 from ..filters import FilterError
 from ..launch.navigate import make_data, run
@@ -200,7 +201,7 @@ def plot_errors(series: dict, path):
         ax.set_ylim(-40, 40)
     fig.suptitle("Launch-frame navigation errors (computed − true), first Monte Carlo run")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path)
     plt.close(fig)
     return path
 
@@ -238,7 +239,7 @@ def plot_ascent(scn: LaunchScenario, path, max_time=None):
     fig.suptitle(f"Paper 001 ascent: {scn.launch.lat_deg}°N {scn.launch.lon_deg}°E, "
                  f"azimuth {scn.launch.azimuth_deg}°, LI frame x downrange, y up, z = x × y")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path)
     plt.close(fig)
     return path
 
@@ -249,15 +250,11 @@ def write_outputs(out, rep: dict) -> list:
     import pandas as pd
 
     out.mkdir(parents=True, exist_ok=True)
-    files = []
-    p = out / "summary.json"
-    p.write_text(json.dumps(rep["summary"], indent=2))
-    files.append(p)
-    p = out / "runs.csv"
-    pd.DataFrame(rep["rows"]).to_csv(p, index=False)
-    files.append(p)
-    files.append(plot_errors(rep["series"], out / "errors.png"))
-    files.append(plot_ascent(rep["scenario"], out / "ascent.png", rep["max_time"]))
+    files = [write_frame(pd.DataFrame(rep["rows"]), out / "runs.csv"),
+             plot_errors(rep["series"], out / "errors.png"),
+             plot_ascent(rep["scenario"], out / "ascent.png", rep["max_time"])]
+    # summary.json last: its presence means the run finished (fednav.atomic)
+    files.insert(0, write_text(out / "summary.json", json.dumps(rep["summary"], indent=2)))
     return files
 
 

@@ -12,6 +12,7 @@ import numpy as np
 from scipy.stats import chi2
 
 from .. import units
+from ..atomic import write_frame, write_text
 from ..config import Scenario
 from ..config import load_scenario as _load
 from ..evaluation import mean_ci95
@@ -224,13 +225,13 @@ def write_outputs(out, rep: dict) -> list:
 
     out.mkdir(parents=True, exist_ok=True)
     files = [out / "summary.json", out / "runs.csv", out / "errors.png"]
-    files[0].write_text(json.dumps(rep["summary"], indent=2))
-    pd.DataFrame(rep["rows"]).to_csv(files[1], index=False)
+    write_frame(pd.DataFrame(rep["rows"]), files[1])
     plot_errors(rep["series"], files[2])
     if rep["fault_rows"]:
         files.append(out / "fault_runs.csv")
-        pd.DataFrame(rep["fault_rows"]).to_csv(files[-1], index=False)
+        write_frame(pd.DataFrame(rep["fault_rows"]), files[-1])
         files.append(plot_fdi(rep["fault_series"]["isolated"].fdi, out / "fdi.png",
                               "Fault experiment: chi-square statistics, 5-sigma GNSS fault"))
         files.append(plot_errors(rep["fault_series"], out / "fault_errors.png"))
+    write_text(files[0], json.dumps(rep["summary"], indent=2))  # last: the run finished
     return files

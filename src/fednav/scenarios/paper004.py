@@ -16,6 +16,7 @@ import time
 import numpy as np
 
 from .. import units
+from ..atomic import save_figure, write_frame
 from ..config import Scenario
 from ..config import load_scenario as _load
 from ..evaluation import mean_ci95
@@ -176,7 +177,7 @@ def plot_sweep(rows, path):
     ax.grid(alpha=0.3, which="both")
     ax.legend()
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path)
     plt.close(fig)
     return path
 
@@ -186,11 +187,10 @@ def write_outputs(out, rep: dict) -> list:
 
     from ..report import write_outputs as _write
 
-    files = _write(out, rep["summary"], rep["rows"], rep["series"])
-    p = out / "sweep_runs.csv"
-    pd.DataFrame(rep["sweep_rows"]).to_csv(p, index=False)
-    files += [p, plot_sweep(rep["sweep_rows"], out / "latency_sweep.png")]
-    return files
+    out.mkdir(parents=True, exist_ok=True)
+    extra = [write_frame(pd.DataFrame(rep["sweep_rows"]), out / "sweep_runs.csv"),
+             plot_sweep(rep["sweep_rows"], out / "latency_sweep.png")]
+    return _write(out, rep["summary"], rep["rows"], rep["series"]) + extra
 
 
 __all__ = ["ALIASES", "PAPER", "PAPER_TABLES", "TABLE_TITLES", "load_scenario",

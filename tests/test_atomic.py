@@ -1,0 +1,80 @@
+import json
+
+import pytest
+from typer.testing import CliRunner
+
+from fednav.atomic import clear_results, replacing, save_figure, write_text
+from fednav.cli import app
+
+
+def test_replacing_keeps_the_old_file_when_writing_fails(tmp_path):
+    p = write_text(tmp_path / "summary.json", "old")
+    with pytest.raises(RuntimeError), replacing(p) as tmp:
+        tmp.write_text("half")
+        raise RuntimeError("killed")
+    assert p.read_text() == "old" and list(tmp_path.iterdir()) == [p]
+    write_text(p, "new")
+    assert p.read_text() == "new" and list(tmp_path.iterdir()) == [p]
+
+
+def test_figure_written_under_a_tmp_name_keeps_its_format(tmp_path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig = plt.figure()
+    p = save_figure(fig, tmp_path / "errors.png")
+    plt.close(fig)
+    assert p.read_bytes()[:4] == b"\x89PNG" and len(list(tmp_path.iterdir())) == 1
+
+
+def test_clear_results(tmp_path):
+    for n in ("summary.json", "report.html", "runs.csv"):
+        (tmp_path / n).write_text("x")
+    clear_results(tmp_path)
+    assert [p.name for p in tmp_path.iterdir()] == ["runs.csv"]
+
+
+def _stale(tmp_path):
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "summary.json").write_text(json.dumps({"paper": "old"}))
+    (out / "report.html").write_text("old")
+    return out
+
+
+def test_a_run_that_fails_does_not_leave_the_previous_summary(tmp_path, monkeypatch):
+    from fednav.filters.base import FilterError
+    from fednav.scenarios import paper002
+
+    def boom(*a, **k):
+        raise FilterError("ukf 'star': step 17 (update): innovation covariance not PD")
+
+    monkeypatch.setattr(paper002, "reproduce", boom)
+    out = _stale(tmp_path)
+    r = CliRunner().invoke(app, ["reproduce", "002", "--out", str(out)])
+    assert r.exit_code == 2 and "Traceback" not in r.output
+    assert "error: ukf 'star': step 17" in r.output
+    assert not (out / "summary.json").exists() and not (out / "report.html").exists()
+
+
+@pytest.mark.parametrize("argv", [
+    ["reproduce", "002", "--scenario", "missing.yaml"],
+    ["process", "csv", "--imu", "missing-imu.csv", "--gnss", "missing-gnss.csv"],
+])
+def test_refused_input_leaves_the_previous_result_alone(tmp_path, argv):
+    out = _stale(tmp_path)
+    r = CliRunner().invoke(app, [*argv, "--out", str(out)])
+    assert r.exit_code == 2 and "Traceback" not in r.output and "missing" in r.output
+    assert (out / "summary.json").read_text() == json.dumps({"paper": "old"})
+
+
+@pytest.mark.parametrize("argv", [["reproduce", "002"],
+                                  ["process", "csv", "--imu", "a.csv", "--gnss", "b.csv"]])
+def test_output_path_that_is_a_file_is_one_line(tmp_path, argv):
+    f = tmp_path / "results"
+    f.write_text("not a folder")
+    r = CliRunner().invoke(app, [*argv, "--out", str(f)])
+    assert r.exit_code == 2 and r.output.strip().count("\n") == 0
+    assert "a file of that name exists" in r.output and str(f) in r.output
