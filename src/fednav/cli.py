@@ -184,6 +184,12 @@ def _print_process(s: dict) -> None:
     from rich.table import Table
 
     console.print(f"{s['epochs']} filter epochs in {s['run_time_s']:.2f} s")
+    for w in s.get("warnings", []):
+        console.print(f"[yellow]warning:[/] {w}")
+    q = {k: v for k, v in s.get("data_quality", {}).items() if v}
+    if q:
+        console.print("data: " + ", ".join(f"{k.replace('_', ' ')} {v}" for k, v in q.items())
+                      + " (docs/reliability.md)")
     for name, c in s["consistency"].items():
         console.print(f"  local '{name}': mean NIS/dof {c['nis_per_dof']:.2f}, isolated "
                       f"{100 * c['isolated_fraction']:.1f} % of {c['measurements']}")
@@ -219,7 +225,8 @@ def process_navego(
     )
 
     def read(cfg):
-        return {"imu": read_navego_imu(imu), "gnss": read_navego_gnss(gnss),
+        return {"imu": read_navego_imu(imu, cfg.imu_max_bridge_s),
+                "gnss": read_navego_gnss(gnss),
                 "velocity": None if visual is None else read_navego_visual(visual),
                 "ref": None if ref is None else read_navego_reference(ref)}
 
@@ -243,7 +250,7 @@ def process_csv(
         g = read_gnss_csv(gnss, cfg.gnss_sigma_pos_m or (5.0, 5.0, 5.0),
                           cfg.gnss_sigma_vel_mps or (0.1, 0.1, 0.1),
                           cfg.gnss_lever_m or (0.0, 0.0, 0.0))
-        return {"imu": read_imu_csv(imu), "gnss": g,
+        return {"imu": read_imu_csv(imu, cfg.imu_max_bridge_s), "gnss": g,
                 "velocity": None if velocity is None else read_velocity_csv(velocity),
                 "ref": None if ref is None else read_reference_csv(ref)}
 

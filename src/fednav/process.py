@@ -68,6 +68,9 @@ class ProcessConfig(BaseModel):
     fdi_alpha: float | dict[str, float] | None = None
     fdi_recovery: int = Field(1, ge=1)
     substeps: int = Field(1, ge=1)
+    # longest run of faulty IMU samples (NaN/inf/absurd) bridged by holding the last
+    # good sample [s]; a longer run stops the processing with its time (docs/reliability)
+    imu_max_bridge_s: float = Field(0.1, gt=0)
 
     @field_validator("fdi_alpha")
     @classmethod
@@ -103,6 +106,9 @@ class ProcessResult:
     smoothed: Solution | None
     run_time_s: float
     epochs: int
+    #: what the input checks did (samples bridged, epochs skipped) and their warnings
+    data_quality: dict = field(default_factory=dict)
+    warnings: list = field(default_factory=list)
 
 
 def _noise(imu: ImuData, cfg: ProcessConfig):
@@ -177,12 +183,63 @@ def _assign(t_meas: np.ndarray, t_epochs: np.ndarray) -> np.ndarray:
     return k
 
 
+def check_units(imu: ImuData, gnss: GnssData) -> list[str]:
+    """Refuse IMU data in the wrong unit; warn about GNSS positions that look like radians.
+
+    * accelerometer: the median specific-force magnitude of a vehicle on or near the
+      Earth is about 9.8 m/s^2; a median near 1 means the file is in g;
+    * gyro: the yaw rate measured about the mean "up" axis (the mean specific force) is
+      regressed on the GNSS course rate over the intervals where the vehicle moves and
+      turns; a slope near 57 means deg/s (needs some turning: a straight run is not
+      tested);
+    * GNSS latitude/longitude all within 3.2 deg of (0, 0): radians read as degrees?
+      (a warning: real data there exist).
+    Returns the warnings; raises DataError for the refusals.
+    """
+    warnings = []
+    fmag = float(np.median(np.linalg.norm(imu.accel, axis=1)))
+    if 0.5 < fmag < 1.5:
+        raise DataError(f"{imu.source}: median specific force {fmag:.3f}: looks like g; "
+                        f"fednav expects m/s^2")
+    if gnss.vel is not None and len(gnss.t) > 5:
+        up = np.mean(imu.accel, axis=0)
+        up /= max(np.linalg.norm(up), 1e-12)
+        # GNSS epochs at least 1 s apart: the course rate of 5 Hz fixes is mostly noise
+        keep = [0]
+        for i in range(1, len(gnss.t)):
+            if gnss.t[i] - gnss.t[keep[-1]] >= 1.0 - 1e-9:
+                keep.append(i)
+        tg, vg = gnss.t[keep], gnss.vel[keep]
+        speed = np.hypot(vg[:, 0], vg[:, 1])
+        course = np.unwrap(np.arctan2(vg[:, 0], vg[:, 1]))
+        dt = np.diff(tg)
+        c_rate = -np.diff(course) / dt  # heading from north toward east: yaw rate = -dpsi/dt
+        moving = (speed[1:] > 2.0) & (speed[:-1] > 2.0) & (dt < 5.0)
+        yaw = np.cumsum(np.r_[0.0, (imu.gyro[1:] @ up) * np.diff(imu.t)])
+        g_rate = (np.interp(tg[1:], imu.t, yaw) - np.interp(tg[:-1], imu.t, yaw)) / dt
+        inside = (tg[:-1] >= imu.t[0]) & (tg[1:] <= imu.t[-1])
+        turning = moving & inside & (np.abs(c_rate) > np.radians(3.0))
+        if turning.sum() >= 5:
+            c, g = c_rate[turning], g_rate[turning]
+            slope = float(c @ g / (c @ c))
+            if 20.0 < abs(slope) < 200.0:
+                raise DataError(f"{imu.source}: gyro rates are {slope:.1f} x the GNSS course "
+                                f"rate while turning: looks like deg/s; fednav expects rad/s")
+    lat, lon = np.degrees(gnss.lla[:, 0]), np.degrees(gnss.lla[:, 1])
+    if np.all(np.abs(lat) < 1.6) and np.all(np.abs(lon) < 3.2):
+        warnings.append(f"{gnss.source}: every position lies within 1.6 deg of latitude 0 and "
+                        f"3.2 deg of longitude 0: latitude/longitude in radians where "
+                        f"degrees are expected?")
+    return warnings
+
+
 def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
             cfg: ProcessConfig | None = None, smooth: bool = False) -> ProcessResult:
     """Loosely coupled INS/GNSS(/velocity) processing; see the module docstring."""
     cfg = cfg or ProcessConfig()
     t_start = time.perf_counter()
     dt = imu.period()
+    warnings = check_units(imu, gnss)
     if gnss.vel is None:
         raise DataError(f"{gnss.source}: GNSS velocity is required by the loosely coupled "
                         f"filter")
@@ -282,7 +339,9 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
         for k in range(len(sm)):
             _correct(sm[k], es[k, em.PHI], es[k, em.DV], es[k, em.DP])
         smoothed = _solution(t_ep, sm, Ps, omegas, "smoothed")
-    return ProcessResult(forward, smoothed, time.perf_counter() - t_start, n_cycles)
+    quality = {**imu.quality, **gnss.quality, **(velocity.quality if velocity else {})}
+    return ProcessResult(forward, smoothed, time.perf_counter() - t_start, n_cycles,
+                         quality, warnings)
 
 
 def gnss_z(gnss: GnssData, i: int) -> np.ndarray:
@@ -318,6 +377,11 @@ def errors_against(sol: Solution, ref: Reference) -> dict[str, np.ndarray]:
     rl = ref.lla[m]
     d = earth.llh_difference_enu(lla[:, 0], lla[:, 1], lla[:, 2], rl[:, 0], rl[:, 1], rl[:, 2])
     dv = vel - ref.vel[m]
+    far = float(np.median(np.hypot(d[:, 0], d[:, 1])))
+    if far > 10_000.0:
+        raise DataError(f"{ref.source}: the solution and the reference are {far / 1000:.0f} "
+                        f"km apart (median): reference or GNSS positions in another unit "
+                        f"(radians vs degrees) or datum?")
     out = {"t": tr, "north_m": d[:, 1], "east_m": d[:, 0], "down_m": -d[:, 2],
            "vn_mps": dv[:, 1], "ve_mps": dv[:, 0], "vd_mps": -dv[:, 2]}
     if ref.euler is not None:

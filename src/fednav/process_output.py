@@ -52,7 +52,11 @@ def consistency(sol: Solution) -> dict[str, dict[str, float]]:
 
 def summary(res: ProcessResult, ref: Reference | None, inputs: dict) -> dict:
     """``summary.json`` content."""
+    quality = dict(res.data_quality)
+    if ref is not None:
+        quality.update(ref.quality)
     out: dict = {"inputs": inputs, "run_time_s": res.run_time_s, "epochs": res.epochs,
+                 "data_quality": quality, "warnings": list(res.warnings),
                  "consistency": consistency(res.forward)}
     if ref is not None:
         out["rmse"] = _rmse_block(res.forward, ref)

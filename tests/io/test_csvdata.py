@@ -49,8 +49,8 @@ def test_missing_column_and_bad_value(tmp_path):
     lines = write_csv(p, _imu_cols()).read_text().splitlines()
     lines[5] = lines[5].replace("0.4", "abc", 1)
     p.write_text("\n".join(lines))
-    with pytest.raises(DataError, match="column 'accel_x_mps2' has a missing or non-numeric "
-                                        "value at data row 5"):
+    with pytest.raises(DataError, match="column 'accel_x_mps2' has a non-numeric value "
+                                        "'abc' at data row 5"):
         read_imu_csv(p)
 
 

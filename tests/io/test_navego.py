@@ -95,8 +95,8 @@ def test_read_gnss_visual_reference(tmp_path):
 @pytest.mark.parametrize(("change", "message"), [
     (lambda f: f.pop("fb"), "missing field 'fb'"),
     (lambda f: f.update(fb=np.ones((50, 2))), "field 'fb' has shape 50x2, expected Nx3"),
-    (lambda f: f["wb"].__setitem__((7, 1), np.nan),
-     "field 'wb' has NaN/inf values (first at row 7)"),
+    (lambda f: f["wb"].__setitem__((slice(7, 30), 1), np.nan),
+     "23 faulty IMU samples in a row (NaN/inf or absurd) from t = 0.070000 s to 0.290000 s"),
     (lambda f: f["t"].__setitem__(10, 0.0), "field 't' is not increasing at row 10"),
     (lambda f: f.update(t=np.arange(40) * 0.01), "field 'fb' has 50 rows but 't' has 40"),
 ])
@@ -109,6 +109,17 @@ def test_bad_imu_files_give_one_line_errors(tmp_path, change, message):
         read_navego_imu(p)
     assert message in str(e.value) and str(p) in str(e.value)
     assert "\n" not in str(e.value)
+
+
+def test_a_faulty_imu_sample_is_bridged_and_counted(tmp_path):
+    fields = _imu_fields()
+    fields["wb"] = fields["wb"].copy()
+    fields["wb"][7, 1] = np.nan
+    fields["wb"][9, 0] = 1e30
+    imu = read_navego_imu(_save(tmp_path, "imu", **fields))
+    assert imu.quality == {"imu_samples_bridged": 2} and np.isfinite(imu.gyro).all()
+    np.testing.assert_array_equal(imu.gyro[7], imu.gyro[6])
+    np.testing.assert_array_equal(imu.gyro[9], imu.gyro[8])
 
 
 def test_missing_and_non_mat_files(tmp_path):

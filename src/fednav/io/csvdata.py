@@ -44,15 +44,22 @@ def _read(path, kind: str, required: tuple) -> tuple[str, pd.DataFrame]:
     if missing:
         raise DataError(f"{src}: missing column(s) {', '.join(missing)} "
                         f"(have {', '.join(map(str, df.columns))})")
+    if df.empty:
+        raise DataError(f"{src}: no data rows (header only)")
     for c in df.columns:
         if c in required or c in VEL_COLUMNS + EULER_COLUMNS + VEL_SIGMA_COLUMNS:
             v = pd.to_numeric(df[c], errors="coerce")
-            bad = v.isna().to_numpy()
-            if bad.any():
-                raise DataError(f"{src}: column '{c}' has a missing or non-numeric value "
-                                f"at data row {int(np.argmax(bad)) + 1}")
+            # empty cells, NaN and inf are faulty samples (the data policy screens them);
+            # text that is not a number means the file is not what it claims to be
+            text = v.isna().to_numpy() & df[c].notna().to_numpy()
+            if text.any():
+                i = int(np.argmax(text))
+                raise DataError(f"{src}: column '{c}' has a non-numeric value "
+                                f"{str(df[c].iloc[i])[:20]!r} at data row {i + 1}")
             df[c] = v
-    check_time(src, df["t_s"].to_numpy(dtype=float), "t_s")
+    t = df["t_s"].to_numpy(dtype=float)
+    if kind == "IMU":
+        check_time(src, t, "t_s")
     return src, df
 
 
@@ -64,11 +71,12 @@ def _has(df, names) -> bool:
     return all(c in df.columns for c in names)
 
 
-def read_imu_csv(path) -> ImuData:
-    """IMU CSV (rates in rad/s, specific force in m/s^2, body right-forward-up)."""
+def read_imu_csv(path, max_bridge_s: float = 0.1) -> ImuData:
+    """IMU CSV (rates in rad/s, specific force in m/s^2, body right-forward-up); faulty
+    samples are bridged up to ``max_bridge_s`` (:class:`~fednav.io.data.ImuData`)."""
     src, df = _read(path, "IMU", IMU_COLUMNS)
     return ImuData(src, df["t_s"].to_numpy(float), _cols(df, IMU_COLUMNS[1:4]),
-                   _cols(df, IMU_COLUMNS[4:7]))
+                   _cols(df, IMU_COLUMNS[4:7]), max_bridge_s=max_bridge_s)
 
 
 def _lla(df) -> np.ndarray:

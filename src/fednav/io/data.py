@@ -50,6 +50,78 @@ def check_time(source: str, t, field: str = "t") -> np.ndarray:
     return t
 
 
+#: Magnitudes no IMU reports: samples beyond them are faulty (bridged like NaN).
+ABSURD_GYRO_RADPS = 100.0       # ~5 700 deg/s
+ABSURD_ACCEL_MPS2 = 2000.0      # ~200 g
+#: GNSS fixes beyond these fail the basic sanity check (skipped and counted).
+ABSURD_HEIGHT_M = 1.0e6
+ABSURD_SPEED_MPS = 1.0e4
+
+
+def _as_float(source: str, field: str, a, shape: tuple) -> np.ndarray:
+    """``a`` as a float array of ``shape`` (NaN allowed: screened by the caller)."""
+    try:
+        arr = np.asarray(a, dtype=float)
+    except (TypeError, ValueError):
+        raise DataError(f"{source}: field '{field}' is not numeric") from None
+    if arr.ndim == 1 and len(shape) == 2:
+        arr = arr.reshape(-1, shape[1]) if arr.size == shape[1] else arr
+    if arr.ndim != len(shape) or any(s not in (-1, n) for s, n in zip(shape, arr.shape,
+                                                                       strict=True)):
+        want = "x".join("N" if s == -1 else str(s) for s in shape)
+        raise DataError(f"{source}: field '{field}' has shape "
+                        f"{'x'.join(map(str, arr.shape)) or 'scalar'}, expected {want}")
+    return arr
+
+
+def bridge_imu(source: str, t, gyro, accel, max_bridge_s: float):
+    """Hold the last good IMU sample over faulty ones (NaN, inf or absurd magnitude).
+
+    A run of faulty samples longer than ``max_bridge_s`` seconds is a DataError naming
+    its time span.  Returns (gyro, accel, number of samples bridged)."""
+    bad = (~np.isfinite(gyro).all(axis=1) | ~np.isfinite(accel).all(axis=1))
+    with np.errstate(invalid="ignore"):
+        bad |= (np.abs(gyro) > ABSURD_GYRO_RADPS).any(axis=1)
+        bad |= (np.abs(accel) > ABSURD_ACCEL_MPS2).any(axis=1)
+    n = int(bad.sum())
+    if n == 0:
+        return gyro, accel, 0
+    if n == len(t):
+        raise DataError(f"{source}: every IMU sample is NaN/inf or absurd (|gyro| > "
+                        f"{ABSURD_GYRO_RADPS:g} rad/s or |accel| > {ABSURD_ACCEL_MPS2:g} m/s^2)")
+    # runs of faulty samples: [start, stop)
+    edges = np.diff(np.r_[0, bad.astype(np.int8), 0])
+    starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    dt = float(np.median(np.diff(t))) if len(t) > 1 else 0.0
+    span = t[stops - 1] - t[starts] + dt
+    worst = int(np.argmax(span))
+    if span[worst] > max_bridge_s + 1e-9:
+        i, j = starts[worst], stops[worst] - 1
+        raise DataError(f"{source}: {j - i + 1} faulty IMU samples in a row (NaN/inf or "
+                        f"absurd) from t = {t[i]:.6f} s to {t[j]:.6f} s: {span[worst]:.3f} s, "
+                        f"more than imu_max_bridge_s = {max_bridge_s:g} s")
+    good = np.where(~bad, np.arange(len(t)), -1)
+    last = np.maximum.accumulate(good)
+    first_good = int(np.argmax(~bad))
+    last[last < 0] = first_good  # leading faulty samples take the first good one
+    return gyro[last], accel[last], n
+
+
+def screen_rows(source: str, what: str, t, arrays: dict, extra_bad=None):
+    """Rows of a measurement stream that are usable: finite time and values (and not
+    ``extra_bad``).  Returns (keep mask, number skipped); DataError if none is left."""
+    keep = np.isfinite(t)
+    for a in arrays.values():
+        if a is not None:
+            keep &= np.isfinite(a.reshape(len(t), -1)).all(axis=1)
+    if extra_bad is not None:
+        keep &= ~extra_bad
+    if not keep.any():
+        raise DataError(f"{source}: no usable {what} row (all have NaN/inf or fail the "
+                        f"sanity checks)")
+    return keep, int((~keep).sum())
+
+
 def check_rows(source: str, n: int, **fields) -> None:
     """Every field has ``n`` rows (the length of the time vector)."""
     for name, a in fields.items():
@@ -90,12 +162,20 @@ class ImuData:
     errors: ImuErrors | None = None
     initial_euler: np.ndarray | None = None
     initial_euler_sigma: np.ndarray | None = None
+    #: longest run of faulty samples (NaN/inf/absurd) bridged by holding the last good
+    #: sample [s]; longer runs are a DataError naming their time
+    max_bridge_s: float = 0.1
+    #: what the checks did: {"imu_samples_bridged": n}
+    quality: dict = field(default_factory=dict)
 
     def __post_init__(self):
         self.t = check_time(self.source, self.t)
-        self.gyro = check_array(self.source, "gyro", self.gyro, (-1, 3))
-        self.accel = check_array(self.source, "accel", self.accel, (-1, 3))
+        self.gyro = _as_float(self.source, "gyro", self.gyro, (-1, 3))
+        self.accel = _as_float(self.source, "accel", self.accel, (-1, 3))
         check_rows(self.source, len(self.t), gyro=self.gyro, accel=self.accel)
+        self.gyro, self.accel, n = bridge_imu(self.source, self.t, self.gyro, self.accel,
+                                              self.max_bridge_s)
+        self.quality["imu_samples_bridged"] = n
 
     def period(self) -> float:
         """The sampling period [s]; DataError if the sampling is not uniform (a gap)."""
@@ -124,16 +204,27 @@ class GnssData:
     sigma_pos: np.ndarray
     sigma_vel: np.ndarray
     lever: np.ndarray
+    #: what the checks did: {"gnss_epochs_skipped": n}
+    quality: dict = field(default_factory=dict)
 
     def __post_init__(self):
-        self.t = check_time(self.source, self.t)
-        self.lla = check_array(self.source, "lat/lon/h", self.lla, (-1, 3))
-        if self.vel is not None:
-            self.vel = check_array(self.source, "vel", self.vel, (-1, 3))
+        t = _as_float(self.source, "t", self.t, (-1,))
+        lla = _as_float(self.source, "lat/lon/h", self.lla, (-1, 3))
+        vel = None if self.vel is None else _as_float(self.source, "vel", self.vel, (-1, 3))
+        check_rows(self.source, len(t), lla=lla, vel=vel)
+        with np.errstate(invalid="ignore"):
+            insane = ((np.abs(lla[:, 0]) > np.pi / 2) | (np.abs(lla[:, 1]) > 2 * np.pi)
+                      | (np.abs(lla[:, 2]) > ABSURD_HEIGHT_M))
+            if vel is not None:
+                insane |= np.linalg.norm(vel, axis=1) > ABSURD_SPEED_MPS
+        keep, n = screen_rows(self.source, "GNSS", t, {"lla": lla, "vel": vel}, insane)
+        self.quality["gnss_epochs_skipped"] = n
+        self.t = check_time(self.source, t[keep])
+        self.lla = lla[keep]
+        self.vel = None if vel is None else vel[keep]
         self.sigma_pos = check_array(self.source, "sigma_pos", self.sigma_pos, (3,))
         self.sigma_vel = check_array(self.source, "sigma_vel", self.sigma_vel, (3,))
         self.lever = check_array(self.source, "lever", self.lever, (3,))
-        check_rows(self.source, len(self.t), lla=self.lla, vel=self.vel)
         if np.any(self.sigma_pos <= 0) or (self.vel is not None and np.any(self.sigma_vel <= 0)):
             raise DataError(f"{self.source}: GNSS standard deviations must be positive")
 
@@ -149,17 +240,26 @@ class VelocityData:
     vel: np.ndarray
     cov: np.ndarray
     lever: np.ndarray
+    #: what the checks did: {"velocity_epochs_skipped": n}
+    quality: dict = field(default_factory=dict)
 
     def __post_init__(self):
-        self.t = check_time(self.source, self.t)
-        self.vel = check_array(self.source, "vel", self.vel, (-1, 3))
-        self.cov = check_array(self.source, "cov", self.cov, (-1, 3, 3))
+        t = _as_float(self.source, "t", self.t, (-1,))
+        vel = _as_float(self.source, "vel", self.vel, (-1, 3))
+        cov = _as_float(self.source, "cov", self.cov, (-1, 3, 3))
         self.lever = check_array(self.source, "lever", self.lever, (3,))
-        check_rows(self.source, len(self.t), vel=self.vel, cov=self.cov)
-        ev = np.linalg.eigvalsh(0.5 * (self.cov + np.swapaxes(self.cov, 1, 2)))
-        if np.any(ev[:, 0] <= 0):
-            i = int(np.argmax(ev[:, 0] <= 0))
-            raise DataError(f"{self.source}: field 'cov' is not positive definite at row {i}")
+        check_rows(self.source, len(t), vel=vel, cov=cov)
+        sym = 0.5 * (cov + np.swapaxes(cov, 1, 2))
+        finite = np.isfinite(sym).all(axis=(1, 2))
+        not_pd = np.zeros(len(t), dtype=bool)
+        if finite.any():
+            not_pd[finite] = np.linalg.eigvalsh(sym[finite])[:, 0] <= 0
+        with np.errstate(invalid="ignore"):
+            insane = not_pd | (np.linalg.norm(vel, axis=1) > ABSURD_SPEED_MPS)
+        keep, n = screen_rows(self.source, "velocity", t, {"vel": vel, "cov": cov}, insane)
+        self.quality["velocity_epochs_skipped"] = n
+        self.t = check_time(self.source, t[keep])
+        self.vel, self.cov = vel[keep], cov[keep]
 
 
 @dataclass
@@ -174,12 +274,20 @@ class Reference:
     vel: np.ndarray
     euler: np.ndarray | None = None
     lever: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    #: what the checks did: {"reference_rows_skipped": n}
+    quality: dict = field(default_factory=dict)
 
     def __post_init__(self):
-        self.t = check_time(self.source, self.t)
-        self.lla = check_array(self.source, "lat/lon/h", self.lla, (-1, 3))
-        self.vel = check_array(self.source, "vel", self.vel, (-1, 3))
-        if self.euler is not None:
-            self.euler = check_array(self.source, "roll/pitch/yaw", self.euler, (-1, 3))
+        t = _as_float(self.source, "t", self.t, (-1,))
+        lla = _as_float(self.source, "lat/lon/h", self.lla, (-1, 3))
+        vel = _as_float(self.source, "vel", self.vel, (-1, 3))
+        euler = (None if self.euler is None
+                 else _as_float(self.source, "roll/pitch/yaw", self.euler, (-1, 3)))
         self.lever = check_array(self.source, "lever", self.lever, (3,))
-        check_rows(self.source, len(self.t), lla=self.lla, vel=self.vel, euler=self.euler)
+        check_rows(self.source, len(t), lla=lla, vel=vel, euler=euler)
+        keep, n = screen_rows(self.source, "reference", t,
+                              {"lla": lla, "vel": vel, "euler": euler})
+        self.quality["reference_rows_skipped"] = n
+        self.t = check_time(self.source, t[keep])
+        self.lla, self.vel = lla[keep], vel[keep]
+        self.euler = None if euler is None else euler[keep]

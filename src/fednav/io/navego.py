@@ -22,7 +22,7 @@ from .data import (
     ImuErrors,
     Reference,
     VelocityData,
-    check_array,
+    _as_float,
     check_rows,
     check_time,
 )
@@ -95,7 +95,7 @@ def _frd(v):
     return np.asarray(v)[[1, 0, 2]]
 
 
-def read_navego_imu(path) -> ImuData:
+def read_navego_imu(path, max_bridge_s: float = 0.1) -> ImuData:
     """NaveGo IMU struct: ``t``, ``fb``, ``wb`` (FRD) and the error figures.
 
     Error figures (NaveGo names, SI): ``arw`` [rad/s/sqrt(Hz)], ``vrw`` [m/s^2/sqrt(Hz)],
@@ -107,8 +107,8 @@ def read_navego_imu(path) -> ImuData:
     """
     src, s = _load(path, "IMU")
     t = check_time(src, _field(src, s, "t"))
-    fb = check_array(src, "fb", _field(src, s, "fb"), (-1, 3))
-    wb = check_array(src, "wb", _field(src, s, "wb"), (-1, 3))
+    fb = _as_float(src, "fb", _field(src, s, "fb"), (-1, 3))  # faulty samples: ImuData
+    wb = _as_float(src, "wb", _field(src, s, "wb"), (-1, 3))
     check_rows(src, len(t), fb=fb, wb=wb)
     errors = None
     if hasattr(s, "arw"):
@@ -126,7 +126,8 @@ def read_navego_imu(path) -> ImuData:
         err = _vec3(src, s, "ini_align_err", required=False)
         if err is not None:
             sigma = np.abs(err[[1, 0, 2]])  # [roll, pitch, yaw] -> [pitch, roll, heading]
-    return ImuData(src, t, wb @ FRD_TO_RFU.T, fb @ FRD_TO_RFU.T, errors, euler, sigma)
+    return ImuData(src, t, wb @ FRD_TO_RFU.T, fb @ FRD_TO_RFU.T, errors, euler, sigma,
+                   max_bridge_s=max_bridge_s)
 
 
 def _lla(src, s):
