@@ -52,7 +52,8 @@ def _paper_module(paper: str):
         if paper.lower() in mod.ALIASES:
             return mod
     known = ", ".join(a for m in _papers() for a in m.ALIASES)
-    raise typer.BadParameter(f"unknown paper '{paper}'; available: {known}")
+    typer.echo(f"error: unknown paper '{paper}'; available: {known}", err=True)
+    raise typer.Exit(2)
 
 
 @app.command()
@@ -61,10 +62,10 @@ def reproduce(
     paper: str = typer.Argument(..., help="paper number or alias: 000 / airship, "
                                           "001 / launch-frame, 002 / cruise-missile, "
                                           "003 / federated-ukf, 004 / sar-delay"),
-    runs: int = typer.Option(10, min=1, help="Monte Carlo runs"),
+    runs: int = typer.Option(10, help="Monte Carlo runs (at least 1)"),
     seed: int = typer.Option(1, help="seed of the first run (run i uses seed + i)"),
     out: Path = typer.Option(None, help="output folder [default: results/<paper>]"),
-    jobs: int = typer.Option(min(2, os.cpu_count() or 1), min=1, help="worker processes"),
+    jobs: int = typer.Option(min(2, os.cpu_count() or 1), help="worker processes (at least 1)"),
     scenario: Path = typer.Option(None, help="alternative scenario YAML"),
     max_time: float = typer.Option(None, help="truncate the flight (smoke runs only)"),
     particles: int = typer.Option(None, help="particles per local particle filter "
@@ -76,6 +77,13 @@ def reproduce(
                                                   "to run on instead of local processes"),
 ) -> None:
     """Reproduce a paper's experiment and print its tables beside the paper's."""
+    for opt, value in (("--runs", runs), ("--jobs", jobs)):
+        if value < 1:
+            typer.echo(f"error: {opt} must be at least 1, got {value}", err=True)
+            raise typer.Exit(2)
+    if max_time is not None and not max_time > 0:
+        typer.echo(f"error: --max-time must be positive, got {max_time}", err=True)
+        raise typer.Exit(2)
     mod = _paper_module(paper)
     extra = {}
     for opt, value, only, low in (("--particles", particles, "001", 10),

@@ -54,7 +54,7 @@ class ConfigError(FednavError, ValueError):
 
 
 class _Model(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
 
 class StartConfig(_Model):
@@ -89,14 +89,14 @@ class ImuConfig(_Model):
 
     gyro_bias_deg_h: float = 0.0
     gyro_markov_deg_h: float = 0.0
-    gyro_markov_tau_s: float = Field(default=float("inf"), gt=0.0)
+    gyro_markov_tau_s: float = Field(default=float("inf"), gt=0.0, allow_inf_nan=True)
     gyro_arw_deg_sqrt_h: float = 0.0
     gyro_white_deg_h: float = 0.0
     gyro_bias_rw_deg_h_sqrt_h: float = 0.0
     accel_bias_rw_ug_sqrt_h: float = 0.0
     accel_bias_ug: float = 0.0
     accel_markov_ug: float = 0.0
-    accel_markov_tau_s: float = Field(default=float("inf"), gt=0.0)
+    accel_markov_tau_s: float = Field(default=float("inf"), gt=0.0, allow_inf_nan=True)
     accel_white_ug: float = 0.0
     accel_vrw_ug_sqrt_hz: float = 0.0   # white noise as a density (ug/sqrt(Hz))
     random_bias: bool = False
@@ -444,6 +444,9 @@ def _format_error(e: dict) -> str:
         msg = "unknown key"
     elif e["type"] == "missing":
         msg = "missing value"
+    elif "input" in e and not isinstance(e["input"], dict | list):
+        got = repr(e["input"])
+        msg = f"{msg} (got {got if len(got) <= 40 else got[:37] + '...'})"
     return f"key '{loc}': {msg}"
 
 

@@ -37,7 +37,7 @@ LOCAL_FILTERS = {"gnss", "velocity"}
 class ImuNoiseConfig(BaseModel):
     """Overrides of the IMU error figures (SI, isotropic); unset keys keep the file's."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
     gyro_arw_rad_sqrt_s: float | None = Field(None, ge=0)
     accel_vrw_mps_sqrt_s: float | None = Field(None, ge=0)
     gyro_bias_radps: float | None = Field(None, ge=0)
@@ -51,7 +51,7 @@ class ImuNoiseConfig(BaseModel):
 class ProcessConfig(BaseModel):
     """Options of :func:`process` (the YAML file of ``fednav process --config``)."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
     period_s: float | None = Field(None, gt=0, description="filter cycle; default: GNSS "
                                                              "period")
     imu: ImuNoiseConfig = ImuNoiseConfig()

@@ -35,11 +35,22 @@ def _read(path, kind: str, required: tuple) -> tuple[str, pd.DataFrame]:
     path = Path(path)
     if not path.is_file():
         raise DataError(f"{kind} file {path}: not found")
-    try:
-        df = pd.read_csv(path, skipinitialspace=True)
-    except Exception as e:  # pandas raises several types for unreadable content
-        raise DataError(f"{kind} file {path}: not a readable CSV file ({e})") from None
     src = str(path)
+    try:
+        with open(path, encoding="utf-8-sig") as f:  # a UTF-8 byte-order mark is accepted
+            header = f.readline()
+    except UnicodeDecodeError:
+        raise DataError(f"{src}: not a UTF-8 text file") from None
+    if not header.strip():
+        raise DataError(f"{src}: empty file (expected a header row: "
+                        f"{', '.join(required)})")
+    if ";" in header and "," not in header:
+        raise DataError(f"{src}: columns are separated by ';': fednav's CSV files use ','")
+    try:
+        df = pd.read_csv(path, skipinitialspace=True, encoding="utf-8-sig")
+    except Exception as e:  # pandas raises several types for unreadable content
+        msg = str(e).strip().splitlines()[-1] if str(e).strip() else type(e).__name__
+        raise DataError(f"{src}: not a readable CSV file ({msg})") from None
     missing = [c for c in required if c not in df.columns]
     if missing:
         raise DataError(f"{src}: missing column(s) {', '.join(missing)} "

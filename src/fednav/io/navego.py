@@ -78,15 +78,20 @@ def _field(src: str, s, name: str, required: bool = True):
     return None
 
 
-def _vec3(src, s, name, required=True, default=None):
+def _vec3(src, s, name, required=True, default=None, nonneg=False):
     v = _field(src, s, name, required)
     if v is None:
         return default
-    a = np.atleast_1d(np.asarray(v, dtype=float)).ravel()
+    try:
+        a = np.atleast_1d(np.asarray(v, dtype=float)).ravel()
+    except (TypeError, ValueError):
+        raise DataError(f"{src}: field '{name}' is not numeric") from None
     if a.size == 1:
         a = np.repeat(a, 3)
-    if a.shape != (3,) or not np.all(np.isfinite(a)):
-        raise DataError(f"{src}: field '{name}' must be 3 finite numbers, got {v!r}")
+    if a.shape != (3,) or not np.all(np.isfinite(a)) or (nonneg and np.any(a < 0)):
+        what = "non-negative finite" if nonneg else "finite"
+        raise DataError(f"{src}: field '{name}' must be 3 {what} numbers, got "
+                        f"{np.array2string(np.atleast_1d(np.asarray(v)), precision=6)}")
     return a
 
 
@@ -113,12 +118,14 @@ def read_navego_imu(path, max_bridge_s: float = 0.1) -> ImuData:
     errors = None
     if hasattr(s, "arw"):
         errors = ImuErrors(
-            gyro_arw=_frd(_vec3(src, s, "arw")), accel_vrw=_frd(_vec3(src, s, "vrw")),
+            gyro_arw=_frd(_vec3(src, s, "arw", nonneg=True)),
+            accel_vrw=_frd(_vec3(src, s, "vrw", nonneg=True)),
             gyro_bias=np.abs(_frd(_vec3(src, s, "gb_sta"))),
             accel_bias=np.abs(_frd(_vec3(src, s, "ab_sta"))),
-            gyro_markov=_frd(_vec3(src, s, "gb_dyn")),
-            accel_markov=_frd(_vec3(src, s, "ab_dyn")),
-            gyro_tau=_frd(_vec3(src, s, "gb_corr")), accel_tau=_frd(_vec3(src, s, "ab_corr")))
+            gyro_markov=_frd(_vec3(src, s, "gb_dyn", nonneg=True)),
+            accel_markov=_frd(_vec3(src, s, "ab_dyn", nonneg=True)),
+            gyro_tau=_frd(_vec3(src, s, "gb_corr", nonneg=True)),
+            accel_tau=_frd(_vec3(src, s, "ab_corr", nonneg=True)))
     euler = sigma = None
     ini = _vec3(src, s, "ini_align", required=False)
     if ini is not None:
