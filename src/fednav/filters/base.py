@@ -119,12 +119,14 @@ class Filter(ABC):
     def _who(self, phase: str) -> str:
         return f"{self.name} {phase} at step {self.step}"
 
-    def _finish(self, phase: str, symmetrize: bool = True) -> None:
+    def _finish(self, phase: str, symmetrize: bool = True, check_pd: bool = False) -> None:
         if symmetrize:
             self.P = 0.5 * (self.P + self.P.T)
         # A sum propagates any NaN/inf: one cheap check for the whole state.
         if not math.isfinite(self.x.sum() + self.P.sum()):
             raise FilterError(f"{self._who(phase)}: state or covariance became NaN/inf")
+        if check_pd and not cholesky_lower(np.ascontiguousarray(self.P))[1]:
+            raise not_pd_error(self.P, self._who(phase))
 
     @abstractmethod
     def predict(self, process, q_scale: float = 1.0) -> None: ...

@@ -59,5 +59,5 @@ class KalmanFilter(Filter):
         if gate is not None and nis > gate:
             return Innovation(r, S, nis, False)
         self.x, self.P = x, P
-        self._finish("update", symmetrize=False)
+        self._finish("update", symmetrize=False, check_pd=True)
         return Innovation(r, S, nis)

@@ -113,7 +113,7 @@ class UnscentedKalmanFilter(Filter):
         if gate is not None and nis > gate:
             return Innovation(r, Pzz, float(nis), False)
         self.x, self.P = x, P
-        self._finish("update", symmetrize=False)
+        self._finish("update", symmetrize=False, check_pd=True)
         return Innovation(r, Pzz, float(nis))
 
 

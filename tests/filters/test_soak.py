@@ -1,0 +1,26 @@
+"""Short numerical soak of every filter (benchmarks/soak.py runs 10^6 cycles)."""
+
+import pytest
+
+from fednav.filters import REGISTRY
+from fednav.filters.soak import soak
+
+
+@pytest.mark.parametrize("name", sorted(REGISTRY))
+def test_hostile_conditions_keep_pd_or_raise_a_filter_error(name):
+    opts = {"n_particles": 300} if name == "pf" else {}
+    r = soak(name, 30 if name == "pf" else 250, **opts)   # AssertionError on silent failure
+    if r.error is None:
+        assert r.cycles == (30 if name == "pf" else 250)
+        assert r.max_asymmetry <= 1e-9 and r.min_eig > 0
+    else:
+        assert r.error.startswith(name) and "step" in r.error and "\n" not in r.error
+
+
+def test_well_posed_soak_runs_clean():
+    """With ordinary numbers (P0 = I, the model's Q, R = I, no outliers) every Gaussian
+    filter runs."""
+    for name in ("kf", "ekf", "ukf", "sukf", "cukf", "cekf", "aekf", "raukf", "sghqf",
+                 "aasghqf"):
+        r = soak(name, 200, huge_p=1.0, tiny_q=1.0, small_r=1.0, outlier_every=0)
+        assert r.error is None and r.min_eig > 0, (name, r.error)
