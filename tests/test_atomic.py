@@ -78,3 +78,48 @@ def test_output_path_that_is_a_file_is_one_line(tmp_path, argv):
     r = CliRunner().invoke(app, [*argv, "--out", str(f)])
     assert r.exit_code == 2 and r.output.strip().count("\n") == 0
     assert "a file of that name exists" in r.output and str(f) in r.output
+
+
+@pytest.mark.slow
+def test_process_killed_at_random_moments_leaves_only_complete_files(tmp_path):
+    """kill -9 `fednav process` at random moments: every visible file is complete (the
+    CSVs parse, summary.json is valid JSON), a summary.json is only there when the run
+    finished, and a later run succeeds in the same folder."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+    from pathlib import Path
+
+    import numpy as np
+    import pandas as pd
+
+    good = Path(__file__).parent / "data" / "bad" / "good"
+    out = tmp_path / "out"
+    cmd = [str(Path(sys.executable).parent / "fednav"), "process", "csv", "--imu",
+           str(good / "imu.csv"), "--gnss", str(good / "gnss.csv"), "--ref",
+           str(good / "ref.csv"), "--config", str(good / "cfg.yaml"), "--smooth",
+           "--out", str(out)]
+    rng = np.random.default_rng(1)
+    for _ in range(6):
+        p = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                             start_new_session=True)
+        time.sleep(rng.uniform(0.5, 4.0))
+        killed = p.poll() is None
+        if killed:
+            os.killpg(p.pid, signal.SIGKILL)
+        p.wait()
+        for f in out.glob("*"):
+            if f.name.startswith("."):
+                continue                          # a temporary file, never read as a result
+            if f.suffix == ".csv":
+                assert len(pd.read_csv(f)) > 0
+            elif f.suffix == ".json":
+                json.loads(f.read_text())
+        if killed and not (out / "summary.json").exists():
+            assert not (out / "report.html").exists()
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    s = json.loads((out / "summary.json").read_text())
+    assert s["rmse"]["north_m"] < 50
