@@ -20,9 +20,12 @@ from fednav.filters.soak import soak
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--cycles", type=int, default=1_000_000)
+    ap.add_argument("--conditions", choices=("hostile", "ordinary", "both"), default="both")
     args = ap.parse_args()
     for label, kw in (("hostile", {}), ("ordinary", {"huge_p": 1.0, "tiny_q": 1.0, "small_r": 1.0,
                                                      "outlier_every": 0})):
+        if args.conditions not in (label, "both"):
+            continue
         print(f"--- {label} conditions, {args.cycles} cycles")
         for name in sorted(REGISTRY):
             opts = {"n_particles": 300} if name == "pf" else {}

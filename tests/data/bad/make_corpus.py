@@ -409,6 +409,8 @@ def main():
     scenario("negative-noise", mod(lambda d: d["sensors"]["star"].__setitem__(
         "sigma_arcsec", -3.0)), "key 'sensors.star.sigma_arcsec': Input should be greater than 0 "
                                 "(got -3.0)")
+    scenario("zero-noise", mod(lambda d: d["sensors"]["sar"].__setitem__("sigma_pos_m", 0)),
+             "key 'sensors.sar.sigma_pos_m': Input should be greater than 0 (got 0)")
     scenario("zero-period", mod(lambda d: d["sensors"]["sar"].__setitem__("period_s", 0)),
              "key 'sensors.sar.period_s': Input should be greater than 0 (got 0)")
     scenario("nan-value", "" + yaml.safe_dump(mod(lambda d: d.__setitem__(
