@@ -123,3 +123,10 @@ def test_process_killed_at_random_moments_leaves_only_complete_files(tmp_path):
     assert r.returncode == 0, r.stderr
     s = json.loads((out / "summary.json").read_text())
     assert s["rmse"]["north_m"] < 50
+
+
+def test_debug_shows_the_traceback(tmp_path):
+    r = CliRunner().invoke(app, ["--debug", "process", "csv", "--imu", "missing.csv",
+                                 "--gnss", "missing.csv", "--out", str(tmp_path)])
+    assert r.exit_code != 0 and r.exception is not None
+    assert "not found" in str(r.exception)

@@ -181,6 +181,8 @@ def _run_process(read, imu, gnss, velocity, ref, smooth, out, config) -> None:
             "reference": None if ref is None else str(ref),
             "config": None if config is None else str(config), "smooth": smooth})
     except (FednavError, ValueError) as e:
+        if _state["debug"]:
+            raise
         typer.echo(f"error: {e}", err=True)
         raise typer.Exit(2) from None
     s = json.loads(files[-1].read_text())
