@@ -269,6 +269,37 @@ def process_csv(
 
 @app.command()
 @_one_line_errors
+def simulate(
+    scenario: Path = typer.Argument(..., help="dataset scenario YAML (examples/car-drive.yaml)"),
+    out: Path = typer.Option(Path("results/dataset"), help="output folder"),
+    fmt: str = typer.Option("csv", "--format", help="csv (fednav layout) or navego (.mat)"),
+    seed: int = typer.Option(None, help="override the scenario's seed"),
+) -> None:
+    """Simulate a dataset (IMU, GNSS, velocity sensor, reference) from a scenario, in the
+    layouts `fednav process csv|navego` reads."""
+    if fmt not in ("csv", "navego"):
+        typer.echo(f"error: --format must be csv or navego, got '{fmt}'", err=True)
+        raise typer.Exit(2)
+    from .dataset import (
+        load_dataset_config,
+        simulate_dataset,
+        write_csv_dataset,
+        write_navego_dataset,
+    )
+
+    cfg = load_dataset_config(scenario)
+    if seed is not None:
+        cfg = cfg.model_copy(update={"seed": seed})
+    out = _output_folder(out)
+    ds = simulate_dataset(cfg)
+    files = (write_csv_dataset if fmt == "csv" else write_navego_dataset)(ds, out)
+    console.print(f"{cfg.name}: {ds.t[-1] - ds.t[0]:.0f} s, {len(ds.t)} IMU samples, "
+                  f"{len(ds.gnss_t)} GNSS fixes (seed {cfg.seed})")
+    console.print(f"wrote {', '.join(str(f) for f in files)}")
+
+
+@app.command()
+@_one_line_errors
 def report(folder: Path = typer.Argument(..., help="a fednav reproduce output folder")) -> None:
     """Write FOLDER/report.html: tables beside the paper's, plots, run metadata."""
     from .html_report import write_report

@@ -1,0 +1,251 @@
+"""Simulated datasets in fednav's own file layouts (``fednav simulate``).
+
+A dataset scenario (YAML, :class:`DatasetConfig`) gives the start, the motion as segments
+(:class:`~fednav.config.SegmentConfig`), the IMU error figures
+(:class:`~fednav.config.ImuConfig`), the GNSS receiver (rate, noise, antenna lever arm)
+and optionally a velocity sensor. :func:`simulate_dataset` draws one realisation from
+its seed; :func:`write_csv_dataset` and :func:`write_navego_dataset` write it in the
+layouts of ``docs/data-formats.md`` — ``imu.csv gnss.csv velocity.csv reference.csv``
+plus ``process.yaml`` (the noise figures, which CSV files have no room for), or NaveGo's
+``imu.mat gnss.mat visual.mat ref.mat`` with the figures in the IMU struct — so that
+``fednav process csv|navego`` reads them back unchanged.
+
+Frames and units as everywhere in fednav: body right-forward-up, ENU, SI inside; the
+files use the edge units of their layout (degrees in CSV, NaveGo's FRD/NED radians).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from pydantic import Field
+
+from . import attitude, earth, units
+from .config import ImuConfig, SegmentConfig, StartConfig, _Model, load_model
+
+_V3 = tuple[float, float, float]
+
+
+class GnssSimConfig(_Model):
+    """GNSS receiver: fix period [s], 1-sigma position noise [north, east, up] m and
+    velocity noise [east, north, up] m/s (white), antenna lever arm from the IMU (body
+    right-forward-up, m)."""
+
+    period_s: float = Field(0.2, gt=0.0)
+    sigma_pos_m: _V3 = (1.5, 1.5, 3.0)
+    sigma_vel_mps: _V3 = (0.05, 0.05, 0.1)
+    lever_m: _V3 = (0.0, 0.0, 0.0)
+
+
+class VelocitySimConfig(_Model):
+    """Velocity sensor (odometry, visual odometry): period [s], 1-sigma ENU noise [m/s],
+    lever arm (body right-forward-up, m)."""
+
+    period_s: float = Field(0.1, gt=0.0)
+    sigma_mps: _V3 = (0.05, 0.05, 0.05)
+    lever_m: _V3 = (0.0, 0.0, 0.0)
+
+
+class DatasetConfig(_Model):
+    """A dataset scenario (the YAML of ``fednav simulate``)."""
+
+    name: str = "dataset"
+    description: str = ""
+    seed: int = 1
+    start: StartConfig
+    imu_period_s: float = Field(0.005, gt=0.0)
+    segments: list[SegmentConfig] = Field(min_length=1)
+    imu: ImuConfig
+    gnss: GnssSimConfig = GnssSimConfig()
+    velocity: VelocitySimConfig | None = None
+    initial_attitude_error_deg: _V3 = (1.0, 1.0, 2.0)   # written as the file's 1-sigma
+
+
+@dataclass
+class Dataset:
+    """One realisation: IMU ``t`` (N,), ``gyro`` [rad/s] and ``accel`` [m/s^2] (body
+    RFU); GNSS ``gnss_t``, antenna ``gnss_lla`` [rad, rad, m] and ENU ``gnss_vel``;
+    optional velocity sensor ``vel_t``, ``vel`` (ENU at its lever point); reference of
+    the IMU at every IMU sample ``ref_lla``, ``ref_vel``, ``ref_euler``; and the config."""
+
+    cfg: DatasetConfig
+    t: np.ndarray
+    gyro: np.ndarray
+    accel: np.ndarray
+    gnss_t: np.ndarray
+    gnss_lla: np.ndarray
+    gnss_vel: np.ndarray
+    vel_t: np.ndarray | None
+    vel: np.ndarray | None
+    ref_lla: np.ndarray
+    ref_vel: np.ndarray
+    ref_euler: np.ndarray
+
+
+def load_dataset_config(path) -> DatasetConfig:
+    return load_model(path, DatasetConfig, "dataset scenario")
+
+
+def _lever_point(tr, idx, lever):
+    """Position and ENU velocity of a point at ``lever`` (body) from the IMU, at samples
+    ``idx`` of the trajectory (rate from the true angle increments)."""
+    C = attitude.euler_to_dcm(tr.euler[idx])
+    d = C @ np.asarray(lever, dtype=float)
+    lla = earth.move_enu(tr.lla[idx], d)
+    w = tr.dtheta[np.maximum(idx - 1, 0)] / tr.dt
+    vel = tr.vel[idx] + np.einsum("kij,kj->ki", C, np.cross(w, lever))
+    return lla, vel
+
+
+def simulate_dataset(cfg: DatasetConfig) -> Dataset:
+    """Draw the dataset of ``cfg`` (seeded by ``cfg.seed``)."""
+    from .sensors import corrupt_imu
+    from .trajectory import generate
+
+    st = cfg.start
+    tr = generate(np.array([units.deg(st.lat_deg), units.deg(st.lon_deg), st.h_m]),
+                  st.speed_mps, units.deg(np.array([st.pitch_deg, st.roll_deg,
+                                                    st.heading_deg])),
+                  [s.to_segment() for s in cfg.segments], cfg.imu_period_s)
+    rng = np.random.default_rng(cfg.seed)
+    dt = tr.dt
+    dth, dv, _ = corrupt_imu(tr.dtheta, tr.dv, dt, cfg.imu.errors(dt), rng)
+    g = cfg.gnss
+    step = max(1, int(round(g.period_s / dt)))
+    gi = np.arange(step, len(tr.t), step)
+    lla, vel = _lever_point(tr, gi, g.lever_m)
+    sp, sv = np.asarray(g.sigma_pos_m), np.asarray(g.sigma_vel_mps)
+    n_pos = rng.standard_normal((len(gi), 3)) * sp               # north, east, up
+    lla = earth.move_enu(lla, n_pos[:, [1, 0, 2]])
+    vel = vel + rng.standard_normal((len(gi), 3)) * sv
+    vt = vv = None
+    if cfg.velocity is not None:
+        vc = cfg.velocity
+        step = max(1, int(round(vc.period_s / dt)))
+        vi = np.arange(step, len(tr.t), step)
+        _, vv = _lever_point(tr, vi, vc.lever_m)
+        vv = vv + rng.standard_normal((len(vi), 3)) * np.asarray(vc.sigma_mps)
+        vt = tr.t[vi]
+    return Dataset(cfg, tr.t[1:], dth / dt, dv / dt, tr.t[gi], lla, vel, vt, vv,
+                   tr.lla[1:], tr.vel[1:], tr.euler[1:])
+
+
+def process_config(ds: Dataset) -> dict:
+    """The ``fednav process --config`` mapping with the dataset's true noise figures."""
+    cfg, dt = ds.cfg, ds.cfg.imu_period_s
+    n = cfg.imu.noise_model(dt)
+    e = cfg.imu.errors(dt)
+    imu = {"gyro_arw_rad_sqrt_s": n.gyro_arw, "accel_vrw_mps_sqrt_s": n.accel_vrw,
+           "gyro_bias_radps": float(e.gyro_bias), "accel_bias_mps2": float(e.accel_bias),
+           "gyro_markov_radps": n.gyro_markov_sigma, "accel_markov_mps2": n.accel_markov_sigma}
+    for key, tau in (("gyro_tau_s", n.gyro_markov_tau), ("accel_tau_s", n.accel_markov_tau)):
+        if np.isfinite(tau):
+            imu[key] = float(tau)
+    return {"imu": {k: float(v) for k, v in imu.items()},
+            "gnss_sigma_pos_m": list(map(float, cfg.gnss.sigma_pos_m)),
+            "gnss_sigma_vel_mps": list(map(float, cfg.gnss.sigma_vel_mps)),
+            "gnss_lever_m": list(map(float, cfg.gnss.lever_m)),
+            "initial_attitude": "coarse"}
+
+
+def write_csv_dataset(ds: Dataset, out) -> list[Path]:
+    """``imu.csv gnss.csv [velocity.csv] reference.csv process.yaml`` into ``out``."""
+    import yaml
+
+    from .atomic import write_text
+    from .io.csvdata import write_csv
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    deg = units.to_deg
+    files = [
+        write_csv(out / "imu.csv", {
+            "t_s": ds.t, "gyro_x_radps": ds.gyro[:, 0], "gyro_y_radps": ds.gyro[:, 1],
+            "gyro_z_radps": ds.gyro[:, 2], "accel_x_mps2": ds.accel[:, 0],
+            "accel_y_mps2": ds.accel[:, 1], "accel_z_mps2": ds.accel[:, 2]}),
+        write_csv(out / "gnss.csv", {
+            "t_s": ds.gnss_t, "lat_deg": deg(ds.gnss_lla[:, 0]),
+            "lon_deg": deg(ds.gnss_lla[:, 1]), "h_m": ds.gnss_lla[:, 2],
+            "vE_mps": ds.gnss_vel[:, 0], "vN_mps": ds.gnss_vel[:, 1],
+            "vU_mps": ds.gnss_vel[:, 2]})]
+    cfg = process_config(ds)
+    if ds.vel is not None:
+        s = np.asarray(ds.cfg.velocity.sigma_mps)
+        n = len(ds.vel_t)
+        files.append(write_csv(out / "velocity.csv", {
+            "t_s": ds.vel_t, "vE_mps": ds.vel[:, 0], "vN_mps": ds.vel[:, 1],
+            "vU_mps": ds.vel[:, 2], "sigma_vE_mps": np.full(n, s[0]),
+            "sigma_vN_mps": np.full(n, s[1]), "sigma_vU_mps": np.full(n, s[2])}))
+    files.append(write_csv(out / "reference.csv", {
+        "t_s": ds.t, "lat_deg": deg(ds.ref_lla[:, 0]), "lon_deg": deg(ds.ref_lla[:, 1]),
+        "h_m": ds.ref_lla[:, 2], "vE_mps": ds.ref_vel[:, 0], "vN_mps": ds.ref_vel[:, 1],
+        "vU_mps": ds.ref_vel[:, 2], "pitch_deg": deg(ds.ref_euler[:, 0]),
+        "roll_deg": deg(ds.ref_euler[:, 1]), "heading_deg": deg(ds.ref_euler[:, 2])}))
+    files.append(write_text(out / "process.yaml", "# fednav process --config: the true noise "
+                            "figures of this simulated dataset\n"
+                            + yaml.safe_dump(cfg, sort_keys=False)))
+    return files
+
+
+def _navego_euler(euler):
+    """fednav [pitch, roll, heading] -> NaveGo (roll, pitch, yaw) [rad] (FRD/NED)."""
+    from .io.navego import FRD_TO_RFU
+
+    C = FRD_TO_RFU @ attitude.euler_to_dcm(euler) @ FRD_TO_RFU   # NaveGo's C_b^n
+    roll = np.arctan2(C[..., 2, 1], C[..., 2, 2])
+    pitch = -np.arcsin(np.clip(C[..., 2, 0], -1.0, 1.0))
+    yaw = np.arctan2(C[..., 1, 0], C[..., 0, 0])
+    return roll, pitch, yaw
+
+
+def write_navego_dataset(ds: Dataset, out) -> list[Path]:
+    """NaveGo ``imu.mat gnss.mat [visual.mat] ref.mat`` into ``out`` (figures in the IMU
+    struct; written atomically)."""
+    import scipy.io
+
+    from .atomic import replacing
+    from .io.navego import FRD_TO_RFU
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    cfg, dt = ds.cfg, ds.cfg.imu_period_s
+    n, e = cfg.imu.noise_model(dt), cfg.imu.errors(dt)
+    M = FRD_TO_RFU  # RFU -> FRD and ENU -> NED (its own inverse)
+    one = np.ones(3)
+    r0, p0, y0 = _navego_euler(ds.ref_euler[0])
+    err = units.deg(np.asarray(cfg.initial_attitude_error_deg))
+    rng = np.random.default_rng(cfg.seed + 7919)
+    ini = np.array([r0, p0, y0]) + err * rng.standard_normal(3)
+    structs = {
+        "imu": {"t": ds.t, "wb": ds.gyro @ M.T, "fb": ds.accel @ M.T,
+                "arw": n.gyro_arw * one, "vrw": n.accel_vrw * one,
+                "gb_sta": float(e.gyro_bias) * one, "ab_sta": float(e.accel_bias) * one,
+                "gb_dyn": n.gyro_markov_sigma * one, "ab_dyn": n.accel_markov_sigma * one,
+                "gb_corr": (n.gyro_markov_tau if np.isfinite(n.gyro_markov_tau) else 1e9) * one,
+                "ab_corr": (n.accel_markov_tau if np.isfinite(n.accel_markov_tau)
+                            else 1e9) * one,
+                "ini_align": ini, "ini_align_err": err},
+        "gnss": {"t": ds.gnss_t, "lat": ds.gnss_lla[:, 0], "lon": ds.gnss_lla[:, 1],
+                 "h": ds.gnss_lla[:, 2], "vel": ds.gnss_vel @ M.T,
+                 "stdm": np.asarray(cfg.gnss.sigma_pos_m),
+                 "stdv": np.asarray(cfg.gnss.sigma_vel_mps)[[1, 0, 2]],
+                 "larm": M @ np.asarray(cfg.gnss.lever_m)},
+    }
+    roll, pitch, yaw = _navego_euler(ds.ref_euler)
+    structs["ref"] = {"t": ds.t, "lat": ds.ref_lla[:, 0], "lon": ds.ref_lla[:, 1],
+                      "h": ds.ref_lla[:, 2], "vel": ds.ref_vel @ M.T, "roll": roll,
+                      "pitch": pitch, "yaw": yaw}
+    if ds.vel is not None:
+        s2 = np.asarray(cfg.velocity.sigma_mps)[[1, 0, 2]] ** 2   # NED variances
+        structs["visual"] = {"t": ds.vel_t, "vel": ds.vel @ M.T,
+                             "covv": np.tile(np.diag(s2).ravel(), (len(ds.vel_t), 1)),
+                             "larm": M @ np.asarray(cfg.velocity.lever_m)}
+    files = []
+    for name, s in structs.items():
+        path = out / f"{name}.mat"
+        with replacing(path) as tmp, open(tmp, "wb") as f:
+            scipy.io.savemat(f, {name: s})
+        files.append(path)
+    return files

@@ -1,0 +1,112 @@
+"""fednav simulate: datasets in the CSV and NaveGo layouts read back unchanged, and the
+processing of a simulated drive is consistent with its own 3-sigma."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from fednav import units
+from fednav.cli import app
+from fednav.config import load_model
+from fednav.dataset import (
+    load_dataset_config,
+    simulate_dataset,
+    write_csv_dataset,
+    write_navego_dataset,
+)
+from fednav.io import (
+    read_gnss_csv,
+    read_imu_csv,
+    read_navego_gnss,
+    read_navego_imu,
+    read_navego_reference,
+    read_navego_visual,
+    read_reference_csv,
+    read_velocity_csv,
+)
+from fednav.io.data import Reference
+from fednav.process import ProcessConfig, errors_against, process
+
+EXAMPLE = Path(__file__).parents[1] / "examples" / "car-drive.yaml"
+
+
+@pytest.fixture(scope="module")
+def short():
+    cfg = load_dataset_config(EXAMPLE)
+    return simulate_dataset(cfg.model_copy(update={"segments": cfg.segments[:5]}))
+
+
+def test_csv_layout_reads_back_unchanged(short, tmp_path):
+    write_csv_dataset(short, tmp_path)
+    imu = read_imu_csv(tmp_path / "imu.csv")
+    np.testing.assert_allclose(imu.gyro, short.gyro, rtol=1e-9, atol=1e-15)
+    np.testing.assert_allclose(imu.accel, short.accel, rtol=1e-9)
+    g = read_gnss_csv(tmp_path / "gnss.csv")
+    np.testing.assert_allclose(g.lla[:, :2], short.gnss_lla[:, :2], rtol=1e-9)
+    np.testing.assert_allclose(g.vel, short.gnss_vel, rtol=1e-9, atol=1e-12)
+    v = read_velocity_csv(tmp_path / "velocity.csv")
+    np.testing.assert_allclose(v.vel, short.vel, rtol=1e-9, atol=1e-12)
+    r = read_reference_csv(tmp_path / "reference.csv")
+    np.testing.assert_allclose(r.euler, short.ref_euler, atol=1e-10)
+    cfg = load_model(tmp_path / "process.yaml", ProcessConfig, "processing config")
+    assert cfg.gnss_lever_m == (0.3, -1.0, 1.2)
+    np.testing.assert_allclose(cfg.imu.gyro_arw_rad_sqrt_s, units.deg_per_sqrt_h(2.0))
+
+
+def test_navego_layout_reads_back_in_fednav_frames(short, tmp_path):
+    """FRD/NED and NaveGo's roll-pitch-yaw convert back to fednav's RFU/ENU exactly."""
+    write_navego_dataset(short, tmp_path)
+    imu = read_navego_imu(tmp_path / "imu.mat")
+    np.testing.assert_allclose(imu.gyro, short.gyro, atol=1e-15)
+    np.testing.assert_allclose(imu.accel, short.accel, atol=1e-12)
+    np.testing.assert_allclose(imu.errors.gyro_arw, units.deg_per_sqrt_h(2.0))
+    g = read_navego_gnss(tmp_path / "gnss.mat")
+    np.testing.assert_allclose(g.vel, short.gnss_vel, atol=1e-12)
+    np.testing.assert_allclose(g.lever, [0.3, -1.0, 1.2], atol=1e-15)
+    np.testing.assert_allclose(g.sigma_pos, [1.5, 1.5, 3.0])
+    np.testing.assert_allclose(g.sigma_vel, [0.05, 0.05, 0.1])
+    r = read_navego_reference(tmp_path / "ref.mat")
+    np.testing.assert_allclose(r.vel, short.ref_vel, atol=1e-12)
+    d = (r.euler - short.ref_euler + np.pi) % (2 * np.pi) - np.pi
+    assert np.max(np.abs(d)) < 1e-9
+    v = read_navego_visual(tmp_path / "visual.mat")
+    np.testing.assert_allclose(v.vel, short.vel, atol=1e-12)
+    np.testing.assert_allclose(np.sqrt(np.diagonal(v.cov, axis1=1, axis2=2)), 0.1)
+
+
+@pytest.mark.slow
+def test_simulated_drive_processed_inside_its_3_sigma(tmp_path):
+    """examples/car-drive.yaml -> CSV -> `fednav process csv`: position and velocity
+    errors inside the filter's 3-sigma (every axis) on >= 95 % of the filter epochs."""
+    r = CliRunner().invoke(app, ["simulate", str(EXAMPLE), "--out", str(tmp_path / "d")])
+    assert r.exit_code == 0, r.output
+    d = tmp_path / "d"
+    cfg = load_model(d / "process.yaml", ProcessConfig, "processing config")
+    g = read_gnss_csv(d / "gnss.csv", cfg.gnss_sigma_pos_m, cfg.gnss_sigma_vel_mps,
+                      cfg.gnss_lever_m)
+    res = process(read_imu_csv(d / "imu.csv"), g, read_velocity_csv(d / "velocity.csv"), cfg)
+    sol = res.forward
+    ref = read_reference_csv(d / "reference.csv")
+    k = np.searchsorted(ref.t, sol.t)                  # the reference holds every IMU time
+    k = k[(k < len(ref.t))]
+    k = k[np.abs(ref.t[k] - sol.t[: len(k)]) < 1e-6]
+    at = Reference("ref", ref.t[k], ref.lla[k], ref.vel[k], ref.euler[k])
+    e = errors_against(sol, at)
+    m = np.isin(sol.t, e["t"])
+    s = sol.sigma[m]
+    pos = np.abs(np.column_stack([e["east_m"], e["north_m"], -e["down_m"]])) <= 3 * s[:, 6:9]
+    vel = np.abs(np.column_stack([e["ve_mps"], e["vn_mps"], -e["vd_mps"]])) <= 3 * s[:, 3:6]
+    assert pos.all(axis=1).mean() >= 0.95 and vel.all(axis=1).mean() >= 0.95
+
+
+def test_simulate_cli_errors_are_one_line(tmp_path):
+    r = CliRunner().invoke(app, ["simulate", str(EXAMPLE), "--format", "rinex",
+                                 "--out", str(tmp_path)])
+    assert r.exit_code == 2 and r.stderr.strip() == ("error: --format must be csv or "
+                                                     "navego, got 'rinex'")
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(EXAMPLE.read_text().replace("imu_period_s: 0.005", "imu_period_s: 0"))
+    r = CliRunner().invoke(app, ["simulate", str(bad), "--out", str(tmp_path / "o")])
+    assert r.exit_code == 2 and "key 'imu_period_s': Input should be greater than 0" in r.stderr
