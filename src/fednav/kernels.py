@@ -7,6 +7,8 @@ removed.
 
 from __future__ import annotations
 
+import math
+
 import numba
 import numpy as np
 
@@ -79,6 +81,45 @@ def spd_inverse(P):
             out[i, j] = s
             out[j, i] = s
     return out, True
+
+
+# --- Scalar forms for per-sample loops: tuples of floats, nothing allocated.
+@numba.njit(cache=True, inline="always")
+def rotvec_to_quat_s(x, y, z, small_a2=1e-12):
+    """Rotation vector -> quaternion as 4 scalars (scalar first); the series form is used
+    while the squared angle is below ``small_a2``."""
+    a2 = x * x + y * y + z * z
+    if a2 < small_a2:
+        c, s = 1.0 - a2 / 8.0, 0.5 - a2 / 48.0
+    else:
+        a = math.sqrt(a2)
+        c, s = math.cos(0.5 * a), math.sin(0.5 * a) / a
+    return c, s * x, s * y, s * z
+
+
+@numba.njit(cache=True, inline="always")
+def quat_mul_s(a0, a1, a2, a3, b0, b1, b2, b3):
+    """Hamilton product of two quaternions given as scalars (scalar first)."""
+    return (a0 * b0 - a1 * b1 - a2 * b2 - a3 * b3, a0 * b1 + a1 * b0 + a2 * b3 - a3 * b2,
+            a0 * b2 - a1 * b3 + a2 * b0 + a3 * b1, a0 * b3 + a1 * b2 - a2 * b1 + a3 * b0)
+
+
+@numba.njit(cache=True, inline="always")
+def quat_to_rotvec_s(w, x, y, z):
+    """Unit quaternion (scalars) -> rotation vector (angle in [0, pi])."""
+    if w < 0.0:
+        w, x, y, z = -w, -x, -y, -z
+    s = math.sqrt(x * x + y * y + z * z)
+    k = 2.0 / w if s < 1e-9 else 2.0 * math.atan2(s, w) / s
+    return k * x, k * y, k * z
+
+
+@numba.njit(cache=True, inline="always")
+def quat_to_dcm_s(w, x, y, z):
+    """Unit quaternion (scalars) -> the 9 DCM elements, row by row."""
+    return (w * w + x * x - y * y - z * z, 2.0 * (x * y - w * z), 2.0 * (x * z + w * y),
+            2.0 * (x * y + w * z), w * w - x * x + y * y - z * z, 2.0 * (y * z - w * x),
+            2.0 * (x * z - w * y), 2.0 * (y * z + w * x), w * w - x * x - y * y + z * z)
 
 
 @numba.njit(cache=True)

@@ -29,6 +29,7 @@ import numpy as np
 
 from . import attitude, earth
 from .kernels import quat_mul as _qmul
+from .kernels import quat_mul_s, quat_to_dcm_s, rotvec_to_quat_s
 from .kernels import quat_to_dcm as _q2dcm
 from .kernels import rotvec_to_quat as _rv2q
 
@@ -121,15 +122,7 @@ def _run(state, dtheta, dv, dt, h_ref, gains, out_q, out_v, out_p):
         cy = by + 0.5 * (az * bx - ax * bz) + sy
         cz = bz + 0.5 * (ax * by - ay * bx) + sz
         # C_b^n from the quaternion.
-        c00 = q0 * q0 + q1 * q1 - q2 * q2 - q3 * q3
-        c01 = 2 * (q1 * q2 - q0 * q3)
-        c02 = 2 * (q1 * q3 + q0 * q2)
-        c10 = 2 * (q1 * q2 + q0 * q3)
-        c11 = q0 * q0 - q1 * q1 + q2 * q2 - q3 * q3
-        c12 = 2 * (q2 * q3 - q0 * q1)
-        c20 = 2 * (q1 * q3 - q0 * q2)
-        c21 = 2 * (q2 * q3 + q0 * q1)
-        c22 = q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3
+        c00, c01, c02, c10, c11, c12, c20, c21, c22 = quat_to_dcm_s(q0, q1, q2, q3)
         ne = c00 * cx + c01 * cy + c02 * cz
         nn = c10 * cx + c11 * cy + c12 * cz
         nu = c20 * cx + c21 * cy + c22 * cz
@@ -157,28 +150,11 @@ def _run(state, dtheta, dv, dt, h_ref, gains, out_q, out_v, out_p):
         rm2, rn2 = earth.radii_nb(lat_a)
         lon_new = lon + 0.5 * dt * (ve + ve_n) / ((rn2 + h_a) * math.cos(lat_a))
         # Attitude: q <- r(-zeta) * q * r(phi) (body rotation, then navigation frame).
-        a2 = fx * fx + fy * fy + fz * fz
-        a = math.sqrt(a2)
-        if a < 1e-8:
-            rc, rs = 1.0 - a2 / 8.0, 0.5 - a2 / 48.0
-        else:
-            rc, rs = math.cos(0.5 * a), math.sin(0.5 * a) / a
-        r1, r2, r3 = rs * fx, rs * fy, rs * fz
-        t0 = q0 * rc - q1 * r1 - q2 * r2 - q3 * r3
-        t1 = q0 * r1 + q1 * rc + q2 * r3 - q3 * r2
-        t2 = q0 * r2 - q1 * r3 + q2 * rc + q3 * r1
-        t3 = q0 * r3 + q1 * r2 - q2 * r1 + q3 * rc
-        a2 = ze * ze + zn * zn + zu * zu
-        a = math.sqrt(a2)
-        if a < 1e-8:
-            rc, rs = 1.0 - a2 / 8.0, 0.5 - a2 / 48.0
-        else:
-            rc, rs = math.cos(0.5 * a), math.sin(0.5 * a) / a
-        r1, r2, r3 = -rs * ze, -rs * zn, -rs * zu
-        q0 = rc * t0 - r1 * t1 - r2 * t2 - r3 * t3
-        q1 = rc * t1 + r1 * t0 + r2 * t3 - r3 * t2
-        q2 = rc * t2 - r1 * t3 + r2 * t0 + r3 * t1
-        q3 = rc * t3 + r1 * t2 - r2 * t1 + r3 * t0
+        # (series below 1e-8 rad, as kernels.rotvec_to_quat)
+        r0, r1, r2, r3 = rotvec_to_quat_s(fx, fy, fz, 1e-16)
+        t0, t1, t2, t3 = quat_mul_s(q0, q1, q2, q3, r0, r1, r2, r3)
+        r0, r1, r2, r3 = rotvec_to_quat_s(-ze, -zn, -zu, 1e-16)
+        q0, q1, q2, q3 = quat_mul_s(r0, r1, r2, r3, t0, t1, t2, t3)
         qn = math.sqrt(q0 ** 2 + q1 ** 2 + q2 ** 2 + q3 ** 2)
         q0, q1, q2, q3 = q0 / qn, q1 / qn, q2 / qn, q3 / qn
         wpe, wpn, wpu = ve, vn, vu

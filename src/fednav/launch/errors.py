@@ -42,7 +42,10 @@ import numba
 import numpy as np
 
 from .. import units
-from ..kernels import dcm_to_rotvec, quat_to_dcm
+from ..kernels import dcm_to_rotvec, quat_to_dcm, quat_to_dcm_s
+from ..kernels import quat_mul_s as _qmul
+from ..kernels import quat_to_rotvec_s as _q2rv
+from ..kernels import rotvec_to_quat_s as _rv2q
 from .frame import LaunchFrame, gravitation_li_xyz
 
 N_STATES = 15
@@ -54,34 +57,6 @@ SCALE = np.concatenate([np.full(3, units.ARCSEC), np.ones(3), np.ones(3),
                         np.full(3, float(units.milli_g(1.0)))])
 STATE_NAMES = ("phi_x", "phi_y", "phi_z", "dr_x", "dr_y", "dr_z", "dv_x", "dv_y", "dv_z",
                "eps_x", "eps_y", "eps_z", "nabla_x", "nabla_y", "nabla_z")
-
-
-@numba.njit(cache=True, inline="always")
-def _rv2q(x, y, z):
-    """Rotation vector -> quaternion (4 scalars, scalar first)."""
-    a2 = x * x + y * y + z * z
-    if a2 < 1e-12:
-        c, s = 1.0 - a2 / 8.0, 0.5 - a2 / 48.0
-    else:
-        a = math.sqrt(a2)
-        c, s = math.cos(0.5 * a), math.sin(0.5 * a) / a
-    return c, s * x, s * y, s * z
-
-
-@numba.njit(cache=True, inline="always")
-def _qmul(a0, a1, a2, a3, b0, b1, b2, b3):
-    return (a0 * b0 - a1 * b1 - a2 * b2 - a3 * b3, a0 * b1 + a1 * b0 + a2 * b3 - a3 * b2,
-            a0 * b2 - a1 * b3 + a2 * b0 + a3 * b1, a0 * b3 + a1 * b2 - a2 * b1 + a3 * b0)
-
-
-@numba.njit(cache=True, inline="always")
-def _q2rv(w, x, y, z):
-    """Unit quaternion -> rotation vector (angle in [0, pi])."""
-    if w < 0.0:
-        w, x, y, z = -w, -x, -y, -z
-    s = math.sqrt(x * x + y * y + z * z)
-    k = 2.0 / w if s < 1e-9 else 2.0 * math.atan2(s, w) / s
-    return k * x, k * y, k * z
 
 
 @numba.njit(cache=True)
@@ -102,15 +77,7 @@ def _transition(X, S, C, dvli, dsli, r_mid, T, r0, Ce, degree):
         p0, p1, p2 = _q2rv(c0, c1, c2, c3)
         b0, b1, b2, b3 = _rv2q(0.5 * u0, 0.5 * u1, 0.5 * u2)
         w, x, y, z = _qmul(b0, b1, b2, b3, a0, a1, a2, a3)             # E at the middle
-        m00 = w * w + x * x - y * y - z * z
-        m01 = 2 * (x * y - w * z)
-        m02 = 2 * (x * z + w * y)
-        m10 = 2 * (x * y + w * z)
-        m11 = w * w - x * x + y * y - z * z
-        m12 = 2 * (y * z - w * x)
-        m20 = 2 * (x * z - w * y)
-        m21 = 2 * (y * z + w * x)
-        m22 = w * w - x * x - y * y + z * z
+        m00, m01, m02, m10, m11, m12, m20, m21, m22 = quat_to_dcm_s(w, x, y, z)
         # C_hat nabla T (LI).
         n0, n1, n2 = X[i, 12] * S[12], X[i, 13] * S[13], X[i, 14] * S[14]
         f0 = T * (C[0, 0] * n0 + C[0, 1] * n1 + C[0, 2] * n2)

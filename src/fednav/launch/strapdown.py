@@ -28,6 +28,7 @@ import math
 import numba
 import numpy as np
 
+from ..kernels import quat_mul_s, quat_to_dcm_s, rotvec_to_quat_s
 from .frame import LaunchFrame, gravitation_li_xyz
 
 STATE_SIZE = 17  # q (4), v (3), r (3), dtheta_prev (3), dv_prev (3), has_prev
@@ -75,15 +76,7 @@ def _run(state, dtheta, dv, dt, r0, Ce, degree, out_q, out_v, out_r, aux):
         uy = by + 0.5 * ty + (az * tx - ax * tz) / 6.0 + cy
         uz = bz + 0.5 * tz + (ax * ty - ay * tx) / 6.0 + cz
         # Rotate into LI with the attitude at the start of the interval.
-        c00 = q0 * q0 + q1 * q1 - q2 * q2 - q3 * q3
-        c01 = 2.0 * (q1 * q2 - q0 * q3)
-        c02 = 2.0 * (q1 * q3 + q0 * q2)
-        c10 = 2.0 * (q1 * q2 + q0 * q3)
-        c11 = q0 * q0 - q1 * q1 + q2 * q2 - q3 * q3
-        c12 = 2.0 * (q2 * q3 - q0 * q1)
-        c20 = 2.0 * (q1 * q3 - q0 * q2)
-        c21 = 2.0 * (q2 * q3 + q0 * q1)
-        c22 = q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3
+        c00, c01, c02, c10, c11, c12, c20, c21, c22 = quat_to_dcm_s(q0, q1, q2, q3)
         wx = c00 * ux + c01 * uy + c02 * uz
         wy = c10 * ux + c11 * uy + c12 * uz
         wz = c20 * ux + c21 * uy + c22 * uz
@@ -103,19 +96,8 @@ def _run(state, dtheta, dv, dt, r0, Ce, degree, out_q, out_v, out_r, aux):
         rz += 0.5 * dt * (vz + nvz)
         vx, vy, vz = nvx, nvy, nvz
         # Attitude: q * q(phi).
-        a2 = px * px + py * py + pz * pz
-        if a2 < 1e-12:
-            hc = 1.0 - a2 / 8.0
-            hs = 0.5 - a2 / 48.0
-        else:
-            a = math.sqrt(a2)
-            hc = math.cos(0.5 * a)
-            hs = math.sin(0.5 * a) / a
-        e0, e1, e2, e3 = hc, hs * px, hs * py, hs * pz
-        n0 = q0 * e0 - q1 * e1 - q2 * e2 - q3 * e3
-        n1 = q0 * e1 + q1 * e0 + q2 * e3 - q3 * e2
-        n2 = q0 * e2 - q1 * e3 + q2 * e0 + q3 * e1
-        n3 = q0 * e3 + q1 * e2 - q2 * e1 + q3 * e0
+        e0, e1, e2, e3 = rotvec_to_quat_s(px, py, pz)
+        n0, n1, n2, n3 = quat_mul_s(q0, q1, q2, q3, e0, e1, e2, e3)
         nn = 1.0 / math.sqrt(n0 * n0 + n1 * n1 + n2 * n2 + n3 * n3)
         q0, q1, q2, q3 = n0 * nn, n1 * nn, n2 * nn, n3 * nn
         ax0, ay0, az0 = ax, ay, az
