@@ -314,21 +314,40 @@ class ErrorProcess:
 
     def __init__(self, nom: Nominal, T: float, noise: ImuNoiseModel,
                  baro_gains=(0.0, 0.0), baro_q: float = 0.0, nsub: int = 2):
-        self.nom, self.T, self.noise, self.nsub = nom, float(T), noise, int(nsub)
+        self._set_model(T, noise, baro_gains, baro_q, nsub)
+        v, f = np.asarray(nom.vel, float), np.asarray(nom.fn, float)
+        params = _nominal_params(float(nom.lat), float(nom.h), v[0], v[1], v[2], f[0], f[1],
+                                 f[2], self.k1, self.k2, self.itg, self.ita)
+        C0 = np.ascontiguousarray(nom.C, dtype=float)
+        self._set_nominal(params, C0, *_discretize(params, C0, self._noise, self.T, SCALE), nom)
+
+    @classmethod
+    def of_interval(cls, s0, s1, dv_sum, T: float, noise: ImuNoiseModel,
+                    baro_gains=(0.0, 0.0), baro_q: float = 0.0, nsub: int = 2):
+        """The model linearised at the middle of an INS interval (see
+        :func:`interval_process`): nominal point, Phi and Qd in one compiled call."""
+        self = cls.__new__(cls)
+        self._set_model(T, noise, baro_gains, baro_q, nsub)
+        self._set_nominal(*_interval(np.asarray(s0, dtype=float), np.asarray(s1, dtype=float),
+                                     np.asarray(dv_sum, dtype=float), self.T, self.k1,
+                                     self.k2, self.itg, self.ita, self._noise, SCALE))
+        return self
+
+    def _set_model(self, T, noise, baro_gains, baro_q, nsub) -> None:
+        self.T, self.noise, self.nsub = float(T), noise, int(nsub)
         self.k1, self.k2 = float(baro_gains[0]), float(baro_gains[1])
-        self.rm, self.rn = earth.radii_nb(float(nom.lat))
         self.itg = 0.0 if np.isinf(noise.gyro_markov_tau) else 1.0 / noise.gyro_markov_tau
         self.ita = 0.0 if np.isinf(noise.accel_markov_tau) else 1.0 / noise.accel_markov_tau
         self.baro_q = float(baro_q)
-        v, f = np.asarray(nom.vel, float), np.asarray(nom.fn, float)
-        self._params = np.array([nom.lat, nom.h, v[0], v[1], v[2], f[0], f[1], f[2], self.rm,
-                                 self.rn, self.k1, self.k2, self.itg, self.ita,
-                                 earth.gravity_nb(float(nom.lat), float(nom.h))])
-        self._C0 = np.ascontiguousarray(nom.C, dtype=float)
         self._noise = np.array([noise.gyro_arw, noise.accel_vrw, noise.gyro_markov_sigma,
                                 noise.accel_markov_sigma, self.baro_q, noise.gyro_bias_rw,
                                 noise.accel_bias_rw])
-        self.Phi, self.Qd = _discretize(self._params, self._C0, self._noise, self.T, SCALE)
+
+    def _set_nominal(self, params, C0, Phi, Qd, nom: Nominal | None = None) -> None:
+        self._params, self._C0, self.Phi, self.Qd = params, C0, Phi, Qd
+        self.rm, self.rn = params[8], params[9]
+        self.nom = nom if nom is not None else Nominal(
+            lat=params[0], h=params[1], vel=params[2:5].copy(), C=C0, fn=params[5:8].copy())
 
     # ------------------------------------------------------------------ SI models
     def F_si(self) -> np.ndarray:
@@ -371,23 +390,15 @@ def interval_process(s0, s1, dv_sum, T: float, noise: ImuNoiseModel, baro_gains=
     interval's midpoint: ``s0``, ``s1`` the INS state (:mod:`fednav.strapdown` layout)
     at its start and end, ``dv_sum`` the compensated velocity increments summed over it
     (body, m/s).  One compiled call builds the nominal point, Phi and Qd."""
-    self = ErrorProcess.__new__(ErrorProcess)
-    self.T, self.noise, self.nsub = float(T), noise, int(nsub)
-    self.k1, self.k2 = float(baro_gains[0]), float(baro_gains[1])
-    self.itg = 0.0 if np.isinf(noise.gyro_markov_tau) else 1.0 / noise.gyro_markov_tau
-    self.ita = 0.0 if np.isinf(noise.accel_markov_tau) else 1.0 / noise.accel_markov_tau
-    self.baro_q = float(baro_q)
-    self._noise = np.array([noise.gyro_arw, noise.accel_vrw, noise.gyro_markov_sigma,
-                            noise.accel_markov_sigma, self.baro_q, noise.gyro_bias_rw,
-                            noise.accel_bias_rw])
-    self._params, self._C0, self.Phi, self.Qd = _interval(
-        np.asarray(s0, dtype=float), np.asarray(s1, dtype=float),
-        np.asarray(dv_sum, dtype=float), self.T, self.k1, self.k2, self.itg, self.ita,
-        self._noise, SCALE)
-    pr = self._params
-    self.rm, self.rn = pr[8], pr[9]
-    self.nom = Nominal(lat=pr[0], h=pr[1], vel=pr[2:5].copy(), C=self._C0, fn=pr[5:8].copy())
-    return self
+    return ErrorProcess.of_interval(s0, s1, dv_sum, T, noise, baro_gains, baro_q, nsub)
+
+
+@numba.njit(cache=True)
+def _nominal_params(lat, h, ve, vn, vu, fe, fn, fu, k1, k2, itg, ita):
+    """The nominal-point vector the compiled model functions read (see ErrorProcess)."""
+    rm, rn = earth.radii_nb(lat)
+    return np.array([lat, h, ve, vn, vu, fe, fn, fu, rm, rn, k1, k2, itg, ita,
+                     earth.gravity_nb(lat, h)])
 
 
 @numba.njit(cache=True)
@@ -398,10 +409,8 @@ def _interval(s0, s1, dv_sum, T, k1, k2, itg, ita, noise, scale):
     lat = 0.5 * (s0[7] + s1[7])
     h = 0.5 * (s0[9] + s1[9])
     f = Cm @ dv_sum / T
-    rm, rn = earth.radii_nb(lat)
-    params = np.array([lat, h, 0.5 * (s0[4] + s1[4]), 0.5 * (s0[5] + s1[5]),
-                       0.5 * (s0[6] + s1[6]), f[0], f[1], f[2], rm, rn, k1, k2, itg, ita,
-                       earth.gravity_nb(lat, h)])
+    params = _nominal_params(lat, h, 0.5 * (s0[4] + s1[4]), 0.5 * (s0[5] + s1[5]),
+                             0.5 * (s0[6] + s1[6]), f[0], f[1], f[2], k1, k2, itg, ita)
     Phi, Qd = _discretize(params, Cm, noise, T, scale)
     return params, Cm, Phi, Qd
 
