@@ -41,18 +41,11 @@ class ReportError(FednavError, ValueError):
 
 
 def _num(x) -> str:
+    from .report import format_number
+
     if x is None or isinstance(x, bool) or not isinstance(x, int | float):
         return "–" if x is None else escape(str(x))
-    if not math.isfinite(x):
-        return "–"
-    a = abs(x)
-    if a >= 100:
-        return f"{x:.0f}"
-    if a >= 10:
-        return f"{x:.1f}"
-    if a >= 1:
-        return f"{x:.2f}"
-    return f"{x:.3g}"
+    return format_number(x)
 
 
 def _leaves(cell: dict, prefix: str = ""):

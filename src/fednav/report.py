@@ -33,7 +33,9 @@ def summarize(rows: list[dict], paper_tables: dict, paper: str, runs: int, seed:
     return {"paper": paper, "runs": runs, "seed": seed, "tables": tables}
 
 
-def _fmt(x: float | None) -> str:
+def format_number(x: float | None) -> str:
+    """A table number with 3 significant figures (whole numbers from 100 up); "–" for
+    a missing or non-finite value."""
     if x is None or not np.isfinite(x):
         return "–"
     a = abs(x)
@@ -65,8 +67,8 @@ def print_tables(summary: dict, titles: dict[str, str], console: Console | None 
                 pv = v.get("paper")
                 q = v["ours"] / pv if pv else None
                 ratio = "–" if q is None else f"×{q:.2f}" if abs(q) < 100 else f"×{q:.3g}"
-                tab.add_row(r if i == 0 else "", c, _fmt(v["ours"]), _fmt(v.get("ci95")),
-                            _fmt(pv), ratio,
+                tab.add_row(r if i == 0 else "", c, format_number(v["ours"]),
+                            format_number(v.get("ci95")), format_number(pv), ratio,
                             end_section=(i == len(vals) - 1))
         console.print(tab)
 

@@ -31,7 +31,7 @@ from __future__ import annotations
 import numpy as np
 
 from .adaptive import QAdaptation, _SageHusa
-from .base import Filter, FilterError, Innovation, chol
+from .base import Filter, Innovation, chol
 from .sparse_grid import sparse_grid
 from .ukf import UnscentedKalmanFilter, _update
 
@@ -62,12 +62,6 @@ class SparseGridFilter(UnscentedKalmanFilter):
         super().predict(process, q_scale)
         chol(self.P, self._who("predict (quadrature covariance with negative weights)"))
 
-    def update(self, y, model, nav=None, R=None, gate: float | None = None) -> Innovation:
-        inn = super().update(y, model, nav, R, gate)
-        if inn.accepted:
-            chol(self.P, self._who("update"))
-        return inn
-
 
 class AdaptiveSparseGridFilter(QAdaptation, SparseGridFilter):
     """Anisotropic sparse-grid filter with Sage–Husa noise adaptation (AASGHQF)."""
@@ -95,14 +89,7 @@ class AdaptiveSparseGridFilter(QAdaptation, SparseGridFilter):
         key = getattr(model, "kind", type(model).__name__)
         Ra = self.sh.adapt(key, R, y - z_hat, Pzz0)
         # The UKF update with the points and predicted measurements already at hand.
-        x, P, r, Pzz, nis, ok = _update(X, Z, self.Wm, self.Wc, self.x, self.P, y, Ra)
-        if not ok or not np.isfinite(nis):
-            raise FilterError(f"{self._who('update')}: innovation covariance not positive "
-                              f"definite")
-        if gate is not None and nis > gate:
-            return Innovation(r, Pzz, float(nis), False)
-        self.x, self.P = x, P
-        self._finish("update", symmetrize=False)
-        chol(self.P, self._who("update"))
-        self._adapt_q_after_update()
-        return Innovation(r, Pzz, float(nis))
+        inn = self._accept(*_update(X, Z, self.Wm, self.Wc, self.x, self.P, y, Ra), gate)
+        if inn.accepted:
+            self._adapt_q_after_update()
+        return inn

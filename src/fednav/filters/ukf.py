@@ -105,8 +105,14 @@ class UnscentedKalmanFilter(Filter):
     def update(self, y, model, nav=None, R=None, gate: float | None = None) -> Innovation:
         X = self.sigma_points(phase="update")
         Z = np.ascontiguousarray(model.h(X, nav), dtype=float)
-        x, P, r, Pzz, nis, ok = _update(X, Z, self.Wm, self.Wc, self.x, self.P,
-                                        np.asarray(y, dtype=float), np.asarray(R, dtype=float))
+        return self._accept(*_update(X, Z, self.Wm, self.Wc, self.x, self.P,
+                                     np.asarray(y, dtype=float), np.asarray(R, dtype=float)),
+                            gate)
+
+    def _accept(self, x, P, r, Pzz, nis, ok, gate) -> Innovation:
+        """Finish an update computed by ``_update``: a clear error if its innovation
+        covariance was not positive definite, the gate, then the new estimate (whose
+        covariance must be positive definite)."""
         if not ok or not np.isfinite(nis):
             raise FilterError(f"{self._who('update')}: innovation covariance not positive "
                               f"definite")
