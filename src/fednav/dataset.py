@@ -91,12 +91,9 @@ def load_dataset_config(path) -> DatasetConfig:
 def _lever_point(tr, idx, lever):
     """Position and ENU velocity of a point at ``lever`` (body) from the IMU, at samples
     ``idx`` of the trajectory (rate from the true angle increments)."""
-    C = attitude.euler_to_dcm(tr.euler[idx])
-    d = C @ np.asarray(lever, dtype=float)
-    lla = earth.move_enu(tr.lla[idx], d)
     w = tr.dtheta[np.maximum(idx - 1, 0)] / tr.dt
-    vel = tr.vel[idx] + np.einsum("kij,kj->ki", C, np.cross(w, lever))
-    return lla, vel
+    return earth.lever_arm_point(tr.lla[idx], tr.vel[idx], attitude.euler_to_dcm(tr.euler[idx]),
+                                 w, lever)
 
 
 def simulate_dataset(cfg: DatasetConfig) -> Dataset:
@@ -189,24 +186,13 @@ def write_csv_dataset(ds: Dataset, out) -> list[Path]:
     return files
 
 
-def _navego_euler(euler):
-    """fednav [pitch, roll, heading] -> NaveGo (roll, pitch, yaw) [rad] (FRD/NED)."""
-    from .io.navego import FRD_TO_RFU
-
-    C = FRD_TO_RFU @ attitude.euler_to_dcm(euler) @ FRD_TO_RFU   # NaveGo's C_b^n
-    roll = np.arctan2(C[..., 2, 1], C[..., 2, 2])
-    pitch = -np.arcsin(np.clip(C[..., 2, 0], -1.0, 1.0))
-    yaw = np.arctan2(C[..., 1, 0], C[..., 0, 0])
-    return roll, pitch, yaw
-
-
 def write_navego_dataset(ds: Dataset, out) -> list[Path]:
     """NaveGo ``imu.mat gnss.mat [visual.mat] ref.mat`` into ``out`` (figures in the IMU
     struct; written atomically)."""
     import scipy.io
 
     from .atomic import replacing
-    from .io.navego import FRD_TO_RFU
+    from .io.navego import FRD_TO_RFU, fednav_euler_to_navego
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -214,7 +200,7 @@ def write_navego_dataset(ds: Dataset, out) -> list[Path]:
     n, e = cfg.imu.noise_model(dt), cfg.imu.errors(dt)
     M = FRD_TO_RFU  # RFU -> FRD and ENU -> NED (its own inverse)
     one = np.ones(3)
-    r0, p0, y0 = _navego_euler(ds.ref_euler[0])
+    r0, p0, y0 = fednav_euler_to_navego(ds.ref_euler[0])
     err = units.deg(np.asarray(cfg.initial_attitude_error_deg))
     rng = np.random.default_rng(cfg.seed + 7919)
     ini = np.array([r0, p0, y0]) + err * rng.standard_normal(3)
@@ -233,7 +219,7 @@ def write_navego_dataset(ds: Dataset, out) -> list[Path]:
                  "stdv": np.asarray(cfg.gnss.sigma_vel_mps)[[1, 0, 2]],
                  "larm": M @ np.asarray(cfg.gnss.lever_m)},
     }
-    roll, pitch, yaw = _navego_euler(ds.ref_euler)
+    roll, pitch, yaw = fednav_euler_to_navego(ds.ref_euler)
     structs["ref"] = {"t": ds.t, "lat": ds.ref_lla[:, 0], "lon": ds.ref_lla[:, 1],
                       "h": ds.ref_lla[:, 2], "vel": ds.ref_vel @ M.T, "roll": roll,
                       "pitch": pitch, "yaw": yaw}

@@ -83,6 +83,17 @@ def move_enu(lla, d_enu) -> np.ndarray:
                      h + d[..., 2]], axis=-1)
 
 
+def lever_arm_point(lla, vel, C, omega, lever):
+    """Position and ENU velocity of a point at ``lever`` (body right-forward-up, m) from
+    the IMU at ``lla`` (..., 3) with ENU velocity ``vel``, attitude ``C`` = C_b^n
+    (..., 3, 3) and body rate ``omega`` (..., 3) [rad/s]: ``move_enu(lla, C l)`` and
+    ``vel + C (omega x l)``."""
+    lever = np.asarray(lever, dtype=float)
+    lla = move_enu(lla, C @ lever)
+    vel = vel + np.einsum("...ij,...j->...i", C, np.cross(omega, lever))
+    return lla, vel
+
+
 def llh_difference_enu(lat, lon, h, lat_ref, lon_ref, h_ref):
     """Small position difference (lat, lon, h) - reference, expressed in metres ENU.
 

@@ -369,9 +369,8 @@ def errors_against(sol: Solution, ref: Reference) -> dict[str, np.ndarray]:
                                         for j in range(a.shape[1])])
     lla, vel = sol.lla, sol.vel
     if np.any(ref.lever):
-        C = att.euler_to_dcm(sol.euler)
-        lla = earth.move_enu(lla, C @ ref.lever)
-        vel = vel + np.einsum("kij,kj->ki", C, np.cross(sol.omega, ref.lever))
+        lla, vel = earth.lever_arm_point(lla, vel, att.euler_to_dcm(sol.euler), sol.omega,
+                                         ref.lever)
     lla = interp(lla)
     vel = interp(vel)
     rl = ref.lla[m]

@@ -55,6 +55,16 @@ def navego_euler_to_fednav(roll, pitch, yaw) -> np.ndarray:
     return att.dcm_to_euler(C)
 
 
+def fednav_euler_to_navego(euler) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """fednav Euler ``[pitch, roll, heading]`` [rad] (..., 3) -> NaveGo roll, pitch, yaw
+    [rad] (the inverse of :func:`navego_euler_to_fednav`)."""
+    C = FRD_TO_RFU @ att.euler_to_dcm(euler) @ FRD_TO_RFU   # NaveGo's C_b^n (FRD -> NED)
+    roll = np.arctan2(C[..., 2, 1], C[..., 2, 2])
+    pitch = -np.arcsin(np.clip(C[..., 2, 0], -1.0, 1.0))
+    yaw = np.arctan2(C[..., 1, 0], C[..., 0, 0])
+    return roll, pitch, yaw
+
+
 def _load(path, kind: str):
     """The one struct in a NaveGo .mat file."""
     path = Path(path)
