@@ -285,58 +285,58 @@ def main():
     scipy.io.savemat(HERE / "imu-other-struct.mat", {"data": {"x": [1, 2, 3]}})
     mat_case("mat-imu-different-struct", nav("imu-other-struct.mat"), 2,
              "error: imu-other-struct.mat: missing field 't'")
-    im = scipy.io.loadmat(GOOD / "imu.mat", squeeze_me=True, struct_as_record=False)["imu"]
-    base = {k: getattr(im, k) for k in im._fieldnames}
+    def fields(struct):
+        """The fields of the good ``struct``.mat."""
+        s = scipy.io.loadmat(GOOD / f"{struct}.mat", squeeze_me=True,
+                             struct_as_record=False)[struct]
+        return {k: getattr(s, k) for k in s._fieldnames}
 
-    def imu_mat(name, **upd):
-        scipy.io.savemat(HERE / name, {"imu": {**base, **upd}})
+    def mat_variant(struct, name, **upd):
+        """``name``: the good ``struct``.mat with the fields in ``upd`` replaced."""
+        scipy.io.savemat(HERE / name, {struct: {**fields(struct), **upd}})
         return name
 
-    f = imu_mat("imu-shape.mat", fb=base["fb"][:, :2])
+    base = fields("imu")
+
+    f = mat_variant("imu", "imu-shape.mat", fb=base["fb"][:, :2])
     mat_case("mat-imu-wrong-shape", nav(f), 2, f"error: {f}: field 'fb' has shape 500x2, "
                                                 "expected Nx3")
-    f = imu_mat("imu-rows.mat", wb=base["wb"][:-5])
+    f = mat_variant("imu", "imu-rows.mat", wb=base["wb"][:-5])
     mat_case("mat-imu-row-count", nav(f), 2, f"error: {f}: field 'wb' has 495 rows but 't' has 500")
     wb = base["wb"].copy()
     wb[40, 2] = np.nan
-    f = imu_mat("imu-nan-row.mat", wb=wb)
+    f = mat_variant("imu", "imu-nan-row.mat", wb=wb)
     mat_case("mat-imu-nan-row", nav(f), 0, "data: imu samples bridged 1")
     wb = base["wb"].copy()
     wb[40:60] = np.nan
-    f = imu_mat("imu-nan-rows.mat", wb=wb)
+    f = mat_variant("imu", "imu-nan-rows.mat", wb=wb)
     mat_case("mat-imu-nan-rows", nav(f), 2,
              f"error: {f}: 20 faulty IMU samples in a row (NaN/inf or absurd) from t = 1.640000 s "
              "to 2.400000 s: 0.800 s, more than imu_max_bridge_s = 0.1 s")
-    f = imu_mat("imu-neg-figure.mat", vrw=-np.ones(3))
+    f = mat_variant("imu", "imu-neg-figure.mat", vrw=-np.ones(3))
     mat_case("mat-imu-negative-noise", nav(f), 2,
              f"error: {f}: field 'vrw' must be 3 non-negative finite numbers, got "
              "[-1. -1. -1.]")
-    gm = scipy.io.loadmat(GOOD / "gnss.mat", squeeze_me=True, struct_as_record=False)["gnss"]
-    gbase = {k: getattr(gm, k) for k in gm._fieldnames}
+    gbase = fields("gnss")
 
-    def gnss_mat(name, **upd):
-        scipy.io.savemat(HERE / name, {"gnss": {**gbase, **upd}})
-        return name
-
-    f = gnss_mat("gnss-zero-std.mat", stdm=np.zeros(3))
+    f = mat_variant("gnss", "gnss-zero-std.mat", stdm=np.zeros(3))
     mat_case("mat-gnss-zero-std", nav(gnss_p=f), 2,
              f"error: {f}: GNSS standard deviations must be positive")
-    f = gnss_mat("gnss-negative-std.mat", stdv=-0.1 * np.ones(3))
+    f = mat_variant("gnss", "gnss-negative-std.mat", stdv=-0.1 * np.ones(3))
     mat_case("mat-gnss-negative-std", nav(gnss_p=f), 2,
              f"error: {f}: GNSS standard deviations must be positive")
     lat = gbase["lat"].copy()
     lat[4] = np.nan
-    f = gnss_mat("gnss-nan-row.mat", lat=lat)
+    f = mat_variant("gnss", "gnss-nan-row.mat", lat=lat)
     mat_case("mat-gnss-nan-row", nav(gnss_p=f), 0, "data: gnss epochs skipped 1")
-    f = gnss_mat("gnss-degrees.mat", lat=np.degrees(gbase["lat"]), lon=np.degrees(gbase["lon"]))
+    f = mat_variant("gnss", "gnss-degrees.mat", lat=np.degrees(gbase["lat"]),
+                    lon=np.degrees(gbase["lon"]))
     mat_case("mat-gnss-degrees-not-radians", nav(gnss_p=f), 2,
              f"error: {f}: no usable GNSS row (all have NaN/inf or fail the sanity checks)")
-    f = gnss_mat("gnss-lengths.mat", lon=gbase["lon"][:-2])
+    f = mat_variant("gnss", "gnss-lengths.mat", lon=gbase["lon"][:-2])
     mat_case("mat-gnss-length-mismatch", nav(gnss_p=f), 2,
              f"error: {f}: fields 'lat', 'lon', 'h' have different lengths [19, 17, 19]")
-    rm = scipy.io.loadmat(GOOD / "ref.mat", squeeze_me=True, struct_as_record=False)["ref"]
-    rbase = {k: getattr(rm, k) for k in rm._fieldnames}
-    scipy.io.savemat(HERE / "ref-late.mat", {"ref": {**rbase, "t": rbase["t"] + 5000.0}})
+    mat_variant("ref", "ref-late.mat", t=fields("ref")["t"] + 5000.0)
     mat_case("mat-reference-no-overlap", nav(extra=["--ref", "ref-late.mat"]), 2,
              "error: ref-late.mat: reference does not overlap the solution in time")
     scipy.io.savemat(HERE / "imu-two-structs.mat", {"a": {"t": [1.0]}, "b": {"t": [2.0]}})
