@@ -41,13 +41,9 @@ def _one_line_errors(command):
     return run
 
 
-def _papers():
-    from .scenarios import paper000, paper001, paper002, paper003, paper004
-
-    return (paper000, paper001, paper002, paper003, paper004)
-
-
 def _paper_module(paper: str):
+    from .scenarios import papers as _papers
+
     for mod in _papers():
         if paper.lower() in mod.ALIASES:
             return mod

@@ -96,9 +96,9 @@ def table_html(name: str, table: dict, title: str, runs, seed) -> str:
 
 
 def _titles(paper: str) -> dict:
-    from .scenarios import paper000, paper001, paper002, paper003, paper004
+    from .scenarios import papers
 
-    for mod in (paper000, paper001, paper002, paper003, paper004):
+    for mod in papers():
         if mod.PAPER == paper:
             return getattr(mod, "TABLE_TITLES", {})
     return {}
