@@ -11,7 +11,7 @@ from fednav import earth, units
 from fednav.cli import app
 from fednav.io.csvdata import IMU_COLUMNS, write_csv
 from fednav.io.data import GnssData, ImuData, ImuErrors, Reference
-from fednav.process import ProcessConfig, coarse_level, errors_against, process, rmse
+from fednav.process import ProcessConfig, errors_against, process, rmse
 from fednav.sensors import ImuErrors as SimImuErrors
 from fednav.sensors import corrupt_imu
 from fednav.trajectory import Segment, generate
@@ -116,15 +116,6 @@ def test_coarse_heading_from_the_gnss_course(flight):
     assert gnss_course(still, 1.0) is None
 
 
-def test_coarse_levelling_signs():
-    # nose up by 5 deg: gravity reaction tilts toward +y (forward) in the body frame
-    g = 9.8
-    f = [0.0, g * np.sin(units.deg(5.0)), g * np.cos(units.deg(5.0))]
-    np.testing.assert_allclose(units.to_deg(coarse_level(f)[:2]), [5.0, 0.0], atol=1e-9)
-    f = [-g * np.sin(units.deg(4.0)), 0.0, g * np.cos(units.deg(4.0))]  # right wing down
-    np.testing.assert_allclose(units.to_deg(coarse_level(f)[:2]), [0.0, 4.0], atol=1e-9)
-
-
 def test_cli_process_csv_end_to_end(tmp_path, flight):
     imu, gnss, ref = flight
     cols = {"t_s": imu.t}
@@ -194,3 +185,85 @@ def test_csv_without_noise_figures_names_the_key(tmp_path, flight):
 
     with pytest.raises(DataError, match="bare.csv: no IMU error figures.*imu.gyro_arw"):
         process(bare, gnss)
+
+
+def test_solution_is_at_imu_rate_with_the_epochs_after_feedback(flight, result):
+    imu, gnss, _ = flight
+    f = result.forward
+    n_per = 20  # 5 Hz GNSS, 100 Hz IMU
+    assert len(f.t) == result.epochs * n_per + 1
+    np.testing.assert_array_equal(f.epoch_rows, np.arange(0, len(f.t), n_per))
+    np.testing.assert_allclose(np.diff(f.t), 0.01, atol=1e-9)
+    # between epochs the sigmas grow from the corrected to the predicted covariance
+    k = f.epoch_rows[100]
+    assert np.all(np.diff(f.sigma[k:k + n_per, 6]) > 0)
+    assert f.sigma[k + n_per, 6] < f.sigma[k + n_per - 1, 6]
+    assert f.sigma_euler.shape == (len(f.t), 3) and np.all(f.sigma_euler > 0)
+
+
+def test_accelerometer_bias_keeps_its_constant_part():
+    """Turn-on bias + Gauss-Markov: one state, a random constant driven by the Markov
+    process's random walk (a Markov state alone would forget the turn-on bias)."""
+    from fednav.process import _noise
+
+    errs = ImuErrors(*[np.full(3, v) for v in (1e-4, 1e-3, 1e-4, 0.02, 1e-5, 2e-3, 1e5,
+                                               100.0)])
+    imu = ImuData("x", np.arange(10) * 0.01, np.zeros((10, 3)), np.zeros((10, 3)), errs)
+    n, gb, ab = _noise(imu, ProcessConfig())
+    assert ab == pytest.approx(np.hypot(0.02, 2e-3))
+    assert np.isinf(n.accel_markov_tau) and n.accel_bias_rw == pytest.approx(2e-3 * np.sqrt(0.02))
+
+
+def test_velocity_sensor_axes_and_clock_corrections():
+    from fednav.io.data import VelocityData
+    from fednav.process import adjust_sensors
+
+    t = np.arange(5.0)
+    v = VelocityData("v", t, np.tile([1.0, 2.0, 3.0], (5, 1)),
+                     np.tile(np.diag([1.0, 4.0, 9.0]), (5, 1, 1)), np.zeros(3))
+    g = GnssData("g", t, np.tile([0.7, 0.1, 5.0], (5, 1)), np.zeros((5, 3)), np.ones(3),
+                 np.ones(3), np.zeros(3))
+    cfg = ProcessConfig(velocity_axes=("N", "-E", "U"), velocity_time_offset_s=7.5,
+                        gnss_time_offset_s=-1.0)
+    g2, v2 = adjust_sensors(g, v, cfg)
+    np.testing.assert_allclose(v2.vel[0], [-2.0, 1.0, 3.0])  # E = -col 2, N = col 1
+    np.testing.assert_allclose(np.diag(v2.cov[0]), [4.0, 1.0, 9.0])
+    np.testing.assert_allclose(v2.t, t + 7.5)
+    np.testing.assert_allclose(g2.t, t - 1.0)
+    np.testing.assert_allclose(v.vel[0], [1.0, 2.0, 3.0])  # the input is left alone
+    _, v3 = adjust_sensors(g, v, ProcessConfig(velocity_sigma_mps=(0.1, 0.1, 0.2)))
+    np.testing.assert_allclose(np.diag(v3.cov[3]), [0.01, 0.01, 0.04])
+    with pytest.raises(ValueError, match="must name E, N and U once each"):
+        ProcessConfig(velocity_axes=("N", "N", "U"))
+
+
+def test_cli_output_rate_decimates_and_refuses_a_rate_above_the_imu(tmp_path, flight):
+    imu, gnss, _ = flight
+    cols = {"t_s": imu.t[:3000]}
+    for j, c in enumerate(IMU_COLUMNS[1:]):
+        cols[c] = (imu.gyro if j < 3 else imu.accel)[:3000, j % 3]
+    write_csv(tmp_path / "imu.csv", cols)
+    write_csv(tmp_path / "gnss.csv", {
+        "t_s": gnss.t, "lat_deg": units.to_deg(gnss.lla[:, 0]),
+        "lon_deg": units.to_deg(gnss.lla[:, 1]), "h_m": gnss.lla[:, 2],
+        "vE_mps": gnss.vel[:, 0], "vN_mps": gnss.vel[:, 1], "vU_mps": gnss.vel[:, 2]})
+    e = imu.errors
+    (tmp_path / "cfg.yaml").write_text(
+        f"imu: {{gyro_arw_rad_sqrt_s: {e.gyro_arw[0]}, accel_vrw_mps_sqrt_s: "
+        f"{e.accel_vrw[0]}, gyro_bias_radps: {e.gyro_bias[0]}, accel_bias_mps2: "
+        f"{e.accel_bias[0]}, gyro_markov_radps: 1.0e-6, accel_markov_mps2: 1.0e-5, "
+        f"gyro_tau_s: 1000, accel_tau_s: 1000}}\n")
+    args = ["process", "csv", "--imu", str(tmp_path / "imu.csv"), "--gnss",
+            str(tmp_path / "gnss.csv"), "--config", str(tmp_path / "cfg.yaml"), "--out"]
+    r = CliRunner().invoke(app, [*args, str(tmp_path / "full")])
+    assert r.exit_code == 0, r.output
+    full = np.loadtxt(tmp_path / "full" / "solution.csv", delimiter=",", skiprows=1)
+    r = CliRunner().invoke(app, [*args, str(tmp_path / "ten"), "--output-rate", "10"])
+    assert r.exit_code == 0, r.output
+    ten = np.loadtxt(tmp_path / "ten" / "solution.csv", delimiter=",", skiprows=1)
+    np.testing.assert_allclose(np.diff(full[:, 0]), 0.01, atol=1e-6)
+    np.testing.assert_allclose(ten, full[::10], rtol=1e-9)
+    assert (tmp_path / "ten" / "track.png").is_file()
+    r = CliRunner().invoke(app, [*args, str(tmp_path / "bad"), "--output-rate", "500"])
+    assert r.exit_code == 2
+    assert "--output-rate 500 Hz: must be positive and at most the IMU rate (100 Hz)" in r.output

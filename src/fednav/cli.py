@@ -158,7 +158,7 @@ def _output_folder(out: Path) -> Path:
     return out
 
 
-def _run_process(read, imu, gnss, velocity, ref, smooth, out, config) -> None:
+def _run_process(read, imu, gnss, velocity, ref, smooth, out, config, output_rate) -> None:
     from . import process_output
     from .atomic import clear_results
     from .config import load_model
@@ -175,7 +175,8 @@ def _run_process(read, imu, gnss, velocity, ref, smooth, out, config) -> None:
             "imu": str(imu), "gnss": str(gnss),
             "velocity": None if velocity is None else str(velocity),
             "reference": None if ref is None else str(ref),
-            "config": None if config is None else str(config), "smooth": smooth})
+            "config": None if config is None else str(config), "smooth": smooth,
+            "output_rate_hz": output_rate}, output_rate, data["gnss"])
     except (FednavError, ValueError) as e:
         if _state["debug"]:
             raise
@@ -190,6 +191,11 @@ def _print_process(s: dict) -> None:
     from rich.table import Table
 
     console.print(f"{s['epochs']} filter epochs in {s['run_time_s']:.2f} s")
+    al = s.get("alignment") or {}
+    if al:
+        console.print(f"initial attitude: levelling {al.get('levelling')}, heading "
+                      f"{al.get('heading')}; pitch/roll/heading {al.get('euler_deg')} deg, "
+                      f"1-sigma {al.get('sigma_deg')} deg")
     for w in s.get("warnings", []):
         console.print(f"[yellow]warning:[/] {w}")
     q = {k: v for k, v in s.get("data_quality", {}).items() if v}
@@ -211,6 +217,8 @@ def _print_process(s: dict) -> None:
 _OUT = typer.Option(Path("results/process"), help="output folder")
 _SMOOTH = typer.Option(False, "--smooth", help="also run the RTS smoother")
 _CONFIG = typer.Option(None, help="processing config YAML (noise figures, options)")
+_RATE = typer.Option(None, "--output-rate", help="solution rows per second [Hz]; default: "
+                     "every IMU sample")
 
 
 @process_app.command("navego")
@@ -221,6 +229,7 @@ def process_navego(
     visual: Path = typer.Option(None, help="NaveGo visual-odometry .mat (velocity)"),
     ref: Path = typer.Option(None, help="NaveGo reference .mat (for RMSE)"),
     smooth: bool = _SMOOTH, out: Path = _OUT, config: Path = _CONFIG,
+    output_rate: float = _RATE,
 ) -> None:
     """Loosely coupled INS/GNSS (+ visual velocity) on NaveGo .mat files."""
     from .io import (
@@ -236,7 +245,7 @@ def process_navego(
                 "velocity": None if visual is None else read_navego_visual(visual),
                 "ref": None if ref is None else read_navego_reference(ref)}
 
-    _run_process(read, imu, gnss, visual, ref, smooth, out, config)
+    _run_process(read, imu, gnss, visual, ref, smooth, out, config, output_rate)
 
 
 @process_app.command("csv")
@@ -247,6 +256,7 @@ def process_csv(
     velocity: Path = typer.Option(None, help="velocity-sensor CSV"),
     ref: Path = typer.Option(None, help="reference CSV (for RMSE)"),
     smooth: bool = _SMOOTH, out: Path = _OUT, config: Path = _CONFIG,
+    output_rate: float = _RATE,
 ) -> None:
     """Loosely coupled INS/GNSS (+ velocity sensor) on fednav CSV files; the IMU noise
     figures and GNSS sigmas come from --config."""
@@ -260,7 +270,7 @@ def process_csv(
                 "velocity": None if velocity is None else read_velocity_csv(velocity),
                 "ref": None if ref is None else read_reference_csv(ref)}
 
-    _run_process(read, imu, gnss, velocity, ref, smooth, out, config)
+    _run_process(read, imu, gnss, velocity, ref, smooth, out, config, output_rate)
 
 
 @app.command()

@@ -143,8 +143,7 @@ def process_config(ds: Dataset) -> dict:
     return {"imu": {k: float(v) for k, v in imu.items()},
             "gnss_sigma_pos_m": list(map(float, cfg.gnss.sigma_pos_m)),
             "gnss_sigma_vel_mps": list(map(float, cfg.gnss.sigma_vel_mps)),
-            "gnss_lever_m": list(map(float, cfg.gnss.lever_m)),
-            "initial_attitude": "coarse"}
+            "gnss_lever_m": list(map(float, cfg.gnss.lever_m))}
 
 
 def write_csv_dataset(ds: Dataset, out) -> list[Path]:

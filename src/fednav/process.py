@@ -15,7 +15,7 @@ measurements disagree (``fdi_alpha``).
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, field_validator
@@ -23,11 +23,19 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator
 from . import attitude as att
 from . import earth, units
 from . import error_model as em
+from .alignment import Alignment, align, coarse_level
 from .filters import FederatedFilter, KalmanFilter
 from .io.data import DataError, GnssData, ImuData, Reference, VelocityData
 from .measurements import GnssPosVel, NavSnapshot, VelocityENU
 from .smoother import rts_errors
-from .strapdown import STATE_LLA, STATE_Q, STATE_VEL, Strapdown, _correct
+from .strapdown import (
+    STATE_LLA,
+    STATE_Q,
+    STATE_VEL,
+    Strapdown,
+    correct_rows,
+    quat_to_dcm_nb,
+)
 
 _V3 = tuple[float, float, float]
 #: Names of the local filters of the processing federated filter.
@@ -58,7 +66,9 @@ class ProcessConfig(BaseModel):
     gnss_sigma_pos_m: _V3 | None = None  # [north, east, up]; default: the file's
     gnss_sigma_vel_mps: _V3 | None = None  # [east, north, up]; default: the file's
     gnss_lever_m: _V3 | None = None  # body right-forward-up; default: the file's
-    initial_attitude: str = Field("file", pattern="^(file|coarse)$")
+    # align: levelling while static + heading from the GNSS course (fednav.alignment);
+    # file: the data file's attitude; coarse: level over coarse_seconds at the start
+    initial_attitude: str = Field("align", pattern="^(align|file|coarse)$")
     initial_attitude_sigma_deg: _V3 | None = None  # [pitch, roll, heading]
     # coarse alignment heading; None: the GNSS course over coarse_seconds when the vehicle
     # moves faster than 0.5 m/s then (forward motion assumed), else 0
@@ -68,9 +78,33 @@ class ProcessConfig(BaseModel):
     fdi_alpha: float | dict[str, float] | None = None
     fdi_recovery: int = Field(1, ge=1)
     substeps: int = Field(1, ge=1)
+    # sensor corrections (docs/real-data.md): time offset added to a sensor's time
+    # stamps [s]; what the velocity file's three columns hold, e.g. [N, E, U] for east and
+    # north exchanged ('-' flips a sign); the velocity sensor's 1-sigma [E, N, U] m/s
+    # instead of the file's covariance
+    gnss_time_offset_s: float = 0.0
+    velocity_time_offset_s: float = 0.0
+    velocity_axes: tuple[str, str, str] = ("E", "N", "U")
+    velocity_sigma_mps: _V3 | None = None
     # longest run of faulty IMU samples (NaN/inf/absurd) bridged by holding the last
     # good sample [s]; a longer run stops the processing with its time (docs/reliability)
     imu_max_bridge_s: float = Field(0.1, gt=0)
+
+    @field_validator("velocity_axes")
+    @classmethod
+    def _axes(cls, v):
+        names = [a.lstrip("+-").upper() for a in v]
+        if sorted(names) != ["E", "N", "U"]:
+            raise ValueError(f"must name E, N and U once each (a leading '-' flips a sign), "
+                             f"got {list(v)}")
+        return v
+
+    @field_validator("velocity_sigma_mps")
+    @classmethod
+    def _sigma(cls, v):
+        if v is not None and min(v) <= 0:
+            raise ValueError("sigmas must be positive")
+        return v
 
     @field_validator("fdi_alpha")
     @classmethod
@@ -86,18 +120,33 @@ class ProcessConfig(BaseModel):
 
 @dataclass
 class Solution:
-    """Navigation solution at the filter epochs: ``t`` [s], ``lla`` (N, 3), ENU ``vel``,
-    Euler ``[pitch, roll, heading]`` [rad], 1-sigma ``sigma`` (N, 9) of
-    [phi (rad), dv ENU (m/s), dp ENU (m)]."""
+    """Navigation solution at every IMU sample: ``t`` [s], ``lla`` (N, 3) [rad, rad, m],
+    ENU ``vel`` [m/s], Euler ``[pitch, roll, heading]`` [rad], 1-sigma ``sigma`` (N, 9) of
+    [phi (rad), dv ENU (m/s), dp ENU (m)] and ``sigma_euler`` (N, 3) of the Euler angles
+    [rad], body rate ``omega`` (N, 3) [rad/s] (compensated gyro).
+
+    Between filter epochs the rows are the corrected mechanization; the rows of the
+    epochs (``epoch_rows``) hold the state after the filter's feedback.  The sigmas
+    between epochs interpolate, linearly in time, from the corrected covariance of the
+    interval's start to the predicted one of its end.
+    """
 
     t: np.ndarray
     lla: np.ndarray
     vel: np.ndarray
     euler: np.ndarray
     sigma: np.ndarray
-    omega: np.ndarray  # mean body angular rate over the last interval [rad/s]
+    sigma_euler: np.ndarray
+    omega: np.ndarray
     label: str = "forward"
     fdi: list = field(default_factory=list)
+    epoch_rows: np.ndarray | None = None
+
+    def rows(self, index) -> Solution:
+        """The solution at the rows ``index`` (a slice or index array)."""
+        return Solution(self.t[index], self.lla[index], self.vel[index], self.euler[index],
+                        self.sigma[index], self.sigma_euler[index], self.omega[index],
+                        self.label, self.fdi)
 
 
 @dataclass
@@ -109,10 +158,49 @@ class ProcessResult:
     #: what the input checks did (samples bridged, epochs skipped) and their warnings
     data_quality: dict = field(default_factory=dict)
     warnings: list = field(default_factory=list)
+    #: how the initial attitude was found (:mod:`fednav.alignment`)
+    alignment: dict = field(default_factory=dict)
+
+
+def adjust_sensors(gnss: GnssData, velocity: VelocityData | None, cfg: ProcessConfig):
+    """The config's sensor corrections applied: time offsets, the velocity sensor's axis
+    order and its 1-sigma (see :class:`ProcessConfig`).  Returns new data objects."""
+    def again(data, **changes):  # re-checked by the constructor; keep the first counts
+        quality = dict(data.quality)
+        out = replace(data, quality={}, **changes)
+        out.quality = quality
+        return out
+
+    if cfg.gnss_time_offset_s:
+        gnss = again(gnss, t=gnss.t + cfg.gnss_time_offset_s)
+    if velocity is None:
+        return gnss, None
+    vel, cov = velocity.vel, velocity.cov
+    if tuple(cfg.velocity_axes) != ("E", "N", "U"):
+        # file column i holds the ENU component axes[i] (sign s_i): v_enu = M v_file
+        M = np.zeros((3, 3))
+        for i, a in enumerate(cfg.velocity_axes):
+            M["ENU".index(a.lstrip("+-").upper()), i] = -1.0 if a.startswith("-") else 1.0
+        vel = vel @ M.T
+        cov = M @ cov @ M.T
+    if cfg.velocity_sigma_mps is not None:
+        cov = np.broadcast_to(np.diag(np.square(cfg.velocity_sigma_mps)), cov.shape).copy()
+    if cfg.velocity_time_offset_s or vel is not velocity.vel or cov is not velocity.cov:
+        velocity = again(velocity, t=velocity.t + cfg.velocity_time_offset_s, vel=vel, cov=cov)
+    return gnss, velocity
 
 
 def _noise(imu: ImuData, cfg: ProcessConfig):
-    """Filter IMU model and initial bias sigmas from the file's figures and overrides."""
+    """Filter IMU model and initial bias sigmas from the file's figures and overrides.
+
+    The gyro has a constant-bias state and a Gauss–Markov one.  The accelerometer has one
+    bias state, which must carry both the turn-on (constant) bias and the Gauss–Markov
+    part: a Markov state alone would let the estimate of the constant bias decay with the
+    correlation time (the tilt it is coupled to would then absorb it).  It is therefore a
+    random constant (1-sigma ``sqrt(bias^2 + markov^2)``) driven by the random walk whose
+    short-term growth equals the Markov process's, ``q = 2 sigma_m^2 / tau``.
+    Returns (noise model, gyro constant-bias sigma, accelerometer bias sigma).
+    """
     e = imu.errors
     o = cfg.imu
 
@@ -125,26 +213,19 @@ def _noise(imu: ImuData, cfg: ProcessConfig):
         return float(np.max(from_file))
 
     g = lambda name: None if e is None else getattr(e, name)  # noqa: E731
-    n = em.ImuNoiseModel(
-        gyro_arw=pick(o.gyro_arw_rad_sqrt_s, g("gyro_arw"), "gyro_arw_rad_sqrt_s"),
-        accel_vrw=pick(o.accel_vrw_mps_sqrt_s, g("accel_vrw"), "accel_vrw_mps_sqrt_s"),
-        gyro_markov_sigma=pick(o.gyro_markov_radps, g("gyro_markov"), "gyro_markov_radps"),
-        gyro_markov_tau=pick(o.gyro_tau_s, g("gyro_tau"), "gyro_tau_s"),
-        accel_markov_sigma=pick(o.accel_markov_mps2, g("accel_markov"), "accel_markov_mps2"),
-        accel_markov_tau=pick(o.accel_tau_s, g("accel_tau"), "accel_tau_s"),
-    )
+    arw = pick(o.gyro_arw_rad_sqrt_s, g("gyro_arw"), "gyro_arw_rad_sqrt_s")
+    vrw = pick(o.accel_vrw_mps_sqrt_s, g("accel_vrw"), "accel_vrw_mps_sqrt_s")
+    g_markov = pick(o.gyro_markov_radps, g("gyro_markov"), "gyro_markov_radps")
+    g_tau = pick(o.gyro_tau_s, g("gyro_tau"), "gyro_tau_s")
+    a_markov = pick(o.accel_markov_mps2, g("accel_markov"), "accel_markov_mps2")
+    a_tau = pick(o.accel_tau_s, g("accel_tau"), "accel_tau_s")
+    n = em.ImuNoiseModel(gyro_arw=arw, accel_vrw=vrw, gyro_markov_sigma=g_markov,
+                         gyro_markov_tau=g_tau,
+                         accel_bias_rw=a_markov * np.sqrt(2.0 / a_tau) if np.isfinite(a_tau)
+                         else 0.0)
     gb = pick(o.gyro_bias_radps, g("gyro_bias"), "gyro_bias_radps")
     ab = pick(o.accel_bias_mps2, g("accel_bias"), "accel_bias_mps2")
-    return n, gb, ab
-
-
-def coarse_level(accel_mean, heading: float = 0.0) -> np.ndarray:
-    """Euler ``[pitch, roll, heading]`` from the mean specific force of a (quasi-)static
-    period (body right-forward-up, m/s^2): the levelling part of coarse alignment."""
-    fx, fy, fz = accel_mean
-    pitch = np.arctan2(fy, np.hypot(fx, fz))
-    roll = np.arctan2(-fx, fz)
-    return np.array([pitch, roll, heading])
+    return n, gb, float(np.hypot(ab, a_markov))
 
 
 def gnss_course(gnss: GnssData, seconds: float, min_speed: float = 0.5) -> float | None:
@@ -158,22 +239,51 @@ def gnss_course(gnss: GnssData, seconds: float, min_speed: float = 0.5) -> float
     return float(np.arctan2(v[0], v[1]) % (2 * np.pi))
 
 
-def _initial_attitude(imu: ImuData, gnss: GnssData, cfg: ProcessConfig, dt: float):
+def _initial_attitude(imu: ImuData, gnss: GnssData, cfg: ProcessConfig, t0: float, i0: int,
+                      dt: float, noise: em.ImuNoiseModel, accel_bias_sigma: float) -> Alignment:
     sig = None if cfg.initial_attitude_sigma_deg is None else units.deg(
         np.asarray(cfg.initial_attitude_sigma_deg))
+    heading = (None if cfg.coarse_heading_deg is None
+               else float(units.deg(cfg.coarse_heading_deg)))
+    if cfg.initial_attitude == "align":
+        a = align(imu, gnss, t0, i0, dt, noise.gyro_arw, noise.accel_vrw, accel_bias_sigma,
+                  imu.initial_euler, imu.initial_euler_sigma if sig is None else sig,
+                  cfg.coarse_seconds, heading)
+        if sig is not None:  # the user's sigmas win over what the alignment claims
+            a.sigma, a.tilt_bias = sig, None
+        return a
     if cfg.initial_attitude == "file" and imu.initial_euler is not None:
         euler = imu.initial_euler
         sig = imu.initial_euler_sigma if sig is None else sig
+        how = "file"
     else:
         n = max(1, int(round(cfg.coarse_seconds / dt)))
-        if cfg.coarse_heading_deg is not None:
-            heading = float(units.deg(cfg.coarse_heading_deg))
-        else:
+        if heading is None:
             heading = gnss_course(gnss, cfg.coarse_seconds) or 0.0
-        euler = coarse_level(imu.accel[:n].mean(axis=0), heading)
+        euler = coarse_level(imu.accel[i0:i0 + n].mean(axis=0), heading)
+        how = f"coarse {cfg.coarse_seconds:g} s"
     if sig is None:
         sig = units.deg(np.array([2.0, 2.0, 10.0]))
-    return euler, sig
+    return Alignment(np.asarray(euler, dtype=float), np.asarray(sig, dtype=float),
+                     report={"levelling": how, "heading": how,
+                             "euler_deg": [round(float(v), 4) for v in units.to_deg(euler)],
+                             "sigma_deg": [round(float(v), 4) for v in units.to_deg(sig)]})
+
+
+def _initial_covariance(al: Alignment, sig_vel, sig_pos, gb: float, ab: float,
+                        noise: em.ImuNoiseModel) -> np.ndarray:
+    """P0 (filter units): diagonal from the figures, with the alignment's tilt/bias
+    coupling and gyro-bias accuracy where it has them (:mod:`fednav.alignment`)."""
+    eps_c = gb if al.gyro_bias_sigma is None else min(gb, al.gyro_bias_sigma)
+    sd0 = np.r_[al.sigma, sig_vel, sig_pos[[1, 0, 2]], np.full(3, eps_c),
+                np.full(3, noise.gyro_markov_sigma), np.full(3, ab)]
+    P0 = np.diag(np.maximum(sd0, 1e-6 * em.SCALE) ** 2)
+    if al.tilt_bias is not None:
+        A = al.tilt_bias
+        P0[0:2, 0:2] = ab**2 * A @ A.T + np.diag(al.sigma[:2] ** 2 - ab**2 * np.sum(A**2, 1))
+        P0[0:2, 15:18] = ab**2 * A
+        P0[15:18, 0:2] = P0[0:2, 15:18].T
+    return P0 / np.outer(em.SCALE, em.SCALE)
 
 
 def _assign(t_meas: np.ndarray, t_epochs: np.ndarray) -> np.ndarray:
@@ -239,6 +349,7 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
     cfg = cfg or ProcessConfig()
     t_start = time.perf_counter()
     dt = imu.period()
+    gnss, velocity = adjust_sensors(gnss, velocity, cfg)
     warnings = check_units(imu, gnss)
     if gnss.vel is None:
         raise DataError(f"{gnss.source}: GNSS velocity is required by the loosely coupled "
@@ -260,13 +371,12 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
     g_sigma = np.r_[sig_pos, sig_vel]
 
     # Initial state: first GNSS fix (antenna moved to the IMU), its velocity, attitude.
-    euler0, att_sig = _initial_attitude(imu, gnss, cfg, dt)
-    C0 = att.euler_to_dcm(euler0)
+    al = _initial_attitude(imu, gnss, cfg, t0, i0, dt, noise, ab)
+    warnings += al.warnings
+    C0 = att.euler_to_dcm(al.euler)
     lla0 = earth.move_enu(gnss.lla[0], -(C0 @ lever))
-    ins = Strapdown(lla0, gnss.vel[0], euler0, dt)
-    sd0 = np.r_[att_sig, sig_vel, sig_pos[[1, 0, 2]], np.full(3, gb),
-                np.full(3, noise.gyro_markov_sigma), np.full(3, max(ab, noise.accel_markov_sigma))]
-    P0 = np.diag((np.maximum(sd0 / em.SCALE, 1e-6)) ** 2)
+    ins = Strapdown(lla0, gnss.vel[0], al.euler, dt)
+    P0 = _initial_covariance(al, sig_vel, sig_pos, gb, ab, noise)
 
     locals_ = {"gnss": KalmanFilter(np.zeros(em.N_STATES), P0, name="kf local 'gnss'")}
     sensors = {"gnss": (GnssPosVel(lever), gnss.t, _assign(gnss.t, t_ep))}
@@ -295,8 +405,15 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
     Phis = np.zeros_like(P_post)
     Qs = np.zeros_like(P_post)
     dxs = np.zeros((n_cycles + 1, em.N_STATES))
-    omegas = np.zeros((n_cycles + 1, 3))
-    comp_g = np.zeros(3)
+    # The IMU-rate solution: the corrected mechanization between epochs, the state after
+    # the feedback at each epoch (row k * n_per).
+    n_rows = n_cycles * n_per + 1
+    rows_q, rows_v, rows_p = np.empty((n_rows, 4)), np.empty((n_rows, 3)), np.empty((n_rows, 3))
+    rows_w = np.empty((n_rows, 3))
+    rows_q[0], rows_v[0], rows_p[0] = (ins.state[STATE_Q], ins.state[STATE_VEL],
+                                       ins.state[STATE_LLA])
+    rows_w[0] = imu.gyro[i0]
+    comp_g = np.zeros(3) if al.gyro_bias is None else al.gyro_bias.copy()
     comp_a = np.zeros(3)
     wb = imu.gyro * dt
     fb = imu.accel * dt
@@ -305,19 +422,25 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
         dth = wb[sl] - comp_g * dt
         dvc = fb[sl] - comp_a * dt
         s0 = ins.state.copy()
-        ins.run(dth, dvc, record=False)
+        rec = ins.run(dth, dvc)
+        r = slice((k - 1) * n_per + 1, k * n_per + 1)
+        rows_q[r], rows_v[r], rows_p[r], rows_w[r] = rec["q"], rec["vel"], rec["lla"], dth / dt
         proc = em.interval_process(s0, ins.state, dvc.sum(axis=0), T, noise,
                                    nsub=cfg.substeps)
         fed.predict(proc)
         Phis[k], Qs[k] = proc.Phi, proc.Qd
         omega = dth.sum(axis=0) / T
-        omegas[k] = omega
-        lla, vel, C = ins.lla, ins.vel, ins.dcm
         for name, (model, tm, _) in sensors.items():
             order, bounds = todo[name]
             for i in order[bounds[k]:bounds[k + 1]]:
-                lag = t_ep[k] - tm[i]
-                nav = NavSnapshot(earth.move_enu(lla, -lag * vel), vel, C, omega)
+                # The INS at the IMU row nearest the measurement time (the error state is
+                # taken as constant over the interval), moved by the remaining lag.
+                j = min(max(int(round((tm[i] - t_ep[k - 1]) / dt)), 0), n_per)
+                r = (k - 1) * n_per + j
+                lag = t_ep[k - 1] + j * dt - tm[i]
+                vel = rows_v[r]
+                nav = NavSnapshot(earth.move_enu(rows_p[r], -lag * vel), vel,
+                                  quat_to_dcm_nb(rows_q[r]), omega)
                 if name == "gnss":
                     z, R = gnss_z(gnss, i), model.R(g_sigma)
                 else:
@@ -330,30 +453,69 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
         comp_g += dg
         comp_a += da
         states[k] = ins.state
-    forward = _solution(t_ep, states, P_post, omegas, "forward", fed.log)
+        e = k * n_per
+        rows_q[e], rows_v[e], rows_p[e] = (ins.state[STATE_Q], ins.state[STATE_VEL],
+                                           ins.state[STATE_LLA])
+    t_rows = t_ep[0] + dt * np.arange(n_rows)
+    P_prior = Phis[1:] @ P_post[:-1] @ np.swapaxes(Phis[1:], 1, 2) + Qs[1:]
+    P_prior = np.concatenate([P_post[:1], P_prior])
+    cov = _interpolate_intervals(_nav_cov(P_post), _nav_cov(P_prior), n_per)
+    forward = Solution(t_rows, rows_p, rows_v, att.quat_to_euler(rows_q), *_sigmas(rows_q, cov),
+                       rows_w, "forward", fed.log, np.arange(0, n_rows, n_per))
     smoothed = None
     if smooth:
         e, Ps = rts_errors(P_post, Phis, Qs, dxs)
-        es = em.to_si(e)
-        sm = states.copy()
-        for k in range(len(sm)):
-            _correct(sm[k], es[k, em.PHI], es[k, em.DV], es[k, em.DP])
-        smoothed = _solution(t_ep, sm, Ps, omegas, "smoothed")
+        # Error of each row: from the smoothed error of the corrected state at the start of
+        # its interval to that of the predicted state at its end (e_k + dx_k), linearly in
+        # time; the smoothed error itself at the epoch rows.
+        err = _interpolate_intervals(e[:, :9], e[:, :9] + dxs[:, :9], n_per) * em.SCALE[:9]
+        q, v, p = rows_q.copy(), rows_v.copy(), rows_p.copy()
+        correct_rows(q, v, p, np.ascontiguousarray(err))
+        cs = _nav_cov(Ps)
+        cov = _interpolate_intervals(cs, cs, n_per)
+        smoothed = Solution(t_rows, p, v, att.quat_to_euler(q), *_sigmas(q, cov), rows_w,
+                            "smoothed", [], forward.epoch_rows)
     quality = {**imu.quality, **gnss.quality, **(velocity.quality if velocity else {})}
     return ProcessResult(forward, smoothed, time.perf_counter() - t_start, n_cycles,
-                         quality, warnings)
+                         quality, warnings, al.report)
+
+
+def _nav_cov(P):
+    """Variances of the 9 navigation states and the phi cross terms (E-N, E-U, N-U) of
+    covariances ``P`` (..., 18, 18), filter units."""
+    return np.concatenate([np.diagonal(P[..., :9, :9], axis1=-2, axis2=-1),
+                           P[..., [0, 0, 1], [1, 2, 2]]], axis=-1)
+
+
+def _interpolate_intervals(post, end, n_per: int) -> np.ndarray:
+    """Per-epoch quantities (N+1, ...) on the IMU rows of N intervals of ``n_per`` samples:
+    row ``(k-1) n_per + m`` lies between ``post[k-1]`` (m = 0) and ``end[k]`` (m = n_per),
+    linearly in time, except the epoch rows (m = n_per), which take ``post[k]``."""
+    post, end = np.asarray(post), np.asarray(end)
+    N = len(post) - 1
+    f = (np.arange(1, n_per) / n_per).reshape((1, -1) + (1,) * (post.ndim - 1))
+    inner = (1.0 - f) * post[:-1, None] + f * end[1:, None]
+    rows = np.concatenate([inner, post[1:, None]], axis=1)
+    return np.concatenate([post[:1], rows.reshape((N * n_per,) + post.shape[1:])])
+
+
+def _sigmas(q, cov) -> tuple[np.ndarray, np.ndarray]:
+    """1-sigma (N, 9) of [phi (rad), dv ENU (m/s), dp ENU (m)] and of the Euler angles
+    [pitch, roll, heading] (N, 3) [rad] from :func:`_nav_cov` rows (filter units)."""
+    sd = np.sqrt(cov[:, :9]) * em.SCALE[:9]
+    s = em.SCALE[0] ** 2
+    Pphi = np.empty((len(cov), 3, 3))
+    Pphi[:, [0, 1, 2], [0, 1, 2]] = cov[:, :3] * s
+    for j, (a, b) in zip((9, 10, 11), ((0, 1), (0, 2), (1, 2)), strict=True):
+        Pphi[:, a, b] = Pphi[:, b, a] = cov[:, j] * s
+    J = att.euler_error_jacobian(att.quat_to_euler(q))
+    var = np.einsum("kij,kjl,kil->ki", J, Pphi, J)
+    return sd, np.sqrt(np.maximum(var, 0.0))
 
 
 def gnss_z(gnss: GnssData, i: int) -> np.ndarray:
     """GNSS fix ``i`` as the measurement vector ``[lat, lon, h, vE, vN, vU]``."""
     return np.concatenate((gnss.lla[i], gnss.vel[i]))
-
-
-def _solution(t, states, P, omega, label, log=None) -> Solution:
-    sd = np.sqrt(np.diagonal(P, axis1=1, axis2=2)[:, :9]) * em.SCALE[:9]
-    euler = att.quat_to_euler(states[:, STATE_Q])
-    return Solution(t, states[:, STATE_LLA].copy(), states[:, STATE_VEL].copy(), euler, sd,
-                    omega, label, log or [])
 
 
 def errors_against(sol: Solution, ref: Reference) -> dict[str, np.ndarray]:

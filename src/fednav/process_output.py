@@ -32,7 +32,22 @@ def solution_columns(sol: Solution) -> dict[str, np.ndarray]:
         "sigma_phiU_deg": units.to_deg(s[:, 2]), "sigma_vE_mps": s[:, 3],
         "sigma_vN_mps": s[:, 4], "sigma_vU_mps": s[:, 5], "sigma_E_m": s[:, 6],
         "sigma_N_m": s[:, 7], "sigma_U_m": s[:, 8],
+        "sigma_pitch_deg": units.to_deg(sol.sigma_euler[:, 0]),
+        "sigma_roll_deg": units.to_deg(sol.sigma_euler[:, 1]),
+        "sigma_heading_deg": units.to_deg(sol.sigma_euler[:, 2]),
     }
+
+
+def decimate(sol: Solution, rate_hz: float | None) -> Solution:
+    """Every ``round(1 / (rate_hz dt))``-th row of an IMU-rate solution, starting with the
+    first (None: every row).  A rate above the IMU's is a ValueError."""
+    if rate_hz is None:
+        return sol
+    dt = float(sol.t[1] - sol.t[0]) if len(sol.t) > 1 else 1.0
+    if not rate_hz > 0 or rate_hz > 1.0 / dt * (1 + 1e-9):
+        raise ValueError(f"--output-rate {rate_hz:g} Hz: must be positive and at most the IMU "
+                         f"rate ({1.0 / dt:g} Hz)")
+    return sol.rows(slice(None, None, max(1, int(round(1.0 / (rate_hz * dt))))))
 
 
 def consistency(sol: Solution) -> dict[str, dict[str, float]]:
@@ -57,7 +72,7 @@ def summary(res: ProcessResult, ref: Reference | None, inputs: dict) -> dict:
         quality.update(ref.quality)
     out: dict = {"inputs": inputs, "run_time_s": res.run_time_s, "epochs": res.epochs,
                  "data_quality": quality, "warnings": list(res.warnings),
-                 "consistency": consistency(res.forward)}
+                 "consistency": consistency(res.forward), "alignment": res.alignment}
     if ref is not None:
         out["rmse"] = _rmse_block(res.forward, ref)
         if res.smoothed is not None:
@@ -70,55 +85,123 @@ def _rmse_block(sol: Solution, ref: Reference) -> dict[str, float]:
     return {k: r[k] for k in RMSE_KEYS if k in r}
 
 
-def plot(res: ProcessResult, ref: Reference | None, path: Path) -> Path:
-    """Trajectory and (with a reference) position/velocity errors with the filter's 3-sigma."""
+def _thin(n: int, most: int = 20_000) -> slice:
+    """Every k-th row so that a line of ``n`` points draws at most ``most`` of them."""
+    return slice(None, None, max(1, -(-n // most)))
+
+
+#: errors.png panels: (error key, solution sigma column, Euler sigma column, title unit)
+_PANELS = ((("north_m", 7), ("east_m", 6), ("down_m", 8)),
+           (("vn_mps", 4), ("ve_mps", 3), ("vd_mps", 5)),
+           (("roll_deg", 1), ("pitch_deg", 0), ("yaw_deg", 2)))
+
+
+def plot_errors(res: ProcessResult, ref: Reference, path: Path) -> Path:
+    """Position, velocity and (with a reference attitude) roll/pitch/yaw errors of the
+    forward (and smoothed) solution against the reference, with the forward filter's
+    +-3 sigma."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     sols = [s for s in (res.forward, res.smoothed) if s is not None]
-    if ref is None:
-        fig, ax = plt.subplots(figsize=(6, 6))
-        for s in sols:
-            ax.plot(units.to_deg(s.lla[:, 1]), units.to_deg(s.lla[:, 0]), label=s.label)
-        ax.set_xlabel("longitude [deg]")
-        ax.set_ylabel("latitude [deg]")
-        ax.legend()
-    else:
-        fig, axes = plt.subplots(2, 3, figsize=(13, 6), sharex=True)
-        names = (("north_m", 7), ("east_m", 6), ("down_m", 8), ("vn_mps", 4), ("ve_mps", 3),
-                 ("vd_mps", 5))
-        for s in sols:
-            e = errors_against(s, ref)
-            for ax, (k, _) in zip(axes.flat, names, strict=True):
-                ax.plot(e["t"], e[k], lw=0.7, label=s.label)
-        f = res.forward
-        r = rmse(errors_against(f, ref))
-        for ax, (k, j) in zip(axes.flat, names, strict=True):
-            ax.plot(f.t, 3 * f.sigma[:, j], "k:", lw=0.7)
-            ax.plot(f.t, -3 * f.sigma[:, j], "k:", lw=0.7, label="forward ±3σ")
-            lim = 8 * r[k]  # the start-up transient would otherwise set the scale
+    errs = [errors_against(s, ref) for s in sols]
+    rows = 3 if "yaw_rad" in errs[0] else 2
+    fig, axes = plt.subplots(rows, 3, figsize=(14, 3.0 * rows + 0.5), sharex=True)
+    f = res.forward
+    r = rmse(errs[0])
+    th = _thin(len(f.t))
+    for i, panels in enumerate(_PANELS[:rows]):
+        for ax, (key, j) in zip(axes[i], panels, strict=True):
+            angle = i == 2
+            ek = key[:-4] + "_rad" if angle else key
+            for s, e in zip(sols, errs, strict=True):
+                k = _thin(len(e["t"]))
+                v = units.to_deg(e[ek][k]) if angle else e[ek][k]
+                ax.plot(e["t"][k], v, lw=0.7, label=s.label)
+            sd = units.to_deg(f.sigma_euler[th, j]) if angle else f.sigma[th, j]
+            ax.plot(f.t[th], 3 * sd, "k:", lw=0.7, label="forward ±3σ")
+            ax.plot(f.t[th], -3 * sd, "k:", lw=0.7)
+            lim = 8 * r[key]  # the start-up transient would otherwise set the scale
             ax.set_ylim(-lim, lim)
-            ax.set_title(f"{k} (forward RMSE {r[k]:.3g})")
+            ax.set_title(f"{key} (forward RMSE {r[key]:.3g})", fontsize=9)
             ax.grid(alpha=0.3)
-        axes[0, 0].legend(fontsize=7)
-        for ax in axes[1]:
-            ax.set_xlabel("t [s]")
+    axes[0, 0].legend(fontsize=7)
+    for ax in axes[-1]:
+        ax.set_xlabel("t [s]")
     fig.tight_layout()
     save_figure(fig, path)
     plt.close(fig)
     return path
 
 
-def write(out: Path, res: ProcessResult, ref: Reference | None, inputs: dict) -> list[Path]:
-    """Write solution CSV(s), the plot and summary.json into ``out``; returns the files."""
+def plot_track(res: ProcessResult, gnss, ref: Reference | None, path: Path) -> Path:
+    """East/north track [m] from the first GNSS fix: GNSS fixes, the forward and smoothed
+    solutions and the reference; GNSS outages (gaps over 3 median periods) drawn in red on
+    the forward track, epochs whose measurement fault detection isolated marked."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from . import earth
+
+    o = gnss.lla[0]
+
+    def en(lla):
+        d = earth.llh_difference_enu(lla[:, 0], lla[:, 1], lla[:, 2], o[0], o[1], o[2])
+        return d[:, 0], d[:, 1]
+
+    fig, ax = plt.subplots(figsize=(8, 7))
+    ax.plot(*en(gnss.lla), ".", ms=2, color="0.6", label="GNSS")
+    if ref is not None:
+        k = _thin(len(ref.t))
+        ax.plot(*en(ref.lla[k]), "k-", lw=1.5, alpha=0.35, label="reference")
+    for s in (res.forward, res.smoothed):
+        if s is not None:
+            k = _thin(len(s.t))
+            ax.plot(*en(s.lla[k]), lw=0.9, label=s.label)
+    f = res.forward
+    gap = 3.0 * float(np.median(np.diff(gnss.t)))
+    outages = [(a, b) for a, b in zip(gnss.t[:-1], gnss.t[1:], strict=True) if b - a > gap]
+    for i, (a, b) in enumerate(outages):
+        m = (f.t > a) & (f.t < b)
+        ax.plot(*en(f.lla[m]), "r-", lw=2.0, label="GNSS outage" if i == 0 else None)
+    if f.fdi:
+        log = pd.DataFrame(f.fdi, columns=["t", "local", "nis", "dof", "thr", "isolated"])
+        for name, marker in (("gnss", "x"), ("velocity", "+")):
+            t_iso = log.t[(log.local == name) & log.isolated].to_numpy(dtype=float)
+            if len(t_iso):
+                i = np.clip(np.searchsorted(f.t, t_iso), 0, len(f.t) - 1)
+                ax.plot(*en(f.lla[i]), marker, ms=5, color="m",
+                        label=f"{name} isolated ({len(t_iso)})")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("east [m]")
+    ax.set_ylabel("north [m]")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    save_figure(fig, path)
+    plt.close(fig)
+    return path
+
+
+def write(out: Path, res: ProcessResult, ref: Reference | None, inputs: dict,
+          output_rate: float | None = None, gnss=None) -> list[Path]:
+    """Write solution CSV(s) (every IMU sample, or decimated to ``output_rate`` Hz), the
+    plots and summary.json into ``out``; returns the files."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    files = [write_csv(out / "solution.csv", solution_columns(res.forward))]
+    files = [write_csv(out / "solution.csv", solution_columns(decimate(res.forward,
+                                                                         output_rate)))]
     if res.smoothed is not None:
-        files.append(write_csv(out / "solution_smoothed.csv", solution_columns(res.smoothed)))
-    files.append(plot(res, ref, out / ("errors.png" if ref is not None else "trajectory.png")))
+        files.append(write_csv(out / "solution_smoothed.csv",
+                               solution_columns(decimate(res.smoothed, output_rate))))
+    if gnss is not None:
+        files.append(plot_track(res, gnss, ref, out / "track.png"))
+    if ref is not None:
+        files.append(plot_errors(res, ref, out / "errors.png"))
     s = summary(res, ref, inputs)
     p = out / "summary.json"
     write_text(p, json.dumps(s, indent=2))

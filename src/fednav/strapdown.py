@@ -193,6 +193,22 @@ def _correct(state, phi, dvel, dpos):
     state[21] -= dpos[2]
 
 
+@numba.njit(cache=True)
+def correct_rows(q, vel, lla, err):
+    """:meth:`Strapdown.correct` applied to many navigation states in place: rows of
+    ``q`` (N, 4), ``vel`` (N, 3) ENU, ``lla`` (N, 3), with ``err`` (N, 9) = platform
+    angles [rad], ENU velocity [m/s], ENU position [m] (computed minus true)."""
+    s = np.zeros(STATE_SIZE)
+    for k in range(q.shape[0]):
+        s[0:4] = q[k]
+        s[4:7] = vel[k]
+        s[7:10] = lla[k]
+        _correct(s, err[k, 0:3], err[k, 3:6], err[k, 6:9])
+        q[k] = s[0:4]
+        vel[k] = s[4:7]
+        lla[k] = s[7:10]
+
+
 _NO_Q = np.empty((0, 4))
 _NO_3 = np.empty((0, 3))
 
