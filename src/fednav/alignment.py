@@ -60,6 +60,10 @@ class Alignment:
     report: dict = field(default_factory=dict)
     warnings: list = field(default_factory=list)
 
+    def __post_init__(self):
+        self.report["euler_deg"] = [round(float(v), 4) for v in units.to_deg(self.euler)]
+        self.report["sigma_deg"] = [round(float(v), 4) for v in units.to_deg(self.sigma)]
+
 
 def coarse_level(accel_mean, heading: float = 0.0) -> np.ndarray:
     """Euler ``[pitch, roll, heading]`` from the mean specific force of a (quasi-)static
@@ -121,11 +125,14 @@ def align(imu, gnss, t0: float, i0: int, dt: float, gyro_arw: float, accel_noise
     report: dict = {}
     warnings: list[str] = []
     T_static = static_span(gnss.t, gnss.vel, t0) if gnss.vel is not None else 0.0
-    g = earth.gravity(imu_lat := float(gnss.lla[0, 0]), float(gnss.lla[0, 2]))
+    static = T_static >= MIN_STATIC
+    lat = float(gnss.lla[0, 0])
+    g = earth.gravity(lat, float(gnss.lla[0, 2]))
+    w_ie = earth.earth_rate(lat)
     tilt_bias = None
     gyro_bias = None
     gyro_bias_sigma = None
-    if T_static >= MIN_STATIC:
+    if static:
         n = max(1, int(round(T_static / dt)))
         f_mean = imu.accel[i0:i0 + n].mean(axis=0)
         w_mean = imu.gyro[i0:i0 + n].mean(axis=0)
@@ -144,10 +151,7 @@ def align(imu, gnss, t0: float, i0: int, dt: float, gyro_arw: float, accel_noise
         sig = np.array([units.deg(2.0), units.deg(2.0), np.nan])
         report["levelling"] = f"coarse {coarse_seconds:g} s (no static start)"
     up_b = att.euler_to_dcm(np.r_[euler[:2], 0.0])[2]  # body components of the ENU up axis
-    if T_static >= MIN_STATIC:
-        w_bias = w_mean - up_b * earth.OMEGA_IE * np.sin(imu_lat)  # up part of the Earth rate
-    else:
-        w_bias = np.zeros(3)
+    w_bias = w_mean - up_b * w_ie[2] if static else np.zeros(3)  # less the up Earth rate
     if heading_override is not None:
         euler[2], sig[2] = heading_override, units.deg(2.0)
         report["heading"] = "config"
@@ -167,15 +171,12 @@ def align(imu, gnss, t0: float, i0: int, dt: float, gyro_arw: float, accel_noise
             report["heading"] = "none (0)"
             warnings.append("the vehicle never moves: no heading from the GNSS course; "
                             "initial heading 0 (give coarse_heading_deg)")
-    if T_static >= MIN_STATIC:
+    if static:
         C = att.euler_to_dcm(euler)
         # Levelling zeroes the computed horizontal specific force: g phiN = (C nabla)_E,
         # -g phiE = (C nabla)_N.
         tilt_bias = np.vstack([-C[1], C[0]]) / g
         # Static gyro mean = bias + C_n^b w_ie (now with the heading).
-        w_ie = np.array([0.0, earth.OMEGA_IE * np.cos(imu_lat), earth.OMEGA_IE * np.sin(imu_lat)])
         gyro_bias = w_mean - C.T @ w_ie
         gyro_bias_sigma = gyro_arw / np.sqrt(T_static)
-    report["euler_deg"] = [round(float(v), 4) for v in units.to_deg(euler)]
-    report["sigma_deg"] = [round(float(v), 4) for v in units.to_deg(sig)]
     return Alignment(euler, sig, tilt_bias, gyro_bias, gyro_bias_sigma, report, warnings)

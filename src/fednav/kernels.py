@@ -190,6 +190,22 @@ def dcm_to_rotvec(C, out):
     out[2] = k * (C[1, 0] - C[0, 1])
 
 
+@numba.njit(cache=True, inline="always")
+def coning_sculling_s(ax, ay, az, bx, by, bz, pax, pay, paz, pbx, pby, pbz, has_prev):
+    """Two-sample coning and sculling: the rotation vector of the current angle increment
+    ``a`` corrected by ``a_prev x a / 12``, and the sculling term
+    ``(a_prev x b + b_prev x a) / 12`` for the velocity increment ``b`` (body axes, rad and
+    m/s).  Without a previous sample: ``a`` and zero."""
+    if not has_prev:
+        return ax, ay, az, 0.0, 0.0, 0.0
+    return (ax + (pay * az - paz * ay) / 12.0,
+            ay + (paz * ax - pax * az) / 12.0,
+            az + (pax * ay - pay * ax) / 12.0,
+            ((pay * bz - paz * by) + (pby * az - pbz * ay)) / 12.0,
+            ((paz * bx - pax * bz) + (pbz * ax - pbx * az)) / 12.0,
+            ((pax * by - pay * bx) + (pbx * ay - pby * ax)) / 12.0)
+
+
 @numba.njit(cache=True)
 def euler_to_dcm(pitch, roll, heading):
     """Compiled scalar twin of :func:`fednav.attitude.euler_to_dcm` (tested equal)."""

@@ -250,7 +250,8 @@ def _initial_attitude(imu: ImuData, gnss: GnssData, cfg: ProcessConfig, t0: floa
                   imu.initial_euler, imu.initial_euler_sigma if sig is None else sig,
                   cfg.coarse_seconds, heading)
         if sig is not None:  # the user's sigmas win over what the alignment claims
-            a.sigma, a.tilt_bias = sig, None
+            a = Alignment(a.euler, sig, None, a.gyro_bias, a.gyro_bias_sigma,
+                          {k: a.report[k] for k in ("levelling", "heading")}, a.warnings)
         return a
     if cfg.initial_attitude == "file" and imu.initial_euler is not None:
         euler = imu.initial_euler
@@ -265,9 +266,7 @@ def _initial_attitude(imu: ImuData, gnss: GnssData, cfg: ProcessConfig, t0: floa
     if sig is None:
         sig = units.deg(np.array([2.0, 2.0, 10.0]))
     return Alignment(np.asarray(euler, dtype=float), np.asarray(sig, dtype=float),
-                     report={"levelling": how, "heading": how,
-                             "euler_deg": [round(float(v), 4) for v in units.to_deg(euler)],
-                             "sigma_deg": [round(float(v), 4) for v in units.to_deg(sig)]})
+                     report={"levelling": how, "heading": how})
 
 
 def _initial_covariance(al: Alignment, sig_vel, sig_pos, gb: float, ab: float,

@@ -90,7 +90,8 @@ def _thin(n: int, most: int = 20_000) -> slice:
     return slice(None, None, max(1, -(-n // most)))
 
 
-#: errors.png panels: (error key, solution sigma column, Euler sigma column, title unit)
+#: errors.png panels, a row per quantity: (error key, sigma column) — columns of
+#: Solution.sigma for position and velocity, of Solution.sigma_euler for the angles
 _PANELS = ((("north_m", 7), ("east_m", 6), ("down_m", 8)),
            (("vn_mps", 4), ("ve_mps", 3), ("vd_mps", 5)),
            (("roll_deg", 1), ("pitch_deg", 0), ("yaw_deg", 2)))

@@ -28,8 +28,8 @@ import numba
 import numpy as np
 
 from . import attitude, earth
+from .kernels import coning_sculling_s, quat_mul_s, quat_to_dcm_s, rotvec_to_quat_s
 from .kernels import quat_mul as _qmul
-from .kernels import quat_mul_s, quat_to_dcm_s, rotvec_to_quat_s
 from .kernels import quat_to_dcm as _q2dcm
 from .kernels import rotvec_to_quat as _rv2q
 
@@ -108,16 +108,8 @@ def _run(state, dtheta, dv, dt, h_ref, gains, out_q, out_v, out_p):
         ine, inn, inu = iee + ene, ien + enn, ieu + enu
         gmag = earth.gravity_nb(lat_m, h_m)
         # Coning and sculling (current + previous sample).
-        if has_prev:
-            fx = ax + (py * az - pz * ay) / 12.0
-            fy = ay + (pz * ax - px * az) / 12.0
-            fz = az + (px * ay - py * ax) / 12.0
-            sx = ((py * bz - pz * by) + (uy * az - uz * ay)) / 12.0
-            sy = ((pz * bx - px * bz) + (uz * ax - ux * az)) / 12.0
-            sz = ((px * by - py * bx) + (ux * ay - uy * ax)) / 12.0
-        else:
-            fx, fy, fz = ax, ay, az
-            sx, sy, sz = 0.0, 0.0, 0.0
+        fx, fy, fz, sx, sy, sz = coning_sculling_s(ax, ay, az, bx, by, bz, px, py, pz,
+                                                   ux, uy, uz, has_prev)
         cx = bx + 0.5 * (ay * bz - az * by) + sx
         cy = by + 0.5 * (az * bx - ax * bz) + sy
         cz = bz + 0.5 * (ax * by - ay * bx) + sz

@@ -28,7 +28,7 @@ import math
 import numba
 import numpy as np
 
-from ..kernels import quat_mul_s, quat_to_dcm_s, rotvec_to_quat_s
+from ..kernels import coning_sculling_s, quat_mul_s, quat_to_dcm_s, rotvec_to_quat_s
 from .frame import LaunchFrame, gravitation_li_xyz
 
 STATE_SIZE = 17  # q (4), v (3), r (3), dtheta_prev (3), dv_prev (3), has_prev
@@ -58,16 +58,8 @@ def _run(state, dtheta, dv, dt, r0, Ce, degree, out_q, out_v, out_r, aux):
         ax, ay, az = dtheta[k, 0], dtheta[k, 1], dtheta[k, 2]
         bx, by, bz = dv[k, 0], dv[k, 1], dv[k, 2]
         # Coning and sculling with the previous sample.
-        if has_prev:
-            px = ax + (ay0 * az - az0 * ay) / 12.0
-            py = ay + (az0 * ax - ax0 * az) / 12.0
-            pz = az + (ax0 * ay - ay0 * ax) / 12.0
-            cx = ((ay0 * bz - az0 * by) + (by0 * az - bz0 * ay)) / 12.0
-            cy = ((az0 * bx - ax0 * bz) + (bz0 * ax - bx0 * az)) / 12.0
-            cz = ((ax0 * by - ay0 * bx) + (bx0 * ay - by0 * ax)) / 12.0
-        else:
-            px, py, pz = ax, ay, az
-            cx = cy = cz = 0.0
+        px, py, pz, cx, cy, cz = coning_sculling_s(ax, ay, az, bx, by, bz, ax0, ay0, az0,
+                                                   bx0, by0, bz0, has_prev)
         # Rotation compensation to second order: dv + a x dv / 2 + a x (a x dv) / 6.
         tx = ay * bz - az * by
         ty = az * bx - ax * bz
