@@ -273,6 +273,101 @@ def process_csv(
     _run_process(read, imu, gnss, velocity, ref, smooth, out, config, output_rate)
 
 
+tune_app = typer.Typer(no_args_is_help=True,
+                       help="Estimate IMU and sensor noise figures from the data "
+                            "(innovation-based) and write a processing config.")
+app.add_typer(tune_app, name="tune")
+_TUNE_OUT = typer.Option(Path("tuned.yaml"), help="config YAML to write")
+_TUNE_CONFIG = typer.Option(None, help="base processing config: its settings are kept, "
+                                       "the figures it leaves unset are estimated")
+
+
+def _run_tune(read, inputs: list, config, out: Path) -> None:
+    from rich.table import Table
+
+    from .atomic import write_text
+    from .config import load_model
+    from .process import ProcessConfig
+    from .tuning import config_yaml, format_value, tune
+
+    base = {}
+    cfg = ProcessConfig()
+    if config is not None:
+        import yaml
+
+        cfg = load_model(config, ProcessConfig, "processing config")
+        base = yaml.safe_load(config.read_text()) or {}
+    data = read(cfg)
+    with console.status("tuning") as status:
+        res = tune(data["imu"], data["gnss"], data["velocity"], cfg,
+                   progress=lambda what: status.update(f"filter run: {what}"))
+    tab = Table(title="noise figures (SI units)")
+    tab.add_column("figure", no_wrap=True)
+    tab.add_column("start")
+    tab.add_column("tuned")
+    tab.add_column("how / why")
+    for f in res.figures:
+        tab.add_row(f.key.removeprefix("imu."), format_value(f.start), format_value(f.value), f.how)
+    console.print(tab)
+    for n in res.notes:
+        console.print(f"note: {n}")
+    console.print("mean NIS/dof before -> after: " + ", ".join(
+        f"{k} {res.before.nis_per_dof[k]:.2f} -> {res.after.nis_per_dof[k]:.2f}"
+        for k in res.after.nis_per_dof)
+        + f"; log-likelihood {res.before.loglik:.1f} -> {res.after.loglik:.1f}")
+    header = (f"fednav tune {__version__}: " + " ".join(str(i) for i in inputs if i)
+              + (f" (base config {config})" if config else "")
+              + f"\n{res.runs} filter runs in {res.run_time_s:.1f} s; see "
+                f"src/fednav/tuning.py for the method")
+    try:
+        write_text(out, config_yaml(res, base, header))
+    except OSError as e:
+        raise typer.BadParameter(f"{out}: {e.strerror or e}", param_hint="--out") from None
+    console.print(f"{res.runs} filter runs in {res.run_time_s:.1f} s; wrote {out} "
+                  f"(fednav process ... --config {out})")
+
+
+@tune_app.command("navego")
+@_one_line_errors
+def tune_navego(
+    imu: Path = typer.Option(..., help="NaveGo IMU .mat"),
+    gnss: Path = typer.Option(..., help="NaveGo GNSS .mat"),
+    visual: Path = typer.Option(None, help="NaveGo visual-odometry .mat (velocity)"),
+    config: Path = _TUNE_CONFIG, out: Path = _TUNE_OUT,
+) -> None:
+    """Noise figures from NaveGo .mat files (start: the files' figures)."""
+    from .io import read_navego_gnss, read_navego_imu, read_navego_visual
+
+    def read(cfg):
+        return {"imu": read_navego_imu(imu, cfg.imu_max_bridge_s),
+                "gnss": read_navego_gnss(gnss),
+                "velocity": None if visual is None else read_navego_visual(visual)}
+
+    _run_tune(read, [imu, gnss, visual], config, out)
+
+
+@tune_app.command("csv")
+@_one_line_errors
+def tune_csv(
+    imu: Path = typer.Option(..., help="IMU CSV (docs/data-formats.md)"),
+    gnss: Path = typer.Option(..., help="GNSS CSV"),
+    velocity: Path = typer.Option(None, help="velocity-sensor CSV"),
+    config: Path = _TUNE_CONFIG, out: Path = _TUNE_OUT,
+) -> None:
+    """Noise figures from fednav CSV files (start: the base config's figures, else a
+    generic MEMS IMU; give the GNSS lever arm in the base config)."""
+    from .io import read_gnss_csv, read_imu_csv, read_velocity_csv
+
+    def read(cfg):
+        g = read_gnss_csv(gnss, cfg.gnss_sigma_pos_m or (5.0, 5.0, 5.0),
+                          cfg.gnss_sigma_vel_mps or (0.1, 0.1, 0.1),
+                          cfg.gnss_lever_m or (0.0, 0.0, 0.0))
+        return {"imu": read_imu_csv(imu, cfg.imu_max_bridge_s), "gnss": g,
+                "velocity": None if velocity is None else read_velocity_csv(velocity)}
+
+    _run_tune(read, [imu, gnss, velocity], config, out)
+
+
 @app.command()
 @_one_line_errors
 def simulate(

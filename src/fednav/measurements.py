@@ -154,6 +154,7 @@ class GnssPosVel:
     error is ``dp + [(C l) x] phi`` (and likewise ``[(C (w x l)) x] phi`` for the
     velocity), so a lever arm makes attitude observable from GNSS (tested numerically)."""
 
+    linear = True  # h(x) = H x
     kind = "gnss"
     dim = 6
     _cols = np.array([6, 7, 8, 3, 4, 5])
@@ -195,6 +196,7 @@ class VelocityENU:
     """A velocity sensor (visual odometry, DVL ...) at ``lever`` (body, m): residual =
     INS-derived sensor velocity - measured, ENU [m/s]; ``R`` is the sensor's covariance."""
 
+    linear = True  # h(x) = H x
     kind = "velocity"
     dim = 3
 

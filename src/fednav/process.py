@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field, replace
+from typing import NamedTuple
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, field_validator
@@ -147,6 +148,22 @@ class Solution:
         return Solution(self.t[index], self.lla[index], self.vel[index], self.euler[index],
                         self.sigma[index], self.sigma_euler[index], self.omega[index],
                         self.label, self.fdi)
+
+
+class Innovation(NamedTuple):
+    """One measurement's innovation in :func:`process`: local filter ``local``, time ``t``
+    [s], residual ``r`` and covariance ``S`` of the local filter, the measurement noise
+    ``R`` and the local's information share ``beta`` (its covariance is ``P / beta``, so
+    ``beta (S - R) + R`` is the innovation covariance of the equivalent centralized
+    filter), and whether the update was applied."""
+
+    local: str
+    t: float
+    r: np.ndarray
+    S: np.ndarray
+    R: np.ndarray
+    beta: float
+    accepted: bool
 
 
 @dataclass
@@ -343,8 +360,12 @@ def check_units(imu: ImuData, gnss: GnssData) -> list[str]:
 
 
 def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
-            cfg: ProcessConfig | None = None, smooth: bool = False) -> ProcessResult:
-    """Loosely coupled INS/GNSS(/velocity) processing; see the module docstring."""
+            cfg: ProcessConfig | None = None, smooth: bool = False,
+            innovations: list | None = None) -> ProcessResult:
+    """Loosely coupled INS/GNSS(/velocity) processing; see the module docstring.
+
+    ``innovations``, when given a list, receives one :class:`Innovation` per measurement
+    (what :mod:`fednav.tuning` estimates noise figures from)."""
     cfg = cfg or ProcessConfig()
     t_start = time.perf_counter()
     dt = imu.period()
@@ -367,7 +388,7 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
     sig_pos = np.asarray(cfg.gnss_sigma_pos_m or gnss.sigma_pos, dtype=float)
     sig_vel = np.asarray(cfg.gnss_sigma_vel_mps or gnss.sigma_vel, dtype=float)
     lever = np.asarray(cfg.gnss_lever_m or gnss.lever, dtype=float)
-    g_sigma = np.r_[sig_pos, sig_vel]
+    R_gnss = GnssPosVel(lever).R(np.r_[sig_pos, sig_vel])
 
     # Initial state: first GNSS fix (antenna moved to the IMU), its velocity, attitude.
     al = _initial_attitude(imu, gnss, cfg, t0, i0, dt, noise, ab)
@@ -441,10 +462,13 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
                 nav = NavSnapshot(earth.move_enu(rows_p[r], -lag * vel), vel,
                                   quat_to_dcm_nb(rows_q[r]), omega)
                 if name == "gnss":
-                    z, R = gnss_z(gnss, i), model.R(g_sigma)
+                    z, R = gnss_z(gnss, i), R_gnss
                 else:
                     z, R = velocity.vel[i], model.R(velocity.cov[i])
-                fed.update(name, model.residual(nav, z), model, nav, R, t=tm[i])
+                inn = fed.update(name, model.residual(nav, z), model, nav, R, t=tm[i])
+                if innovations is not None:
+                    innovations.append(Innovation(name, tm[i], inn.r, inn.S, R,
+                                                  fed.beta[name], inn.accepted))
         fed.fuse()
         P_post[k] = fed.P
         dxs[k] = fed.feedback()

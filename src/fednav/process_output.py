@@ -38,6 +38,17 @@ def solution_columns(sol: Solution) -> dict[str, np.ndarray]:
     }
 
 
+def solution_decimals(names) -> dict[str, int]:
+    """Decimals of each solution column: time 1 us, latitude/longitude 1e-9 deg (0.1 mm),
+    height 0.1 mm, velocity 10 um/s, angles 1e-6 deg, sigmas 1e-6 of their unit."""
+    def d(name):
+        if name == "t_s" or name.startswith("sigma_"):
+            return 6
+        return {"lat_deg": 9, "lon_deg": 9, "h_m": 4}.get(name, 5 if name.endswith("mps")
+                                                         else 6)
+    return {k: d(k) for k in names}
+
+
 def decimate(sol: Solution, rate_hz: float | None) -> Solution:
     """Every ``round(1 / (rate_hz dt))``-th row of an IMU-rate solution, starting with the
     first (None: every row).  A rate above the IMU's is a ValueError."""
@@ -194,11 +205,11 @@ def write(out: Path, res: ProcessResult, ref: Reference | None, inputs: dict,
     plots and summary.json into ``out``; returns the files."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    files = [write_csv(out / "solution.csv", solution_columns(decimate(res.forward,
-                                                                         output_rate)))]
-    if res.smoothed is not None:
-        files.append(write_csv(out / "solution_smoothed.csv",
-                               solution_columns(decimate(res.smoothed, output_rate))))
+    files = []
+    for name, sol in (("solution.csv", res.forward), ("solution_smoothed.csv", res.smoothed)):
+        if sol is not None:
+            cols = solution_columns(decimate(sol, output_rate))
+            files.append(write_csv(out / name, cols, solution_decimals(cols)))
     if gnss is not None:
         files.append(plot_track(res, gnss, ref, out / "track.png"))
     if ref is not None:

@@ -51,7 +51,9 @@ class KalmanFilter(Filter):
 
     def update(self, y, model, nav=None, R=None, gate: float | None = None) -> Innovation:
         H = np.ascontiguousarray(model.H(nav), dtype=float)
-        r = np.asarray(y, dtype=float) - model.h(self.x[None], nav)[0]
+        # a linear model (h(x) = H x) needs no second evaluation of its Jacobian
+        yhat = H @ self.x if getattr(model, "linear", False) else model.h(self.x[None], nav)[0]
+        r = np.asarray(y, dtype=float) - yhat
         x, P, S, nis, ok = _joseph_update(self.x, self.P, H, r, np.asarray(R, dtype=float))
         if not ok:
             raise FilterError(f"{self._who('update')}: innovation covariance not positive "

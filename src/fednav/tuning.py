@@ -1,0 +1,329 @@
+"""Noise figures from the data alone (``fednav tune``).
+
+The processing filter (:func:`fednav.process.process`) needs the IMU's white noise (ARW,
+VRW), its bias instability (the Gauss–Markov sigmas) and the 1-sigma of every aiding
+sensor.  Data sheets give lower bounds at best (vibration, temperature, multipath are
+not in them), so fednav estimates them from the data the way the filter sees them:
+
+1. **White noise floor** — the robust sample-to-sample scatter of the raw IMU:
+   ``N = 1.4826 MAD(diff x) / sqrt(2) * sqrt(dt)`` per axis (the largest axis is kept).
+   The vehicle's own motion changes little between two samples, and the median ignores
+   the steps where it does, so this needs no static period.  It is the noise at the IMU
+   rate, vibration included.
+2. **Aiding-sensor noise** — innovation covariance matching: with ``nu = z - H x^-`` and
+   ``S = H P^- H' + R``, ``E[nu nu'] = H P^- H' + R``, so ``R_jj = mean(nu_j^2) -
+   mean((H P^- H')_jj)`` per component, iterated to its fixed point (a few filter runs).
+   In the federated filter each local filter holds ``P / beta``; the centralized
+   ``H P^- H' = beta (S_local - R)`` is used.
+3. **IMU process noise** — maximum of the innovation likelihood ``L = -1/2 sum(log det S
+   + nu' S^-1 nu)`` over one figure at a time (log scale: the figure x 1/3 and x 3, the
+   bracket widened while an end wins, then the vertex of the parabola through the best
+   three).  A figure changes only when the likelihood rises by more than 1.92 (the
+   likelihood-ratio test at 95 %, one degree of freedom); otherwise it keeps its value
+   and the table says the data do not determine it: the white noise of a MEMS IMU, for
+   instance, is invisible in 5 Hz GNSS innovations.  One data set holds one turn-on bias,
+   not its spread, so the turn-on bias sigmas and the correlation times are never changed.
+
+Figures the base config sets are kept as they are: ``fednav tune`` estimates what the
+config leaves open (start values then come from the data file, else a generic MEMS IMU).
+Measurements that fault detection isolates (``fdi_alpha`` of the base config) are left
+out of the matching, and every measurement's ``nu' S^-1 nu`` is capped at its 99.9 %
+chi-square point in the likelihood, so a few outliers do not set the noise figures.
+Units: SI (rad, m, s) as in :class:`fednav.process.ProcessConfig`.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .io.data import GnssData, ImuData, VelocityData
+from .process import Innovation, ProcessConfig, adjust_sensors, process
+
+#: Starting IMU figures (a generic MEMS IMU) where neither the file nor the config has one.
+MEMS_DEFAULTS = {"gyro_arw_rad_sqrt_s": 5.8e-4, "accel_vrw_mps_sqrt_s": 2.0e-3,
+                 "gyro_bias_radps": 4.8e-4, "accel_bias_mps2": 2.0e-2,
+                 "gyro_markov_radps": 4.8e-5, "accel_markov_mps2": 1.0e-3,
+                 "gyro_tau_s": 100.0, "accel_tau_s": 100.0}
+#: IMU figures estimated by the likelihood, in the order searched.
+LIKELIHOOD_KEYS = ("accel_vrw_mps_sqrt_s", "gyro_arw_rad_sqrt_s", "accel_markov_mps2",
+                   "gyro_markov_radps")
+#: ln of the likelihood-search step (a factor 3).
+_STEP = float(np.log(3.0))
+#: log-likelihood gain a new figure must bring (the likelihood-ratio test at 95 %, 1 dof)
+LR_95 = 1.92
+#: log-likelihood gain at an end of the bracket that widens it (below: a flat likelihood)
+_WIDEN = 0.5
+#: chi-square point at which a measurement's statistic is capped in the likelihood
+_CAP_P = 0.999
+
+
+@dataclass
+class Figure:
+    """One tuned figure: its config ``key``, ``start`` and tuned ``value`` (SI; a float or
+    a 3-list), how it was found and why."""
+
+    key: str
+    start: float | list
+    value: float | list
+    how: str
+
+
+@dataclass
+class Evaluation:
+    """One filter run: log-likelihood and, per local filter, NIS/dof and the matched R
+    diagonal (residual order)."""
+
+    loglik: float
+    nis_per_dof: dict[str, float]
+    matched: dict[str, np.ndarray]
+
+
+@dataclass
+class TuneResult:
+    config: ProcessConfig
+    figures: list[Figure]
+    before: Evaluation
+    after: Evaluation
+    runs: int
+    run_time_s: float
+    notes: list[str] = field(default_factory=list)
+
+
+def white_noise(x: np.ndarray, dt: float) -> np.ndarray:
+    """White-noise density [unit * sqrt(s)] of each column of samples ``x`` (N, k) taken
+    every ``dt`` [s], from the robust scatter of their first differences."""
+    d = np.diff(np.asarray(x, dtype=float), axis=0)
+    mad = np.median(np.abs(d - np.median(d, axis=0)), axis=0)
+    return 1.4826 * mad / np.sqrt(2.0) * np.sqrt(dt)
+
+
+def _cap(dof: int) -> float:
+    from scipy.stats import chi2
+
+    return float(chi2.ppf(_CAP_P, dof))
+
+
+def evaluate(imu: ImuData, gnss: GnssData, velocity: VelocityData | None,
+             cfg: ProcessConfig) -> Evaluation:
+    """Run the forward filter with ``cfg`` and sum up its innovations."""
+    inns: list[Innovation] = []
+    process(imu, gnss, velocity, cfg, innovations=inns)
+    ll = 0.0
+    nis: dict[str, list] = {}
+    r2: dict[str, list] = {}
+    hph: dict[str, list] = {}
+    caps: dict[int, float] = {}
+    for i in inns:
+        Sc = i.beta * (i.S - i.R) + i.R
+        d = len(i.r)
+        L = np.linalg.cholesky(Sc)
+        w = np.linalg.solve(L, i.r)
+        q = float(w @ w)
+        cap = caps.setdefault(d, _cap(d))
+        ll -= 0.5 * (2.0 * np.log(np.diag(L)).sum() + min(q, cap) + d * np.log(2 * np.pi))
+        nis.setdefault(i.local, []).append(q / d)
+        if i.accepted and q <= cap:
+            r2.setdefault(i.local, []).append(i.r**2)
+            hph.setdefault(i.local, []).append(np.diag(Sc - i.R))
+    matched = {k: np.mean(r2[k], axis=0) - np.mean(hph[k], axis=0) for k in r2}
+    return Evaluation(ll, {k: float(np.mean(v)) for k, v in nis.items()}, matched)
+
+
+def _starting_imu(imu: ImuData, base: ProcessConfig, notes: list) -> dict[str, float]:
+    out, generic = {}, []
+    for key, default in MEMS_DEFAULTS.items():
+        v = getattr(base.imu, key)
+        if v is None and imu.errors is not None:
+            name = {"gyro_arw_rad_sqrt_s": "gyro_arw", "accel_vrw_mps_sqrt_s": "accel_vrw",
+                    "gyro_bias_radps": "gyro_bias", "accel_bias_mps2": "accel_bias",
+                    "gyro_markov_radps": "gyro_markov", "accel_markov_mps2": "accel_markov",
+                    "gyro_tau_s": "gyro_tau", "accel_tau_s": "accel_tau"}[key]
+            v = float(np.max(getattr(imu.errors, name)))
+        if v is None:
+            v = default
+            generic.append(f"{key} {default:g}")
+        out[key] = float(v)
+    if generic:
+        notes.append("not in the file or the config, started from a generic MEMS IMU: "
+                     + ", ".join(generic))
+    return out
+
+
+def _with(base: ProcessConfig, imu: dict, gnss_pos, gnss_vel, vel_sigma) -> ProcessConfig:
+    return base.model_copy(update={
+        "imu": base.imu.model_copy(update=imu),
+        "gnss_sigma_pos_m": tuple(map(float, gnss_pos)),
+        "gnss_sigma_vel_mps": tuple(map(float, gnss_vel)),
+        "velocity_sigma_mps": None if vel_sigma is None else tuple(map(float, vel_sigma))})
+
+
+def tune(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
+         base: ProcessConfig | None = None, matching_passes: int = 2,
+         progress=None) -> TuneResult:
+    """Estimate the noise figures that ``base`` (default :class:`ProcessConfig`) leaves
+    unset from the data (see the module docstring); figures ``base`` sets are kept as
+    they are.  ``progress(text)`` is called before each filter run."""
+    t_start = time.perf_counter()
+    base = base or ProcessConfig()
+    notes: list[str] = []
+    runs = 0
+    dt = imu.period()
+    fixed = {k for k, v in base.imu.model_dump().items() if v is not None}
+    fixed |= {k for k in ("gnss_sigma_pos_m", "gnss_sigma_vel_mps", "velocity_sigma_mps")
+              if getattr(base, k) is not None}
+    # Sensor noise variances in the order of the residuals: GNSS [E, N, U] m, [E, N, U]
+    # m/s; velocity sensor [E, N, U] m/s.
+    _, v_adj = adjust_sensors(gnss, velocity, base)
+    pos0 = np.asarray(base.gnss_sigma_pos_m or gnss.sigma_pos, dtype=float)  # N, E, U
+    vel0 = np.asarray(base.gnss_sigma_vel_mps or gnss.sigma_vel, dtype=float)  # E, N, U
+    r_gnss = np.r_[pos0[[1, 0, 2]], vel0] ** 2
+    r_vel = None
+    if velocity is not None:
+        r_vel = np.square(base.velocity_sigma_mps) if base.velocity_sigma_mps is not None \
+            else np.median(np.diagonal(v_adj.cov, axis1=1, axis2=2), axis=0)
+    start_r = (r_gnss.copy(), None if r_vel is None else r_vel.copy())
+    free_g = np.r_[np.full(3, "gnss_sigma_pos_m" not in fixed),
+                   np.full(3, "gnss_sigma_vel_mps" not in fixed)]
+    free_v = "velocity_sigma_mps" not in fixed
+
+    def config(fig_imu, rg, rv):
+        sd = np.sqrt(rg)
+        return _with(base, fig_imu, sd[[1, 0, 2]], sd[3:],
+                     None if rv is None else np.sqrt(rv))
+
+    def run(fig_imu, rg, rv, what):
+        nonlocal runs
+        runs += 1
+        if progress is not None:
+            progress(what)
+        return evaluate(imu, gnss, velocity, config(fig_imu, rg, rv))
+
+    def match(rg, rv, ev):
+        """Covariance matching of the free sensor variances (floored at 1e-3 of the
+        current value: one pass cannot zero a variance)."""
+        new_g = np.where(free_g, np.maximum(ev.matched["gnss"], 1e-3 * rg), rg)
+        if rv is not None and free_v and "velocity" in ev.matched:
+            rv = np.maximum(ev.matched["velocity"], 1e-3 * rv)
+        return new_g, rv
+
+    fig_imu = _starting_imu(imu, base, notes)
+    start_imu = dict(fig_imu)
+    figures: list[Figure] = []
+    before = run(start_imu, r_gnss, r_vel, "starting figures")
+    # 1. White-noise floor from the sample-to-sample scatter.
+    scatter = {"gyro_arw_rad_sqrt_s": float(np.max(white_noise(imu.gyro, dt))),
+               "accel_vrw_mps_sqrt_s": float(np.max(white_noise(imu.accel, dt)))}
+    fig_imu.update({k: v for k, v in scatter.items() if k not in fixed})
+    # 2. Aiding-sensor noise by covariance matching (the first pass from the run with
+    # the starting figures).
+    ev = before
+    for p in range(matching_passes):
+        r_gnss, r_vel = match(r_gnss, r_vel, ev)
+        ev = run(fig_imu, r_gnss, r_vel, f"covariance matching {p + 1}")
+    # 3. IMU process noise by the likelihood, one figure at a time.
+    for key in LIKELIHOOD_KEYS:
+        if key in fixed:
+            figures.append(Figure(f"imu.{key}", start_imu[key], start_imu[key],
+                                  "kept: set in the config"))
+            continue
+        ev, figure = _search(key, fig_imu, ev, lambda f, what: run(f, r_gnss, r_vel, what),
+                             "sample scatter" if key in scatter else "start")
+        figure.start = start_imu[key]
+        figures.append(figure)
+    # 4. The sensor noise again, with the process noise found.
+    r_gnss, r_vel = match(r_gnss, r_vel, ev)
+    ev = run(fig_imu, r_gnss, r_vel, "covariance matching, final")
+    sd0, sd = np.sqrt(start_r[0]), np.sqrt(r_gnss)
+    sensors = [("gnss_sigma_pos_m", sd0[[1, 0, 2]], sd[[1, 0, 2]]),
+               ("gnss_sigma_vel_mps", sd0[3:], sd[3:])]
+    if r_vel is not None:
+        sensors.append(("velocity_sigma_mps", np.sqrt(start_r[1]), np.sqrt(r_vel)))
+    for key, s0, s1 in sensors:
+        figures.append(Figure(key, [float(x) for x in s0], [float(x) for x in s1],
+                              "kept: set in the config" if key in fixed
+                              else "innovation covariance matching"))
+    for key in ("gyro_bias_radps", "accel_bias_mps2", "gyro_tau_s", "accel_tau_s"):
+        figures.append(Figure(f"imu.{key}", start_imu[key], fig_imu[key],
+                              "kept: set in the config" if key in fixed else
+                              "kept: one data set holds one draw of it, not its "
+                              "spread"))
+    return TuneResult(config(fig_imu, r_gnss, r_vel), figures, before, ev, runs,
+                      time.perf_counter() - t_start, notes)
+
+
+def _search(key: str, fig_imu: dict, ev: Evaluation, run, origin: str):
+    """Maximise the likelihood over ``fig_imu[key]`` (log scale) from the evaluation
+    ``ev`` of the current figures; ``fig_imu`` is updated in place when the best value
+    beats the current one by more than :data:`LR_95`.  Returns (evaluation of the figures
+    kept, :class:`Figure`)."""
+    x0 = float(np.log(fig_imu[key]))
+    tried = {0.0: ev}
+
+    def at(u):
+        if u not in tried:
+            tried[u] = run({**fig_imu, key: float(np.exp(x0 + u))},
+                           f"likelihood of imu.{key} x {np.exp(u):.3g}")
+        return tried[u].loglik
+
+    at(-_STEP), at(_STEP)
+    for _ in range(6):  # widen while an end of the bracket wins (by more than noise)
+        us = sorted(tried)
+        best = max(tried, key=at)
+        if best not in (us[0], us[-1]) or at(best) - tried[0.0].loglik < _WIDEN:
+            break
+        at(best + (2 * _STEP if best == us[-1] else -2 * _STEP))
+    us = sorted(tried)
+    best = max(tried, key=at)
+    k = us.index(best)
+    if 0 < k < len(us) - 1:  # refine at the vertex of the parabola through the best three
+        u = np.array(us[k - 1:k + 2])
+        a, b, _ = np.polyfit(u, [tried[v].loglik for v in u], 2)
+        if a < 0:
+            vertex = float(np.clip(-b / (2 * a), u[0], u[2]))
+            if abs(vertex - best) > 0.1 and at(vertex) > at(best):
+                best = vertex
+    gain = at(best) - tried[0.0].loglik
+    lo, hi = float(np.exp(min(tried))), float(np.exp(max(tried)))
+    if gain <= LR_95:
+        return ev, Figure(f"imu.{key}", fig_imu[key], fig_imu[key],
+                          f"kept ({origin}): likelihood at most {gain:+.1f} "
+                          f"over x{lo:.2g}..x{hi:.2g}")
+    start = fig_imu[key]
+    fig_imu[key] = float(np.exp(x0 + best))
+    return tried[best], Figure(f"imu.{key}", start, fig_imu[key],
+                               f"innovation likelihood: {gain:+.1f} over the "
+                               f"{origin} value")
+
+
+def config_yaml(res: TuneResult, base: dict | None = None, header: str = "") -> str:
+    """The tuned config as YAML for ``fednav process --config``: the ``base`` mapping
+    (the user's config, kept key for key) with the tuned figures, a comment per figure."""
+    import yaml
+
+    data = dict(base or {})
+    c = res.config
+    data["imu"] = {**(data.get("imu") or {}),
+                   **{k: float(v) for k, v in c.imu.model_dump().items() if v is not None}}
+    for key in ("gnss_sigma_pos_m", "gnss_sigma_vel_mps", "velocity_sigma_mps"):
+        v = getattr(c, key)
+        if v is not None:
+            data[key] = [float(f"{x:.6g}") for x in v]
+    data["imu"] = {k: float(f"{v:.6g}") for k, v in data["imu"].items()}
+    lines = [f"# {line}" for line in header.splitlines()]
+    lines.append("# mean NIS/dof before -> after: " + ", ".join(
+        f"{k} {res.before.nis_per_dof[k]:.2f} -> {res.after.nis_per_dof[k]:.2f}"
+        for k in res.after.nis_per_dof))
+    for f in res.figures:
+        lines.append(f"# {f.key}: {format_value(f.start)} -> {format_value(f.value)} ({f.how})")
+    for n in res.notes:
+        lines.append(f"# note: {n}")
+    return "\n".join(lines) + "\n" + yaml.safe_dump(data, sort_keys=False)
+
+
+def format_value(v) -> str:
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(f"{x:.3g}" for x in v) + "]"
+    return f"{v:.3g}"
