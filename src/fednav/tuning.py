@@ -111,25 +111,26 @@ def evaluate(imu: ImuData, gnss: GnssData, velocity: VelocityData | None,
     """Run the forward filter with ``cfg`` and sum up its innovations."""
     inns: list[Innovation] = []
     process(imu, gnss, velocity, cfg, innovations=inns)
-    ll = 0.0
-    nis: dict[str, list] = {}
-    r2: dict[str, list] = {}
-    hph: dict[str, list] = {}
-    caps: dict[int, float] = {}
-    for i in inns:
-        Sc = i.beta * (i.S - i.R) + i.R
-        d = len(i.r)
+    ll, nis, matched = 0.0, {}, {}
+    for local in dict.fromkeys(i.local for i in inns):
+        mine = [i for i in inns if i.local == local]
+        r = np.array([i.r for i in mine])
+        R = np.array([i.R for i in mine])
+        beta = np.array([i.beta for i in mine])[:, None, None]
+        Sc = beta * (np.array([i.S for i in mine]) - R) + R  # centralized S
         L = np.linalg.cholesky(Sc)
-        w = np.linalg.solve(L, i.r)
-        q = float(w @ w)
-        cap = caps.setdefault(d, _cap(d))
-        ll -= 0.5 * (2.0 * np.log(np.diag(L)).sum() + min(q, cap) + d * np.log(2 * np.pi))
-        nis.setdefault(i.local, []).append(q / d)
-        if i.accepted and q <= cap:
-            r2.setdefault(i.local, []).append(i.r**2)
-            hph.setdefault(i.local, []).append(np.diag(Sc - i.R))
-    matched = {k: np.mean(r2[k], axis=0) - np.mean(hph[k], axis=0) for k in r2}
-    return Evaluation(ll, {k: float(np.mean(v)) for k, v in nis.items()}, matched)
+        w = np.linalg.solve(L, r[..., None])[..., 0]
+        q = np.einsum("ij,ij->i", w, w)
+        d = r.shape[1]
+        cap = _cap(d)
+        logdet = 2.0 * np.log(np.diagonal(L, axis1=1, axis2=2)).sum(axis=1)
+        ll -= 0.5 * float(np.sum(logdet + np.minimum(q, cap) + d * np.log(2 * np.pi)))
+        nis[local] = float(np.mean(q) / d)
+        use = np.array([i.accepted for i in mine]) & (q <= cap)
+        if use.any():
+            hph = np.diagonal(Sc - R, axis1=1, axis2=2)
+            matched[local] = np.mean(r[use] ** 2, axis=0) - np.mean(hph[use], axis=0)
+    return Evaluation(ll, nis, matched)
 
 
 def _starting_imu(imu: ImuData, base: ProcessConfig, notes: list) -> dict[str, float]:
@@ -204,7 +205,8 @@ def tune(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
     def match(rg, rv, ev):
         """Covariance matching of the free sensor variances (floored at 1e-3 of the
         current value: one pass cannot zero a variance)."""
-        new_g = np.where(free_g, np.maximum(ev.matched["gnss"], 1e-3 * rg), rg)
+        new_g = rg if "gnss" not in ev.matched else \
+            np.where(free_g, np.maximum(ev.matched["gnss"], 1e-3 * rg), rg)
         if rv is not None and free_v and "velocity" in ev.matched:
             rv = np.maximum(ev.matched["velocity"], 1e-3 * rv)
         return new_g, rv
