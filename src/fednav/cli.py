@@ -214,6 +214,38 @@ def _print_process(s: dict) -> None:
             console.print(tab)
 
 
+def _navego_reader(imu: Path, gnss: Path, visual: Path | None, ref: Path | None = None):
+    """``read(cfg)`` of NaveGo .mat files: {imu, gnss, velocity, ref} (None when absent)."""
+    def read(cfg):
+        from .io import (
+            read_navego_gnss,
+            read_navego_imu,
+            read_navego_reference,
+            read_navego_visual,
+        )
+
+        return {"imu": read_navego_imu(imu, cfg.imu_max_bridge_s),
+                "gnss": read_navego_gnss(gnss),
+                "velocity": None if visual is None else read_navego_visual(visual),
+                "ref": None if ref is None else read_navego_reference(ref)}
+    return read
+
+
+def _csv_reader(imu: Path, gnss: Path, velocity: Path | None, ref: Path | None = None):
+    """``read(cfg)`` of fednav CSV files (GNSS sigmas and lever arm from the config, else
+    5 m, 0.1 m/s and none)."""
+    def read(cfg):
+        from .io import read_gnss_csv, read_imu_csv, read_reference_csv, read_velocity_csv
+
+        g = read_gnss_csv(gnss, cfg.gnss_sigma_pos_m or (5.0, 5.0, 5.0),
+                          cfg.gnss_sigma_vel_mps or (0.1, 0.1, 0.1),
+                          cfg.gnss_lever_m or (0.0, 0.0, 0.0))
+        return {"imu": read_imu_csv(imu, cfg.imu_max_bridge_s), "gnss": g,
+                "velocity": None if velocity is None else read_velocity_csv(velocity),
+                "ref": None if ref is None else read_reference_csv(ref)}
+    return read
+
+
 _OUT = typer.Option(Path("results/process"), help="output folder")
 _SMOOTH = typer.Option(False, "--smooth", help="also run the RTS smoother")
 _CONFIG = typer.Option(None, help="processing config YAML (noise figures, options)")
@@ -232,20 +264,8 @@ def process_navego(
     output_rate: float = _RATE,
 ) -> None:
     """Loosely coupled INS/GNSS (+ visual velocity) on NaveGo .mat files."""
-    from .io import (
-        read_navego_gnss,
-        read_navego_imu,
-        read_navego_reference,
-        read_navego_visual,
-    )
-
-    def read(cfg):
-        return {"imu": read_navego_imu(imu, cfg.imu_max_bridge_s),
-                "gnss": read_navego_gnss(gnss),
-                "velocity": None if visual is None else read_navego_visual(visual),
-                "ref": None if ref is None else read_navego_reference(ref)}
-
-    _run_process(read, imu, gnss, visual, ref, smooth, out, config, output_rate)
+    _run_process(_navego_reader(imu, gnss, visual, ref), imu, gnss, visual, ref, smooth, out,
+                 config, output_rate)
 
 
 @process_app.command("csv")
@@ -260,17 +280,8 @@ def process_csv(
 ) -> None:
     """Loosely coupled INS/GNSS (+ velocity sensor) on fednav CSV files; the IMU noise
     figures and GNSS sigmas come from --config."""
-    from .io import read_gnss_csv, read_imu_csv, read_reference_csv, read_velocity_csv
-
-    def read(cfg):
-        g = read_gnss_csv(gnss, cfg.gnss_sigma_pos_m or (5.0, 5.0, 5.0),
-                          cfg.gnss_sigma_vel_mps or (0.1, 0.1, 0.1),
-                          cfg.gnss_lever_m or (0.0, 0.0, 0.0))
-        return {"imu": read_imu_csv(imu, cfg.imu_max_bridge_s), "gnss": g,
-                "velocity": None if velocity is None else read_velocity_csv(velocity),
-                "ref": None if ref is None else read_reference_csv(ref)}
-
-    _run_process(read, imu, gnss, velocity, ref, smooth, out, config, output_rate)
+    _run_process(_csv_reader(imu, gnss, velocity, ref), imu, gnss, velocity, ref, smooth, out,
+                 config, output_rate)
 
 
 tune_app = typer.Typer(no_args_is_help=True,
@@ -307,7 +318,8 @@ def _run_tune(read, inputs: list, config, out: Path) -> None:
     tab.add_column("tuned")
     tab.add_column("how / why")
     for f in res.figures:
-        tab.add_row(f.key.removeprefix("imu."), format_value(f.start), format_value(f.value), f.how)
+        tab.add_row(f.key.removeprefix("imu."), format_value(f.start), format_value(f.value),
+                    f.how)
     console.print(tab)
     for n in res.notes:
         console.print(f"note: {n}")
@@ -336,14 +348,7 @@ def tune_navego(
     config: Path = _TUNE_CONFIG, out: Path = _TUNE_OUT,
 ) -> None:
     """Noise figures from NaveGo .mat files (start: the files' figures)."""
-    from .io import read_navego_gnss, read_navego_imu, read_navego_visual
-
-    def read(cfg):
-        return {"imu": read_navego_imu(imu, cfg.imu_max_bridge_s),
-                "gnss": read_navego_gnss(gnss),
-                "velocity": None if visual is None else read_navego_visual(visual)}
-
-    _run_tune(read, [imu, gnss, visual], config, out)
+    _run_tune(_navego_reader(imu, gnss, visual), [imu, gnss, visual], config, out)
 
 
 @tune_app.command("csv")
@@ -356,16 +361,7 @@ def tune_csv(
 ) -> None:
     """Noise figures from fednav CSV files (start: the base config's figures, else a
     generic MEMS IMU; give the GNSS lever arm in the base config)."""
-    from .io import read_gnss_csv, read_imu_csv, read_velocity_csv
-
-    def read(cfg):
-        g = read_gnss_csv(gnss, cfg.gnss_sigma_pos_m or (5.0, 5.0, 5.0),
-                          cfg.gnss_sigma_vel_mps or (0.1, 0.1, 0.1),
-                          cfg.gnss_lever_m or (0.0, 0.0, 0.0))
-        return {"imu": read_imu_csv(imu, cfg.imu_max_bridge_s), "gnss": g,
-                "velocity": None if velocity is None else read_velocity_csv(velocity)}
-
-    _run_tune(read, [imu, gnss, velocity], config, out)
+    _run_tune(_csv_reader(imu, gnss, velocity), [imu, gnss, velocity], config, out)
 
 
 @app.command()

@@ -195,8 +195,8 @@ def write_navego_dataset(ds: Dataset, out) -> list[Path]:
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    cfg, dt = ds.cfg, ds.cfg.imu_period_s
-    n, e = cfg.imu.noise_model(dt), cfg.imu.errors(dt)
+    cfg = ds.cfg
+    f = process_config(ds)["imu"]  # the figures, SI; no correlation time: 1e9 s in NaveGo
     M = FRD_TO_RFU  # RFU -> FRD and ENU -> NED (its own inverse)
     one = np.ones(3)
     r0, p0, y0 = fednav_euler_to_navego(ds.ref_euler[0])
@@ -205,12 +205,11 @@ def write_navego_dataset(ds: Dataset, out) -> list[Path]:
     ini = np.array([r0, p0, y0]) + err * rng.standard_normal(3)
     structs = {
         "imu": {"t": ds.t, "wb": ds.gyro @ M.T, "fb": ds.accel @ M.T,
-                "arw": n.gyro_arw * one, "vrw": n.accel_vrw * one,
-                "gb_sta": float(e.gyro_bias) * one, "ab_sta": float(e.accel_bias) * one,
-                "gb_dyn": n.gyro_markov_sigma * one, "ab_dyn": n.accel_markov_sigma * one,
-                "gb_corr": (n.gyro_markov_tau if np.isfinite(n.gyro_markov_tau) else 1e9) * one,
-                "ab_corr": (n.accel_markov_tau if np.isfinite(n.accel_markov_tau)
-                            else 1e9) * one,
+                "arw": f["gyro_arw_rad_sqrt_s"] * one, "vrw": f["accel_vrw_mps_sqrt_s"] * one,
+                "gb_sta": f["gyro_bias_radps"] * one, "ab_sta": f["accel_bias_mps2"] * one,
+                "gb_dyn": f["gyro_markov_radps"] * one, "ab_dyn": f["accel_markov_mps2"] * one,
+                "gb_corr": f.get("gyro_tau_s", 1e9) * one,
+                "ab_corr": f.get("accel_tau_s", 1e9) * one,
                 "ini_align": ini, "ini_align_err": err},
         "gnss": {"t": ds.gnss_t, "lat": ds.gnss_lla[:, 0], "lon": ds.gnss_lla[:, 1],
                  "h": ds.gnss_lla[:, 2], "vel": ds.gnss_vel @ M.T,

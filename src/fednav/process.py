@@ -150,7 +150,7 @@ class Solution:
                         self.label, self.fdi)
 
 
-class Innovation(NamedTuple):
+class InnovationRecord(NamedTuple):
     """One measurement's innovation in :func:`process`: local filter ``local``, time ``t``
     [s], residual ``r`` and covariance ``S`` of the local filter, the measurement noise
     ``R`` and the local's information share ``beta`` (its covariance is ``P / beta``, so
@@ -207,6 +207,26 @@ def adjust_sensors(gnss: GnssData, velocity: VelocityData | None, cfg: ProcessCo
     return gnss, velocity
 
 
+#: Each :class:`ImuNoiseConfig` key and the :class:`~fednav.io.data.ImuErrors` field of
+#: the data file it overrides.
+IMU_FILE_FIELDS = {"gyro_arw_rad_sqrt_s": "gyro_arw", "accel_vrw_mps_sqrt_s": "accel_vrw",
+                   "gyro_bias_radps": "gyro_bias", "accel_bias_mps2": "accel_bias",
+                   "gyro_markov_radps": "gyro_markov", "accel_markov_mps2": "accel_markov",
+                   "gyro_tau_s": "gyro_tau", "accel_tau_s": "accel_tau"}
+
+
+def imu_figures(imu: ImuData, overrides: ImuNoiseConfig) -> dict[str, float | None]:
+    """Every IMU figure (SI, by :class:`ImuNoiseConfig` key): the config's override, else
+    the file's (its largest axis), else None."""
+    out = {}
+    for key, name in IMU_FILE_FIELDS.items():
+        v = getattr(overrides, key)
+        if v is None and imu.errors is not None:
+            v = getattr(imu.errors, name)
+        out[key] = None if v is None else float(np.max(v))
+    return out
+
+
 def _noise(imu: ImuData, cfg: ProcessConfig):
     """Filter IMU model and initial bias sigmas from the file's figures and overrides.
 
@@ -218,30 +238,19 @@ def _noise(imu: ImuData, cfg: ProcessConfig):
     short-term growth equals the Markov process's, ``q = 2 sigma_m^2 / tau``.
     Returns (noise model, gyro constant-bias sigma, accelerometer bias sigma).
     """
-    e = imu.errors
-    o = cfg.imu
-
-    def pick(override, from_file, name):
-        if override is not None:
-            return float(override)
-        if from_file is None:
-            raise DataError(f"{imu.source}: no IMU error figures in the file; give "
-                            f"imu.{name} in the processing config")
-        return float(np.max(from_file))
-
-    g = lambda name: None if e is None else getattr(e, name)  # noqa: E731
-    arw = pick(o.gyro_arw_rad_sqrt_s, g("gyro_arw"), "gyro_arw_rad_sqrt_s")
-    vrw = pick(o.accel_vrw_mps_sqrt_s, g("accel_vrw"), "accel_vrw_mps_sqrt_s")
-    g_markov = pick(o.gyro_markov_radps, g("gyro_markov"), "gyro_markov_radps")
-    g_tau = pick(o.gyro_tau_s, g("gyro_tau"), "gyro_tau_s")
-    a_markov = pick(o.accel_markov_mps2, g("accel_markov"), "accel_markov_mps2")
-    a_tau = pick(o.accel_tau_s, g("accel_tau"), "accel_tau_s")
+    f = imu_figures(imu, cfg.imu)
+    missing = [k for k, v in f.items() if v is None]
+    if missing:
+        raise DataError(f"{imu.source}: no IMU error figures in the file; give "
+                        f"imu.{missing[0]} in the processing config")
+    arw, vrw = f["gyro_arw_rad_sqrt_s"], f["accel_vrw_mps_sqrt_s"]
+    g_markov, g_tau = f["gyro_markov_radps"], f["gyro_tau_s"]
+    a_markov, a_tau = f["accel_markov_mps2"], f["accel_tau_s"]
     n = em.ImuNoiseModel(gyro_arw=arw, accel_vrw=vrw, gyro_markov_sigma=g_markov,
                          gyro_markov_tau=g_tau,
                          accel_bias_rw=a_markov * np.sqrt(2.0 / a_tau) if np.isfinite(a_tau)
                          else 0.0)
-    gb = pick(o.gyro_bias_radps, g("gyro_bias"), "gyro_bias_radps")
-    ab = pick(o.accel_bias_mps2, g("accel_bias"), "accel_bias_mps2")
+    gb, ab = f["gyro_bias_radps"], f["accel_bias_mps2"]
     return n, gb, float(np.hypot(ab, a_markov))
 
 
@@ -364,7 +373,7 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
             innovations: list | None = None) -> ProcessResult:
     """Loosely coupled INS/GNSS(/velocity) processing; see the module docstring.
 
-    ``innovations``, when given a list, receives one :class:`Innovation` per measurement
+    ``innovations``, when given a list, receives one :class:`InnovationRecord` per measurement
     (what :mod:`fednav.tuning` estimates noise figures from)."""
     cfg = cfg or ProcessConfig()
     t_start = time.perf_counter()
@@ -467,7 +476,7 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
                     z, R = velocity.vel[i], model.R(velocity.cov[i])
                 inn = fed.update(name, model.residual(nav, z), model, nav, R, t=tm[i])
                 if innovations is not None:
-                    innovations.append(Innovation(name, tm[i], inn.r, inn.S, R,
+                    innovations.append(InnovationRecord(name, tm[i], inn.r, inn.S, R,
                                                   fed.beta[name], inn.accepted))
         fed.fuse()
         P_post[k] = fed.P

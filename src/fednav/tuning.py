@@ -40,7 +40,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .io.data import GnssData, ImuData, VelocityData
-from .process import Innovation, ProcessConfig, adjust_sensors, process
+from .process import (
+    InnovationRecord,
+    ProcessConfig,
+    adjust_sensors,
+    imu_figures,
+    process,
+)
 
 #: Starting IMU figures (a generic MEMS IMU) where neither the file nor the config has one.
 MEMS_DEFAULTS = {"gyro_arw_rad_sqrt_s": 5.8e-4, "accel_vrw_mps_sqrt_s": 2.0e-3,
@@ -109,7 +115,7 @@ def _cap(dof: int) -> float:
 def evaluate(imu: ImuData, gnss: GnssData, velocity: VelocityData | None,
              cfg: ProcessConfig) -> Evaluation:
     """Run the forward filter with ``cfg`` and sum up its innovations."""
-    inns: list[Innovation] = []
+    inns: list[InnovationRecord] = []
     process(imu, gnss, velocity, cfg, innovations=inns)
     ll, nis, matched = 0.0, {}, {}
     for local in dict.fromkeys(i.local for i in inns):
@@ -134,31 +140,13 @@ def evaluate(imu: ImuData, gnss: GnssData, velocity: VelocityData | None,
 
 
 def _starting_imu(imu: ImuData, base: ProcessConfig, notes: list) -> dict[str, float]:
-    out, generic = {}, []
-    for key, default in MEMS_DEFAULTS.items():
-        v = getattr(base.imu, key)
-        if v is None and imu.errors is not None:
-            name = {"gyro_arw_rad_sqrt_s": "gyro_arw", "accel_vrw_mps_sqrt_s": "accel_vrw",
-                    "gyro_bias_radps": "gyro_bias", "accel_bias_mps2": "accel_bias",
-                    "gyro_markov_radps": "gyro_markov", "accel_markov_mps2": "accel_markov",
-                    "gyro_tau_s": "gyro_tau", "accel_tau_s": "accel_tau"}[key]
-            v = float(np.max(getattr(imu.errors, name)))
-        if v is None:
-            v = default
-            generic.append(f"{key} {default:g}")
-        out[key] = float(v)
+    out = imu_figures(imu, base.imu)
+    generic = [k for k, v in out.items() if v is None]
     if generic:
+        out.update({k: MEMS_DEFAULTS[k] for k in generic})
         notes.append("not in the file or the config, started from a generic MEMS IMU: "
-                     + ", ".join(generic))
+                     + ", ".join(f"{k} {MEMS_DEFAULTS[k]:g}" for k in generic))
     return out
-
-
-def _with(base: ProcessConfig, imu: dict, gnss_pos, gnss_vel, vel_sigma) -> ProcessConfig:
-    return base.model_copy(update={
-        "imu": base.imu.model_copy(update=imu),
-        "gnss_sigma_pos_m": tuple(map(float, gnss_pos)),
-        "gnss_sigma_vel_mps": tuple(map(float, gnss_vel)),
-        "velocity_sigma_mps": None if vel_sigma is None else tuple(map(float, vel_sigma))})
 
 
 def tune(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
@@ -191,9 +179,13 @@ def tune(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
     free_v = "velocity_sigma_mps" not in fixed
 
     def config(fig_imu, rg, rv):
+        """``base`` with these IMU figures and sensor variances (residual order)."""
         sd = np.sqrt(rg)
-        return _with(base, fig_imu, sd[[1, 0, 2]], sd[3:],
-                     None if rv is None else np.sqrt(rv))
+        return base.model_copy(update={
+            "imu": base.imu.model_copy(update=fig_imu),
+            "gnss_sigma_pos_m": tuple(map(float, sd[[1, 0, 2]])),
+            "gnss_sigma_vel_mps": tuple(map(float, sd[3:])),
+            "velocity_sigma_mps": None if rv is None else tuple(map(float, np.sqrt(rv)))})
 
     def run(fig_imu, rg, rv, what):
         nonlocal runs
@@ -307,13 +299,13 @@ def config_yaml(res: TuneResult, base: dict | None = None, header: str = "") -> 
 
     data = dict(base or {})
     c = res.config
-    data["imu"] = {**(data.get("imu") or {}),
-                   **{k: float(v) for k, v in c.imu.model_dump().items() if v is not None}}
+    given = data.get("imu") or {}  # the user's own figures are written as given
+    data["imu"] = {k: given.get(k, float(f"{v:.6g}")) for k, v in c.imu.model_dump().items()
+                   if v is not None}
     for key in ("gnss_sigma_pos_m", "gnss_sigma_vel_mps", "velocity_sigma_mps"):
         v = getattr(c, key)
-        if v is not None:
+        if v is not None and key not in data:
             data[key] = [float(f"{x:.6g}") for x in v]
-    data["imu"] = {k: float(f"{v:.6g}") for k, v in data["imu"].items()}
     lines = [f"# {line}" for line in header.splitlines()]
     lines.append("# mean NIS/dof before -> after: " + ", ".join(
         f"{k} {res.before.nis_per_dof[k]:.2f} -> {res.after.nis_per_dof[k]:.2f}"
@@ -326,6 +318,7 @@ def config_yaml(res: TuneResult, base: dict | None = None, header: str = "") -> 
 
 
 def format_value(v) -> str:
+    """A figure (a number or a 3-list) to 3 significant digits."""
     if isinstance(v, (list, tuple)):
         return "[" + ", ".join(f"{x:.3g}" for x in v) + "]"
     return f"{v:.3g}"
