@@ -37,7 +37,12 @@ def gravity(lat, h):
 
     The gravity vector in ENU is ``[0, 0, -gravity(lat, h)]``.
     """
-    s2 = np.sin(lat) ** 2
+    return gravity_of_sin2(np.sin(lat) ** 2, h)
+
+
+def gravity_of_sin2(s2, h):
+    """:func:`gravity` from the squared sine of the latitude (for compiled loops that
+    already hold it)."""
     g0 = _GE * (1.0 + _K * s2) / np.sqrt(1.0 - E2 * s2)
     # Height dependence of normal gravity (free-air gradient with latitude term).
     m = OMEGA_IE**2 * A**3 * (1.0 - F) / GM  # omega^2 a^2 b / GM
@@ -125,6 +130,14 @@ def gravity_dlat(lat):
 
 
 radii_nb = numba.njit(cache=True)(radii)
-gravity_nb = numba.njit(cache=True)(gravity)
+gravity_of_sin2_nb = numba.njit(cache=True)(gravity_of_sin2)
+
+
+@numba.njit(cache=True)
+def gravity_nb(lat, h):
+    """Compiled :func:`gravity`."""
+    return gravity_of_sin2_nb(np.sin(lat) ** 2, h)
+
+
 gravity_gradient_nb = numba.njit(cache=True)(gravity_gradient)
 gravity_dlat_nb = numba.njit(cache=True)(gravity_dlat)

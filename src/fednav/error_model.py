@@ -37,7 +37,7 @@ import numba
 import numpy as np
 
 from . import earth, units
-from .kernels import dcm_to_rotvec, rotvec_to_dcm
+from .kernels import dcm_to_rotvec, matmul_sparse, rotvec_to_dcm
 from .kernels import quat_to_dcm as _quat_to_dcm
 
 N_STATES = 18
@@ -87,7 +87,8 @@ def _rotate(E, wl, wr, h, tmp, R):
 @numba.njit(cache=True)
 def _nominal_terms(p):
     """Terms of ``_rates`` that depend on the nominal only: w_ie0 + w_en0 (3),
-    (2 w_ie0 + w_en0) x v0 (3), cos(lat0)."""
+    (2 w_ie0 + w_en0) x v0 (3), cos(lat0), sin(lat0),
+    1 / (rm + h0)."""
     lat0, h0, rm, rn = p[0], p[1], p[8], p[9]
     v0e, v0n, v0u = p[2], p[3], p[4]
     om = earth.OMEGA_IE
@@ -95,33 +96,48 @@ def _nominal_terms(p):
     wie = np.array([0.0, om * c0, om * s0])
     wen = np.array([-v0n / (rm + h0), v0e / (rn + h0), v0e * s0 / c0 / (rn + h0)])
     a = 2.0 * wie + wen
-    out = np.empty(7)
+    out = np.empty(9)
     out[0:3] = wie + wen
     out[3] = a[1] * v0u - a[2] * v0n
     out[4] = a[2] * v0e - a[0] * v0u
     out[5] = a[0] * v0n - a[1] * v0e
     out[6] = c0
+    out[7] = s0
+    out[8] = 1.0 / (rm + h0)
     return out
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
+def _cos_sin_minus(c0, s0, d):
+    """cos and sin of ``a - d`` from those of ``a``; ``d`` below 1e-3 rad by its series
+    (error under 1e-20), which is what sigma points a few kilometres apart need."""
+    if abs(d) < 1e-3:
+        d2 = d * d
+        cd = 1.0 - d2 * (0.5 - d2 * (1.0 / 24.0 - d2 / 720.0))
+        sd = d * (1.0 - d2 * (1.0 / 6.0 - d2 * (1.0 / 120.0 - d2 / 5040.0)))
+    else:
+        cd, sd = np.cos(d), np.sin(d)
+    return c0 * cd + s0 * sd, s0 * cd - c0 * sd
+
+
+@numba.njit(cache=True, inline="always")
 def _rates(x, E, p, C0, out, wl, wr, k0):
     """Derivative of the non-attitude states into ``out``; attitude rotation rates into
     ``wl`` (left of E) and ``wr`` (right of E).  ``p`` = [lat0, h0, vE0, vN0, vU0, fE, fN, fU,
     rm, rn, k1, k2, 1/tau_g, 1/tau_a, g0]."""
-    lat0, h0 = p[0], p[1]
+    h0 = p[1]
     fe, fn_, fu = p[5], p[6], p[7]
     rm, rn, k1, k2, itg, ita, g0 = p[8], p[9], p[10], p[11], p[12], p[13], p[14]
     om = earth.OMEGA_IE
-    lat = lat0 - x[7] / (rm + h0)
     h = h0 - x[8]
     v0e, v0n, v0u = p[2], p[3], p[4]
     ve, vn, vu = v0e - x[3], v0n - x[4], v0u - x[5]
-    # True rates (the computed ones are in k0).
+    # True rates (the computed ones are in k0); true latitude lat0 - dN / (rm + h0).
     c0 = k0[6]
-    c1, s1 = np.cos(lat), np.sin(lat)
+    c1, s1 = _cos_sin_minus(c0, k0[7], x[7] * k0[8])
+    irm, irn, ic1 = 1.0 / (rm + h), 1.0 / (rn + h), 1.0 / c1
     wie1 = (0.0, om * c1, om * s1)
-    wen1 = (-vn / (rm + h), ve / (rn + h), ve * s1 / c1 / (rn + h))
+    wen1 = (-vn * irm, ve * irn, ve * s1 * ic1 * irn)
     e0 = x[9] + x[12]
     e1 = x[10] + x[13]
     e2 = x[11] + x[14]
@@ -142,9 +158,9 @@ def _rates(x, E, p, C0, out, wl, wr, k0):
     out[3] = fe - (E[0, 0] * a0 + E[1, 0] * a1 + E[2, 0] * a2) - cor0
     out[4] = fn_ - (E[0, 1] * a0 + E[1, 1] * a1 + E[2, 1] * a2) - cor1
     out[5] = (fu - (E[0, 2] * a0 + E[1, 2] * a1 + E[2, 2] * a2) - cor2
-              - g0 + earth.gravity_nb(lat, h) - k2 * x[8])
-    out[6] = (rn + h0) * c0 * (v0e / ((rn + h0) * c0) - ve / ((rn + h) * c1))
-    out[7] = (rm + h0) * (v0n / (rm + h0) - vn / (rm + h))
+              - g0 + earth.gravity_of_sin2_nb(s1 * s1, h) - k2 * x[8])
+    out[6] = v0e - ve * ((rn + h0) * c0) * irn * ic1
+    out[7] = v0n - vn * (rm + h0) * irm
     out[8] = x[5] - k1 * x[8]
     for i in range(3):
         out[9 + i] = 0.0
@@ -280,10 +296,10 @@ def _discretize(p, C, q, T, scale):
     F = _F(p, C)
     Qc = _Qc(p, C, q)
     A = F * (0.5 * T)
-    A2 = A @ A
-    half = np.eye(18) + A + A2 @ (np.eye(18) / 2.0 + A / 6.0 + A2 / 24.0)
-    Phi = half @ half
-    Qd = 0.5 * (Phi @ Qc @ Phi.T + Qc) * T
+    A2 = matmul_sparse(A, A)
+    half = np.eye(18) + A + matmul_sparse(A2, np.eye(18) / 2.0 + A / 6.0 + A2 / 24.0)
+    Phi = matmul_sparse(half, half)
+    Qd = 0.5 * (matmul_sparse(Phi, matmul_sparse(Qc, Phi.T)) + Qc) * T
     for i in range(18):
         for j in range(18):
             Phi[i, j] *= scale[j] / scale[i]

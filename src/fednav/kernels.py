@@ -17,8 +17,9 @@ import numpy as np
 def rotvec_to_dcm(r0, r1, r2, out):
     """Rodrigues' formula for the rotation vector (r0, r1, r2) [rad], written into ``out``."""
     a2 = r0 * r0 + r1 * r1 + r2 * r2
-    if a2 < 1e-12:
-        s, c = 1.0 - a2 / 6.0, 0.5 - a2 / 24.0
+    if a2 < 1e-6:  # series to a^6: below 1e-3 rad its error is under 1e-20 (no cancellation)
+        s = 1.0 - a2 * (1.0 / 6.0 - a2 * (1.0 / 120.0 - a2 / 5040.0))
+        c = 0.5 - a2 * (1.0 / 24.0 - a2 * (1.0 / 720.0 - a2 / 40320.0))
     else:
         a = np.sqrt(a2)
         s, c = np.sin(a) / a, (1.0 - np.cos(a)) / a2
@@ -53,6 +54,22 @@ def cholesky_lower(S):
                 s -= L[i, k] * L[j, k]
             L[i, j] = s / L[j, j]
     return L, True
+
+
+@numba.njit(cache=True)
+def matmul_sparse(A, B):
+    """``A @ B`` by explicit loops that skip the zero entries of ``A`` (state-space matrices
+    F, Phi, Qc are mostly zeros); equal to ``A @ B`` up to the order of rounding."""
+    n, m = A.shape
+    p = B.shape[1]
+    out = np.zeros((n, p))
+    for i in range(n):
+        for k in range(m):
+            a = A[i, k]
+            if a != 0.0:
+                for j in range(p):
+                    out[i, j] += a * B[k, j]
+    return out
 
 
 @numba.njit(cache=True)
@@ -180,14 +197,21 @@ def quat_to_rotvec(q):
 
 @numba.njit(cache=True, inline="always")
 def dcm_to_rotvec(C, out):
-    """Rotation vector of the DCM ``C`` [rad], written into ``out``."""
+    """Rotation vector of the DCM ``C`` [rad], written into ``out``.
+
+    Small angles (below 1e-3 rad) take ``a / sin a`` as a series in ``sin a`` (half the
+    antisymmetric part): no inverse trigonometric call, and exact to rounding."""
+    v0, v1, v2 = C[2, 1] - C[1, 2], C[0, 2] - C[2, 0], C[1, 0] - C[0, 1]
     tr = C[0, 0] + C[1, 1] + C[2, 2]
-    cosa = min(1.0, max(-1.0, 0.5 * (tr - 1.0)))
-    a = np.arccos(cosa)
-    k = 0.5 * (1.0 + a * a / 6.0) if a < 1e-6 else a / (2.0 * np.sin(a))
-    out[0] = k * (C[2, 1] - C[1, 2])
-    out[1] = k * (C[0, 2] - C[2, 0])
-    out[2] = k * (C[1, 0] - C[0, 1])
+    s2 = 0.25 * (v0 * v0 + v1 * v1 + v2 * v2)  # sin(a)^2
+    if tr > 1.0 and s2 < 1e-6:
+        k = 0.5 * (1.0 + s2 * (1.0 / 6.0 + s2 * (3.0 / 40.0 + s2 * 5.0 / 112.0)))
+    else:
+        a = np.arccos(min(1.0, max(-1.0, 0.5 * (tr - 1.0))))
+        k = 0.5 * (1.0 + a * a / 6.0) if a < 1e-6 else a / (2.0 * np.sin(a))
+    out[0] = k * v0
+    out[1] = k * v1
+    out[2] = k * v2
 
 
 @numba.njit(cache=True, inline="always")

@@ -15,11 +15,11 @@ import pandas as pd
 import scipy.linalg
 
 from . import attitude as att
-from . import earth, units
+from . import compiled_loop, earth, units
 from . import error_model as em
 from .config import Scenario
 from .delays import ANGLE_COLUMNS, InsIncrements, curve_fit_value
-from .filters import FederatedFilter, KalmanFilter, LinearModel, make_filter
+from .filters import FederatedFilter, FilterError, KalmanFilter, LinearModel, make_filter
 from .measurements import MODELS, NavSnapshot, StackedModel, WindConstraint
 from .sensors import Barometer, MeasurementSeries, corrupt_imu, inject_faults
 from .strapdown import STATE_LLA, STATE_Q, STATE_VEL, Strapdown, quat_to_dcm_nb
@@ -222,10 +222,8 @@ class _ClosedLoop:
         dth = self.data.dtheta[sl] - self.comp_g * dt
         dvc = self.data.dv[sl] - self.comp_a * dt
         ins, fed = self.ins, self.fed
-        s0 = ins.state.copy() if fed is not None else None
+        s0 = ins.state.copy()
         ins.run(dth, dvc, self.data.h_ref[sl], record=False)
-        if fed is None:
-            return
         s1 = ins.state
         if self.incs is not None:
             self.incs.record(k + 1, s0[STATE_LLA], s0[STATE_VEL], quat_to_dcm_nb(s0[STATE_Q]),
@@ -289,6 +287,18 @@ def run_mode(scn: Scenario, aiding: list[str], data: RunData, mode: str = "",
     how = {a: loop.timing[a].delay_compensation for a in aiding}
     t0 = truth.t[0]
     sched = {a: _schedule(data.series[a], T, n_cycles, t0) for a in aiding}
+    if fed is None:  # free INS: the whole flight in one compiled call
+        m = n_cycles * n_per
+        rec = loop.ins.run(data.dtheta[:m], data.dv[:m], data.h_ref[:m])
+        states = np.zeros((n_cycles, loop.ins.state.size))
+        end = np.arange(1, n_cycles + 1) * n_per - 1
+        for sl, key in ((STATE_Q, "q"), (STATE_VEL, "vel"), (STATE_LLA, "lla")):
+            states[:, sl] = rec[key][end]
+        return _result(scn, truth, n_per, states, mode, np.full((n_cycles, em.N_STATES),
+                                                                 np.nan), {}, None)
+    if compiled_loop.supported(ftype, aiding, loop.timing, loop.central, constraint,
+                               scn.filter.fdi_alpha, scn.filter.reset, loop.incs):
+        return _run_compiled(scn, truth, loop, sched, n_cycles, mode)
     recompute = [a for a in aiding if how[a] == "recompute"]
     capture = {a: _cycle_of(data.series[a].t, t0, T) for a in recompute}
     avail = {a: _cycle_of(data.series[a].t_avail, t0, T) for a in recompute}
@@ -305,9 +315,9 @@ def run_mode(scn: Scenario, aiding: list[str], data: RunData, mode: str = "",
 
     states = np.empty((n_cycles, loop.ins.state.size))  # INS state after each cycle
     var = np.full((n_cycles, em.N_STATES), np.nan)  # fused covariance diagonal (filter units)
-    betas = {k: np.empty(n_cycles) for k in (fed.filters if fed else {})}
+    betas = {k: np.empty(n_cycles) for k in fed.filters}
     snaps: list = [None] * n_cycles
-    first = loop.snapshot() if recompute and fed is not None else None
+    first = loop.snapshot() if recompute else None
     for k in range(n_cycles):
         j = k
         for a in recompute:
@@ -318,17 +328,62 @@ def run_mode(scn: Scenario, aiding: list[str], data: RunData, mode: str = "",
             for m in range(j, k):
                 loop.cycle(m, planned(m, k))
                 snaps[m] = loop.snapshot()
-        loop.cycle(k, planned(k, k) if fed is not None else [])
+        loop.cycle(k, planned(k, k))
         if first is not None:
             snaps[k] = loop.snapshot()
-        if fed is not None:
-            var[k] = np.diagonal(fed.P)
-            for name, b in fed.beta.items():
-                betas[name][k] = b
+        var[k] = np.diagonal(fed.P)
+        for name, b in fed.beta.items():
+            betas[name][k] = b
         states[k] = loop.ins.state
     sigma = np.sqrt(var) * em.SCALE
-    return _result(scn, truth, n_per, states, mode, sigma,
-                   betas, fed.log if fed is not None else None)
+    return _result(scn, truth, n_per, states, mode, sigma, betas, fed.log)
+
+
+def _run_compiled(scn, truth, loop: _ClosedLoop, sched, n_cycles: int, mode: str) -> RunResult:
+    """:func:`run_mode` through :func:`fednav.compiled_loop.closed_loop` (same filters,
+    same order of measurements, one compiled call)."""
+    fed, data = loop.fed, loop.data
+    names = list(fed.filters)
+    first = fed.filters[names[0]]
+    X = np.array([f.x for f in fed.filters.values()])
+    P = np.array([f.P for f in fed.filters.values()])
+    beta = np.array([fed.beta[k] for k in names])
+    kinds = np.array([compiled_loop.KINDS.get(k, -1) for k in names])
+    R = np.zeros((len(names), 3, 3))
+    for i, a in enumerate(loop.aiding):
+        R[i] = MODELS[a].R(data.series[a].sigma)
+    meas = [(k, i, j) for k in range(n_cycles) for i, a in enumerate(loop.aiding)
+            for j in sched[a][k]]
+    m_cycle = np.array([k for k, _, _ in meas], dtype=np.int64)
+    m_filter = np.array([i for _, i, _ in meas], dtype=np.int64)
+    m_z = np.array([data.series[loop.aiding[i]].z[j] for _, i, j in meas],
+                   dtype=float).reshape(-1, 3)
+    proc = em.ErrorProcess.__new__(em.ErrorProcess)
+    proc._set_model(loop.T, loop.noise, loop.baro_gains, loop.baro_q,
+                    scn.filter.substeps)
+    n = loop.ins.state.size
+    states = np.empty((n_cycles, n))
+    var = np.empty((n_cycles, em.N_STATES))
+    betas = np.empty((n_cycles, len(names)))
+    nis = np.empty(len(meas))
+    state = loop.ins.state.copy()
+    code, k, f = compiled_loop.closed_loop(
+        state, np.ascontiguousarray(data.dtheta), np.ascontiguousarray(data.dv),
+        np.ascontiguousarray(data.h_ref, dtype=float), loop.dt, loop.ins.baro_gains,
+        loop.n_per, proc.T, proc.k1, proc.k2, proc.itg, proc.ita, proc._noise, proc.nsub,
+        em.SCALE, X, P, beta, first.c, first.Wm, first.Wc,
+        compiled_loop.SHARING[fed.sharing], kinds, m_cycle, m_filter, m_z, R, states, var,
+        betas, nis)
+    if code:
+        who = (fed.filters[names[f]].name if 0 <= f < len(names) and code != 1
+               else "strapdown INS" if code == 1 else "federated fusion")
+        raise FilterError(f"{who} at step {k + 1}: {compiled_loop.FAILURES[code]}")
+    loop.ins.state[:] = state
+    log = [(loop.t_epoch[k + 1], loop.aiding[i], float(v), 3, float("nan"), False)
+           for (k, i, _), v in zip(meas, nis, strict=True)]
+    sigma = np.sqrt(var) * em.SCALE
+    return _result(scn, truth, loop.n_per, states, mode, sigma,
+                   {k: betas[:, i].copy() for i, k in enumerate(names)}, log)
 
 
 def _result(scn, truth, n_per, states, mode, sigma, betas, log) -> RunResult:

@@ -70,8 +70,12 @@ def sharing_factors(covs: dict[str, np.ndarray], rule: str = "equal",
 
 @numba.njit(cache=True)
 def _fuse(xs, Ps):
-    """Information fusion of k estimates: (x_g, P_g, tr(P_i^-1) (k,), index of failure)."""
+    """Information fusion of k estimates: (x_g, P_g, tr(P_i^-1) (k,), index of failure).
+    One estimate is its own fusion (returned as it is, its trace set to 1: the sharing
+    factor is 1 whatever it is)."""
     k, n = xs.shape
+    if k == 1:
+        return xs[0].copy(), Ps[0].copy(), np.ones(1), -1
     Ig = np.zeros((n, n))
     v = np.zeros(n)
     tr = np.empty(k)
