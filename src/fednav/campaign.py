@@ -159,8 +159,10 @@ def run_units(fn: Callable, args: list, jobs: int = 1, progress: Callable | None
     """``[fn(a) for a in args]`` in order; units already in ``campaign`` are read back,
     the others computed (in this process, on a local Dask cluster of ``jobs`` worker
     processes, or on the campaign's Dask scheduler) and stored as they finish;
-    ``progress()`` after each unit, reused or computed."""
-    keys = [work_key(fn, a) for a in args]
+    ``progress()`` after each unit, reused or computed.  ``fn`` may be a list, one
+    function per unit (units are submitted in order: put the long ones first)."""
+    fns = list(fn) if isinstance(fn, list | tuple) else [fn] * len(args)
+    keys = [work_key(f, a) for f, a in zip(fns, args, strict=True)]
     out: list = [None] * len(args)
     todo = []
     for i, k in enumerate(keys):
@@ -185,7 +187,7 @@ def run_units(fn: Callable, args: list, jobs: int = 1, progress: Callable | None
         return out
     if address is None and (jobs <= 1 or len(todo) == 1):
         for i in todo:
-            done(i, fn(args[i]))
+            done(i, fns[i](args[i]))
         return out
     from distributed import as_completed
 
@@ -195,8 +197,8 @@ def run_units(fn: Callable, args: list, jobs: int = 1, progress: Callable | None
         client, cluster, _ = _start_client(None, jobs)
         own = (client, cluster)
     try:
-        futs = {client.submit(fn, args[i], key=f"{fn.__name__}-{keys[i]}", pure=False): i
-                for i in todo}
+        futs = {client.submit(fns[i], args[i], key=f"{fns[i].__name__}-{keys[i]}",
+                              pure=False): i for i in todo}
         for fut in as_completed(futs):
             done(futs[fut], fut.result())
     finally:

@@ -11,10 +11,11 @@ from __future__ import annotations
 from collections.abc import Callable
 
 
-def run_seeds(fn: Callable, args: list, jobs: int = 1, progress: Callable | None = None,
-              campaign=None) -> list:
+def run_seeds(fn: Callable | list[Callable], args: list, jobs: int = 1,
+              progress: Callable | None = None, campaign=None) -> list:
     """``[fn(a) for a in args]`` in order, with ``jobs`` worker processes (Dask), reusing
-    and filling the ``campaign`` store when one is given; ``progress()`` after each."""
+    and filling the ``campaign`` store when one is given; ``progress()`` after each.
+    ``fn`` may be a list: one function per unit."""
     from .campaign import run_units
 
     return run_units(fn, args, jobs, progress, campaign)
