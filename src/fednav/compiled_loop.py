@@ -12,11 +12,10 @@ back to the interpreter; the per-cycle Python orchestration (about 250 us a cycl
 gone.
 
 Every other configuration runs the general Python loop.  :func:`supported` says which
-path a mode takes; the test suite flies both paths on the same data and compares them.
-The two paths make the same floating-point operations; where they round differently
-(library ``asin``/``atan2`` against numpy's), the UKF's small ``alpha`` (paper 002:
-1e-3, centre weight ``-1e6``) magnifies a last-bit difference to about 1e-6 relative in
-the error statistics of a 1200 s flight.
+path a mode takes; the test suite flies both paths on the same data and finds them equal
+within 1e-9 relative.  Keep them making the same floating-point operations in the same
+order: the UKF's small ``alpha`` (paper 002: 1e-3, centre weight ``-1e6``) magnifies any
+last-bit difference to about 1e-6 relative in the error statistics of a 1200 s flight.
 """
 
 from __future__ import annotations
