@@ -31,7 +31,7 @@ from .filters.federated import _fuse
 from .filters.ukf import _predict_moments, _sigma_points, _update
 from .kernels import cholesky_lower
 from .kernels import quat_to_dcm as _q2dcm
-from .measurements import _euler_error_kernel
+from .measurements import euler_error_nb
 from .strapdown import _correct
 from .strapdown import _run as _strapdown_run
 from .units import ARCMIN
@@ -83,18 +83,11 @@ def _residual(kind, state, C, z, out):
 
 
 @numba.njit(cache=True)
-def _predicted(kind, C, X, scale):
-    """The measurement model ``h`` of each sigma point (rows of X, filter units)."""
-    m = X.shape[0]
-    phi = np.empty((m, 3))
-    for i in range(m):
-        for j in range(3):
-            phi[i, j] = X[i, j] * scale[j]
-    e = np.empty((m, 3))
-    _euler_error_kernel(C, phi, e)
-    e = e / ARCMIN
+def _predicted(kind, C, X):
+    """The measurement model ``h`` of each sigma point: StarAttitude.h, SarFix.h."""
+    e = euler_error_nb(C, X)
     if kind == 1:
-        for i in range(m):
+        for i in range(X.shape[0]):
             e[i, 0] = X[i, 6]
             e[i, 1] = X[i, 7]
     return e
@@ -149,7 +142,7 @@ def closed_loop(state, dtheta, dv, h_ref, dt, gains, n_per, T, k1, k2, itg, ita,
             S = _sigma_points(X[f], P[f], c)
             if S.shape[0] == 0:
                 return 2, k, f
-            x, Pn, _, _, ni, ok = _update(S, _predicted(kinds[f], C, S, scale), Wm, Wc, X[f],
+            x, Pn, _, _, ni, ok = _update(S, _predicted(kinds[f], C, S), Wm, Wc, X[f],
                                           P[f], y, R[f])
             if not ok or not math.isfinite(ni):
                 return 4, k, f

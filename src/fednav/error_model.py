@@ -322,6 +322,18 @@ class Nominal:
     fn: np.ndarray
 
 
+def model_constants(noise: ImuNoiseModel, baro_gains=(0.0, 0.0), baro_q: float = 0.0):
+    """What the compiled model functions read besides the nominal point: baro loop gains
+    k1, k2, inverse Markov times 1/tau_g, 1/tau_a [1/s] (0 for a constant bias) and the
+    noise vector of ``_Qc``."""
+    itg = 0.0 if np.isinf(noise.gyro_markov_tau) else 1.0 / noise.gyro_markov_tau
+    ita = 0.0 if np.isinf(noise.accel_markov_tau) else 1.0 / noise.accel_markov_tau
+    vec = np.array([noise.gyro_arw, noise.accel_vrw, noise.gyro_markov_sigma,
+                    noise.accel_markov_sigma, float(baro_q), noise.gyro_bias_rw,
+                    noise.accel_bias_rw])
+    return float(baro_gains[0]), float(baro_gains[1]), itg, ita, vec
+
+
 class ErrorProcess:
     """The error model over one interval ``T``: Phi, Qd and the nonlinear transition.
 
@@ -351,13 +363,9 @@ class ErrorProcess:
 
     def _set_model(self, T, noise, baro_gains, baro_q, nsub) -> None:
         self.T, self.noise, self.nsub = float(T), noise, int(nsub)
-        self.k1, self.k2 = float(baro_gains[0]), float(baro_gains[1])
-        self.itg = 0.0 if np.isinf(noise.gyro_markov_tau) else 1.0 / noise.gyro_markov_tau
-        self.ita = 0.0 if np.isinf(noise.accel_markov_tau) else 1.0 / noise.accel_markov_tau
         self.baro_q = float(baro_q)
-        self._noise = np.array([noise.gyro_arw, noise.accel_vrw, noise.gyro_markov_sigma,
-                                noise.accel_markov_sigma, self.baro_q, noise.gyro_bias_rw,
-                                noise.accel_bias_rw])
+        self.k1, self.k2, self.itg, self.ita, self._noise = model_constants(noise, baro_gains,
+                                                                            baro_q)
 
     def _set_nominal(self, params, C0, Phi, Qd, nom: Nominal | None = None) -> None:
         self._params, self._C0, self.Phi, self.Qd = params, C0, Phi, Qd

@@ -53,12 +53,23 @@ def _euler_error_kernel(C_hat, phi, out):
         out[i, 2] = (e0h - h + np.pi) % (2 * np.pi) - np.pi
 
 
-def _euler_error(C_hat, X):
-    """Euler of C_hat minus Euler of the attitude corrected by each row's phi (arcmin)."""
-    phi = np.ascontiguousarray(X[:, PHI] * SCALE[PHI])
-    out = np.empty((phi.shape[0], 3))
-    _euler_error_kernel(np.ascontiguousarray(C_hat, dtype=float), phi, out)
+@numba.njit(cache=True)
+def euler_error_nb(C_hat, X):
+    """Euler of C_hat minus Euler of the attitude corrected by each row's phi (rows of X
+    in filter units; arcmin)."""
+    m = X.shape[0]
+    phi = np.empty((m, 3))
+    for i in range(m):
+        for j in range(3):
+            phi[i, j] = X[i, j] * SCALE[j]
+    out = np.empty((m, 3))
+    _euler_error_kernel(C_hat, phi, out)
     return out / ARCMIN
+
+
+def _euler_error(C_hat, X):
+    return euler_error_nb(np.ascontiguousarray(C_hat, dtype=float),
+                          np.ascontiguousarray(X, dtype=float))
 
 
 class StarAttitude:

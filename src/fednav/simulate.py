@@ -358,9 +358,7 @@ def _run_compiled(scn, truth, loop: _ClosedLoop, sched, n_cycles: int, mode: str
     m_filter = np.array([i for _, i, _ in meas], dtype=np.int64)
     m_z = np.array([data.series[loop.aiding[i]].z[j] for _, i, j in meas],
                    dtype=float).reshape(-1, 3)
-    proc = em.ErrorProcess.__new__(em.ErrorProcess)
-    proc._set_model(loop.T, loop.noise, loop.baro_gains, loop.baro_q,
-                    scn.filter.substeps)
+    k1, k2, itg, ita, noise = em.model_constants(loop.noise, loop.baro_gains, loop.baro_q)
     n = loop.ins.state.size
     states = np.empty((n_cycles, n))
     var = np.empty((n_cycles, em.N_STATES))
@@ -370,7 +368,7 @@ def _run_compiled(scn, truth, loop: _ClosedLoop, sched, n_cycles: int, mode: str
     code, k, f = compiled_loop.closed_loop(
         state, np.ascontiguousarray(data.dtheta), np.ascontiguousarray(data.dv),
         np.ascontiguousarray(data.h_ref, dtype=float), loop.dt, loop.ins.baro_gains,
-        loop.n_per, proc.T, proc.k1, proc.k2, proc.itg, proc.ita, proc._noise, proc.nsub,
+        loop.n_per, float(loop.T), k1, k2, itg, ita, noise, int(scn.filter.substeps),
         em.SCALE, X, P, beta, first.c, first.Wm, first.Wc,
         compiled_loop.SHARING[fed.sharing], kinds, m_cycle, m_filter, m_z, R, states, var,
         betas, nis)
