@@ -47,6 +47,14 @@ def test_codec_round_trip_with_frames_and_dicts():
     assert f1["isolated"].dtype == bool and f1["local"].iloc[0] == f0["local"].iloc[0]
 
 
+def test_codec_round_trip_of_an_analysis_dict():
+    """Paper 002's Table-1 unit returns nested numbers and names (kept as JSON)."""
+    obs = {"rows": {"phiE": {"degree": {"ours": 8.123456789012345, "paper": None}}},
+           "phases": {"si": {"climb": {"phiE": 1e-300}}}}
+    assert decode(encode(obs)) == obs
+    assert decode(encode((obs, [{"seed": 1, "x": 0.5}]))) == (obs, [{"seed": 1, "x": 0.5}])
+
+
 def test_resume_computes_only_missing_runs_and_gives_identical_tables(tmp_path):
     whole = _reproduce(tmp_path / "whole")
     part = tmp_path / "part"
@@ -55,7 +63,7 @@ def test_resume_computes_only_missing_runs_and_gives_identical_tables(tmp_path):
     runs[0].unlink()                                          # a run lost ...
     (part / "runs" / f".{runs[1].stem}.123.tmp").write_text("half-written")  # ... a kill
     s = _reproduce(part)
-    assert s["campaign"]["runs_computed"] == 1 and s["campaign"]["runs_reused"] == 3
+    assert s["campaign"]["runs_computed"] == 1 and s["campaign"]["runs_reused"] == 4
     assert _tables(s) == _tables(whole)
     ds = open_runs(part)
     assert set(ds.dims) == {"run", "mode", "time", "axis"} and list(ds.run.values) == [1, 2]
@@ -155,7 +163,7 @@ def test_kill_9_at_random_moments_then_resume_gives_identical_tables(tmp_path):
             assert f.stat().st_size > 0
     assert kills >= 1
     s = _reproduce(out)
-    assert s["campaign"]["runs_computed"] + s["campaign"]["runs_reused"] == 4
+    assert s["campaign"]["runs_computed"] + s["campaign"]["runs_reused"] == 5
     assert _tables(s) == _tables(whole)
 
 

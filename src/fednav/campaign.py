@@ -311,8 +311,9 @@ def _result_from(ds, prefix: str, meta: dict):
 
 
 def encode(result):
-    """A unit's result — a table (list of dicts), a dict of result dataclasses, None, or a
-    tuple of those — as an :class:`xarray.Dataset` (exact round trip with :func:`decode`)."""
+    """A unit's result — a table (list of dicts), a dict of result dataclasses, a dict of
+    JSON values (kept in the attributes), None, or a tuple of those — as an
+    :class:`xarray.Dataset` (exact round trip with :func:`decode`)."""
     import xarray as xr
 
     parts = list(result) if isinstance(result, tuple) else [result]
@@ -331,6 +332,8 @@ def encode(result):
             metas.append({"kind": "series", "names": names,
                           "items": [_result_vars(f"{p}_s{j}", part[n], data)
                                     for j, n in enumerate(names)]})
+        elif isinstance(part, dict):  # plain numbers and names (e.g. an analysis table)
+            metas.append({"kind": "json", "value": part})
         else:
             raise TypeError(f"campaign: cannot store a result part of type {type(part)}")
     attrs = {"fednav_structure": json.dumps({"tuple": isinstance(result, tuple),
@@ -347,6 +350,8 @@ def decode(ds):
             parts.append(None)
         elif m["kind"] == "table":
             parts.append(_table_from(ds, p, m))
+        elif m["kind"] == "json":
+            parts.append(m["value"])
         else:
             parts.append({n: _result_from(ds, f"{p}_s{j}", it)
                           for j, (n, it) in enumerate(zip(m["names"], m["items"],

@@ -108,7 +108,9 @@ def plot_errors(series: dict, path: Path) -> Path:
     axes[0, 0].set_yscale("symlog", linthresh=1.0)
     axes[0, 1].set_yscale("symlog", linthresh=1.0)
     fig.suptitle("Navigation errors (computed − true), first Monte Carlo run")
-    fig.tight_layout()
+    # A fixed layout: tight_layout would draw every axis twice (half the plotting time).
+    fig.subplots_adjust(left=0.06, right=0.99, bottom=0.06, top=0.94, wspace=0.22,
+                        hspace=0.08)
     save_figure(fig, path)
     plt.close(fig)
     return path
