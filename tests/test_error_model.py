@@ -33,6 +33,22 @@ def test_F_is_jacobian_of_nonlinear_model():
     np.testing.assert_allclose(p.Phi, expected, atol=2e-5, rtol=1e-4)
 
 
+def test_points_propagate_independently_to_the_bit():
+    """The transition propagates all points together (one column each, branch-free where
+    every point takes the series forms): each row must come out exactly as it does alone,
+    whether its neighbours take the series or the library trigonometry."""
+    p = make_process(nsub=2)
+    rng = np.random.default_rng(7)
+    X = rng.normal(size=(37, 18))
+    X[5, 7] = 1e4      # 10 km north error: latitude offset above the series range
+    X[9, 0:3] = 200.0  # 200 arcmin misalignment: rotation above the series range
+    both = p.transition(X)
+    for i in (0, 5, 9, 36):
+        assert np.array_equal(p.transition(X[i:i + 1])[0], both[i])
+    small = np.delete(X, [5, 9], axis=0)
+    assert np.array_equal(p.transition(small), np.delete(both, [5, 9], axis=0))
+
+
 def test_zero_error_stays_zero_and_large_errors_are_nonlinear():
     p = make_process(nsub=4)
     np.testing.assert_allclose(p.transition(np.zeros((1, 18))), 0.0, atol=1e-12)

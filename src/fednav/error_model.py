@@ -71,17 +71,74 @@ class ImuNoiseModel:
     accel_markov_tau: float = np.inf
 
 
-@numba.njit(cache=True, inline="always")
-def _rotate(E, wl, wr, h, tmp, R):
-    """E <- exp(h [wl x]) E exp(h [wr x])."""
-    rotvec_to_dcm(h * wl[0], h * wl[1], h * wl[2], R)
-    for i in range(3):
-        for j in range(3):
-            tmp[i, j] = R[i, 0] * E[0, j] + R[i, 1] * E[1, j] + R[i, 2] * E[2, j]
-    rotvec_to_dcm(h * wr[0], h * wr[1], h * wr[2], R)
-    for i in range(3):
-        for j in range(3):
-            E[i, j] = tmp[i, 0] * R[0, j] + tmp[i, 1] * R[1, j] + tmp[i, 2] * R[2, j]
+# ----------------------------------------------------------------- nonlinear transition
+# The sigma points (or quadrature points) are propagated together: every array below
+# holds one point per column, and every stage is a loop over the points with the same
+# scalar arithmetic the model would make point by point.  Independent iterations keep
+# the floating-point units busy (one point alone is a long chain of dependent operations)
+# and let the compiler use SIMD; each point's result is bit-for-bit that of the
+# point-by-point evaluation, because no operation is reordered or contracted.
+_VEC = {"cache": True, "error_model": "numpy"}  # no zero-division branch: loops vectorise
+
+
+@numba.njit(inline="always")
+def _dcm_entries(r0, r1, r2, s, c, out, i):
+    """The nine entries of Rodrigues' formula (:func:`fednav.kernels.rotvec_to_dcm`),
+    row-major, into column ``i`` of ``out`` (9, P)."""
+    out[0, i] = 1.0 - c * (r1 * r1 + r2 * r2)
+    out[4, i] = 1.0 - c * (r0 * r0 + r2 * r2)
+    out[8, i] = 1.0 - c * (r0 * r0 + r1 * r1)
+    out[1, i] = -s * r2 + c * r0 * r1
+    out[3, i] = s * r2 + c * r0 * r1
+    out[2, i] = s * r1 + c * r0 * r2
+    out[6, i] = -s * r1 + c * r0 * r2
+    out[5, i] = -s * r0 + c * r1 * r2
+    out[7, i] = s * r0 + c * r1 * r2
+
+
+@numba.njit(**_VEC)
+def _rotvec_to_dcm_cols(W, row, h, out):
+    """``rotvec_to_dcm(h * W[row:row + 3, i])`` for every column ``i`` into ``out`` (9, P);
+    the same series below 1e-3 rad, taken without a branch when every point is there."""
+    P = W.shape[1]
+    small = True
+    for i in range(P):
+        r0, r1, r2 = h * W[row, i], h * W[row + 1, i], h * W[row + 2, i]
+        if not r0 * r0 + r1 * r1 + r2 * r2 < 1e-6:
+            small = False
+    if small:
+        for i in range(P):
+            r0, r1, r2 = h * W[row, i], h * W[row + 1, i], h * W[row + 2, i]
+            a2 = r0 * r0 + r1 * r1 + r2 * r2
+            s = 1.0 - a2 * (1.0 / 6.0 - a2 * (1.0 / 120.0 - a2 / 5040.0))
+            c = 0.5 - a2 * (1.0 / 24.0 - a2 * (1.0 / 720.0 - a2 / 40320.0))
+            _dcm_entries(r0, r1, r2, s, c, out, i)
+    else:
+        R = np.empty((3, 3))
+        for i in range(P):
+            rotvec_to_dcm(h * W[row, i], h * W[row + 1, i], h * W[row + 2, i], R)
+            for a in range(3):
+                for b in range(3):
+                    out[3 * a + b, i] = R[a, b]
+
+
+@numba.njit(**_VEC)
+def _rotate_cols(E, D, h, R, tmp):
+    """E <- exp(h [wl x]) E exp(h [wr x]) per column: E (9, P) row-major 3x3, wl and wr
+    in rows 18:21 and 21:24 of D; R, tmp (9, P) scratch."""
+    P = E.shape[1]
+    _rotvec_to_dcm_cols(D, 18, h, R)
+    for a in range(3):
+        for b in range(3):
+            for i in range(P):
+                tmp[3 * a + b, i] = (R[3 * a, i] * E[b, i] + R[3 * a + 1, i] * E[3 + b, i]
+                                     + R[3 * a + 2, i] * E[6 + b, i])
+    _rotvec_to_dcm_cols(D, 21, h, R)
+    for a in range(3):
+        for b in range(3):
+            for i in range(P):
+                E[3 * a + b, i] = (tmp[3 * a, i] * R[b, i] + tmp[3 * a + 1, i] * R[3 + b, i]
+                                   + tmp[3 * a + 2, i] * R[6 + b, i])
 
 
 @numba.njit(cache=True)
@@ -107,103 +164,145 @@ def _nominal_terms(p):
     return out
 
 
-@numba.njit(cache=True, inline="always")
-def _cos_sin_minus(c0, s0, d):
-    """cos and sin of ``a - d`` from those of ``a``; ``d`` below 1e-3 rad by its series
-    (error under 1e-20), which is what sigma points a few kilometres apart need."""
-    if abs(d) < 1e-3:
-        d2 = d * d
-        cd = 1.0 - d2 * (0.5 - d2 * (1.0 / 24.0 - d2 / 720.0))
-        sd = d * (1.0 - d2 * (1.0 / 6.0 - d2 * (1.0 / 120.0 - d2 / 5040.0)))
-    else:
-        cd, sd = np.cos(d), np.sin(d)
-    return c0 * cd + s0 * sd, s0 * cd - c0 * sd
+_gravity_of_sin2 = numba.njit(inline="always", error_model="numpy")(earth.gravity_of_sin2)
 
 
-@numba.njit(cache=True, inline="always")
-def _rates(x, E, p, C0, out, wl, wr, k0):
-    """Derivative of the non-attitude states into ``out``; attitude rotation rates into
-    ``wl`` (left of E) and ``wr`` (right of E).  ``p`` = [lat0, h0, vE0, vN0, vU0, fE, fN, fU,
-    rm, rn, k1, k2, 1/tau_g, 1/tau_a, g0]."""
+@numba.njit(inline="always")
+def _cos_sin_series(d):
+    """cos and sin of ``d`` by their series: error under 1e-20 below 1e-3 rad."""
+    d2 = d * d
+    return (1.0 - d2 * (0.5 - d2 * (1.0 / 24.0 - d2 / 720.0)),
+            d * (1.0 - d2 * (1.0 / 6.0 - d2 * (1.0 / 120.0 - d2 / 5040.0))))
+
+
+@numba.njit(**_VEC)
+def _true_lat_cos_sin(x, k0, cs):
+    """cos and sin of the true latitude lat0 - dN / (rm + h0) of every column of ``x``
+    into ``cs`` (2, P), from those of lat0: the offset's cosine and sine by their series
+    below 1e-3 rad (a few kilometres, what sigma points need), else by the library; the
+    loop has no branch when every point is below."""
+    P = x.shape[1]
+    c0, s0, k8 = k0[6], k0[7], k0[8]
+    small = True
+    for i in range(P):
+        if not abs(x[7, i] * k8) < 1e-3:
+            small = False
+    if small:
+        for i in range(P):
+            cd, sd = _cos_sin_series(x[7, i] * k8)
+            cs[0, i] = c0 * cd + s0 * sd
+            cs[1, i] = s0 * cd - c0 * sd
+        return
+    for i in range(P):
+        d = x[7, i] * k8
+        cd, sd = _cos_sin_series(d) if abs(d) < 1e-3 else (np.cos(d), np.sin(d))
+        cs[0, i] = c0 * cd + s0 * sd
+        cs[1, i] = s0 * cd - c0 * sd
+
+
+@numba.njit(**_VEC)
+def _rates(x, E, p, C0, k0, cs, out):
+    """Derivatives of every column of ``x`` (18, P; SI) with error rotations ``E`` (9, P):
+    the non-attitude states into rows 3:18 of ``out`` (24, P), the attitude rotation rates
+    into rows 18:21 (``wl``, left of E) and 21:24 (``wr``, right of E).  ``p`` = [lat0, h0,
+    vE0, vN0, vU0, fE, fN, fU, rm, rn, k1, k2, 1/tau_g, 1/tau_a, g0]; ``k0`` from
+    :func:`_nominal_terms`; ``cs`` (2, P) scratch."""
+    P = x.shape[1]
     h0 = p[1]
     fe, fn_, fu = p[5], p[6], p[7]
     rm, rn, k1, k2, itg, ita, g0 = p[8], p[9], p[10], p[11], p[12], p[13], p[14]
     om = earth.OMEGA_IE
-    h = h0 - x[8]
     v0e, v0n, v0u = p[2], p[3], p[4]
-    ve, vn, vu = v0e - x[3], v0n - x[4], v0u - x[5]
-    # True rates (the computed ones are in k0); true latitude lat0 - dN / (rm + h0).
     c0 = k0[6]
-    c1, s1 = _cos_sin_minus(c0, k0[7], x[7] * k0[8])
-    irm, irn, ic1 = 1.0 / (rm + h), 1.0 / (rn + h), 1.0 / c1
-    wie1 = (0.0, om * c1, om * s1)
-    wen1 = (-vn * irm, ve * irn, ve * s1 * ic1 * irn)
-    e0 = x[9] + x[12]
-    e1 = x[10] + x[13]
-    e2 = x[11] + x[14]
-    for i in range(3):
-        wl[i] = C0[i, 0] * e0 + C0[i, 1] * e1 + C0[i, 2] * e2 - k0[i]
-        wr[i] = wie1[i] + wen1[i]
-    # Velocity error: (I - E^T) f + E^T C0 nabla - Coriolis difference + gravity difference.
-    cn0 = C0[0, 0] * x[15] + C0[0, 1] * x[16] + C0[0, 2] * x[17]
-    cn1 = C0[1, 0] * x[15] + C0[1, 1] * x[16] + C0[1, 2] * x[17]
-    cn2 = C0[2, 0] * x[15] + C0[2, 1] * x[16] + C0[2, 2] * x[17]
-    a0, a1, a2 = fe - cn0, fn_ - cn1, fu - cn2
-    a1x = 2 * wie1[0] + wen1[0]
-    a1y = 2 * wie1[1] + wen1[1]
-    a1z = 2 * wie1[2] + wen1[2]
-    cor0 = k0[3] - (a1y * vu - a1z * vn)
-    cor1 = k0[4] - (a1z * ve - a1x * vu)
-    cor2 = k0[5] - (a1x * vn - a1y * ve)
-    out[3] = fe - (E[0, 0] * a0 + E[1, 0] * a1 + E[2, 0] * a2) - cor0
-    out[4] = fn_ - (E[0, 1] * a0 + E[1, 1] * a1 + E[2, 1] * a2) - cor1
-    out[5] = (fu - (E[0, 2] * a0 + E[1, 2] * a1 + E[2, 2] * a2) - cor2
-              - g0 + earth.gravity_of_sin2_nb(s1 * s1, h) - k2 * x[8])
-    out[6] = v0e - ve * ((rn + h0) * c0) * irn * ic1
-    out[7] = v0n - vn * (rm + h0) * irm
-    out[8] = x[5] - k1 * x[8]
-    for i in range(3):
-        out[9 + i] = 0.0
-        out[12 + i] = -itg * x[12 + i]
-        out[15 + i] = -ita * x[15 + i]
+    q00, q01, q02 = C0[0, 0], C0[0, 1], C0[0, 2]
+    q10, q11, q12 = C0[1, 0], C0[1, 1], C0[1, 2]
+    q20, q21, q22 = C0[2, 0], C0[2, 1], C0[2, 2]
+    w0, w1, w2, k3, k4, k5 = k0[0], k0[1], k0[2], k0[3], k0[4], k0[5]
+    # True rates (the computed ones are in k0); true latitude lat0 - dN / (rm + h0).
+    _true_lat_cos_sin(x, k0, cs)
+    for i in range(P):
+        h = h0 - x[8, i]
+        ve, vn, vu = v0e - x[3, i], v0n - x[4, i], v0u - x[5, i]
+        c1, s1 = cs[0, i], cs[1, i]
+        irm, irn, ic1 = 1.0 / (rm + h), 1.0 / (rn + h), 1.0 / c1
+        wie1, wie2 = om * c1, om * s1  # w_ie east is zero
+        wen0, wen1, wen2 = -vn * irm, ve * irn, ve * s1 * ic1 * irn
+        e0 = x[9, i] + x[12, i]
+        e1 = x[10, i] + x[13, i]
+        e2 = x[11, i] + x[14, i]
+        out[18, i] = q00 * e0 + q01 * e1 + q02 * e2 - w0
+        out[19, i] = q10 * e0 + q11 * e1 + q12 * e2 - w1
+        out[20, i] = q20 * e0 + q21 * e1 + q22 * e2 - w2
+        out[21, i] = 0.0 + wen0
+        out[22, i] = wie1 + wen1
+        out[23, i] = wie2 + wen2
+        # Velocity error: (I - E^T) f + E^T C0 nabla - Coriolis difference + gravity
+        # difference.
+        cn0 = q00 * x[15, i] + q01 * x[16, i] + q02 * x[17, i]
+        cn1 = q10 * x[15, i] + q11 * x[16, i] + q12 * x[17, i]
+        cn2 = q20 * x[15, i] + q21 * x[16, i] + q22 * x[17, i]
+        a0, a1, a2 = fe - cn0, fn_ - cn1, fu - cn2
+        a1x = 2 * 0.0 + wen0
+        a1y = 2 * wie1 + wen1
+        a1z = 2 * wie2 + wen2
+        cor0 = k3 - (a1y * vu - a1z * vn)
+        cor1 = k4 - (a1z * ve - a1x * vu)
+        cor2 = k5 - (a1x * vn - a1y * ve)
+        out[3, i] = fe - (E[0, i] * a0 + E[3, i] * a1 + E[6, i] * a2) - cor0
+        out[4, i] = fn_ - (E[1, i] * a0 + E[4, i] * a1 + E[7, i] * a2) - cor1
+        out[5, i] = (fu - (E[2, i] * a0 + E[5, i] * a1 + E[8, i] * a2) - cor2
+                     - g0 + _gravity_of_sin2(s1 * s1, h) - k2 * x[8, i])
+        out[6, i] = v0e - ve * ((rn + h0) * c0) * irn * ic1
+        out[7, i] = v0n - vn * (rm + h0) * irm
+        out[8, i] = x[5, i] - k1 * x[8, i]
+        for j in range(3):
+            out[9 + j, i] = 0.0
+            out[12 + j, i] = -itg * x[12 + j, i]
+            out[15 + j, i] = -ita * x[15 + j, i]
 
 
 @numba.njit(cache=True)
 def _transition(X, T, nsub, p, C0, scale):
     """Propagate each row of X (filter units) over T seconds with the nonlinear model
     (midpoint rule: geometric for the attitude error rotation, RK2 for the rest)."""
-    out = np.empty_like(X)
+    P, n = X.shape
     hs = T / nsub
-    n = X.shape[1]
-    x = np.empty(n)
-    xm = np.empty(n)
-    d = np.empty(n)
-    E = np.empty((3, 3))
-    Em = np.empty((3, 3))
-    tmp = np.empty((3, 3))
-    R = np.empty((3, 3))
-    wl = np.empty(3)
-    wr = np.empty(3)
-    rv = np.empty(3)
+    x = np.empty((n, P))
+    xm = np.empty((n, P))
+    d = np.empty((24, P))
+    E = np.empty((9, P))
+    Em = np.empty((9, P))
+    tmp = np.empty((9, P))
+    R = np.empty((9, P))
+    cs = np.empty((2, P))
+    for j in range(n):
+        for i in range(P):
+            x[j, i] = X[i, j] * scale[j]
     k0 = _nominal_terms(p)
-    for i in range(X.shape[0]):
+    _rotvec_to_dcm_cols(x, 0, -1.0, E)
+    for _ in range(nsub):
+        _rates(x, E, p, C0, k0, cs, d)
+        for j in range(3, n):
+            for i in range(P):
+                xm[j, i] = x[j, i] + 0.5 * hs * d[j, i]
+        Em[:, :] = E
+        _rotate_cols(Em, d, 0.5 * hs, R, tmp)
+        _rates(xm, Em, p, C0, k0, cs, d)
+        for j in range(3, n):
+            for i in range(P):
+                x[j, i] += hs * d[j, i]
+        _rotate_cols(E, d, hs, R, tmp)
+    out = np.empty_like(X)
+    C = np.empty((3, 3))
+    rv = np.empty(3)
+    for i in range(P):
+        for a in range(3):
+            for b in range(3):
+                C[a, b] = E[3 * a + b, i]
+        dcm_to_rotvec(C, rv)
+        x[0, i], x[1, i], x[2, i] = -rv[0], -rv[1], -rv[2]
         for j in range(n):
-            x[j] = X[i, j] * scale[j]
-        rotvec_to_dcm(-x[0], -x[1], -x[2], E)
-        for _ in range(nsub):
-            _rates(x, E, p, C0, d, wl, wr, k0)
-            for j in range(3, n):
-                xm[j] = x[j] + 0.5 * hs * d[j]
-            Em[:, :] = E
-            _rotate(Em, wl, wr, 0.5 * hs, tmp, R)
-            _rates(xm, Em, p, C0, d, wl, wr, k0)
-            for j in range(3, n):
-                x[j] += hs * d[j]
-            _rotate(E, wl, wr, hs, tmp, R)
-        dcm_to_rotvec(E, rv)
-        x[0], x[1], x[2] = -rv[0], -rv[1], -rv[2]
-        for j in range(n):
-            out[i, j] = x[j] / scale[j]
+            out[i, j] = x[j, i] / scale[j]
     return out
 
 
