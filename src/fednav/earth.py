@@ -25,7 +25,12 @@ _K = 0.00193185265241
 
 def radii(lat):
     """Meridian (R_M) and prime-vertical (R_N) radii of curvature [m] at latitude ``lat``."""
-    s2 = np.sin(lat) ** 2
+    return radii_of_sin2(np.sin(lat) ** 2)
+
+
+def radii_of_sin2(s2):
+    """:func:`radii` from the squared sine of the latitude (for compiled loops that
+    already hold it)."""
     w = 1.0 - E2 * s2
     rn = A / np.sqrt(w)
     rm = rn * (1.0 - E2) / w
@@ -129,7 +134,15 @@ def gravity_dlat(lat):
     return _GE * np.sin(2 * lat) * (_K / np.sqrt(w) + (1.0 + _K * s * s) * E2 / (2.0 * w**1.5))
 
 
-radii_nb = numba.njit(cache=True)(radii)
+radii_of_sin2_nb = numba.njit(cache=True)(radii_of_sin2)
+
+
+@numba.njit(cache=True)
+def radii_nb(lat):
+    """Compiled :func:`radii`."""
+    return radii_of_sin2_nb(np.sin(lat) ** 2)
+
+
 gravity_of_sin2_nb = numba.njit(cache=True)(gravity_of_sin2)
 
 

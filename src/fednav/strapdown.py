@@ -99,14 +99,15 @@ def _run(state, dtheta, dv, dt, h_ref, gains, out_q, out_v, out_p):
         rm, rn = earth.radii_nb(lat)
         lat_m = lat + 0.5 * dt * mn / (rm + h)
         h_m = h + 0.5 * dt * mu
-        rm, rn = earth.radii_nb(lat_m)
         sl, cl = math.sin(lat_m), math.cos(lat_m)
+        sl2 = sl * sl  # one sine of the midpoint latitude for radii, rates and gravity
+        rm, rn = earth.radii_of_sin2_nb(sl2)
         iee, ien, ieu = 0.0, om * cl, om * sl
         ene = -mn / (rm + h_m)
         enn = me / (rn + h_m)
         enu = me * sl / cl / (rn + h_m)
         ine, inn, inu = iee + ene, ien + enn, ieu + enu
-        gmag = earth.gravity_nb(lat_m, h_m)
+        gmag = earth.gravity_of_sin2_nb(sl2, h_m)
         # Coning and sculling (current + previous sample).
         fx, fy, fz, sx, sy, sz = coning_sculling_s(ax, ay, az, bx, by, bz, px, py, pz,
                                                    ux, uy, uz, has_prev)
