@@ -77,3 +77,16 @@ def test_gnss_and_sar_noise_statistics():
     s = SarMatcher(3.0, units.deg(0.1), 1.0).simulate(tr, rng)
     d = earth.llh_difference_enu(s.z[:, 0], s.z[:, 1], 0.0, *tr.at(s.t)["lla"][:, :2].T, 0.0)
     np.testing.assert_allclose(d[:, :2].std(axis=0), 3.0, rtol=0.06)
+
+
+def test_markov_recursion_is_lfilter_to_the_bit():
+    """The Gauss-Markov drift is filtered by a compiled loop in place of
+    scipy.signal.lfilter (kept out of the worker processes); same operations, same bits."""
+    from scipy.signal import lfilter
+
+    from fednav.sensors.imu import _ar1
+
+    rng = np.random.default_rng(3)
+    for a in (0.0, 0.5, 0.9999944444598766, -0.3):
+        e = rng.standard_normal(5000) * 10.0 ** rng.uniform(-9, 6)
+        assert np.array_equal(_ar1(e, a), lfilter([1.0], [1.0, -a], e))

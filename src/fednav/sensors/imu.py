@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 
@@ -48,12 +49,23 @@ def _axes(v) -> np.ndarray:
     return np.broadcast_to(np.asarray(v, dtype=float), (3,)).copy()
 
 
+@numba.njit(cache=True)
+def _ar1(e, a):
+    """y[k] = a y[k-1] + e[k], y[-1] = 0: the recursion ``scipy.signal.lfilter([1], [1, -a],
+    e)`` makes, with the same operations (equal to the bit, tested), without importing
+    scipy.signal (0.7 s) in every worker process."""
+    y = np.empty_like(e)
+    z = 0.0
+    for k in range(e.shape[0]):
+        y[k] = z + e[k]
+        z = y[k] * a
+    return y
+
+
 def _markov(n, dt, sigma, tau, rng):
     """Stationary first-order Gauss–Markov sequence (n, 3), exact discretisation.
 
     ``sigma`` and ``tau`` are per axis (scalars broadcast)."""
-    from scipy.signal import lfilter  # heavy import, only where used
-
     sigma, tau = _axes(sigma), _axes(tau)
     out = np.zeros((n, 3))
     for i in range(3):
@@ -63,7 +75,7 @@ def _markov(n, dt, sigma, tau, rng):
         w = rng.standard_normal(n)
         e = w * sigma[i] * np.sqrt(1.0 - a * a)
         e[0] = w[0] * sigma[i]  # start in steady state
-        out[:, i] = lfilter([1.0], [1.0, -a], e)
+        out[:, i] = _ar1(e, a)
     return out
 
 
