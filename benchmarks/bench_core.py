@@ -45,6 +45,41 @@ def bench_strapdown():
           f"fresh process: import {imp:.2f} s, first call {first:.3f} s (numba cache)")
 
 
+def bench_transition():
+    """The nonlinear 18-state error transition over one 1 s filter interval (paper 002's
+    nominal), per point, called from compiled code as the closed loop calls it: all points
+    in one call (one column per point) against the same points one call each."""
+    import numba
+
+    from fednav import error_model as em
+    from fednav import units
+
+    @numba.njit
+    def together(X, T, nsub, par, C, scale, reps):
+        for _ in range(reps):
+            em._transition(X, T, nsub, par, C, scale)
+
+    @numba.njit
+    def one_each(X, T, nsub, par, C, scale, reps):
+        for _ in range(reps):
+            for i in range(X.shape[0]):
+                em._transition(X[i:i + 1], T, nsub, par, C, scale)
+
+    nom = em.Nominal(lat=units.deg(39.0), h=5000.0, vel=np.array([283.0, 282.0, 15.0]),
+                     C=np.eye(3), fn=np.array([0.3, -0.2, 9.8]))
+    p = em.ErrorProcess(nom, 1.0, em.ImuNoiseModel(gyro_markov_tau=1800.0), nsub=2)
+    rng = np.random.default_rng(1)
+    for n_pts in (37, 721):  # UKF sigma points, level-3 sparse grid (n = 18)
+        X = rng.normal(size=(n_pts, em.N_STATES))
+        args = (X, p.T, p.nsub, p._params, p._C0, em.SCALE)
+        reps = 40000 // n_pts
+        t_all = best_of(lambda a=args, r=reps: together(*a, r), 5) / reps
+        t_one = best_of(lambda a=args, r=reps: one_each(*a, r), 5) / reps
+        print(f"error transition, {n_pts:3d} points: {t_all / n_pts * 1e9:.0f} ns/point "
+              f"together, {t_one / n_pts * 1e9:.0f} ns/point one call each "
+              f"(x{t_one / t_all:.1f})")
+
+
 def toy_models(n, m, seed, linear_h=None):
     """A batched nonlinear process, a linear measurement, and FilterPy's UKF on the same
     problem with the same sigma-point settings (alpha 1e-3, beta 2, kappa 0)."""
@@ -222,6 +257,7 @@ def bench_paper003_run():
 
 if __name__ == "__main__":
     bench_strapdown()
+    bench_transition()
     bench_ukf()
     bench_quadrature()
     bench_simplified_ukf()
