@@ -7,8 +7,9 @@ A campaign folder ``DIR`` holds
   reuses every unit of work already stored; a different paper, scenario or seed is refused
   with a one-line :class:`CampaignError` (``--fresh`` starts over);
 * ``DIR/runs/<key>.nc`` — one NetCDF file per unit of work (a Monte Carlo run of a paper,
-  or one run of a sweep): the per-run statistics tables and the error time series of every
-  mode at the statistics epochs (1 Hz in the papers).  ``<key>`` is a hash of the work
+  one run of a sweep, or an analysis such as paper 002's Table 1): the per-run statistics
+  tables and the error time series of every mode at the statistics epochs (1 Hz in the
+  papers).  ``<key>`` is a hash of the work
   function and its arguments (scenario content, seed, options), so a larger ``--runs``
   only adds keys.  Each file is written to a temporary name and renamed: a campaign killed
   at any moment never leaves a half-written file that would later be read as complete.
