@@ -122,23 +122,24 @@ def _rotvec_to_dcm_cols(W, row, h, out):
                     out[3 * a + b, i] = R[a, b]
 
 
+@numba.njit(inline="always")
+def _mul_cols(A, B, out):
+    """out = A @ B per column (row-major 3x3 matrices, one per column of (9, P))."""
+    for a in range(3):
+        for b in range(3):
+            for i in range(out.shape[1]):
+                out[3 * a + b, i] = (A[3 * a, i] * B[b, i] + A[3 * a + 1, i] * B[3 + b, i]
+                                     + A[3 * a + 2, i] * B[6 + b, i])
+
+
 @numba.njit(**_VEC)
 def _rotate_cols(E, D, h, R, tmp):
     """E <- exp(h [wl x]) E exp(h [wr x]) per column: E (9, P) row-major 3x3, wl and wr
     in rows 18:21 and 21:24 of D; R, tmp (9, P) scratch."""
-    P = E.shape[1]
     _rotvec_to_dcm_cols(D, 18, h, R)
-    for a in range(3):
-        for b in range(3):
-            for i in range(P):
-                tmp[3 * a + b, i] = (R[3 * a, i] * E[b, i] + R[3 * a + 1, i] * E[3 + b, i]
-                                     + R[3 * a + 2, i] * E[6 + b, i])
+    _mul_cols(R, E, tmp)
     _rotvec_to_dcm_cols(D, 21, h, R)
-    for a in range(3):
-        for b in range(3):
-            for i in range(P):
-                E[3 * a + b, i] = (tmp[3 * a, i] * R[b, i] + tmp[3 * a + 1, i] * R[3 + b, i]
-                                   + tmp[3 * a + 2, i] * R[6 + b, i])
+    _mul_cols(tmp, R, E)
 
 
 @numba.njit(cache=True)
