@@ -60,7 +60,8 @@ def reproduce(
                                           "003 / federated-ukf, 004 / sar-delay"),
     runs: int = typer.Option(10, help="Monte Carlo runs (at least 1)"),
     seed: int = typer.Option(1, help="seed of the first run (run i uses seed + i)"),
-    out: Path = typer.Option(None, help="output folder [default: results/<paper>]"),
+    out: Path = typer.Option(None, help="output folder",
+                             show_default="results/<paper>"),
     jobs: int = typer.Option(min(2, os.cpu_count() or 1), help="worker processes (at least 1)"),
     scenario: Path = typer.Option(None, help="alternative scenario YAML"),
     max_time: float = typer.Option(None, help="truncate the flight (smoke runs only)"),
@@ -133,7 +134,8 @@ def reproduce(
 
 
 process_app = typer.Typer(no_args_is_help=True,
-                          help="Process real sensor data (INS/GNSS[/velocity], smoother).")
+                          help="Process real sensor data (INS/GNSS, optional velocity aiding, "
+                               "smoother).")
 app.add_typer(process_app, name="process")
 
 
