@@ -233,24 +233,44 @@ def _start_client(address: str | None, jobs: int):
 
 # ------------------------------------------------------------------------------- codec
 def _table_vars(prefix: str, rows: list[dict], data: dict, meta: dict) -> None:
+    """A table (list of dicts, the union of their keys as columns) as one variable per
+    column; its column names and types in ``meta``."""
     cols: list[str] = []
     for r in rows:
         cols += [c for c in r if c not in cols]
+    _columns_vars(prefix, {c: [r.get(c) for r in rows] for c in cols}, len(rows), data, meta)
+
+
+def _frame_vars(prefix: str, frame, data: dict, meta: dict) -> None:
+    """A pandas DataFrame as :func:`_table_vars` stores its ``to_dict("records")``, taken
+    column by column (boolean, integer and float columns without a pass over the rows)."""
+    cols = {}
+    for c in frame.columns:
+        v = frame[c].to_numpy()
+        cols[c] = v if v.dtype.kind in "biuf" else v.tolist()
+    _columns_vars(prefix, cols, len(frame), data, meta)
+
+
+def _columns_vars(prefix: str, columns: dict, n: int, data: dict, meta: dict) -> None:
     dim = f"{prefix}_row"
     types = {}
-    for j, c in enumerate(cols):
-        vals = [r.get(c) for r in rows]
+    for j, (c, vals) in enumerate(columns.items()):
+        name = f"{prefix}_c{j}"
+        if isinstance(vals, np.ndarray):
+            types[c] = {"b": "bool", "i": "int", "u": "int"}.get(vals.dtype.kind, "float")
+            data[name] = ((dim,), vals.astype(float))
+            continue
         kinds = {type(v).__name__ for v in vals if v is not None}
         if kinds <= {"str"}:
             types[c] = "str"
-            data[f"{prefix}_c{j}"] = ((dim,), np.array(["" if v is None else v for v in vals],
-                                                      dtype=object))
+            data[name] = ((dim,), np.array(["" if v is None else v for v in vals],
+                                           dtype=object))
         else:
             types[c] = "bool" if kinds <= {"bool", "bool_"} else \
                 "int" if kinds <= {"int", "int64", "int32"} else "float"
-            data[f"{prefix}_c{j}"] = ((dim,), np.array([np.nan if v is None else float(v)
-                                                       for v in vals], dtype=float))
-    meta.update({"kind": "table", "columns": cols, "types": types, "n": len(rows)})
+            data[name] = ((dim,), np.array([np.nan if v is None else float(v)
+                                            for v in vals], dtype=float))
+    meta.update({"kind": "table", "columns": list(columns), "types": types, "n": n})
 
 
 def _table_from(ds, prefix: str, meta: dict) -> list[dict]:
@@ -258,6 +278,22 @@ def _table_from(ds, prefix: str, meta: dict) -> list[dict]:
     cols = [(c, ds[f"{prefix}_c{j}"].values, conv[meta["types"][c]])
             for j, c in enumerate(meta["columns"])]
     return [{c: f(v[i]) for c, v, f in cols} for i in range(meta["n"])]
+
+
+def _frame_from(ds, prefix: str, meta: dict):
+    """The DataFrame :func:`_frame_vars` stored (the same columns, values and dtypes as
+    ``pandas.DataFrame(records)`` of its rows)."""
+    import pandas as pd
+
+    if not meta["n"]:
+        return pd.DataFrame([], columns=meta["columns"])
+    cols = {}
+    for j, c in enumerate(meta["columns"]):
+        v = ds[f"{prefix}_c{j}"].values
+        kind = meta["types"][c]
+        cols[c] = (v.astype(np.int64) if kind == "int" else v.astype(bool) if kind == "bool"
+                   else [str(s) for s in v] if kind == "str" else v.astype(float))
+    return pd.DataFrame(cols, columns=meta["columns"])
 
 
 def _result_vars(prefix: str, obj, data: dict) -> dict:
@@ -280,7 +316,7 @@ def _result_vars(prefix: str, obj, data: dict) -> dict:
             meta["fields"][f.name] = {"kind": "dict", "keys": keys}
         elif hasattr(v, "to_dict") and hasattr(v, "columns"):  # pandas DataFrame
             sub: dict = {}
-            _table_vars(name, v.to_dict("records"), data, sub)
+            _frame_vars(name, v, data, sub)
             meta["fields"][f.name] = {**sub, "kind": "frame"}
         else:
             meta["fields"][f.name] = {"kind": "scalar", "value": v if not isinstance(
@@ -303,9 +339,7 @@ def _result_from(ds, prefix: str, meta: dict):
         elif m["kind"] == "dict":
             kw[name] = {a: ds[f"{key}_k{k}"].values for k, a in enumerate(m["keys"])}
         elif m["kind"] == "frame":
-            import pandas as pd
-
-            kw[name] = pd.DataFrame(_table_from(ds, key, m), columns=m["columns"])
+            kw[name] = _frame_from(ds, key, m)
         else:
             kw[name] = m["value"]
     return cls(**kw)

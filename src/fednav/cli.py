@@ -42,12 +42,12 @@ def _one_line_errors(command):
 
 
 def _paper_module(paper: str):
-    from .scenarios import papers as _papers
+    from .scenarios import ALIASES, paper_module
 
-    for mod in _papers():
-        if paper.lower() in mod.ALIASES:
-            return mod
-    known = ", ".join(a for m in _papers() for a in m.ALIASES)
+    mod = paper_module(paper)
+    if mod is not None:
+        return mod
+    known = ", ".join(a for aliases in ALIASES.values() for a in aliases)
     typer.echo(f"error: unknown paper '{paper}'; available: {known}", err=True)
     raise typer.Exit(2)
 

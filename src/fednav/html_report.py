@@ -96,12 +96,10 @@ def table_html(name: str, table: dict, title: str, runs, seed) -> str:
 
 
 def _titles(paper: str) -> dict:
-    from .scenarios import papers
+    from .scenarios import paper_module
 
-    for mod in papers():
-        if mod.PAPER == paper:
-            return getattr(mod, "TABLE_TITLES", {})
-    return {}
+    mod = paper_module(paper)
+    return getattr(mod, "TABLE_TITLES", {}) if mod is not None else {}
 
 
 def _image(path: Path) -> str:
