@@ -28,6 +28,14 @@ def test_mean_ci95_matches_student_t():
     assert m1 == 5.0 and np.isnan(h1)
 
 
+def test_mean_ci95_is_the_scipy_stats_t_interval_to_the_bit():
+    rng = np.random.default_rng(5)
+    for n in (2, 3, 10, 101, 1000):
+        v = rng.normal(size=n)
+        h = float(stats.t.ppf(0.975, n - 1) * v.std(ddof=1) / np.sqrt(n))
+        assert mean_ci95(v)[1] == h
+
+
 def test_ci_covers_true_mean_at_95_percent():
     rng = np.random.default_rng(11)
     hits = 0

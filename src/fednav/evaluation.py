@@ -33,7 +33,9 @@ def mean_ci95(values) -> tuple[float, float]:
     m = float(v.mean())
     if n < 2:
         return m, float("nan")
-    from scipy import stats
+    # Student-t quantile: scipy.stats.t.ppf is this function (equal to the bit), without
+    # importing scipy.stats (0.6 s) in the process that writes the tables.
+    from scipy.special import stdtrit
 
-    h = float(stats.t.ppf(0.975, n - 1) * v.std(ddof=1) / np.sqrt(n))
+    h = float(stdtrit(n - 1, 0.975) * v.std(ddof=1) / np.sqrt(n))
     return m, h
