@@ -103,6 +103,31 @@ def test_other_seed_or_scenario_refused_in_one_line_and_fresh(tmp_path):
     assert (out / "summary.json").exists()  # refused input leaves the result alone
 
 
+def test_damaged_manifest_or_stored_run_refused_in_one_line(tmp_path):
+    scn = paper000.load_scenario()
+    out = tmp_path / "c"
+    args = [(scn, s, 20.0) for s in (1, 2)]
+    with Campaign(out, "000", scn, 1) as camp:
+        run_units(paper000.one_run, args, campaign=camp)
+    bad = sorted((out / "runs").glob("*.nc"))[0]
+    bad.write_bytes(bad.read_bytes()[:500])          # damaged outside fednav
+    msg = f"stored run {bad.name} cannot be read .*; delete it to compute that run again"
+    with Campaign(out, "000", scn, 1) as camp, pytest.raises(CampaignError, match=msg):
+        run_units(paper000.one_run, args, campaign=camp)
+    with pytest.raises(CampaignError, match=msg):
+        open_runs(out)
+    bad.unlink()
+    with Campaign(out, "000", scn, 1) as camp:
+        run_units(paper000.one_run, args, campaign=camp)
+        assert (camp.computed, camp.reused) == (1, 1)
+    for text in ("{not json", "[1, 2]"):
+        (out / "campaign.json").write_text(text)
+        with pytest.raises(CampaignError, match="campaign.json is not a fednav campaign "
+                                                "manifest .*--fresh"):
+            Campaign(out, "000", scn, 1)
+    assert Campaign(out, "000", scn, 1, fresh=True).manifest["seed"] == 1
+
+
 def _units(jobs=1, campaign=None):
     scn = paper000.load_scenario()
     return run_units(paper000.one_run, [(scn, s, 20.0) for s in (1, 2, 3)], jobs,

@@ -89,7 +89,14 @@ class Campaign:
             for f in self.runs_dir.iterdir():
                 f.unlink()
         if path.exists() and not fresh:
-            old = json.loads(path.read_text())
+            try:
+                old = json.loads(path.read_text(encoding="utf-8"))
+            except (OSError, ValueError) as e:
+                old = e
+            if not isinstance(old, dict):
+                raise CampaignError(f"campaign folder {self.out}: {path.name} is not a fednav "
+                                    f"campaign manifest (use another --out, or --fresh to "
+                                    f"start over)")
             for k in ("paper", "scenario_hash", "seed"):
                 if old.get(k) != manifest[k]:
                     raise CampaignError(
@@ -132,10 +139,7 @@ class Campaign:
         return self.runs_dir / f"{key}.nc"
 
     def load(self, key: str):
-        import xarray as xr
-
-        with xr.open_dataset(self.path(key), engine="scipy") as ds:
-            return decode(ds.load())
+        return _read_unit(self.path(key), self.out)
 
     def save(self, key: str, result) -> None:
         # Encoded to bytes, not to a path: xarray would take a Dask-distributed write lock
@@ -397,6 +401,20 @@ def decode(ds):
     return tuple(parts) if s["tuple"] else parts[0]
 
 
+def _read_unit(path: Path, folder) -> object:
+    """The unit of work stored in ``path`` (decoded), or a one-line :class:`CampaignError`
+    when the file is damaged."""
+    import xarray as xr
+
+    try:
+        with xr.open_dataset(path, engine="scipy") as ds:
+            return decode(ds.load())
+    except Exception as e:  # any damage: truncated, overwritten, not written by fednav
+        raise CampaignError(
+            f"campaign folder {folder}: stored run {path.name} cannot be read "
+            f"({type(e).__name__}); delete it to compute that run again") from None
+
+
 # ---------------------------------------------------------------------------- analysis
 def open_runs(path) -> xarray.Dataset:  # noqa: F821
     """The campaign in ``path`` as one :class:`xarray.Dataset`.
@@ -413,8 +431,7 @@ def open_runs(path) -> xarray.Dataset:  # noqa: F821
         raise CampaignError(f"campaign folder {path}: no runs/ folder (not a campaign)")
     per_run = []
     for f in sorted(runs_dir.glob("*.nc")):
-        with xr.open_dataset(f, engine="scipy") as ds:
-            res = decode(ds.load())
+        res = _read_unit(f, path)
         parts = list(res) if isinstance(res, tuple) else [res]
         table = next((p for p in parts if isinstance(p, list)), None)
         series = next((p for p in parts if isinstance(p, dict)), None)

@@ -450,14 +450,27 @@ def _format_error(e: dict) -> str:
     return f"key '{loc}': {msg}"
 
 
+def read_text_file(path: Path, what: str) -> str:
+    """The text of a UTF-8 file (a byte-order mark is accepted), or a one-line
+    :class:`ConfigError` naming the file and why it cannot be read."""
+    try:
+        return path.read_text(encoding="utf-8-sig")
+    except FileNotFoundError:
+        why = "not found"
+    except IsADirectoryError:
+        why = "is a folder, not a file"
+    except UnicodeDecodeError:
+        why = "not a UTF-8 text file"
+    except OSError as e:
+        why = f"cannot be read ({e.strerror or e})"
+    raise ConfigError(f"{what} file {path}: {why}")
+
+
 def load_model(path: str | Path, model: type[BaseModel], what: str = "scenario"):
     """Read a YAML file into the pydantic ``model`` (errors: :class:`ConfigError`, one line
     naming the file and the key)."""
     path = Path(path)
-    try:
-        text = path.read_text()
-    except FileNotFoundError:
-        raise ConfigError(f"{what} file {path}: not found") from None
+    text = read_text_file(path, what)
     try:
         data = yaml.safe_load(text)
     except yaml.YAMLError as e:

@@ -34,7 +34,8 @@ EULER_COLUMNS = ("pitch_deg", "roll_deg", "heading_deg")
 def _read(path, kind: str, required: tuple) -> tuple[str, pd.DataFrame]:
     path = Path(path)
     if not path.is_file():
-        raise DataError(f"{kind} file {path}: not found")
+        raise DataError(f"{kind} file {path}: "
+                        f"{'is a folder, not a file' if path.is_dir() else 'not found'}")
     src = str(path)
     try:
         with open(path, encoding="utf-8-sig") as f:  # a UTF-8 byte-order mark is accepted

@@ -69,7 +69,8 @@ def _load(path, kind: str):
     """The one struct in a NaveGo .mat file."""
     path = Path(path)
     if not path.is_file():
-        raise DataError(f"{kind} file {path}: not found")
+        raise DataError(f"{kind} file {path}: "
+                        f"{'is a folder, not a file' if path.is_dir() else 'not found'}")
     try:
         d = scipy.io.loadmat(path, squeeze_me=True, struct_as_record=False)
     except Exception as e:  # scipy raises several types for non-MAT content

@@ -265,6 +265,7 @@ def main():
     (HERE / "imu-binary.csv").write_bytes(bytes(range(256)) * 4)
     csv_case("csv-imu-binary", proc("imu-binary.csv"), 2,
              "error: imu-binary.csv: not a UTF-8 text file")
+    csv_case("csv-imu-is-a-folder", proc(G), 2, "error: IMU file good: is a folder, not a file")
     # --- NaveGo .mat
     def mat_case(cid, argv, exit_code, message):
         cases.append({"id": cid, "family": "navego", "argv": argv, "exit": exit_code,
@@ -280,6 +281,7 @@ def main():
     (HERE / "imu-text.mat").write_text("this is not a mat file\n")
     mat_case("mat-imu-not-mat", nav("imu-text.mat"), 2,
              "error: IMU file imu-text.mat: not a MATLAB v5 .mat file")
+    mat_case("mat-imu-is-a-folder", nav(G), 2, "error: IMU file good: is a folder, not a file")
     mat_case("mat-swapped-files", nav(f"{G}/gnss.mat", f"{G}/imu.mat"), 2,
              "error: good/gnss.mat: missing field 'fb'")
     scipy.io.savemat(HERE / "imu-other-struct.mat", {"data": {"x": [1, 2, 3]}})
@@ -383,6 +385,17 @@ def main():
               "error: good/imu.csv: no IMU error figures in the file; give")
     yaml_case("yaml-config-missing", proc(cfg_p="no-such.yaml"), 2,
               "error: processing config file no-such.yaml: not found")
+    yaml_case("yaml-config-is-a-folder", proc(cfg_p=G), 2,
+              "error: processing config file good: is a folder, not a file")
+    (HERE / "cfg-not-utf8.yaml").write_bytes(b"period_s: 0.1\n# \xff\xfe\n")
+    yaml_case("yaml-config-not-utf8", proc(cfg_p="cfg-not-utf8.yaml"), 2,
+              "error: processing config file cfg-not-utf8.yaml: not a UTF-8 text file")
+    yaml_case("yaml-tune-config-is-a-folder",
+              ["tune", "csv", "--imu", f"{G}/imu.csv", "--gnss", f"{G}/gnss.csv", "--config", G,
+               "--out", "{out}/tuned.yaml"], 2,
+              "error: processing config file good: is a folder, not a file")
+    yaml_case("yaml-dataset-scenario-is-a-folder", ["simulate", G, "--out", "{out}/ds"], 2,
+              "error: dataset scenario file good: is a folder, not a file")
     from fednav.scenarios import paper002
 
     scn = yaml.safe_load(Path(paper002.__file__).with_suffix(".yaml").read_text())
@@ -421,6 +434,14 @@ def main():
              "key 'filter.type': Input should be")
     scenario("list-not-mapping", "- 1\n- 2\n", "expected a mapping at the top level")
     scenario("empty", "", "key 'paper': missing value (and 7 more)")
+    (HERE / "scenario-not-utf8.yaml").write_bytes("paper: '002'\nname: caf\u00e9\n"
+                                                  .encode("latin-1"))
+    yaml_case("yaml-scenario-not-utf8", ["reproduce", "002", "--scenario",
+                                         "scenario-not-utf8.yaml", "--runs", "1", "--jobs", "1"],
+              2, "error: scenario file scenario-not-utf8.yaml: not a UTF-8 text file")
+    yaml_case("yaml-scenario-is-a-folder", ["reproduce", "002", "--scenario", G, "--runs", "1",
+                                            "--jobs", "1"], 2,
+              "error: scenario file good: is a folder, not a file")
     # --- CLI
     def cli_case(cid, argv, exit_code, message):
         cases.append({"id": cid, "family": "cli", "argv": argv, "exit": exit_code,
