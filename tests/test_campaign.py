@@ -223,3 +223,39 @@ def test_same_seed_bit_identical_outputs_with_one_or_two_workers(tmp_path):
     ra, rb = (pd.read_csv(tmp_path / d / "runs.csv", dtype=str).drop(columns="ms_per_cycle")
               for d in ("j1", "j2"))   # as text: every digit written must agree
     assert ra.equals(rb)
+
+
+@pytest.mark.slow
+def test_ctrl_c_ends_in_one_line_and_resume_computes_the_rest(tmp_path):
+    """Ctrl-C (SIGINT to the whole process group, as a terminal sends it) during a run on
+    local Dask workers: exit status 130, one line saying what is stored, no traceback from
+    any worker, no process left; the same command then finishes the campaign."""
+    import os
+    import signal
+
+    out = tmp_path / "c"
+    cmd = [str(Path(sys.executable).parent / "fednav"), "reproduce", "002", "--runs", "4",
+           "--max-time", "60", "--jobs", "2", "--out", str(out)]
+    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                         start_new_session=True,
+                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and not list(out.glob("runs/*.nc")) \
+            and p.poll() is None:
+        time.sleep(0.02)
+    assert p.poll() is None, "the campaign ended before it could be interrupted"
+    os.killpg(p.pid, signal.SIGINT)
+    stdout, stderr = p.communicate(timeout=60)
+    assert p.returncode == 130, stdout + stderr
+    assert "Traceback" not in stdout + stderr
+    assert stderr.strip().startswith("interrupted: ") and len(stderr.strip().splitlines()) == 1
+    stored = len(list(out.glob("runs/*.nc")))
+    told = int(stderr.split()[1])             # an interrupt between a file's rename and
+    assert told in (stored, stored - 1)       # its count leaves one more file than told
+    with pytest.raises(ProcessLookupError):
+        os.killpg(p.pid, 0)                   # no worker outlived the interrupt
+    r = CliRunner().invoke(app, ["reproduce", "002", "--runs", "4", "--max-time", "60",
+                                 "--jobs", "1", "--out", str(out)])
+    assert r.exit_code == 0, r.output
+    s = json.loads((out / "summary.json").read_text())["campaign"]
+    assert (s["runs_reused"], s["runs_computed"]) == (stored, 8 - stored)

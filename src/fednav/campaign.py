@@ -36,6 +36,7 @@ from __future__ import annotations
 import hashlib
 import json
 from collections.abc import Callable
+from contextlib import contextmanager
 from dataclasses import fields, is_dataclass
 from datetime import UTC, datetime
 from pathlib import Path
@@ -213,12 +214,37 @@ def run_units(fn: Callable, args: list, jobs: int = 1, progress: Callable | None
     return out
 
 
+@contextmanager
+def _no_sigint():
+    """Ignore Ctrl-C while the local workers start: they inherit that, so an interrupt
+    reaches only this process, which stops them in order (otherwise every worker prints
+    its own traceback)."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
+
+
 def _start_client(address: str | None, jobs: int):
     """(client, local cluster or None, engine description)."""
     from distributed import Client, LocalCluster
 
     if address is not None:
-        client, cluster, engine = Client(address, timeout="30s"), None, f"dask {address}"
+        try:
+            client = Client(address, timeout="30s")
+        except ValueError as e:
+            raise CampaignError(f"Dask scheduler address {address!r}: {e} (expected "
+                                f"tcp://HOST:PORT)") from None
+        except OSError as e:  # a timeout or a refused connection
+            raise CampaignError(f"Dask scheduler {address}: cannot connect ({e})") from None
+        cluster, engine = None, f"dask {address}"
     else:
         import sys
 
@@ -230,7 +256,7 @@ def _start_client(address: str | None, jobs: int):
         # have and takes about 1 % of their CPU.
         method = "fork" if sys.platform.startswith("linux") else "spawn"
         with dask.config.set({"distributed.worker.multiprocessing-method": method,
-                              "distributed.worker.profile.enabled": False}):
+                              "distributed.worker.profile.enabled": False}), _no_sigint():
             cluster = LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True,
                                    dashboard_address=None, silence_logs=40)
         client, engine = Client(cluster), f"dask local, {jobs} worker processes"

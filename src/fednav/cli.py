@@ -117,9 +117,15 @@ def reproduce(
                   MofNCompleteColumn(), TimeElapsedColumn(), TimeRemainingColumn(),
                   console=console, transient=False) as prog:
         task = prog.add_task(f"paper {mod.PAPER}: {scn.name}", total=total)
-        with camp:
-            rep = mod.reproduce(scn, runs, seed, jobs, max_time,
-                                progress=lambda: prog.advance(task), **extra)
+        try:
+            with camp:
+                rep = mod.reproduce(scn, runs, seed, jobs, max_time,
+                                    progress=lambda: prog.advance(task), **extra)
+        except KeyboardInterrupt:
+            prog.stop()
+            typer.echo(f"interrupted: {camp.computed + camp.reused} of {total} units of work "
+                       f"are stored in {out}; the same command computes the others", err=True)
+            raise typer.Exit(130) from None
     rep["summary"]["campaign"] = camp.summary()
     mod.print_summary(rep["summary"], console)
     c = camp.summary()

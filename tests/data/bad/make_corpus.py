@@ -454,6 +454,9 @@ def main():
     cli_case("cli-max-time-negative", ["reproduce", "002", "--max-time", "-5"], 2,
              "error: --max-time must be positive, got -5.0")
     cli_case("cli-unknown-paper", ["reproduce", "042"], 2, "error: unknown paper '042'; available:")
+    cli_case("cli-dask-address-without-port", ["reproduce", "002", "--runs", "1", "--max-time",
+                                               "10", "--dask", "localhost"], 2,
+             "error: Dask scheduler address 'localhost':")
     (HERE / "a-file").write_text("not a folder\n")
     cli_case("cli-out-is-a-file", [*proc(), "--out", "a-file"], 2,
              "error: output folder a-file: a file of that name exists")
