@@ -4,8 +4,8 @@ import importlib
 from pathlib import Path
 
 SCENARIO_DIR = Path(__file__).parent
-#: Paper number -> the names the command line accepts for it (each module's ``ALIASES``;
-#: kept here so that finding one paper imports only that paper's module).
+#: Paper number -> the names the command line accepts for it (each paper module's
+#: ``ALIASES``), here so that finding one paper imports only that paper's module.
 ALIASES = {"000": ("000", "airship"), "001": ("001", "launch-frame"),
            "002": ("002", "cruise-missile"), "003": ("003", "federated-ukf"),
            "004": ("004", "sar-delay")}

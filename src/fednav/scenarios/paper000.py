@@ -16,10 +16,11 @@ from ..config import Scenario
 from ..config import load_scenario as _load
 from ..montecarlo import run_seeds
 from ..simulate import make_run_data, run_configured_mode
+from . import ALIASES as _REGISTRY
 from . import scenario_path
 
 PAPER = "000"
-ALIASES = ("000", "airship")
+ALIASES = _REGISTRY[PAPER]
 COLS = ("pos_mean_m", "vel_mean_mps", "pos_std_m", "vel_std_mps")
 _P = {"AEKF/none": (2.37, 0.326, 1.53, 0.178), "AEKF/wind": (4.56, 0.496, 2.36, 0.361),
       "RAUKF/none": (1.50, 0.120, 0.50, 0.066), "RAUKF/wind": (3.01, 0.309, 1.56, 0.276),

@@ -25,10 +25,11 @@ from ..filters import FilterError
 from ..launch.navigate import make_data, run
 from ..launch.scenario import LaunchScenario, load_launch_scenario
 from ..montecarlo import run_seeds
+from . import ALIASES as _REGISTRY
 from . import scenario_path
 
 PAPER = "001"
-ALIASES = ("001", "launch-frame")
+ALIASES = _REGISTRY[PAPER]
 COLS = ("att_x_arcsec", "att_y_arcsec", "att_z_arcsec", "pos_x_m", "pos_y_m", "pos_z_m",
         "vel_x_mps", "vel_y_mps", "vel_z_mps")
 _P = {"PF": (4.731, 4.081, 4.790, 3.437, 2.363, 2.760, 0.095, 0.076, 0.047),

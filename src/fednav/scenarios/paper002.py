@@ -25,10 +25,11 @@ from ..config import load_scenario as _load
 from ..evaluation import error_stats
 from ..montecarlo import run_seeds
 from ..simulate import make_run_data, run_all_modes
+from . import ALIASES as _REGISTRY
 from . import scenario_path
 
 PAPER = "002"
-ALIASES = ("002", "cruise-missile")
+ALIASES = _REGISTRY[PAPER]
 
 PAPER_TABLES = {
     "T2": {

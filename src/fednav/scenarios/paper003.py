@@ -18,10 +18,11 @@ from ..config import load_scenario as _load
 from ..evaluation import mean_ci95
 from ..montecarlo import run_seeds
 from ..simulate import make_run_data, run_all_modes, run_configured_mode
+from . import ALIASES as _REGISTRY
 from . import scenario_path
 
 PAPER = "003"
-ALIASES = ("003", "federated-ukf")
+ALIASES = _REGISTRY[PAPER]
 COLS = ("lon_m", "lat_m", "h_m", "vE_mps", "vN_mps", "vU_mps", "roll_deg", "pitch_deg",
         "yaw_deg")
 STATS = ("max", "min", "std")

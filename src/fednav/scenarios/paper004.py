@@ -22,10 +22,11 @@ from ..config import load_scenario as _load
 from ..evaluation import mean_ci95
 from ..montecarlo import run_seeds
 from ..simulate import make_run_data, run_configured_mode
+from . import ALIASES as _REGISTRY
 from . import scenario_path
 
 PAPER = "004"
-ALIASES = ("004", "sar-delay")
+ALIASES = _REGISTRY[PAPER]
 METHODS = ("uncompensated", "curve_fit", "ins_increment", "recompute")
 QUANTITIES = (("lon", "m"), ("lat", "m"), ("h", "m"), ("yaw", "arcmin"), ("vE", "mps"),
               ("vN", "mps"))
