@@ -37,7 +37,13 @@ import numba
 import numpy as np
 
 from . import earth, units
-from .kernels import dcm_to_rotvec, matmul_sparse, rotvec_to_dcm
+from .kernels import (
+    dcm_to_rotvec,
+    matmul_sparse,
+    rodrigues_coefficients,
+    rodrigues_entries,
+    rodrigues_series,
+)
 from .kernels import quat_to_dcm as _quat_to_dcm
 
 N_STATES = 18
@@ -83,17 +89,11 @@ _VEC = {"cache": True, "error_model": "numpy"}  # no zero-division branch: loops
 
 @numba.njit(inline="always")
 def _dcm_entries(r0, r1, r2, s, c, out, i):
-    """The nine entries of Rodrigues' formula (:func:`fednav.kernels.rotvec_to_dcm`),
-    row-major, into column ``i`` of ``out`` (9, P)."""
-    out[0, i] = 1.0 - c * (r1 * r1 + r2 * r2)
-    out[4, i] = 1.0 - c * (r0 * r0 + r2 * r2)
-    out[8, i] = 1.0 - c * (r0 * r0 + r1 * r1)
-    out[1, i] = -s * r2 + c * r0 * r1
-    out[3, i] = s * r2 + c * r0 * r1
-    out[2, i] = s * r1 + c * r0 * r2
-    out[6, i] = -s * r1 + c * r0 * r2
-    out[5, i] = -s * r0 + c * r1 * r2
-    out[7, i] = s * r0 + c * r1 * r2
+    """Rodrigues' formula (:func:`fednav.kernels.rodrigues_entries`) into column ``i`` of
+    ``out`` (9, P), row-major."""
+    e = rodrigues_entries(r0, r1, r2, s, c)
+    for k in range(9):
+        out[k, i] = e[k]
 
 
 @numba.njit(**_VEC)
@@ -109,17 +109,13 @@ def _rotvec_to_dcm_cols(W, row, h, out):
     if small:
         for i in range(P):
             r0, r1, r2 = h * W[row, i], h * W[row + 1, i], h * W[row + 2, i]
-            a2 = r0 * r0 + r1 * r1 + r2 * r2
-            s = 1.0 - a2 * (1.0 / 6.0 - a2 * (1.0 / 120.0 - a2 / 5040.0))
-            c = 0.5 - a2 * (1.0 / 24.0 - a2 * (1.0 / 720.0 - a2 / 40320.0))
+            s, c = rodrigues_series(r0 * r0 + r1 * r1 + r2 * r2)
             _dcm_entries(r0, r1, r2, s, c, out, i)
-    else:
-        R = np.empty((3, 3))
-        for i in range(P):
-            rotvec_to_dcm(h * W[row, i], h * W[row + 1, i], h * W[row + 2, i], R)
-            for a in range(3):
-                for b in range(3):
-                    out[3 * a + b, i] = R[a, b]
+        return
+    for i in range(P):
+        r0, r1, r2 = h * W[row, i], h * W[row + 1, i], h * W[row + 2, i]
+        s, c = rodrigues_coefficients(r0 * r0 + r1 * r1 + r2 * r2)
+        _dcm_entries(r0, r1, r2, s, c, out, i)
 
 
 @numba.njit(inline="always")

@@ -14,24 +14,38 @@ import numpy as np
 
 
 @numba.njit(cache=True, inline="always")
+def rodrigues_series(a2):
+    """``sin(a) / a`` and ``(1 - cos a) / a^2`` from ``a2 = a^2`` by their series to a^6:
+    below 1e-3 rad (a2 < 1e-6) the error is under 1e-20, with no cancellation."""
+    return (1.0 - a2 * (1.0 / 6.0 - a2 * (1.0 / 120.0 - a2 / 5040.0)),
+            0.5 - a2 * (1.0 / 24.0 - a2 * (1.0 / 720.0 - a2 / 40320.0)))
+
+
+@numba.njit(cache=True, inline="always")
+def rodrigues_coefficients(a2):
+    """``sin(a) / a`` and ``(1 - cos a) / a^2`` (the series below 1e-3 rad)."""
+    if a2 < 1e-6:
+        return rodrigues_series(a2)
+    a = np.sqrt(a2)
+    return np.sin(a) / a, (1.0 - np.cos(a)) / a2
+
+
+@numba.njit(cache=True, inline="always")
+def rodrigues_entries(r0, r1, r2, s, c):
+    """The nine entries, row-major, of ``I + s [r x] + c [r x]^2`` (Rodrigues' formula
+    with the coefficients of :func:`rodrigues_coefficients`)."""
+    return (1.0 - c * (r1 * r1 + r2 * r2), -s * r2 + c * r0 * r1, s * r1 + c * r0 * r2,
+            s * r2 + c * r0 * r1, 1.0 - c * (r0 * r0 + r2 * r2), -s * r0 + c * r1 * r2,
+            -s * r1 + c * r0 * r2, s * r0 + c * r1 * r2, 1.0 - c * (r0 * r0 + r1 * r1))
+
+
+@numba.njit(cache=True, inline="always")
 def rotvec_to_dcm(r0, r1, r2, out):
     """Rodrigues' formula for the rotation vector (r0, r1, r2) [rad], written into ``out``."""
-    a2 = r0 * r0 + r1 * r1 + r2 * r2
-    if a2 < 1e-6:  # series to a^6: below 1e-3 rad its error is under 1e-20 (no cancellation)
-        s = 1.0 - a2 * (1.0 / 6.0 - a2 * (1.0 / 120.0 - a2 / 5040.0))
-        c = 0.5 - a2 * (1.0 / 24.0 - a2 * (1.0 / 720.0 - a2 / 40320.0))
-    else:
-        a = np.sqrt(a2)
-        s, c = np.sin(a) / a, (1.0 - np.cos(a)) / a2
-    out[0, 0] = 1.0 - c * (r1 * r1 + r2 * r2)
-    out[1, 1] = 1.0 - c * (r0 * r0 + r2 * r2)
-    out[2, 2] = 1.0 - c * (r0 * r0 + r1 * r1)
-    out[0, 1] = -s * r2 + c * r0 * r1
-    out[1, 0] = s * r2 + c * r0 * r1
-    out[0, 2] = s * r1 + c * r0 * r2
-    out[2, 0] = -s * r1 + c * r0 * r2
-    out[1, 2] = -s * r0 + c * r1 * r2
-    out[2, 1] = s * r0 + c * r1 * r2
+    s, c = rodrigues_coefficients(r0 * r0 + r1 * r1 + r2 * r2)
+    e = rodrigues_entries(r0, r1, r2, s, c)
+    for k in range(9):
+        out[k // 3, k % 3] = e[k]
 
 
 @numba.njit(cache=True)
