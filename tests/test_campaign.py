@@ -128,6 +128,25 @@ def test_damaged_manifest_or_stored_run_refused_in_one_line(tmp_path):
     assert Campaign(out, "000", scn, 1, fresh=True).manifest["seed"] == 1
 
 
+def test_scheduler_address_nobody_listens_on_is_refused_at_once(monkeypatch):
+    """Dask would retry a refused or unresolvable address for its whole 30 s timeout."""
+    import socket
+
+    from fednav.campaign import _start_client
+
+    t0 = time.perf_counter()
+    with pytest.raises(CampaignError, match="tcp://127.0.0.1:1: cannot connect .nothing "
+                                            "listens on 127.0.0.1 port 1; start one"):
+        _start_client("tcp://127.0.0.1:1", 1)
+    assert time.perf_counter() - t0 < 20.0
+
+    def no_host(*_, **__):
+        raise socket.gaierror(socket.EAI_NONAME, "Name or service not known")
+
+    monkeypatch.setattr(socket, "create_connection", no_host)
+    with pytest.raises(CampaignError, match="cannot connect .host 'nohost': Name or service"):
+        _start_client("tcp://nohost:8786", 1)
+
 def _units(jobs=1, campaign=None):
     scn = paper000.load_scenario()
     return run_units(paper000.one_run, [(scn, s, 20.0) for s in (1, 2, 3)], jobs,

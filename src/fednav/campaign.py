@@ -232,11 +232,40 @@ def _no_sigint():
         signal.signal(signal.SIGINT, old)
 
 
+def _check_listening(address: str) -> None:
+    """Refuse at once a TCP scheduler address where nothing listens or whose host does not
+    resolve (Dask would retry for its whole 30 s connect timeout).  Anything else (a
+    malformed address, a host that does not answer) is left to Dask's own connect."""
+    import socket
+
+    from distributed.comm import parse_address
+    from distributed.comm.addressing import parse_host_port
+
+    try:
+        scheme, loc = parse_address(address)
+        host, port = parse_host_port(loc)
+    except ValueError:
+        return
+    if scheme not in ("tcp", "tls"):
+        return
+    try:
+        socket.create_connection((host, port), timeout=5.0).close()
+    except ConnectionRefusedError:
+        raise CampaignError(f"Dask scheduler {address}: cannot connect (nothing listens on "
+                            f"{host} port {port}; start one with 'dask scheduler')") from None
+    except socket.gaierror as e:
+        raise CampaignError(f"Dask scheduler {address}: cannot connect (host {host!r}: "
+                            f"{e.strerror})") from None
+    except OSError:
+        return
+
+
 def _start_client(address: str | None, jobs: int):
     """(client, local cluster or None, engine description)."""
     from distributed import Client, LocalCluster
 
     if address is not None:
+        _check_listening(address)
         try:
             client = Client(address, timeout="30s")
         except ValueError as e:

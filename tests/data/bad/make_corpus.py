@@ -457,6 +457,9 @@ def main():
     cli_case("cli-dask-address-without-port", ["reproduce", "002", "--runs", "1", "--max-time",
                                                "10", "--dask", "localhost"], 2,
              "error: Dask scheduler address 'localhost':")
+    cli_case("cli-dask-nothing-listening", ["reproduce", "002", "--runs", "1", "--max-time",
+                                            "10", "--dask", "tcp://127.0.0.1:1"], 2,
+             "error: Dask scheduler tcp://127.0.0.1:1: cannot connect (nothing listens on")
     (HERE / "a-file").write_text("not a folder\n")
     cli_case("cli-out-is-a-file", [*proc(), "--out", "a-file"], 2,
              "error: output folder a-file: a file of that name exists")
