@@ -9,8 +9,8 @@ SINS/CNS/SAR with federated UKF local filters):
   ``filterpy.kalman.UnscentedKalmanFilter`` with the same sigma-point settings, the same
   process (fednav's compiled error transition, called per sigma point as FilterPy does)
   and the same measurement functions — measured in this invocation; and the ratio;
-* the wall time of an N-run campaign with the default local Dask workers, and the import
-  time of the command line.
+* the wall time of an N-run campaign with the default local Dask workers, the CPU seconds
+  of its parent process and of its workers, and the import time of the command line.
 
 Ratios only: nothing here is asserted in tests.
 """
@@ -18,6 +18,7 @@ Ratios only: nothing here is asserted in tests.
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import subprocess
 import sys
@@ -129,14 +130,37 @@ def main():
     print(f"import fednav.cli: {imp:.3f} s (best of 3)")
     with tempfile.TemporaryDirectory() as d:
         jobs = min(2, os.cpu_count() or 1)
+        cpu = Path(d) / "cpu.json"
         t0 = time.perf_counter()
-        fednav = str(Path(sys.executable).parent / "fednav")
-        subprocess.run([fednav, "reproduce", "002", "--runs",
-                        str(args.runs), "--jobs", str(jobs), "--out", d], check=True,
-                       capture_output=True)
+        subprocess.run([sys.executable, "-c", _CLI_WITH_CPU, str(cpu), "reproduce", "002",
+                        "--runs", str(args.runs), "--jobs", str(jobs), "--out",
+                        str(Path(d) / "out")], check=True, capture_output=True)
         t = time.perf_counter() - t0
+        parent, workers = json.loads(cpu.read_text())
     print(f"fednav reproduce 002 --runs {args.runs} --jobs {jobs}: {t:.1f} s wall "
-          f"(Tables 1-4, includes start-up and the 3 Table-4 runs)")
+          f"(Tables 1-4, includes start-up and the 3 Table-4 runs); CPU: parent "
+          f"{parent:.1f} s (imports, dispatch, storing runs, tables, plot), workers "
+          f"{workers:.1f} s")
+
+
+#: The command line run in-process, then the CPU seconds of that process (all its
+#: threads: the Dask scheduler and nannies of a local cluster live there) and of its
+#: children (the worker processes) written as JSON to argv[1].
+_CLI_WITH_CPU = """
+import json, resource, sys
+out = sys.argv[1]
+sys.argv = ["fednav", *sys.argv[2:]]
+from fednav.cli import main
+try:
+    main()
+except SystemExit as e:
+    if e.code:
+        raise
+cpu = [r.ru_utime + r.ru_stime for r in (resource.getrusage(resource.RUSAGE_SELF),
+                                         resource.getrusage(resource.RUSAGE_CHILDREN))]
+with open(out, "w") as f:
+    json.dump(cpu, f)
+"""
 
 
 if __name__ == "__main__":
