@@ -66,3 +66,36 @@ def test_failure_names_the_filter_and_step(scn_data):
     mode = next(m for m in scn.modes if m.name == "SINS/SAR")
     with pytest.raises(FilterError, match=r"step 3: navigation state became non-finite"):
         simulate.run_configured_mode(scn, mode, bad, MAX_TIME)
+
+
+@pytest.mark.parametrize("kind", ["star", "sar"])
+def test_residual_and_predicted_are_the_measurement_models(kind):
+    """The compiled loop's copies of StarAttitude / SarFix (residual and h) against the
+    classes the Python loop calls, on random attitudes (headings across 0 / 2 pi, steep
+    pitch), positions and sigma points."""
+    from fednav import attitude as att
+    from fednav.measurements import MODELS, NavSnapshot
+    from fednav.strapdown import STATE_SIZE
+
+    rng = np.random.default_rng(5)
+    model = MODELS[kind]
+    for _ in range(50):
+        euler = np.array([rng.uniform(-1.4, 1.4), rng.uniform(-3.1, 3.1),
+                          rng.uniform(0.0, 2 * np.pi)])
+        C = att.euler_to_dcm(euler)
+        state = np.zeros(STATE_SIZE)
+        state[0:4] = att.dcm_to_quat(C)
+        state[7:10] = [rng.uniform(-1.2, 1.2), rng.uniform(-3.1, 3.1), rng.uniform(0, 9e3)]
+        Cq = att.quat_to_dcm(state[0:4])
+        nav = NavSnapshot(lla=state[7:10].copy(), vel=np.zeros(3), C=Cq)
+        if kind == "star":
+            z = att.dcm_to_euler(Cq) + rng.normal(0, 1e-4, 3)
+        else:
+            z = np.r_[state[7:9] + rng.normal(0, 1e-6, 2), (euler[2] + rng.normal(0, 0.01))
+                      % (2 * np.pi)]
+        y = np.empty(3)
+        compiled_loop._residual(compiled_loop.KINDS[kind], state, Cq, z, y)
+        np.testing.assert_allclose(y, model.residual(nav, z), rtol=1e-12, atol=1e-9)
+        X = rng.normal(0, 30.0, (37, 18))  # filter units: arcmin, m/s, m, ...
+        np.testing.assert_allclose(compiled_loop._predicted(compiled_loop.KINDS[kind], Cq, X),
+                                   model.h(X, nav), rtol=1e-12, atol=1e-12)
