@@ -283,7 +283,7 @@ def _start_client(address: str | None, jobs: int):
         # functions instead of re-importing them (spawn costs ~2 s per worker).  The
         # statistical profiler, the system monitor's disk counters and the fast
         # monitoring ticks feed a dashboard this cluster does not have; slowed down they
-        # give the runs back about 4 % of the machine (a 100-run paper-002 campaign on 2
+        # give the runs back about 4 % of the CPU (a 100-run paper-002 campaign on 2
         # cores: parent 9.5 -> 8.2 s of CPU, workers 58.2 -> 56.4 s).
         method = "fork" if sys.platform.startswith("linux") else "spawn"
         with dask.config.set({"distributed.worker.multiprocessing-method": method,
