@@ -125,6 +125,8 @@ def test_damaged_manifest_or_stored_run_refused_in_one_line(tmp_path):
         with pytest.raises(CampaignError, match="campaign.json is not a fednav campaign "
                                                 "manifest .*--fresh"):
             Campaign(out, "000", scn, 1)
+        with pytest.raises(CampaignError, match="campaign.json is not a fednav campaign "):
+            open_runs(out)
     assert Campaign(out, "000", scn, 1, fresh=True).manifest["seed"] == 1
 
 

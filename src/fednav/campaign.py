@@ -90,14 +90,7 @@ class Campaign:
             for f in self.runs_dir.iterdir():
                 f.unlink()
         if path.exists() and not fresh:
-            try:
-                old = json.loads(path.read_text(encoding="utf-8"))
-            except (OSError, ValueError) as e:
-                old = e
-            if not isinstance(old, dict):
-                raise CampaignError(f"campaign folder {self.out}: {path.name} is not a fednav "
-                                    f"campaign manifest (use another --out, or --fresh to "
-                                    f"start over)")
+            old = _read_manifest(self.out)
             for k in ("paper", "scenario_hash", "seed"):
                 if old.get(k) != manifest[k]:
                     raise CampaignError(
@@ -463,6 +456,20 @@ def decode(ds):
     return tuple(parts) if s["tuple"] else parts[0]
 
 
+def _read_manifest(folder: Path) -> dict:
+    """``folder/campaign.json`` as a dict, or a one-line :class:`CampaignError` when it is
+    not a manifest (damaged, overwritten, unreadable)."""
+    path = folder / "campaign.json"
+    try:
+        old = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as e:
+        old = e
+    if not isinstance(old, dict):
+        raise CampaignError(f"campaign folder {folder}: {path.name} is not a fednav campaign "
+                            f"manifest (use another --out, or --fresh to start over)")
+    return old
+
+
 def _read_unit(path: Path, folder) -> object:
     """The unit of work stored in ``path`` (decoded), or a one-line :class:`CampaignError`
     when the file is damaged."""
@@ -532,7 +539,6 @@ def open_runs(path) -> xarray.Dataset:  # noqa: F821
                             "axis": ["x", "y", "z"]})
     for c, v in stats.items():
         ds[f"stat_{c}"] = (("run", "mode"), v)
-    manifest = Path(path) / "campaign.json"
-    if manifest.exists():
-        ds.attrs.update({k: str(v) for k, v in json.loads(manifest.read_text()).items()})
+    if (Path(path) / "campaign.json").exists():
+        ds.attrs.update({k: str(v) for k, v in _read_manifest(Path(path)).items()})
     return ds
