@@ -21,7 +21,7 @@ import pandas as pd
 
 from .. import units
 from ..atomic import write_bytes, write_text
-from .data import DataError, GnssData, ImuData, Reference, VelocityData, check_time
+from .data import DataError, GnssData, ImuData, Reference, VelocityData, check_time, require_file
 
 IMU_COLUMNS = ("t_s", "gyro_x_radps", "gyro_y_radps", "gyro_z_radps", "accel_x_mps2",
                "accel_y_mps2", "accel_z_mps2")
@@ -33,9 +33,7 @@ EULER_COLUMNS = ("pitch_deg", "roll_deg", "heading_deg")
 
 def _read(path, kind: str, required: tuple) -> tuple[str, pd.DataFrame]:
     path = Path(path)
-    if not path.is_file():
-        raise DataError(f"{kind} file {path}: "
-                        f"{'is a folder, not a file' if path.is_dir() else 'not found'}")
+    require_file(path, kind)
     src = str(path)
     try:
         with open(path, encoding="utf-8-sig") as f:  # a UTF-8 byte-order mark is accepted

@@ -7,6 +7,7 @@ Frames: body right-forward-up, navigation ENU; positions geodetic ``[lat, lon, h
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -15,6 +16,13 @@ from ..errors import FednavError
 
 class DataError(FednavError, ValueError):
     """A sensor data file that cannot be used (one line naming the file and the field)."""
+
+
+def require_file(path: Path, kind: str) -> None:
+    """A one-line :class:`DataError` unless ``path`` is an existing file."""
+    if not path.is_file():
+        raise DataError(f"{kind} file {path}: "
+                        f"{'is a folder, not a file' if path.is_dir() else 'not found'}")
 
 
 def check_array(source: str, field: str, a, shape: tuple) -> np.ndarray:

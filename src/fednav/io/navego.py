@@ -25,6 +25,7 @@ from .data import (
     _as_float,
     check_rows,
     check_time,
+    require_file,
 )
 
 #: FRD -> RFU (and NED -> ENU): swap x and y, negate z.  A proper rotation, its own inverse.
@@ -68,9 +69,7 @@ def fednav_euler_to_navego(euler) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 def _load(path, kind: str):
     """The one struct in a NaveGo .mat file."""
     path = Path(path)
-    if not path.is_file():
-        raise DataError(f"{kind} file {path}: "
-                        f"{'is a folder, not a file' if path.is_dir() else 'not found'}")
+    require_file(path, kind)
     try:
         d = scipy.io.loadmat(path, squeeze_me=True, struct_as_record=False)
     except Exception as e:  # scipy raises several types for non-MAT content
