@@ -149,6 +149,7 @@ def test_scheduler_address_nobody_listens_on_is_refused_at_once(monkeypatch):
     with pytest.raises(CampaignError, match="cannot connect .host 'nohost': Name or service"):
         _start_client("tcp://nohost:8786", 1)
 
+
 def _units(jobs=1, campaign=None):
     scn = paper000.load_scenario()
     return run_units(paper000.one_run, [(scn, s, 20.0) for s in (1, 2, 3)], jobs,
