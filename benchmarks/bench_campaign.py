@@ -10,7 +10,8 @@ SINS/CNS/SAR with federated UKF local filters):
   process (fednav's compiled error transition, called per sigma point as FilterPy does)
   and the same measurement functions — measured in this invocation; and the ratio;
 * the wall time of an N-run campaign with the default local Dask workers, the CPU seconds
-  of its parent process and of its workers, and the import time of the command line.
+  of its parent process and of its workers, its serial parts (before the workers start,
+  after the last unit), and the import time of the command line.
 
 Ratios only: nothing here is asserted in tests.
 """
@@ -136,30 +137,51 @@ def main():
                         "--runs", str(args.runs), "--jobs", str(jobs), "--out",
                         str(Path(d) / "out")], check=True, capture_output=True)
         t = time.perf_counter() - t0
-        parent, workers = json.loads(cpu.read_text())
+        got = json.loads(cpu.read_text())
+    (parent, workers), m = got["cpu"], got["marks"]
     print(f"fednav reproduce 002 --runs {args.runs} --jobs {jobs}: {t:.1f} s wall "
           f"(Tables 1-4, includes start-up and the 3 Table-4 runs); CPU: parent "
           f"{parent:.1f} s (imports, dispatch, storing runs, tables, plot), workers "
-          f"{workers:.1f} s")
+          f"{workers:.1f} s; serial parts: {m['asked']:.2f} s before the cluster is asked "
+          f"for, {m['ready'] - m['asked']:.2f} s to start it, {m['end'] - m['last']:.2f} s "
+          f"after the last unit (tables, plot, report)")
 
 
-#: The command line run in-process, then the CPU seconds of that process (all its
-#: threads: the Dask scheduler and nannies of a local cluster live there) and of its
-#: children (the worker processes) written as JSON to argv[1].
+#: The command line run in-process, then written as JSON to argv[1]: the CPU seconds of
+#: that process (all its threads: the Dask scheduler and nannies of a local cluster live
+#: there) and of its children (the worker processes), and when (s from the start of the
+#: script) the cluster was asked for, when it was ready, when the last unit of work came
+#: back, and the end.
 _CLI_WITH_CPU = """
-import json, resource, sys
+import json, resource, sys, time
+t0 = time.perf_counter()
 out = sys.argv[1]
 sys.argv = ["fednav", *sys.argv[2:]]
+marks = {}
+from fednav import campaign
+from fednav.scenarios import paper002
+start_client, run_seeds = campaign._start_client, paper002.run_seeds
+def timed_start_client(*a, **k):
+    marks.setdefault("asked", time.perf_counter() - t0)
+    r = start_client(*a, **k)
+    marks.setdefault("ready", time.perf_counter() - t0)
+    return r
+def timed_run_seeds(*a, **k):
+    r = run_seeds(*a, **k)
+    marks["last"] = time.perf_counter() - t0
+    return r
+campaign._start_client, paper002.run_seeds = timed_start_client, timed_run_seeds
 from fednav.cli import main
 try:
     main()
 except SystemExit as e:
     if e.code:
         raise
+marks["end"] = time.perf_counter() - t0
 cpu = [r.ru_utime + r.ru_stime for r in (resource.getrusage(resource.RUSAGE_SELF),
                                          resource.getrusage(resource.RUSAGE_CHILDREN))]
 with open(out, "w") as f:
-    json.dump(cpu, f)
+    json.dump({"cpu": cpu, "marks": marks}, f)
 """
 
 
