@@ -1,0 +1,235 @@
+"""What the golden-result tests pin: short runs of every paper's closed loops, `process`
+forward and smoothed, and `tune`, flattened to named float arrays.
+
+``python tests/golden/make_golden.py`` wrote ``tests/golden/*.npz`` from the code of
+main before the one-navigator restructure (commit dca1acc); ``tests/golden/test_golden.py``
+recomputes the same quantities with today's code and compares them to 1e-9 relative.
+The functions below are the only place that knows how to ask today's code for them, so
+when an interface moves only this file follows it; the stored numbers never change.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parents[1]
+PLANETARY = ROOT.parent / "shared" / "data" / "canada-planetary"
+
+#: Fields of a simulation run result that are pinned (``None`` fields are skipped).
+RESULT_FIELDS = ("t", "pos", "vel", "att", "sigma", "euler")
+
+
+def _put(out: dict, key: str, value) -> None:
+    a = np.asarray(value, dtype=float)
+    out[key] = a
+
+
+def _run_result(out: dict, prefix: str, r) -> None:
+    for f in RESULT_FIELDS:
+        v = getattr(r, f, None)
+        if v is not None:
+            _put(out, f"{prefix}/{f}", v)
+    for k, b in (getattr(r, "beta", None) or {}).items():
+        _put(out, f"{prefix}/beta/{k}", b)
+    fdi = getattr(r, "fdi", None)
+    if fdi is not None and len(fdi):
+        _put(out, f"{prefix}/fdi/t", fdi["t"].to_numpy())
+        _put(out, f"{prefix}/fdi/statistic", fdi["statistic"].to_numpy())
+        _put(out, f"{prefix}/fdi/isolated", fdi["isolated"].to_numpy().astype(float))
+
+
+def _rows(out: dict, prefix: str, rows: list[dict]) -> None:
+    for i, row in enumerate(rows):
+        for k, v in row.items():
+            if isinstance(v, (int, float, np.floating, np.integer)) and k not in (
+                    "seed", "time_s", "ms_per_cycle", "seconds_per_run"):
+                _put(out, f"{prefix}/row{i}/{k}", v)
+
+
+# ----------------------------------------------------------------------------- papers
+def paper000() -> dict:
+    from fednav.scenarios import paper000 as p
+
+    out: dict = {}
+    scn = p.load_scenario()
+    rows, series = p.one_run((scn, 2, 250.0))
+    _rows(out, "run", rows)
+    for name, r in series.items():
+        _run_result(out, name, r)
+    return out
+
+
+def paper001() -> dict:
+    from fednav.scenarios import paper001 as p
+
+    out: dict = {}
+    scn = p.load_scenario()
+    scn = scn.model_copy(update={"filters": scn.filters.model_copy(update={"particles": 100})})
+    rows, series = p._task(("T1", scn, 3, None, 80.0))
+    _rows(out, "T1", rows)
+    for name, r in series.items():
+        for f in ("t", "att", "pos", "vel", "sigma"):
+            _put(out, f"{name}/{f}", getattr(r, f))
+    reg = next(g for g in scn.regimes if "chi-square" in g.name)
+    rows, _ = p._task(("regime", scn.with_regime(reg), 4, reg.name, 80.0))
+    _rows(out, "regime", rows)
+    return out
+
+
+def paper002() -> dict:
+    from fednav.scenarios import paper002 as p
+
+    out: dict = {}
+    scn = p.load_scenario()
+    for seed in (3, 4):
+        rows, series = p.one_run((scn, seed, 120.0))
+        _rows(out, f"s{seed}", rows)
+        for name, r in series.items():
+            _run_result(out, f"s{seed}/{name}", r)
+    _rows(out, "T4", p.one_run_t4((scn, 3, 40.0)))
+    obs = p.observability(scn, 120.0)
+    for key, row in obs["rows"].items():
+        for col, cell in row.items():
+            _put(out, f"T1/{key}/{col}", cell["ours"])
+    return out
+
+
+def paper003() -> dict:
+    from fednav.scenarios import paper003 as p
+
+    out: dict = {}
+    scn = p.load_scenario()
+    scn = scn.model_copy(update={"fault_experiment": scn.fault_experiment.model_copy(
+        update={"duration_s": 460.0})})
+    rows, series, fault_rows, fault_series = p.one_run((scn, 5, 460.0))
+    _rows(out, "run", rows)
+    _rows(out, "fault", fault_rows)
+    for name, r in series.items():
+        _run_result(out, name, r)
+    for name, r in fault_series.items():
+        _run_result(out, f"fault/{name}", r)
+    return out
+
+
+def paper004() -> dict:
+    from fednav.scenarios import paper004 as p
+
+    out: dict = {}
+    scn = p.load_scenario()
+    rows, series = p.one_run((scn, 6, 300.0))
+    _rows(out, "run", rows)
+    for name, r in series.items():
+        _run_result(out, name, r)
+    _rows(out, "sweep", p.sweep_run((scn, 6, 200.0, 0.5)))
+    return out
+
+
+# ---------------------------------------------------------------------------- process
+def car_drive(tmp: Path):
+    """The simulated drive of examples/car-drive.yaml read back from its CSV files."""
+    from fednav.dataset import load_dataset_config, simulate_dataset, write_csv_dataset
+
+    cfg = load_dataset_config(ROOT / "examples" / "car-drive.yaml")
+    write_csv_dataset(simulate_dataset(cfg), tmp)
+    return tmp
+
+
+def _read_csv(folder: Path, cfg, velocity: bool = True):
+    from fednav.io import read_gnss_csv, read_imu_csv, read_reference_csv, read_velocity_csv
+
+    g = read_gnss_csv(folder / "gnss.csv", cfg.gnss_sigma_pos_m or (5.0, 5.0, 5.0),
+                      cfg.gnss_sigma_vel_mps or (0.1, 0.1, 0.1),
+                      cfg.gnss_lever_m or (0.0, 0.0, 0.0))
+    return (read_imu_csv(folder / "imu.csv", cfg.imu_max_bridge_s), g,
+            read_velocity_csv(folder / "velocity.csv") if velocity else None,
+            read_reference_csv(folder / "reference.csv"))
+
+
+def _solution(out: dict, prefix: str, sol, step: int) -> None:
+    rows = np.r_[np.arange(0, len(sol.t), step), len(sol.t) - 1]
+    for f in ("t", "lla", "vel", "euler", "sigma", "sigma_euler", "omega"):
+        _put(out, f"{prefix}/{f}", getattr(sol, f)[rows])
+    if sol.fdi:
+        _put(out, f"{prefix}/nis", [e[2] for e in sol.fdi])
+        _put(out, f"{prefix}/isolated", [float(e[5]) for e in sol.fdi])
+
+
+def _process_case(out: dict, prefix: str, imu, gnss, vel, ref, cfg, smooth: bool) -> None:
+    from fednav.process import errors_against, process, rmse
+
+    res = process(imu, gnss, vel, cfg, smooth)
+    _solution(out, f"{prefix}/forward", res.forward, 200)
+    _put(out, f"{prefix}/epochs", res.epochs)
+    for k, v in rmse(errors_against(res.forward, ref)).items():
+        _put(out, f"{prefix}/rmse/{k}", v)
+    if smooth:
+        _solution(out, f"{prefix}/smoothed", res.smoothed, 200)
+        for k, v in rmse(errors_against(res.smoothed, ref)).items():
+            _put(out, f"{prefix}/rmse_smoothed/{k}", v)
+
+
+def process_cases(tmp: Path) -> dict:
+    import yaml
+
+    from fednav.process import ProcessConfig
+
+    folder = car_drive(tmp)
+    base = yaml.safe_load((folder / "process.yaml").read_text())
+    out: dict = {}
+    cfg = ProcessConfig.model_validate(base)
+    imu, gnss, vel, ref = _read_csv(folder, cfg)
+    _process_case(out, "gnss", imu, gnss, None, ref, cfg, smooth=True)
+    cfg2 = ProcessConfig.model_validate({**base, "fdi_alpha": {"velocity": 0.01},
+                                         "fdi_recovery": 2, "substeps": 2})
+    _process_case(out, "gnss+velocity", imu, gnss, vel, ref, cfg2, smooth=True)
+    cfg3 = ProcessConfig.model_validate({**base, "initial_attitude": "coarse",
+                                         "fdi_alpha": 0.001, "period_s": 0.4})
+    _process_case(out, "coarse", imu, gnss, vel, ref, cfg3, smooth=False)
+    return out
+
+
+def planetary() -> dict:
+    from fednav.config import load_model
+    from fednav.io import (
+        read_navego_gnss,
+        read_navego_imu,
+        read_navego_reference,
+        read_navego_visual,
+    )
+    from fednav.process import ProcessConfig
+
+    cfg = load_model(ROOT / "examples" / "canada-planetary.yaml", ProcessConfig, "config")
+    out: dict = {}
+    _process_case(out, "planetary", read_navego_imu(PLANETARY / "imu_planetary.mat"),
+                  read_navego_gnss(PLANETARY / "gnss_planetary.mat"),
+                  read_navego_visual(PLANETARY / "visual_planetary.mat"),
+                  read_navego_reference(PLANETARY / "gnss_planetary_r.mat"), cfg, True)
+    return out
+
+
+def tune_case(tmp: Path) -> dict:
+    from fednav.dataset import load_dataset_config, simulate_dataset, write_csv_dataset
+    from fednav.process import ProcessConfig
+    from fednav.tuning import tune
+
+    cfg = load_dataset_config(ROOT / "examples" / "car-drive.yaml")
+    cfg = cfg.model_copy(update={"segments": cfg.segments[:6], "seed": 4})
+    write_csv_dataset(simulate_dataset(cfg), tmp)
+    pcfg = ProcessConfig(gnss_lever_m=tuple(cfg.gnss.lever_m))
+    imu, gnss, vel, _ = _read_csv(tmp, pcfg)
+    res = tune(imu, gnss, vel, pcfg)
+    out: dict = {}
+    for f in res.figures:
+        _put(out, f"figure/{f.key}", f.value)
+    _put(out, "before/loglik", res.before.loglik)
+    _put(out, "after/loglik", res.after.loglik)
+    for k, v in res.after.nis_per_dof.items():
+        _put(out, f"after/nis/{k}", v)
+    return out
+
+
+CASES = {"paper000": paper000, "paper001": paper001, "paper002": paper002,
+         "paper003": paper003, "paper004": paper004}

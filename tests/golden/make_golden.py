@@ -1,0 +1,44 @@
+"""Write the golden results (``tests/golden/*.npz``) from the code as it is now.
+
+Run only to pin a deliberate change of results, and say so in the commit:
+``python tests/golden/make_golden.py [CASE ...]`` (cases: the keys of
+``golden_cases.CASES`` plus ``process``, ``planetary`` and ``tune``).
+"""
+
+from __future__ import annotations
+
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import golden_cases as gc  # noqa: E402
+
+
+def compute(name: str) -> dict:
+    if name in gc.CASES:
+        return gc.CASES[name]()
+    with tempfile.TemporaryDirectory() as tmp:
+        if name == "process":
+            return gc.process_cases(Path(tmp))
+        if name == "tune":
+            return gc.tune_case(Path(tmp))
+    if name == "planetary":
+        return gc.planetary()
+    raise SystemExit(f"unknown case {name}")
+
+
+def main(names: list[str]) -> None:
+    for name in names or [*gc.CASES, "process", "planetary", "tune"]:
+        t0 = time.perf_counter()
+        out = compute(name)
+        np.savez_compressed(gc.HERE / f"{name}.npz", **out)
+        print(f"{name}: {len(out)} arrays, {sum(a.size for a in out.values())} values, "
+              f"{time.perf_counter() - t0:.1f} s")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])

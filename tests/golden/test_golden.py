@@ -1,0 +1,60 @@
+"""Golden results: every closed loop of fednav gives today's numbers to 1e-9 relative.
+
+The stored arrays (``tests/golden/*.npz``) were written by ``make_golden.py`` from main
+before the one-navigator restructure; ``golden_cases.py`` says what each holds.  An
+array matches when every element is within ``1e-9 * max(|golden|)`` of the golden one
+(relative to the array's own scale, so values crossing zero compare sensibly).
+"""
+
+from __future__ import annotations
+
+import golden_cases as gc
+import numpy as np
+import pytest
+
+RTOL = 1e-9
+
+
+def _compare(name: str, got: dict) -> None:
+    want = np.load(gc.HERE / f"{name}.npz")
+    missing = sorted(set(want.files) - set(got))
+    extra = sorted(set(got) - set(want.files))
+    assert not missing and not extra, f"{name}: missing {missing[:5]}, extra {extra[:5]}"
+    worst = []
+    for key in want.files:
+        w, g = want[key], np.asarray(got[key], dtype=float)
+        assert g.shape == w.shape, f"{name} {key}: shape {g.shape}, golden {w.shape}"
+        if not w.size:
+            continue
+        nan = np.isnan(w)
+        if not np.array_equal(np.isnan(g), nan):
+            worst.append((np.inf, key))
+            continue
+        if nan.all():
+            continue
+        w, g = w[~nan], g[~nan]
+        scale = float(np.max(np.abs(w))) or 1.0
+        err = float(np.max(np.abs(g - w))) / scale if np.all(np.isfinite(g)) else np.inf
+        if err > RTOL:
+            worst.append((err, key))
+    worst.sort(reverse=True)
+    assert not worst, f"{name}: {len(worst)} arrays differ, worst " + ", ".join(
+        f"{k} ({e:.2g})" for e, k in worst[:5])
+
+
+@pytest.mark.parametrize("name", list(gc.CASES))
+def test_paper_closed_loops(name):
+    _compare(name, gc.CASES[name]())
+
+
+def test_process_forward_and_smoothed(tmp_path):
+    _compare("process", gc.process_cases(tmp_path))
+
+
+@pytest.mark.skipif(not gc.PLANETARY.is_dir(), reason="../shared/data not available")
+def test_process_real_rover_data():
+    _compare("planetary", gc.planetary())
+
+
+def test_tune(tmp_path):
+    _compare("tune", gc.tune_case(tmp_path))
