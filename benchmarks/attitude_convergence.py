@@ -21,11 +21,11 @@ from pathlib import Path
 
 import numpy as np
 
-from fednav import units
-from fednav.config import load_model
-from fednav.dataset import load_dataset_config, simulate_dataset, write_csv_dataset
+from fednav.core import units
+from fednav.core.config import load_model
 from fednav.io import read_gnss_csv, read_imu_csv, read_reference_csv
-from fednav.process import ProcessConfig, errors_against, process, rmse
+from fednav.process.run import ProcessConfig, errors_against, process, rmse
+from fednav.sim.dataset import load_dataset_config, simulate_dataset, write_csv_dataset
 
 ROOT = Path(__file__).resolve().parents[1]
 ADIS16488 = {"random_bias": True, "gyro_bias_deg_h": 25.0, "gyro_markov_deg_h": 6.0,

@@ -34,9 +34,9 @@ def record_steps(scn, seed):
     """Run one Monte Carlo run of paper 002 through the Python filter loop (the compiled
     loop makes the same steps without calling the filter classes) and record every UKF
     step it made; returns (seconds of that run, steps)."""
-    from fednav import compiled_loop
     from fednav.filters.ukf import UnscentedKalmanFilter as UKF
     from fednav.scenarios import paper002
+    from fednav.sim import compiled_loop
 
     steps = []
     predict, update = UKF.predict, UKF.update
@@ -158,7 +158,7 @@ t0 = time.perf_counter()
 out = sys.argv[1]
 sys.argv = ["fednav", *sys.argv[2:]]
 marks = {}
-from fednav import campaign
+from fednav.campaign import store as campaign
 from fednav.scenarios import paper002
 start_client, run_seeds = campaign._start_client, paper002.run_seeds
 def timed_start_client(*a, **k):

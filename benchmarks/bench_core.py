@@ -24,12 +24,12 @@ def best_of(fn, repeat=5, number=1):
 
 
 def bench_strapdown():
+    from fednav.ins.strapdown import Strapdown
     from fednav.scenarios import paper002
-    from fednav.strapdown import Strapdown
 
     tr = paper002.load_scenario().trajectory()
     code = ("import time; t0=time.perf_counter(); import numpy as np;"
-            "from fednav.strapdown import Strapdown; t1=time.perf_counter();"
+            "from fednav.ins.strapdown import Strapdown; t1=time.perf_counter();"
             "s=Strapdown([0.6,2.0,0.0],[0,0,0],[0,0,0],0.01);"
             "s.run(np.zeros((10,3)),np.zeros((10,3)));"
             "print(t1-t0, time.perf_counter()-t1)")
@@ -51,8 +51,8 @@ def bench_transition():
     in one call (one column per point) against the same points one call each."""
     import numba
 
-    from fednav import error_model as em
-    from fednav import units
+    from fednav.core import units
+    from fednav.ins import error_model as em
 
     @numba.njit
     def together(X, T, nsub, par, C, scale, reps):
@@ -146,7 +146,11 @@ def bench_quadrature(n=18, m=3):
     process and measurement functions called point by point from Python, the moments with
     NumPy; the same Sage-Husa step for AASGHQF) — FilterPy itself for the UKF — in the
     same run."""
-    from fednav.filters import AdaptiveSparseGridFilter, SparseGridFilter, UnscentedKalmanFilter
+    from fednav.filters import (
+        AdaptiveSparseGridFilter,
+        SparseGridFilter,
+        UnscentedKalmanFilter,
+    )
 
     A, H, Q, R, z, Proc, Model, step_ref = toy_models(n, m, 2)
     def fx(x):
@@ -225,7 +229,7 @@ def bench_simplified_ukf(n=15, m=6):
 def _time_modes(paper, modes: dict[str, tuple]):
     """Best-of-3 warm wall time of each (aiding, filter type) mode of ``paper``, and of the
     free SINS on the same loop (the baseline)."""
-    from fednav.simulate import make_run_data, run_mode
+    from fednav.sim.runs import make_run_data, run_mode
 
     scn = paper.load_scenario()
     data = make_run_data(scn, 1)

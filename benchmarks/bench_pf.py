@@ -19,7 +19,7 @@ import time
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from fednav import attitude, earth
+from fednav.core import attitude, earth
 from fednav.filters import particle
 from fednav.launch import errors, navigate
 from fednav.launch.frame import J2, J4

@@ -22,9 +22,9 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--hours", type=float, default=24.0)
     args = ap.parse_args()
-    from fednav import units
+    from fednav.core import units
     from fednav.scenarios import paper002
-    from fednav.simulate import make_run_data, run_configured_mode
+    from fednav.sim.runs import make_run_data, run_configured_mode
 
     scn = paper002.load_scenario()
     segs = list(scn.segments[:3])
@@ -45,7 +45,7 @@ def main():
     t2 = time.perf_counter()
     hour = res.t < 3600.0
     last = res.t > res.t[-1] - 3600.0
-    from fednav import error_model as em
+    from fednav.ins import error_model as em
 
     s = res.sigma / em.SCALE                      # filter units, as the filter holds them
     s = s[:, ~np.all(np.isnan(s), axis=0)]

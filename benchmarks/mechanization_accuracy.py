@@ -5,11 +5,11 @@ Run by hand: ``python benchmarks/mechanization_accuracy.py``.
 
 import numpy as np
 
-from fednav import attitude as att
-from fednav import earth, units
+from fednav.core import attitude as att
+from fednav.core import earth, units
+from fednav.ins.strapdown import BaroLoop, Strapdown
 from fednav.scenarios import paper002
-from fednav.strapdown import BaroLoop, Strapdown
-from fednav.trajectory import Segment, generate
+from fednav.sim.trajectory import Segment, generate
 
 
 def paper002_flight():

@@ -19,7 +19,7 @@ import sys
 import numpy as np
 
 from fednav.scenarios import paper000
-from fednav.simulate import make_run_data, run_configured_mode, run_mode
+from fednav.sim.runs import make_run_data, run_configured_mode, run_mode
 
 
 def stats(scn, data, T=None):

@@ -13,9 +13,9 @@ import sys
 
 import numpy as np
 
+from fednav.campaign.montecarlo import run_seeds
 from fednav.filters import ParticleFilter
 from fednav.launch import navigate
-from fednav.montecarlo import run_seeds
 from fednav.scenarios import paper001
 
 

@@ -9,7 +9,7 @@ import sys
 import numpy as np
 
 from fednav.scenarios import paper002
-from fednav.simulate import make_run_data, run_mode
+from fednav.sim.runs import make_run_data, run_mode
 
 NAMES = "phiE phiN phiU vE vN vU pE pN pU".split()
 

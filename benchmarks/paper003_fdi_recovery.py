@@ -10,8 +10,8 @@ import tempfile
 
 import yaml
 
-from fednav.config import load_scenario
 from fednav.scenarios import paper003, scenario_path
+from fednav.sim.scenario import load_scenario
 
 
 def main(seeds):

@@ -7,11 +7,11 @@ Run by hand: ``python benchmarks/paper003_linearisation.py``.
 
 import numpy as np
 
-from fednav import attitude as att
-from fednav import error_model as em
-from fednav.strapdown import Strapdown
-from fednav.total_state import TotalStateUKF
-from fednav.trajectory import Segment, generate
+from fednav.core import attitude as att
+from fednav.ins import error_model as em
+from fednav.ins.strapdown import Strapdown
+from fednav.ins.total_state import TotalStateUKF
+from fednav.sim.trajectory import Segment, generate
 
 
 def main():

@@ -19,10 +19,15 @@ from pathlib import Path
 
 import numpy as np
 
-from fednav.config import load_model
-from fednav.io import read_navego_gnss, read_navego_imu, read_navego_reference, read_navego_visual
-from fednav.process import ProcessConfig, errors_against, process, rmse
-from fednav.process_output import consistency
+from fednav.core.config import load_model
+from fednav.io import (
+    read_navego_gnss,
+    read_navego_imu,
+    read_navego_reference,
+    read_navego_visual,
+)
+from fednav.process.output import consistency
+from fednav.process.run import ProcessConfig, errors_against, process, rmse
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT.parent / "shared" / "data" / "canada-planetary"
@@ -136,10 +141,10 @@ def corrections():
 
 
 def tune():
-    """``fednav.tuning.tune`` from the file's figures, against the hand-tuned example
+    """``fednav.process.tuning.tune`` from the file's figures, against the hand-tuned example
     config (docs/real-data.md, "Tuned from the data"); GNSS only and GNSS + corrected
     visual (the example's sensor corrections and fault detection kept as the base)."""
-    from fednav.tuning import tune as tune_figures
+    from fednav.process.tuning import tune as tune_figures
 
     imu, g, gs, vis, ref = load()
     ex = load_model(ROOT / "examples" / "canada-planetary.yaml", ProcessConfig, "config")

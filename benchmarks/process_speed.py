@@ -7,7 +7,7 @@ and read back.  Timed, warm (a first run compiles the numba kernels):
 
 * forward filter + RTS smoother with the IMU-rate solutions (``process(smooth=True)``);
 * writing both IMU-rate solution CSVs (``solution.csv``, ``solution_smoothed.csv``);
-* ``fednav tune`` on the same data (``fednav.tuning.tune``).
+* ``fednav tune`` on the same data (``fednav.process.tuning.tune``).
 
 Targets: processing + IMU-rate output < 2 s, tune < 30 s.  The ratio printed is to the
 data's own duration (times faster than real time).
@@ -20,12 +20,12 @@ import tempfile
 import time
 from pathlib import Path
 
-from fednav.dataset import load_dataset_config, simulate_dataset, write_csv_dataset
 from fednav.io import read_gnss_csv, read_imu_csv
 from fednav.io.csvdata import write_csv
-from fednav.process import ProcessConfig, process
-from fednav.process_output import solution_columns, solution_decimals
-from fednav.tuning import tune
+from fednav.process.output import solution_columns, solution_decimals
+from fednav.process.run import ProcessConfig, process
+from fednav.process.tuning import tune
+from fednav.sim.dataset import load_dataset_config, simulate_dataset, write_csv_dataset
 
 ROOT = Path(__file__).resolve().parents[1]
 DURATION = 437.0

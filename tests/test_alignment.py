@@ -1,12 +1,12 @@
-"""Initial alignment (fednav.alignment): levelling, heading from the GNSS course carried
+"""Initial alignment (fednav.ins.alignment): levelling, heading from the GNSS course carried
 back by the gyro, the tilt/bias coupling of the initial covariance."""
 
 import numpy as np
 import pytest
 
-from fednav import attitude as att
-from fednav import earth, units
-from fednav.alignment import align, coarse_level, heading_from_course, static_span
+from fednav.core import attitude as att
+from fednav.core import earth, units
+from fednav.ins.alignment import align, coarse_level, heading_from_course, static_span
 from fednav.io.data import GnssData, ImuData
 
 LAT = units.deg(45.0)

@@ -3,8 +3,8 @@ import json
 import pytest
 from typer.testing import CliRunner
 
-from fednav.atomic import clear_results, replacing, save_figure, write_text
 from fednav.cli import app
+from fednav.core.atomic import clear_results, replacing, save_figure, write_text
 
 
 def test_replacing_keeps_the_old_file_when_writing_fails(tmp_path):

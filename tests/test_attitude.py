@@ -4,7 +4,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
-from fednav import attitude as att
+from fednav.core import attitude as att
 
 angles = st.tuples(
     st.floats(-1.4, 1.4), st.floats(-3.1, 3.1), st.floats(0.0, 6.28)

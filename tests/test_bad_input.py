@@ -113,8 +113,8 @@ _YAML = st.recursive(_SCALAR, lambda c: st.one_of(
 def test_random_malformed_process_config(doc):
     import tempfile
 
-    from fednav.config import ConfigError, load_model
-    from fednav.process import ProcessConfig
+    from fednav.core.config import ConfigError, load_model
+    from fednav.process.run import ProcessConfig
 
     with tempfile.TemporaryDirectory() as d:
         p = Path(d) / "cfg.yaml"

@@ -12,7 +12,7 @@ import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
-from fednav.campaign import Campaign, CampaignError, decode, encode, open_runs, run_units
+from fednav.campaign.store import Campaign, CampaignError, decode, encode, open_runs, run_units
 from fednav.cli import app
 from fednav.scenarios import paper000, paper003
 
@@ -134,7 +134,7 @@ def test_scheduler_address_nobody_listens_on_is_refused_at_once(monkeypatch):
     """Dask would retry a refused or unresolvable address for its whole 30 s timeout."""
     import socket
 
-    from fednav.campaign import _start_client
+    from fednav.campaign.store import _start_client
 
     t0 = time.perf_counter()
     with pytest.raises(CampaignError, match="tcp://127.0.0.1:1: cannot connect .nothing "

@@ -3,9 +3,10 @@
 import numpy as np
 import pytest
 
-from fednav import compiled_loop, simulate
 from fednav.filters import FilterError
 from fednav.scenarios import paper002
+from fednav.sim import compiled_loop
+from fednav.sim import runs as simulate
 
 MAX_TIME = 120.0
 
@@ -73,9 +74,9 @@ def test_residual_and_predicted_are_the_measurement_models(kind):
     """The compiled loop's copies of StarAttitude / SarFix (residual and h) against the
     classes the Python loop calls, on random attitudes (headings across 0 / 2 pi, steep
     pitch), positions and sigma points."""
-    from fednav import attitude as att
-    from fednav.measurements import MODELS, NavSnapshot
-    from fednav.strapdown import STATE_SIZE
+    from fednav.core import attitude as att
+    from fednav.ins.strapdown import STATE_SIZE
+    from fednav.sensors.models import MODELS, NavSnapshot
 
     rng = np.random.default_rng(5)
     model = MODELS[kind]

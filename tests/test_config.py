@@ -1,8 +1,9 @@
 import pytest
 import yaml
 
-from fednav.config import ConfigError, load_scenario
+from fednav.core.config import ConfigError
 from fednav.scenarios import scenario_path
+from fednav.sim.scenario import load_scenario
 
 
 def write(tmp_path, mutate):

@@ -7,15 +7,9 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from fednav import units
 from fednav.cli import app
-from fednav.config import load_model
-from fednav.dataset import (
-    load_dataset_config,
-    simulate_dataset,
-    write_csv_dataset,
-    write_navego_dataset,
-)
+from fednav.core import units
+from fednav.core.config import load_model
 from fednav.io import (
     read_gnss_csv,
     read_imu_csv,
@@ -26,7 +20,13 @@ from fednav.io import (
     read_reference_csv,
     read_velocity_csv,
 )
-from fednav.process import ProcessConfig, errors_against, process
+from fednav.process.run import ProcessConfig, errors_against, process
+from fednav.sim.dataset import (
+    load_dataset_config,
+    simulate_dataset,
+    write_csv_dataset,
+    write_navego_dataset,
+)
 
 EXAMPLE = Path(__file__).parents[1] / "examples" / "car-drive.yaml"
 
@@ -122,7 +122,7 @@ def test_no_velocity_spike_at_turn_entries(drive):
     (benchmarks/attitude_convergence.py), not by this seed's roll (0.107 deg: its lateral
     accelerometer bias is a 2-sigma draw, which no forward filter can tell from roll
     before the first turn at 51 s), hence 0.12 here."""
-    from fednav.process import rmse
+    from fednav.process.run import rmse
 
     cases, ref = drive
     sol, e = cases["gnss"]

@@ -4,15 +4,16 @@ strategies in closed loop (paper-004 flight, shortened)."""
 import numpy as np
 import pytest
 
-from fednav import earth, units
-from fednav.config import ConfigError, load_scenario
-from fednav.delays import InsIncrements, curve_fit_value
-from fednav.measurements import NavSnapshot
+from fednav.core import earth, units
+from fednav.core.config import ConfigError
+from fednav.ins.strapdown import Strapdown
 from fednav.scenarios import paper004
 from fednav.sensors import Latency, measurement_times, sequential_times
-from fednav.simulate import make_run_data, run_mode
-from fednav.strapdown import Strapdown
-from fednav.trajectory import Segment, generate
+from fednav.sensors.delays import InsIncrements, curve_fit_value
+from fednav.sensors.models import NavSnapshot
+from fednav.sim.runs import make_run_data, run_mode
+from fednav.sim.scenario import load_scenario
+from fednav.sim.trajectory import Segment, generate
 
 
 def test_latency_kinds_and_sequential_chaining():
@@ -76,7 +77,7 @@ def test_ins_increment_carries_the_ins_back_to_the_capture_instant():
                 record=False)
         incs.record(e, s0[7:10], s0[4:7], C0, ins.lla, ins.vel, ins.dcm)
     nav = NavSnapshot(ins.lla, ins.vel, ins.dcm)
-    from fednav import attitude as att
+    from fednav.core import attitude as att
 
     # (t_c, position / velocity / attitude tolerance): exact on epochs; the fractional term
     # uses the *next* interval's increment (eq. 6), off by the change of velocity in a
@@ -151,7 +152,7 @@ def test_measurement_sets_vary_per_epoch(short):
 def test_gnss_with_latency_gets_the_same_treatment(short):
     import yaml
 
-    from fednav.config import GnssConfig
+    from fednav.sim.scenario import GnssConfig
 
     scn, _ = short
     g = GnssConfig.model_validate({"sigma_pos_m": 5.0, "sigma_vel_mps": 0.1, "period_s": 1.0,

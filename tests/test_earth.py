@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from fednav import earth
+from fednav.core import earth
 
 
 def test_radii_equator_and_pole():

@@ -2,9 +2,9 @@ import numpy as np
 import pytest
 from scipy.linalg import expm
 
-from fednav import attitude as att
-from fednav import error_model as em
-from fednav import units
+from fednav.core import attitude as att
+from fednav.core import units
+from fednav.ins import error_model as em
 
 
 def make_process(nsub=20, baro=(0.2, 0.0101), T=1.0):

@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from fednav.evaluation import error_stats, mean_ci95
+from fednav.campaign.evaluation import error_stats, mean_ci95
 
 
 def test_error_stats_values():

@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 import yaml
 
-from fednav.config import load_scenario
-from fednav.report import plot_fdi
+from fednav.campaign.report import plot_fdi
 from fednav.scenarios import scenario_path
-from fednav.simulate import make_run_data, run_mode
+from fednav.sim.runs import make_run_data, run_mode
+from fednav.sim.scenario import load_scenario
 
 T_END = 400.0
 

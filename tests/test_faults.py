@@ -1,9 +1,9 @@
 import numpy as np
 import pytest
 
-from fednav import earth
+from fednav.core import earth
 from fednav.sensors import Fault, Gnss, inject_faults
-from fednav.trajectory import Segment, generate
+from fednav.sim.trajectory import Segment, generate
 
 
 @pytest.fixture(scope="module")

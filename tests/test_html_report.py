@@ -5,8 +5,8 @@ import pytest
 from conftest import assert_report_complete, report_tables
 from typer.testing import CliRunner
 
+from fednav.campaign.html_report import render, write_report
 from fednav.cli import app
-from fednav.html_report import render, write_report
 
 SUMMARY = {
     "paper": "003", "runs": 4, "seed": 7,

@@ -1,7 +1,7 @@
 import numpy as np
 
-from fednav import attitude as att
-from fednav.kernels import cholesky_lower, rotvec_to_dcm
+from fednav.core import attitude as att
+from fednav.core.kernels import cholesky_lower, rotvec_to_dcm
 
 
 def test_rotvec_to_dcm_matches_attitude():
@@ -25,7 +25,7 @@ def test_cholesky_lower():
 
 
 def test_compiled_euler_to_dcm_matches_attitude():
-    from fednav.kernels import euler_to_dcm
+    from fednav.core.kernels import euler_to_dcm
 
     for e in ([0.3, -0.2, 4.0], [1.5, 3.0, 0.1], [0.0, 0.0, 0.0]):
         np.testing.assert_allclose(euler_to_dcm(*e), att.euler_to_dcm(e), atol=1e-15)

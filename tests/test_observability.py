@@ -1,7 +1,11 @@
 import numpy as np
 import pytest
 
-from fednav.observability import covariance_degree, stripped_observability_matrix, svd_degree
+from fednav.ins.observability import (
+    covariance_degree,
+    stripped_observability_matrix,
+    svd_degree,
+)
 
 # Position-velocity-acceleration chain, position measured.
 F = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, 0.0]])

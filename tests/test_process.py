@@ -7,14 +7,14 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from fednav import earth, units
 from fednav.cli import app
+from fednav.core import earth, units
 from fednav.io.csvdata import IMU_COLUMNS, write_csv
 from fednav.io.data import GnssData, ImuData, ImuErrors, Reference
-from fednav.process import ProcessConfig, errors_against, process, rmse
+from fednav.process.run import ProcessConfig, errors_against, process, rmse
 from fednav.sensors import ImuErrors as SimImuErrors
 from fednav.sensors import corrupt_imu
-from fednav.trajectory import Segment, generate
+from fednav.sim.trajectory import Segment, generate
 
 LEVER = np.array([0.6, -1.2, 0.4])  # antenna: right, aft, up of the IMU [m]
 
@@ -38,7 +38,7 @@ def make_flight():
                   units.deg(np.array([1.0, 1.0, 3.0])))
     tg = np.arange(0.2, truth.t[-1], 0.2)
     tr = truth.at(tg)
-    from fednav import attitude as att
+    from fednav.core import attitude as att
 
     C = att.euler_to_dcm(tr["euler"])
     d = C @ LEVER
@@ -91,7 +91,7 @@ def test_smoother_improves_position_velocity_and_attitude(flight, result):
 
 
 def test_filter_is_consistent(result):
-    from fednav.process_output import consistency
+    from fednav.process.output import consistency
 
     c = consistency(result.forward)["gnss"]
     assert 0.6 < c["nis_per_dof"] < 1.6
@@ -107,7 +107,7 @@ def test_ignoring_the_lever_arm_costs_accuracy(flight, result):
 
 
 def test_coarse_heading_from_the_gnss_course(flight):
-    from fednav.process import gnss_course
+    from fednav.process.run import gnss_course
 
     _, gnss, ref = flight
     assert units.to_deg(gnss_course(gnss, 1.0)) == pytest.approx(45.0, abs=2.0)
@@ -204,7 +204,7 @@ def test_solution_is_at_imu_rate_with_the_epochs_after_feedback(flight, result):
 def test_accelerometer_bias_keeps_its_constant_part():
     """Turn-on bias + Gauss-Markov: one state, a random constant driven by the Markov
     process's random walk (a Markov state alone would forget the turn-on bias)."""
-    from fednav.process import _noise
+    from fednav.process.run import _noise
 
     errs = ImuErrors(*[np.full(3, v) for v in (1e-4, 1e-3, 1e-4, 0.02, 1e-5, 2e-3, 1e5,
                                                100.0)])
@@ -216,7 +216,7 @@ def test_accelerometer_bias_keeps_its_constant_part():
 
 def test_velocity_sensor_axes_and_clock_corrections():
     from fednav.io.data import VelocityData
-    from fednav.process import adjust_sensors
+    from fednav.process.run import adjust_sensors
 
     t = np.arange(5.0)
     v = VelocityData("v", t, np.tile([1.0, 2.0, 3.0], (5, 1)),

@@ -5,14 +5,14 @@ from pathlib import Path
 
 import pytest
 
-from fednav.config import load_model
+from fednav.core.config import load_model
 from fednav.io import (
     read_navego_gnss,
     read_navego_imu,
     read_navego_reference,
     read_navego_visual,
 )
-from fednav.process import ProcessConfig, errors_against, process, rmse
+from fednav.process.run import ProcessConfig, errors_against, process, rmse
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT.parent / "shared" / "data" / "canada-planetary"
@@ -76,7 +76,7 @@ def test_corrected_visual_data_is_consistent_and_bounds_the_outage(data):
     through the sparse file's GNSS outage (100-200 s) falls from ~35 m (as filed) to a few m."""
     import numpy as np
 
-    from fednav.process_output import consistency
+    from fednav.process.output import consistency
 
     cfg = load_model(ROOT / "examples" / "canada-planetary.yaml", ProcessConfig, "config")
     as_filed = cfg.model_copy(update={"velocity_time_offset_s": 0.0,

@@ -1,9 +1,9 @@
 import numpy as np
 import pytest
 
-from fednav import units
+from fednav.core import units
 from fednav.sensors import Barometer, ImuErrors, MeasurementSeries, StarSensor, corrupt_imu
-from fednav.trajectory import Segment, generate
+from fednav.sim.trajectory import Segment, generate
 
 
 def test_imu_error_statistics():
@@ -62,7 +62,7 @@ def test_imu_per_axis_parameters():
 
 
 def test_gnss_and_sar_noise_statistics():
-    from fednav import earth
+    from fednav.core import earth
     from fednav.sensors import Gnss, SarMatcher
 
     tr = generate([0.6, 2.0, 100.0], 50.0, [0, 0, 0.5], [Segment(2000.0)], 0.1)

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from fednav.smoother import rts_errors
+from fednav.filters.smoother import rts_errors
 
 
 def test_closed_loop_rts_equals_open_loop_rts():

@@ -1,11 +1,11 @@
 import numpy as np
 import pytest
 
-from fednav import attitude as att
-from fednav import earth, units
+from fednav.core import attitude as att
+from fednav.core import earth, units
+from fednav.ins.strapdown import BaroLoop, Strapdown
 from fednav.scenarios import paper002
-from fednav.strapdown import BaroLoop, Strapdown
-from fednav.trajectory import Segment, generate
+from fednav.sim.trajectory import Segment, generate
 
 
 def nav_errors(out, tr):
@@ -90,7 +90,7 @@ def test_baro_loop_does_not_lag_in_a_fast_climb():
 
 
 def test_compiled_quat_to_dcm_matches_numpy():
-    from fednav.strapdown import quat_to_dcm_nb
+    from fednav.ins.strapdown import quat_to_dcm_nb
 
     q = att.euler_to_quat([0.3, -0.2, 4.0])
     np.testing.assert_allclose(quat_to_dcm_nb(q), att.quat_to_dcm(q), atol=1e-15)

@@ -1,10 +1,10 @@
 import numpy as np
 import pytest
 
-from fednav import attitude as att
-from fednav import units
-from fednav.strapdown import Strapdown
-from fednav.total_state import StarTotal, attitude_innovation, boxminus, boxplus
+from fednav.core import attitude as att
+from fednav.core import units
+from fednav.ins.strapdown import Strapdown
+from fednav.ins.total_state import StarTotal, attitude_innovation, boxminus, boxplus
 
 
 def ins_at(euler, lla=(0.5, 2.0, 100.0), vel=(10.0, 20.0, 1.0)):
@@ -52,9 +52,9 @@ def test_star_residual_and_noise_mapping():
 
 def test_time_update_matches_linear_error_model():
     """Covariance through the total-state UKF == Phi P Phi' of the error model (9x9 block)."""
-    from fednav import error_model as em
-    from fednav.total_state import TotalStateUKF
-    from fednav.trajectory import Segment, generate
+    from fednav.ins import error_model as em
+    from fednav.ins.total_state import TotalStateUKF
+    from fednav.sim.trajectory import Segment, generate
 
     tr = generate([0.5, 2.0, 1000.0], 150.0, [0.05, 0.2, 1.0],
                   [Segment(1.0, accel=1.0, pitch_rate=0.01, heading_rate=0.02)], 0.02)
@@ -83,9 +83,9 @@ def test_time_update_matches_linear_error_model():
 def test_bias_states_propagate_like_the_error_model():
     """Gyro/accelerometer error states: their effect on attitude and velocity over one
     interval matches the error model's Phi (the -C eps and C nabla blocks)."""
-    from fednav import error_model as em
-    from fednav.total_state import TotalStateUKF
-    from fednav.trajectory import Segment, generate
+    from fednav.ins import error_model as em
+    from fednav.ins.total_state import TotalStateUKF
+    from fednav.sim.trajectory import Segment, generate
 
     tr = generate([0.5, 2.0, 1000.0], 150.0, [0.05, 0.2, 1.0], [Segment(1.0)], 0.02)
     P0 = np.diag(np.r_[np.full(9, 1e-8), np.full(6, 1.0)])  # 1 deg/h, 1 mg

@@ -1,9 +1,9 @@
 import numpy as np
 import pytest
 
-from fednav import attitude as att
-from fednav import earth, units
-from fednav.trajectory import Segment, body_rate_from_euler_rates, generate
+from fednav.core import attitude as att
+from fednav.core import earth, units
+from fednav.sim.trajectory import Segment, body_rate_from_euler_rates, generate
 
 
 def test_body_rate_matches_dcm_derivative():

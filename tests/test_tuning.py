@@ -1,4 +1,4 @@
-"""fednav.tuning (``fednav tune``): noise figures estimated from the data alone."""
+"""fednav.process.tuning (``fednav tune``): noise figures estimated from the data alone."""
 
 from pathlib import Path
 
@@ -7,16 +7,16 @@ import pytest
 from typer.testing import CliRunner
 
 from fednav.cli import app
-from fednav.config import load_model
-from fednav.dataset import (
+from fednav.core.config import load_model
+from fednav.io import read_gnss_csv, read_imu_csv
+from fednav.process.run import ProcessConfig
+from fednav.process.tuning import LR_95, evaluate, tune, white_noise
+from fednav.sim.dataset import (
     load_dataset_config,
     process_config,
     simulate_dataset,
     write_csv_dataset,
 )
-from fednav.io import read_gnss_csv, read_imu_csv
-from fednav.process import ProcessConfig
-from fednav.tuning import LR_95, evaluate, tune, white_noise
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "car-drive.yaml"
 

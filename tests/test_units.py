@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from fednav import units as u
+from fednav.core import units as u
 
 
 def test_round_trips():

@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-from fednav import earth, units
-from fednav.strapdown import Strapdown
-from fednav.trajectory import Segment, generate
-from fednav.wind import Episode, WindField, wind_vector
+from fednav.core import earth, units
+from fednav.ins.strapdown import Strapdown
+from fednav.sim.trajectory import Segment, generate
+from fednav.sim.wind import Episode, WindField, wind_vector
 
 
 def test_west_wind_blows_east():

@@ -6,3 +6,7 @@ positive toward east, SI units and radians inside the library.
 """
 
 __version__ = "0.1.0"
+
+from . import _compat
+
+_compat.install()

@@ -12,7 +12,7 @@ import typer
 from rich.console import Console
 
 from . import __version__
-from .errors import FednavError
+from .core.errors import FednavError
 
 app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="fednav — federated multi-sensor integrated navigation.")
@@ -103,8 +103,8 @@ def reproduce(
         TimeRemainingColumn,
     )
 
-    from .atomic import clear_results
-    from .campaign import Campaign
+    from .campaign.store import Campaign
+    from .core.atomic import clear_results
 
     out = _output_folder(out or Path("results") / mod.PAPER)
     scn = mod.load_scenario(scenario)
@@ -132,9 +132,9 @@ def reproduce(
     console.print(f"campaign {out}: {c['runs_computed']} units of work computed, "
                   f"{c['runs_reused']} reused ({c['engine']})")
     files = mod.write_outputs(out, rep)
-    from .html_report import write_report
+    from .campaign.html_report import write_report
 
-    files.append(write_report(out))
+    files.append(write_report(out, getattr(mod, "TABLE_TITLES", None)))
     console.print(f"wrote {', '.join(str(f) for f in files)} "
                   f"in {time.perf_counter() - t0:.1f} s")
 
@@ -149,7 +149,7 @@ def _output_folder(out: Path) -> Path:
     """Create the output folder, or end with a one-line error if that is impossible.
 
     Once the inputs are validated and a run starts, the commands remove the previous
-    run's result markers (:func:`fednav.atomic.clear_results`), so a run that fails never
+    run's result markers (:func:`fednav.core.atomic.clear_results`), so a run that fails never
     leaves an older summary.json looking like its own result; input refused before that
     leaves the previous result as it was."""
     try:
@@ -167,10 +167,10 @@ def _output_folder(out: Path) -> Path:
 
 
 def _run_process(read, imu, gnss, velocity, ref, smooth, out, config, output_rate) -> None:
-    from . import process_output
-    from .atomic import clear_results
-    from .config import load_model
-    from .process import ProcessConfig, process
+    from .core.atomic import clear_results
+    from .core.config import load_model
+    from .process import output as process_output
+    from .process.run import ProcessConfig, process
 
     out = _output_folder(out)
     try:
@@ -304,10 +304,10 @@ _TUNE_CONFIG = typer.Option(None, help="base processing config: its settings are
 def _run_tune(read, inputs: list, config, out: Path) -> None:
     from rich.table import Table
 
-    from .atomic import write_text
-    from .config import load_model
-    from .process import ProcessConfig
-    from .tuning import config_yaml, format_value, tune
+    from .core.atomic import write_text
+    from .core.config import load_model
+    from .process.run import ProcessConfig
+    from .process.tuning import config_yaml, format_value, tune
 
     base = {}
     cfg = ProcessConfig()
@@ -338,7 +338,7 @@ def _run_tune(read, inputs: list, config, out: Path) -> None:
     header = (f"fednav tune {__version__}: " + " ".join(str(i) for i in inputs if i)
               + (f" (base config {config})" if config else "")
               + f"\n{res.runs} filter runs in {res.run_time_s:.1f} s; see "
-                f"src/fednav/tuning.py for the method")
+                f"src/fednav/process/tuning.py for the method")
     try:
         write_text(out, config_yaml(res, base, header))
     except OSError as e:
@@ -385,7 +385,7 @@ def simulate(
     if fmt not in ("csv", "navego"):
         typer.echo(f"error: --format must be csv or navego, got '{fmt}'", err=True)
         raise typer.Exit(2)
-    from .dataset import (
+    from .sim.dataset import (
         load_dataset_config,
         simulate_dataset,
         write_csv_dataset,
@@ -407,9 +407,21 @@ def simulate(
 @_one_line_errors
 def report(folder: Path = typer.Argument(..., help="a fednav reproduce output folder")) -> None:
     """Write FOLDER/report.html: tables beside the paper's, plots, run metadata."""
-    from .html_report import write_report
+    from .campaign.html_report import write_report
 
-    console.print(f"wrote {write_report(folder)}")
+    console.print(f"wrote {write_report(folder, _report_titles(folder))}")
+
+
+def _report_titles(folder: Path) -> dict | None:
+    """The table headings of the paper a reproduction folder holds (None if unknown)."""
+    try:
+        paper = str(json.loads((folder / "summary.json").read_text()).get("paper"))
+    except (OSError, ValueError, AttributeError):
+        return None  # write_report says what is wrong with the folder
+    from .scenarios import paper_module
+
+    mod = paper_module(paper)
+    return getattr(mod, "TABLE_TITLES", None) if mod is not None else None
 
 
 @app.command()

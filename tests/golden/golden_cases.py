@@ -130,7 +130,7 @@ def paper004() -> dict:
 # ---------------------------------------------------------------------------- process
 def car_drive(tmp: Path):
     """The simulated drive of examples/car-drive.yaml read back from its CSV files."""
-    from fednav.dataset import load_dataset_config, simulate_dataset, write_csv_dataset
+    from fednav.sim.dataset import load_dataset_config, simulate_dataset, write_csv_dataset
 
     cfg = load_dataset_config(ROOT / "examples" / "car-drive.yaml")
     write_csv_dataset(simulate_dataset(cfg), tmp)
@@ -158,7 +158,7 @@ def _solution(out: dict, prefix: str, sol, step: int) -> None:
 
 
 def _process_case(out: dict, prefix: str, imu, gnss, vel, ref, cfg, smooth: bool) -> None:
-    from fednav.process import errors_against, process, rmse
+    from fednav.process.run import errors_against, process, rmse
 
     res = process(imu, gnss, vel, cfg, smooth)
     _solution(out, f"{prefix}/forward", res.forward, 200)
@@ -174,7 +174,7 @@ def _process_case(out: dict, prefix: str, imu, gnss, vel, ref, cfg, smooth: bool
 def process_cases(tmp: Path) -> dict:
     import yaml
 
-    from fednav.process import ProcessConfig
+    from fednav.process.run import ProcessConfig
 
     folder = car_drive(tmp)
     base = yaml.safe_load((folder / "process.yaml").read_text())
@@ -192,14 +192,14 @@ def process_cases(tmp: Path) -> dict:
 
 
 def planetary() -> dict:
-    from fednav.config import load_model
+    from fednav.core.config import load_model
     from fednav.io import (
         read_navego_gnss,
         read_navego_imu,
         read_navego_reference,
         read_navego_visual,
     )
-    from fednav.process import ProcessConfig
+    from fednav.process.run import ProcessConfig
 
     cfg = load_model(ROOT / "examples" / "canada-planetary.yaml", ProcessConfig, "config")
     out: dict = {}
@@ -211,9 +211,9 @@ def planetary() -> dict:
 
 
 def tune_case(tmp: Path) -> dict:
-    from fednav.dataset import load_dataset_config, simulate_dataset, write_csv_dataset
-    from fednav.process import ProcessConfig
-    from fednav.tuning import tune
+    from fednav.process.run import ProcessConfig
+    from fednav.process.tuning import tune
+    from fednav.sim.dataset import load_dataset_config, simulate_dataset, write_csv_dataset
 
     cfg = load_dataset_config(ROOT / "examples" / "car-drive.yaml")
     cfg = cfg.model_copy(update={"segments": cfg.segments[:6], "seed": 4})

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from fednav import units
+from fednav.core import units
 from fednav.io import DataError, read_gnss_csv, read_imu_csv, read_reference_csv
 from fednav.io.csvdata import IMU_COLUMNS, write_csv
 

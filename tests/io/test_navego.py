@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 import scipy.io
 
-from fednav import attitude as att
-from fednav import units
+from fednav.core import attitude as att
+from fednav.core import units
 from fednav.io import (
     FRD_TO_RFU,
     DataError,

@@ -4,7 +4,7 @@ perturbed, one ideal) over a filter interval give the error the transition must 
 import numpy as np
 import pytest
 
-from fednav import attitude, units
+from fednav.core import attitude, units
 from fednav.launch.errors import (
     SCALE,
     GpsPosition,

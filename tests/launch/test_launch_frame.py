@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from fednav import earth, units
+from fednav.core import earth, units
 from fednav.launch.frame import J2, J4, LaunchFrame, ecef_to_geodetic, gravitation_eci
 
 FRAME = LaunchFrame((units.deg(32.0), units.deg(118.0), 0.0), units.deg(90.0))

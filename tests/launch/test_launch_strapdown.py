@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from fednav import attitude, units
+from fednav.core import attitude, units
 from fednav.launch.frame import LaunchFrame
 from fednav.launch.strapdown import LaunchStrapdown
 from fednav.launch.trajectory import AscentProfile, Burn, Manoeuvre, generate

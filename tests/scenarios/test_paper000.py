@@ -7,7 +7,7 @@ from typer.testing import CliRunner
 
 from fednav.cli import app
 from fednav.scenarios import paper000
-from fednav.simulate import make_run_data, run_configured_mode
+from fednav.sim.runs import make_run_data, run_configured_mode
 
 
 def test_cli_reproduce_000_smoke(tmp_path, report_complete):

@@ -9,7 +9,7 @@ import yaml
 from typer.testing import CliRunner
 
 from fednav.cli import app
-from fednav.config import ConfigError
+from fednav.core.config import ConfigError
 from fednav.launch import navigate
 from fednav.launch.scenario import load_launch_scenario
 from fednav.scenarios import paper001, scenario_path

@@ -8,7 +8,7 @@ from typer.testing import CliRunner
 
 from fednav.cli import app
 from fednav.scenarios import paper002
-from fednav.simulate import make_run_data, run_mode
+from fednav.sim.runs import make_run_data, run_mode
 
 
 def test_modes_behave_as_the_paper_says_on_a_short_flight():
@@ -102,8 +102,8 @@ def test_kf_in_the_navigation_loop_matches_ukf(tmp_path):
     errors it should do as well as the UKF."""
     import yaml
 
-    from fednav.config import load_scenario
     from fednav.scenarios import scenario_path
+    from fednav.sim.scenario import load_scenario
 
     data_yaml = yaml.safe_load(scenario_path("paper002").read_text())
     data_yaml["filter"]["type"] = "kf"

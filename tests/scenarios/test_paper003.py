@@ -8,8 +8,8 @@ import yaml
 from typer.testing import CliRunner
 
 from fednav.cli import app
-from fednav.config import load_scenario
 from fednav.scenarios import paper003, scenario_path
+from fednav.sim.scenario import load_scenario
 
 
 @pytest.fixture(scope="module")
@@ -61,7 +61,7 @@ def test_total_state_ukf_and_error_state_kf_agree():
     """With the same information (navigation + IMU-error states, same sensors) the
     total-state UKF and the error-state linear KF agree closely: linearisation error is
     negligible in this scenario (docs/paper003.md)."""
-    from fednav.simulate import make_run_data, run_configured_mode
+    from fednav.sim.runs import make_run_data, run_configured_mode
 
     scn = load_scenario(scenario_path("paper003"))
     data = make_run_data(scn, 4, max_time=600.0)

@@ -8,7 +8,7 @@ from typer.testing import CliRunner
 
 from fednav.cli import app
 from fednav.scenarios import paper004
-from fednav.simulate import make_run_data, run_all_modes
+from fednav.sim.runs import make_run_data, run_all_modes
 
 
 def test_cli_reproduce_004_smoke(tmp_path, report_complete):

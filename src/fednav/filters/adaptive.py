@@ -47,7 +47,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..kernels import cholesky_lower
+from ..core.kernels import cholesky_lower
 from .base import Innovation
 from .kf import KalmanFilter
 from .ukf import UnscentedKalmanFilter, _sigma_points

@@ -23,8 +23,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..errors import FednavError
-from ..kernels import cholesky_lower
+from ..core.errors import FednavError
+from ..core.kernels import cholesky_lower
 
 
 class FilterError(FednavError, RuntimeError):

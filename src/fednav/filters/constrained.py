@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..kernels import spd_inverse
+from ..core.kernels import spd_inverse
 from .base import FilterError, Innovation
 from .kf import KalmanFilter
 from .ukf import UnscentedKalmanFilter

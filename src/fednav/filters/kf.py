@@ -5,7 +5,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from ..kernels import spd_inverse
+from ..core.kernels import spd_inverse
 from .base import Filter, FilterError, Innovation
 
 

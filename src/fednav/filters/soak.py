@@ -1,7 +1,7 @@
 """Numerical soak: run a filter for many cycles on the 18-state INS error model under
 hostile conditions and check that its numerics hold.
 
-Conditions (all at once, filter units of :mod:`fednav.error_model`):
+Conditions (all at once, filter units of :mod:`fednav.ins.error_model`):
 
 * initial covariance ``huge_p`` (1e6) times the identity;
 * process noise scaled by ``tiny_q`` (1e-12): the covariance may collapse;
@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..kernels import cholesky_lower
+from ..core.kernels import cholesky_lower
 from .base import FilterError, LinearModel
 
 
@@ -56,9 +56,9 @@ class _Constraint(LinearModel):
 
 def cruise_process():
     """The error process of one second of level cruise at 250 m/s, 32 deg N."""
-    from .. import error_model as em
-    from ..error_model import ImuNoiseModel
-    from ..strapdown import Strapdown
+    from ..ins import error_model as em
+    from ..ins.error_model import ImuNoiseModel
+    from ..ins.strapdown import Strapdown
 
     ins = Strapdown(np.array([np.radians(32.0), np.radians(118.0), 1000.0]),
                     np.array([250.0, 0.0, 0.0]), np.array([0.0, 0.0, np.radians(90.0)]), 0.01)

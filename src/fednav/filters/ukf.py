@@ -15,7 +15,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from ..kernels import cholesky_lower
+from ..core.kernels import cholesky_lower
 from .base import Filter, FilterError, Innovation, not_pd_error
 from .kf import KalmanFilter
 

@@ -19,9 +19,17 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .. import units
-from ..atomic import write_bytes, write_text
-from .data import DataError, GnssData, ImuData, Reference, VelocityData, check_time, require_file
+from ..core import units
+from ..core.atomic import write_bytes, write_text
+from .data import (
+    DataError,
+    GnssData,
+    ImuData,
+    Reference,
+    VelocityData,
+    check_time,
+    require_file,
+)
 
 IMU_COLUMNS = ("t_s", "gyro_x_radps", "gyro_y_radps", "gyro_z_radps", "accel_x_mps2",
                "accel_y_mps2", "accel_z_mps2")

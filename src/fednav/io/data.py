@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import FednavError
+from ..core.errors import FednavError
 
 
 class DataError(FednavError, ValueError):

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import scipy.io
 
-from .. import attitude as att
+from ..core import attitude as att
 from .data import (
     DataError,
     GnssData,

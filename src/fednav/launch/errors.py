@@ -41,11 +41,11 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from .. import units
-from ..kernels import dcm_to_rotvec, quat_to_dcm, quat_to_dcm_s
-from ..kernels import quat_mul_s as _qmul
-from ..kernels import quat_to_rotvec_s as _q2rv
-from ..kernels import rotvec_to_quat_s as _rv2q
+from ..core import units
+from ..core.kernels import dcm_to_rotvec, quat_to_dcm, quat_to_dcm_s
+from ..core.kernels import quat_mul_s as _qmul
+from ..core.kernels import quat_to_rotvec_s as _q2rv
+from ..core.kernels import rotvec_to_quat_s as _rv2q
 from .frame import LaunchFrame, gravitation_li_xyz
 
 N_STATES = 15
@@ -142,7 +142,7 @@ def gravity_gradient(frame: LaunchFrame, r_li, step: float = 10.0) -> np.ndarray
 @numba.njit(cache=True)
 def misalignment_nb(C_true, C_hat):
     """phi with C_hat = exp(-[phi x]) C_true [rad] (compiled single-attitude twin of
-    :func:`fednav.attitude.misalignment`)."""
+    :func:`fednav.core.attitude.misalignment`)."""
     M = C_hat @ C_true.T
     out = np.empty(3)
     dcm_to_rotvec(M, out)

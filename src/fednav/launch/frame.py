@@ -18,7 +18,7 @@ Frames (every array says which one it is in by its name suffix ``_li``, ``_eci``
 Gravitation (no centrifugal term: LI is inertial) is the gradient of the zonal potential
 ``U = GM/r [1 - J2 (a/r)^2 P2(sin phi) - J4 (a/r)^4 P4(sin phi)]`` in ECI.  With the WGS-84
 normal-field J2 and J4, gravitation plus the centrifugal acceleration of the rotating
-Earth equals fednav's normal gravity (:func:`fednav.earth.gravity`) on the ellipsoid to
+Earth equals fednav's normal gravity (:func:`fednav.core.earth.gravity`) on the ellipsoid to
 about 1e-7 m/s^2 (tested); the J2-only model (``degree=2``) differs by the J4 term:
 4.7e-5 m/s^2 at 32 deg latitude, up to 1.2e-4 m/s^2 near the poles.
 """
@@ -32,7 +32,7 @@ from datetime import UTC, datetime
 import numba
 import numpy as np
 
-from .. import earth
+from ..core import earth
 
 #: WGS-84 normal-field zonal coefficients (the field whose gravity is Somigliana's).
 J2 = 1.082629821313e-3

@@ -23,11 +23,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import units
-from ..attitude import dcm_to_quat, misalignment, quat_to_dcm, rotvec_to_dcm
+from ..core import units
+from ..core.attitude import dcm_to_quat, misalignment, quat_to_dcm, rotvec_to_dcm
+from ..core.kernels import quat_mul, rotvec_to_quat
+from ..core.kernels import quat_to_dcm as quat_to_dcm_nb
 from ..filters import FederatedFilter, KalmanFilter, ParticleFilter
-from ..kernels import quat_mul, rotvec_to_quat
-from ..kernels import quat_to_dcm as quat_to_dcm_nb
 from ..sensors.imu import corrupt_imu
 from .errors import (
     ACC,

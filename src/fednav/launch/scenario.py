@@ -1,6 +1,6 @@
 """Launch scenarios (paper 001): YAML validated by pydantic, converted to SI here.
 
-Keys carry their unit in the name, as in :mod:`fednav.config`; an unknown key, a wrong
+Keys carry their unit in the name, as in :mod:`fednav.sim.scenario`; an unknown key, a wrong
 type or a value out of range is reported in one line naming the key and the file.
 """
 
@@ -12,8 +12,9 @@ from typing import Literal
 
 from pydantic import Field, field_validator, model_validator
 
-from .. import units
-from ..config import ImuConfig, _Model, cached_flight, load_model
+from ..core import units
+from ..core.config import _Model, load_model
+from ..sim.scenario import ImuConfig, cached_flight
 from .frame import LaunchFrame
 from .trajectory import AscentProfile, Burn, LaunchTrajectory, Manoeuvre, generate
 

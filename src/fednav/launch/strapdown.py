@@ -1,7 +1,7 @@
 """Strapdown inertial navigation in the launch inertial frame (numba, IMU rate).
 
 LI is inertial, so the mechanization has no Earth-rate, transport-rate or Coriolis terms
-(compare the ENU core, :mod:`fednav.strapdown`).  Per IMU sample ``k`` with body
+(compare the ENU core, :mod:`fednav.ins.strapdown`).  Per IMU sample ``k`` with body
 increments ``dtheta_k`` [rad], ``dv_k`` [m/s] over ``dt`` [s]:
 
 * attitude ``q_b^li <- q_b^li * q(phi)``, ``phi = dtheta_k + dtheta_{k-1} x dtheta_k / 12``
@@ -28,7 +28,7 @@ import math
 import numba
 import numpy as np
 
-from ..kernels import coning_sculling_s, quat_mul_s, quat_to_dcm_s, rotvec_to_quat_s
+from ..core.kernels import coning_sculling_s, quat_mul_s, quat_to_dcm_s, rotvec_to_quat_s
 from .frame import LaunchFrame, gravitation_li_xyz
 
 STATE_SIZE = 17  # q (4), v (3), r (3), dtheta_prev (3), dv_prev (3), has_prev

@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from .. import earth, units
+from ..core import earth, units
 from .frame import LaunchFrame, gravitation_li_nb
 
 #: Attitude of a vehicle lying along LI x (columns: body x, y, z in LI).

@@ -11,11 +11,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..atomic import save_figure
-from ..config import Scenario
-from ..config import load_scenario as _load
-from ..montecarlo import run_seeds
-from ..simulate import make_run_data, run_configured_mode
+from ..campaign.montecarlo import run_seeds
+from ..core.atomic import save_figure
+from ..sim.runs import make_run_data, run_configured_mode
+from ..sim.scenario import Scenario
+from ..sim.scenario import load_scenario as _load
 from . import ALIASES as _REGISTRY
 from . import scenario_path
 
@@ -84,7 +84,7 @@ def one_run(args):
 
 def reproduce(scn: Scenario, runs: int, seed: int, jobs: int = 1,
               max_time: float | None = None, progress=None, campaign=None) -> dict:
-    from ..report import summarize
+    from ..campaign.report import summarize
 
     out = run_seeds(one_run, [(scn, seed + i, max_time) for i in range(runs)], jobs, progress,
                     campaign)
@@ -97,7 +97,7 @@ def reproduce(scn: Scenario, runs: int, seed: int, jobs: int = 1,
 
 
 def print_summary(summary: dict, console) -> None:
-    from ..report import print_tables
+    from ..campaign.report import print_tables
 
     print_tables(summary, TABLE_TITLES, console)
 
@@ -132,7 +132,7 @@ def plot_window(series: dict, path, window=WINDOW):
 
 
 def write_outputs(out, rep: dict) -> list:
-    from ..report import write_outputs as _write
+    from ..campaign.report import write_outputs as _write
 
     series = {k: v for k, v in rep["series"].items() if "," not in k}
     files = _write(out, rep["summary"], rep["rows"], series)

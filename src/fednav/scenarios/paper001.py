@@ -18,13 +18,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import units
-from ..atomic import save_figure, write_frame, write_text
-from ..evaluation import mean_ci95
+from ..campaign.evaluation import mean_ci95
+from ..campaign.montecarlo import run_seeds
+from ..core import units
+from ..core.atomic import save_figure, write_frame, write_text
 from ..filters import FilterError
 from ..launch.navigate import make_data, run
 from ..launch.scenario import LaunchScenario, load_launch_scenario
-from ..montecarlo import run_seeds
 from . import ALIASES as _REGISTRY
 from . import scenario_path
 
@@ -138,7 +138,7 @@ def _table(rows: list[dict], table: str, cols: tuple[str, ...]) -> dict:
 def reproduce(scn: LaunchScenario, runs: int, seed: int, jobs: int = 1,
               max_time: float | None = None, progress=None, campaign=None,
               particles: int | None = None) -> dict:
-    from ..report import summarize
+    from ..campaign.report import summarize
 
     work = tasks(scn, runs, seed, max_time, particles)
     out = run_seeds(_task, work, jobs, progress, campaign)
@@ -161,7 +161,7 @@ def reproduce(scn: LaunchScenario, runs: int, seed: int, jobs: int = 1,
 
 
 def print_summary(summary: dict, console) -> None:
-    from ..report import print_tables
+    from ..campaign.report import print_tables
 
     print_tables(summary, TABLE_TITLES, console)
     s = summary["seconds_per_run"]
@@ -254,7 +254,7 @@ def write_outputs(out, rep: dict) -> list:
     files = [write_frame(pd.DataFrame(rep["rows"]), out / "runs.csv"),
              plot_errors(rep["series"], out / "errors.png"),
              plot_ascent(rep["scenario"], out / "ascent.png", rep["max_time"])]
-    # summary.json last: its presence means the run finished (fednav.atomic)
+    # summary.json last: its presence means the run finished (fednav.core.atomic)
     files.insert(0, write_text(out / "summary.json", json.dumps(rep["summary"], indent=2)))
     return files
 

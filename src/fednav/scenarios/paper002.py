@@ -1,7 +1,7 @@
 """Paper 002 — SINS/CNS/SAR for a cruise missile: Tables 1 to 4.
 
 * Table 1 — observability degree of every error state for the SINS/CNS/SAR measurement
-  set over the flight (:mod:`fednav.observability`): the paper's SVD degree (SI units,
+  set over the flight (:mod:`fednav.ins.observability`): the paper's SVD degree (SI units,
   velocity error = 1) beside the same in filter units and the unit-free covariance
   degree ``sigma(0) / sigma(T)``; per flight phase in ``observability_phases``.
 * Tables 2 and 3 — statistic (paper): errors sampled every 1 s, absolute value averaged
@@ -19,12 +19,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import units
-from ..config import Scenario
-from ..config import load_scenario as _load
-from ..evaluation import error_stats
-from ..montecarlo import run_seeds
-from ..simulate import make_run_data, run_all_modes
+from ..campaign.evaluation import error_stats
+from ..campaign.montecarlo import run_seeds
+from ..core import units
+from ..sim.runs import make_run_data, run_all_modes
+from ..sim.scenario import Scenario
+from ..sim.scenario import load_scenario as _load
 from . import ALIASES as _REGISTRY
 from . import scenario_path
 
@@ -95,8 +95,8 @@ def one_run(args) -> tuple[list[dict], dict]:
 
 def _nominal(tr, k):
     """Error-model linearisation point from the truth at sample k."""
-    from ..attitude import euler_to_dcm
-    from ..error_model import Nominal
+    from ..core.attitude import euler_to_dcm
+    from ..ins.error_model import Nominal
 
     C = euler_to_dcm(tr.euler[k])
     return Nominal(lat=tr.lla[k, 0], h=tr.lla[k, 2], vel=tr.vel[k], C=C,
@@ -104,7 +104,7 @@ def _nominal(tr, k):
 
 
 def _measurement_H(scn: Scenario, nav):
-    from ..measurements import SarFix, StarAttitude
+    from ..sensors.models import SarFix, StarAttitude
 
     out = []
     if scn.sensors.star is not None:
@@ -122,11 +122,15 @@ def _measurement_H(scn: Scenario, nav):
 def observability(scn: Scenario, max_time: float | None = None) -> dict:
     """Table 1 (whole flight) and the SVD degree per flight phase (one PWCS segment per
     scenario segment, linearised at its middle), for the star + SAR measurement set."""
-    from .. import error_model as em
-    from ..measurements import NavSnapshot
-    from ..observability import covariance_degree, stripped_observability_matrix, svd_degree
-    from ..simulate import initial_covariance
-    from ..strapdown import Strapdown
+    from ..ins import error_model as em
+    from ..ins.observability import (
+        covariance_degree,
+        stripped_observability_matrix,
+        svd_degree,
+    )
+    from ..ins.strapdown import Strapdown
+    from ..sensors.models import NavSnapshot
+    from ..sim.runs import initial_covariance
 
     tr = scn.trajectory(max_time)
     noise = scn.imu.noise_model(tr.dt)
@@ -190,8 +194,8 @@ def one_run_t4(args) -> list[dict]:
     """Table 4: SINS/CNS/SAR with each filter on one run's data, timed alike."""
     import time
 
-    from ..config import ModeConfig
-    from ..simulate import run_configured_mode
+    from ..sim.runs import run_configured_mode
+    from ..sim.scenario import ModeConfig
 
     scn, seed, max_time = args
     data = make_run_data(scn, seed, max_time)
@@ -239,7 +243,7 @@ def reproduce(scn: Scenario, runs: int, seed: int, jobs: int = 1,
     (Tables 2-3 over ``runs`` runs, Table 4 over the first ``t4_runs`` of them — default
     min(runs, 3) — and Table 1, which needs no Monte Carlo but is one more unit of the
     same batch, so a worker computes it while the others fly runs)."""
-    from ..report import summarize
+    from ..campaign.report import summarize
 
     n4 = min(runs, 3) if t4_runs is None else t4_runs
     # One batch, the long units first (Table 4, then Table 1's analysis): the Monte Carlo
@@ -264,13 +268,13 @@ def reproduce(scn: Scenario, runs: int, seed: int, jobs: int = 1,
 
 
 def print_summary(summary: dict, console) -> None:
-    from ..report import print_tables
+    from ..campaign.report import print_tables
 
     print_tables(summary, TABLE_TITLES, console)
 
 
 def write_outputs(out, rep: dict) -> list:
-    from ..report import write_outputs as _write
+    from ..campaign.report import write_outputs as _write
 
     return _write(out, rep["summary"], rep["rows"], rep["series"])
 

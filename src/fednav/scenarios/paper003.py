@@ -11,13 +11,13 @@ from __future__ import annotations
 import numpy as np
 from scipy.stats import chi2
 
-from .. import units
-from ..atomic import write_frame, write_text
-from ..config import Scenario
-from ..config import load_scenario as _load
-from ..evaluation import mean_ci95
-from ..montecarlo import run_seeds
-from ..simulate import make_run_data, run_all_modes, run_configured_mode
+from ..campaign.evaluation import mean_ci95
+from ..campaign.montecarlo import run_seeds
+from ..core import units
+from ..core.atomic import write_frame, write_text
+from ..sim.runs import make_run_data, run_all_modes, run_configured_mode
+from ..sim.scenario import Scenario
+from ..sim.scenario import load_scenario as _load
 from . import ALIASES as _REGISTRY
 from . import scenario_path
 
@@ -222,7 +222,7 @@ def write_outputs(out, rep: dict) -> list:
 
     import pandas as pd
 
-    from ..report import plot_errors, plot_fdi
+    from ..campaign.report import plot_errors, plot_fdi
 
     out.mkdir(parents=True, exist_ok=True)
     files = [out / "summary.json", out / "runs.csv", out / "errors.png"]

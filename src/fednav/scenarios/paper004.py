@@ -15,13 +15,13 @@ import time
 
 import numpy as np
 
-from .. import units
-from ..atomic import save_figure, write_frame
-from ..config import Scenario
-from ..config import load_scenario as _load
-from ..evaluation import mean_ci95
-from ..montecarlo import run_seeds
-from ..simulate import make_run_data, run_configured_mode
+from ..campaign.evaluation import mean_ci95
+from ..campaign.montecarlo import run_seeds
+from ..core import units
+from ..core.atomic import save_figure, write_frame
+from ..sim.runs import make_run_data, run_configured_mode
+from ..sim.scenario import Scenario
+from ..sim.scenario import load_scenario as _load
 from . import ALIASES as _REGISTRY
 from . import scenario_path
 
@@ -112,7 +112,7 @@ def sweep_run(args):
 
 def reproduce(scn: Scenario, runs: int, seed: int, jobs: int = 1,
               max_time: float | None = None, progress=None, campaign=None) -> dict:
-    from ..report import summarize
+    from ..campaign.report import summarize
 
     out = run_seeds(one_run, [(scn, seed + i, max_time) for i in range(runs)], jobs, progress,
                     campaign)
@@ -155,7 +155,7 @@ def _sweep(rows) -> dict:
 
 
 def print_summary(summary: dict, console) -> None:
-    from ..report import print_tables
+    from ..campaign.report import print_tables
 
     print_tables(summary, TABLE_TITLES, console)
 
@@ -186,7 +186,7 @@ def plot_sweep(rows, path):
 def write_outputs(out, rep: dict) -> list:
     import pandas as pd
 
-    from ..report import write_outputs as _write
+    from ..campaign.report import write_outputs as _write
 
     out.mkdir(parents=True, exist_ok=True)
     extra = [write_frame(pd.DataFrame(rep["sweep_rows"]), out / "sweep_runs.csv"),

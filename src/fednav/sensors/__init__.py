@@ -2,7 +2,7 @@
 
 A sensor is a small frozen dataclass with a ``simulate(truth, rng)`` method returning a
 :class:`~fednav.sensors.base.MeasurementSeries`; its filter-side counterpart lives in
-:mod:`fednav.measurements`.  All randomness comes from the ``numpy.random.Generator``
+:mod:`fednav.sensors.models`.  All randomness comes from the ``numpy.random.Generator``
 passed in.
 """
 

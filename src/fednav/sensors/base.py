@@ -45,7 +45,7 @@ class MeasurementSeries:
 
 def position_noise_to_llh(lla, d_neu):
     """Add metric offsets ``d_neu`` = (north, east, up) [m] to positions ``lla`` (N, 3)."""
-    from ..earth import move_enu
+    from ..core.earth import move_enu
 
     return move_enu(lla, np.asarray(d_neu, dtype=float)[..., [1, 0, 2]])
 

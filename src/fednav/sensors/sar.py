@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..attitude import wrap_2pi
+from ..core.attitude import wrap_2pi
 from .base import MeasurementSeries, flight_times, position_noise_to_llh
 
 

@@ -17,10 +17,10 @@ import numpy as np
 import scipy.io
 import yaml
 
-from fednav import units
+from fednav.core import units
 from fednav.io.navego import FRD_TO_RFU
 from fednav.sensors import ImuErrors, corrupt_imu
-from fednav.trajectory import Segment, generate
+from fednav.sim.trajectory import Segment, generate
 
 HERE = Path(__file__).parent
 GOOD = HERE / "good"

@@ -16,7 +16,7 @@ from datetime import UTC, datetime
 from html import escape
 from pathlib import Path
 
-from .errors import FednavError
+from ..core.errors import FednavError
 
 FAR = 3.0  # ratios outside [1/FAR, FAR] are flagged
 
@@ -95,21 +95,15 @@ def table_html(name: str, table: dict, title: str, runs, seed) -> str:
     return "\n".join(out)
 
 
-def _titles(paper: str) -> dict:
-    from .scenarios import paper_module
-
-    mod = paper_module(paper)
-    return getattr(mod, "TABLE_TITLES", {}) if mod is not None else {}
-
-
 def _image(path: Path) -> str:
     data = base64.b64encode(path.read_bytes()).decode("ascii")
     return (f"<figure><img alt='{escape(path.name)}' src='data:image/png;base64,{data}'>"
             f"<figcaption class='note'>{escape(path.name)}</figcaption></figure>")
 
 
-def render(folder: Path) -> str:
-    """The HTML text of the report on reproduction folder ``folder``."""
+def render(folder: Path, titles: dict[str, str] | None = None) -> str:
+    """The HTML text of the report on reproduction folder ``folder``; ``titles``: the
+    heading of each table by its key (the paper module's ``TABLE_TITLES``)."""
     folder = Path(folder)
     sfile = folder / "summary.json"
     if not sfile.is_file():
@@ -128,7 +122,7 @@ def render(folder: Path) -> str:
         except json.JSONDecodeError:
             manifest = {}
     paper = str(summary.get("paper", "?"))
-    titles = _titles(paper)
+    titles = titles or {}
     runs, seed = summary.get("runs"), summary.get("seed")
     camp = summary.get("campaign", {})
     seeds = (f"{seed} … {seed + runs - 1} (run i uses seed + i)"
@@ -168,8 +162,8 @@ def render(folder: Path) -> str:
     return "\n".join(parts)
 
 
-def write_report(folder: Path) -> Path:
-    """Write ``folder/report.html`` (atomically: :mod:`fednav.atomic`)."""
-    from .atomic import write_text
+def write_report(folder: Path, titles: dict[str, str] | None = None) -> Path:
+    """Write ``folder/report.html`` (atomically: :mod:`fednav.core.atomic`)."""
+    from ..core.atomic import write_text
 
-    return write_text(Path(folder) / "report.html", render(folder))
+    return write_text(Path(folder) / "report.html", render(folder, titles))

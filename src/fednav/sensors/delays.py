@@ -3,7 +3,7 @@ use (paper 004).
 
 A measurement describes the instant ``t_c`` (image capture) but reaches the filter at the
 first epoch ``t_k`` after it is available.  The strategies (per sensor, see
-:class:`~fednav.config.TimingConfig`):
+:class:`~fednav.sim.scenario.TimingConfig`):
 
 * ``none`` — compare it with the INS at ``t_k`` (the delay becomes an error);
 * ``curve_fit`` — extrapolate the sensor's own last K values to ``t_k`` with a polynomial;
@@ -13,7 +13,7 @@ first epoch ``t_k`` after it is available.  The strategies (per sensor, see
   increments are those of the mechanization alone (the filter's feedback corrections in
   between are not motion and are excluded), for position, velocity and attitude;
 * ``recompute`` — re-run the filter from the capture epoch with the stored IMU data
-  (:func:`fednav.simulate.run_mode`); the measurement is used at the first epoch after
+  (:func:`fednav.sim.runs.run_mode`); the measurement is used at the first epoch after
   ``t_c`` with the fractional increment above (the previous interval's).
 """
 
@@ -21,9 +21,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import earth
-from .attitude import dcm_to_rotvec, rotvec_to_dcm
-from .measurements import NavSnapshot
+from ..core import earth
+from ..core.attitude import dcm_to_rotvec, rotvec_to_dcm
+from .models import NavSnapshot
 
 #: Components of each sensor's z that are angles (unwrapped before curve fitting).
 ANGLE_COLUMNS = {"sar": (2,), "star": (0, 1, 2)}

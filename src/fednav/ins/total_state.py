@@ -1,7 +1,7 @@
 """Total-state (direct) filtering of the navigation state (paper 003).
 
 The filter estimates the navigation state itself — attitude, ENU velocity, position —
-instead of the INS error.  Its mean *is* the INS (:class:`~fednav.strapdown.Strapdown`),
+instead of the INS error.  Its mean *is* the INS (:class:`~fednav.ins.strapdown.Strapdown`),
 propagated by the mechanization at the full IMU rate.  Uncertainty lives on the tangent
 space ``d = [phi (3), dv (3), dp (3)]`` in filter units (arc-minutes, m/s, metres ENU):
 
@@ -9,7 +9,7 @@ space ``d = [phi (3), dv (3), dp (3)]`` in filter units (arc-minutes, m/s, metre
   ``phi``), ``v = v_X + dv``, position moved by ``dp`` metres east/north/up;
 * ``Y [-] X``: the ``d`` with ``X [+] d = Y``; the attitude part is ``log(C_Y C_X')`` —
   (with Y the truth and X the INS, ``d = S x_err`` for the error state of
-  :mod:`fednav.error_model`, ``S = diag(+1 x3, -1 x6)``: same attitude sign, opposite
+  :mod:`fednav.ins.error_model`, ``S = diag(+1 x3, -1 x6)``: same attitude sign, opposite
   velocity/position sign);
   recovered platform angles, never a difference of Euler angles (paper 003, eq. 27–29;
   fednav uses the exact exponential where the paper writes the small-angle matrix).
@@ -38,10 +38,9 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from . import attitude as att
-from . import earth
-from .error_model import SCALE
-from .kernels import (
+from ..core import attitude as att
+from ..core import earth
+from ..core.kernels import (
     cholesky_lower,
     dcm_to_rotvec,
     euler_to_dcm,
@@ -50,6 +49,7 @@ from .kernels import (
     quat_to_rotvec,
     rotvec_to_quat,
 )
+from .error_model import SCALE
 from .strapdown import STATE_Q, STATE_VEL, Strapdown, _run
 
 N_NAV = 9
@@ -300,7 +300,7 @@ def _star_terms(q_est, z, sigma, unit):
 class StarTotal:
     """Star sensor on the total state: residual = ``log(C_cns C_est')`` (arc-minutes);
     ``H = [I 0 0]``.  The Euler-angle noise of the sensor maps to the rotation space with
-    the inverse of :func:`~fednav.attitude.euler_error_jacobian`."""
+    the inverse of :func:`~fednav.core.attitude.euler_error_jacobian`."""
 
     kind = "star"
     dim = 3

@@ -20,8 +20,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from . import earth
-from .attitude import euler_to_dcm, wrap_2pi
+from ..core import earth
+from ..core.attitude import euler_to_dcm, wrap_2pi
 
 
 @dataclass(frozen=True)
@@ -148,7 +148,7 @@ def generate(
 
     ``euler0`` = initial [pitch, roll, heading] [rad]; ``dt`` = IMU sample period [s].
     Every segment duration must be a whole number of samples.  With ``wind`` (a
-    :class:`~fednav.wind.WindField`, or any ``t -> (w, dw/dt)`` ENU), the segments describe
+    :class:`~fednav.sim.wind.WindField`, or any ``t -> (w, dw/dt)`` ENU), the segments describe
     the motion *through the air mass* (speed = airspeed, body axes along the air
     velocity) and the ground velocity is air velocity + wind.
     """

@@ -2,7 +2,7 @@
 
 Every model turns a sensor value and the INS solution at the same instant into the
 *observed residual* ``y = INS-derived - sensor`` and predicts it from the error state:
-``h(X, nav)`` (nonlinear, rows of X in filter units, see :mod:`fednav.error_model`) and
+``h(X, nav)`` (nonlinear, rows of X in filter units, see :mod:`fednav.ins.error_model`) and
 its Jacobian ``H(nav)``.  Residual units: metres for positions, arc-minutes for angles.
 """
 
@@ -14,11 +14,11 @@ from functools import cached_property
 import numba
 import numpy as np
 
-from . import attitude as att
-from . import earth
-from .error_model import DP, N_STATES, PHI, SCALE
-from .kernels import rotvec_to_dcm
-from .units import ARCMIN
+from ..core import attitude as att
+from ..core import earth
+from ..core.kernels import rotvec_to_dcm
+from ..core.units import ARCMIN
+from ..ins.error_model import DP, N_STATES, PHI, SCALE
 
 
 @dataclass

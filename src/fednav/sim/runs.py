@@ -14,16 +14,17 @@ import numpy as np
 import pandas as pd
 import scipy.linalg
 
-from . import attitude as att
-from . import compiled_loop, earth, units
-from . import error_model as em
-from .config import Scenario
-from .delays import ANGLE_COLUMNS, InsIncrements, curve_fit_value
-from .filters import FederatedFilter, FilterError, KalmanFilter, LinearModel, make_filter
-from .measurements import MODELS, NavSnapshot, StackedModel, WindConstraint
-from .sensors import Barometer, MeasurementSeries, corrupt_imu, inject_faults
-from .strapdown import STATE_LLA, STATE_Q, STATE_VEL, Strapdown, quat_to_dcm_nb
-from .total_state import GnssTotal, StarTotal, TotalStateUKF
+from ..core import attitude as att
+from ..core import earth, units
+from ..filters import FederatedFilter, FilterError, KalmanFilter, LinearModel, make_filter
+from ..ins import error_model as em
+from ..ins.strapdown import STATE_LLA, STATE_Q, STATE_VEL, Strapdown, quat_to_dcm_nb
+from ..ins.total_state import GnssTotal, StarTotal, TotalStateUKF
+from ..sensors import Barometer, MeasurementSeries, corrupt_imu, inject_faults
+from ..sensors.delays import ANGLE_COLUMNS, InsIncrements, curve_fit_value
+from ..sensors.models import MODELS, NavSnapshot, StackedModel, WindConstraint
+from . import compiled_loop
+from .scenario import Scenario
 
 TOTAL_MODELS = {"gnss": GnssTotal(), "star": StarTotal()}
 #: Positions of the total-state filter's 15 states in the 18-state error layout.
@@ -147,7 +148,7 @@ def _schedule(series: MeasurementSeries, T: float, n_cycles: int,
 class _ClosedLoop:
     """SINS + error-state (federated or centralized) filter with feedback, one filter
     cycle at a time, on one run's data; measurements carry their timing and are treated
-    by their sensor's delay strategy (:mod:`fednav.delays`)."""
+    by their sensor's delay strategy (:mod:`fednav.sensors.delays`)."""
 
     def __init__(self, scn: Scenario, aiding: list[str], data: RunData, ftype: str, truth,
                  delay: str | None = None, constraint: str | None = None):
@@ -488,6 +489,6 @@ def run_all_modes(scn: Scenario, data: RunData,
 
 def run_configured_mode(scn: Scenario, mode, data: RunData,
                         max_time: float | None = None) -> RunResult:
-    """Run a :class:`~fednav.config.ModeConfig` of the scenario."""
+    """Run a :class:`~fednav.sim.scenario.ModeConfig` of the scenario."""
     return run_mode(scn, list(mode.aiding), data, mode.name, max_time, mode.filter,
                     mode.delay_compensation, mode.constraint)

@@ -1,8 +1,8 @@
 """Simulated datasets in fednav's own file layouts (``fednav simulate``).
 
 A dataset scenario (YAML, :class:`DatasetConfig`) gives the start, the motion as segments
-(:class:`~fednav.config.SegmentConfig`), the IMU error figures
-(:class:`~fednav.config.ImuConfig`), the GNSS receiver (rate, noise, antenna lever arm)
+(:class:`~fednav.sim.scenario.SegmentConfig`), the IMU error figures
+(:class:`~fednav.sim.scenario.ImuConfig`), the GNSS receiver (rate, noise, antenna lever arm)
 and optionally a velocity sensor. :func:`simulate_dataset` draws one realisation from
 its seed; :func:`write_csv_dataset` and :func:`write_navego_dataset` write it in the
 layouts of ``docs/data-formats.md`` — ``imu.csv gnss.csv velocity.csv reference.csv``
@@ -22,8 +22,9 @@ from pathlib import Path
 import numpy as np
 from pydantic import Field
 
-from . import attitude, earth, units
-from .config import ImuConfig, SegmentConfig, StartConfig, _Model, load_model
+from ..core import attitude, earth, units
+from ..core.config import _Model, load_model
+from .scenario import ImuConfig, SegmentConfig, StartConfig
 
 _V3 = tuple[float, float, float]
 
@@ -98,7 +99,7 @@ def _lever_point(tr, idx, lever):
 
 def simulate_dataset(cfg: DatasetConfig) -> Dataset:
     """Draw the dataset of ``cfg`` (seeded by ``cfg.seed``)."""
-    from .sensors import corrupt_imu
+    from ..sensors import corrupt_imu
     from .trajectory import generate
 
     st = cfg.start
@@ -150,8 +151,8 @@ def write_csv_dataset(ds: Dataset, out) -> list[Path]:
     """``imu.csv gnss.csv [velocity.csv] reference.csv process.yaml`` into ``out``."""
     import yaml
 
-    from .atomic import write_text
-    from .io.csvdata import write_csv
+    from ..core.atomic import write_text
+    from ..io.csvdata import write_csv
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -190,8 +191,8 @@ def write_navego_dataset(ds: Dataset, out) -> list[Path]:
     struct; written atomically)."""
     import scipy.io
 
-    from .atomic import replacing
-    from .io.navego import FRD_TO_RFU, fednav_euler_to_navego
+    from ..core.atomic import replacing
+    from ..io.navego import FRD_TO_RFU, fednav_euler_to_navego
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)

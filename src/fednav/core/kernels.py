@@ -246,7 +246,7 @@ def coning_sculling_s(ax, ay, az, bx, by, bz, pax, pay, paz, pbx, pby, pbz, has_
 
 @numba.njit(cache=True)
 def euler_to_dcm(pitch, roll, heading):
-    """Compiled scalar twin of :func:`fednav.attitude.euler_to_dcm` (tested equal)."""
+    """Compiled scalar twin of :func:`fednav.core.attitude.euler_to_dcm` (tested equal)."""
     st, ct = np.sin(pitch), np.cos(pitch)
     sg, cg = np.sin(roll), np.cos(roll)
     sp, cp = np.sin(heading), np.cos(heading)

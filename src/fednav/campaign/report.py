@@ -10,8 +10,8 @@ import pandas as pd
 from rich.console import Console
 from rich.table import Table
 
-from . import units
-from .atomic import save_figure, write_frame, write_text
+from ..core import units
+from ..core.atomic import save_figure, write_frame, write_text
 from .evaluation import mean_ci95
 
 

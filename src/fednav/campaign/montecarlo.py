@@ -16,6 +16,6 @@ def run_seeds(fn: Callable | list[Callable], args: list, jobs: int = 1,
     """``[fn(a) for a in args]`` in order, with ``jobs`` worker processes (Dask), reusing
     and filling the ``campaign`` store when one is given; ``progress()`` after each.
     ``fn`` may be a list: one function per unit."""
-    from .campaign import run_units
+    from .store import run_units
 
     return run_units(fn, args, jobs, progress, campaign)

@@ -39,14 +39,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .io.data import GnssData, ImuData, VelocityData
-from .process import (
-    InnovationRecord,
-    ProcessConfig,
-    adjust_sensors,
-    imu_figures,
-    process,
-)
+from ..io.data import GnssData, ImuData, VelocityData
+from .run import InnovationRecord, ProcessConfig, adjust_sensors, imu_figures, process
 
 #: Starting IMU figures (a generic MEMS IMU) where neither the file nor the config has one.
 MEMS_DEFAULTS = {"gyro_arw_rad_sqrt_s": 5.8e-4, "accel_vrw_mps_sqrt_s": 2.0e-3,

@@ -1,4 +1,4 @@
-"""The closed loop of :func:`fednav.simulate.run_mode` in one compiled call.
+"""The closed loop of :func:`fednav.sim.runs.run_mode` in one compiled call.
 
 For the configuration that Monte Carlo campaigns spend their time in — error-state
 federated UKF local filters (with or without a master) in fusion-reset mode, equal, fixed
@@ -6,7 +6,7 @@ or adaptive sharing, star-sensor and SAR fixes used at the first filter epoch af
 arrive (no delay compensation, no fault detection, no constraint) — the whole run,
 strapdown INS at IMU rate, error-model discretisation, sigma-point time and measurement
 updates, fusion and feedback, runs in one numba function built from the same kernels the
-Python classes call (:mod:`fednav.strapdown`, :mod:`fednav.error_model`,
+Python classes call (:mod:`fednav.ins.strapdown`, :mod:`fednav.ins.error_model`,
 :mod:`fednav.filters.ukf`, :mod:`fednav.filters.federated`).  Nothing in a cycle goes
 back to the interpreter; the per-cycle Python orchestration (about 250 us a cycle) is
 gone.
@@ -25,16 +25,16 @@ import math
 import numba
 import numpy as np
 
-from . import earth
-from .error_model import _interval, _transition
-from .filters.federated import _fuse
-from .filters.ukf import _predict_moments, _sigma_points, _update
-from .kernels import cholesky_lower
-from .kernels import quat_to_dcm as _q2dcm
-from .measurements import euler_error_nb
-from .strapdown import _correct
-from .strapdown import _run as _strapdown_run
-from .units import ARCMIN
+from ..core import earth
+from ..core.kernels import cholesky_lower
+from ..core.kernels import quat_to_dcm as _q2dcm
+from ..core.units import ARCMIN
+from ..filters.federated import _fuse
+from ..filters.ukf import _predict_moments, _sigma_points, _update
+from ..ins.error_model import _interval, _transition
+from ..ins.strapdown import _correct
+from ..ins.strapdown import _run as _strapdown_run
+from ..sensors.models import euler_error_nb
 
 #: Sensor kinds the compiled loop measures with (see :func:`_residual`).
 KINDS = {"star": 0, "sar": 1}

@@ -43,8 +43,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .atomic import write_bytes, write_text
-from .errors import FednavError
+from ..core.atomic import write_bytes, write_text
+from ..core.errors import FednavError
 
 
 class CampaignError(FednavError, ValueError):
@@ -77,7 +77,7 @@ class Campaign:
 
     def __init__(self, out: Path, paper: str, scn, seed: int, fresh: bool = False,
                  address: str | None = None):
-        from . import __version__
+        from .. import __version__
 
         self.out = Path(out)
         if self.out.exists() and not self.out.is_dir():

@@ -27,11 +27,11 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from . import attitude, earth
-from .kernels import coning_sculling_s, quat_mul_s, quat_to_dcm_s, rotvec_to_quat_s
-from .kernels import quat_mul as _qmul
-from .kernels import quat_to_dcm as _q2dcm
-from .kernels import rotvec_to_quat as _rv2q
+from ..core import attitude, earth
+from ..core.kernels import coning_sculling_s, quat_mul_s, quat_to_dcm_s, rotvec_to_quat_s
+from ..core.kernels import quat_mul as _qmul
+from ..core.kernels import quat_to_dcm as _q2dcm
+from ..core.kernels import rotvec_to_quat as _rv2q
 
 # Layout of the flat state array.
 _Q, _V, _P, _DTH, _DV, _VPREV, _HAS_PREV, _BARO_INT, _BARO_DH = (

@@ -8,11 +8,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from . import units
-from .atomic import save_figure, write_text
-from .io.csvdata import write_csv
-from .io.data import Reference
-from .process import ProcessResult, Solution, errors_against, rmse
+from ..core import units
+from ..core.atomic import save_figure, write_text
+from ..io.csvdata import write_csv
+from ..io.data import Reference
+from .run import ProcessResult, Solution, errors_against, rmse
 
 #: Columns of the RMSE block of summary.json (attitude ones only with a reference attitude).
 RMSE_KEYS = ("north_m", "east_m", "down_m", "vn_mps", "ve_mps", "vd_mps", "roll_deg",
@@ -157,7 +157,7 @@ def plot_track(res: ProcessResult, gnss, ref: Reference | None, path: Path) -> P
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from . import earth
+    from ..core import earth
 
     o = gnss.lla[0]
 

@@ -1,8 +1,8 @@
 """Post-processing of real data: loosely coupled INS/GNSS (+ velocity sensors) in the
 federated error-state filter, with an optional RTS smoother.
 
-The IMU drives the strapdown mechanization (:class:`~fednav.strapdown.Strapdown`) at its
-own rate; every ``period_s`` the 18-state error model (:mod:`fednav.error_model`) is
+The IMU drives the strapdown mechanization (:class:`~fednav.ins.strapdown.Strapdown`) at its
+own rate; every ``period_s`` the 18-state error model (:mod:`fednav.ins.error_model`) is
 propagated and every local filter of the federated filter (``gnss``, and ``velocity``
 when a velocity sensor is given) updates with the measurements that arrived during the
 interval, then the fused estimate is fed back to the INS and the IMU compensation.  A
@@ -21,15 +21,13 @@ from typing import NamedTuple
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
-from . import attitude as att
-from . import earth, units
-from . import error_model as em
-from .alignment import Alignment, align, coarse_level
-from .filters import FederatedFilter, KalmanFilter
-from .io.data import DataError, GnssData, ImuData, Reference, VelocityData
-from .measurements import GnssPosVel, NavSnapshot, VelocityENU
-from .smoother import rts_errors
-from .strapdown import (
+from ..core import attitude as att
+from ..core import earth, units
+from ..filters import FederatedFilter, KalmanFilter
+from ..filters.smoother import rts_errors
+from ..ins import error_model as em
+from ..ins.alignment import Alignment, align, coarse_level
+from ..ins.strapdown import (
     STATE_LLA,
     STATE_Q,
     STATE_VEL,
@@ -37,6 +35,8 @@ from .strapdown import (
     correct_rows,
     quat_to_dcm_nb,
 )
+from ..io.data import DataError, GnssData, ImuData, Reference, VelocityData
+from ..sensors.models import GnssPosVel, NavSnapshot, VelocityENU
 
 _V3 = tuple[float, float, float]
 #: Names of the local filters of the processing federated filter.
@@ -67,7 +67,7 @@ class ProcessConfig(BaseModel):
     gnss_sigma_pos_m: _V3 | None = None  # [north, east, up]; default: the file's
     gnss_sigma_vel_mps: _V3 | None = None  # [east, north, up]; default: the file's
     gnss_lever_m: _V3 | None = None  # body right-forward-up; default: the file's
-    # align: levelling while static + heading from the GNSS course (fednav.alignment);
+    # align: levelling while static + heading from the GNSS course (fednav.ins.alignment);
     # file: the data file's attitude; coarse: level over coarse_seconds at the start
     initial_attitude: str = Field("align", pattern="^(align|file|coarse)$")
     initial_attitude_sigma_deg: _V3 | None = None  # [pitch, roll, heading]
@@ -175,7 +175,7 @@ class ProcessResult:
     #: what the input checks did (samples bridged, epochs skipped) and their warnings
     data_quality: dict = field(default_factory=dict)
     warnings: list = field(default_factory=list)
-    #: how the initial attitude was found (:mod:`fednav.alignment`)
+    #: how the initial attitude was found (:mod:`fednav.ins.alignment`)
     alignment: dict = field(default_factory=dict)
 
 
@@ -298,7 +298,7 @@ def _initial_attitude(imu: ImuData, gnss: GnssData, cfg: ProcessConfig, t0: floa
 def _initial_covariance(al: Alignment, sig_vel, sig_pos, gb: float, ab: float,
                         noise: em.ImuNoiseModel) -> np.ndarray:
     """P0 (filter units): diagonal from the figures, with the alignment's tilt/bias
-    coupling and gyro-bias accuracy where it has them (:mod:`fednav.alignment`)."""
+    coupling and gyro-bias accuracy where it has them (:mod:`fednav.ins.alignment`)."""
     eps_c = gb if al.gyro_bias_sigma is None else min(gb, al.gyro_bias_sigma)
     sd0 = np.r_[al.sigma, sig_vel, sig_pos[[1, 0, 2]], np.full(3, eps_c),
                 np.full(3, noise.gyro_markov_sigma), np.full(3, ab)]
@@ -374,7 +374,7 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
     """Loosely coupled INS/GNSS(/velocity) processing; see the module docstring.
 
     ``innovations``, when given a list, receives one :class:`InnovationRecord` per measurement
-    (what :mod:`fednav.tuning` estimates noise figures from)."""
+    (what :mod:`fednav.process.tuning` estimates noise figures from)."""
     cfg = cfg or ProcessConfig()
     t_start = time.perf_counter()
     dt = imu.period()

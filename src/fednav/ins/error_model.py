@@ -36,15 +36,15 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from . import earth, units
-from .kernels import (
+from ..core import earth, units
+from ..core.kernels import (
     dcm_to_rotvec,
     matmul_sparse,
     rodrigues_coefficients,
     rodrigues_entries,
     rodrigues_series,
 )
-from .kernels import quat_to_dcm as _quat_to_dcm
+from ..core.kernels import quat_to_dcm as _quat_to_dcm
 
 N_STATES = 18
 PHI, DV, DP, EPS_C, EPS_R, NABLA = (slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12),
@@ -89,7 +89,7 @@ _VEC = {"cache": True, "error_model": "numpy"}  # no zero-division branch: loops
 
 @numba.njit(inline="always")
 def _dcm_entries(r0, r1, r2, s, c, out, i):
-    """Rodrigues' formula (:func:`fednav.kernels.rodrigues_entries`) into column ``i`` of
+    """Rodrigues' formula (:func:`fednav.core.kernels.rodrigues_entries`) into column ``i`` of
     ``out`` (9, P), row-major."""
     e = rodrigues_entries(r0, r1, r2, s, c)
     for k in range(9):
@@ -507,7 +507,7 @@ def from_si(x):
 def interval_process(s0, s1, dv_sum, T: float, noise: ImuNoiseModel, baro_gains=(0.0, 0.0),
                      baro_q: float = 0.0, nsub: int = 2) -> ErrorProcess:
     """The error model over one filter interval of the strapdown INS, linearised at the
-    interval's midpoint: ``s0``, ``s1`` the INS state (:mod:`fednav.strapdown` layout)
+    interval's midpoint: ``s0``, ``s1`` the INS state (:mod:`fednav.ins.strapdown` layout)
     at its start and end, ``dv_sum`` the compensated velocity increments summed over it
     (body, m/s).  One compiled call builds the nominal point, Phi and Qd."""
     return ErrorProcess.of_interval(s0, s1, dv_sum, T, noise, baro_gains, baro_q, nsub)

@@ -34,8 +34,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import attitude as att
-from . import earth, units
+from ..core import attitude as att
+from ..core import earth, units
 
 #: GNSS horizontal speed [m/s] above which the vehicle counts as moving.
 MOVING_SPEED = 0.5

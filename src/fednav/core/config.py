@@ -1,0 +1,75 @@
+"""YAML files validated by pydantic: the one-line errors every fednav file reader gives.
+
+Keys carry their unit in the name (``_deg``, ``_arcsec``, ``_deg_h``, ``_ug``, ``_m``,
+``_s`` ...).  An unknown key, a wrong type or a missing value is reported in one line
+naming the key and the file (:class:`ConfigError`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import yaml
+from pydantic import BaseModel, ConfigDict, ValidationError
+
+from .errors import FednavError
+
+
+class ConfigError(FednavError, ValueError):
+    """A scenario file that cannot be used; the message names the file and the key."""
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+
+def _format_error(e: dict) -> str:
+    loc = ".".join(str(p) for p in e["loc"]) or "(top level)"
+    msg = e["msg"]
+    if e["type"] == "extra_forbidden":
+        msg = "unknown key"
+    elif e["type"] == "missing":
+        msg = "missing value"
+    elif "input" in e and not isinstance(e["input"], dict | list):
+        got = repr(e["input"])
+        msg = f"{msg} (got {got if len(got) <= 40 else got[:37] + '...'})"
+    return f"key '{loc}': {msg}"
+
+
+def read_text_file(path: Path, what: str) -> str:
+    """The text of a UTF-8 file (a byte-order mark is accepted), or a one-line
+    :class:`ConfigError` naming the file and why it cannot be read."""
+    try:
+        return path.read_text(encoding="utf-8-sig")
+    except FileNotFoundError:
+        why = "not found"
+    except IsADirectoryError:
+        why = "is a folder, not a file"
+    except UnicodeDecodeError:
+        why = "not a UTF-8 text file"
+    except OSError as e:
+        why = f"cannot be read ({e.strerror or e})"
+    raise ConfigError(f"{what} file {path}: {why}")
+
+
+def load_model(path: str | Path, model: type[BaseModel], what: str = "scenario"):
+    """Read a YAML file into the pydantic ``model`` (errors: :class:`ConfigError`, one line
+    naming the file and the key)."""
+    path = Path(path)
+    text = read_text_file(path, what)
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as e:
+        raise ConfigError(f"{what} file {path}: not valid YAML ({str(e).splitlines()[0]})") \
+            from None
+    if data is None:
+        data = {}
+    if not isinstance(data, dict):
+        raise ConfigError(f"{what} file {path}: expected a mapping at the top level")
+    try:
+        return model.model_validate(data)
+    except ValidationError as e:
+        # An unknown key is usually a misspelt one: report it before the "missing" it causes.
+        errs = sorted(e.errors(), key=lambda x: x["type"] != "extra_forbidden")
+        more = f" (and {len(errs) - 1} more)" if len(errs) > 1 else ""
+        raise ConfigError(f"{what} file {path}: {_format_error(errs[0])}{more}") from None

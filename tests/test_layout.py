@@ -1,0 +1,88 @@
+"""The package layout: layered subpackages, no import running upward, old names kept."""
+
+import ast
+import subprocess
+import sys
+import warnings
+from pathlib import Path
+
+import pytest
+
+PKG = Path(__file__).resolve().parents[1] / "src" / "fednav"
+#: Subpackages from the bottom up.  A module may import its own subpackage and any
+#: subpackage of a lower layer; packages on one layer do not import each other.
+LAYERS = [{"core"}, {"ins"}, {"filters"}, {"sensors"}, {"io"},
+          {"sim", "process"}, {"campaign"}, {"launch"}, {"scenarios"}]
+LEVEL = {name: i for i, layer in enumerate(LAYERS) for name in layer}
+TOP = len(LAYERS)  # the package's own top-level modules (cli, __init__, _compat)
+
+
+def _level(module_path: Path) -> tuple[str, int]:
+    rel = module_path.relative_to(PKG)
+    name = rel.parts[0] if len(rel.parts) > 1 else rel.stem
+    return name, LEVEL.get(name, TOP)
+
+
+def _imports(path: Path):
+    """(line, imported subpackage) for every fednav import of a module."""
+    tree = ast.parse(path.read_text())
+    parts = path.relative_to(PKG).with_suffix("").parts
+    pkg = ["fednav", *parts[:-1]]
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = pkg[:len(pkg) - (node.level - 1)]
+                target = base + (node.module.split(".") if node.module else [])
+            elif node.module and node.module.split(".")[0] == "fednav":
+                target = node.module.split(".")
+            else:
+                continue
+            if len(target) > 1:
+                yield node.lineno, target[1]
+            else:  # from fednav import x, y: each name is a subpackage or module
+                for alias in node.names:
+                    yield node.lineno, alias.name
+        elif isinstance(node, ast.Import):
+            for alias in node.names:
+                t = alias.name.split(".")
+                if t[0] == "fednav" and len(t) > 1:
+                    yield node.lineno, t[1]
+
+
+def test_every_subpackage_has_a_layer():
+    subpackages = {p.parent.name for p in PKG.glob("*/__init__.py")}
+    assert subpackages == set(LEVEL), subpackages ^ set(LEVEL)
+
+
+def test_no_import_runs_upward_or_sideways():
+    bad = []
+    for path in sorted(PKG.rglob("*.py")):
+        name, level = _level(path)
+        for line, target in _imports(path):
+            if target == name or target.startswith("_") or target == "__version__":
+                continue
+            tl = LEVEL.get(target, TOP)
+            if tl >= level:
+                bad.append(f"{path.relative_to(PKG)}:{line} imports {target}")
+    assert not bad, "\n".join(bad)
+
+
+def test_top_level_holds_only_the_entry_points():
+    assert sorted(p.name for p in PKG.glob("*.py")) == ["__init__.py", "_compat.py", "cli.py"]
+
+
+@pytest.mark.parametrize("old", ["fednav.earth", "fednav.simulate", "fednav.tuning",
+                                 "fednav.config"])
+def test_old_module_names_still_import_with_a_warning(old):
+    from fednav._compat import MOVED
+
+    code = (f"import warnings; warnings.simplefilter('error', FutureWarning)\n"
+            f"try:\n    import {old}\nexcept FutureWarning as w:\n    print(w)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout
+    assert f"{old} is now {MOVED[old]}" in out
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", FutureWarning)
+        import importlib
+
+        assert importlib.import_module(old) is importlib.import_module(MOVED[old])
