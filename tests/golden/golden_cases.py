@@ -10,6 +10,9 @@ when an interface moves only this file follows it; the stored numbers never chan
 
 from __future__ import annotations
 
+import contextlib
+import json
+import platform
 from pathlib import Path
 
 import numpy as np
@@ -17,6 +20,68 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
 PLANETARY = ROOT.parent / "shared" / "data" / "canada-planetary"
+
+#: When set, every data source below nudges its inputs by about one unit in the last place
+#: (:func:`nudged`): how far that moves each result measures its sensitivity to rounding,
+#: which is what a machine with another BLAS or libm changes.
+_NUDGE = {"on": False}
+
+
+@contextlib.contextmanager
+def nudged():
+    """Inside, the cases compute from inputs changed by one ulp in one value."""
+    _NUDGE["on"] = True
+    try:
+        yield
+    finally:
+        _NUDGE["on"] = False
+
+
+def _ulp(a: np.ndarray) -> np.ndarray:
+    """``a`` with every value one ulp larger when nudged (else ``a``)."""
+    return np.nextafter(a, np.inf) if _NUDGE["on"] else a
+
+
+def _nudging(make):
+    """A run-data factory whose IMU angle increments and first initial error are nudged."""
+    def wrapped(*args, **kwargs):
+        data = make(*args, **kwargs)
+        data.dtheta = _ulp(data.dtheta)
+        for name in ("init_phi", "x0_err"):
+            v = getattr(data, name, None)
+            if v is not None:
+                setattr(data, name, np.r_[_ulp(v[:1]), v[1:]])
+        return data
+    return wrapped
+
+
+def environment() -> dict:
+    """What decides the last bits of a run besides fednav's code: CPU, numerical
+    libraries and the SIMD paths numpy takes."""
+    import numba
+    import scipy
+    import scipy.linalg  # noqa: F401  (loads scipy's BLAS, which numba calls)
+    import threadpoolctl
+    from numpy._core._multiarray_umath import __cpu_features__
+
+    cpu = platform.processor()
+    try:
+        cpu = next(line.split(":", 1)[1].strip() for line in
+                   Path("/proc/cpuinfo").read_text().splitlines()
+                   if line.startswith("model name"))
+    except (OSError, StopIteration):
+        pass
+    blas = sorted(f"{i.get('internal_api')} {i.get('version')} {i.get('architecture')}"
+                  for i in threadpoolctl.threadpool_info())
+    return {"cpu": cpu, "machine": platform.machine(), "numpy": np.__version__,
+            "scipy": scipy.__version__, "numba": numba.__version__, "blas": blas,
+            "simd": sorted(k for k, v in __cpu_features__.items() if v)}
+
+
+def same_environment() -> bool:
+    stored = json.loads((HERE / "environment.json").read_text())
+    return stored == json.loads(json.dumps(environment()))
+
 
 #: Fields of a simulation run result that are pinned (``None`` fields are skipped).
 RESULT_FIELDS = ("t", "pos", "vel", "att", "sigma", "euler")
@@ -49,13 +114,25 @@ def _rows(out: dict, prefix: str, rows: list[dict]) -> None:
                 _put(out, f"{prefix}/row{i}/{k}", v)
 
 
+@contextlib.contextmanager
+def _patched(module, name: str):
+    """``module.name`` (a run-data factory) nudged while the block runs."""
+    make = getattr(module, name)
+    setattr(module, name, _nudging(make))
+    try:
+        yield
+    finally:
+        setattr(module, name, make)
+
+
 # ----------------------------------------------------------------------------- papers
 def paper000() -> dict:
     from fednav.scenarios import paper000 as p
 
     out: dict = {}
     scn = p.load_scenario()
-    rows, series = p.one_run((scn, 2, 250.0))
+    with _patched(p, "make_run_data"):
+        rows, series = p.one_run((scn, 2, 250.0))
     _rows(out, "run", rows)
     for name, r in series.items():
         _run_result(out, name, r)
@@ -68,13 +145,15 @@ def paper001() -> dict:
     out: dict = {}
     scn = p.load_scenario()
     scn = scn.model_copy(update={"filters": scn.filters.model_copy(update={"particles": 100})})
-    rows, series = p._task(("T1", scn, 3, None, 80.0))
+    with _patched(p, "make_data"):
+        rows, series = p._task(("T1", scn, 3, None, 80.0))
     _rows(out, "T1", rows)
     for name, r in series.items():
         for f in ("t", "att", "pos", "vel", "sigma"):
             _put(out, f"{name}/{f}", getattr(r, f))
     reg = next(g for g in scn.regimes if "chi-square" in g.name)
-    rows, _ = p._task(("regime", scn.with_regime(reg), 4, reg.name, 80.0))
+    with _patched(p, "make_data"):
+        rows, _ = p._task(("regime", scn.with_regime(reg), 4, reg.name, 80.0))
     _rows(out, "regime", rows)
     return out
 
@@ -84,12 +163,13 @@ def paper002() -> dict:
 
     out: dict = {}
     scn = p.load_scenario()
-    for seed in (3, 4):
-        rows, series = p.one_run((scn, seed, 120.0))
-        _rows(out, f"s{seed}", rows)
-        for name, r in series.items():
-            _run_result(out, f"s{seed}/{name}", r)
-    _rows(out, "T4", p.one_run_t4((scn, 3, 40.0)))
+    with _patched(p, "make_run_data"):
+        for seed in (3, 4):
+            rows, series = p.one_run((scn, seed, 120.0))
+            _rows(out, f"s{seed}", rows)
+            for name, r in series.items():
+                _run_result(out, f"s{seed}/{name}", r)
+        _rows(out, "T4", p.one_run_t4((scn, 3, 40.0)))
     obs = p.observability(scn, 120.0)
     for key, row in obs["rows"].items():
         for col, cell in row.items():
@@ -104,7 +184,8 @@ def paper003() -> dict:
     scn = p.load_scenario()
     scn = scn.model_copy(update={"fault_experiment": scn.fault_experiment.model_copy(
         update={"duration_s": 460.0})})
-    rows, series, fault_rows, fault_series = p.one_run((scn, 5, 460.0))
+    with _patched(p, "make_run_data"):
+        rows, series, fault_rows, fault_series = p.one_run((scn, 5, 460.0))
     _rows(out, "run", rows)
     _rows(out, "fault", fault_rows)
     for name, r in series.items():
@@ -119,11 +200,12 @@ def paper004() -> dict:
 
     out: dict = {}
     scn = p.load_scenario()
-    rows, series = p.one_run((scn, 6, 300.0))
-    _rows(out, "run", rows)
-    for name, r in series.items():
-        _run_result(out, name, r)
-    _rows(out, "sweep", p.sweep_run((scn, 6, 200.0, 0.5)))
+    with _patched(p, "make_run_data"):
+        rows, series = p.one_run((scn, 6, 300.0))
+        _rows(out, "run", rows)
+        for name, r in series.items():
+            _run_result(out, name, r)
+        _rows(out, "sweep", p.sweep_run((scn, 6, 200.0, 0.5)))
     return out
 
 
@@ -220,6 +302,7 @@ def tune_case(tmp: Path) -> dict:
     write_csv_dataset(simulate_dataset(cfg), tmp)
     pcfg = ProcessConfig(gnss_lever_m=tuple(cfg.gnss.lever_m))
     imu, gnss, vel, _ = _read_csv(tmp, pcfg)
+    imu.gyro = _ulp(imu.gyro)
     res = tune(imu, gnss, vel, pcfg)
     out: dict = {}
     for f in res.figures:

@@ -7,6 +7,7 @@ Run only to pin a deliberate change of results, and say so in the commit:
 
 from __future__ import annotations
 
+import json
 import sys
 import tempfile
 import time
@@ -31,13 +32,35 @@ def compute(name: str) -> dict:
     raise SystemExit(f"unknown case {name}")
 
 
+def sensitivity(out: dict, nudged: dict) -> dict:
+    """Per array: the largest change the nudge made, relative to the array's scale."""
+    res = {}
+    for key, a in out.items():
+        b = nudged[key]
+        ok = np.isfinite(a) & np.isfinite(b)
+        if not ok.any():
+            continue
+        scale = float(np.max(np.abs(a[ok]))) or 1.0
+        d = float(np.max(np.abs(a[ok] - b[ok]))) / scale
+        if d > 0.0:
+            res[key] = float(f"{d:.3g}")
+    return res
+
+
 def main(names: list[str]) -> None:
+    sens_file = gc.HERE / "sensitivity.json"
+    sens = json.loads(sens_file.read_text()) if sens_file.exists() else {}
     for name in names or [*gc.CASES, "process", "planetary", "tune"]:
         t0 = time.perf_counter()
         out = compute(name)
+        with gc.nudged():
+            sens[name] = sensitivity(out, compute(name))
         np.savez_compressed(gc.HERE / f"{name}.npz", **out)
         print(f"{name}: {len(out)} arrays, {sum(a.size for a in out.values())} values, "
-              f"{time.perf_counter() - t0:.1f} s")
+              f"{time.perf_counter() - t0:.1f} s; largest change from a one-ulp nudge "
+              f"{max(sens[name].values(), default=0.0):.2g}")
+    sens_file.write_text(json.dumps(sens, indent=1, sort_keys=True) + "\n")
+    (gc.HERE / "environment.json").write_text(json.dumps(gc.environment(), indent=1) + "\n")
 
 
 if __name__ == "__main__":

@@ -4,15 +4,32 @@ The stored arrays (``tests/golden/*.npz``) were written by ``make_golden.py`` fr
 before the one-navigator restructure; ``golden_cases.py`` says what each holds.  An
 array matches when every element is within ``1e-9 * max(|golden|)`` of the golden one
 (relative to the array's own scale, so values crossing zero compare sensibly).
+
+Some filters amplify rounding: a one-ulp nudge of the inputs moves paper 003's
+total-state UKF by 1e-3 relative after 460 s and the small-alpha UKFs of papers 000 and
+002 by 1e-5 .. 1e-6 (``sensitivity.json``, measured when the goldens were written).  A
+machine with another CPU, BLAS or libm rounds differently, so there the tolerance of
+each array is ``max(1e-9, 100 x its sensitivity)``; on the machine and libraries that
+wrote the goldens (``environment.json``) every array is held to 1e-9.
 """
 
 from __future__ import annotations
+
+import json
 
 import golden_cases as gc
 import numpy as np
 import pytest
 
 RTOL = 1e-9
+SAME = gc.same_environment()
+SENSITIVITY = json.loads((gc.HERE / "sensitivity.json").read_text())
+
+
+def _tolerance(name: str, key: str) -> float:
+    if SAME:
+        return RTOL
+    return max(RTOL, 100.0 * SENSITIVITY.get(name, {}).get(key, 0.0))
 
 
 def _compare(name: str, got: dict) -> None:
@@ -35,10 +52,11 @@ def _compare(name: str, got: dict) -> None:
         w, g = w[~nan], g[~nan]
         scale = float(np.max(np.abs(w))) or 1.0
         err = float(np.max(np.abs(g - w))) / scale if np.all(np.isfinite(g)) else np.inf
-        if err > RTOL:
+        if err > _tolerance(name, key):
             worst.append((err, key))
     worst.sort(reverse=True)
-    assert not worst, f"{name}: {len(worst)} arrays differ, worst " + ", ".join(
+    assert not worst, f"{name}: {len(worst)} arrays differ (same environment as the " \
+        f"goldens: {SAME}), worst " + ", ".join(
         f"{k} ({e:.2g})" for e, k in worst[:5])
 
 
