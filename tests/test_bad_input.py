@@ -105,7 +105,9 @@ _YAML = st.recursive(_SCALAR, lambda c: st.one_of(
     st.lists(c, max_size=3),
     st.dictionaries(st.sampled_from(["imu", "period_s", "gnss_sigma_pos_m", "fdi_alpha",
                                      "gyro_arw_rad_sqrt_s", "initial_attitude", "substeps",
-                                     "coarse_seconds", "x"]), c, max_size=4)), max_leaves=8)
+                                     "coarse_seconds", "x", "filter", "sensors", "gnss",
+                                     "alignment", "type", "aiding"]), c, max_size=4)),
+    max_leaves=8)
 
 
 @settings(max_examples=60, deadline=None)
@@ -113,17 +115,17 @@ _YAML = st.recursive(_SCALAR, lambda c: st.one_of(
 def test_random_malformed_process_config(doc):
     import tempfile
 
-    from fednav.core.config import ConfigError, load_model
-    from fednav.process.run import ProcessConfig
+    from fednav import load_system
+    from fednav.core.config import ConfigError
 
     with tempfile.TemporaryDirectory() as d:
         p = Path(d) / "cfg.yaml"
         p.write_text(yaml.safe_dump(doc))
         try:
-            cfg = load_model(p, ProcessConfig, "processing config")
+            cfg = load_system(p)
         except ConfigError as e:
             msg = str(e)
-            assert "\n" not in msg and str(p) in msg
+            assert "\n" not in msg and str(p) in msg, msg
             return
     for v in cfg.model_dump().values():      # accepted: nothing NaN slipped through
         if isinstance(v, float):

@@ -76,7 +76,7 @@ def test_residual_and_predicted_are_the_measurement_models(kind):
     pitch), positions and sigma points."""
     from fednav.core import attitude as att
     from fednav.ins.strapdown import STATE_SIZE
-    from fednav.sensors.models import MODELS, NavSnapshot
+    from fednav.sensors import MODELS, NavSnapshot
 
     rng = np.random.default_rng(5)
     model = MODELS[kind]

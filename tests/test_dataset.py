@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
+from fednav import load_system
 from fednav.cli import app
 from fednav.core import units
-from fednav.core.config import load_model
 from fednav.io import (
     read_gnss_csv,
     read_imu_csv,
@@ -20,7 +20,7 @@ from fednav.io import (
     read_reference_csv,
     read_velocity_csv,
 )
-from fednav.process.run import ProcessConfig, errors_against, process
+from fednav.process import errors_against, process
 from fednav.sim.dataset import (
     load_dataset_config,
     simulate_dataset,
@@ -49,8 +49,8 @@ def test_csv_layout_reads_back_unchanged(short, tmp_path):
     np.testing.assert_allclose(v.vel, short.vel, rtol=1e-9, atol=1e-12)
     r = read_reference_csv(tmp_path / "reference.csv")
     np.testing.assert_allclose(r.euler, short.ref_euler, atol=1e-10)
-    cfg = load_model(tmp_path / "process.yaml", ProcessConfig, "processing config")
-    assert cfg.gnss_lever_m == (0.3, -1.0, 1.2)
+    cfg = load_system(tmp_path / "process.yaml")
+    assert cfg.sensors.gnss.lever_m == (0.3, -1.0, 1.2)
     np.testing.assert_allclose(cfg.imu.gyro_arw_rad_sqrt_s, units.deg_per_sqrt_h(2.0))
 
 
@@ -83,9 +83,9 @@ def drive(tmp_path_factory):
     d = tmp_path_factory.mktemp("drive")
     r = CliRunner().invoke(app, ["simulate", str(EXAMPLE), "--out", str(d)])
     assert r.exit_code == 0, r.output
-    cfg = load_model(d / "process.yaml", ProcessConfig, "processing config")
-    g = read_gnss_csv(d / "gnss.csv", cfg.gnss_sigma_pos_m, cfg.gnss_sigma_vel_mps,
-                      cfg.gnss_lever_m)
+    cfg = load_system(d / "process.yaml")
+    gc = cfg.sensors.gnss
+    g = read_gnss_csv(d / "gnss.csv", gc.sigma_pos_m, gc.sigma_vel_mps, gc.lever_m)
     imu = read_imu_csv(d / "imu.csv")
     ref = read_reference_csv(d / "reference.csv")
     out = {}

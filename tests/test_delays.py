@@ -8,9 +8,8 @@ from fednav.core import earth, units
 from fednav.core.config import ConfigError
 from fednav.ins.strapdown import Strapdown
 from fednav.scenarios import paper004
-from fednav.sensors import Latency, measurement_times, sequential_times
+from fednav.sensors import Latency, NavSnapshot, measurement_times, sequential_times
 from fednav.sensors.delays import InsIncrements, curve_fit_value
-from fednav.sensors.models import NavSnapshot
 from fednav.sim.runs import make_run_data, run_mode
 from fednav.sim.scenario import load_scenario
 from fednav.sim.trajectory import Segment, generate
@@ -115,17 +114,15 @@ def test_strategies_rank_as_the_paper_says(short):
 
 def test_without_latency_the_compensations_change_nothing(short):
     scn, _ = short
-    sensors = {n: getattr(scn.sensors, n).model_copy(update={"timing": getattr(
-        scn.sensors, n).timing.model_copy(update={"latency_range_s": None, "sequential": False})})
-        for n in ("sar", "sarvel")}
-    scn0 = scn.model_copy(update={"sensors": scn.sensors.model_copy(update=sensors)})
+    sensors = {n: scn.sensors[n].model_copy(update={"timing": scn.sensors[n].timing.model_copy(
+        update={"latency_range_s": None, "sequential": False})}) for n in ("sar", "sarvel")}
+    scn0 = scn.model_copy(update={"sensors": scn.sensors.replace(**sensors)})
     data = make_run_data(scn0, 3, max_time=200.0)
     ref = run_mode(scn0, ["sar", "sarvel", "baro"], data, "", 200.0)
     for how in ("ins_increment", "recompute"):
-        sensors2 = {n: getattr(scn0.sensors, n).model_copy(update={"timing": getattr(
-            scn0.sensors, n).timing.model_copy(update={"delay_compensation": how})})
-            for n in ("sar", "sarvel")}
-        scn2 = scn0.model_copy(update={"sensors": scn0.sensors.model_copy(update=sensors2)})
+        sensors2 = {n: scn0.sensors[n].model_copy(update={"timing": scn0.sensors[
+            n].timing.model_copy(update={"delay_compensation": how})}) for n in ("sar", "sarvel")}
+        scn2 = scn0.model_copy(update={"sensors": scn0.sensors.replace(**sensors2)})
         r = run_mode(scn2, ["sar", "sarvel", "baro"], data, "", 200.0)
         np.testing.assert_allclose(r.pos, ref.pos, atol=1e-9)
 
@@ -150,16 +147,13 @@ def test_measurement_sets_vary_per_epoch(short):
 
 
 def test_gnss_with_latency_gets_the_same_treatment(short):
-    import yaml
-
-    from fednav.sim.scenario import GnssConfig
+    from fednav.sensors import GnssConfig
 
     scn, _ = short
     g = GnssConfig.model_validate({"sigma_pos_m": 5.0, "sigma_vel_mps": 0.1, "period_s": 1.0,
                                    "timing": {"latency_s": 2.0}})
-    scn_g = scn.model_copy(update={"sensors": scn.sensors.model_copy(update={"gnss": g})})
+    scn_g = scn.model_copy(update={"sensors": scn.sensors.replace(gnss=g)})
     data = make_run_data(scn_g, 4, max_time=300.0)
     none = _hstd(run_mode(scn_g, ["gnss", "baro"], data, "", 300.0, delay="none"))
     inc = _hstd(run_mode(scn_g, ["gnss", "baro"], data, "", 300.0, delay="ins_increment"))
     assert inc < 0.2 * none
-    del yaml

@@ -11,7 +11,7 @@ import pytest
 PKG = Path(__file__).resolve().parents[1] / "src" / "fednav"
 #: Subpackages from the bottom up.  A module may import its own subpackage and any
 #: subpackage of a lower layer; packages on one layer do not import each other.
-LAYERS = [{"core"}, {"ins"}, {"filters"}, {"sensors"}, {"io"},
+LAYERS = [{"core"}, {"ins"}, {"filters"}, {"sensors"}, {"io"}, {"navigator"},
           {"sim", "process"}, {"campaign"}, {"launch"}, {"scenarios"}]
 LEVEL = {name: i for i, layer in enumerate(LAYERS) for name in layer}
 TOP = len(LAYERS)  # the package's own top-level modules (cli, __init__, _compat)

@@ -11,7 +11,7 @@ import pytest
 from fednav.core import attitude as att
 from fednav.core import earth, units
 from fednav.ins import error_model as em
-from fednav.sensors.models import BaroHeight, NavSnapshot, SarFix, StarAttitude
+from fednav.sensors import BaroHeight, NavSnapshot, SarFix, StarAttitude
 
 
 def perturbed_nav(euler, dx_si, lla=(0.68, 2.04, 3000.0), vel=(200.0, 150.0, 5.0)):
@@ -80,7 +80,7 @@ def test_heading_residual_wraps_at_north():
 
 
 def test_gnss_model_matches_truth():
-    from fednav.sensors.models import GnssPosVel
+    from fednav.sensors import GnssPosVel
 
     dx = np.zeros(18)
     dx[em.DP] = [4.0, -3.0, 2.0]
@@ -102,7 +102,7 @@ def test_gnss_lever_arm_matches_truth(euler):
     """Antenna at a lever arm: the perfect GNSS sees the true antenna position/velocity;
     the INS-derived antenna (with attitude, velocity, position errors) minus it must equal
     H dx to first order — this pins the sign of the attitude coupling."""
-    from fednav.sensors.models import GnssPosVel
+    from fednav.sensors import GnssPosVel
 
     lever = np.array([0.8, -1.5, 0.6])
     w = np.array([0.05, -0.1, 0.3])  # body rate [rad/s]
@@ -128,7 +128,7 @@ def test_gnss_lever_arm_matches_truth(euler):
 
 
 def test_velocity_sensor_model_matches_truth():
-    from fednav.sensors.models import VelocityENU
+    from fednav.sensors import VelocityENU
 
     lever = np.array([0.0, 2.0, -0.5])
     w = np.array([0.0, 0.0, 0.4])
@@ -149,7 +149,7 @@ def test_velocity_sensor_model_matches_truth():
 def test_wind_constraint_matches_truth(euler):
     """D dx = d for a perturbed truth with perfect air data and wind (paper 000 eq. 49-50
     in fednav's heading convention)."""
-    from fednav.sensors.models import WindConstraint
+    from fednav.sensors import WindConstraint
 
     C = att.euler_to_dcm(euler)
     w = np.array([8.0, -3.0, 0.0])

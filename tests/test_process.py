@@ -7,11 +7,12 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
+from fednav import System, load_system
 from fednav.cli import app
 from fednav.core import earth, units
 from fednav.io.csvdata import IMU_COLUMNS, write_csv
 from fednav.io.data import GnssData, ImuData, ImuErrors, Reference
-from fednav.process.run import ProcessConfig, errors_against, process, rmse
+from fednav.process import errors_against, process, rmse
 from fednav.sensors import ImuErrors as SimImuErrors
 from fednav.sensors import corrupt_imu
 from fednav.sim.trajectory import Segment, generate
@@ -69,7 +70,7 @@ def flight():
 @pytest.fixture(scope="module")
 def result(flight):
     imu, gnss, _ = flight
-    return process(imu, gnss, None, ProcessConfig(), smooth=True)
+    return process(imu, gnss, None, System(), smooth=True)
 
 
 def test_forward_filter_tracks_the_truth(flight, result):
@@ -100,7 +101,7 @@ def test_filter_is_consistent(result):
 def test_ignoring_the_lever_arm_costs_accuracy(flight, result):
     """End-to-end check of the lever-arm sign: zero lever -> clearly worse position."""
     imu, gnss, ref = flight
-    wrong = process(imu, gnss, None, ProcessConfig(gnss_lever_m=(0.0, 0.0, 0.0)))
+    wrong = process(imu, gnss, None, load_system({"sensors": {"gnss": {"lever_m": [0, 0, 0]}}}))
     good = rmse(errors_against(result.forward, ref))
     bad = rmse(errors_against(wrong.forward, ref))
     assert bad["north_m"] + bad["east_m"] > 1.5 * (good["north_m"] + good["east_m"])
@@ -140,8 +141,9 @@ def test_cli_process_csv_end_to_end(tmp_path, flight):
         f"{e.accel_vrw[0]}, gyro_bias_radps: {e.gyro_bias[0]}, accel_bias_mps2: "
         f"{e.accel_bias[0]}, gyro_markov_radps: 1.0e-6, accel_markov_mps2: 1.0e-5, "
         f"gyro_tau_s: 1000, accel_tau_s: 1000}}\n"
-        f"gnss_sigma_pos_m: [1, 1, 1]\ngnss_sigma_vel_mps: [0.05, 0.05, 0.05]\n"
-        f"gnss_lever_m: [{LEVER[0]}, {LEVER[1]}, {LEVER[2]}]\ninitial_attitude: coarse\n")
+        f"sensors: {{gnss: {{sigma_pos_m: [1, 1, 1], sigma_vel_mps: [0.05, 0.05, 0.05], "
+        f"lever_m: [{LEVER[0]}, {LEVER[1]}, {LEVER[2]}]}}}}\n"
+        f"alignment: {{initial_attitude: coarse}}\n")
     out = tmp_path / "out"
     res = CliRunner().invoke(app, ["process", "csv", "--imu", str(tmp_path / "imu.csv"),
                                    "--gnss", str(tmp_path / "gnss.csv"), "--ref",
@@ -209,7 +211,7 @@ def test_accelerometer_bias_keeps_its_constant_part():
     errs = ImuErrors(*[np.full(3, v) for v in (1e-4, 1e-3, 1e-4, 0.02, 1e-5, 2e-3, 1e5,
                                                100.0)])
     imu = ImuData("x", np.arange(10) * 0.01, np.zeros((10, 3)), np.zeros((10, 3)), errs)
-    n, gb, ab = _noise(imu, ProcessConfig())
+    n, gb, ab = _noise(imu, System(), 0.01)
     assert ab == pytest.approx(np.hypot(0.02, 2e-3))
     assert np.isinf(n.accel_markov_tau) and n.accel_bias_rw == pytest.approx(2e-3 * np.sqrt(0.02))
 
@@ -223,18 +225,19 @@ def test_velocity_sensor_axes_and_clock_corrections():
                      np.tile(np.diag([1.0, 4.0, 9.0]), (5, 1, 1)), np.zeros(3))
     g = GnssData("g", t, np.tile([0.7, 0.1, 5.0], (5, 1)), np.zeros((5, 3)), np.ones(3),
                  np.ones(3), np.zeros(3))
-    cfg = ProcessConfig(velocity_axes=("N", "-E", "U"), velocity_time_offset_s=7.5,
-                        gnss_time_offset_s=-1.0)
+    cfg = load_system({"sensors": {"velocity": {"axes": ["N", "-E", "U"], "time_offset_s": 7.5},
+                                   "gnss": {"time_offset_s": -1.0}}})
     g2, v2 = adjust_sensors(g, v, cfg)
     np.testing.assert_allclose(v2.vel[0], [-2.0, 1.0, 3.0])  # E = -col 2, N = col 1
     np.testing.assert_allclose(np.diag(v2.cov[0]), [4.0, 1.0, 9.0])
     np.testing.assert_allclose(v2.t, t + 7.5)
     np.testing.assert_allclose(g2.t, t - 1.0)
     np.testing.assert_allclose(v.vel[0], [1.0, 2.0, 3.0])  # the input is left alone
-    _, v3 = adjust_sensors(g, v, ProcessConfig(velocity_sigma_mps=(0.1, 0.1, 0.2)))
+    _, v3 = adjust_sensors(g, v, load_system({"sensors": {"velocity": {
+        "sigma_mps": [0.1, 0.1, 0.2]}}}))
     np.testing.assert_allclose(np.diag(v3.cov[3]), [0.01, 0.01, 0.04])
     with pytest.raises(ValueError, match="must name E, N and U once each"):
-        ProcessConfig(velocity_axes=("N", "N", "U"))
+        load_system({"sensors": {"velocity": {"axes": ["N", "N", "U"]}}})
 
 
 def test_cli_output_rate_decimates_and_refuses_a_rate_above_the_imu(tmp_path, flight):

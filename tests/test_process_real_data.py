@@ -5,14 +5,14 @@ from pathlib import Path
 
 import pytest
 
-from fednav.core.config import load_model
+from fednav import System, load_system
 from fednav.io import (
     read_navego_gnss,
     read_navego_imu,
     read_navego_reference,
     read_navego_visual,
 )
-from fednav.process.run import ProcessConfig, errors_against, process, rmse
+from fednav.process import errors_against, process, rmse
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT.parent / "shared" / "data" / "canada-planetary"
@@ -39,14 +39,14 @@ def _rmse(res, ref):
 
 
 def test_imu_gnss_with_the_files_noise_figures_beats_navego(data):
-    res = process(data["imu"], data["gnss"], None, ProcessConfig())
+    res = process(data["imu"], data["gnss"], None, System())
     r = _rmse(res.forward, data["ref"])
     for k in KEYS:
         assert r[k] < MARGIN * NAVEGO_GNSS[k], (k, r[k])
 
 
 def test_imu_gnss_visual_reaches_the_target_with_the_example_config(data):
-    cfg = load_model(ROOT / "examples" / "canada-planetary.yaml", ProcessConfig, "config")
+    cfg = load_system(ROOT / "examples" / "canada-planetary.yaml")
     res = process(data["imu"], data["gnss"], data["visual"], cfg, smooth=True)
     r = _rmse(res.forward, data["ref"])
     for k in KEYS:
@@ -60,7 +60,7 @@ def test_visual_aiding_bounds_the_drift_through_the_gnss_outage(data):
     """The sparse GNSS file has no fixes between 100 s and 200 s."""
     import numpy as np
 
-    cfg = load_model(ROOT / "examples" / "canada-planetary.yaml", ProcessConfig, "config")
+    cfg = load_system(ROOT / "examples" / "canada-planetary.yaml")
     g = read_navego_gnss(DATA / "gnss_sparse_planetary.mat")
     drift = {}
     for name, vis in (("gnss", None), ("visual", data["visual"])):
@@ -78,10 +78,8 @@ def test_corrected_visual_data_is_consistent_and_bounds_the_outage(data):
 
     from fednav.process.output import consistency
 
-    cfg = load_model(ROOT / "examples" / "canada-planetary.yaml", ProcessConfig, "config")
-    as_filed = cfg.model_copy(update={"velocity_time_offset_s": 0.0,
-                                      "velocity_axes": ("E", "N", "U"),
-                                      "velocity_sigma_mps": None})
+    cfg = load_system(ROOT / "examples" / "canada-planetary.yaml")
+    as_filed = cfg.model_copy(update={"sensors": cfg.sensors.replace(velocity=None)})
     res = process(data["imu"], data["gnss"], data["visual"], cfg)
     c = consistency(res.forward)["velocity"]
     assert 0.7 < c["nis_per_dof"] < 1.5 and c["isolated_fraction"] < 0.15

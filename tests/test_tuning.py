@@ -6,10 +6,9 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
+from fednav import load_system
 from fednav.cli import app
-from fednav.core.config import load_model
 from fednav.io import read_gnss_csv, read_imu_csv
-from fednav.process.run import ProcessConfig
 from fednav.process.tuning import LR_95, evaluate, tune, white_noise
 from fednav.sim.dataset import (
     load_dataset_config,
@@ -39,7 +38,8 @@ def drive(tmp_path_factory):
     write_csv_dataset(ds, d)
     truth = process_config(ds)
     # what a user has before tuning: the CSV reader's default GNSS sigmas, no IMU figures
-    g = read_gnss_csv(d / "gnss.csv", (5.0, 5.0, 5.0), (0.1, 0.1, 0.1), truth["gnss_lever_m"])
+    g = read_gnss_csv(d / "gnss.csv", (5.0, 5.0, 5.0), (0.1, 0.1, 0.1),
+                      truth["sensors"]["gnss"]["lever_m"])
     return read_imu_csv(d / "imu.csv"), g, truth
 
 
@@ -50,11 +50,12 @@ def within(value, true, factor=1.5):
 
 def test_tune_recovers_the_figures_of_a_simulated_drive(drive):
     imu, g, truth = drive
-    base = ProcessConfig(gnss_lever_m=truth["gnss_lever_m"])
+    base = load_system({"sensors": {"gnss": {"lever_m": truth["sensors"]["gnss"]["lever_m"]}}})
     res = tune(imu, g, None, base)
     fig = {f.key: f for f in res.figures}
-    for key in ("gnss_sigma_pos_m", "gnss_sigma_vel_mps"):
-        assert within(fig[key].value, truth[key], 1.1), (key, fig[key].value, truth[key])
+    for key in ("sigma_pos_m", "sigma_vel_mps"):
+        f, true = fig[f"sensors.gnss.{key}"], truth["sensors"]["gnss"][key]
+        assert within(f.value, true, 1.1), (key, f.value, true)
     for key in ("gyro_arw_rad_sqrt_s", "accel_vrw_mps_sqrt_s"):
         assert within(fig[f"imu.{key}"].value, truth["imu"][key]), key
     # The bias instabilities: recovered, or kept because the likelihood cannot tell, and
@@ -63,7 +64,7 @@ def test_tune_recovers_the_figures_of_a_simulated_drive(drive):
         f = fig[f"imu.{key}"]
         if not within(f.value, truth["imu"][key]):
             assert f.how.startswith("kept"), (key, f)
-            imu_true = {**res.config.imu.model_dump(), key: truth["imu"][key]}
+            imu_true = {**res.config.imu.model_dump(exclude_none=True), key: truth["imu"][key]}
             at_truth = evaluate(imu, g, None, res.config.model_copy(
                 update={"imu": res.config.imu.model_copy(update=imu_true)}))
             assert at_truth.loglik - res.after.loglik < LR_95, key
@@ -91,11 +92,14 @@ def test_cli_tune_writes_a_config_that_process_accepts(short, tmp_path):
                                  str(short / "velocity.csv"), "--config", str(base),
                                  "--out", str(out)])
     assert r.exit_code == 0, r.output
-    assert "NIS/dof before -> after" in r.output and "velocity_sigma_mps" in r.output
-    cfg = load_model(out, ProcessConfig, "tuned config")
-    assert cfg.gnss_lever_m == (0.3, -1.0, 1.2) and cfg.fdi_alpha == {"velocity": 0.01}
+    assert "NIS/dof before -> after" in r.output and "velocity.sigma_mps" in r.output
+    cfg = load_system(out)  # the base config's 0.1 keys are written in today's places
+    assert "gnss_lever_m" not in out.read_text()
+    assert cfg.sensors.gnss.lever_m == (0.3, -1.0, 1.2)
+    assert cfg.filter.fdi_alpha == {"velocity": 0.01}
     assert cfg.imu.gyro_arw_rad_sqrt_s == 1.0e-3  # set in the base config: kept
-    assert cfg.velocity_sigma_mps is not None and cfg.imu.accel_vrw_mps_sqrt_s is not None
+    assert cfg.sensors.velocity.sigma_mps is not None
+    assert cfg.imu.accel_vrw_mps_sqrt_s is not None
     assert "# imu.gyro_arw_rad_sqrt_s: 0.001 -> 0.001 (kept: set in the config)" in \
         out.read_text()
     r = CliRunner().invoke(app, ["process", "csv", "--imu", str(short / "imu.csv"), "--gnss",

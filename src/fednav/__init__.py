@@ -10,3 +10,7 @@ __version__ = "0.1.0"
 from . import _compat
 
 _compat.install()
+
+from .navigator.system import System, load_system  # noqa: E402
+
+__all__ = ["System", "load_system"]

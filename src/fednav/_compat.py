@@ -24,7 +24,7 @@ MOVED = {
     "fednav.observability": "fednav.ins.observability",
     "fednav.total_state": "fednav.ins.total_state",
     "fednav.smoother": "fednav.filters.smoother",
-    "fednav.measurements": "fednav.sensors.models", "fednav.delays": "fednav.sensors.delays",
+    "fednav.measurements": "fednav.sensors", "fednav.delays": "fednav.sensors.delays",
     "fednav.trajectory": "fednav.sim.trajectory", "fednav.wind": "fednav.sim.wind",
     "fednav.simulate": "fednav.sim.runs", "fednav.dataset": "fednav.sim.dataset",
     "fednav.config": "fednav.sim.scenario",

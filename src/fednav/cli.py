@@ -26,13 +26,24 @@ def _options(debug: bool = typer.Option(False, "--debug",
     _state["debug"] = debug
 
 
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """A warning as one line on stderr (not Python's file:line form)."""
+    typer.echo(f"warning: {message}", err=True)
+
+
 def _one_line_errors(command):
     """fednav's own errors end a command with their one-line message and exit status 2
-    (the traceback only with ``--debug``)."""
+    (the traceback only with ``--debug``); warnings are one line each."""
     @functools.wraps(command)
     def run(*args, **kwargs):
+        import warnings
+
         try:
-            return command(*args, **kwargs)
+            with warnings.catch_warnings():
+                warnings.simplefilter("default", FutureWarning)
+                if not _state["debug"]:
+                    warnings.showwarning = _show_warning
+                return command(*args, **kwargs)
         except FednavError as e:
             if _state["debug"]:
                 raise
@@ -169,13 +180,13 @@ def _output_folder(out: Path) -> Path:
 def _run_process(read, imu, gnss, velocity, ref, smooth, out, config, output_rate) -> None:
     from .core.atomic import clear_results
     from .core.config import load_model
+    from .navigator.system import System
     from .process import output as process_output
-    from .process.run import ProcessConfig, process
+    from .process.run import process
 
     out = _output_folder(out)
     try:
-        cfg = ProcessConfig() if config is None else load_model(config, ProcessConfig,
-                                                                "processing config")
+        cfg = System() if config is None else load_model(config, System, "processing config")
         data = read(cfg)
         clear_results(out)
         res = process(data["imu"], data["gnss"], data["velocity"], cfg, smooth)
@@ -232,7 +243,7 @@ def _navego_reader(imu: Path, gnss: Path, visual: Path | None, ref: Path | None 
             read_navego_visual,
         )
 
-        return {"imu": read_navego_imu(imu, cfg.imu_max_bridge_s),
+        return {"imu": read_navego_imu(imu, cfg.imu.max_bridge_s),
                 "gnss": read_navego_gnss(gnss),
                 "velocity": None if visual is None else read_navego_visual(visual),
                 "ref": None if ref is None else read_navego_reference(ref)}
@@ -243,12 +254,19 @@ def _csv_reader(imu: Path, gnss: Path, velocity: Path | None, ref: Path | None =
     """``read(cfg)`` of fednav CSV files (GNSS sigmas and lever arm from the config, else
     5 m, 0.1 m/s and none)."""
     def read(cfg):
+        import numpy as np
+
         from .io import read_gnss_csv, read_imu_csv, read_reference_csv, read_velocity_csv
 
-        g = read_gnss_csv(gnss, cfg.gnss_sigma_pos_m or (5.0, 5.0, 5.0),
-                          cfg.gnss_sigma_vel_mps or (0.1, 0.1, 0.1),
-                          cfg.gnss_lever_m or (0.0, 0.0, 0.0))
-        return {"imu": read_imu_csv(imu, cfg.imu_max_bridge_s), "gnss": g,
+        gc = cfg.sensors.gnss
+
+        def given(v, default):
+            return default if v is None else np.broadcast_to(np.asarray(v, float), (3,))
+
+        g = read_gnss_csv(gnss, given(gc and gc.sigma_pos_m, (5.0, 5.0, 5.0)),
+                          given(gc and gc.sigma_vel_mps, (0.1, 0.1, 0.1)),
+                          given(gc and gc.lever_m, (0.0, 0.0, 0.0)))
+        return {"imu": read_imu_csv(imu, cfg.imu.max_bridge_s), "gnss": g,
                 "velocity": None if velocity is None else read_velocity_csv(velocity),
                 "ref": None if ref is None else read_reference_csv(ref)}
     return read
@@ -306,15 +324,15 @@ def _run_tune(read, inputs: list, config, out: Path) -> None:
 
     from .core.atomic import write_text
     from .core.config import load_model
-    from .process.run import ProcessConfig
+    from .navigator.system import System
     from .process.tuning import config_yaml, format_value, tune
 
     base = {}
-    cfg = ProcessConfig()
+    cfg = System()
     if config is not None:
         import yaml
 
-        cfg = load_model(config, ProcessConfig, "processing config")
+        cfg = load_model(config, System, "processing config")
         base = yaml.safe_load(config.read_text()) or {}
     data = read(cfg)
     with console.status("tuning") as status:

@@ -222,10 +222,12 @@ def car_drive(tmp: Path):
 def _read_csv(folder: Path, cfg, velocity: bool = True):
     from fednav.io import read_gnss_csv, read_imu_csv, read_reference_csv, read_velocity_csv
 
-    g = read_gnss_csv(folder / "gnss.csv", cfg.gnss_sigma_pos_m or (5.0, 5.0, 5.0),
-                      cfg.gnss_sigma_vel_mps or (0.1, 0.1, 0.1),
-                      cfg.gnss_lever_m or (0.0, 0.0, 0.0))
-    return (read_imu_csv(folder / "imu.csv", cfg.imu_max_bridge_s), g,
+    gc = cfg.sensors.gnss
+    g = read_gnss_csv(folder / "gnss.csv",
+                      gc.sigma_pos_m if gc and gc.sigma_pos_m else (5.0, 5.0, 5.0),
+                      gc.sigma_vel_mps if gc and gc.sigma_vel_mps else (0.1, 0.1, 0.1),
+                      gc.lever_m if gc and gc.lever_m else (0.0, 0.0, 0.0))
+    return (read_imu_csv(folder / "imu.csv", cfg.imu.max_bridge_s), g,
             read_velocity_csv(folder / "velocity.csv") if velocity else None,
             read_reference_csv(folder / "reference.csv"))
 
@@ -256,34 +258,32 @@ def _process_case(out: dict, prefix: str, imu, gnss, vel, ref, cfg, smooth: bool
 def process_cases(tmp: Path) -> dict:
     import yaml
 
-    from fednav.process.run import ProcessConfig
+    from fednav import load_system
 
     folder = car_drive(tmp)
     base = yaml.safe_load((folder / "process.yaml").read_text())
     out: dict = {}
-    cfg = ProcessConfig.model_validate(base)
+    cfg = load_system(base)
     imu, gnss, vel, ref = _read_csv(folder, cfg)
     _process_case(out, "gnss", imu, gnss, None, ref, cfg, smooth=True)
-    cfg2 = ProcessConfig.model_validate({**base, "fdi_alpha": {"velocity": 0.01},
-                                         "fdi_recovery": 2, "substeps": 2})
+    cfg2 = load_system({**base, "filter": {"fdi_alpha": {"velocity": 0.01},
+                                           "fdi_recovery": 2, "substeps": 2}})
     _process_case(out, "gnss+velocity", imu, gnss, vel, ref, cfg2, smooth=True)
-    cfg3 = ProcessConfig.model_validate({**base, "initial_attitude": "coarse",
-                                         "fdi_alpha": 0.001, "period_s": 0.4})
+    cfg3 = load_system({**base, "alignment": {"initial_attitude": "coarse"},
+                        "filter": {"fdi_alpha": 0.001, "period_s": 0.4}})
     _process_case(out, "coarse", imu, gnss, vel, ref, cfg3, smooth=False)
     return out
 
 
 def planetary() -> dict:
-    from fednav.core.config import load_model
+    from fednav import load_system
     from fednav.io import (
         read_navego_gnss,
         read_navego_imu,
         read_navego_reference,
         read_navego_visual,
     )
-    from fednav.process.run import ProcessConfig
-
-    cfg = load_model(ROOT / "examples" / "canada-planetary.yaml", ProcessConfig, "config")
+    cfg = load_system(ROOT / "examples" / "canada-planetary.yaml")
     out: dict = {}
     _process_case(out, "planetary", read_navego_imu(PLANETARY / "imu_planetary.mat"),
                   read_navego_gnss(PLANETARY / "gnss_planetary.mat"),
@@ -293,20 +293,23 @@ def planetary() -> dict:
 
 
 def tune_case(tmp: Path) -> dict:
-    from fednav.process.run import ProcessConfig
+    from fednav import load_system
     from fednav.process.tuning import tune
     from fednav.sim.dataset import load_dataset_config, simulate_dataset, write_csv_dataset
 
     cfg = load_dataset_config(ROOT / "examples" / "car-drive.yaml")
     cfg = cfg.model_copy(update={"segments": cfg.segments[:6], "seed": 4})
     write_csv_dataset(simulate_dataset(cfg), tmp)
-    pcfg = ProcessConfig(gnss_lever_m=tuple(cfg.gnss.lever_m))
+    pcfg = load_system({"sensors": {"gnss": {"lever_m": list(cfg.gnss.lever_m)}}})
     imu, gnss, vel, _ = _read_csv(tmp, pcfg)
     imu.gyro = _ulp(imu.gyro)
     res = tune(imu, gnss, vel, pcfg)
     out: dict = {}
+    legacy = {"sensors.gnss.sigma_pos_m": "gnss_sigma_pos_m",
+              "sensors.gnss.sigma_vel_mps": "gnss_sigma_vel_mps",
+              "sensors.velocity.sigma_mps": "velocity_sigma_mps"}  # their 0.1 names
     for f in res.figures:
-        _put(out, f"figure/{f.key}", f.value)
+        _put(out, f"figure/{legacy.get(f.key, f.key)}", f.value)
     _put(out, "before/loglik", res.before.loglik)
     _put(out, "after/loglik", res.after.loglik)
     for k, v in res.after.nis_per_dof.items():

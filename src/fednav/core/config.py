@@ -11,6 +11,7 @@ from pathlib import Path
 
 import yaml
 from pydantic import BaseModel, ConfigDict, ValidationError
+from pydantic_core import PydanticCustomError
 
 from .errors import FednavError
 
@@ -23,9 +24,30 @@ class _Model(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
 
+def nested_error(path: list, message: str) -> PydanticCustomError:
+    """An error found inside a value that a validator checks by hand (a section whose
+    keys depend on a registry): reported as ``key 'outer.path': message``."""
+    return PydanticCustomError("nested", "{message}",
+                               {"path": ".".join(str(p) for p in path), "message": message})
+
+
+def nested_validation_error(path: list, e: ValidationError) -> PydanticCustomError:
+    """:func:`nested_error` for the first error of ``e`` (a section validated by hand)."""
+    errs = sorted(e.errors(), key=lambda x: x["type"] != "extra_forbidden")
+    inner = _format_error(errs[0])
+    key, _, msg = inner.partition("': ")
+    key = key.removeprefix("key '")
+    return nested_error([*path, key] if key != "(top level)" else path, msg)
+
+
 def _format_error(e: dict) -> str:
     loc = ".".join(str(p) for p in e["loc"]) or "(top level)"
     msg = e["msg"]
+    if e["type"] == "nested":
+        ctx = e["ctx"]
+        loc = ".".join(p for p in (loc if e["loc"] else "", ctx["path"]) if p)
+        return f"key '{loc}': {ctx['message']}"
+    msg = msg.removeprefix("Value error, ")
     if e["type"] == "extra_forbidden":
         msg = "unknown key"
     elif e["type"] == "missing":
@@ -52,9 +74,8 @@ def read_text_file(path: Path, what: str) -> str:
     raise ConfigError(f"{what} file {path}: {why}")
 
 
-def load_model(path: str | Path, model: type[BaseModel], what: str = "scenario"):
-    """Read a YAML file into the pydantic ``model`` (errors: :class:`ConfigError`, one line
-    naming the file and the key)."""
+def read_mapping(path: str | Path, what: str = "scenario") -> dict:
+    """The top-level mapping of a YAML file (errors: :class:`ConfigError`, one line)."""
     path = Path(path)
     text = read_text_file(path, what)
     try:
@@ -66,10 +87,22 @@ def load_model(path: str | Path, model: type[BaseModel], what: str = "scenario")
         data = {}
     if not isinstance(data, dict):
         raise ConfigError(f"{what} file {path}: expected a mapping at the top level")
+    return data
+
+
+def validate(data: dict, model: type[BaseModel], where: str):
+    """``data`` validated as ``model``; a :class:`ConfigError` of one line, ``where``
+    (the file, or what the mapping is) first, naming the key."""
     try:
         return model.model_validate(data)
     except ValidationError as e:
         # An unknown key is usually a misspelt one: report it before the "missing" it causes.
         errs = sorted(e.errors(), key=lambda x: x["type"] != "extra_forbidden")
         more = f" (and {len(errs) - 1} more)" if len(errs) > 1 else ""
-        raise ConfigError(f"{what} file {path}: {_format_error(errs[0])}{more}") from None
+        raise ConfigError(f"{where}: {_format_error(errs[0])}{more}") from None
+
+
+def load_model(path: str | Path, model: type[BaseModel], what: str = "scenario"):
+    """Read a YAML file into the pydantic ``model`` (errors: :class:`ConfigError`, one line
+    naming the file and the key)."""
+    return validate(read_mapping(path, what), model, f"{what} file {path}")

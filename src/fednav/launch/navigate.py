@@ -94,8 +94,9 @@ def initial_covariance(scn: LaunchScenario) -> np.ndarray:
     ie = scn.initial_error
     sig = np.concatenate([ie.attitude_arcsec, np.full(3, ie.position_m),
                           np.full(3, ie.velocity_mps),
-                          np.full(3, scn.imu.gyro_bias_deg_h if scn.imu.random_bias else 0.0),
-                          np.full(3, scn.imu.accel_bias_ug * 1e-3 if scn.imu.random_bias
+                          np.full(3, (scn.imu.gyro_bias_deg_h or 0.0) if scn.imu.random_bias
+                                  else 0.0),
+                          np.full(3, (scn.imu.accel_bias_ug or 0.0) * 1e-3 if scn.imu.random_bias
                                   else 0.0)])
     floor = np.concatenate([np.zeros(9), np.full(6, 1e-3)])  # bias sigma floor (filter units)
     return np.diag(np.maximum(sig, floor) ** 2)

@@ -14,7 +14,8 @@ from pydantic import Field, field_validator, model_validator
 
 from ..core import units
 from ..core.config import _Model, load_model
-from ..sim.scenario import ImuConfig, cached_flight
+from ..sensors.imu import ImuConfig
+from ..sim.scenario import cached_flight
 from .frame import LaunchFrame
 from .trajectory import AscentProfile, Burn, LaunchTrajectory, Manoeuvre, generate
 

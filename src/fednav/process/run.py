@@ -19,7 +19,6 @@ from dataclasses import dataclass, field, replace
 from typing import NamedTuple
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from ..core import attitude as att
 from ..core import earth, units
@@ -36,87 +35,22 @@ from ..ins.strapdown import (
     quat_to_dcm_nb,
 )
 from ..io.data import DataError, GnssData, ImuData, Reference, VelocityData
-from ..sensors.models import GnssPosVel, NavSnapshot, VelocityENU
+from ..navigator.system import System, imu_noise_model
+from ..navigator.system import imu_figures as _imu_figures
+from ..sensors import GnssConfig, GnssPosVel, NavSnapshot, VelocityConfig, VelocityENU
+from ..sensors.imu import FIGURES
 
-_V3 = tuple[float, float, float]
-#: Names of the local filters of the processing federated filter.
-LOCAL_FILTERS = {"gnss", "velocity"}
-
-
-class ImuNoiseConfig(BaseModel):
-    """Overrides of the IMU error figures (SI, isotropic); unset keys keep the file's."""
-
-    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
-    gyro_arw_rad_sqrt_s: float | None = Field(None, ge=0)
-    accel_vrw_mps_sqrt_s: float | None = Field(None, ge=0)
-    gyro_bias_radps: float | None = Field(None, ge=0)
-    accel_bias_mps2: float | None = Field(None, ge=0)
-    gyro_markov_radps: float | None = Field(None, ge=0)
-    accel_markov_mps2: float | None = Field(None, ge=0)
-    gyro_tau_s: float | None = Field(None, gt=0)
-    accel_tau_s: float | None = Field(None, gt=0)
+#: The processing config of fednav 0.1 is a system description now (one schema); the
+#: old name is kept for one release.
+ProcessConfig = System
 
 
-class ProcessConfig(BaseModel):
-    """Options of :func:`process` (the YAML file of ``fednav process --config``)."""
+def _gnss_cfg(cfg: System) -> GnssConfig:
+    return cfg.sensors.gnss or GnssConfig()
 
-    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
-    period_s: float | None = Field(None, gt=0, description="filter cycle; default: GNSS "
-                                                             "period")
-    imu: ImuNoiseConfig = ImuNoiseConfig()
-    gnss_sigma_pos_m: _V3 | None = None  # [north, east, up]; default: the file's
-    gnss_sigma_vel_mps: _V3 | None = None  # [east, north, up]; default: the file's
-    gnss_lever_m: _V3 | None = None  # body right-forward-up; default: the file's
-    # align: levelling while static + heading from the GNSS course (fednav.ins.alignment);
-    # file: the data file's attitude; coarse: level over coarse_seconds at the start
-    initial_attitude: str = Field("align", pattern="^(align|file|coarse)$")
-    initial_attitude_sigma_deg: _V3 | None = None  # [pitch, roll, heading]
-    # coarse alignment heading; None: the GNSS course over coarse_seconds when the vehicle
-    # moves faster than 0.5 m/s then (forward motion assumed), else 0
-    coarse_heading_deg: float | None = None
-    coarse_seconds: float = Field(1.0, gt=0)
-    # chi-square test level: one for every local filter, or by name {gnss: .., velocity: ..}
-    fdi_alpha: float | dict[str, float] | None = None
-    fdi_recovery: int = Field(1, ge=1)
-    substeps: int = Field(1, ge=1)
-    # sensor corrections (docs/real-data.md): time offset added to a sensor's time
-    # stamps [s]; what the velocity file's three columns hold, e.g. [N, E, U] for east and
-    # north exchanged ('-' flips a sign); the velocity sensor's 1-sigma [E, N, U] m/s
-    # instead of the file's covariance
-    gnss_time_offset_s: float = 0.0
-    velocity_time_offset_s: float = 0.0
-    velocity_axes: tuple[str, str, str] = ("E", "N", "U")
-    velocity_sigma_mps: _V3 | None = None
-    # longest run of faulty IMU samples (NaN/inf/absurd) bridged by holding the last
-    # good sample [s]; a longer run stops the processing with its time (docs/reliability)
-    imu_max_bridge_s: float = Field(0.1, gt=0)
 
-    @field_validator("velocity_axes")
-    @classmethod
-    def _axes(cls, v):
-        names = [a.lstrip("+-").upper() for a in v]
-        if sorted(names) != ["E", "N", "U"]:
-            raise ValueError(f"must name E, N and U once each (a leading '-' flips a sign), "
-                             f"got {list(v)}")
-        return v
-
-    @field_validator("velocity_sigma_mps")
-    @classmethod
-    def _sigma(cls, v):
-        if v is not None and min(v) <= 0:
-            raise ValueError("sigmas must be positive")
-        return v
-
-    @field_validator("fdi_alpha")
-    @classmethod
-    def _alpha(cls, v):
-        values = v.values() if isinstance(v, dict) else [] if v is None else [v]
-        if isinstance(v, dict) and set(v) - LOCAL_FILTERS:
-            raise ValueError(f"unknown local filter(s) {sorted(set(v) - LOCAL_FILTERS)}; "
-                             f"use {', '.join(sorted(LOCAL_FILTERS))}")
-        if any(not 0.0 < a < 1.0 for a in values):
-            raise ValueError("test level must be in (0, 1)")
-        return v
+def _velocity_cfg(cfg: System) -> VelocityConfig:
+    return cfg.sensors.velocity or VelocityConfig()
 
 
 @dataclass
@@ -179,79 +113,61 @@ class ProcessResult:
     alignment: dict = field(default_factory=dict)
 
 
-def adjust_sensors(gnss: GnssData, velocity: VelocityData | None, cfg: ProcessConfig):
-    """The config's sensor corrections applied: time offsets, the velocity sensor's axis
-    order and its 1-sigma (see :class:`ProcessConfig`).  Returns new data objects."""
+def adjust_sensors(gnss: GnssData, velocity: VelocityData | None, cfg: System):
+    """The system description's sensor corrections applied: time offsets, the velocity
+    sensor's axis order and its 1-sigma (``sensors.gnss``, ``sensors.velocity``).
+    Returns new data objects."""
     def again(data, **changes):  # re-checked by the constructor; keep the first counts
         quality = dict(data.quality)
         out = replace(data, quality={}, **changes)
         out.quality = quality
         return out
 
-    if cfg.gnss_time_offset_s:
-        gnss = again(gnss, t=gnss.t + cfg.gnss_time_offset_s)
+    gc, vc = _gnss_cfg(cfg), _velocity_cfg(cfg)
+    if gc.time_offset_s:
+        gnss = again(gnss, t=gnss.t + gc.time_offset_s)
     if velocity is None:
         return gnss, None
     vel, cov = velocity.vel, velocity.cov
-    if tuple(cfg.velocity_axes) != ("E", "N", "U"):
+    if tuple(vc.axes) != ("E", "N", "U"):
         # file column i holds the ENU component axes[i] (sign s_i): v_enu = M v_file
         M = np.zeros((3, 3))
-        for i, a in enumerate(cfg.velocity_axes):
+        for i, a in enumerate(vc.axes):
             M["ENU".index(a.lstrip("+-").upper()), i] = -1.0 if a.startswith("-") else 1.0
         vel = vel @ M.T
         cov = M @ cov @ M.T
-    if cfg.velocity_sigma_mps is not None:
-        cov = np.broadcast_to(np.diag(np.square(cfg.velocity_sigma_mps)), cov.shape).copy()
-    if cfg.velocity_time_offset_s or vel is not velocity.vel or cov is not velocity.cov:
-        velocity = again(velocity, t=velocity.t + cfg.velocity_time_offset_s, vel=vel, cov=cov)
+    if vc.sigma_mps is not None:
+        cov = np.broadcast_to(np.diag(np.square(vc.sigma_mps)), cov.shape).copy()
+    if vc.time_offset_s or vel is not velocity.vel or cov is not velocity.cov:
+        velocity = again(velocity, t=velocity.t + vc.time_offset_s, vel=vel, cov=cov)
     return gnss, velocity
 
 
-#: Each :class:`ImuNoiseConfig` key and the :class:`~fednav.io.data.ImuErrors` field of
-#: the data file it overrides.
-IMU_FILE_FIELDS = {"gyro_arw_rad_sqrt_s": "gyro_arw", "accel_vrw_mps_sqrt_s": "accel_vrw",
-                   "gyro_bias_radps": "gyro_bias", "accel_bias_mps2": "accel_bias",
-                   "gyro_markov_radps": "gyro_markov", "accel_markov_mps2": "accel_markov",
-                   "gyro_tau_s": "gyro_tau", "accel_tau_s": "accel_tau"}
+def imu_figures(imu: ImuData, cfg: System) -> dict[str, float | None]:
+    """Every IMU figure (SI, by its SI key of the ``imu:`` section): the system
+    description's, else the data file's (its largest axis), else None."""
+    f = _imu_figures(cfg.imu, imu.errors)
+    return {FIGURES[k][2]: v for k, v in f.items()}
 
 
-def imu_figures(imu: ImuData, overrides: ImuNoiseConfig) -> dict[str, float | None]:
-    """Every IMU figure (SI, by :class:`ImuNoiseConfig` key): the config's override, else
-    the file's (its largest axis), else None."""
-    out = {}
-    for key, name in IMU_FILE_FIELDS.items():
-        v = getattr(overrides, key)
-        if v is None and imu.errors is not None:
-            v = getattr(imu.errors, name)
-        out[key] = None if v is None else float(np.max(v))
-    return out
+def _noise(imu: ImuData, cfg: System, dt: float):
+    """Filter IMU model and initial bias sigmas from the file's figures and the system
+    description's (:func:`fednav.navigator.system.imu_noise_model`).
 
-
-def _noise(imu: ImuData, cfg: ProcessConfig):
-    """Filter IMU model and initial bias sigmas from the file's figures and overrides.
-
-    The gyro has a constant-bias state and a Gauss–Markov one.  The accelerometer has one
-    bias state, which must carry both the turn-on (constant) bias and the Gauss–Markov
-    part: a Markov state alone would let the estimate of the constant bias decay with the
-    correlation time (the tilt it is coupled to would then absorb it).  It is therefore a
-    random constant (1-sigma ``sqrt(bias^2 + markov^2)``) driven by the random walk whose
-    short-term growth equals the Markov process's, ``q = 2 sigma_m^2 / tau``.
+    The gyro has a constant-bias state and a Gauss–Markov one.  With the default
+    ``filter.accel_bias: random_walk`` the accelerometer has one bias state, which must
+    carry both the turn-on (constant) bias and the Gauss–Markov part: a Markov state
+    alone would let the estimate of the constant bias decay with the correlation time
+    (the tilt it is coupled to would then absorb it).  It is therefore a random constant
+    (1-sigma ``sqrt(bias^2 + markov^2)``) driven by the random walk whose short-term
+    growth equals the Markov process's, ``q = 2 sigma_m^2 / tau``.
     Returns (noise model, gyro constant-bias sigma, accelerometer bias sigma).
     """
-    f = imu_figures(imu, cfg.imu)
-    missing = [k for k, v in f.items() if v is None]
+    missing = [k for k, v in imu_figures(imu, cfg).items() if v is None]
     if missing:
         raise DataError(f"{imu.source}: no IMU error figures in the file; give "
                         f"imu.{missing[0]} in the processing config")
-    arw, vrw = f["gyro_arw_rad_sqrt_s"], f["accel_vrw_mps_sqrt_s"]
-    g_markov, g_tau = f["gyro_markov_radps"], f["gyro_tau_s"]
-    a_markov, a_tau = f["accel_markov_mps2"], f["accel_tau_s"]
-    n = em.ImuNoiseModel(gyro_arw=arw, accel_vrw=vrw, gyro_markov_sigma=g_markov,
-                         gyro_markov_tau=g_tau,
-                         accel_bias_rw=a_markov * np.sqrt(2.0 / a_tau) if np.isfinite(a_tau)
-                         else 0.0)
-    gb, ab = f["gyro_bias_radps"], f["accel_bias_mps2"]
-    return n, gb, float(np.hypot(ab, a_markov))
+    return imu_noise_model(cfg, dt, imu.errors)
 
 
 def gnss_course(gnss: GnssData, seconds: float, min_speed: float = 0.5) -> float | None:
@@ -265,8 +181,9 @@ def gnss_course(gnss: GnssData, seconds: float, min_speed: float = 0.5) -> float
     return float(np.arctan2(v[0], v[1]) % (2 * np.pi))
 
 
-def _initial_attitude(imu: ImuData, gnss: GnssData, cfg: ProcessConfig, t0: float, i0: int,
+def _initial_attitude(imu: ImuData, gnss: GnssData, system: System, t0: float, i0: int,
                       dt: float, noise: em.ImuNoiseModel, accel_bias_sigma: float) -> Alignment:
+    cfg = system.alignment
     sig = None if cfg.initial_attitude_sigma_deg is None else units.deg(
         np.asarray(cfg.initial_attitude_sigma_deg))
     heading = (None if cfg.coarse_heading_deg is None
@@ -369,13 +286,13 @@ def check_units(imu: ImuData, gnss: GnssData) -> list[str]:
 
 
 def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
-            cfg: ProcessConfig | None = None, smooth: bool = False,
+            cfg: System | None = None, smooth: bool = False,
             innovations: list | None = None) -> ProcessResult:
     """Loosely coupled INS/GNSS(/velocity) processing; see the module docstring.
 
     ``innovations``, when given a list, receives one :class:`InnovationRecord` per measurement
     (what :mod:`fednav.process.tuning` estimates noise figures from)."""
-    cfg = cfg or ProcessConfig()
+    cfg = cfg or System()
     t_start = time.perf_counter()
     dt = imu.period()
     gnss, velocity = adjust_sensors(gnss, velocity, cfg)
@@ -383,7 +300,7 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
     if gnss.vel is None:
         raise DataError(f"{gnss.source}: GNSS velocity is required by the loosely coupled "
                         f"filter")
-    period = cfg.period_s or float(np.median(np.diff(gnss.t)))
+    period = cfg.filter.period_s or float(np.median(np.diff(gnss.t)))
     n_per = max(1, int(round(period / dt)))
     T = n_per * dt
     t0 = max(imu.t[0], gnss.t[0])
@@ -392,11 +309,14 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
     if n_cycles < 1:
         raise DataError(f"{imu.source}: IMU data does not overlap the GNSS data")
     t_ep = imu.t[i0] + T * np.arange(n_cycles + 1)
-    noise, gb, ab = _noise(imu, cfg)
+    noise, gb, ab = _noise(imu, cfg, dt)
 
-    sig_pos = np.asarray(cfg.gnss_sigma_pos_m or gnss.sigma_pos, dtype=float)
-    sig_vel = np.asarray(cfg.gnss_sigma_vel_mps or gnss.sigma_vel, dtype=float)
-    lever = np.asarray(cfg.gnss_lever_m or gnss.lever, dtype=float)
+    gc = _gnss_cfg(cfg)
+    sig_pos = np.broadcast_to(np.asarray(gc.sigma_pos_m if gc.sigma_pos_m is not None
+                                         else gnss.sigma_pos, dtype=float), (3,))
+    sig_vel = np.broadcast_to(np.asarray(gc.sigma_vel_mps if gc.sigma_vel_mps is not None
+                                         else gnss.sigma_vel, dtype=float), (3,))
+    lever = np.asarray(gc.lever_m or gnss.lever, dtype=float)
     R_gnss = GnssPosVel(lever).R(np.r_[sig_pos, sig_vel])
 
     # Initial state: first GNSS fix (antenna moved to the IMU), its velocity, attitude.
@@ -414,11 +334,11 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
                                            name="kf local 'velocity'")
         sensors["velocity"] = (VelocityENU(velocity.lever), velocity.t,
                                _assign(velocity.t, t_ep))
-    alpha = cfg.fdi_alpha
+    alpha = cfg.filter.fdi_alpha
     if isinstance(alpha, dict):
         alpha = {k: v for k, v in alpha.items() if k in locals_}
     fed = FederatedFilter(locals_, None, sharing="equal", reset=True, fdi_alpha=alpha,
-                          fdi_recovery=cfg.fdi_recovery)
+                          fdi_recovery=cfg.filter.fdi_recovery)
     # Measurements of each epoch (index lists), in time order per sensor.
     todo = {}
     for name, (_, _, k) in sensors.items():
@@ -455,7 +375,7 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
         r = slice((k - 1) * n_per + 1, k * n_per + 1)
         rows_q[r], rows_v[r], rows_p[r], rows_w[r] = rec["q"], rec["vel"], rec["lla"], dth / dt
         proc = em.interval_process(s0, ins.state, dvc.sum(axis=0), T, noise,
-                                   nsub=cfg.substeps)
+                                   nsub=cfg.filter.substeps)
         fed.predict(proc)
         Phis[k], Qs[k] = proc.Phi, proc.Qd
         omega = dth.sum(axis=0) / T

@@ -29,7 +29,8 @@ config leaves open (start values then come from the data file, else a generic ME
 Measurements that fault detection isolates (``fdi_alpha`` of the base config) are left
 out of the matching, and every measurement's ``nu' S^-1 nu`` is capped at its 99.9 %
 chi-square point in the likelihood, so a few outliers do not set the noise figures.
-Units: SI (rad, m, s) as in :class:`fednav.process.ProcessConfig`.
+Units: SI (rad, m, s) as in the ``imu:`` section's SI keys
+(:class:`fednav.sensors.imu.ImuConfig`).
 """
 
 from __future__ import annotations
@@ -40,7 +41,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..io.data import GnssData, ImuData, VelocityData
-from .run import InnovationRecord, ProcessConfig, adjust_sensors, imu_figures, process
+from ..navigator.system import System, _translate_legacy
+from ..sensors import GnssConfig, VelocityConfig
+from ..sensors.imu import FIGURES
+from .run import InnovationRecord, adjust_sensors, imu_figures, process
 
 #: Starting IMU figures (a generic MEMS IMU) where neither the file nor the config has one.
 MEMS_DEFAULTS = {"gyro_arw_rad_sqrt_s": 5.8e-4, "accel_vrw_mps_sqrt_s": 2.0e-3,
@@ -83,7 +87,7 @@ class Evaluation:
 
 @dataclass
 class TuneResult:
-    config: ProcessConfig
+    config: System
     figures: list[Figure]
     before: Evaluation
     after: Evaluation
@@ -107,7 +111,7 @@ def _cap(dof: int) -> float:
 
 
 def evaluate(imu: ImuData, gnss: GnssData, velocity: VelocityData | None,
-             cfg: ProcessConfig) -> Evaluation:
+             cfg: System) -> Evaluation:
     """Run the forward filter with ``cfg`` and sum up its innovations."""
     inns: list[InnovationRecord] = []
     process(imu, gnss, velocity, cfg, innovations=inns)
@@ -133,8 +137,8 @@ def evaluate(imu: ImuData, gnss: GnssData, velocity: VelocityData | None,
     return Evaluation(ll, nis, matched)
 
 
-def _starting_imu(imu: ImuData, base: ProcessConfig, notes: list) -> dict[str, float]:
-    out = imu_figures(imu, base.imu)
+def _starting_imu(imu: ImuData, base: System, notes: list) -> dict[str, float]:
+    out = imu_figures(imu, base)
     generic = [k for k, v in out.items() if v is None]
     if generic:
         out.update({k: MEMS_DEFAULTS[k] for k in generic})
@@ -144,42 +148,53 @@ def _starting_imu(imu: ImuData, base: ProcessConfig, notes: list) -> dict[str, f
 
 
 def tune(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
-         base: ProcessConfig | None = None, matching_passes: int = 2,
+         base: System | None = None, matching_passes: int = 2,
          progress=None) -> TuneResult:
-    """Estimate the noise figures that ``base`` (default :class:`ProcessConfig`) leaves
+    """Estimate the noise figures that ``base`` (default :class:`System`) leaves
     unset from the data (see the module docstring); figures ``base`` sets are kept as
     they are.  ``progress(text)`` is called before each filter run."""
     t_start = time.perf_counter()
-    base = base or ProcessConfig()
+    base = base or System()
     notes: list[str] = []
     runs = 0
     dt = imu.period()
-    fixed = {k for k, v in base.imu.model_dump().items() if v is not None}
-    fixed |= {k for k in ("gnss_sigma_pos_m", "gnss_sigma_vel_mps", "velocity_sigma_mps")
-              if getattr(base, k) is not None}
+    gc = base.sensors.gnss or GnssConfig()
+    vc = base.sensors.velocity or VelocityConfig()
+    # Figures the base config sets, by their SI key (however the config spells them).
+    fixed = {FIGURES[f][2] for f in FIGURES if base.imu.si(f) is not None}
+    fixed |= {k for k, v in (("sensors.gnss.sigma_pos_m", gc.sigma_pos_m),
+                             ("sensors.gnss.sigma_vel_mps", gc.sigma_vel_mps),
+                             ("sensors.velocity.sigma_mps", vc.sigma_mps)) if v is not None}
     # Sensor noise variances in the order of the residuals: GNSS [E, N, U] m, [E, N, U]
     # m/s; velocity sensor [E, N, U] m/s.
     _, v_adj = adjust_sensors(gnss, velocity, base)
-    pos0 = np.asarray(base.gnss_sigma_pos_m or gnss.sigma_pos, dtype=float)  # N, E, U
-    vel0 = np.asarray(base.gnss_sigma_vel_mps or gnss.sigma_vel, dtype=float)  # E, N, U
+    pos0 = np.broadcast_to(np.asarray(gnss.sigma_pos if gc.sigma_pos_m is None
+                                      else gc.sigma_pos_m, dtype=float), (3,))  # N, E, U
+    vel0 = np.broadcast_to(np.asarray(gnss.sigma_vel if gc.sigma_vel_mps is None
+                                      else gc.sigma_vel_mps, dtype=float), (3,))  # E, N, U
     r_gnss = np.r_[pos0[[1, 0, 2]], vel0] ** 2
     r_vel = None
     if velocity is not None:
-        r_vel = np.square(base.velocity_sigma_mps) if base.velocity_sigma_mps is not None \
+        r_vel = np.square(vc.sigma_mps) if vc.sigma_mps is not None \
             else np.median(np.diagonal(v_adj.cov, axis1=1, axis2=2), axis=0)
     start_r = (r_gnss.copy(), None if r_vel is None else r_vel.copy())
-    free_g = np.r_[np.full(3, "gnss_sigma_pos_m" not in fixed),
-                   np.full(3, "gnss_sigma_vel_mps" not in fixed)]
-    free_v = "velocity_sigma_mps" not in fixed
+    free_g = np.r_[np.full(3, "sensors.gnss.sigma_pos_m" not in fixed),
+                   np.full(3, "sensors.gnss.sigma_vel_mps" not in fixed)]
+    free_v = "sensors.velocity.sigma_mps" not in fixed
 
     def config(fig_imu, rg, rv):
         """``base`` with these IMU figures and sensor variances (residual order)."""
         sd = np.sqrt(rg)
+        sensors = {"gnss": gc.model_copy(update={
+            "sigma_pos_m": tuple(map(float, sd[[1, 0, 2]])),
+            "sigma_vel_mps": tuple(map(float, sd[3:]))})}
+        if rv is not None or base.sensors.velocity is not None:
+            sensors["velocity"] = vc.model_copy(update={
+                "sigma_mps": None if rv is None else tuple(map(float, np.sqrt(rv)))})
         return base.model_copy(update={
-            "imu": base.imu.model_copy(update=fig_imu),
-            "gnss_sigma_pos_m": tuple(map(float, sd[[1, 0, 2]])),
-            "gnss_sigma_vel_mps": tuple(map(float, sd[3:])),
-            "velocity_sigma_mps": None if rv is None else tuple(map(float, np.sqrt(rv)))})
+            "imu": base.imu.model_copy(update={k: v for k, v in fig_imu.items()
+                                               if k not in fixed}),
+            "sensors": base.sensors.replace(**sensors)})
 
     def run(fig_imu, rg, rv, what):
         nonlocal runs
@@ -225,10 +240,10 @@ def tune(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
     r_gnss, r_vel = match(r_gnss, r_vel, ev)
     ev = run(fig_imu, r_gnss, r_vel, "covariance matching, final")
     sd0, sd = np.sqrt(start_r[0]), np.sqrt(r_gnss)
-    sensors = [("gnss_sigma_pos_m", sd0[[1, 0, 2]], sd[[1, 0, 2]]),
-               ("gnss_sigma_vel_mps", sd0[3:], sd[3:])]
+    sensors = [("sensors.gnss.sigma_pos_m", sd0[[1, 0, 2]], sd[[1, 0, 2]]),
+               ("sensors.gnss.sigma_vel_mps", sd0[3:], sd[3:])]
     if r_vel is not None:
-        sensors.append(("velocity_sigma_mps", np.sqrt(start_r[1]), np.sqrt(r_vel)))
+        sensors.append(("sensors.velocity.sigma_mps", np.sqrt(start_r[1]), np.sqrt(r_vel)))
     for key, s0, s1 in sensors:
         figures.append(Figure(key, [float(x) for x in s0], [float(x) for x in s1],
                               "kept: set in the config" if key in fixed
@@ -289,17 +304,27 @@ def _search(key: str, fig_imu: dict, ev: Evaluation, run, origin: str):
 def config_yaml(res: TuneResult, base: dict | None = None, header: str = "") -> str:
     """The tuned config as YAML for ``fednav process --config``: the ``base`` mapping
     (the user's config, kept key for key) with the tuned figures, a comment per figure."""
+    import warnings
+
     import yaml
 
-    data = dict(base or {})
+    with warnings.catch_warnings():  # the user's 0.1 keys are written in today's places
+        warnings.simplefilter("ignore", FutureWarning)
+        data = _translate_legacy(dict(base or {}))
     c = res.config
     given = data.get("imu") or {}  # the user's own figures are written as given
-    data["imu"] = {k: given.get(k, float(f"{v:.6g}")) for k, v in c.imu.model_dump().items()
-                   if v is not None}
-    for key in ("gnss_sigma_pos_m", "gnss_sigma_vel_mps", "velocity_sigma_mps"):
-        v = getattr(c, key)
-        if v is not None and key not in data:
-            data[key] = [float(f"{x:.6g}") for x in v]
+    data["imu"] = {**given, **{k: float(f"{v:.6g}") for k, v in
+                               c.imu.model_dump(exclude_defaults=True).items()
+                               if k not in given}}
+    sensors = {k: dict(v or {}) for k, v in (data.get("sensors") or {}).items()}
+    for name, key in (("gnss", "sigma_pos_m"), ("gnss", "sigma_vel_mps"),
+                      ("velocity", "sigma_mps")):
+        section = c.sensors.get(name)
+        v = None if section is None else getattr(section, key)
+        if v is not None and key not in sensors.get(name, {}):
+            sensors.setdefault(name, {})[key] = [float(f"{x:.6g}") for x in v]
+    if sensors:
+        data["sensors"] = sensors
     lines = [f"# {line}" for line in header.splitlines()]
     lines.append("# mean NIS/dof before -> after: " + ", ".join(
         f"{k} {res.before.nis_per_dof[k]:.2f} -> {res.after.nis_per_dof[k]:.2f}"

@@ -51,7 +51,7 @@ def variants(scn: Scenario) -> dict[str, Scenario]:
 
 def with_air_data(scn: Scenario, **changes) -> Scenario:
     ad = scn.sensors.airdata.model_copy(update=changes)
-    return scn.model_copy(update={"sensors": scn.sensors.model_copy(update={"airdata": ad})})
+    return scn.model_copy(update={"sensors": scn.sensors.replace(airdata=ad)})
 
 
 def run_statistics(result) -> dict[str, float]:

@@ -104,7 +104,7 @@ def _nominal(tr, k):
 
 
 def _measurement_H(scn: Scenario, nav):
-    from ..sensors.models import SarFix, StarAttitude
+    from ..sensors import SarFix, StarAttitude
 
     out = []
     if scn.sensors.star is not None:
@@ -129,11 +129,12 @@ def observability(scn: Scenario, max_time: float | None = None) -> dict:
         svd_degree,
     )
     from ..ins.strapdown import Strapdown
-    from ..sensors.models import NavSnapshot
+    from ..navigator.system import imu_noise_model
+    from ..sensors import NavSnapshot
     from ..sim.runs import initial_covariance
 
     tr = scn.trajectory(max_time)
-    noise = scn.imu.noise_model(tr.dt)
+    noise = imu_noise_model(scn, tr.dt)[0]
     baro = scn.sensors.baro.loop() if scn.sensors.baro is not None else None
     gains = Strapdown(tr.lla[0], tr.vel[0], tr.euler[0], tr.dt, baro).baro_gains[:2]
     T = scn.filter.period_s

@@ -84,11 +84,11 @@ def with_latency_scale(scn: Scenario, f: float) -> Scenario:
     """The scenario with every uniform SAR latency range multiplied by ``f``."""
     sensors = {}
     for name in ("sar", "sarvel"):
-        cfg = getattr(scn.sensors, name)
+        cfg = scn.sensors[name]
         lo, hi = cfg.timing.latency_range_s
         sensors[name] = cfg.model_copy(update={"timing": cfg.timing.model_copy(
             update={"latency_range_s": (lo * f, hi * f)})})
-    return scn.model_copy(update={"sensors": scn.sensors.model_copy(update=sensors)})
+    return scn.model_copy(update={"sensors": scn.sensors.replace(**sensors)})
 
 
 def one_run(args):

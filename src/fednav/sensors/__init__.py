@@ -1,21 +1,34 @@
-"""Sensor simulation: each sensor turns the truth into time-stamped measurements.
+"""Sensors: each aiding sensor in one module — its section of the system description,
+its simulator (truth -> time-stamped measurements, every random number from the
+``numpy.random.Generator`` passed in), its filter-side measurement model and its file
+columns — and the registry that lists them (:mod:`fednav.sensors.registry`); plus the
+IMU error model, measurement timing and delays, and fault injection."""
 
-A sensor is a small frozen dataclass with a ``simulate(truth, rng)`` method returning a
-:class:`~fednav.sensors.base.MeasurementSeries`; its filter-side counterpart lives in
-:mod:`fednav.sensors.models`.  All randomness comes from the ``numpy.random.Generator``
-passed in.
-"""
-
-from .airdata import AirData
-from .baro import Barometer
+from .airdata import AirData, AirDataConfig, WindConstraint
+from .baro import BaroConfig, BaroHeight, Barometer
 from .base import MeasurementSeries, sample_times
 from .faults import Fault, inject_faults
-from .gnss import Gnss
-from .imu import ImuErrors, ImuErrorState, corrupt_imu
-from .sar import SarMatcher, SarVelocity
-from .star import StarSensor
-from .timing import Latency, measurement_times, sequential_times
+from .gnss import Gnss, GnssConfig, GnssPosVel
+from .imu import ImuConfig, ImuErrors, ImuErrorState, corrupt_imu
+from .measurement import NavSnapshot, StackedModel
+from .sar import SarConfig, SarFix, SarMatcher
+from .sarvel import SarVelocity, SarVelocityConfig, SarVelocityEN
+from .spec import Column, SensorConfig, SensorSpec
+from .star import StarAttitude, StarConfig, StarSensor
+from .timing import Latency, TimingConfig, measurement_times, sequential_times
+from .velocity import VelocityConfig, VelocityENU, VelocitySensor
 
-__all__ = ["AirData", "Barometer", "Fault", "Gnss", "ImuErrorState", "ImuErrors", "Latency",
-           "MeasurementSeries", "SarMatcher", "SarVelocity", "StarSensor", "corrupt_imu",
-           "inject_faults", "measurement_times", "sample_times", "sequential_times"]
+__all__ = ["AirData", "AirDataConfig", "BaroConfig", "BaroHeight", "Barometer", "Column",
+           "Fault", "Gnss", "GnssConfig", "GnssPosVel", "ImuConfig", "ImuErrorState",
+           "ImuErrors", "Latency", "MeasurementSeries", "NavSnapshot", "SarConfig", "SarFix",
+           "SarMatcher", "SarVelocity", "SarVelocityConfig", "SarVelocityEN", "SensorConfig",
+           "SensorSpec", "StackedModel", "StarAttitude", "StarConfig", "StarSensor",
+           "TimingConfig", "VelocityConfig", "VelocityENU", "VelocitySensor", "WindConstraint",
+           "corrupt_imu", "inject_faults", "measurement_times", "sample_times",
+           "sequential_times"]
+
+#: One model of each aiding sensor with default settings (no lever arm), by name —
+#: fednav 0.1's ``fednav.measurements.MODELS``; build a configured one with
+#: ``system.sensors[name].model()``.
+MODELS = {m.kind: m for m in (StarAttitude(), SarFix(), BaroHeight(), GnssPosVel(),
+                              SarVelocityEN())}

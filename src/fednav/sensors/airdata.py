@@ -6,6 +6,11 @@ which the paper takes as known.  fednav makes both explicit: the series carries
 ``z = [airspeed (m/s), wind east, wind north (m/s)]`` where the wind estimate is the
 truth plus white noise ``wind_sigma`` and a constant ``wind_bias`` (east, north) — the
 knob that shows what a wrong wind estimate does to the constrained filter.
+
+Section ``sensors.airdata``: ``sigma_airspeed_mps``, ``wind_sigma_mps``,
+``wind_bias_mps`` (east, north), ``period_s``.  File columns: ``t_s, airspeed_mps,
+wind_e_mps, wind_n_mps``.  It does not feed a local filter: the wind constraint
+(:class:`WindConstraint`) uses it in every local filter.
 """
 
 from __future__ import annotations
@@ -13,8 +18,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from pydantic import Field
 
+from ..core import attitude as att
+from ..core.units import ARCMIN
+from ..ins.error_model import N_STATES, PHI
 from .base import MeasurementSeries, flight_times
+from .measurement import NavSnapshot
+from .spec import Column, SensorConfig, SensorSpec
 
 
 @dataclass(frozen=True)
@@ -39,3 +50,83 @@ class AirData:
         return MeasurementSeries("airdata", t, z,
                                  np.array([self.sigma, self.wind_sigma, self.wind_sigma]),
                                  t_avail)
+
+
+class WindConstraint:
+    """Air-data wind constraint on the velocity errors (paper 000, eq. 3 and 49–50),
+    derived in fednav's convention (heading ψ from north toward east):
+
+    the true ground velocity is ``v = v_a u(ψ) + w`` with ``u(ψ) = [sin ψ, cos ψ]``, so
+    with the measured airspeed ``v_a``, the INS heading ``ψ^`` and the wind estimate ``w^``::
+
+        d = v^_EN - (v_a u(ψ^) + w^)  =  δv_EN - v_a u'(ψ) δψ      u' = [cos ψ, -sin ψ]
+        D = [ -v_a u'(ψ) ⊗ ∂δψ/∂φ ,  I (δvE, δvN) ]
+
+    ``δψ = φU - tanθ (sinψ φE + cosψ φN)`` (``attitude.euler_error_jacobian``).  The paper
+    prints ``D = [.. sinψ .. ; .. cosψ ..]`` on δvE/δvN and ``d = δv_w + δv_a cos/sinψ``;
+    its sin/cos placement fits a heading from east; here both rows follow from the same
+    expression, and the test suite checks ``D x = d`` against a perturbed truth.
+
+    ``z = [airspeed, wind E, wind N]`` (:class:`AirData`); ``R`` is the covariance of
+    ``d`` from the airspeed and wind-estimate noise.  ``constraint = True``: constrained
+    filters project onto it (CUKF), others would treat it as a measurement.
+    """
+
+    kind = "airdata"
+    dim = 2
+    constraint = True
+
+    def __init__(self, airspeed: float = 0.0):
+        self.va = float(airspeed)  # measured airspeed [m/s] (enters D)
+
+    def residual(self, nav: NavSnapshot, z) -> np.ndarray:
+        psi = nav.euler[2]
+        u = np.array([np.sin(psi), np.cos(psi)])
+        return np.asarray(nav.vel[:2], dtype=float) - (z[0] * u + np.asarray(z[1:3]))
+
+    def h(self, X, nav: NavSnapshot) -> np.ndarray:
+        return np.atleast_2d(X) @ self.H(nav).T
+
+    def H(self, nav: NavSnapshot) -> np.ndarray:
+        va = self.va
+        psi = nav.euler[2]
+        du = np.array([np.cos(psi), -np.sin(psi)])
+        jpsi = att.euler_error_jacobian(nav.euler)[2]  # d(heading error)/d(phi)
+        D = np.zeros((2, N_STATES))
+        D[:, PHI] = -va * np.outer(du, jpsi) * ARCMIN
+        D[0, 3] = D[1, 4] = 1.0
+        return D
+
+    def R(self, sigma, nav: NavSnapshot | None = None) -> np.ndarray:
+        s = np.asarray(sigma, dtype=float)  # [airspeed, wind E, wind N]
+        R = np.diag(s[1:3] ** 2)
+        if nav is not None:
+            psi = nav.euler[2]
+            u = np.array([np.sin(psi), np.cos(psi)])
+            R = R + s[0] ** 2 * np.outer(u, u)
+        return R
+
+
+class AirDataConfig(SensorConfig):
+    """Air data (horizontal airspeed) and the wind estimate the wind constraint uses."""
+
+    sigma_airspeed_mps: float = Field(gt=0.0)
+    wind_sigma_mps: float = Field(default=0.0, ge=0.0)
+    wind_bias_mps: tuple[float, float] = (0.0, 0.0)  # (east, north) error of the estimate
+
+    def sensor(self) -> AirData:
+        return AirData(self.sigma_airspeed_mps, max(self.wind_sigma_mps, 1e-6),
+                       self.wind_bias_mps, self.period_s)
+
+    def model(self) -> WindConstraint:
+        return WindConstraint()
+
+    def sigma(self) -> np.ndarray:
+        w = max(self.wind_sigma_mps, 1e-6)
+        return np.array([self.sigma_airspeed_mps, w, w])
+
+
+SPEC = SensorSpec("airdata", "air data: true airspeed and the wind estimate (the wind "
+                  "constraint; no local filter of its own)", AirDataConfig, dim=2,
+                  columns=(Column("airspeed_mps"), Column("wind_e_mps"),
+                           Column("wind_n_mps")), aiding=False)

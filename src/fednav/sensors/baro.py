@@ -1,12 +1,24 @@
-"""Barometric altimeter."""
+"""Barometric altimeter: damps the INS vertical channel and/or aids a filter.
+
+Section ``sensors.baro``: ``sigma_m``, ``period_s``, ``damping_loop`` (feed the
+mechanization's vertical loop, :class:`~fednav.ins.strapdown.BaroLoop`), its
+``loop_time_constant_s`` and ``loop_order``.  File columns: ``t_s, h_m``.  As a filter
+measurement: residual h(INS) - h(baro) [m] (linear).
+"""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal
 
+import numba
 import numpy as np
+from pydantic import Field
 
+from ..ins.strapdown import BaroLoop
 from .base import MeasurementSeries, flight_times
+from .measurement import JACOBIAN, RESIDUAL, KernelModel, Kernels, predict_linear
+from .spec import Column, SensorConfig, SensorSpec
 
 
 @dataclass(frozen=True)
@@ -36,3 +48,53 @@ class Barometer:
                                    < 1e-6)
         out[idx[ok]] = series.z[ok, 0]
         return out
+
+
+@numba.njit(RESIDUAL, cache=True)
+def residual(lla, vel, C, omega, z, aux, out):
+    out[0] = lla[2] - z[0]
+
+
+@numba.njit(JACOBIAN, cache=True)
+def jacobian(lla, vel, C, omega, aux, H):
+    H[0, 8] = 1.0
+
+
+class BaroHeight(KernelModel):
+    """Barometric altimeter as a filter measurement: residual = h(INS) - h(baro) [m]."""
+
+    kind = "baro"
+    dim = 1
+    kernels = Kernels(residual, jacobian, predict_linear, linear=True)
+
+    def R(self, sigma) -> np.ndarray:
+        return np.diag(np.asarray(sigma, dtype=float) ** 2)
+
+
+class BaroConfig(SensorConfig):
+    """Barometric altimeter: damps the INS vertical channel (``damping_loop``) and/or aids
+    the filter as a measurement (``baro`` among the aiding sensors)."""
+
+    sigma_m: float = Field(gt=0.0)
+    damping_loop: bool = True
+    loop_time_constant_s: float = Field(default=20.0, gt=0.0)
+    loop_order: Literal[2, 3] = 2
+
+    def sensor(self) -> Barometer:
+        return Barometer(self.sigma_m, self.period_s)
+
+    def model(self) -> BaroHeight:
+        return BaroHeight()
+
+    def sigma(self) -> np.ndarray:
+        return np.array([self.sigma_m])
+
+    def loop(self) -> BaroLoop | None:
+        if not self.damping_loop:
+            return None
+        return BaroLoop(self.loop_time_constant_s, self.loop_order)
+
+
+SPEC = SensorSpec("baro", "barometric altimeter: height (vertical-channel damping and/or "
+                  "a filter measurement)", BaroConfig, dim=1, columns=(Column("h_m"),),
+                  kernels=BaroHeight.kernels)

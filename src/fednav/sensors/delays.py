@@ -23,7 +23,7 @@ import numpy as np
 
 from ..core import earth
 from ..core.attitude import dcm_to_rotvec, rotvec_to_dcm
-from .models import NavSnapshot
+from .measurement import NavSnapshot
 
 #: Components of each sensor's z that are angles (unwrapped before curve fitting).
 ANGLE_COLUMNS = {"sar": (2,), "star": (0, 1, 2)}

@@ -1,12 +1,35 @@
-"""GNSS receiver: position (latitude, longitude, height) and ENU velocity fixes."""
+"""GNSS receiver: position (latitude, longitude, height) and ENU velocity fixes.
+
+Section ``sensors.gnss``: ``sigma_pos_m`` (one value or [north, east, up]),
+``sigma_vel_mps`` (one value or [east, north, up]), ``lever_m`` (antenna from the IMU,
+body right-forward-up), ``time_offset_s`` (added to the file's time stamps), ``period_s``.
+File columns: ``t_s, lat_deg, lon_deg, h_m, vE_mps, vN_mps, vU_mps``
+(:func:`fednav.io.read_gnss_csv`).  Residual: INS-derived antenna - GNSS,
+``[dE, dN, dU] m, [dvE, dvN, dvU] m/s`` (linear in the error state).
+"""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
+from ..core import earth
+from ..core.units import ARCMIN
 from .base import MeasurementSeries, flight_times, position_noise_to_llh
+from .measurement import (
+    JACOBIAN,
+    RESIDUAL,
+    KernelModel,
+    Kernels,
+    lever_offsets,
+    predict_linear,
+    skew_into,
+)
+from .spec import Column, SensorConfig, SensorSpec
+
+_V3 = tuple[float, float, float]
 
 
 @dataclass(frozen=True)
@@ -32,3 +55,87 @@ class Gnss:
         z = np.column_stack([position_noise_to_llh(tr["lla"], npos),
                              tr["vel"] + rng.standard_normal((len(t), 3)) * sv])
         return MeasurementSeries("gnss", t, z, np.r_[sp, sv], t_avail)
+
+
+@numba.njit(RESIDUAL, cache=True)
+def residual(lla, vel, C, omega, z, aux, out):
+    lat, lon, h = lla[0], lla[1], lla[2]
+    rm, rn = earth.radii_nb(lat)
+    out[0] = (lon - z[1]) * (rn + h) * np.cos(lat)
+    out[1] = (lat - z[0]) * (rm + h)
+    out[2] = h - z[2]
+    for j in range(3):
+        out[3 + j] = vel[j] - z[3 + j]
+    if aux[0] != 0.0 or aux[1] != 0.0 or aux[2] != 0.0:
+        p, v = lever_offsets(C, omega, aux[0], aux[1], aux[2])
+        for j in range(3):
+            out[j] += p[j]
+            out[3 + j] += v[j]
+
+
+@numba.njit(JACOBIAN, cache=True)
+def jacobian(lla, vel, C, omega, aux, H):
+    H[0, 6] = H[1, 7] = H[2, 8] = 1.0
+    H[3, 3] = H[4, 4] = H[5, 5] = 1.0
+    if aux[0] != 0.0 or aux[1] != 0.0 or aux[2] != 0.0:
+        p, v = lever_offsets(C, omega, aux[0], aux[1], aux[2])
+        skew_into(H, 0, 0, p[0], p[1], p[2], ARCMIN)
+        skew_into(H, 3, 0, v[0], v[1], v[2], ARCMIN)
+
+
+class GnssPosVel(KernelModel):
+    """GNSS position and velocity of an antenna at ``lever`` (body right-forward-up, m)
+    from the IMU: residual = INS-derived antenna - GNSS, ``[dE, dN, dU] m, [dvE, dvN, dvU]``.
+
+    The INS-derived antenna position is ``p + C l``; with ``C_hat = exp(-[phi x]) C`` its
+    error is ``dp + [(C l) x] phi`` (and likewise ``[(C (w x l)) x] phi`` for the
+    velocity), so a lever arm makes attitude observable from GNSS (tested numerically)."""
+
+    kind = "gnss"
+    dim = 6
+    kernels = Kernels(residual, jacobian, predict_linear, linear=True)
+
+    def __init__(self, lever=(0.0, 0.0, 0.0)):
+        super().__init__(lever)
+        self.lever = self.aux
+
+    def R(self, sigma) -> np.ndarray:
+        s = np.asarray(sigma, dtype=float)  # [north, east, up m, vE, vN, vU], as z
+        return np.diag(s[[1, 0, 2, 3, 4, 5]] ** 2)
+
+
+class GnssConfig(SensorConfig):
+    """GNSS receiver: 1-sigma position noise (one value or [north, east, up] m) and
+    velocity noise (one value or [east, north, up] m/s) — the data file's when left out —
+    antenna ``lever_m`` from the IMU (body right-forward-up; the file's when left out) and
+    ``time_offset_s`` added to the file's time stamps."""
+
+    sigma_pos_m: float | _V3 | None = None
+    sigma_vel_mps: float | _V3 | None = None
+    lever_m: _V3 | None = None
+    time_offset_s: float = 0.0
+
+    def sensor(self) -> Gnss:
+        from ..core.config import ConfigError
+
+        if self.sigma_pos_m is None or self.sigma_vel_mps is None:
+            raise ConfigError("sensors.gnss: sigma_pos_m and sigma_vel_mps are needed to "
+                              "simulate the receiver")
+        return Gnss(self.sigma_pos_m, self.sigma_vel_mps, self.period_s)
+
+    def model(self) -> GnssPosVel:
+        return GnssPosVel(self.lever_m or (0.0, 0.0, 0.0))
+
+    def sigma(self) -> np.ndarray | None:
+        if self.sigma_pos_m is None or self.sigma_vel_mps is None:
+            return None
+        return np.r_[np.broadcast_to(np.asarray(self.sigma_pos_m, dtype=float), (3,)),
+                     np.broadcast_to(np.asarray(self.sigma_vel_mps, dtype=float), (3,))]
+
+
+_DEG = float(np.radians(1.0))
+SPEC = SensorSpec(
+    "gnss", "GNSS receiver: position and ENU velocity of its antenna", GnssConfig, dim=6,
+    columns=(Column("lat_deg", _DEG), Column("lon_deg", _DEG), Column("h_m"),
+             Column("vE_mps"), Column("vN_mps"), Column("vU_mps")),
+    kernels=GnssPosVel.kernels, latlon=(0, 1))

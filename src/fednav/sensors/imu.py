@@ -10,6 +10,10 @@ from dataclasses import dataclass
 
 import numba
 import numpy as np
+from pydantic import Field, model_validator
+
+from ..core import units
+from ..core.config import _Model
 
 
 @dataclass(frozen=True)
@@ -110,3 +114,114 @@ def corrupt_imu(dtheta, dv, dt: float, errors: ImuErrors, rng: np.random.Generat
     dth = dtheta + gb * dt + rng.standard_normal((n, 3)) * _axes(errors.gyro_arw) * np.sqrt(dt)
     dvm = dv + ab * dt + rng.standard_normal((n, 3)) * _axes(errors.accel_vrw) * np.sqrt(dt)
     return dth, dvm, ImuErrorState(gb, ab)
+
+
+# ---------------------------------------------------------------- the ``imu:`` section
+#: Each IMU figure: its key in engineering units and the conversion to SI, and its key
+#: in SI (a section gives a figure by at most one of its keys).
+FIGURES = {
+    "gyro_bias": ("gyro_bias_deg_h", units.deg_per_h, "gyro_bias_radps"),
+    "gyro_markov": ("gyro_markov_deg_h", units.deg_per_h, "gyro_markov_radps"),
+    "gyro_tau": ("gyro_markov_tau_s", None, "gyro_tau_s"),
+    "gyro_arw": ("gyro_arw_deg_sqrt_h", units.deg_per_sqrt_h, "gyro_arw_rad_sqrt_s"),
+    "accel_bias": ("accel_bias_ug", units.micro_g, "accel_bias_mps2"),
+    "accel_markov": ("accel_markov_ug", units.micro_g, "accel_markov_mps2"),
+    "accel_tau": ("accel_markov_tau_s", None, "accel_tau_s"),
+    "accel_vrw": ("accel_vrw_ug_sqrt_hz", units.micro_g, "accel_vrw_mps_sqrt_s"),
+}
+_NONNEG = Field(None, ge=0.0)
+_POS = Field(None, gt=0.0)
+
+
+class ImuConfig(_Model):
+    """IMU error figures, per axis (isotropic); each in whichever unit its key names.
+
+    Turn-on bias (1-sigma of a constant; with ``random_bias`` a simulation draws it per
+    run): ``gyro_bias_deg_h`` or ``gyro_bias_radps``, ``accel_bias_ug`` or
+    ``accel_bias_mps2``.  First-order Gauss–Markov bias instability and its correlation
+    time: ``gyro_markov_deg_h`` / ``_radps`` with ``gyro_markov_tau_s`` (or
+    ``gyro_tau_s``), ``accel_markov_ug`` / ``_mps2`` with ``accel_markov_tau_s`` (or
+    ``accel_tau_s``).  White noise as a density: ``gyro_arw_deg_sqrt_h`` /
+    ``gyro_arw_rad_sqrt_s``, ``accel_vrw_ug_sqrt_hz`` / ``accel_vrw_mps_sqrt_s``; or per
+    *sample* (``gyro_white_deg_h``, ``accel_white_ug``: converted with the IMU period).
+    Bias random walk: ``gyro_bias_rw_deg_h_sqrt_h``, ``accel_bias_rw_ug_sqrt_h`` (the
+    bias grows by that much per square-root hour).
+
+    A figure left out is unknown: recorded data take it from the data file (NaveGo's IMU
+    struct), a simulation takes it as zero (infinite for correlation times).
+    ``max_bridge_s``: the longest run of faulty samples (NaN/inf/absurd) in a recorded
+    IMU file bridged by holding the last good one (docs/reliability.md).
+    """
+
+    gyro_bias_deg_h: float | None = _NONNEG
+    gyro_bias_radps: float | None = _NONNEG
+    gyro_markov_deg_h: float | None = _NONNEG
+    gyro_markov_radps: float | None = _NONNEG
+    gyro_markov_tau_s: float | None = _POS
+    gyro_tau_s: float | None = _POS
+    gyro_arw_deg_sqrt_h: float | None = _NONNEG
+    gyro_arw_rad_sqrt_s: float | None = _NONNEG
+    gyro_white_deg_h: float | None = _NONNEG
+    gyro_bias_rw_deg_h_sqrt_h: float | None = _NONNEG
+    accel_bias_ug: float | None = _NONNEG
+    accel_bias_mps2: float | None = _NONNEG
+    accel_markov_ug: float | None = _NONNEG
+    accel_markov_mps2: float | None = _NONNEG
+    accel_markov_tau_s: float | None = _POS
+    accel_tau_s: float | None = _POS
+    accel_white_ug: float | None = _NONNEG
+    accel_vrw_ug_sqrt_hz: float | None = _NONNEG
+    accel_vrw_mps_sqrt_s: float | None = _NONNEG
+    accel_bias_rw_ug_sqrt_h: float | None = _NONNEG
+    random_bias: bool = False
+    max_bridge_s: float = Field(0.1, gt=0.0)
+
+    @model_validator(mode="after")
+    def _one_key_per_figure(self):
+        for eng, _, si in FIGURES.values():
+            if getattr(self, eng) is not None and getattr(self, si) is not None:
+                raise ValueError(f"give {eng} or {si}, not both")
+        return self
+
+    def si(self, figure: str) -> float | None:
+        """Figure ``figure`` (a key of :data:`FIGURES`) in SI, None when not given."""
+        eng, to_si, si = FIGURES[figure]
+        v = getattr(self, eng)
+        if v is not None:
+            return float(v) if to_si is None else float(to_si(v))
+        v = getattr(self, si)
+        return None if v is None else float(v)
+
+    def _or(self, figure: str, default: float = 0.0) -> float:
+        v = self.si(figure)
+        return default if v is None else v
+
+    # -- the figures of a simulation (unknown = 0, correlation time unknown = infinite)
+    def arw(self, dt: float) -> float:
+        """Gyro white noise [rad/sqrt(s)], the density and the per-sample figure."""
+        return float(np.hypot(self._or("gyro_arw"),
+                              units.deg_per_h(self.gyro_white_deg_h or 0.0) * np.sqrt(dt)))
+
+    def vrw(self, dt: float) -> float:
+        """Accelerometer white noise [m/s/sqrt(s)], per sample and as a density."""
+        return float(np.hypot(units.micro_g(self.accel_white_ug or 0.0) * np.sqrt(dt),
+                              self._or("accel_vrw")))
+
+    def gyro_rw(self) -> float:
+        return float(units.deg_per_h(self.gyro_bias_rw_deg_h_sqrt_h or 0.0)
+                     / np.sqrt(units.HOUR))
+
+    def accel_rw(self) -> float:
+        return float(units.micro_g(self.accel_bias_rw_ug_sqrt_h or 0.0) / np.sqrt(units.HOUR))
+
+    def errors(self, dt: float) -> ImuErrors:
+        """The simulated IMU's errors (:func:`corrupt_imu`)."""
+        inf = float("inf")
+        return ImuErrors(
+            gyro_bias=self._or("gyro_bias"), gyro_arw=self.arw(dt),
+            gyro_bias_rw=self.gyro_rw(), accel_bias_rw=self.accel_rw(),
+            gyro_markov_sigma=self._or("gyro_markov"),
+            gyro_markov_tau=self._or("gyro_tau", inf),
+            accel_bias=self._or("accel_bias"), accel_vrw=self.vrw(dt),
+            accel_markov_sigma=self._or("accel_markov"),
+            accel_markov_tau=self._or("accel_tau", inf), random_bias=self.random_bias)

@@ -1,13 +1,34 @@
-"""SAR image matching: latitude, longitude and heading fixes."""
+"""SAR image matching: latitude, longitude and heading fixes.
+
+Section ``sensors.sar``: ``sigma_pos_m`` (each horizontal axis), ``sigma_heading_deg``,
+``period_s``.  File columns: ``t_s, lat_deg, lon_deg, heading_deg``.  Residual: INS -
+SAR ``[east m, north m, heading arcmin]``.
+"""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
+from pydantic import Field
 
+from ..core import earth, units
 from ..core.attitude import wrap_2pi
+from ..core.units import ARCMIN
 from .base import MeasurementSeries, flight_times, position_noise_to_llh
+from .measurement import (
+    JACOBIAN,
+    PREDICT,
+    RESIDUAL,
+    KernelModel,
+    Kernels,
+    euler_error_nb,
+    euler_jacobian_rows,
+    euler_of,
+    wrap_pi_nb,
+)
+from .spec import Column, SensorConfig, SensorSpec
 
 
 @dataclass(frozen=True)
@@ -40,17 +61,68 @@ class SarMatcher:
                                  t_avail)
 
 
-@dataclass(frozen=True)
-class SarVelocity:
-    """Sequential-image velocity ``[vE, vN]`` [m/s] with white noise ``sigma`` (each axis),
-    every ``period`` [s] or at given capture times."""
+@numba.njit(RESIDUAL, cache=True)
+def residual(lla, vel, C, omega, z, aux, out):
+    lat, lon, h = lla[0], lla[1], lla[2]
+    rm, rn = earth.radii_nb(lat)
+    out[0] = (lon - z[1]) * (rn + h) * np.cos(lat)
+    out[1] = (lat - z[0]) * (rm + h)
+    out[2] = wrap_pi_nb(euler_of(C)[2] - z[2]) / ARCMIN
 
-    sigma: float
-    period: float
 
-    def simulate(self, truth, rng: np.random.Generator, t=None,
-                 t_avail=None) -> MeasurementSeries:
-        t = flight_times(truth, self.period, t)
-        v = truth.at(t)["vel"][:, :2]
-        z = v + rng.standard_normal(v.shape) * self.sigma
-        return MeasurementSeries("sarvel", t, z, np.array([self.sigma, self.sigma]), t_avail)
+_HEADING = np.array([2])
+
+
+@numba.njit(JACOBIAN, cache=True)
+def jacobian(lla, vel, C, omega, aux, H):
+    pitch, _, heading = euler_of(C)
+    H[0, 6] = 1.0
+    H[1, 7] = 1.0
+    euler_jacobian_rows(pitch, heading, H, 2, _HEADING)
+
+
+@numba.njit(PREDICT, cache=True)
+def predict(lla, vel, C, omega, aux, X, Z):
+    e = euler_error_nb(C, X)
+    for i in range(X.shape[0]):
+        Z[i, 0] = X[i, 6]
+        Z[i, 1] = X[i, 7]
+        Z[i, 2] = e[i, 2]
+
+
+class SarFix(KernelModel):
+    """SAR image matching: residual = [east m, north m, heading arcmin] of INS - SAR."""
+
+    kind = "sar"
+    dim = 3
+    kernels = Kernels(residual, jacobian, predict, linear=False)
+
+    def R(self, sigma) -> np.ndarray:
+        s = np.asarray(sigma, dtype=float)  # [north m, east m, heading rad], as z
+        return np.diag([s[1] ** 2, s[0] ** 2, (s[2] / ARCMIN) ** 2])
+
+
+class SarConfig(SensorConfig):
+    """SAR image-matching fix: position and heading."""
+
+    sigma_pos_m: float = Field(gt=0.0)
+    sigma_heading_deg: float = Field(gt=0.0)
+
+    def sensor(self) -> SarMatcher:
+        return SarMatcher(self.sigma_pos_m, float(units.deg(self.sigma_heading_deg)),
+                          self.period_s)
+
+    def model(self) -> SarFix:
+        return SarFix()
+
+    def sigma(self) -> np.ndarray:
+        return np.array([self.sigma_pos_m, self.sigma_pos_m,
+                         float(units.deg(self.sigma_heading_deg))])
+
+
+_DEG = float(units.deg(1.0))
+SPEC = SensorSpec(
+    "sar", "SAR image matching: position fix and heading", SarConfig, dim=3,
+    columns=(Column("lat_deg", _DEG), Column("lon_deg", _DEG),
+             Column("heading_deg", _DEG, wrap_2pi=True)),
+    kernels=SarFix.kernels, angles=(2,), latlon=(0, 1))

@@ -1,13 +1,35 @@
-"""Star sensor (CNS) giving the attitude as Euler angles [pitch, roll, heading]."""
+"""Star sensor (CNS): the attitude as Euler angles [pitch, roll, heading].
+
+Section ``sensors.star``: ``sigma_arcsec`` (1-sigma of each angle), ``period_s``.
+File columns: ``t_s, pitch_deg, roll_deg, heading_deg``.  Residual: Euler(INS) -
+Euler(CNS) [arcmin], roll and heading wrapped to +-180 deg; ``H`` is
+``euler_error_jacobian`` (paper 002, eq. 3); sigma points use the exact Euler error.
+"""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
+from pydantic import Field
 
+from ..core import units
 from ..core.attitude import wrap_2pi
+from ..core.units import ARCMIN
 from .base import MeasurementSeries, flight_times
+from .measurement import (
+    JACOBIAN,
+    PREDICT,
+    RESIDUAL,
+    KernelModel,
+    Kernels,
+    euler_error_nb,
+    euler_jacobian_rows,
+    euler_of,
+    wrap_pi_nb,
+)
+from .spec import Column, SensorConfig, SensorSpec
 
 
 @dataclass(frozen=True)
@@ -25,3 +47,60 @@ class StarSensor:
         z = e + rng.standard_normal(e.shape) * sig
         z[:, 2] = wrap_2pi(z[:, 2])
         return MeasurementSeries("star", t, z, sig.copy(), t_avail)
+
+
+@numba.njit(RESIDUAL, cache=True)
+def residual(lla, vel, C, omega, z, aux, out):
+    pitch, roll, heading = euler_of(C)
+    out[0] = (pitch - z[0]) / ARCMIN
+    out[1] = wrap_pi_nb(roll - z[1]) / ARCMIN
+    out[2] = wrap_pi_nb(heading - z[2]) / ARCMIN
+
+
+_ALL = np.arange(3)
+
+
+@numba.njit(JACOBIAN, cache=True)
+def jacobian(lla, vel, C, omega, aux, H):
+    pitch, _, heading = euler_of(C)
+    euler_jacobian_rows(pitch, heading, H, 0, _ALL)
+
+
+@numba.njit(PREDICT, cache=True)
+def predict(lla, vel, C, omega, aux, X, Z):
+    Z[:, :] = euler_error_nb(C, X)
+
+
+class StarAttitude(KernelModel):
+    """Star sensor: residual = Euler(INS) - Euler(CNS), [pitch, roll, heading] (arcmin)."""
+
+    kind = "star"
+    dim = 3
+    kernels = Kernels(residual, jacobian, predict, linear=False)
+
+    def R(self, sigma) -> np.ndarray:
+        return np.diag((np.asarray(sigma, dtype=float) / ARCMIN) ** 2)
+
+
+class StarConfig(SensorConfig):
+    """Star sensor: ``sigma_arcsec`` 1-sigma of each Euler angle."""
+
+    sigma_arcsec: float = Field(gt=0.0)
+
+    def sensor(self) -> StarSensor:
+        return StarSensor(float(units.arcsec(self.sigma_arcsec)), self.period_s)
+
+    def model(self) -> StarAttitude:
+        return StarAttitude()
+
+    def sigma(self) -> np.ndarray:
+        return np.full(3, float(units.arcsec(self.sigma_arcsec)))
+
+
+_DEG = float(units.deg(1.0))
+SPEC = SensorSpec(
+    "star", "star sensor (CNS): attitude as Euler angles [pitch, roll, heading]",
+    StarConfig, dim=3,
+    columns=(Column("pitch_deg", _DEG), Column("roll_deg", _DEG),
+             Column("heading_deg", _DEG, wrap_2pi=True)),
+    kernels=StarAttitude.kernels, angles=(0, 1, 2))

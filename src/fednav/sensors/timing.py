@@ -16,10 +16,17 @@ latencies themselves instead of following a fixed period.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
+from pydantic import Field, model_validator
 
+from ..core.config import _Model
 from .base import sample_times
+
+#: How the navigator treats the time between a measurement's time of validity and the
+#: filter epoch that uses it (:class:`TimingConfig`).
+DELAY_COMPENSATIONS = ("interpolate", "none", "curve_fit", "ins_increment", "recompute")
 
 
 @dataclass(frozen=True)
@@ -97,3 +104,59 @@ def measurement_times(t0: float, t_end: float, period: float, latency: Latency,
         return sequential_times(t0 + period, t_end, latency, rng, grid)
     t = sample_times(t_end, period, t0 + period)
     return t, t + (0.0 if latency.is_zero else latency.draw(len(t), rng))
+
+
+class TimingConfig(_Model):
+    """When a sensor's measurements become available and how the filter treats the delay.
+
+    A measurement describes its time of validity ``t`` and reaches the filter at the
+    first epoch at or after its arrival.  Latency (simulation): ``latency_s`` (fixed),
+    ``latency_range_s`` [lo, hi] (uniform per measurement) or ``latency_list_s``
+    (cycled); none = available when taken.  ``sequential``: the next measurement starts
+    when the previous one ends (instead of every ``period_s``).
+
+    ``delay_compensation`` — how the residual bridges validity and epoch of use:
+    ``interpolate`` (default: the INS at the IMU sample nearest the time of validity in
+    the interval that ends at the epoch, moved by velocity x the remaining lag),
+    ``none`` (the INS at the epoch: the delayed value used as if current),
+    ``curve_fit`` (polynomial of ``curve_fit_degree`` through the last
+    ``curve_fit_points`` values, extrapolated to the epoch of use), ``ins_increment``
+    (paper 004 eq. 6: the INS carried back by its own increments since the time of
+    validity) or ``recompute`` (re-run the filter from the epoch of validity; the exact,
+    costly reference).
+    """
+
+    latency_s: float | None = Field(default=None, ge=0.0)
+    latency_range_s: tuple[float, float] | None = None
+    latency_list_s: list[float] | None = None
+    sequential: bool = False
+    delay_compensation: Literal[DELAY_COMPENSATIONS] = "interpolate"
+    curve_fit_degree: Literal[1, 2, 3] = 2
+    curve_fit_points: int = Field(default=4, ge=2)
+
+    @model_validator(mode="after")
+    def _one_latency(self):
+        given = [x is not None for x in (self.latency_s, self.latency_range_s,
+                                         self.latency_list_s)]
+        if sum(given) > 1:
+            raise ValueError("give only one of latency_s, latency_range_s, latency_list_s")
+        if self.latency_range_s is not None and not (
+                0.0 <= self.latency_range_s[0] <= self.latency_range_s[1]):
+            raise ValueError("latency_range_s must be [low, high] with 0 <= low <= high")
+        if self.sequential and not any(given):
+            raise ValueError("sequential timing needs a latency")
+        if self.curve_fit_points < self.curve_fit_degree + 1:
+            raise ValueError("curve_fit_points must be at least curve_fit_degree + 1")
+        return self
+
+    def latency(self) -> Latency:
+        if self.latency_range_s is not None:
+            return Latency.uniform(*self.latency_range_s)
+        if self.latency_list_s is not None:
+            return Latency.from_list(self.latency_list_s)
+        return Latency.fixed(self.latency_s or 0.0)
+
+    @property
+    def delayed(self) -> bool:
+        """Whether measurements arrive after their time of validity."""
+        return not (self.latency().is_zero and not self.sequential)

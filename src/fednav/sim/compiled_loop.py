@@ -34,7 +34,7 @@ from ..filters.ukf import _predict_moments, _sigma_points, _update
 from ..ins.error_model import _interval, _transition
 from ..ins.strapdown import _correct
 from ..ins.strapdown import _run as _strapdown_run
-from ..sensors.models import euler_error_nb
+from ..sensors.measurement import euler_error_nb
 
 #: Sensor kinds the compiled loop measures with (see :func:`_residual`).
 KINDS = {"star": 0, "sar": 1}
@@ -55,7 +55,7 @@ def supported(ftype: str, aiding, timing: dict, central: bool, constraint, fdi_a
     fdi_off = (all(v is None for v in fdi_alpha.values()) if isinstance(fdi_alpha, dict)
                else fdi_alpha is None)
     return (ftype == "ukf" and bool(aiding) and all(a in KINDS for a in aiding)
-            and all(tm.delay_compensation == "none" for tm in timing.values())
+            and all(tm.delay_compensation in ("none", "interpolate") for tm in timing.values())
             and not central and constraint is None and fdi_off and reset and incs is None)
 
 

@@ -2,7 +2,7 @@
 
 A dataset scenario (YAML, :class:`DatasetConfig`) gives the start, the motion as segments
 (:class:`~fednav.sim.scenario.SegmentConfig`), the IMU error figures
-(:class:`~fednav.sim.scenario.ImuConfig`), the GNSS receiver (rate, noise, antenna lever arm)
+(:class:`~fednav.sensors.imu.ImuConfig`), the GNSS receiver (rate, noise, antenna lever arm)
 and optionally a velocity sensor. :func:`simulate_dataset` draws one realisation from
 its seed; :func:`write_csv_dataset` and :func:`write_navego_dataset` write it in the
 layouts of ``docs/data-formats.md`` — ``imu.csv gnss.csv velocity.csv reference.csv``
@@ -24,7 +24,8 @@ from pydantic import Field
 
 from ..core import attitude, earth, units
 from ..core.config import _Model, load_model
-from .scenario import ImuConfig, SegmentConfig, StartConfig
+from ..sensors.imu import ImuConfig
+from .scenario import SegmentConfig, StartConfig
 
 _V3 = tuple[float, float, float]
 
@@ -131,20 +132,21 @@ def simulate_dataset(cfg: DatasetConfig) -> Dataset:
 
 
 def process_config(ds: Dataset) -> dict:
-    """The ``fednav process --config`` mapping with the dataset's true noise figures."""
+    """The system description (``fednav process --config``) with the dataset's true noise
+    figures."""
     cfg, dt = ds.cfg, ds.cfg.imu_period_s
-    n = cfg.imu.noise_model(dt)
     e = cfg.imu.errors(dt)
-    imu = {"gyro_arw_rad_sqrt_s": n.gyro_arw, "accel_vrw_mps_sqrt_s": n.accel_vrw,
+    imu = {"gyro_arw_rad_sqrt_s": e.gyro_arw, "accel_vrw_mps_sqrt_s": e.accel_vrw,
            "gyro_bias_radps": float(e.gyro_bias), "accel_bias_mps2": float(e.accel_bias),
-           "gyro_markov_radps": n.gyro_markov_sigma, "accel_markov_mps2": n.accel_markov_sigma}
-    for key, tau in (("gyro_tau_s", n.gyro_markov_tau), ("accel_tau_s", n.accel_markov_tau)):
+           "gyro_markov_radps": e.gyro_markov_sigma,
+           "accel_markov_mps2": e.accel_markov_sigma}
+    for key, tau in (("gyro_tau_s", e.gyro_markov_tau), ("accel_tau_s", e.accel_markov_tau)):
         if np.isfinite(tau):
             imu[key] = float(tau)
-    return {"imu": {k: float(v) for k, v in imu.items()},
-            "gnss_sigma_pos_m": list(map(float, cfg.gnss.sigma_pos_m)),
-            "gnss_sigma_vel_mps": list(map(float, cfg.gnss.sigma_vel_mps)),
-            "gnss_lever_m": list(map(float, cfg.gnss.lever_m))}
+    sensors = {"gnss": {"sigma_pos_m": list(map(float, cfg.gnss.sigma_pos_m)),
+                        "sigma_vel_mps": list(map(float, cfg.gnss.sigma_vel_mps)),
+                        "lever_m": list(map(float, cfg.gnss.lever_m))}}
+    return {"imu": {k: float(v) for k, v in imu.items()}, "sensors": sensors}
 
 
 def write_csv_dataset(ds: Dataset, out) -> list[Path]:

@@ -20,9 +20,19 @@ from ..filters import FederatedFilter, FilterError, KalmanFilter, LinearModel, m
 from ..ins import error_model as em
 from ..ins.strapdown import STATE_LLA, STATE_Q, STATE_VEL, Strapdown, quat_to_dcm_nb
 from ..ins.total_state import GnssTotal, StarTotal, TotalStateUKF
-from ..sensors import Barometer, MeasurementSeries, corrupt_imu, inject_faults
+from ..navigator.system import imu_noise_model
+from ..sensors import (
+    MODELS,
+    Barometer,
+    MeasurementSeries,
+    NavSnapshot,
+    StackedModel,
+    WindConstraint,
+    corrupt_imu,
+    inject_faults,
+)
 from ..sensors.delays import ANGLE_COLUMNS, InsIncrements, curve_fit_value
-from ..sensors.models import MODELS, NavSnapshot, StackedModel, WindConstraint
+from ..sensors.registry import SENSORS
 from . import compiled_loop
 from .scenario import Scenario
 
@@ -78,10 +88,10 @@ def make_run_data(scn: Scenario, seed: int, max_time: float | None = None) -> Ru
     dth, dv, _ = corrupt_imu(truth.dtheta, truth.dv, truth.dt, scn.imu.errors(truth.dt), rng)
     series = {}
     faults = [f.fault() for f in scn.faults]
-    for name in ("star", "sar", "gnss", "baro", "sarvel", "airdata"):
-        cfg = getattr(scn.sensors, name)
+    for name in SENSORS:  # registry order: the order of the draws
+        cfg = scn.sensors.get(name)
         if cfg is not None:
-            series[name] = inject_faults(cfg.simulate(truth, rng), faults)
+            series[name] = inject_faults(cfg.simulate(truth, rng, name), faults)
     baro = scn.sensors.baro
     h_ref = (Barometer.on_imu_grid(series["baro"], truth.t[:-1])
              if baro is not None and baro.damping_loop else np.full(len(truth.t) - 1, np.nan))
@@ -97,13 +107,12 @@ def _initial_ins(scn: Scenario, truth, data: RunData) -> Strapdown:
 
 def initial_covariance(scn: Scenario) -> np.ndarray:
     """Filter P0 (filter units) from the scenario's initial errors and IMU specification."""
-    ie, imu = scn.initial_errors, scn.imu
+    ie = scn.initial_errors
+    _, gb, ab = imu_noise_model(scn, scn.imu_period_s)
     sd = np.r_[
         units.arcsec(np.asarray(ie.attitude_arcsec)), np.full(3, ie.velocity_mps),
         np.broadcast_to(np.asarray(ie.position_m, dtype=float), (3,)),
-        np.full(3, units.deg_per_h(imu.gyro_bias_deg_h)),
-        np.full(3, units.deg_per_h(imu.gyro_markov_deg_h)),
-        np.full(3, units.micro_g(max(imu.accel_bias_ug, imu.accel_markov_ug))),
+        np.full(3, gb), np.full(3, scn.imu.si("gyro_markov") or 0.0), np.full(3, ab),
     ]
     sd = np.maximum(sd / em.SCALE, 1e-6)  # keep P0 positive definite for states set to 0
     return np.diag(sd**2)
@@ -159,7 +168,7 @@ class _ClosedLoop:
         self.ins = _initial_ins(scn, truth, data)
         self.fed = _build_filter(scn, aiding, ftype) if aiding else None
         self.central = scn.filter.architecture == "centralized"
-        self.noise = scn.imu.noise_model(self.dt)
+        self.noise = imu_noise_model(scn, self.dt)[0]
         self.baro_gains = self.ins.baro_gains[:2]
         baro = scn.sensors.baro
         self.baro_q = (baro.sigma_m**2 * baro.period_s
@@ -168,7 +177,7 @@ class _ClosedLoop:
         self.comp_a = np.zeros(3)
         self.timing = {}
         for a in aiding:
-            tm = getattr(scn.sensors, a).timing
+            tm = scn.sensors[a].timing
             if delay is not None and not (tm.latency().is_zero and not tm.sequential):
                 tm = tm.model_copy(update={"delay_compensation": delay})
             self.timing[a] = tm
@@ -415,7 +424,7 @@ def total_state_models(scn: Scenario, T: float, dt: float):
     time (random walk when it is infinite), driven by the bias random walk and the Markov
     noise; ``Qw`` is the white gyro/accelerometer noise averaged over one interval.
     """
-    noise = scn.imu.noise_model(dt)
+    noise = imu_noise_model(scn, dt)[0]
     P18 = initial_covariance(scn)
     P0 = P18[np.ix_(_NAV_BIAS, _NAV_BIAS)]
     decay = np.r_[np.full(3, np.exp(-T / noise.gyro_markov_tau)),

@@ -1,0 +1,312 @@
+"""The system description: one schema for every navigation system fednav runs.
+
+A system description (YAML, or a mapping; :func:`load_system`) says what the navigator
+is made of::
+
+    imu:        the IMU's error figures (fednav.sensors.imu.ImuConfig)
+    sensors:    each aiding sensor's section, by registered name (fednav.sensors.registry):
+                noise, lever arm, period, latency handling
+    aiding:     which of them feed the filter (default: every one that can)
+    constraint: wind — the air-data constraint in every local filter (paper 000)
+    filter:     local filter type (any name of fednav.filters.REGISTRY, per local filter
+                in ``locals``), federated / centralized, sharing, reset, fault detection,
+                period, the filter's IMU bias model
+    alignment:  how recorded data find the initial attitude
+    smoother:   also run the RTS smoother
+    output_rate_hz: solution rows per second (default: every IMU sample)
+
+The papers' scenario files are a system description plus the flight and the experiment
+(:class:`fednav.sim.scenario.Scenario` extends :class:`System`); the processing config of
+``fednav process`` is one.  Units are in the key names; everything is converted to SI
+here.  Errors are one line naming the key (and the file).
+"""
+
+from __future__ import annotations
+
+import warnings
+from typing import Literal
+
+import numpy as np
+from pydantic import Field, field_validator, model_validator
+
+from ..core.config import _Model, nested_error, read_mapping, validate
+from ..filters import REGISTRY as FILTERS
+from ..ins.error_model import ImuNoiseModel
+from ..sensors.imu import ImuConfig
+from ..sensors.registry import SENSORS, SensorSet, check_names
+
+_V3 = tuple[float, float, float]
+
+
+def _check_filter(v: str) -> str:
+    if v.lower() not in FILTERS:
+        raise ValueError(f"unknown filter '{v}'; registered: {', '.join(sorted(FILTERS))}")
+    return v.lower()
+
+
+def _check_locals(names) -> None:
+    known = set(SENSORS) | {"central"}
+    for k in names:
+        if k not in known:
+            raise ValueError(f"unknown local filter '{k}'; local filters are named after "
+                             f"their sensor ({', '.join(sorted(SENSORS))}) or 'central'")
+
+
+class LocalFilterConfig(_Model):
+    """Settings of one local filter that differ from ``filter``'s."""
+
+    type: str
+
+    @field_validator("type")
+    @classmethod
+    def _type(cls, v):
+        return _check_filter(v)
+
+
+class FilterConfig(_Model):
+    """The estimator.
+
+    ``type``: the local filters' estimator (a name of the filter registry: kf ekf ukf
+    sukf cukf cekf aekf raukf sghqf aasghqf pf); ``locals``: another type for some local
+    filters (by sensor name).  ``state``: ``error`` (closed-loop error-state filters,
+    18 states) or ``total`` (paper 003: a total-state UKF master time-updates the
+    navigation state, the local filters update linearly).  ``architecture``:
+    ``federated`` (one local filter per aiding sensor, fused) or ``centralized`` (one
+    filter; each epoch stacks H and R of the sensors that delivered).  ``sharing`` of the
+    information between the local filters (and the ``master`` filter, which has no
+    sensor): equal, fixed (``fixed_factors``) or adaptive (paper 002, eq. 13).  ``reset``:
+    fusion-reset every epoch.  ``fdi_alpha``: chi-square fault detection level, one for
+    every local filter or by name; ``fdi_recovery``: passes in a row before an isolated
+    local filter returns.  ``period_s``: the filter epoch (default: the period of the
+    first aiding sensor's data).  ``substeps`` of the nonlinear error propagation;
+    ``alpha``, ``beta``, ``kappa`` of the unscented transform; ``grid_level`` of the
+    sparse-grid filters.  ``accel_bias``: the filter's accelerometer-bias state —
+    ``random_walk`` (a random constant, 1-sigma ``hypot(bias, markov)``, driven by the
+    random walk whose short-term growth equals the Gauss–Markov process's) or
+    ``gauss_markov`` (the Gauss–Markov process with its correlation time; 1-sigma
+    ``max(bias, markov)``).
+    """
+
+    type: str = "kf"
+    locals: dict[str, LocalFilterConfig] = {}
+    state: Literal["error", "total"] = "error"
+    architecture: Literal["federated", "centralized"] = "federated"
+    period_s: float | None = Field(default=None, gt=0.0)
+    alpha: float = Field(default=1e-3, gt=0.0)
+    beta: float = 2.0
+    kappa: float = 0.0
+    sharing: Literal["equal", "fixed", "adaptive"] = "equal"
+    fixed_factors: dict[str, float] | None = None
+    master: bool = False
+    reset: bool = True
+    substeps: int = Field(default=1, ge=1)
+    fdi_alpha: float | dict[str, float] | None = None
+    fdi_recovery: int = Field(default=1, ge=1)
+    grid_level: int = Field(default=3, ge=1, le=5)
+    accel_bias: Literal["random_walk", "gauss_markov"] = "random_walk"
+
+    @field_validator("type")
+    @classmethod
+    def _type(cls, v):
+        return _check_filter(v)
+
+    @field_validator("fdi_alpha")
+    @classmethod
+    def _alpha(cls, v):
+        values = v.values() if isinstance(v, dict) else [] if v is None else [v]
+        if any(not 0.0 < a < 1.0 for a in values):
+            raise ValueError("test level must be in (0, 1)")
+        _check_locals(v if isinstance(v, dict) else {})
+        return v
+
+    @field_validator("locals")
+    @classmethod
+    def _locals(cls, v):
+        _check_locals(v)
+        return v
+
+    def type_of(self, local: str) -> str:
+        """The estimator of local filter ``local``."""
+        c = self.locals.get(local)
+        return self.type if c is None else c.type
+
+
+class AlignmentConfig(_Model):
+    """How recorded data find the initial attitude (:mod:`fednav.ins.alignment`).
+
+    ``initial_attitude``: ``align`` (levelling while static, heading from the GNSS course
+    once moving), ``file`` (the data file's attitude) or ``coarse`` (level over
+    ``coarse_seconds`` at the start; heading ``coarse_heading_deg``, else the GNSS course
+    then when faster than 0.5 m/s, else 0); ``initial_attitude_sigma_deg`` [pitch, roll,
+    heading] overrides what the method claims."""
+
+    initial_attitude: Literal["align", "file", "coarse"] = "align"
+    initial_attitude_sigma_deg: _V3 | None = None
+    coarse_heading_deg: float | None = None
+    coarse_seconds: float = Field(1.0, gt=0.0)
+
+
+#: Keys of the flat processing config of fednav 0.1 -> their place in a system description.
+LEGACY_KEYS = {
+    "period_s": ("filter", "period_s"), "substeps": ("filter", "substeps"),
+    "fdi_alpha": ("filter", "fdi_alpha"), "fdi_recovery": ("filter", "fdi_recovery"),
+    "gnss_sigma_pos_m": ("sensors", "gnss", "sigma_pos_m"),
+    "gnss_sigma_vel_mps": ("sensors", "gnss", "sigma_vel_mps"),
+    "gnss_lever_m": ("sensors", "gnss", "lever_m"),
+    "gnss_time_offset_s": ("sensors", "gnss", "time_offset_s"),
+    "velocity_time_offset_s": ("sensors", "velocity", "time_offset_s"),
+    "velocity_axes": ("sensors", "velocity", "axes"),
+    "velocity_sigma_mps": ("sensors", "velocity", "sigma_mps"),
+    "imu_max_bridge_s": ("imu", "max_bridge_s"),
+    "initial_attitude": ("alignment", "initial_attitude"),
+    "initial_attitude_sigma_deg": ("alignment", "initial_attitude_sigma_deg"),
+    "coarse_heading_deg": ("alignment", "coarse_heading_deg"),
+    "coarse_seconds": ("alignment", "coarse_seconds"),
+}
+
+
+def _translate_legacy(data: dict) -> dict:
+    """A flat fednav 0.1 processing config rewritten as a system description."""
+    old = [k for k in data if k in LEGACY_KEYS]
+    if not old:
+        return data
+    out = dict(data)
+    for k in old:
+        *path, leaf = LEGACY_KEYS[k]
+        d = out
+        for p in path:
+            if not isinstance(d.get(p) or {}, dict):
+                break  # the section is malformed: its own error says so, the key stays
+            d[p] = dict(d.get(p) or {})
+            d = d[p]
+        else:
+            if leaf in d:
+                raise ValueError(f"'{k}' and '{'.'.join(LEGACY_KEYS[k])}' are the same "
+                                 f"setting; give it once")
+            d[leaf] = out.pop(k)
+    warnings.warn("processing-config keys of fednav 0.1 (" + ", ".join(
+        f"{k} -> {'.'.join(LEGACY_KEYS[k])}" for k in old) + ") are read for one more "
+        "release", FutureWarning, stacklevel=2)
+    return out
+
+
+class System(_Model):
+    """A navigation system: IMU, aiding sensors, estimator (see the module docstring)."""
+
+    imu: ImuConfig = ImuConfig()
+    sensors: SensorSet = SensorSet()
+    aiding: list[str] | None = None
+    constraint: Literal["wind"] | None = None
+    filter: FilterConfig = FilterConfig()
+    alignment: AlignmentConfig = AlignmentConfig()
+    smoother: bool = False
+    output_rate_hz: float | None = Field(default=None, gt=0.0)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _legacy(cls, data):
+        return _translate_legacy(data) if isinstance(data, dict) else data
+
+    @field_validator("aiding")
+    @classmethod
+    def _aiding(cls, v):
+        return None if v is None else check_names(v, "aiding sensor", aiding=True)
+
+    @model_validator(mode="after")
+    def _consistent(self):
+        if self.aiding is not None:
+            missing = [a for a in self.aiding if a not in self.sensors]
+            if missing:
+                raise nested_error(["aiding"], f"sensor '{missing[0]}' has no section in "
+                                               f"sensors")
+        if self.constraint == "wind" and self.sensors.airdata is None:
+            raise nested_error(["constraint"], "the wind constraint needs sensors.airdata")
+        return self
+
+    def aiding_sensors(self, available=None) -> list[str]:
+        """The sensors that feed the filter: ``aiding``, else every configured sensor that
+        can aid (of those in ``available``, when given)."""
+        if self.aiding is not None:
+            names = list(self.aiding)
+        else:
+            names = [n for n in self.sensors if SENSORS[n].aiding]
+        return names if available is None else [n for n in names if n in available]
+
+
+def load_system(source) -> System:
+    """A validated :class:`System` from a YAML file path, a mapping or a System (errors:
+    :class:`~fednav.core.config.ConfigError`, one line naming the key and the file).
+
+    A paper's scenario file is accepted too: its system description is returned (the
+    flight and the experiment are left out)."""
+    if isinstance(source, System):
+        return source
+    if isinstance(source, dict):
+        data, where = source, "system description"
+    else:
+        data = read_mapping(source, "system description")
+        where = f"system description file {source}"
+    if _SCENARIO_KEYS & set(data):
+        data = {k: v for k, v in data.items() if k in System.model_fields}
+    return validate(data, System, where)
+
+
+#: Keys that make a file a scenario (a system description plus flight and experiment).
+_SCENARIO_KEYS = {"start", "segments", "modes", "imu_period_s"}
+
+
+# ---------------------------------------------------------------- the filter's IMU model
+def imu_noise_model(system: System, dt: float, file_errors=None
+                    ) -> tuple[ImuNoiseModel, float | None, float | None]:
+    """The filter's IMU model and the 1-sigma of its gyro constant bias [rad/s] and
+    accelerometer bias [m/s^2] states (for P0), from the system's figures, each left-out
+    figure taken from ``file_errors`` (a data file's :class:`~fednav.io.ImuErrors`,
+    its largest axis) when given, else zero (infinite correlation time).  ``dt``: the IMU
+    period [s] (per-sample white figures).
+
+    ``filter.accel_bias`` chooses the accelerometer-bias state (see
+    :class:`FilterConfig`); the gyro has a constant-bias state and a Gauss–Markov one.
+    """
+    imu = system.imu
+    f = imu_figures(imu, file_errors)
+    inf = float("inf")
+    # White noise: the system's (density and per-sample figures), else the file's.
+    given = imu.si("gyro_arw") is not None or imu.gyro_white_deg_h is not None
+    arw = imu.arw(dt) if given or f["gyro_arw"] is None else f["gyro_arw"]
+    given = imu.si("accel_vrw") is not None or imu.accel_white_ug is not None
+    vrw = imu.vrw(dt) if given or f["accel_vrw"] is None else f["accel_vrw"]
+    g_markov, g_tau = f["gyro_markov"] or 0.0, f["gyro_tau"] or inf
+    a_markov, a_tau = f["accel_markov"] or 0.0, f["accel_tau"] or inf
+    gb, ab = f["gyro_bias"] or 0.0, f["accel_bias"] or 0.0
+    if system.filter.accel_bias == "gauss_markov":
+        n = ImuNoiseModel(gyro_arw=arw, accel_vrw=vrw, gyro_bias_rw=imu.gyro_rw(),
+                          accel_bias_rw=imu.accel_rw(), gyro_markov_sigma=g_markov,
+                          gyro_markov_tau=g_tau, accel_markov_sigma=a_markov,
+                          accel_markov_tau=a_tau)
+        return n, gb, max(ab, a_markov)
+    walk = a_markov * np.sqrt(2.0 / a_tau) if np.isfinite(a_tau) else 0.0
+    if imu.accel_bias_rw_ug_sqrt_h:
+        walk = float(np.hypot(walk, imu.accel_rw()))
+    n = ImuNoiseModel(gyro_arw=arw, accel_vrw=vrw, gyro_bias_rw=imu.gyro_rw(),
+                      gyro_markov_sigma=g_markov, gyro_markov_tau=g_tau, accel_bias_rw=walk)
+    return n, gb, float(np.hypot(ab, a_markov))
+
+
+#: Each figure of :data:`fednav.sensors.imu.FIGURES` and the field of a data file's
+#: :class:`~fednav.io.ImuErrors` that gives it.
+FILE_FIELDS = {"gyro_arw": "gyro_arw", "accel_vrw": "accel_vrw", "gyro_bias": "gyro_bias",
+               "accel_bias": "accel_bias", "gyro_markov": "gyro_markov",
+               "accel_markov": "accel_markov", "gyro_tau": "gyro_tau",
+               "accel_tau": "accel_tau"}
+
+
+def imu_figures(imu: ImuConfig, file_errors=None) -> dict[str, float | None]:
+    """Every IMU figure (SI, by figure name): the system's, else the data file's (its
+    largest axis), else None."""
+    out = {}
+    for key, name in FILE_FIELDS.items():
+        v = imu.si(key)
+        if v is None and file_errors is not None:
+            v = getattr(file_errors, name)
+        out[key] = None if v is None else float(np.max(v))
+    return out

@@ -1,0 +1,91 @@
+"""What a sensor module declares: its section of the system description and its entry
+in the sensor registry (:mod:`fednav.sensors.registry`).
+
+A sensor module holds, for one aiding sensor, everything fednav knows of it:
+
+* a :class:`SensorConfig` subclass — its keys in a system description or scenario file
+  (noise in the units its key names carry, period, lever arm, timing) and the two objects
+  built from them: the simulator (``sensor()``, turning a true trajectory into a
+  :class:`~fednav.sensors.base.MeasurementSeries`) and the filter-side measurement model
+  (``model()``, :mod:`fednav.sensors.measurement`);
+* its CSV file layout (:class:`Column` s after ``t_s``);
+* a :class:`SensorSpec` naming all of it, which one line of the registry adds.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from pydantic import Field
+
+from ..core.config import ConfigError, _Model
+from .measurement import Kernels
+from .timing import TimingConfig, measurement_times
+
+
+class SensorConfig(_Model):
+    """Common to every sensor's section: its period (for simulation) and timing."""
+
+    period_s: float | None = Field(default=None, gt=0.0)
+    timing: TimingConfig = TimingConfig()
+
+    def sensor(self):
+        """The simulator of this sensor (a frozen dataclass with ``simulate``)."""
+        raise NotImplementedError
+
+    def model(self):
+        """The filter-side measurement model (residual, ``h``, ``H``, ``R``)."""
+        raise NotImplementedError
+
+    def sigma(self) -> np.ndarray | None:
+        """1-sigma of each component of ``z`` (the units of the sensor's series), or None
+        when the configuration leaves it to the data."""
+        return None
+
+    def simulate(self, truth, rng, name: str = "sensor"):
+        """The sensor's measurements over the flight, with their timing."""
+        if self.period_s is None:
+            raise ConfigError(f"sensors.{name}.period_s: needed to simulate the sensor")
+        tm = self.timing
+        if not tm.delayed:
+            return self.sensor().simulate(truth, rng)
+        t, ta = measurement_times(float(truth.t[0]), float(truth.t[-1]), self.period_s,
+                                  tm.latency(), tm.sequential, rng, truth.dt)
+        return self.sensor().simulate(truth, rng, t, ta)
+
+
+@dataclass(frozen=True)
+class Column:
+    """One column of a sensor's CSV file: its header ``name`` (unit in the name), the
+    factor that turns its values into the SI value of ``z`` and, for angles, whether it
+    is wrapped to [0, 2 pi)."""
+
+    name: str
+    to_si: float = 1.0
+    wrap_2pi: bool = False
+
+
+@dataclass(frozen=True)
+class SensorSpec:
+    """A registered sensor.
+
+    ``name``: its key in ``sensors:``, the name of its local filter and of its CLI file
+    option; ``summary``: one line for the docs and ``--help``; ``config``: its section;
+    ``dim``: components of its residual; ``columns``: its CSV file after ``t_s`` (one per
+    component of ``z``, in order); ``kernels``: its compiled model (None: the navigator's
+    Python loop only); ``aiding``: whether it can feed a local filter (air data only
+    constrains); ``angles``: components of ``z`` that are angles (unwrapped before curve
+    fitting); ``latlon``: components holding latitude and longitude (faults are metric
+    offsets there).
+    """
+
+    name: str
+    summary: str
+    config: type[SensorConfig]
+    dim: int
+    columns: tuple[Column, ...] = ()
+    kernels: Kernels | None = None
+    aiding: bool = True
+    angles: tuple[int, ...] = ()
+    latlon: tuple[int, int] | None = None

@@ -1,0 +1,130 @@
+"""A velocity sensor in the navigation frame (visual odometry, DVL output in ENU ...).
+
+Section ``sensors.velocity``: ``sigma_mps`` ([east, north, up]; the file's covariance
+when left out), ``lever_m`` (body right-forward-up), ``axes`` (what the file's three
+columns hold, e.g. ``[N, E, U]``; a leading ``-`` flips a sign), ``time_offset_s`` (added
+to the file's time stamps), ``period_s``.  File columns: ``t_s, vE_mps, vN_mps, vU_mps``
+[``, sigma_vE_mps, sigma_vN_mps, sigma_vU_mps``] (:func:`fednav.io.read_velocity_csv`).
+Residual: INS-derived sensor velocity - measured, ENU [m/s] (linear).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+from pydantic import field_validator
+
+from ..core import attitude, earth
+from ..core.units import ARCMIN
+from .base import MeasurementSeries, flight_times
+from .measurement import (
+    JACOBIAN,
+    RESIDUAL,
+    KernelModel,
+    Kernels,
+    lever_offsets,
+    predict_linear,
+    skew_into,
+)
+from .spec import Column, SensorConfig, SensorSpec
+
+_V3 = tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class VelocitySensor:
+    """ENU velocity of the point at ``lever`` (body, m) with white noise ``sigma``
+    ([east, north, up] m/s) every ``period`` [s]."""
+
+    sigma: tuple
+    lever: tuple
+    period: float
+
+    def simulate(self, truth, rng: np.random.Generator, t=None,
+                 t_avail=None) -> MeasurementSeries:
+        t = flight_times(truth, self.period, t)
+        idx = np.rint((t - truth.t[0]) / truth.dt).astype(int)
+        w = truth.dtheta[np.maximum(idx - 1, 0)] / truth.dt
+        _, v = earth.lever_arm_point(truth.lla[idx], truth.vel[idx],
+                                     attitude.euler_to_dcm(truth.euler[idx]), w, self.lever)
+        sig = np.asarray(self.sigma, dtype=float)
+        z = v + rng.standard_normal(v.shape) * sig
+        return MeasurementSeries("velocity", t, z, sig.copy(), t_avail)
+
+
+@numba.njit(RESIDUAL, cache=True)
+def residual(lla, vel, C, omega, z, aux, out):
+    _, v = lever_offsets(C, omega, aux[0], aux[1], aux[2])
+    for j in range(3):
+        out[j] = vel[j] + v[j] - z[j]
+
+
+@numba.njit(JACOBIAN, cache=True)
+def jacobian(lla, vel, C, omega, aux, H):
+    H[0, 3] = H[1, 4] = H[2, 5] = 1.0
+    _, v = lever_offsets(C, omega, aux[0], aux[1], aux[2])
+    skew_into(H, 0, 0, v[0], v[1], v[2], ARCMIN)
+
+
+class VelocityENU(KernelModel):
+    """A velocity sensor at ``lever`` (body, m): residual = INS-derived sensor velocity -
+    measured, ENU [m/s]; ``R`` is the sensor's covariance."""
+
+    kind = "velocity"
+    dim = 3
+    kernels = Kernels(residual, jacobian, predict_linear, linear=True)
+
+    def __init__(self, lever=(0.0, 0.0, 0.0)):
+        super().__init__(lever)
+        self.lever = self.aux
+
+    def R(self, cov) -> np.ndarray:
+        c = np.asarray(cov, dtype=float)
+        return np.diag(c**2) if c.ndim == 1 else c
+
+
+class VelocityConfig(SensorConfig):
+    """Velocity sensor: 1-sigma [east, north, up] m/s (None: the file's covariance), lever
+    arm, the file's axis order and a time offset."""
+
+    sigma_mps: _V3 | None = None
+    lever_m: _V3 = (0.0, 0.0, 0.0)
+    axes: tuple[str, str, str] = ("E", "N", "U")
+    time_offset_s: float = 0.0
+
+    @field_validator("axes")
+    @classmethod
+    def _axes(cls, v):
+        names = [a.lstrip("+-").upper() for a in v]
+        if sorted(names) != ["E", "N", "U"]:
+            raise ValueError(f"must name E, N and U once each (a leading '-' flips a sign), "
+                             f"got {list(v)}")
+        return v
+
+    @field_validator("sigma_mps")
+    @classmethod
+    def _sigma(cls, v):
+        if v is not None and min(v) <= 0:
+            raise ValueError("sigmas must be positive")
+        return v
+
+    def sensor(self) -> VelocitySensor:
+        from ..core.config import ConfigError
+
+        if self.sigma_mps is None:
+            raise ConfigError("sensors.velocity.sigma_mps: needed to simulate the sensor")
+        return VelocitySensor(self.sigma_mps, self.lever_m, self.period_s)
+
+    def model(self) -> VelocityENU:
+        return VelocityENU(self.lever_m)
+
+    def sigma(self) -> np.ndarray | None:
+        return None if self.sigma_mps is None else np.asarray(self.sigma_mps, dtype=float)
+
+
+SPEC = SensorSpec("velocity", "velocity sensor (visual odometry, DVL ...): ENU velocity "
+                  "at its lever arm", VelocityConfig, dim=3,
+                  columns=(Column("vE_mps"), Column("vN_mps"), Column("vU_mps")),
+                  kernels=VelocityENU.kernels)
