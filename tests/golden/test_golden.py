@@ -35,8 +35,7 @@ def _tolerance(name: str, key: str) -> float:
 def _compare(name: str, got: dict) -> None:
     want = np.load(gc.HERE / f"{name}.npz")
     missing = sorted(set(want.files) - set(got))
-    extra = sorted(set(got) - set(want.files))
-    assert not missing and not extra, f"{name}: missing {missing[:5]}, extra {extra[:5]}"
+    assert not missing, f"{name}: missing {missing[:5]}"  # (new outputs may be added)
     worst = []
     for key in want.files:
         w, g = want[key], np.asarray(got[key], dtype=float)

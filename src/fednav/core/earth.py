@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numba
 import numpy as np
+from numba.extending import register_jitable
 
 A = 6378137.0  #: semi-major axis [m]
 F = 1.0 / 298.257223563  #: flattening
@@ -28,9 +29,10 @@ def radii(lat):
     return radii_of_sin2(np.sin(lat) ** 2)
 
 
+@register_jitable
 def radii_of_sin2(s2):
     """:func:`radii` from the squared sine of the latitude (for compiled loops that
-    already hold it)."""
+    already hold it; plain Python, and callable from compiled code)."""
     w = 1.0 - E2 * s2
     rn = A / np.sqrt(w)
     rm = rn * (1.0 - E2) / w
@@ -81,16 +83,21 @@ def llh_to_ecef(lat, lon, h):
     )
 
 
+@register_jitable
+def moved(lat, lon, h, de, dn, du):
+    """Latitude, longitude, height moved by ``de``, ``dn``, ``du`` metres east, north, up
+    (radii of curvature at the start; scalars or arrays; compiled: :func:`moved_nb`)."""
+    rm, rn = radii_of_sin2(np.sin(lat) ** 2)
+    return lat + dn / (rm + h), lon + de / ((rn + h) * np.cos(lat)), h + du
+
+
 def move_enu(lla, d_enu) -> np.ndarray:
     """Positions ``lla`` (..., 3) moved by ``d_enu`` (..., 3) metres east, north, up (the
     inverse of :func:`llh_difference_enu`, radii of curvature at ``lla``)."""
     lla = np.asarray(lla, dtype=float)
     d = np.asarray(d_enu, dtype=float)
-    lat, h = lla[..., 0], lla[..., 2]
-    rm, rn = radii(lat)
-    return np.stack([lat + d[..., 1] / (rm + h),
-                     lla[..., 1] + d[..., 0] / ((rn + h) * np.cos(lat)),
-                     h + d[..., 2]], axis=-1)
+    return np.stack(moved(lla[..., 0], lla[..., 1], lla[..., 2], d[..., 0], d[..., 1],
+                          d[..., 2]), axis=-1)
 
 
 def lever_arm_point(lla, vel, C, omega, lever):
@@ -152,5 +159,6 @@ def gravity_nb(lat, h):
     return gravity_of_sin2_nb(np.sin(lat) ** 2, h)
 
 
+moved_nb = numba.njit(cache=True)(moved)
 gravity_gradient_nb = numba.njit(cache=True)(gravity_gradient)
 gravity_dlat_nb = numba.njit(cache=True)(gravity_dlat)

@@ -1,43 +1,34 @@
-"""Post-processing of real data: loosely coupled INS/GNSS (+ velocity sensors) in the
-federated error-state filter, with an optional RTS smoother.
+"""Post-processing of recorded data: the navigator on IMU, GNSS (and velocity-sensor)
+files, with an optional RTS smoother.
 
-The IMU drives the strapdown mechanization (:class:`~fednav.ins.strapdown.Strapdown`) at its
-own rate; every ``period_s`` the 18-state error model (:mod:`fednav.ins.error_model`) is
-propagated and every local filter of the federated filter (``gnss``, and ``velocity``
-when a velocity sensor is given) updates with the measurements that arrived during the
-interval, then the fused estimate is fed back to the INS and the IMU compensation.  A
-measurement taken ``dt`` before the epoch is compared with the INS position moved back
-by ``v dt``.  With equal sharing and fusion-reset the federated filter equals the
-centralized Kalman filter; chi-square fault detection isolates a local filter whose
-measurements disagree (``fdi_alpha``).
+The front end of ``fednav process``: the input checks (units, time offsets, the velocity
+sensor's axes), the initial attitude (:mod:`fednav.ins.alignment`) and P0, then the
+system description run by the :class:`~fednav.navigator.Navigator` — by default a
+loosely coupled federated Kalman filter with one local filter per sensor (``gnss``, and
+``velocity`` when a velocity sensor is given), fusion-reset with equal sharing (which
+equals the centralized filter), a measurement compared with the INS at its time of
+validity — and the solution at every IMU sample with its sigmas, smoothed on request.
 """
 
 from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field, replace
-from typing import NamedTuple
 
 import numpy as np
 
 from ..core import attitude as att
 from ..core import earth, units
-from ..filters import FederatedFilter, KalmanFilter
 from ..filters.smoother import rts_errors
 from ..ins import error_model as em
 from ..ins.alignment import Alignment, align, coarse_level
-from ..ins.strapdown import (
-    STATE_LLA,
-    STATE_Q,
-    STATE_VEL,
-    Strapdown,
-    correct_rows,
-    quat_to_dcm_nb,
-)
+from ..ins.strapdown import correct_rows
 from ..io.data import DataError, GnssData, ImuData, Reference, VelocityData
+from ..navigator.loop import InnovationRecord  # noqa: F401  (fednav.process's name)
+from ..navigator.navigator import InitialState, Navigator
 from ..navigator.system import System, imu_noise_model
 from ..navigator.system import imu_figures as _imu_figures
-from ..sensors import GnssConfig, GnssPosVel, NavSnapshot, VelocityConfig, VelocityENU
+from ..sensors import GnssConfig, GnssPosVel, VelocityConfig
 from ..sensors.imu import FIGURES
 
 #: The processing config of fednav 0.1 is a system description now (one schema); the
@@ -82,22 +73,6 @@ class Solution:
         return Solution(self.t[index], self.lla[index], self.vel[index], self.euler[index],
                         self.sigma[index], self.sigma_euler[index], self.omega[index],
                         self.label, self.fdi)
-
-
-class InnovationRecord(NamedTuple):
-    """One measurement's innovation in :func:`process`: local filter ``local``, time ``t``
-    [s], residual ``r`` and covariance ``S`` of the local filter, the measurement noise
-    ``R`` and the local's information share ``beta`` (its covariance is ``P / beta``, so
-    ``beta (S - R) + R`` is the innovation covariance of the equivalent centralized
-    filter), and whether the update was applied."""
-
-    local: str
-    t: float
-    r: np.ndarray
-    S: np.ndarray
-    R: np.ndarray
-    beta: float
-    accepted: bool
 
 
 @dataclass
@@ -228,13 +203,6 @@ def _initial_covariance(al: Alignment, sig_vel, sig_pos, gb: float, ab: float,
     return P0 / np.outer(em.SCALE, em.SCALE)
 
 
-def _assign(t_meas: np.ndarray, t_epochs: np.ndarray) -> np.ndarray:
-    """Epoch index at or after each measurement (-1 if before the first / after the last)."""
-    k = np.searchsorted(t_epochs, t_meas - 1e-9, side="left")
-    k[(k >= len(t_epochs)) | (t_meas <= t_epochs[0] - 1e-9)] = -1
-    return k
-
-
 def check_units(imu: ImuData, gnss: GnssData) -> list[str]:
     """Refuse IMU data in the wrong unit; warn about GNSS positions that look like radians.
 
@@ -324,96 +292,46 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
     warnings += al.warnings
     C0 = att.euler_to_dcm(al.euler)
     lla0 = earth.move_enu(gnss.lla[0], -(C0 @ lever))
-    ins = Strapdown(lla0, gnss.vel[0], al.euler, dt)
     P0 = _initial_covariance(al, sig_vel, sig_pos, gb, ab, noise)
 
-    locals_ = {"gnss": KalmanFilter(np.zeros(em.N_STATES), P0, name="kf local 'gnss'")}
-    sensors = {"gnss": (GnssPosVel(lever), gnss.t, _assign(gnss.t, t_ep))}
+    # The system the navigator flies: the config with the epoch period and the sensors'
+    # effective settings (the data files' where the config leaves them out).
+    vc = _velocity_cfg(cfg)
+    sensors = {"gnss": gc.model_copy(update={"lever_m": tuple(map(float, lever)),
+                                             "sigma_pos_m": tuple(map(float, sig_pos)),
+                                             "sigma_vel_mps": tuple(map(float, sig_vel))})}
     if velocity is not None:
-        locals_["velocity"] = KalmanFilter(np.zeros(em.N_STATES), P0,
-                                           name="kf local 'velocity'")
-        sensors["velocity"] = (VelocityENU(velocity.lever), velocity.t,
-                               _assign(velocity.t, t_ep))
-    alpha = cfg.filter.fdi_alpha
-    if isinstance(alpha, dict):
-        alpha = {k: v for k, v in alpha.items() if k in locals_}
-    fed = FederatedFilter(locals_, None, sharing="equal", reset=True, fdi_alpha=alpha,
-                          fdi_recovery=cfg.filter.fdi_recovery)
-    # Measurements of each epoch (index lists), in time order per sensor.
-    todo = {}
-    for name, (_, _, k) in sensors.items():
-        order = np.argsort(k, kind="stable")
-        ks = k[order]
-        todo[name] = (order, np.searchsorted(ks, np.arange(n_cycles + 2)))
-
-    nS = ins.state.size
-    states = np.empty((n_cycles + 1, nS))
-    states[0] = ins.state
-    P_post = np.empty((n_cycles + 1, em.N_STATES, em.N_STATES))
-    P_post[0] = P0
-    Phis = np.zeros_like(P_post)
-    Qs = np.zeros_like(P_post)
-    dxs = np.zeros((n_cycles + 1, em.N_STATES))
-    # The IMU-rate solution: the corrected mechanization between epochs, the state after
-    # the feedback at each epoch (row k * n_per).
-    n_rows = n_cycles * n_per + 1
-    rows_q, rows_v, rows_p = np.empty((n_rows, 4)), np.empty((n_rows, 3)), np.empty((n_rows, 3))
-    rows_w = np.empty((n_rows, 3))
-    rows_q[0], rows_v[0], rows_p[0] = (ins.state[STATE_Q], ins.state[STATE_VEL],
-                                       ins.state[STATE_LLA])
+        sensors["velocity"] = vc.model_copy(update={"lever_m": tuple(map(float, (
+            velocity.lever if vc.lever_m is None else vc.lever_m)))})
+    system = cfg.model_copy(update={
+        "filter": cfg.filter.model_copy(update={"period_s": T}),
+        "sensors": cfg.sensors.replace(**sensors), "aiding": list(sensors)})
+    nav = Navigator(system, InitialState(imu.t[i0], lla0, gnss.vel[0], al.euler, P0,
+                                         gyro_bias=al.gyro_bias), dt, imu_errors=imu.errors,
+                    record_rows=True, record_covariance=True,
+                    innovations=innovations is not None)
+    nav.add_measurements("gnss", gnss.t, np.column_stack([gnss.lla, gnss.vel]),
+                         R=np.broadcast_to(R_gnss, (len(gnss.t), 6, 6)))
+    if velocity is not None:
+        model = system.sensors.velocity.model()
+        nav.add_measurements("velocity", velocity.t, velocity.vel,
+                             R=np.array([model.R(c) for c in velocity.cov]))
+    m = n_cycles * n_per
+    nav.add_imu(imu.t[i0:i0 + m], imu.gyro[i0:i0 + m], imu.accel[i0:i0 + m])
+    res = nav.result()
+    if innovations is not None:
+        innovations.extend(res.innovations)
+    rows_q, rows_v, rows_p = res.rows["q"], res.rows["vel"], res.rows["lla"]
+    rows_w = res.rows["omega"]
     rows_w[0] = imu.gyro[i0]
-    comp_g = np.zeros(3) if al.gyro_bias is None else al.gyro_bias.copy()
-    comp_a = np.zeros(3)
-    wb = imu.gyro * dt
-    fb = imu.accel * dt
-    for k in range(1, n_cycles + 1):
-        sl = slice(i0 + (k - 1) * n_per, i0 + k * n_per)
-        dth = wb[sl] - comp_g * dt
-        dvc = fb[sl] - comp_a * dt
-        s0 = ins.state.copy()
-        rec = ins.run(dth, dvc)
-        r = slice((k - 1) * n_per + 1, k * n_per + 1)
-        rows_q[r], rows_v[r], rows_p[r], rows_w[r] = rec["q"], rec["vel"], rec["lla"], dth / dt
-        proc = em.interval_process(s0, ins.state, dvc.sum(axis=0), T, noise,
-                                   nsub=cfg.filter.substeps)
-        fed.predict(proc)
-        Phis[k], Qs[k] = proc.Phi, proc.Qd
-        omega = dth.sum(axis=0) / T
-        for name, (model, tm, _) in sensors.items():
-            order, bounds = todo[name]
-            for i in order[bounds[k]:bounds[k + 1]]:
-                # The INS at the IMU row nearest the measurement time (the error state is
-                # taken as constant over the interval), moved by the remaining lag.
-                j = min(max(int(round((tm[i] - t_ep[k - 1]) / dt)), 0), n_per)
-                r = (k - 1) * n_per + j
-                lag = t_ep[k - 1] + j * dt - tm[i]
-                vel = rows_v[r]
-                nav = NavSnapshot(earth.move_enu(rows_p[r], -lag * vel), vel,
-                                  quat_to_dcm_nb(rows_q[r]), omega)
-                if name == "gnss":
-                    z, R = gnss_z(gnss, i), R_gnss
-                else:
-                    z, R = velocity.vel[i], model.R(velocity.cov[i])
-                inn = fed.update(name, model.residual(nav, z), model, nav, R, t=tm[i])
-                if innovations is not None:
-                    innovations.append(InnovationRecord(name, tm[i], inn.r, inn.S, R,
-                                                  fed.beta[name], inn.accepted))
-        fed.fuse()
-        P_post[k] = fed.P
-        dxs[k] = fed.feedback()
-        dg, da = em.apply_feedback(ins, dxs[k])
-        comp_g += dg
-        comp_a += da
-        states[k] = ins.state
-        e = k * n_per
-        rows_q[e], rows_v[e], rows_p[e] = (ins.state[STATE_Q], ins.state[STATE_VEL],
-                                           ins.state[STATE_LLA])
+    P_post, Phis, Qs, dxs = res.P, res.Phi, res.Qd, res.dx
+    n_rows = n_cycles * n_per + 1
     t_rows = t_ep[0] + dt * np.arange(n_rows)
     P_prior = Phis[1:] @ P_post[:-1] @ np.swapaxes(Phis[1:], 1, 2) + Qs[1:]
     P_prior = np.concatenate([P_post[:1], P_prior])
     cov = _interpolate_intervals(_nav_cov(P_post), _nav_cov(P_prior), n_per)
     forward = Solution(t_rows, rows_p, rows_v, att.quat_to_euler(rows_q), *_sigmas(rows_q, cov),
-                       rows_w, "forward", fed.log, np.arange(0, n_rows, n_per))
+                       rows_w, "forward", res.fdi, np.arange(0, n_rows, n_per))
     smoothed = None
     if smooth:
         e, Ps = rts_errors(P_post, Phis, Qs, dxs)

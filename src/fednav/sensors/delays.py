@@ -43,6 +43,11 @@ class InsIncrements:
     def record(self, e: int, lla_prev, vel_prev, C_prev, lla_now, vel_now, C_now) -> None:
         """The mechanization moved the INS from (prev, after epoch e-1's correction) to
         (now, at epoch e before its correction)."""
+        if e >= len(self.pos):  # a stream: room for as many epochs again
+            n = len(self.pos)
+            self.pos = np.concatenate([self.pos, np.zeros((n, 3))])
+            self.vel = np.concatenate([self.vel, np.zeros((n, 3))])
+            self.rot = np.concatenate([self.rot, np.tile(np.eye(3), (n, 1, 1))])
         d = earth.llh_difference_enu(lla_now[0], lla_now[1], lla_now[2], lla_prev[0],
                                      lla_prev[1], lla_prev[2])
         self.pos[e] = self.pos[e - 1] + d

@@ -87,10 +87,10 @@ class VelocityENU(KernelModel):
 
 class VelocityConfig(SensorConfig):
     """Velocity sensor: 1-sigma [east, north, up] m/s (None: the file's covariance), lever
-    arm, the file's axis order and a time offset."""
+    arm (None: the file's, else zero), the file's axis order and a time offset."""
 
     sigma_mps: _V3 | None = None
-    lever_m: _V3 = (0.0, 0.0, 0.0)
+    lever_m: _V3 | None = None
     axes: tuple[str, str, str] = ("E", "N", "U")
     time_offset_s: float = 0.0
 
@@ -115,10 +115,10 @@ class VelocityConfig(SensorConfig):
 
         if self.sigma_mps is None:
             raise ConfigError("sensors.velocity.sigma_mps: needed to simulate the sensor")
-        return VelocitySensor(self.sigma_mps, self.lever_m, self.period_s)
+        return VelocitySensor(self.sigma_mps, self.lever_m or (0.0, 0.0, 0.0), self.period_s)
 
     def model(self) -> VelocityENU:
-        return VelocityENU(self.lever_m)
+        return VelocityENU(self.lever_m or (0.0, 0.0, 0.0))
 
     def sigma(self) -> np.ndarray | None:
         return None if self.sigma_mps is None else np.asarray(self.sigma_mps, dtype=float)

@@ -1,0 +1,389 @@
+"""The navigator's cycle, epoch by epoch, with the filter objects of :mod:`fednav.filters`.
+
+One filter epoch ``k`` (the interval from ``t_k-1`` to ``t_k = t0 + k T``):
+
+1. **mechanize** — the IMU increments of the interval, compensated with the current bias
+   estimates, through the strapdown (:class:`~fednav.ins.strapdown.Strapdown`);
+2. **predict** — the error model of the interval (:func:`fednav.ins.error_model.
+   interval_process`) time-updates every filter with its share of the process noise;
+3. **update** — each measurement that arrived during the interval updates its sensor's
+   local filter (the stacked central filter), with chi-square fault detection; its
+   residual compares it with the INS at its time of validity (``interpolate``), at the
+   epoch (``none``), carried back by the INS increments (``ins_increment``), extrapolated
+   (``curve_fit``) or by re-running the filter from its epoch (``recompute``); then the
+   constraint (the air-data wind constraint) in every local filter;
+4. **fuse and feed back** — the federated fusion; the fused error estimate corrects the
+   INS and the IMU compensation, and is zeroed in the filters.
+
+The mechanization / error-model pair is a *core*: :class:`ErrorStateCore` (ENU strapdown,
+18-state error model, closed loop) or :class:`TotalStateCore` (paper 003: a total-state
+UKF master time-updates the navigation state itself, the local filters update linearly on
+its tangent space).  The compiled engine (:mod:`fednav.navigator.engine`) runs the same
+cycle for the error-state core in one numba call when every filter and sensor of the
+system has a compiled form.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import NamedTuple
+
+import numpy as np
+import scipy.linalg
+
+from ..core import earth
+from ..filters import FederatedFilter, FilterError, LinearModel, make_filter
+from ..ins import error_model as em
+from ..ins.strapdown import STATE_LLA, STATE_Q, STATE_VEL, quat_to_dcm_nb
+from ..sensors import NavSnapshot, StackedModel, WindConstraint
+from ..sensors.delays import InsIncrements, curve_fit_value
+
+
+@dataclass
+class Meas:
+    """The measurements of one sensor (arrays in the order they were added): time of
+    validity ``t`` and of arrival ``ta`` [s], values ``z`` (N, m), noise ``R`` (N, d, d)
+    (filter units of the residual) or, for models that compute their own noise, the
+    sensor ``sigma`` (N, m); ``epoch`` the filter epoch each is used at."""
+
+    name: str
+    model: object
+    how: str
+    timing: object = None
+    angles: tuple = ()
+    t: list = field(default_factory=list)
+    ta: list = field(default_factory=list)
+    z: list = field(default_factory=list)
+    R: list = field(default_factory=list)
+    sigma: list = field(default_factory=list)
+    epoch: list = field(default_factory=list)
+
+    def arrays(self):
+        return (np.asarray(self.t, dtype=float), np.asarray(self.ta, dtype=float),
+                np.asarray(self.z, dtype=float))
+
+
+class InnovationRecord(NamedTuple):
+    """One measurement's innovation: local filter ``local``, time ``t`` [s], residual ``r``
+    and covariance ``S`` of the local filter, the measurement noise ``R`` and the local's
+    information share ``beta`` (its covariance is ``P / beta``, so ``beta (S - R) + R`` is
+    the innovation covariance of the equivalent centralized filter), and whether the
+    update was applied."""
+
+    local: str
+    t: float
+    r: np.ndarray
+    S: np.ndarray
+    R: np.ndarray
+    beta: float
+    accepted: bool
+
+
+@dataclass
+class Record:
+    """What the loop keeps of each epoch (index 0: the start)."""
+
+    states: list = field(default_factory=list)      # INS state after the feedback
+    P: list = field(default_factory=list)           # fused covariance (filter units)
+    Phi: list = field(default_factory=list)         # transition of the interval
+    Qd: list = field(default_factory=list)          # process noise of the interval
+    dx: list = field(default_factory=list)          # correction fed back
+    beta: list = field(default_factory=list)        # sharing factors after the epoch
+    fdi: list = field(default_factory=list)         # (t, local, nis, dof, threshold, isolated)
+    innovations: list = field(default_factory=list)  # InnovationRecord
+    rows: list = field(default_factory=list)        # (q, vel, lla, omega) blocks, IMU rate
+
+
+def build_federation(system, names: list[str], P0: np.ndarray, n: int) -> FederatedFilter:
+    """The local filters (one per name) and the master of ``system``'s federated filter."""
+    f = system.filter
+
+    def one(ftype, what):
+        opts = ({"alpha": f.alpha, "beta": f.beta, "kappa": f.kappa}
+                if ftype in ("ukf", "sukf", "cukf", "raukf") else
+                {"level": f.grid_level} if ftype in ("sghqf", "aasghqf") else {})
+        flt = make_filter(ftype, np.zeros(n), P0, **opts)
+        flt.name = f"{ftype} {what}"
+        return flt
+
+    locals_ = {a: one(f.type_of(a), f"local '{a}'") for a in names}
+    master = one(f.type, "master") if f.master and len(locals_) > 1 else None
+    alpha = f.fdi_alpha
+    if isinstance(alpha, dict):
+        alpha = {k: v for k, v in alpha.items() if k in locals_}
+    return FederatedFilter(locals_, master, sharing=f.sharing, fixed=f.fixed_factors,
+                           reset=f.reset, fdi_alpha=alpha, fdi_recovery=f.fdi_recovery)
+
+
+# ----------------------------------------------------------------------------- cores
+class ErrorStateCore:
+    """ENU strapdown + 18-state error model; the fused error estimate is fed back."""
+
+    n = em.N_STATES
+
+    def __init__(self, ins, noise, T: float, nsub: int, baro_q: float, comp_g, comp_a):
+        self.ins, self.noise, self.T, self.nsub = ins, noise, float(T), int(nsub)
+        self.baro_gains = ins.baro_gains[:2]
+        self.baro_q = float(baro_q)
+        self.comp_g = np.array(comp_g, dtype=float)
+        self.comp_a = np.array(comp_a, dtype=float)
+
+    @property
+    def state(self) -> np.ndarray:
+        return self.ins.state
+
+    def snapshot(self) -> tuple:
+        return self.ins.state.copy(), self.comp_g.copy(), self.comp_a.copy()
+
+    def restore(self, snap) -> None:
+        state, g, a = snap
+        self.ins.state[:] = state
+        self.comp_g, self.comp_a = g.copy(), a.copy()
+
+    def propagate(self, fed, dtheta, dv, h_ref, dt: float, record: bool):
+        """Mechanize one interval and time-update the filters; returns (process model,
+        the interval's rows when ``record``, mean body rate [rad/s], INS state at the
+        interval's start)."""
+        dth = dtheta - self.comp_g * dt
+        dvc = dv - self.comp_a * dt
+        s0 = self.ins.state.copy()
+        rec = self.ins.run(dth, dvc, h_ref, record=record)
+        proc = em.interval_process(s0, self.ins.state, dvc.sum(axis=0), self.T, self.noise,
+                                   self.baro_gains, self.baro_q, self.nsub)
+        fed.predict(proc)
+        rows = None
+        if record:
+            rows = (rec["q"], rec["vel"], rec["lla"], dth / dt)
+        return proc, rows, dth.sum(axis=0) / self.T, s0
+
+    def measure(self, m: Meas, i: int, nav: NavSnapshot | None):
+        """(residual, model, nav, R) of measurement ``i`` of sensor ``m`` against ``nav``."""
+        return m.model.residual(nav, m.z[i]), m.model, nav, m.R[i]
+
+    def feed_back(self, fed) -> np.ndarray:
+        fed.fuse()
+        dx = fed.feedback()
+        dg, da = em.apply_feedback(self.ins, dx)
+        self.comp_g += dg
+        self.comp_a += da
+        return dx
+
+
+class TotalStateCore:
+    """Paper 003: the total-state UKF master flies the navigation state (mechanization at
+    the IMU rate, sigma points through a coarse step, :mod:`fednav.ins.total_state`) and
+    shares ``P / beta`` with the local filters, which update linearly; the fused
+    correction moves the navigation state."""
+
+    n = 15
+
+    def __init__(self, ukf):
+        self.ukf = ukf
+        self.ins = ukf.ins
+
+    @property
+    def state(self) -> np.ndarray:
+        return self.ins.state
+
+    def propagate(self, fed, dtheta, dv, h_ref, dt: float, record: bool):
+        """(Records no IMU-rate rows: measurements are used at the epoch.)"""
+        self.ukf.predict(dtheta, dv, h_ref)
+        fed.share(np.zeros(self.n), self.ukf.P)
+        return None, None, None, None
+
+    def measure(self, m: Meas, i: int, nav):
+        y, R = m.model.terms(self.ins.state, m.z[i], m.sigma[i])
+        return y, LinearModel(m.model.H), None, R
+
+    def feed_back(self, fed) -> np.ndarray:
+        dx, P = fed.fuse()
+        self.ukf.apply(dx)
+        self.ukf.P = P
+        return dx
+
+
+# ------------------------------------------------------------------------------ loop
+class PythonLoop:
+    """The cycle of the module docstring over the filters of ``fed``.
+
+    ``meas``: one :class:`Meas` per aiding sensor (aiding order); ``central``: one stacked
+    filter; ``constraint``: the air-data :class:`Meas` of the wind constraint (or None);
+    ``t0``, ``T``, ``dt``, ``n_per``: epoch grid and IMU period."""
+
+    def __init__(self, core, fed: FederatedFilter, meas: list[Meas], central: bool,
+                 constraint: Meas | None, t0: float, T: float, dt: float, n_per: int,
+                 record_rows: bool, record_cov: bool, innovations: bool, n_epochs_hint=0):
+        self.core, self.fed, self.meas, self.central = core, fed, meas, central
+        self.constraint = constraint
+        self.t0, self.T, self.dt, self.n_per = float(t0), float(T), float(dt), int(n_per)
+        self.record_rows, self.record_cov = record_rows, record_cov
+        self.innovations = innovations
+        self.rec = Record()
+        self.k = 0  # epochs done
+        s = core.state.copy()
+        self.rec.states.append(s)
+        self.rec.P.append(fed.P.copy())
+        if record_cov:
+            n = core.n
+            self.rec.Phi.append(np.zeros((n, n)))
+            self.rec.Qd.append(np.zeros((n, n)))
+            self.rec.dx.append(np.zeros(n))
+        if record_rows:
+            st = core.ins.state
+            self.rec.rows.append((st[STATE_Q][None].copy(), st[STATE_VEL][None].copy(),
+                                  st[STATE_LLA][None].copy(), None))
+        self.incs = None
+        if any(m.how in ("ins_increment", "recompute") for m in meas):
+            self.incs = InsIncrements(max(n_epochs_hint, 1), self.t0, self.T)
+
+    def t_epoch(self, k: int) -> float:
+        return self.t0 + self.T * k
+
+    @property
+    def log(self) -> list:
+        """One entry per local measurement: t, local, statistic, dof, threshold, isolated."""
+        return self.fed.log
+
+    def fused_P(self) -> np.ndarray:
+        return self.fed.P
+
+    @property
+    def comp_g(self) -> np.ndarray:
+        return getattr(self.core, "comp_g", np.zeros(3))
+
+    @property
+    def comp_a(self) -> np.ndarray:
+        return getattr(self.core, "comp_a", np.zeros(3))
+
+    # -- snapshots for re-running the filter from the past (recompute)
+    def snapshot(self) -> tuple:
+        return (self.core.snapshot(), self.fed.snapshot())
+
+    def restore(self, snap) -> None:
+        self.core.restore(snap[0])
+        self.fed.restore(snap[1])
+
+    # -- one epoch
+    def _nav_at(self, m: Meas, i: int, k: int, rows, omega):
+        """The INS the residual of measurement ``i`` compares with, the INS its model is
+        linearised at, and the time it refers to: for ``interpolate`` the sample nearest
+        the time of validity moved by the remaining lag (both), else the epoch (the
+        residual's INS carried back for ``ins_increment`` and ``recompute``)."""
+        ins = self.core.ins
+        tk = self.t_epoch(k)
+        t = m.t[i]
+        if m.how == "interpolate" and rows is not None:
+            j = min(max(int(round((t - self.t_epoch(k - 1)) / self.dt)), 0), self.n_per)
+            lag = self.t_epoch(k - 1) + j * self.dt - t
+            q, v, p = rows
+            vel = v[j]
+            nav = NavSnapshot(earth.move_enu(p[j], -lag * vel), vel, quat_to_dcm_nb(q[j]),
+                              omega)
+            return nav, nav, t
+        nav = NavSnapshot(ins.lla, ins.vel, ins.dcm, omega)
+        if m.how == "interpolate":
+            return nav, nav, t
+        if m.how in ("ins_increment", "recompute"):
+            return self.incs.carry_back(nav, k, t), nav, tk
+        return nav, nav, tk
+
+    def _z(self, m: Meas, i: int, k: int):
+        """The value a measurement is used with (curve fit: extrapolated to the epoch)."""
+        if m.how != "curve_fit":
+            return m.z[i]
+        tm = m.timing
+        t, ta, z = m.arrays()
+        known = np.flatnonzero(ta <= self.t_epoch(k) + 1e-9)
+        return curve_fit_value(t[known], z[known], self.t_epoch(k), tm.curve_fit_degree,
+                               tm.curve_fit_points, m.angles)
+
+    def _interval_rows(self, block):
+        """Rows 0..n_per of the interval: its start (after the last feedback) and the
+        mechanization's samples."""
+        ins0 = self._rows_start
+        q, v, p, _ = block
+        return (np.concatenate([ins0[0][None], q]), np.concatenate([ins0[1][None], v]),
+                np.concatenate([ins0[2][None], p]))
+
+    def cycle(self, k: int, dtheta, dv, h_ref, todo: list[tuple[Meas, int]],
+              replay: bool = False) -> None:
+        """Epoch ``k`` (1-based) with the IMU increments of its interval and the
+        measurements ``todo`` = [(sensor, index)] in the order they are applied;
+        ``replay``: an epoch flown again (``recompute``), not recorded."""
+        core, fed = self.core, self.fed
+        self._rows_start = (core.state[STATE_Q].copy(), core.state[STATE_VEL].copy(),
+                            core.state[STATE_LLA].copy())
+        s0 = core.state.copy()
+        need_rows = self.record_rows or any(m.how == "interpolate" for m, _ in todo)
+        try:
+            proc, block, omega, _ = core.propagate(fed, dtheta, dv, h_ref, self.dt, need_rows)
+        except FloatingPointError:
+            raise FilterError(f"strapdown INS at step {k}: navigation state became "
+                              f"non-finite") from None
+        if self.incs is not None:
+            s1 = core.state
+            self.incs.record(k, s0[STATE_LLA], s0[STATE_VEL], quat_to_dcm_nb(s0[STATE_Q]),
+                             s1[STATE_LLA], s1[STATE_VEL], quat_to_dcm_nb(s1[STATE_Q]))
+        rows = self._interval_rows(block) if block is not None else None
+        tk = self.t_epoch(k)
+        if todo:
+            if self.central:
+                ys, models, Rs = [], [], []
+                ins = core.ins
+                nav = NavSnapshot(ins.lla, ins.vel, ins.dcm, omega)  # H at the epoch
+                for m, i in todo:
+                    nav_i, _, _ = self._nav_at(m, i, k, rows, omega)
+                    y, model, _, R = core.measure(m, i, nav_i)
+                    if m.how == "curve_fit":
+                        y = model.residual(nav_i, self._z(m, i, k))
+                    ys.append(y)
+                    models.append(model)
+                    Rs.append(R)
+                fed.update("central", np.concatenate(ys), StackedModel(models), nav,
+                           scipy.linalg.block_diag(*Rs), t=tk)
+            else:
+                for m, i in todo:
+                    nav_r, nav_h, t = self._nav_at(m, i, k, rows, omega)
+                    y, model, nav, R = core.measure(m, i, nav_r)
+                    nav = nav_h if nav is not None else None
+                    if m.how == "curve_fit":
+                        y = model.residual(nav_r, self._z(m, i, k))
+                    inn = fed.update(m.name, y, model, nav, R, t=t)
+                    if self.innovations:
+                        self.rec.innovations.append(InnovationRecord(
+                            m.name, t, inn.r, inn.S, R, fed.beta[m.name], inn.accepted))
+        if self.constraint is not None:
+            self._wind_constraint(k)
+        dx = core.feed_back(fed)
+        if replay:
+            return
+        r = self.rec
+        r.states.append(core.state.copy())
+        r.P.append(fed.P.copy())
+        r.beta.append(dict(fed.beta))
+        if self.record_cov:
+            r.Phi.append(proc.Phi)
+            r.Qd.append(proc.Qd)
+            r.dx.append(dx)
+        if self.record_rows:
+            q, v, p, w = block
+            q, v, p = q.copy(), v.copy(), p.copy()
+            q[-1], v[-1], p[-1] = (core.state[STATE_Q], core.state[STATE_VEL],
+                                   core.state[STATE_LLA])
+            r.rows.append((q, v, p, w))
+        self.k = k
+
+    def _wind_constraint(self, k: int) -> None:
+        """The air-data wind constraint (latest air data available) in every local filter."""
+        m = self.constraint
+        _, ta, z = m.arrays()
+        tk = self.t_epoch(k)
+        i = int(np.searchsorted(ta, tk + 1e-9)) - 1
+        if i < 0:
+            return
+        ins = self.core.ins
+        nav = NavSnapshot(ins.lla, ins.vel, ins.dcm)
+        model = WindConstraint(z[i, 0])
+        d, R = model.residual(nav, z[i]), model.R(m.sigma[i], nav)
+        for name in self.fed.locals:
+            self.fed.update(name, d, model, nav, R, t=tk)

@@ -1,0 +1,483 @@
+"""The navigator: one object that runs any described system, on a stream or a batch.
+
+::
+
+    nav = Navigator(system, InitialState(t=t0, lla=..., vel=..., euler=..., P0=...),
+                    imu_period=0.005)
+    nav.add_imu(t, gyro, accel)               # one sample, or (N,) times and (N, 3) blocks
+    nav.add_measurement("gnss", t, z)         # z in the sensor's units (see its module)
+    nav.solution()                            # the latest t, lla, ENU vel, Euler and sigmas
+    res = nav.result()                        # everything: epochs, IMU-rate rows, FDI log
+
+Filter epochs fall on ``t0 + k T`` (``T`` the system's filter period, a whole number of
+IMU periods).  IMU sample ``i`` (time stamp ``t0 + i dt``) spans ``[t_i, t_i + dt]``; epoch
+``k`` integrates samples ``(k-1) n .. k n - 1``.  A measurement is used at the first
+epoch at or after its arrival (``t_arrival``, default its time of validity ``t``);
+within an epoch the sensors take turns in the system's aiding order, each sensor's
+measurements in time order.  Epoch ``k`` is processed once an IMU sample stamped at or
+after ``t_k + hold_s`` has been added (so measurements may arrive out of order and late by
+up to ``hold_s``) or when :meth:`result` is asked for.  Feeding data sample by sample or
+in blocks processes the same epochs with the same operations: the results are equal.
+
+All inputs are SI (rates rad/s, specific force m/s^2, angles rad, positions lat/lon
+rad, height m, ENU velocities); each sensor's ``z`` is laid out as its module says
+(:mod:`fednav.sensors`).
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..core import attitude as att
+from ..filters import FederatedFilter, KalmanFilter
+from ..ins import error_model as em
+from ..ins.strapdown import STATE_LLA, STATE_Q, STATE_VEL, Strapdown
+from ..ins.total_state import GnssTotal, StarTotal
+from ..sensors.registry import SENSORS
+from .engine import CompiledLoop, why_not_compiled
+from .loop import ErrorStateCore, Meas, PythonLoop, TotalStateCore, build_federation
+from .system import System, imu_noise_model
+from .total import NAV_BIAS
+
+#: Measurement models of the total-state navigator, by sensor.
+TOTAL_MODELS = {"gnss": GnssTotal(), "star": StarTotal()}
+
+
+@dataclass
+class InitialState:
+    """Where the navigator starts: the time of its first epoch ``t`` [s] (the time stamp
+    of its first IMU sample), position ``lla`` [rad, rad, m], ENU ``vel`` [m/s], attitude
+    ``euler`` [pitch, roll, heading] [rad], the filter covariance ``P0`` (18 x 18, filter
+    units of :mod:`fednav.ins.error_model`) and the IMU compensation to start from
+    (``gyro_bias`` [rad/s], ``accel_bias`` [m/s^2], body axes)."""
+
+    t: float
+    lla: np.ndarray
+    vel: np.ndarray
+    euler: np.ndarray
+    P0: np.ndarray
+    gyro_bias: np.ndarray | None = None
+    accel_bias: np.ndarray | None = None
+
+
+@dataclass
+class Snapshot:
+    """The navigation solution at time ``t``: ``lla``, ENU ``vel``, ``euler`` [pitch,
+    roll, heading] and the 1-sigma of the last epoch's fused estimate, ``sigma`` (9,) of
+    [phi (rad), dv ENU (m/s), dp ENU (m)]."""
+
+    t: float
+    lla: np.ndarray
+    vel: np.ndarray
+    euler: np.ndarray
+    sigma: np.ndarray
+
+
+@dataclass
+class NavResult:
+    """What a run of the navigator produced.
+
+    Per epoch ``k = 0..K`` (0: the start): ``t`` [s], ``states`` (K+1, 22) the INS state
+    after the epoch's feedback (:mod:`fednav.ins.strapdown` layout), ``P`` (K+1, n, n) the
+    fused covariance (filter units); with ``record_covariance``: ``Phi``, ``Qd`` (the
+    interval ending at epoch k; entry 0 zero) and ``dx`` (the correction fed back).
+    ``beta``: sharing factor of each filter after each epoch (K,); ``fdi``: one entry per
+    local measurement (t, local, statistic, dof, threshold, isolated); ``innovations``:
+    :class:`~fednav.navigator.loop.InnovationRecord` s; ``rows`` (with ``record_rows``):
+    quaternion, ENU velocity, lla and body rate at every IMU sample (row ``k n`` holds
+    the state after epoch k's feedback); ``data_quality``: what the input checks did."""
+
+    t: np.ndarray
+    states: np.ndarray
+    P: np.ndarray
+    beta: dict
+    fdi: list
+    innovations: list = field(default_factory=list)
+    Phi: np.ndarray | None = None
+    Qd: np.ndarray | None = None
+    dx: np.ndarray | None = None
+    rows: dict | None = None
+    data_quality: dict = field(default_factory=dict)
+    engine: str = "python"
+
+    @property
+    def sigma(self) -> np.ndarray:
+        """1-sigma of the fused estimate per epoch (K+1, 18), SI (NaN where the filter has
+        no such state)."""
+        n = self.P.shape[-1]
+        var = np.diagonal(self.P, axis1=1, axis2=2)
+        if n == em.N_STATES:
+            return np.sqrt(var) * em.SCALE
+        out = np.full((len(var), em.N_STATES), np.nan)
+        out[:, NAV_BIAS] = var
+        return np.sqrt(out) * em.SCALE
+
+
+class _Growing:
+    """A float array that grows along its first axis (capacity doubling)."""
+
+    def __init__(self, shape_tail=(), fill=0.0):
+        self.tail = tuple(shape_tail)
+        self.a = np.full((64, *self.tail), fill)
+        self.n = 0
+        self.fill = fill
+
+    def extend(self, block) -> None:
+        block = np.asarray(block, dtype=float).reshape((-1, *self.tail))
+        m = len(block)
+        if self.n + m > len(self.a):
+            cap = max(2 * len(self.a), self.n + m)
+            a = np.full((cap, *self.tail), self.fill)
+            a[:self.n] = self.a[:self.n]
+            self.a = a
+        self.a[self.n:self.n + m] = block
+        self.n += m
+
+    @property
+    def view(self) -> np.ndarray:
+        return self.a[:self.n]
+
+
+class Navigator:
+    """Runs ``system`` from ``initial`` on IMU samples of period ``imu_period`` [s].
+
+    ``imu_errors``: the IMU file's error figures (:class:`fednav.io.ImuErrors`), used where
+    the system leaves a figure out.  ``record_rows``: keep the solution at every IMU sample
+    (what ``fednav process`` writes); ``record_covariance``: keep each interval's
+    transition and noise and each epoch's correction (what the smoother needs);
+    ``innovations``: keep every measurement's innovation (what ``fednav tune`` reads).
+    ``hold_s``: how long after an epoch its measurements may still arrive.  ``engine``:
+    ``auto`` (compiled when every part of the system has a compiled form, else Python;
+    the environment variable ``FEDNAV_ENGINE`` can set it for a whole program, e.g. to
+    compare the two), ``compiled`` or ``python`` (:attr:`engine` says which runs and
+    :attr:`why_python` why not the compiled one).
+    """
+
+    def __init__(self, system: System, initial: InitialState, imu_period: float, *,
+                 imu_errors=None, record_rows: bool = False, record_covariance: bool = False,
+                 innovations: bool = False, hold_s: float = 0.0, engine: str = "auto"):
+        self.system = system
+        self.dt = float(imu_period)
+        f = system.filter
+        period = f.period_s if f.period_s is not None else self.dt
+        self.n_per = max(1, int(round(period / self.dt)))
+        self.T = self.n_per * self.dt
+        self.t0 = float(initial.t)
+        self.hold_s = float(hold_s)
+        self.record_rows = record_rows
+        self.aiding = system.aiding_sensors()
+        self.quality = {"late_measurements_dropped": 0}
+        baro = system.sensors.baro
+        loop = baro.loop() if baro is not None else None
+        self.ins = Strapdown(np.asarray(initial.lla, dtype=float),
+                             np.asarray(initial.vel, dtype=float),
+                             np.asarray(initial.euler, dtype=float), self.dt, loop)
+        self._imu_dth = _Growing((3,))
+        self._imu_dv = _Growing((3,))
+        self._h_ref = _Growing((), np.nan)
+        self._t_last = None
+        self._meas: dict[str, Meas] = {}
+        self._bucket: dict[str, dict[int, list[int]]] = {}  # sensor -> epoch -> indices
+        self._snaps: dict[int, tuple] = {}  # epoch -> loop snapshot (recompute)
+        total = f.state == "total"
+        for a in self.aiding:
+            cfg = system.sensors[a]
+            if total and a not in TOTAL_MODELS:
+                raise ValueError(f"the total-state navigator has no model of sensor '{a}' "
+                                 f"(it has {', '.join(TOTAL_MODELS)})")
+            model = TOTAL_MODELS[a] if total else cfg.model()
+            self._meas[a] = Meas(a, model, cfg.timing.delay_compensation, cfg.timing,
+                                 SENSORS[a].angles)
+            self._bucket[a] = {}
+        self._constraint = None
+        if system.constraint == "wind":
+            cfg = system.sensors.airdata
+            self._constraint = Meas("airdata", cfg.model(), "none", cfg.timing)
+        noise, _, _ = imu_noise_model(system, self.dt, imu_errors)
+        self.noise = noise
+        P0 = np.asarray(initial.P0, dtype=float)
+        if not self.aiding:
+            self.loop = None  # a free INS
+            self.engine, self.why_python = "compiled", None
+            self._free = {"states": [self.ins.state.copy()]}
+            return
+        if total:
+            from .total import total_state_ukf
+
+            ukf = total_state_ukf(system, self.ins, P0, noise, self.T)
+            core = TotalStateCore(ukf)
+            fed = FederatedFilter(
+                {a: KalmanFilter(np.zeros(15), np.eye(15), name=f"local '{a}'")
+                 for a in self.aiding}, None,
+                sharing="equal" if f.sharing == "adaptive" else f.sharing,
+                fixed=f.fixed_factors, reset=True, fdi_alpha=f.fdi_alpha,
+                fdi_recovery=f.fdi_recovery)
+        else:
+            baro_q = (baro.sigma_m**2 * baro.period_s
+                      if baro is not None and baro.damping_loop else 0.0)
+            core = ErrorStateCore(self.ins, noise, self.T, f.substeps, baro_q,
+                                  np.zeros(3) if initial.gyro_bias is None
+                                  else initial.gyro_bias,
+                                  np.zeros(3) if initial.accel_bias is None
+                                  else initial.accel_bias)
+            central = f.architecture == "centralized"
+            names = ["central"] if central else self.aiding
+            fed = build_federation(system, names, P0, em.N_STATES)
+        meas = [self._meas[a] for a in self.aiding]
+        self.why_python = why_not_compiled(system, self.aiding, SENSORS)
+        if engine == "auto":
+            engine = os.environ.get("FEDNAV_ENGINE", "auto")
+        if engine not in ("auto", "compiled", "python"):
+            raise ValueError(f"engine must be auto, compiled or python, got '{engine}'")
+        if engine == "compiled" and self.why_python is not None:
+            raise ValueError(f"the compiled engine cannot run {self.why_python}")
+        if engine != "python" and self.why_python is None:
+            self.engine = "compiled"
+            self.loop = CompiledLoop(core, fed, meas, SENSORS, self.t0, self.T, self.dt,
+                                     self.n_per, record_rows, record_covariance, innovations)
+        else:
+            self.engine = "python"
+            if self.why_python is None:
+                self.why_python = "asked for"
+            self.loop = PythonLoop(core, fed, meas, f.architecture == "centralized",
+                                   self._constraint, self.t0, self.T, self.dt, self.n_per,
+                                   record_rows, record_covariance, innovations)
+
+    # ------------------------------------------------------------------------ input
+    def add_imu(self, t, gyro=None, accel=None, *, dtheta=None, dv=None) -> None:
+        """IMU sample(s) stamped ``t`` [s]: rates ``gyro`` [rad/s] and specific force
+        ``accel`` [m/s^2], or increments ``dtheta`` [rad] and ``dv`` [m/s] over the
+        sample (body right-forward-up); one sample (3,) or a block (N, 3)."""
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        if gyro is not None:
+            dth = np.asarray(gyro, dtype=float).reshape(-1, 3) * self.dt
+            dvv = np.asarray(accel, dtype=float).reshape(-1, 3) * self.dt
+        else:
+            dth = np.asarray(dtheta, dtype=float).reshape(-1, 3)
+            dvv = np.asarray(dv, dtype=float).reshape(-1, 3)
+        if not (len(t) == len(dth) == len(dvv)):
+            raise ValueError(f"add_imu: {len(t)} times, {len(dth)} rotations and "
+                             f"{len(dvv)} velocity samples")
+        i0 = self._imu_dth.n
+        prev = self.t0 - self.dt if self._t_last is None else self._t_last
+        if self._t_last is None and abs(t[0] - self.t0) > 0.1 * self.dt:
+            raise ValueError(f"add_imu: the first sample is stamped {t[0]:.6f} s, the "
+                             f"navigator starts at {self.t0:.6f} s")
+        d = np.diff(np.r_[prev, t])
+        bad = np.abs(d - self.dt) > 0.1 * self.dt
+        if bad.any():
+            j = int(np.argmax(bad))
+            raise ValueError(f"add_imu: sample {i0 + j} is stamped {t[j]:.6f} s, "
+                             f"{d[j]:.6f} s after the one before (uniform sampling every "
+                             f"{self.dt:g} s)")
+        self._imu_dth.extend(dth)
+        self._imu_dv.extend(dvv)
+        if self._h_ref.n < self._imu_dth.n:
+            self._h_ref.extend(np.full(self._imu_dth.n - self._h_ref.n, np.nan))
+        self._t_last = float(t[-1])
+        self._advance(final=False)
+
+    def add_measurement(self, sensor: str, t: float, z, *, sigma=None, R=None,
+                        t_arrival: float | None = None) -> None:
+        """One measurement of ``sensor`` valid at ``t`` [s] (arriving at ``t_arrival``):
+        ``z`` in the sensor's layout, its noise as 1-sigma ``sigma`` of each component of
+        ``z`` or as the residual covariance ``R``; neither: the system's figure."""
+        self.add_measurements(sensor, [t], np.atleast_2d(z),
+                              sigma=None if sigma is None else np.atleast_2d(sigma),
+                              R=None if R is None else np.asarray(R, dtype=float)[None],
+                              t_arrival=None if t_arrival is None else [t_arrival])
+
+    def add_measurements(self, sensor: str, t, z, *, sigma=None, R=None,
+                         t_arrival=None) -> None:
+        """Several measurements of ``sensor`` (arrays along the first axis; see
+        :meth:`add_measurement`).  ``sigma`` may be one row for all."""
+        t = np.asarray(t, dtype=float).ravel()
+        z = np.asarray(z, dtype=float).reshape(len(t), -1)
+        ta = t if t_arrival is None else np.asarray(t_arrival, dtype=float).ravel()
+        if sensor == "baro" and self.ins.baro is not None:
+            self._baro_heights(t, z[:, 0])
+        m = self._meas.get(sensor)
+        if m is None:
+            if self._constraint is not None and sensor == "airdata":
+                m = self._constraint
+            elif sensor in SENSORS:
+                return  # configured but not aiding (a baro that only damps, say)
+            else:
+                raise ValueError(f"unknown sensor '{sensor}'; registered: "
+                                 f"{', '.join(sorted(SENSORS))}")
+        cfg = self.system.sensors[sensor]
+        if sigma is None and R is None:
+            sigma = cfg.sigma()
+            if sigma is None:
+                raise ValueError(f"{sensor}: no noise given and none in the system "
+                                 f"description (sensors.{sensor})")
+        if sigma is not None:
+            sigma = np.broadcast_to(np.asarray(sigma, dtype=float), (len(t),) + np.shape(
+                sigma)[-1:]) if np.ndim(sigma) == 1 else np.asarray(sigma, dtype=float)
+        epochs = self._epoch_of(ta)
+        capture = self._epoch_of(t) if m.how == "recompute" else None
+        bucket = self._bucket.get(sensor)
+        for i in range(len(t)):
+            k = int(epochs[i])
+            if self.loop is not None and 0 < k <= self.loop.k:
+                self.quality["late_measurements_dropped"] += 1
+                continue
+            if bucket is not None:
+                bucket.setdefault(k, []).append(len(m.t))
+                if capture is not None:
+                    m.capture = getattr(m, "capture", [])
+                    m.capture.append(max(int(capture[i]), 1))
+            m.t.append(float(t[i]))
+            m.ta.append(float(ta[i]))
+            m.z.append(z[i])
+            m.epoch.append(k)
+            s = None if sigma is None else sigma[i]
+            m.sigma.append(s)
+            m.R.append(np.array(R[i], dtype=float) if R is not None
+                       else None if m is self._constraint or not hasattr(m.model, "R")
+                       else m.model.R(s))
+        self._advance(final=False)
+
+    def add_series(self, series) -> None:
+        """A simulated :class:`~fednav.sensors.base.MeasurementSeries` (its sensor, times,
+        arrival times, values and sigma)."""
+        self.add_measurements(series.kind, series.t, series.z, sigma=series.sigma,
+                              t_arrival=series.t_avail)
+
+    def _epoch_of(self, t) -> np.ndarray:
+        """The epoch at or after each time (0: at or before the start)."""
+        if not len(t):
+            return np.zeros(0, dtype=int)
+        n = int(np.ceil((np.max(t) - self.t0) / self.T)) + 3
+        return np.searchsorted(self.t0 + self.T * np.arange(max(n, 1)), t - 1e-9, side="left")
+
+    def _baro_heights(self, t, h) -> None:
+        """Baro heights for the vertical-channel loop at the IMU sample that starts at
+        their time (the loop holds the last INS - baro difference)."""
+        idx = np.rint((t - self.t0) / self.dt).astype(int)
+        ok = (idx >= 0) & (np.abs(self.t0 + idx * self.dt - t) < 1e-6)
+        need = int(idx[ok].max()) + 1 if ok.any() else 0
+        if need > self._h_ref.n:
+            self._h_ref.extend(np.full(need - self._h_ref.n, np.nan))
+        self._h_ref.view[idx[ok]] = h[ok]
+
+    # ------------------------------------------------------------------- processing
+    def _todo(self, k: int, now: int) -> list:
+        """The measurements of epoch ``k`` as (sensor, index), in the order they are
+        applied; ``recompute`` sensors: those of validity epoch ``k`` that arrived by epoch
+        ``now``."""
+        out = []
+        for a in self.aiding:
+            m = self._meas[a]
+            if m.how == "recompute":
+                idx = [i for i, (c, e) in enumerate(zip(m.capture, m.epoch, strict=True))
+                       if c == k and e <= now] if hasattr(m, "capture") else []
+            else:
+                idx = sorted(self._bucket[a].get(k, []), key=lambda i: m.t[i])
+            out += [(m, i) for i in idx]
+        return out
+
+    def _advance(self, final: bool) -> None:
+        n = self._imu_dth.n
+        done = self.loop.k if self.loop is not None else len(self._free["states"]) - 1
+        k_max = n // self.n_per
+        if not final and self._t_last is not None:
+            # epochs the stream has passed by hold_s (measurements can no longer arrive)
+            k_max = min(k_max, int(np.floor((self._t_last - self.hold_s - self.t0) / self.T
+                                            + 1e-9)))
+        if isinstance(self.loop, CompiledLoop):
+            if k_max > done:
+                sl = slice(done * self.n_per, k_max * self.n_per)
+                todo = [(k, self._todo(k, k)) for k in range(done + 1, k_max + 1)]
+                self.loop.run(done, k_max, self._imu_dth.view[sl], self._imu_dv.view[sl],
+                              self._h_ref.view[sl], todo)
+            return
+        for k in range(done + 1, k_max + 1):
+            dth, dv, h_ref = self._imu(k)
+            if self.loop is None:
+                self.ins.run(dth, dv, h_ref, record=False)
+                self._free["states"].append(self.ins.state.copy())
+                continue
+            recompute = [m for m in self._meas.values() if m.how == "recompute"]
+            if not recompute:
+                self.loop.cycle(k, dth, dv, h_ref, self._todo(k, k))
+                continue
+            if not self._snaps:
+                self._snaps[0] = self.loop.snapshot()
+            # re-run the filter from the earliest epoch of validity of what arrived now
+            j = k
+            for m in recompute:
+                for i in self._bucket[m.name].get(k, []):
+                    j = min(j, m.capture[i])
+            if j < k:
+                self.loop.restore(self._snaps[j - 1])
+                for e in range(j, k):
+                    self.loop.cycle(e, *self._imu(e), self._todo(e, k), replay=True)
+                    self._snaps[e] = self.loop.snapshot()
+            self.loop.cycle(k, dth, dv, h_ref, self._todo(k, k))
+            self._snaps[k] = self.loop.snapshot()
+
+    def _imu(self, k: int):
+        """The IMU increments and baro heights of epoch ``k``'s interval."""
+        sl = slice((k - 1) * self.n_per, k * self.n_per)
+        h = self._h_ref.view[sl] if self._h_ref.n >= k * self.n_per else \
+            np.full(self.n_per, np.nan)
+        return self._imu_dth.view[sl], self._imu_dv.view[sl], h
+
+    # ------------------------------------------------------------------------ output
+    def solution(self) -> Snapshot:
+        """The latest solution: the last epoch's state mechanized through the samples
+        added since (no filter update in between)."""
+        self._advance(final=False)
+        k = self.loop.k if self.loop is not None else len(self._free["states"]) - 1
+        n = self._imu_dth.n
+        tmp = Strapdown.__new__(Strapdown)
+        tmp.__dict__.update(self.ins.__dict__)
+        tmp.state = self.ins.state.copy()
+        sl = slice(k * self.n_per, n)
+        if n > k * self.n_per:
+            loop = self.loop
+            comp_g = np.zeros(3) if loop is None else loop.comp_g
+            comp_a = np.zeros(3) if loop is None else loop.comp_a
+            tmp.run(self._imu_dth.view[sl] - comp_g * self.dt,
+                    self._imu_dv.view[sl] - comp_a * self.dt, self._h_ref.view[sl],
+                    record=False)
+        s = tmp.state
+        if self.loop is not None:
+            P = self.loop.fused_P()
+            sd = np.sqrt(np.diagonal(P)[:9]) * em.SCALE[:9]
+        else:
+            sd = np.full(9, np.nan)
+        return Snapshot(self.t0 + n * self.dt, s[STATE_LLA].copy(), s[STATE_VEL].copy(),
+                        att.quat_to_euler(s[STATE_Q]), sd)
+
+    def result(self) -> NavResult:
+        """Every complete epoch processed, and what the run produced."""
+        self._advance(final=True)
+        if self.loop is None:
+            st = np.array(self._free["states"])
+            K = len(st) - 1
+            return NavResult(self.t0 + self.T * np.arange(K + 1), st,
+                             np.full((K + 1, em.N_STATES, em.N_STATES), np.nan), {}, [],
+                             data_quality=dict(self.quality))
+        r = self.loop.rec
+        K = len(r.states) - 1
+        names = list(self.loop.fed.filters)
+        beta = {nm: np.array([b[nm] for b in r.beta]) for nm in names}
+        rows = None
+        if r.rows:
+            rows = {"q": np.concatenate([b[0] for b in r.rows]),
+                    "vel": np.concatenate([b[1] for b in r.rows]),
+                    "lla": np.concatenate([b[2] for b in r.rows])}
+            w = [b[3] for b in r.rows[1:]]
+            first = w[0][:1] if w else np.zeros((1, 3))
+            rows["omega"] = np.concatenate([first, *w]) if w else first
+        cov = r.Phi != []
+        return NavResult(self.t0 + self.T * np.arange(K + 1), np.array(r.states),
+                         np.array(r.P), beta, list(self.loop.log), list(r.innovations),
+                         np.array(r.Phi) if cov else None, np.array(r.Qd) if cov else None,
+                         np.array(r.dx) if cov else None, rows, dict(self.quality),
+                         self.engine)
