@@ -3,15 +3,15 @@
 The same cycle as :mod:`fednav.navigator.loop` (mechanize, predict, update, fuse, feed
 back) for the error-state core, over arrays: the strapdown of :mod:`fednav.ins.
 strapdown`, the error model of :mod:`fednav.ins.error_model`, the filters' own kernels
-(:mod:`fednav.filters.kf`, :mod:`fednav.filters.ukf`, the federated fusion) and each
-sensor's measurement kernels (:class:`fednav.sensors.measurement.Kernels`, passed in as
-functions).  Nothing in an epoch goes back to the interpreter, so a Monte Carlo run and
-a recorded file cost the same per epoch; the epochs of a stream are run as they become
-ready, with the same operations as in one batch.
+(:mod:`fednav.filters.kf`, :mod:`fednav.filters.ukf`, the federated fusion) and the
+sensors' row models (:mod:`fednav.sensors.measurement`: each measurement arrives with the
+rows its sensor's model describes).  Nothing in an epoch goes back to the interpreter,
+so a Monte Carlo run and a recorded file cost the same per epoch; the epochs of a stream
+are run as they become ready, with the same operations as in one batch.
 
 A system runs here when every part has a compiled form (:func:`why_not_compiled` says
 which does not): local filters of the Kalman (``kf``, ``ekf``), unscented (``ukf``) or
-simplified unscented (``sukf``) family, fusion-reset federation, sensors with kernels,
+simplified unscented (``sukf``) family, fusion-reset federation, sensors with row models,
 measurements used at their time of validity (``interpolate``) or at the epoch
 (``none``), no constraint.  Every other system runs the Python loop; the test suite flies
 both on the same data and finds them equal.
@@ -20,11 +20,9 @@ both on the same data and finds them equal.
 from __future__ import annotations
 
 import math
-import warnings
 
 import numba
 import numpy as np
-from numba.core.errors import NumbaExperimentalFeatureWarning
 
 from ..core import earth
 from ..core.kernels import cholesky_lower
@@ -36,6 +34,8 @@ from ..ins import error_model as em
 from ..ins.error_model import _interval, _transition
 from ..ins.strapdown import _correct
 from ..ins.strapdown import _run as _strapdown_run
+from ..sensors.measurement import RowModel, row_jacobian, row_predict, row_residual
+from .record import Growing, InnovationRecord, Record
 
 #: Filter families the engine runs: the filter registry's names -> (time update,
 #: measurement update) 0 Kalman (linear covariance, nonlinear mean) / 1 unscented.
@@ -69,8 +69,8 @@ def why_not_compiled(system, sensors: list, specs: dict) -> str | None:
         if t not in FAMILIES:
             return f"'{t}' filters"
     for a in sensors:
-        if specs[a].kernels is None:
-            return f"sensor '{a}' (no compiled model)"
+        if not specs[a].compiled:
+            return f"sensor '{a}' (its model is Python)"
         how = system.sensors[a].timing.delay_compensation
         if how not in HOWS:
             return f"delay compensation '{how}' ({a})"
@@ -87,9 +87,8 @@ def _nav_buffers(lla, vel, src_p, src_v):
 @numba.njit(cache=True)
 def run_epochs(k0, n_ep, state, comp, dtheta, dv, h_ref, gains, cst, noise, nsub, n_per,
                X, P, beta, passes, fam, c, Wm, Wc, thr, recovery, sharing,
-               m_epoch, m_filter, m_sensor, m_how, m_t, m_z, m_R, m_dim, m_aux,
-               residual_fns, jacobian_fns, predict_fns, linear,
-               out_states, out_P, out_beta, out_Phi, out_Qd, out_dx, out_rows,
+               m_epoch, m_sens, m_t, m_z, m_R, s_filter, s_how, s_dim, s_kinds, s_zi,
+               s_lever, s_linear, out_states, out_P, out_beta, out_Phi, out_Qd, out_dx, out_rows,
                out_nis, out_acc, out_r, out_S, out_bm, out_thr, out_tlog):
     """Fly epochs ``k0 + 1 .. k0 + n_ep`` (1-based) in place on ``state`` (the INS),
     ``comp`` (gyro and accelerometer compensation) and the filters ``X``, ``P``, ``beta``,
@@ -100,8 +99,9 @@ def run_epochs(k0, n_ep, state, comp, dtheta, dv, h_ref, gains, cst, noise, nsub
     measurement-update family; ``c``, ``Wm``, ``Wc`` its unscented constants; ``thr``
     (nf, 7) its chi-square threshold by dof (NaN: no detection); ``sharing`` 0 equal,
     1 fixed, 2 adaptive.  ``m_*``: the epochs' measurements in the order they are applied
-    (epoch index, local filter, sensor, how, time of validity, z, R, dimension, kernel
-    parameters).  Outputs per epoch and per measurement (``out_rows`` of zero length:
+    (epoch index, sensor, time of validity, z, R); ``s_*``: per sensor its local filter,
+    how, dimension, the rows of its model, its lever arm and whether it is linear.
+    Outputs per epoch and per measurement (``out_rows`` of zero length:
     no IMU-rate rows).  Returns (failure code, epoch, filter); code 0 when all flew."""
     dt, T, t0 = cst[0], cst[1], cst[2]
     k1g, k2g, itg, ita = cst[3], cst[4], cst[5], cst[6]
@@ -156,15 +156,15 @@ def run_epochs(k0, n_ep, state, comp, dtheta, dv, h_ref, gains, cst, noise, nsub
             omega[j] = dth[:, j].sum() / T
         C_ep = _q2dcm(state[0:4])
         while m < n_meas and m_epoch[m] == k:
-            f = m_filter[m]
-            s = m_sensor[m]
-            d = m_dim[m]
+            sn = m_sens[m]
+            f = s_filter[sn]
+            d = s_dim[sn]
             # the INS the residual compares with: at the epoch, or at the sample nearest
             # the time of validity moved by the remaining lag
             C = C_ep
             t_log = t0 + T * k
             _nav_buffers(lla, vel, state[7:10], state[4:7])
-            if m_how[m] == 1:
+            if s_how[sn] == 1:
                 t_log = m_t[m]
                 tk0 = t0 + T * (k - 1)
                 jj = min(max(int(round((m_t[m] - tk0) / dt)), 0), n_per)
@@ -180,18 +180,19 @@ def run_epochs(k0, n_ep, state, comp, dtheta, dv, h_ref, gains, cst, noise, nsub
                 lla[0], lla[1], lla[2] = earth.moved_nb(
                     lla[0], lla[1], lla[2], -lag * vel[0], -lag * vel[1], -lag * vel[2])
                 C = _q2dcm(row_q)
+            kinds, zi, lever = s_kinds[sn, :d], s_zi[sn, :d], s_lever[sn]
             y = np.empty(d)
-            residual_fns[s](lla, vel, C, omega, m_z[m], m_aux[m], y)
+            row_residual(kinds, zi, lla, vel, C, omega, m_z[m], lever, y)
             R = m_R[m, :d, :d].copy()
-            H = np.zeros((d, n))
-            if fam[f, 1] == 0 or linear[s]:
-                jacobian_fns[s](lla, vel, C, omega, m_aux[m], H)
             if fam[f, 1] == 0:  # Kalman: Joseph form
-                if linear[s]:
+                H = np.zeros((d, n))
+                row_jacobian(kinds, lla, vel, C, omega, lever, H)
+                if s_linear[sn]:
                     yhat = H @ X[f]
                 else:
                     Z = np.empty((1, d))
-                    predict_fns[s](lla, vel, C, omega, m_aux[m], X[f].copy().reshape(1, n), Z)
+                    row_predict(kinds, lla, vel, C, omega, lever, X[f].copy().reshape(1, n),
+                                Z)
                     yhat = Z[0]
                 r = y - yhat
                 x1, Pn, Sm, ni, ok = _joseph_update(X[f], P[f], H, r, R)
@@ -201,11 +202,8 @@ def run_epochs(k0, n_ep, state, comp, dtheta, dv, h_ref, gains, cst, noise, nsub
                 Sg = _sigma_points(X[f], P[f], c[f])
                 if Sg.shape[0] == 0:
                     return 7, k, f
-                if linear[s]:
-                    Z = Sg @ H.T
-                else:
-                    Z = np.empty((Sg.shape[0], d))
-                    predict_fns[s](lla, vel, C, omega, m_aux[m], Sg, Z)
+                Z = np.empty((Sg.shape[0], d))
+                row_predict(kinds, lla, vel, C, omega, lever, Sg, Z)
                 x1, Pn, r, Sm, ni, ok = _update(Sg, Z, Wm[f], Wc[f], X[f], P[f], y, R)
                 if not ok or not math.isfinite(ni):
                     return 4, k, f
@@ -229,12 +227,13 @@ def run_epochs(k0, n_ep, state, comp, dtheta, dv, h_ref, gains, cst, noise, nsub
                 X[f] = x1
                 P[f] = Pn
             out_nis[m] = ni
-            out_acc[m] = accepted
-            out_r[m, :d] = r
-            out_S[m, :d, :d] = Sm
-            out_bm[m] = beta[f]
+            out_acc[m] = 1.0 if accepted else 0.0
             out_thr[m] = th
             out_tlog[m] = t_log
+            if out_r.shape[0] > 0:  # the innovations themselves, when asked for
+                out_r[m, :d] = r
+                out_S[m, :d, :d] = Sm
+                out_bm[m] = beta[f]
             m += 1
         xg, Pg, traces, bad = _fuse(X, P)
         if bad >= 0:
@@ -274,18 +273,17 @@ def run_epochs(k0, n_ep, state, comp, dtheta, dv, h_ref, gains, cst, noise, nsub
 
 class CompiledLoop:
     """The engine with the interface of :class:`~fednav.navigator.loop.PythonLoop`: it
-    flies the epochs handed to :meth:`run` and keeps the same :class:`Record`.
+    flies the epochs handed to :meth:`run` and keeps the same
+    :class:`~fednav.navigator.record.Record`, writing straight into its arrays.
 
     ``core``: the :class:`~fednav.navigator.loop.ErrorStateCore` (its INS state and
     compensation are flown in place); ``fed``: the federated filter as built (its
     filters' names, types, starting estimates and sharing; its arrays are flown here);
     ``meas``: the aiding sensors' :class:`~fednav.navigator.loop.Meas`, in aiding order."""
 
-    def __init__(self, core, fed, meas, specs, t0, T, dt, n_per, record_rows,
-                 record_cov, innovations):
+    def __init__(self, core, fed, meas, t0, T, dt, n_per, record_rows, record_cov,
+                 innovations):
         from scipy.stats import chi2
-
-        from .loop import Record
 
         self.core, self.fed, self.meas = core, fed, meas
         self.t0, self.T, self.dt, self.n_per = float(t0), float(T), float(dt), int(n_per)
@@ -313,34 +311,41 @@ class CompiledLoop:
                 self.thr[i, 1:] = [float(chi2.ppf(1.0 - a, d)) for d in range(1, 7)]
         self.recovery = int(fed.fdi_recovery)
         self.sharing = {"equal": 0, "fixed": 1, "adaptive": 2}[fed.sharing]
-        self.local_index = {k: i for i, k in enumerate(self.names)}
-        self.sensor_index = {m.name: i for i, m in enumerate(meas)}
-        kern = [specs[m.name].kernels for m in meas]
-        self.residual_fns = tuple(k.residual for k in kern)
-        self.jacobian_fns = tuple(k.jacobian for k in kern)
-        self.predict_fns = tuple(k.predict for k in kern)
-        self.linear = np.array([k.linear for k in kern])
-        self.aux = {m.name: np.ascontiguousarray(np.resize(m.model.aux, 3), dtype=float)
-                    for m in meas}
+        # Per sensor (aiding order): its local filter, how, rows, lever, linearity.
+        for m in meas:
+            if not isinstance(m.model, RowModel):
+                raise ValueError(f"sensor '{m.name}': its model is not a row model")
+        S = len(meas)
+        self.s_filter = np.array([self.names.index(m.name) for m in meas], dtype=np.int64)
+        self.s_how = np.array([HOWS[m.how] for m in meas], dtype=np.int64)
+        self.s_dim = np.array([m.model.dim for m in meas], dtype=np.int64)
+        self.s_kinds = np.zeros((S, 6), dtype=np.int64)
+        self.s_zi = np.zeros((S, 6), dtype=np.int64)
+        for j, m in enumerate(meas):
+            self.s_kinds[j, :m.model.dim] = m.model.kinds
+            self.s_zi[j, :m.model.dim] = m.model.zindex
+        self.s_lever = np.array([m.model.lever for m in meas]).reshape(S, 3)
+        self.s_linear = np.array([m.model.linear for m in meas], dtype=np.bool_)
         self.comp = np.r_[core.comp_g, core.comp_a]
         self.gains = core.ins.baro_gains
         k1, k2, itg, ita, noise = em.model_constants(core.noise, core.baro_gains, core.baro_q)
         self.noise_vec = noise
         self.cst = np.array([self.dt, self.T, self.t0, k1, k2, itg, ita])
-        self.rec = Record()
+        self.rec = Record(len(core.state), n, nf, record_cov, record_rows, innovations)
         self.k = 0
         s = core.state
-        self.rec.states.append(s.copy())
-        self.rec.P.append(fed.P.copy())
+        self.rec.epoch(s, fed.P, None)
         self.Pg = fed.P.copy()
-        if record_cov:
-            self.rec.Phi.append(np.zeros((n, n)))
-            self.rec.Qd.append(np.zeros((n, n)))
-            self.rec.dx.append(np.zeros(n))
         if record_rows:
-            self.rec.rows.append((s[0:4][None].copy(), s[4:7][None].copy(),
-                                  s[7:10][None].copy(), None))
-        self.log: list = []
+            self.rec.row_block(s[0:4][None], s[4:7][None], s[7:10][None],
+                               np.full((1, 3), np.nan))
+        # the FDI log: t, local filter, statistic, dof, threshold, accepted
+        self._log = Growing((6,))
+        r = self.rec
+        self._outs = [r.states, r.P, r.beta] + ([r.Phi, r.Qd, r.dx] if record_cov else [])
+        self._none_rows = np.empty((0, 13))
+        self._none_cov = (np.empty((0, n, n)), np.empty((0, n, n)), np.empty((0, n)))
+        self._none_inn = (np.empty((0, 6)), np.empty((0, 6, 6)), np.empty(0))
 
     @property
     def comp_g(self) -> np.ndarray:
@@ -353,53 +358,74 @@ class CompiledLoop:
     def fused_P(self) -> np.ndarray:
         return self.Pg
 
+    @property
+    def log(self) -> list:
+        """One entry per local measurement: t, local, statistic, dof, threshold, isolated."""
+        return [(t, self.names[int(f)], nis, int(dof), thr, not acc)
+                for t, f, nis, dof, thr, acc in self._log.view.tolist()]
+
     def run(self, k0: int, k1: int, dtheta, dv, h_ref, todo: list) -> None:
-        """Epochs ``k0 + 1 .. k1`` with their IMU data and ``todo`` = [(epoch, [(Meas,
-        index), ...])]."""
+        """Epochs ``k0 + 1 .. k1`` with their IMU data and ``todo`` = [(epoch, [(sensor
+        position in aiding order, measurement indices), ...]), ...] in application order."""
         from ..filters import FilterError
-        from .loop import InnovationRecord
 
         n_ep = k1 - k0
         if n_ep <= 0:
             return
-        items = [(k, m, i) for k, lst in todo for m, i in lst]
-        M = len(items)
-        m_epoch = np.array([k for k, _, _ in items], dtype=np.int64)
-        m_filter = np.array([self.local_index[m.name] for _, m, _ in items], dtype=np.int64)
-        m_sensor = np.array([self.sensor_index[m.name] for _, m, _ in items], dtype=np.int64)
-        m_how = np.array([HOWS[m.how] for _, m, _ in items], dtype=np.int64)
-        m_t = np.array([m.t[i] for _, m, i in items], dtype=float)
-        m_dim = np.array([len(m.R[i]) for _, m, i in items], dtype=np.int64)
+        ep, sens, idx = [], [], []
+        for k, lst in todo:
+            for s, ii in lst:
+                ep += [k] * len(ii)
+                sens += [s] * len(ii)
+                idx += ii
+        M = len(idx)
+        m_epoch = np.array(ep, dtype=np.int64)
+        m_sens = np.array(sens, dtype=np.int64)
+        m_t = np.empty(M)
         m_z = np.zeros((M, 6))
         m_R = np.zeros((M, 6, 6))
-        m_aux = np.zeros((M, 3))
-        for j, (_, m, i) in enumerate(items):
-            z = m.z[i]
-            m_z[j, :len(z)] = z
-            d = m_dim[j]
-            m_R[j, :d, :d] = m.R[i]
-            m_aux[j] = self.aux[m.name]
-        n, nf = self.X.shape[1], self.X.shape[0]
-        out_states = np.empty((n_ep, len(self.core.state)))
-        out_P = np.empty((n_ep, n, n))
-        out_beta = np.empty((n_ep, nf))
-        nc = n_ep if self.record_cov else 0
-        out_Phi, out_Qd, out_dx = np.empty((nc, n, n)), np.empty((nc, n, n)), np.empty((nc, n))
-        out_rows = np.empty((n_ep * self.n_per if self.record_rows else 0, 13))
-        out_nis, out_acc = np.empty(M), np.empty(M, dtype=np.bool_)
-        out_r, out_S = np.zeros((M, 6)), np.zeros((M, 6, 6))
-        out_bm, out_thr, out_tlog = np.empty(M), np.empty(M), np.empty(M)
-        args = (k0, n_ep, self.core.state, self.comp, np.ascontiguousarray(dtheta),
-                np.ascontiguousarray(dv), np.ascontiguousarray(h_ref, dtype=float), self.gains,
-                self.cst, self.noise_vec, self.core.nsub, self.n_per, self.X, self.P,
-                self.beta, self.passes, self.fam, self.c, self.Wm, self.Wc, self.thr,
-                self.recovery, self.sharing, m_epoch, m_filter, m_sensor, m_how, m_t, m_z,
-                m_R, m_dim, m_aux, self.residual_fns, self.jacobian_fns, self.predict_fns,
-                self.linear, out_states, out_P, out_beta, out_Phi, out_Qd, out_dx, out_rows,
-                out_nis, out_acc, out_r, out_S, out_bm, out_thr, out_tlog)
-        with warnings.catch_warnings():  # numba: first-class functions are "experimental"
-            warnings.simplefilter("ignore", NumbaExperimentalFeatureWarning)
-            code, k, f = run_epochs(*args)
+        if M:
+            m_idx = np.array(idx, dtype=np.int64)
+            for s, m in enumerate(self.meas):
+                sel = m_sens == s if len(self.meas) > 1 else slice(None)
+                ii = m_idx[sel]
+                if not len(ii):
+                    continue
+                d, dz = m.R.shape[1], m.z.shape[1]
+                m_t[sel] = m.t[ii]
+                m_z[sel, :dz] = m.z[ii]
+                m_R[sel, :d, :d] = m.R[ii]
+        rec = self.rec
+        e0 = rec.states.n
+        for g in self._outs:
+            g._room(n_ep)
+        n_rows = n_ep * self.n_per if self.record_rows else 0
+        out_rows = self._none_rows
+        if n_rows:
+            rec.rows._room(n_rows)
+            out_rows = rec.rows.a[rec.rows.n:rec.rows.n + n_rows]
+        if self.record_cov:
+            out_Phi, out_Qd = rec.Phi.a[e0:e0 + n_ep], rec.Qd.a[e0:e0 + n_ep]
+            out_dx = rec.dx.a[e0:e0 + n_ep]
+        else:
+            out_Phi, out_Qd, out_dx = self._none_cov
+        log = self._log
+        j0 = log.n
+        log._room(M)
+        lg = log.a[j0:j0 + M]
+        if self.innovations:
+            out_r, out_S, out_bm = np.zeros((M, 6)), np.zeros((M, 6, 6)), np.empty(M)
+        else:
+            out_r, out_S, out_bm = self._none_inn
+        code, k, f = run_epochs(
+            k0, n_ep, self.core.state, self.comp, dtheta, dv, h_ref, self.gains,
+            self.cst, self.noise_vec, self.core.nsub, self.n_per, self.X, self.P, self.beta,
+            self.passes, self.fam, self.c, self.Wm, self.Wc, self.thr, self.recovery,
+            self.sharing, m_epoch, m_sens, m_t, m_z, m_R, self.s_filter, self.s_how,
+            self.s_dim, self.s_kinds, self.s_zi, self.s_lever, self.s_linear,
+            rec.states.a[e0:e0 + n_ep],
+            rec.P.a[e0:e0 + n_ep], rec.beta.a[e0 - 1:e0 - 1 + n_ep], out_Phi, out_Qd,
+            out_dx, out_rows, lg[:, 2], lg[:, 5], out_r, out_S, out_bm, lg[:, 4], lg[:, 0])
         if code:
             phase, why = FAILURES[code]
             if code == 1:
@@ -409,28 +435,22 @@ class CompiledLoop:
                                   f"not positive definite (epoch {k})")
             raise FilterError(f"{self.fed.filters[self.names[f]].name} {phase} at step {k}: "
                               f"{why}")
-        r = self.rec
-        for e in range(n_ep):
-            r.states.append(out_states[e].copy())
-            r.P.append(out_P[e])
-            r.beta.append(dict(zip(self.names, out_beta[e], strict=True)))
-        self.Pg = out_P[-1].copy()
-        if self.record_cov:
-            r.Phi.extend(out_Phi)
-            r.Qd.extend(out_Qd)
-            r.dx.extend(out_dx)
-        if self.record_rows:
-            r.rows.append((out_rows[:, 0:4], out_rows[:, 4:7], out_rows[:, 7:10],
-                           out_rows[:, 10:13]))
-        for j, (_, m, i) in enumerate(items):
-            d = int(m_dim[j])
-            acc = bool(out_acc[j])
-            self.log.append((float(out_tlog[j]), m.name, float(out_nis[j]), d,
-                             float(out_thr[j]), not acc))
+        for g in self._outs:
+            g.n += n_ep
+        if n_rows:
+            rec.rows.n += n_rows
+        self.Pg = rec.P.a[rec.P.n - 1]
+        if M:
+            lg[:, 1] = self.s_filter[m_sens]
+            lg[:, 3] = self.s_dim[m_sens]
+            log.n += M
             if self.innovations:
-                r.innovations.append(InnovationRecord(
-                    m.name, float(out_tlog[j]), out_r[j, :d].copy(), out_S[j, :d, :d].copy(),
-                    m.R[i], float(out_bm[j]), acc))
+                for j in range(M):
+                    d = int(lg[j, 3])
+                    m = self.meas[m_sens[j]]
+                    rec.innovations.append(InnovationRecord(
+                        m.name, float(lg[j, 0]), out_r[j, :d].copy(), out_S[j, :d, :d].copy(),
+                        m.R[m_idx[j]], float(out_bm[j]), bool(lg[j, 5])))
         self.k = k1
 
 

@@ -25,9 +25,6 @@ system has a compiled form.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import NamedTuple
-
 import numpy as np
 import scipy.linalg
 
@@ -37,61 +34,54 @@ from ..ins import error_model as em
 from ..ins.strapdown import STATE_LLA, STATE_Q, STATE_VEL, quat_to_dcm_nb
 from ..sensors import NavSnapshot, StackedModel, WindConstraint
 from ..sensors.delays import InsIncrements, curve_fit_value
+from .record import Growing, InnovationRecord, Record
 
 
-@dataclass
 class Meas:
-    """The measurements of one sensor (arrays in the order they were added): time of
-    validity ``t`` and of arrival ``ta`` [s], values ``z`` (N, m), noise ``R`` (N, d, d)
-    (filter units of the residual) or, for models that compute their own noise, the
-    sensor ``sigma`` (N, m); ``epoch`` the filter epoch each is used at."""
+    """The measurements of one sensor, in the order they were added: time of validity
+    ``t`` and of arrival ``ta`` [s], values ``z`` (N, m), noise ``R`` (N, d, d) (filter
+    units of the residual; NaN for models that compute their own from ``sigma``),
+    ``sigma`` (N, m) the sensor's 1-sigma, ``epoch`` the filter epoch each arrives at and,
+    for ``recompute``, ``capture`` the epoch of its time of validity."""
 
-    name: str
-    model: object
-    how: str
-    timing: object = None
-    angles: tuple = ()
-    t: list = field(default_factory=list)
-    ta: list = field(default_factory=list)
-    z: list = field(default_factory=list)
-    R: list = field(default_factory=list)
-    sigma: list = field(default_factory=list)
-    epoch: list = field(default_factory=list)
+    def __init__(self, name: str, model, how: str, timing=None, angles: tuple = ()):
+        self.name, self.model, self.how, self.timing = name, model, how, timing
+        self.angles = tuple(angles)
+        self._times = Growing((4,))  # t, ta, epoch, capture
+        self._z = self._R = self._sigma = None
+
+    def add(self, t, ta, z, R, sigma, epoch, capture) -> None:
+        """Append measurements (arrays along the first axis)."""
+        if self._z is None:
+            self._z = Growing(z.shape[1:])
+            self._R = Growing(R.shape[1:])
+            self._sigma = Growing(sigma.shape[1:])
+        self._times.extend(np.column_stack([t, ta, epoch, capture]))
+        self._z.extend(z)
+        self._R.extend(R)
+        self._sigma.extend(sigma)
+
+    def append(self, t: float, ta: float, z, R, epoch: int) -> None:
+        """One measurement with its noise (its sensor has measurements already)."""
+        self._times.append((t, ta, epoch, epoch))
+        self._z.append(z)
+        self._R.append(R)
+        self._sigma.append(np.nan)
+
+    def __len__(self) -> int:
+        return self._times.n
+
+    t = property(lambda self: self._times.view[:, 0])
+    ta = property(lambda self: self._times.view[:, 1])
+    epoch = property(lambda self: self._times.view[:, 2].astype(np.int64))
+    capture = property(lambda self: self._times.view[:, 3].astype(np.int64))
+    z = property(lambda self: self._z.view if self._z is not None else np.zeros((0, 0)))
+    R = property(lambda self: self._R.view if self._R is not None else np.zeros((0, 0, 0)))
+    sigma = property(lambda self: self._sigma.view if self._sigma is not None
+                     else np.zeros((0, 0)))
 
     def arrays(self):
-        return (np.asarray(self.t, dtype=float), np.asarray(self.ta, dtype=float),
-                np.asarray(self.z, dtype=float))
-
-
-class InnovationRecord(NamedTuple):
-    """One measurement's innovation: local filter ``local``, time ``t`` [s], residual ``r``
-    and covariance ``S`` of the local filter, the measurement noise ``R`` and the local's
-    information share ``beta`` (its covariance is ``P / beta``, so ``beta (S - R) + R`` is
-    the innovation covariance of the equivalent centralized filter), and whether the
-    update was applied."""
-
-    local: str
-    t: float
-    r: np.ndarray
-    S: np.ndarray
-    R: np.ndarray
-    beta: float
-    accepted: bool
-
-
-@dataclass
-class Record:
-    """What the loop keeps of each epoch (index 0: the start)."""
-
-    states: list = field(default_factory=list)      # INS state after the feedback
-    P: list = field(default_factory=list)           # fused covariance (filter units)
-    Phi: list = field(default_factory=list)         # transition of the interval
-    Qd: list = field(default_factory=list)          # process noise of the interval
-    dx: list = field(default_factory=list)          # correction fed back
-    beta: list = field(default_factory=list)        # sharing factors after the epoch
-    fdi: list = field(default_factory=list)         # (t, local, nis, dof, threshold, isolated)
-    innovations: list = field(default_factory=list)  # InnovationRecord
-    rows: list = field(default_factory=list)        # (q, vel, lla, omega) blocks, IMU rate
+        return self.t, self.ta, self.z
 
 
 def build_federation(system, names: list[str], P0: np.ndarray, n: int) -> FederatedFilter:
@@ -218,20 +208,15 @@ class PythonLoop:
         self.t0, self.T, self.dt, self.n_per = float(t0), float(T), float(dt), int(n_per)
         self.record_rows, self.record_cov = record_rows, record_cov
         self.innovations = innovations
-        self.rec = Record()
+        self.names = list(fed.filters)
+        self.rec = Record(len(core.state), core.n, len(self.names), record_cov, record_rows,
+                          innovations)
         self.k = 0  # epochs done
-        s = core.state.copy()
-        self.rec.states.append(s)
-        self.rec.P.append(fed.P.copy())
-        if record_cov:
-            n = core.n
-            self.rec.Phi.append(np.zeros((n, n)))
-            self.rec.Qd.append(np.zeros((n, n)))
-            self.rec.dx.append(np.zeros(n))
+        self.rec.epoch(core.state, fed.P, None)
         if record_rows:
             st = core.ins.state
-            self.rec.rows.append((st[STATE_Q][None].copy(), st[STATE_VEL][None].copy(),
-                                  st[STATE_LLA][None].copy(), None))
+            self.rec.row_block(st[STATE_Q][None], st[STATE_VEL][None], st[STATE_LLA][None],
+                               np.full((1, 3), np.nan))
         self.incs = None
         if any(m.how in ("ins_increment", "recompute") for m in meas):
             self.incs = InsIncrements(max(n_epochs_hint, 1), self.t0, self.T)
@@ -351,26 +336,23 @@ class PythonLoop:
                     inn = fed.update(m.name, y, model, nav, R, t=t)
                     if self.innovations:
                         self.rec.innovations.append(InnovationRecord(
-                            m.name, t, inn.r, inn.S, R, fed.beta[m.name], inn.accepted))
+                            m.name, float(t), inn.r, inn.S, R, fed.beta[m.name],
+                            inn.accepted))
         if self.constraint is not None:
             self._wind_constraint(k)
         dx = core.feed_back(fed)
         if replay:
             return
         r = self.rec
-        r.states.append(core.state.copy())
-        r.P.append(fed.P.copy())
-        r.beta.append(dict(fed.beta))
-        if self.record_cov:
-            r.Phi.append(proc.Phi)
-            r.Qd.append(proc.Qd)
-            r.dx.append(dx)
+        r.epoch(core.state, fed.P, [fed.beta[nm] for nm in self.names],
+                proc.Phi if proc is not None else None, proc.Qd if proc is not None else None,
+                dx)
         if self.record_rows:
             q, v, p, w = block
             q, v, p = q.copy(), v.copy(), p.copy()
             q[-1], v[-1], p[-1] = (core.state[STATE_Q], core.state[STATE_VEL],
                                    core.state[STATE_LLA])
-            r.rows.append((q, v, p, w))
+            r.row_block(q, v, p, w)
         self.k = k
 
     def _wind_constraint(self, k: int) -> None:

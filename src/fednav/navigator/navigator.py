@@ -26,6 +26,7 @@ rad, height m, ENU velocities); each sensor's ``z`` is laid out as its module sa
 
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import dataclass, field
 
@@ -39,6 +40,7 @@ from ..ins.total_state import GnssTotal, StarTotal
 from ..sensors.registry import SENSORS
 from .engine import CompiledLoop, why_not_compiled
 from .loop import ErrorStateCore, Meas, PythonLoop, TotalStateCore, build_federation
+from .record import Growing
 from .system import System, imu_noise_model
 from .total import NAV_BIAS
 
@@ -116,31 +118,6 @@ class NavResult:
         return np.sqrt(out) * em.SCALE
 
 
-class _Growing:
-    """A float array that grows along its first axis (capacity doubling)."""
-
-    def __init__(self, shape_tail=(), fill=0.0):
-        self.tail = tuple(shape_tail)
-        self.a = np.full((64, *self.tail), fill)
-        self.n = 0
-        self.fill = fill
-
-    def extend(self, block) -> None:
-        block = np.asarray(block, dtype=float).reshape((-1, *self.tail))
-        m = len(block)
-        if self.n + m > len(self.a):
-            cap = max(2 * len(self.a), self.n + m)
-            a = np.full((cap, *self.tail), self.fill)
-            a[:self.n] = self.a[:self.n]
-            self.a = a
-        self.a[self.n:self.n + m] = block
-        self.n += m
-
-    @property
-    def view(self) -> np.ndarray:
-        return self.a[:self.n]
-
-
 class Navigator:
     """Runs ``system`` from ``initial`` on IMU samples of period ``imu_period`` [s].
 
@@ -175,9 +152,9 @@ class Navigator:
         self.ins = Strapdown(np.asarray(initial.lla, dtype=float),
                              np.asarray(initial.vel, dtype=float),
                              np.asarray(initial.euler, dtype=float), self.dt, loop)
-        self._imu_dth = _Growing((3,))
-        self._imu_dv = _Growing((3,))
-        self._h_ref = _Growing((), np.nan)
+        self._imu_dth = Growing((3,))
+        self._imu_dv = Growing((3,))
+        self._h_ref = Growing((), np.nan)
         self._t_last = None
         self._meas: dict[str, Meas] = {}
         self._bucket: dict[str, dict[int, list[int]]] = {}  # sensor -> epoch -> indices
@@ -236,8 +213,8 @@ class Navigator:
             raise ValueError(f"the compiled engine cannot run {self.why_python}")
         if engine != "python" and self.why_python is None:
             self.engine = "compiled"
-            self.loop = CompiledLoop(core, fed, meas, SENSORS, self.t0, self.T, self.dt,
-                                     self.n_per, record_rows, record_covariance, innovations)
+            self.loop = CompiledLoop(core, fed, meas, self.t0, self.T, self.dt, self.n_per,
+                                     record_rows, record_covariance, innovations)
         else:
             self.engine = "python"
             if self.why_python is None:
@@ -251,40 +228,77 @@ class Navigator:
         """IMU sample(s) stamped ``t`` [s]: rates ``gyro`` [rad/s] and specific force
         ``accel`` [m/s^2], or increments ``dtheta`` [rad] and ``dv`` [m/s] over the
         sample (body right-forward-up); one sample (3,) or a block (N, 3)."""
-        t = np.atleast_1d(np.asarray(t, dtype=float))
+        if np.ndim(t) == 0:  # one sample: no arrays made, no block checks
+            t = float(t)
+            prev = self.t0 - self.dt if self._t_last is None else self._t_last
+            if abs(t - prev - self.dt) > 0.1 * self.dt:
+                self._bad_stamp(t, prev)
+            if gyro is not None:
+                self._imu_dth.append(np.multiply(gyro, self.dt))
+                self._imu_dv.append(np.multiply(accel, self.dt))
+            else:
+                self._imu_dth.append(dtheta)
+                self._imu_dv.append(dv)
+            if self._h_ref.n < self._imu_dth.n:
+                self._h_ref.grow(1)
+            self._t_last = t
+            if self.hold_s or self._imu_dth.n % self.n_per == 1 % self.n_per:
+                self._advance(final=False)  # (a sample that starts an interval)
+            return
+        t = np.asarray(t, dtype=float).ravel()
+        if not len(t):
+            return
         if gyro is not None:
-            dth = np.asarray(gyro, dtype=float).reshape(-1, 3) * self.dt
-            dvv = np.asarray(accel, dtype=float).reshape(-1, 3) * self.dt
+            dth = np.multiply(gyro, self.dt).reshape(-1, 3)
+            dvv = np.multiply(accel, self.dt).reshape(-1, 3)
         else:
             dth = np.asarray(dtheta, dtype=float).reshape(-1, 3)
             dvv = np.asarray(dv, dtype=float).reshape(-1, 3)
-        if not (len(t) == len(dth) == len(dvv)):
-            raise ValueError(f"add_imu: {len(t)} times, {len(dth)} rotations and "
-                             f"{len(dvv)} velocity samples")
-        i0 = self._imu_dth.n
+        if not (dth.shape == dvv.shape == (len(t), 3)):
+            raise ValueError(f"add_imu: {len(t)} times, rotations {dth.shape} and velocity "
+                             f"samples {dvv.shape} (expected ({len(t)}, 3) each)")
         prev = self.t0 - self.dt if self._t_last is None else self._t_last
-        if self._t_last is None and abs(t[0] - self.t0) > 0.1 * self.dt:
-            raise ValueError(f"add_imu: the first sample is stamped {t[0]:.6f} s, the "
-                             f"navigator starts at {self.t0:.6f} s")
-        d = np.diff(np.r_[prev, t])
+        d = np.empty(len(t))
+        d[0] = t[0] - prev
+        np.subtract(t[1:], t[:-1], out=d[1:])
         bad = np.abs(d - self.dt) > 0.1 * self.dt
         if bad.any():
             j = int(np.argmax(bad))
-            raise ValueError(f"add_imu: sample {i0 + j} is stamped {t[j]:.6f} s, "
-                             f"{d[j]:.6f} s after the one before (uniform sampling every "
-                             f"{self.dt:g} s)")
+            self._bad_stamp(t[j], prev if j == 0 else t[j - 1], self._imu_dth.n + j)
         self._imu_dth.extend(dth)
         self._imu_dv.extend(dvv)
         if self._h_ref.n < self._imu_dth.n:
-            self._h_ref.extend(np.full(self._imu_dth.n - self._h_ref.n, np.nan))
+            self._h_ref.grow(self._imu_dth.n - self._h_ref.n)
         self._t_last = float(t[-1])
         self._advance(final=False)
+
+    def _bad_stamp(self, t: float, prev: float, i: int | None = None) -> None:
+        i = self._imu_dth.n if i is None else i
+        if self._t_last is None and i == 0:
+            raise ValueError(f"add_imu: the first sample is stamped {t:.6f} s, the "
+                             f"navigator starts at {self.t0:.6f} s")
+        raise ValueError(f"add_imu: sample {i} is stamped {t:.6f} s, {t - prev:.6f} s after "
+                         f"the one before (uniform sampling every {self.dt:g} s)")
 
     def add_measurement(self, sensor: str, t: float, z, *, sigma=None, R=None,
                         t_arrival: float | None = None) -> None:
         """One measurement of ``sensor`` valid at ``t`` [s] (arriving at ``t_arrival``):
         ``z`` in the sensor's layout, its noise as 1-sigma ``sigma`` of each component of
         ``z`` or as the residual covariance ``R``; neither: the system's figure."""
+        m = self._meas.get(sensor)
+        if R is not None and m is not None and m.how != "recompute" and len(m):
+            # the common case of a stream: one value with its noise, appended in place
+            ta = float(t if t_arrival is None else t_arrival)
+            x = ta - 1e-9  # (the epoch of _epoch_of, for one time)
+            k = max(math.ceil((x - self.t0) / self.T), 0)
+            k -= k > 0 and self.t0 + self.T * (k - 1) >= x
+            k += self.t0 + self.T * k < x
+            if self.loop is not None and 0 < k <= self.loop.k:
+                self.quality["late_measurements_dropped"] += 1
+                return
+            self._bucket[sensor].setdefault(k, []).append(len(m))
+            m.append(float(t), ta, z, R, k)
+            return
         self.add_measurements(sensor, [t], np.atleast_2d(z),
                               sigma=None if sigma is None else np.atleast_2d(sigma),
                               R=None if R is None else np.asarray(R, dtype=float)[None],
@@ -318,28 +332,29 @@ class Navigator:
             sigma = np.broadcast_to(np.asarray(sigma, dtype=float), (len(t),) + np.shape(
                 sigma)[-1:]) if np.ndim(sigma) == 1 else np.asarray(sigma, dtype=float)
         epochs = self._epoch_of(ta)
-        capture = self._epoch_of(t) if m.how == "recompute" else None
+        keep = np.ones(len(t), dtype=bool)
+        if self.loop is not None:
+            late = (epochs > 0) & (epochs <= self.loop.k)
+            self.quality["late_measurements_dropped"] += int(late.sum())
+            keep = ~late
+        t, ta, z, epochs = t[keep], ta[keep], z[keep], epochs[keep]
+        if sigma is not None:
+            sigma = sigma[keep]
+        if R is not None:
+            R = np.asarray(R, dtype=float)[keep]
+        elif m is self._constraint or not hasattr(m.model, "R"):
+            R = np.full((len(t), 1, 1), np.nan)
+        else:
+            R = np.array([m.model.R(s) for s in sigma])
+        if sigma is None:
+            sigma = np.full((len(t), z.shape[1]), np.nan)
+        capture = np.maximum(self._epoch_of(t), 1) if m.how == "recompute" else epochs
         bucket = self._bucket.get(sensor)
-        for i in range(len(t)):
-            k = int(epochs[i])
-            if self.loop is not None and 0 < k <= self.loop.k:
-                self.quality["late_measurements_dropped"] += 1
-                continue
-            if bucket is not None:
-                bucket.setdefault(k, []).append(len(m.t))
-                if capture is not None:
-                    m.capture = getattr(m, "capture", [])
-                    m.capture.append(max(int(capture[i]), 1))
-            m.t.append(float(t[i]))
-            m.ta.append(float(ta[i]))
-            m.z.append(z[i])
-            m.epoch.append(k)
-            s = None if sigma is None else sigma[i]
-            m.sigma.append(s)
-            m.R.append(np.array(R[i], dtype=float) if R is not None
-                       else None if m is self._constraint or not hasattr(m.model, "R")
-                       else m.model.R(s))
-        self._advance(final=False)
+        if bucket is not None:
+            first = len(m)
+            for j, k in enumerate(epochs.tolist()):
+                bucket.setdefault(k, []).append(first + j)
+        m.add(t, ta, z, R, sigma, epochs, capture)
 
     def add_series(self, series) -> None:
         """A simulated :class:`~fednav.sensors.base.MeasurementSeries` (its sensor, times,
@@ -348,11 +363,13 @@ class Navigator:
                               t_arrival=series.t_avail)
 
     def _epoch_of(self, t) -> np.ndarray:
-        """The epoch at or after each time (0: at or before the start)."""
-        if not len(t):
-            return np.zeros(0, dtype=int)
-        n = int(np.ceil((np.max(t) - self.t0) / self.T)) + 3
-        return np.searchsorted(self.t0 + self.T * np.arange(max(n, 1)), t - 1e-9, side="left")
+        """The epoch at or after each time (0: at or before the start): the first ``k``
+        with ``t0 + k T >= t - 1e-9`` on the epoch grid as computed."""
+        x = np.asarray(t, dtype=float) - 1e-9
+        k = np.maximum(np.ceil((x - self.t0) / self.T), 0.0).astype(np.int64)
+        k -= (k > 0) & (self.t0 + self.T * (k - 1) >= x)  # rounding at a grid point
+        k += self.t0 + self.T * k < x
+        return k
 
     def _baro_heights(self, t, h) -> None:
         """Baro heights for the vertical-channel loop at the IMU sample that starts at
@@ -361,24 +378,33 @@ class Navigator:
         ok = (idx >= 0) & (np.abs(self.t0 + idx * self.dt - t) < 1e-6)
         need = int(idx[ok].max()) + 1 if ok.any() else 0
         if need > self._h_ref.n:
-            self._h_ref.extend(np.full(need - self._h_ref.n, np.nan))
+            self._h_ref.grow(need - self._h_ref.n)
         self._h_ref.view[idx[ok]] = h[ok]
 
     # ------------------------------------------------------------------- processing
     def _todo(self, k: int, now: int) -> list:
-        """The measurements of epoch ``k`` as (sensor, index), in the order they are
-        applied; ``recompute`` sensors: those of validity epoch ``k`` that arrived by epoch
-        ``now``."""
+        """The measurements of epoch ``k``: [(sensor position in aiding order, indices
+        in time order)], in the order they are applied; ``recompute`` sensors: those of
+        validity epoch ``k`` that arrived by epoch ``now``."""
         out = []
-        for a in self.aiding:
+        for s, a in enumerate(self.aiding):
             m = self._meas[a]
             if m.how == "recompute":
-                idx = [i for i, (c, e) in enumerate(zip(m.capture, m.epoch, strict=True))
-                       if c == k and e <= now] if hasattr(m, "capture") else []
+                idx = np.flatnonzero((m.capture == k) & (m.epoch <= now)).tolist()
             else:
-                idx = sorted(self._bucket[a].get(k, []), key=lambda i: m.t[i])
-            out += [(m, i) for i in idx]
+                idx = self._bucket[a].get(k)
+                if not idx:
+                    continue
+                if len(idx) > 1:
+                    t = m.t
+                    idx = sorted(idx, key=lambda i: t[i])
+            if idx:
+                out.append((s, idx))
         return out
+
+    def _pairs(self, todo) -> list:
+        """:meth:`_todo` as [(Meas, index)] (the Python loop's form)."""
+        return [(self._meas[self.aiding[s]], i) for s, idx in todo for i in idx]
 
     def _advance(self, final: bool) -> None:
         n = self._imu_dth.n
@@ -386,8 +412,10 @@ class Navigator:
         k_max = n // self.n_per
         if not final and self._t_last is not None:
             # epochs the stream has passed by hold_s (measurements can no longer arrive)
-            k_max = min(k_max, int(np.floor((self._t_last - self.hold_s - self.t0) / self.T
-                                            + 1e-9)))
+            k_max = min(k_max, math.floor((self._t_last - self.hold_s - self.t0) / self.T
+                                          + 1e-9))
+        if k_max <= done:
+            return
         if isinstance(self.loop, CompiledLoop):
             if k_max > done:
                 sl = slice(done * self.n_per, k_max * self.n_per)
@@ -403,7 +431,7 @@ class Navigator:
                 continue
             recompute = [m for m in self._meas.values() if m.how == "recompute"]
             if not recompute:
-                self.loop.cycle(k, dth, dv, h_ref, self._todo(k, k))
+                self.loop.cycle(k, dth, dv, h_ref, self._pairs(self._todo(k, k)))
                 continue
             if not self._snaps:
                 self._snaps[0] = self.loop.snapshot()
@@ -411,13 +439,14 @@ class Navigator:
             j = k
             for m in recompute:
                 for i in self._bucket[m.name].get(k, []):
-                    j = min(j, m.capture[i])
+                    j = min(j, int(m.capture[i]))
             if j < k:
                 self.loop.restore(self._snaps[j - 1])
                 for e in range(j, k):
-                    self.loop.cycle(e, *self._imu(e), self._todo(e, k), replay=True)
+                    self.loop.cycle(e, *self._imu(e), self._pairs(self._todo(e, k)),
+                                    replay=True)
                     self._snaps[e] = self.loop.snapshot()
-            self.loop.cycle(k, dth, dv, h_ref, self._todo(k, k))
+            self.loop.cycle(k, dth, dv, h_ref, self._pairs(self._todo(k, k)))
             self._snaps[k] = self.loop.snapshot()
 
     def _imu(self, k: int):
@@ -464,20 +493,18 @@ class Navigator:
                              np.full((K + 1, em.N_STATES, em.N_STATES), np.nan), {}, [],
                              data_quality=dict(self.quality))
         r = self.loop.rec
-        K = len(r.states) - 1
+        K = r.n_epochs
         names = list(self.loop.fed.filters)
-        beta = {nm: np.array([b[nm] for b in r.beta]) for nm in names}
+        beta = {nm: r.beta.view[:, j].copy() for j, nm in enumerate(names)}
         rows = None
-        if r.rows:
-            rows = {"q": np.concatenate([b[0] for b in r.rows]),
-                    "vel": np.concatenate([b[1] for b in r.rows]),
-                    "lla": np.concatenate([b[2] for b in r.rows])}
-            w = [b[3] for b in r.rows[1:]]
-            first = w[0][:1] if w else np.zeros((1, 3))
-            rows["omega"] = np.concatenate([first, *w]) if w else first
-        cov = r.Phi != []
-        return NavResult(self.t0 + self.T * np.arange(K + 1), np.array(r.states),
-                         np.array(r.P), beta, list(self.loop.log), list(r.innovations),
-                         np.array(r.Phi) if cov else None, np.array(r.Qd) if cov else None,
-                         np.array(r.dx) if cov else None, rows, dict(self.quality),
-                         self.engine)
+        if r.rows is not None:
+            a = r.rows.view.copy()
+            if len(a) > 1:
+                a[0, 10:13] = self._imu_dth.view[0] / self.dt  # the first sample's rate
+            rows = {"q": a[:, 0:4], "vel": a[:, 4:7], "lla": a[:, 7:10], "omega": a[:, 10:13]}
+        cov = r.covariance
+        return NavResult(self.t0 + self.T * np.arange(K + 1), r.states.view.copy(),
+                         r.P.view.copy(), beta, list(self.loop.log),
+                         list(r.innovations or []), r.Phi.view.copy() if cov else None,
+                         r.Qd.view.copy() if cov else None, r.dx.view.copy() if cov else None,
+                         rows, dict(self.quality), self.engine)

@@ -253,15 +253,45 @@ def check_units(imu: ImuData, gnss: GnssData) -> list[str]:
     return warnings
 
 
-def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
-            cfg: System | None = None, smooth: bool = False,
-            innovations: list | None = None) -> ProcessResult:
-    """Loosely coupled INS/GNSS(/velocity) processing; see the module docstring.
+@dataclass
+class Prepared:
+    """Recorded data made ready for the navigator (:func:`prepare`): the system it flies
+    (the config with the epoch period and the sensors' effective settings), where it
+    starts, the IMU samples from that start (``t``, ``gyro``, ``accel``; whole epochs
+    only), each sensor's measurements ``(t, z, R)``, the IMU file's error figures, and
+    what the checks and the alignment found."""
 
-    ``innovations``, when given a list, receives one :class:`InnovationRecord` per measurement
-    (what :mod:`fednav.process.tuning` estimates noise figures from)."""
+    system: System
+    initial: InitialState
+    dt: float
+    t: np.ndarray
+    gyro: np.ndarray
+    accel: np.ndarray
+    measurements: dict
+    imu_errors: object
+    n_per: int
+    warnings: list
+    alignment: Alignment
+    quality: dict
+
+    def navigator(self, **options) -> Navigator:
+        """A :class:`~fednav.navigator.Navigator` for this data (nothing fed yet)."""
+        return Navigator(self.system, self.initial, self.dt, imu_errors=self.imu_errors,
+                         **options)
+
+    def feed(self, nav: Navigator) -> Navigator:
+        """Every measurement, then every IMU sample, in one block each."""
+        for name, (t, z, R) in self.measurements.items():
+            nav.add_measurements(name, t, z, R=R)
+        nav.add_imu(self.t, self.gyro, self.accel)
+        return nav
+
+
+def prepare(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
+            cfg: System | None = None) -> Prepared:
+    """The input checks, the sensor corrections, the initial attitude and P0 of
+    :func:`process` (one-line :class:`DataError` s for data it cannot use)."""
     cfg = cfg or System()
-    t_start = time.perf_counter()
     dt = imu.period()
     gnss, velocity = adjust_sensors(gnss, velocity, cfg)
     warnings = check_units(imu, gnss)
@@ -276,7 +306,6 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
     n_cycles = (len(imu.t) - 1 - i0) // n_per
     if n_cycles < 1:
         raise DataError(f"{imu.source}: IMU data does not overlap the GNSS data")
-    t_ep = imu.t[i0] + T * np.arange(n_cycles + 1)
     noise, gb, ab = _noise(imu, cfg, dt)
 
     gc = _gnss_cfg(cfg)
@@ -306,27 +335,49 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
     system = cfg.model_copy(update={
         "filter": cfg.filter.model_copy(update={"period_s": T}),
         "sensors": cfg.sensors.replace(**sensors), "aiding": list(sensors)})
-    nav = Navigator(system, InitialState(imu.t[i0], lla0, gnss.vel[0], al.euler, P0,
-                                         gyro_bias=al.gyro_bias), dt, imu_errors=imu.errors,
-                    record_rows=True, record_covariance=True,
-                    innovations=innovations is not None)
-    nav.add_measurements("gnss", gnss.t, np.column_stack([gnss.lla, gnss.vel]),
-                         R=np.broadcast_to(R_gnss, (len(gnss.t), 6, 6)))
+    meas = {"gnss": (gnss.t, np.column_stack([gnss.lla, gnss.vel]),
+                     np.broadcast_to(R_gnss, (len(gnss.t), 6, 6)))}
     if velocity is not None:
         model = system.sensors.velocity.model()
-        nav.add_measurements("velocity", velocity.t, velocity.vel,
-                             R=np.array([model.R(c) for c in velocity.cov]))
-    m = n_cycles * n_per
-    nav.add_imu(imu.t[i0:i0 + m], imu.gyro[i0:i0 + m], imu.accel[i0:i0 + m])
-    res = nav.result()
+        meas["velocity"] = (velocity.t, velocity.vel,
+                            np.array([model.R(c) for c in velocity.cov]))
+    m = slice(i0, i0 + n_cycles * n_per)
+    quality = {**imu.quality, **gnss.quality, **(velocity.quality if velocity else {})}
+    return Prepared(system, InitialState(imu.t[i0], lla0, gnss.vel[0], al.euler, P0,
+                                         gyro_bias=al.gyro_bias), dt, imu.t[m], imu.gyro[m],
+                    imu.accel[m], meas, imu.errors, n_per, warnings, al, quality)
+
+
+def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
+            cfg: System | None = None, smooth: bool = False,
+            innovations: list | None = None) -> ProcessResult:
+    """Loosely coupled INS/GNSS(/velocity) processing; see the module docstring.
+
+    ``innovations``, when given a list, receives one :class:`InnovationRecord` per measurement
+    (what :mod:`fednav.process.tuning` estimates noise figures from)."""
+    t_start = time.perf_counter()
+    prep = prepare(imu, gnss, velocity, cfg)
+    nav = prep.feed(prep.navigator(record_rows=True, record_covariance=True,
+                                   innovations=innovations is not None))
+    out = nav.result()
+    res = solution(out, prep, smooth)
+    res.run_time_s = time.perf_counter() - t_start
     if innovations is not None:
-        innovations.extend(res.innovations)
+        innovations.extend(out.innovations)
+    return res
+
+
+def solution(res, prep: Prepared, smooth: bool = False) -> ProcessResult:
+    """The IMU-rate forward solution (and the smoothed one) of a navigator's result on
+    prepared recorded data."""
+    n_per, dt = prep.n_per, prep.dt
+    n_cycles = len(res.states) - 1
     rows_q, rows_v, rows_p = res.rows["q"], res.rows["vel"], res.rows["lla"]
     rows_w = res.rows["omega"]
-    rows_w[0] = imu.gyro[i0]
+    rows_w[0] = prep.gyro[0]  # the raw rate of the first sample (no compensation yet)
     P_post, Phis, Qs, dxs = res.P, res.Phi, res.Qd, res.dx
     n_rows = n_cycles * n_per + 1
-    t_rows = t_ep[0] + dt * np.arange(n_rows)
+    t_rows = prep.t[0] + dt * np.arange(n_rows)
     P_prior = Phis[1:] @ P_post[:-1] @ np.swapaxes(Phis[1:], 1, 2) + Qs[1:]
     P_prior = np.concatenate([P_post[:1], P_prior])
     cov = _interpolate_intervals(_nav_cov(P_post), _nav_cov(P_prior), n_per)
@@ -345,9 +396,8 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
         cov = _interpolate_intervals(cs, cs, n_per)
         smoothed = Solution(t_rows, p, v, att.quat_to_euler(q), *_sigmas(q, cov), rows_w,
                             "smoothed", [], forward.epoch_rows)
-    quality = {**imu.quality, **gnss.quality, **(velocity.quality if velocity else {})}
-    return ProcessResult(forward, smoothed, time.perf_counter() - t_start, n_cycles,
-                         quality, warnings, al.report)
+    return ProcessResult(forward, smoothed, 0.0, n_cycles, dict(prep.quality),
+                         list(prep.warnings), prep.alignment.report)
 
 
 def _nav_cov(P):

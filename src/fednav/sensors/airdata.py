@@ -127,6 +127,6 @@ class AirDataConfig(SensorConfig):
 
 
 SPEC = SensorSpec("airdata", "air data: true airspeed and the wind estimate (the wind "
-                  "constraint; no local filter of its own)", AirDataConfig, dim=2,
+                  "constraint; no local filter of its own)", AirDataConfig, WindConstraint,
                   columns=(Column("airspeed_mps"), Column("wind_e_mps"),
                            Column("wind_n_mps")), aiding=False)

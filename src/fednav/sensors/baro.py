@@ -11,13 +11,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
-import numba
 import numpy as np
 from pydantic import Field
 
 from ..ins.strapdown import BaroLoop
 from .base import MeasurementSeries, flight_times
-from .measurement import JACOBIAN, RESIDUAL, KernelModel, Kernels, predict_linear
+from .measurement import POS_U, RowModel
 from .spec import Column, SensorConfig, SensorSpec
 
 
@@ -50,22 +49,11 @@ class Barometer:
         return out
 
 
-@numba.njit(RESIDUAL, cache=True)
-def residual(lla, vel, C, omega, z, aux, out):
-    out[0] = lla[2] - z[0]
-
-
-@numba.njit(JACOBIAN, cache=True)
-def jacobian(lla, vel, C, omega, aux, H):
-    H[0, 8] = 1.0
-
-
-class BaroHeight(KernelModel):
+class BaroHeight(RowModel):
     """Barometric altimeter as a filter measurement: residual = h(INS) - h(baro) [m]."""
 
     kind = "baro"
-    dim = 1
-    kernels = Kernels(residual, jacobian, predict_linear, linear=True)
+    rows = ((POS_U, 0),)
 
     def R(self, sigma) -> np.ndarray:
         return np.diag(np.asarray(sigma, dtype=float) ** 2)
@@ -96,5 +84,4 @@ class BaroConfig(SensorConfig):
 
 
 SPEC = SensorSpec("baro", "barometric altimeter: height (vertical-channel damping and/or "
-                  "a filter measurement)", BaroConfig, dim=1, columns=(Column("h_m"),),
-                  kernels=BaroHeight.kernels)
+                  "a filter measurement)", BaroConfig, BaroHeight, columns=(Column("h_m"),))

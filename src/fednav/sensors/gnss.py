@@ -12,21 +12,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 
-from ..core import earth
-from ..core.units import ARCMIN
 from .base import MeasurementSeries, flight_times, position_noise_to_llh
-from .measurement import (
-    JACOBIAN,
-    RESIDUAL,
-    KernelModel,
-    Kernels,
-    lever_offsets,
-    predict_linear,
-    skew_into,
-)
+from .measurement import POS_E, POS_N, POS_U, VEL_E, VEL_N, VEL_U, RowModel
 from .spec import Column, SensorConfig, SensorSpec
 
 _V3 = tuple[float, float, float]
@@ -57,33 +46,7 @@ class Gnss:
         return MeasurementSeries("gnss", t, z, np.r_[sp, sv], t_avail)
 
 
-@numba.njit(RESIDUAL, cache=True)
-def residual(lla, vel, C, omega, z, aux, out):
-    lat, lon, h = lla[0], lla[1], lla[2]
-    rm, rn = earth.radii_nb(lat)
-    out[0] = (lon - z[1]) * (rn + h) * np.cos(lat)
-    out[1] = (lat - z[0]) * (rm + h)
-    out[2] = h - z[2]
-    for j in range(3):
-        out[3 + j] = vel[j] - z[3 + j]
-    if aux[0] != 0.0 or aux[1] != 0.0 or aux[2] != 0.0:
-        p, v = lever_offsets(C, omega, aux[0], aux[1], aux[2])
-        for j in range(3):
-            out[j] += p[j]
-            out[3 + j] += v[j]
-
-
-@numba.njit(JACOBIAN, cache=True)
-def jacobian(lla, vel, C, omega, aux, H):
-    H[0, 6] = H[1, 7] = H[2, 8] = 1.0
-    H[3, 3] = H[4, 4] = H[5, 5] = 1.0
-    if aux[0] != 0.0 or aux[1] != 0.0 or aux[2] != 0.0:
-        p, v = lever_offsets(C, omega, aux[0], aux[1], aux[2])
-        skew_into(H, 0, 0, p[0], p[1], p[2], ARCMIN)
-        skew_into(H, 3, 0, v[0], v[1], v[2], ARCMIN)
-
-
-class GnssPosVel(KernelModel):
+class GnssPosVel(RowModel):
     """GNSS position and velocity of an antenna at ``lever`` (body right-forward-up, m)
     from the IMU: residual = INS-derived antenna - GNSS, ``[dE, dN, dU] m, [dvE, dvN, dvU]``.
 
@@ -92,12 +55,7 @@ class GnssPosVel(KernelModel):
     velocity), so a lever arm makes attitude observable from GNSS (tested numerically)."""
 
     kind = "gnss"
-    dim = 6
-    kernels = Kernels(residual, jacobian, predict_linear, linear=True)
-
-    def __init__(self, lever=(0.0, 0.0, 0.0)):
-        super().__init__(lever)
-        self.lever = self.aux
+    rows = ((POS_E, 1), (POS_N, 0), (POS_U, 2), (VEL_E, 3), (VEL_N, 4), (VEL_U, 5))
 
     def R(self, sigma) -> np.ndarray:
         s = np.asarray(sigma, dtype=float)  # [north, east, up m, vE, vN, vU], as z
@@ -135,7 +93,7 @@ class GnssConfig(SensorConfig):
 
 _DEG = float(np.radians(1.0))
 SPEC = SensorSpec(
-    "gnss", "GNSS receiver: position and ENU velocity of its antenna", GnssConfig, dim=6,
+    "gnss", "GNSS receiver: position and ENU velocity of its antenna", GnssConfig, GnssPosVel,
     columns=(Column("lat_deg", _DEG), Column("lon_deg", _DEG), Column("h_m"),
              Column("vE_mps"), Column("vN_mps"), Column("vU_mps")),
-    kernels=GnssPosVel.kernels, latlon=(0, 1))
+    latlon=(0, 1))

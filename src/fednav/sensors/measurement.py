@@ -6,59 +6,38 @@ predicts it from the error state: ``h(X, nav)`` for rows ``X`` of error states i
 units (see :mod:`fednav.ins.error_model`) and its Jacobian ``H(nav)``.  Residual units:
 metres for positions, m/s for velocities, arc-minutes for angles.
 
-Each sensor module writes its model once, as compiled kernels with the signatures below
-(:class:`Kernels`): the navigator's compiled engine calls them directly, and
-:class:`KernelModel` calls the same functions from Python, so both paths compute the
-same numbers from one source.  A model without kernels (a Python-only sensor, the wind
-constraint) runs in the navigator's Python loop only.
+Most sensors measure parts of the navigation solution.  Such a sensor describes its
+residual as *rows* (:class:`RowModel`): each row one quantity of the solution — position
+east / north / up of the sensor's point (its lever arm), velocity east / north / up of
+that point, pitch, roll or heading — against one component of ``z``.  One compiled
+model (:func:`row_residual`, :func:`row_jacobian`, :func:`row_predict`) evaluates every
+row kind; the navigator's compiled engine calls it with each measurement's rows, and
+:class:`RowModel` calls the same functions from Python, so both paths compute the same
+numbers from one source.  A sensor that measures something else writes its own model
+(``residual``, ``h``, ``H``, ``R``) and runs in the navigator's Python loop.
 """
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass
 from functools import cached_property
-from typing import NamedTuple
 
 import numba
 import numpy as np
-from numba import types
-from numba.core.errors import NumbaExperimentalFeatureWarning
 
 from ..core import attitude as att
+from ..core import earth
 from ..core.kernels import rotvec_to_dcm
 from ..core.units import ARCMIN
 from ..ins.error_model import N_STATES, SCALE
 
-# Sensor kernels are passed to the compiled engine as first-class functions; numba marks
-# the feature experimental and says so once per compilation.
-warnings.filterwarnings("ignore", category=NumbaExperimentalFeatureWarning)
-
-_V = types.float64[::1]
-_M = types.float64[:, ::1]
-#: ``residual(lla, vel, C, omega, z, aux, out)``: ``out[:dim]`` = INS-derived - ``z``.
-RESIDUAL = types.void(_V, _V, _M, _V, _V, _V, _V)
-#: ``jacobian(lla, vel, C, omega, aux, H)``: the non-zero entries of ``H`` (dim, 18),
-#: filter units; the caller zeroes ``H``.
-JACOBIAN = types.void(_V, _V, _M, _V, _V, _M)
-#: ``predict(lla, vel, C, omega, aux, X, Z)``: ``Z[i, :dim] = h(X[i])`` for sigma points
-#: (rows of X in filter units).  Linear models leave it to ``Z = X H'``.
-PREDICT = types.void(_V, _V, _M, _V, _V, _M, _M)
-
-
-class Kernels(NamedTuple):
-    """A sensor's compiled measurement model (see the signatures above)."""
-
-    residual: object
-    jacobian: object
-    predict: object
-    linear: bool  # h(X) = X H' (then ``predict`` is never called)
-
-
-@numba.njit(PREDICT, cache=True)
-def predict_linear(lla, vel, C, omega, aux, X, Z):
-    """The ``predict`` slot of a linear model (the engine computes ``X H'`` itself)."""
-    Z[:, :] = np.nan
+#: Row kinds: position east, north, up [m]; velocity east, north, up [m/s] (both of the
+#: sensor's point at its lever arm); pitch, roll, heading [arcmin; roll and heading
+#: wrapped to +-180 deg].  A row compares its quantity with ``z[index]`` (latitude,
+#: longitude [rad] and height [m] for the position rows, m/s, rad).
+POS_E, POS_N, POS_U, VEL_E, VEL_N, VEL_U, PITCH, ROLL, HEADING = range(9)
+#: Error-state column of each position / velocity row kind.
+_COLUMN = np.array([6, 7, 8, 3, 4, 5, -1, -1, -1])
 
 
 @dataclass
@@ -82,21 +61,27 @@ def _v(a) -> np.ndarray:
     return np.ascontiguousarray(a, dtype=float)
 
 
-class KernelModel:
-    """A measurement model computed by its sensor's :class:`Kernels` (Python side).
-
-    ``aux``: the model's parameters the kernels read (a lever arm ...)."""
+class RowModel:
+    """A measurement model described by rows (see the module docstring): ``rows`` =
+    ((row kind, index into z), ...); ``lever`` the sensor's point from the IMU (body
+    right-forward-up, m).  Subclasses give ``kind``, ``rows`` and ``R``."""
 
     kind = "?"
-    dim = 0
-    kernels: Kernels
+    rows: tuple = ()
 
-    def __init__(self, aux=()):
-        self.aux = _v(np.atleast_1d(np.asarray(aux, dtype=float)).ravel())
+    def __init__(self, lever=(0.0, 0.0, 0.0)):
+        self.lever = _v(np.asarray(lever, dtype=float).reshape(3))
+        self.kinds = np.array([k for k, _ in self.rows], dtype=np.int64)
+        self.zindex = np.array([i for _, i in self.rows], dtype=np.int64)
+
+    @property
+    def dim(self) -> int:
+        return len(self.rows)
 
     @property
     def linear(self) -> bool:
-        return self.kernels.linear
+        """Whether ``h(x) = H x`` (no attitude rows)."""
+        return bool(np.all(self.kinds < PITCH))
 
     def _nav(self, nav: NavSnapshot):
         return (_v(nav.lla), _v(nav.vel), _v(nav.C),
@@ -104,20 +89,18 @@ class KernelModel:
 
     def residual(self, nav: NavSnapshot, z) -> np.ndarray:
         out = np.empty(self.dim)
-        self.kernels.residual(*self._nav(nav), _v(z), self.aux, out)
+        row_residual(self.kinds, self.zindex, *self._nav(nav), _v(z), self.lever, out)
         return out
 
     def H(self, nav: NavSnapshot) -> np.ndarray:
         H = np.zeros((self.dim, N_STATES))
-        self.kernels.jacobian(*self._nav(nav), self.aux, H)
+        row_jacobian(self.kinds, *self._nav(nav), self.lever, H)
         return H
 
     def h(self, X, nav: NavSnapshot) -> np.ndarray:
-        X = np.atleast_2d(X)
-        if self.linear:
-            return X @ self.H(nav).T
+        X = _v(np.atleast_2d(X))
         Z = np.empty((X.shape[0], self.dim))
-        self.kernels.predict(*self._nav(nav), self.aux, _v(X), Z)
+        row_predict(self.kinds, *self._nav(nav), self.lever, X, Z)
         return Z
 
 
@@ -206,11 +189,97 @@ def lever_offsets(C, omega, lx, ly, lz):
 
 
 @numba.njit(cache=True, inline="always")
-def skew_into(H, row0, col0, a0, a1, a2, k):
-    """``H[row0:row0+3, col0:col0+3] = k [a x]``."""
-    H[row0, col0 + 1], H[row0, col0 + 2] = -a2 * k, a1 * k
-    H[row0 + 1, col0], H[row0 + 1, col0 + 2] = a2 * k, -a0 * k
-    H[row0 + 2, col0], H[row0 + 2, col0 + 1] = -a1 * k, a0 * k
+def skew_row(H, r, which, a0, a1, a2, k):
+    """Row ``which`` (0, 1, 2) of ``k [a x]`` into ``H[r, 0:3]``."""
+    if which == 0:
+        H[r, 1], H[r, 2] = -a2 * k, a1 * k
+    elif which == 1:
+        H[r, 0], H[r, 2] = a2 * k, -a0 * k
+    else:
+        H[r, 0], H[r, 1] = -a1 * k, a0 * k
+
+
+@numba.njit(cache=True)
+def row_residual(kinds, zindex, lla, vel, C, omega, z, lever, out):
+    """The residual of each row (INS-derived - ``z``) into ``out``."""
+    has_lever = lever[0] != 0.0 or lever[1] != 0.0 or lever[2] != 0.0
+    if has_lever:
+        p, v = lever_offsets(C, omega, lever[0], lever[1], lever[2])
+    else:
+        p, v = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
+    pitch, roll, heading = euler_of(C)
+    lat, lon, h = lla[0], lla[1], lla[2]
+    rm, rn = earth.radii_nb(lat)
+    for r in range(kinds.shape[0]):
+        k, zi = kinds[r], zindex[r]
+        if k == POS_E:
+            out[r] = (lon - z[zi]) * (rn + h) * np.cos(lat)
+        elif k == POS_N:
+            out[r] = (lat - z[zi]) * (rm + h)
+        elif k == POS_U:
+            out[r] = h - z[zi]
+        elif k <= VEL_U:
+            out[r] = vel[k - VEL_E] - z[zi]
+        elif k == PITCH:
+            out[r] = (pitch - z[zi]) / ARCMIN
+        elif k == ROLL:
+            out[r] = wrap_pi_nb(roll - z[zi]) / ARCMIN
+        else:
+            out[r] = wrap_pi_nb(heading - z[zi]) / ARCMIN
+        if has_lever and k <= POS_U:
+            out[r] += p[k - POS_E]
+        elif has_lever and k <= VEL_U:
+            out[r] += v[k - VEL_E]
+
+
+@numba.njit(cache=True)
+def row_jacobian(kinds, lla, vel, C, omega, lever, H):
+    """The non-zero entries of each row of ``H`` (filter units; ``H`` zeroed by the
+    caller): 1 on the position / velocity error, the lever arm's attitude coupling
+    ``[(C l) x]`` / ``[(C (w x l)) x]``, the Euler-error Jacobian of attitude rows."""
+    has_lever = lever[0] != 0.0 or lever[1] != 0.0 or lever[2] != 0.0
+    if has_lever:
+        p, v = lever_offsets(C, omega, lever[0], lever[1], lever[2])
+    else:
+        p, v = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
+    pitch, _, heading = euler_of(C)
+    one = np.zeros(1, dtype=np.int64)
+    for r in range(kinds.shape[0]):
+        k = kinds[r]
+        if k <= VEL_U:
+            H[r, _COLUMN[k]] = 1.0
+            if has_lever:
+                a = p if k <= POS_U else v
+                skew_row(H, r, (k - POS_E) % 3, a[0], a[1], a[2], ARCMIN)
+        else:
+            one[0] = k - PITCH
+            euler_jacobian_rows(pitch, heading, H, r, one)
+
+
+@numba.njit(cache=True)
+def row_predict(kinds, lla, vel, C, omega, lever, X, Z):
+    """``Z[i] = h(X[i])`` for sigma points (rows of X in filter units): the exact Euler
+    error for attitude rows, ``H x`` for the others."""
+    H = np.zeros((kinds.shape[0], X.shape[1]))
+    row_jacobian(kinds, lla, vel, C, omega, lever, H)
+    has_lever = lever[0] != 0.0 or lever[1] != 0.0 or lever[2] != 0.0
+    e = np.empty((0, 3))
+    if np.any(kinds >= PITCH):
+        e = euler_error_nb(C, X)
+    for r in range(kinds.shape[0]):
+        k = kinds[r]
+        if k >= PITCH:
+            for i in range(X.shape[0]):
+                Z[i, r] = e[i, k - PITCH]
+        elif has_lever:
+            for i in range(X.shape[0]):
+                s = X[i, _COLUMN[k]]
+                for j in range(3):
+                    s += H[r, j] * X[i, j]
+                Z[i, r] = s
+        else:
+            for i in range(X.shape[0]):
+                Z[i, r] = X[i, _COLUMN[k]]
 
 
 class StackedModel:

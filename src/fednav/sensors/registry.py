@@ -69,7 +69,7 @@ def markdown_table() -> str:
         cols = ", ".join(f"`{c.name}`" for c in s.columns)
         rows.append(f"| `{s.name}` | {s.summary} | {cols} | "
                     f"{'yes' if s.aiding else 'no (constraint)'} | "
-                    f"{'yes' if s.kernels is not None else 'Python loop'} |")
+                    f"{'yes' if s.compiled else 'Python loop'} |")
     return "\n".join(rows)
 
 

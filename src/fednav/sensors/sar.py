@@ -9,25 +9,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 from pydantic import Field
 
-from ..core import earth, units
+from ..core import units
 from ..core.attitude import wrap_2pi
 from ..core.units import ARCMIN
 from .base import MeasurementSeries, flight_times, position_noise_to_llh
-from .measurement import (
-    JACOBIAN,
-    PREDICT,
-    RESIDUAL,
-    KernelModel,
-    Kernels,
-    euler_error_nb,
-    euler_jacobian_rows,
-    euler_of,
-    wrap_pi_nb,
-)
+from .measurement import HEADING, POS_E, POS_N, RowModel
 from .spec import Column, SensorConfig, SensorSpec
 
 
@@ -61,41 +50,11 @@ class SarMatcher:
                                  t_avail)
 
 
-@numba.njit(RESIDUAL, cache=True)
-def residual(lla, vel, C, omega, z, aux, out):
-    lat, lon, h = lla[0], lla[1], lla[2]
-    rm, rn = earth.radii_nb(lat)
-    out[0] = (lon - z[1]) * (rn + h) * np.cos(lat)
-    out[1] = (lat - z[0]) * (rm + h)
-    out[2] = wrap_pi_nb(euler_of(C)[2] - z[2]) / ARCMIN
-
-
-_HEADING = np.array([2])
-
-
-@numba.njit(JACOBIAN, cache=True)
-def jacobian(lla, vel, C, omega, aux, H):
-    pitch, _, heading = euler_of(C)
-    H[0, 6] = 1.0
-    H[1, 7] = 1.0
-    euler_jacobian_rows(pitch, heading, H, 2, _HEADING)
-
-
-@numba.njit(PREDICT, cache=True)
-def predict(lla, vel, C, omega, aux, X, Z):
-    e = euler_error_nb(C, X)
-    for i in range(X.shape[0]):
-        Z[i, 0] = X[i, 6]
-        Z[i, 1] = X[i, 7]
-        Z[i, 2] = e[i, 2]
-
-
-class SarFix(KernelModel):
+class SarFix(RowModel):
     """SAR image matching: residual = [east m, north m, heading arcmin] of INS - SAR."""
 
     kind = "sar"
-    dim = 3
-    kernels = Kernels(residual, jacobian, predict, linear=False)
+    rows = ((POS_E, 1), (POS_N, 0), (HEADING, 2))
 
     def R(self, sigma) -> np.ndarray:
         s = np.asarray(sigma, dtype=float)  # [north m, east m, heading rad], as z
@@ -122,7 +81,7 @@ class SarConfig(SensorConfig):
 
 _DEG = float(units.deg(1.0))
 SPEC = SensorSpec(
-    "sar", "SAR image matching: position fix and heading", SarConfig, dim=3,
+    "sar", "SAR image matching: position fix and heading", SarConfig, SarFix,
     columns=(Column("lat_deg", _DEG), Column("lon_deg", _DEG),
              Column("heading_deg", _DEG, wrap_2pi=True)),
-    kernels=SarFix.kernels, angles=(2,), latlon=(0, 1))
+    angles=(2,), latlon=(0, 1))

@@ -8,12 +8,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 from pydantic import Field
 
 from .base import MeasurementSeries, flight_times
-from .measurement import JACOBIAN, RESIDUAL, KernelModel, Kernels, predict_linear
+from .measurement import VEL_E, VEL_N, RowModel
 from .spec import Column, SensorConfig, SensorSpec
 
 
@@ -33,24 +32,11 @@ class SarVelocity:
         return MeasurementSeries("sarvel", t, z, np.array([self.sigma, self.sigma]), t_avail)
 
 
-@numba.njit(RESIDUAL, cache=True)
-def residual(lla, vel, C, omega, z, aux, out):
-    out[0] = vel[0] - z[0]
-    out[1] = vel[1] - z[1]
-
-
-@numba.njit(JACOBIAN, cache=True)
-def jacobian(lla, vel, C, omega, aux, H):
-    H[0, 3] = 1.0
-    H[1, 4] = 1.0
-
-
-class SarVelocityEN(KernelModel):
+class SarVelocityEN(RowModel):
     """SAR sequential-image velocity: residual = ``[vE, vN]`` INS - SAR [m/s]."""
 
     kind = "sarvel"
-    dim = 2
-    kernels = Kernels(residual, jacobian, predict_linear, linear=True)
+    rows = ((VEL_E, 0), (VEL_N, 1))
 
     def R(self, sigma) -> np.ndarray:
         return np.diag(np.asarray(sigma, dtype=float) ** 2)
@@ -72,5 +58,5 @@ class SarVelocityConfig(SensorConfig):
 
 
 SPEC = SensorSpec("sarvel", "SAR sequential-image velocity: east and north",
-                  SarVelocityConfig, dim=2,
-                  columns=(Column("vE_mps"), Column("vN_mps")), kernels=SarVelocityEN.kernels)
+                  SarVelocityConfig, SarVelocityEN,
+                  columns=(Column("vE_mps"), Column("vN_mps")))

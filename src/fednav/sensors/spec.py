@@ -20,7 +20,7 @@ import numpy as np
 from pydantic import Field
 
 from ..core.config import ConfigError, _Model
-from .measurement import Kernels
+from .measurement import RowModel
 from .timing import TimingConfig, measurement_times
 
 
@@ -72,20 +72,25 @@ class SensorSpec:
 
     ``name``: its key in ``sensors:``, the name of its local filter and of its CLI file
     option; ``summary``: one line for the docs and ``--help``; ``config``: its section;
-    ``dim``: components of its residual; ``columns``: its CSV file after ``t_s`` (one per
-    component of ``z``, in order); ``kernels``: its compiled model (None: the navigator's
-    Python loop only); ``aiding``: whether it can feed a local filter (air data only
-    constrains); ``angles``: components of ``z`` that are angles (unwrapped before curve
-    fitting); ``latlon``: components holding latitude and longitude (faults are metric
-    offsets there).
+    ``model``: its measurement model's class (a
+    :class:`~fednav.sensors.measurement.RowModel` runs in the navigator's compiled engine,
+    any other model in its Python loop); ``columns``: its CSV file after ``t_s`` (one per
+    component of ``z``, in order); ``aiding``: whether it can feed a local filter (air
+    data only constrains); ``angles``: components of ``z`` that are angles (unwrapped
+    before curve fitting); ``latlon``: components holding latitude and longitude (faults
+    are metric offsets there).
     """
 
     name: str
     summary: str
     config: type[SensorConfig]
-    dim: int
+    model: type
     columns: tuple[Column, ...] = ()
-    kernels: Kernels | None = None
     aiding: bool = True
     angles: tuple[int, ...] = ()
     latlon: tuple[int, int] | None = None
+
+    @property
+    def compiled(self) -> bool:
+        """Whether its model runs in the navigator's compiled engine."""
+        return issubclass(self.model, RowModel)

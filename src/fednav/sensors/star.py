@@ -10,7 +10,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 from pydantic import Field
 
@@ -18,17 +17,7 @@ from ..core import units
 from ..core.attitude import wrap_2pi
 from ..core.units import ARCMIN
 from .base import MeasurementSeries, flight_times
-from .measurement import (
-    JACOBIAN,
-    PREDICT,
-    RESIDUAL,
-    KernelModel,
-    Kernels,
-    euler_error_nb,
-    euler_jacobian_rows,
-    euler_of,
-    wrap_pi_nb,
-)
+from .measurement import HEADING, PITCH, ROLL, RowModel
 from .spec import Column, SensorConfig, SensorSpec
 
 
@@ -49,34 +38,11 @@ class StarSensor:
         return MeasurementSeries("star", t, z, sig.copy(), t_avail)
 
 
-@numba.njit(RESIDUAL, cache=True)
-def residual(lla, vel, C, omega, z, aux, out):
-    pitch, roll, heading = euler_of(C)
-    out[0] = (pitch - z[0]) / ARCMIN
-    out[1] = wrap_pi_nb(roll - z[1]) / ARCMIN
-    out[2] = wrap_pi_nb(heading - z[2]) / ARCMIN
-
-
-_ALL = np.arange(3)
-
-
-@numba.njit(JACOBIAN, cache=True)
-def jacobian(lla, vel, C, omega, aux, H):
-    pitch, _, heading = euler_of(C)
-    euler_jacobian_rows(pitch, heading, H, 0, _ALL)
-
-
-@numba.njit(PREDICT, cache=True)
-def predict(lla, vel, C, omega, aux, X, Z):
-    Z[:, :] = euler_error_nb(C, X)
-
-
-class StarAttitude(KernelModel):
+class StarAttitude(RowModel):
     """Star sensor: residual = Euler(INS) - Euler(CNS), [pitch, roll, heading] (arcmin)."""
 
     kind = "star"
-    dim = 3
-    kernels = Kernels(residual, jacobian, predict, linear=False)
+    rows = ((PITCH, 0), (ROLL, 1), (HEADING, 2))
 
     def R(self, sigma) -> np.ndarray:
         return np.diag((np.asarray(sigma, dtype=float) / ARCMIN) ** 2)
@@ -100,7 +66,7 @@ class StarConfig(SensorConfig):
 _DEG = float(units.deg(1.0))
 SPEC = SensorSpec(
     "star", "star sensor (CNS): attitude as Euler angles [pitch, roll, heading]",
-    StarConfig, dim=3,
+    StarConfig, StarAttitude,
     columns=(Column("pitch_deg", _DEG), Column("roll_deg", _DEG),
              Column("heading_deg", _DEG, wrap_2pi=True)),
-    kernels=StarAttitude.kernels, angles=(0, 1, 2))
+    angles=(0, 1, 2))

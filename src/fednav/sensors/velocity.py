@@ -12,22 +12,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 from pydantic import field_validator
 
 from ..core import attitude, earth
-from ..core.units import ARCMIN
 from .base import MeasurementSeries, flight_times
-from .measurement import (
-    JACOBIAN,
-    RESIDUAL,
-    KernelModel,
-    Kernels,
-    lever_offsets,
-    predict_linear,
-    skew_into,
-)
+from .measurement import VEL_E, VEL_N, VEL_U, RowModel
 from .spec import Column, SensorConfig, SensorSpec
 
 _V3 = tuple[float, float, float]
@@ -54,31 +44,12 @@ class VelocitySensor:
         return MeasurementSeries("velocity", t, z, sig.copy(), t_avail)
 
 
-@numba.njit(RESIDUAL, cache=True)
-def residual(lla, vel, C, omega, z, aux, out):
-    _, v = lever_offsets(C, omega, aux[0], aux[1], aux[2])
-    for j in range(3):
-        out[j] = vel[j] + v[j] - z[j]
-
-
-@numba.njit(JACOBIAN, cache=True)
-def jacobian(lla, vel, C, omega, aux, H):
-    H[0, 3] = H[1, 4] = H[2, 5] = 1.0
-    _, v = lever_offsets(C, omega, aux[0], aux[1], aux[2])
-    skew_into(H, 0, 0, v[0], v[1], v[2], ARCMIN)
-
-
-class VelocityENU(KernelModel):
+class VelocityENU(RowModel):
     """A velocity sensor at ``lever`` (body, m): residual = INS-derived sensor velocity -
     measured, ENU [m/s]; ``R`` is the sensor's covariance."""
 
     kind = "velocity"
-    dim = 3
-    kernels = Kernels(residual, jacobian, predict_linear, linear=True)
-
-    def __init__(self, lever=(0.0, 0.0, 0.0)):
-        super().__init__(lever)
-        self.lever = self.aux
+    rows = ((VEL_E, 0), (VEL_N, 1), (VEL_U, 2))
 
     def R(self, cov) -> np.ndarray:
         c = np.asarray(cov, dtype=float)
@@ -125,6 +96,5 @@ class VelocityConfig(SensorConfig):
 
 
 SPEC = SensorSpec("velocity", "velocity sensor (visual odometry, DVL ...): ENU velocity "
-                  "at its lever arm", VelocityConfig, dim=3,
-                  columns=(Column("vE_mps"), Column("vN_mps"), Column("vU_mps")),
-                  kernels=VelocityENU.kernels)
+                  "at its lever arm", VelocityConfig, VelocityENU,
+                  columns=(Column("vE_mps"), Column("vN_mps"), Column("vU_mps")))
