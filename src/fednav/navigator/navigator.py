@@ -29,6 +29,7 @@ from __future__ import annotations
 import math
 import os
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -104,6 +105,33 @@ class NavResult:
     rows: dict | None = None
     data_quality: dict = field(default_factory=dict)
     engine: str = "python"
+    dt: float = float("nan")
+    smooth: bool = False
+
+    @cached_property
+    def _imu_rate(self):
+        from .solution import imu_rate
+
+        return imu_rate(self, self.smooth)
+
+    @property
+    def forward(self):
+        """The forward :class:`~fednav.navigator.solution.Solution` at every IMU sample
+        (with its 1-sigma)."""
+        return self._imu_rate[0]
+
+    @property
+    def smoothed(self):
+        """The RTS-smoothed solution at every IMU sample (when the system asks for the
+        smoother), else None."""
+        return self._imu_rate[1]
+
+    @property
+    def consistency(self) -> dict:
+        """Per local filter: mean NIS per degree of freedom, fraction isolated, count."""
+        from .solution import consistency
+
+        return consistency(self.fdi)
 
     @property
     def sigma(self) -> np.ndarray:
@@ -124,7 +152,8 @@ class Navigator:
     ``imu_errors``: the IMU file's error figures (:class:`fednav.io.ImuErrors`), used where
     the system leaves a figure out.  ``record_rows``: keep the solution at every IMU sample
     (what ``fednav process`` writes); ``record_covariance``: keep each interval's
-    transition and noise and each epoch's correction (what the smoother needs);
+    transition and noise and each epoch's correction (what the IMU-rate sigmas and the
+    smoother need); a Monte Carlo run that reads only the epochs turns both off.
     ``innovations``: keep every measurement's innovation (what ``fednav tune`` reads).
     ``hold_s``: how long after an epoch its measurements may still arrive.  ``engine``:
     ``auto`` (compiled when every part of the system has a compiled form, else Python;
@@ -134,7 +163,7 @@ class Navigator:
     """
 
     def __init__(self, system: System, initial: InitialState, imu_period: float, *,
-                 imu_errors=None, record_rows: bool = False, record_covariance: bool = False,
+                 imu_errors=None, record_rows: bool = True, record_covariance: bool = True,
                  innovations: bool = False, hold_s: float = 0.0, engine: str = "auto"):
         self.system = system
         self.dt = float(imu_period)
@@ -491,7 +520,7 @@ class Navigator:
             K = len(st) - 1
             return NavResult(self.t0 + self.T * np.arange(K + 1), st,
                              np.full((K + 1, em.N_STATES, em.N_STATES), np.nan), {}, [],
-                             data_quality=dict(self.quality))
+                             data_quality=dict(self.quality), dt=self.dt)
         r = self.loop.rec
         K = r.n_epochs
         names = list(self.loop.fed.filters)
@@ -507,4 +536,5 @@ class Navigator:
                          r.P.view.copy(), beta, list(self.loop.log),
                          list(r.innovations or []), r.Phi.view.copy() if cov else None,
                          r.Qd.view.copy() if cov else None, r.dx.view.copy() if cov else None,
-                         rows, dict(self.quality), self.engine)
+                         rows, dict(self.quality), self.engine, self.dt,
+                         self.system.smoother)

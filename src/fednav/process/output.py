@@ -12,6 +12,7 @@ from ..core import units
 from ..core.atomic import save_figure, write_text
 from ..io.csvdata import write_csv
 from ..io.data import Reference
+from ..navigator.solution import consistency as _consistency
 from .run import ProcessResult, Solution, errors_against, rmse
 
 #: Columns of the RMSE block of summary.json (attitude ones only with a reference attitude).
@@ -62,18 +63,9 @@ def decimate(sol: Solution, rate_hz: float | None) -> Solution:
 
 
 def consistency(sol: Solution) -> dict[str, dict[str, float]]:
-    """Per local filter: mean normalized innovation squared per degree of freedom (about 1
-    for a consistent filter; well above 1: the noise figures are too optimistic) and the
-    fraction of measurements isolated by fault detection."""
-    if not sol.fdi:
-        return {}
-    log = pd.DataFrame(sol.fdi, columns=["t", "local", "nis", "dof", "thr", "isolated"])
-    out = {}
-    for name, g in log.groupby("local"):
-        out[str(name)] = {"nis_per_dof": float((g.nis / g.dof).mean()),
-                          "isolated_fraction": float(g.isolated.mean()),
-                          "measurements": int(len(g))}
-    return out
+    """Per local filter: mean normalized innovation squared per degree of freedom and the
+    fraction isolated (:func:`fednav.navigator.solution.consistency` of ``sol.fdi``)."""
+    return _consistency(sol.fdi)
 
 
 def summary(res: ProcessResult, ref: Reference | None, inputs: dict) -> dict:

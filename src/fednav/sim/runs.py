@@ -139,7 +139,8 @@ def run_mode(scn: Scenario, aiding: list[str], data: RunData, mode: str = "",
     system = scn.system_for(ModeConfig(name=mode or "mode", aiding=list(aiding),
                                        filter=filter_type, delay_compensation=delay,
                                        constraint=constraint))
-    nav = Navigator(system, _initial_state(scn, truth, data), dt)
+    nav = Navigator(system, _initial_state(scn, truth, data), dt, record_rows=False,
+                    record_covariance=False)
     feed = list(aiding) + ["baro"] * ("baro" not in aiding) + ["airdata"] * (
         constraint is not None)
     for a in feed:

@@ -1,0 +1,135 @@
+"""The navigator's solution at every IMU sample: position, velocity, attitude and their
+1-sigma, forward and smoothed.
+
+Between filter epochs the rows are the corrected mechanization; the rows of the epochs
+hold the state after the filter's feedback.  The sigmas between epochs interpolate,
+linearly in time, from the corrected covariance of the interval's start to the
+predicted one of its end.  The smoothed solution removes the RTS smoother's error
+estimate (:mod:`fednav.filters.smoother`) from every row: at the epochs its smoothed
+error, between them the error interpolated from that of the interval's corrected start
+to that of its predicted end.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..core import attitude as att
+from ..filters.smoother import rts_errors
+from ..ins import error_model as em
+from ..ins.strapdown import correct_rows
+
+
+@dataclass
+class Solution:
+    """Navigation solution at every IMU sample: ``t`` [s], ``lla`` (N, 3) [rad, rad, m],
+    ENU ``vel`` [m/s], Euler ``[pitch, roll, heading]`` [rad], 1-sigma ``sigma`` (N, 9) of
+    [phi (rad), dv ENU (m/s), dp ENU (m)] and ``sigma_euler`` (N, 3) of the Euler angles
+    [rad], body rate ``omega`` (N, 3) [rad/s] (compensated gyro).
+
+    Between filter epochs the rows are the corrected mechanization; the rows of the
+    epochs (``epoch_rows``) hold the state after the filter's feedback.  The sigmas
+    between epochs interpolate, linearly in time, from the corrected covariance of the
+    interval's start to the predicted one of its end.
+    """
+
+    t: np.ndarray
+    lla: np.ndarray
+    vel: np.ndarray
+    euler: np.ndarray
+    sigma: np.ndarray
+    sigma_euler: np.ndarray
+    omega: np.ndarray
+    label: str = "forward"
+    fdi: list = field(default_factory=list)
+    epoch_rows: np.ndarray | None = None
+
+    def rows(self, index) -> Solution:
+        """The solution at the rows ``index`` (a slice or index array)."""
+        return Solution(self.t[index], self.lla[index], self.vel[index], self.euler[index],
+                        self.sigma[index], self.sigma_euler[index], self.omega[index],
+                        self.label, self.fdi)
+
+
+def imu_rate(res, smooth: bool = False) -> tuple[Solution, Solution | None]:
+    """The forward :class:`Solution` at every IMU sample of a navigator's result (recorded
+    with ``record_rows`` and ``record_covariance``) and, with ``smooth``, the smoothed one."""
+    if res.rows is None or res.Phi is None:
+        raise ValueError("the IMU-rate solution needs a navigator built with "
+                         "record_rows=True and record_covariance=True")
+    n_cycles = len(res.states) - 1
+    n_rows = len(res.rows["q"])
+    n_per = (n_rows - 1) // max(n_cycles, 1)
+    rows_q, rows_v, rows_p = res.rows["q"], res.rows["vel"], res.rows["lla"]
+    rows_w = res.rows["omega"]
+    P_post, Phis, Qs, dxs = res.P, res.Phi, res.Qd, res.dx
+    t_rows = res.t[0] + res.dt * np.arange(n_rows)
+    P_prior = Phis[1:] @ P_post[:-1] @ np.swapaxes(Phis[1:], 1, 2) + Qs[1:]
+    P_prior = np.concatenate([P_post[:1], P_prior])
+    cov = _interpolate_intervals(_nav_cov(P_post), _nav_cov(P_prior), n_per)
+    forward = Solution(t_rows, rows_p, rows_v, att.quat_to_euler(rows_q), *_sigmas(rows_q, cov),
+                       rows_w, "forward", res.fdi, np.arange(0, n_rows, n_per))
+    smoothed = None
+    if smooth:
+        e, Ps = rts_errors(P_post, Phis, Qs, dxs)
+        err = _interpolate_intervals(e[:, :9], e[:, :9] + dxs[:, :9], n_per) * em.SCALE[:9]
+        q, v, p = rows_q.copy(), rows_v.copy(), rows_p.copy()
+        correct_rows(q, v, p, np.ascontiguousarray(err))
+        cs = _nav_cov(Ps)
+        cov = _interpolate_intervals(cs, cs, n_per)
+        smoothed = Solution(t_rows, p, v, att.quat_to_euler(q), *_sigmas(q, cov), rows_w,
+                            "smoothed", [], forward.epoch_rows)
+    return forward, smoothed
+
+
+def consistency(fdi: list) -> dict[str, dict[str, float]]:
+    """Per local filter: mean normalized innovation squared per degree of freedom (about 1
+    for a consistent filter; well above 1: the noise figures are too optimistic) and the
+    fraction of measurements isolated by fault detection."""
+    import pandas as pd
+
+    if not fdi:
+        return {}
+    log = pd.DataFrame(fdi, columns=["t", "local", "nis", "dof", "thr", "isolated"])
+    out = {}
+    for name, g in log.groupby("local"):
+        out[str(name)] = {"nis_per_dof": float((g.nis / g.dof).mean()),
+                          "isolated_fraction": float(g.isolated.mean()),
+                          "measurements": int(len(g))}
+    return out
+
+
+
+def _nav_cov(P):
+    """Variances of the 9 navigation states and the phi cross terms (E-N, E-U, N-U) of
+    covariances ``P`` (..., 18, 18), filter units."""
+    return np.concatenate([np.diagonal(P[..., :9, :9], axis1=-2, axis2=-1),
+                           P[..., [0, 0, 1], [1, 2, 2]]], axis=-1)
+
+
+def _interpolate_intervals(post, end, n_per: int) -> np.ndarray:
+    """Per-epoch quantities (N+1, ...) on the IMU rows of N intervals of ``n_per`` samples:
+    row ``(k-1) n_per + m`` lies between ``post[k-1]`` (m = 0) and ``end[k]`` (m = n_per),
+    linearly in time, except the epoch rows (m = n_per), which take ``post[k]``."""
+    post, end = np.asarray(post), np.asarray(end)
+    N = len(post) - 1
+    f = (np.arange(1, n_per) / n_per).reshape((1, -1) + (1,) * (post.ndim - 1))
+    inner = (1.0 - f) * post[:-1, None] + f * end[1:, None]
+    rows = np.concatenate([inner, post[1:, None]], axis=1)
+    return np.concatenate([post[:1], rows.reshape((N * n_per,) + post.shape[1:])])
+
+
+def _sigmas(q, cov) -> tuple[np.ndarray, np.ndarray]:
+    """1-sigma (N, 9) of [phi (rad), dv ENU (m/s), dp ENU (m)] and of the Euler angles
+    [pitch, roll, heading] (N, 3) [rad] from :func:`_nav_cov` rows (filter units)."""
+    sd = np.sqrt(cov[:, :9]) * em.SCALE[:9]
+    s = em.SCALE[0] ** 2
+    Pphi = np.empty((len(cov), 3, 3))
+    Pphi[:, [0, 1, 2], [0, 1, 2]] = cov[:, :3] * s
+    for j, (a, b) in zip((9, 10, 11), ((0, 1), (0, 2), (1, 2)), strict=True):
+        Pphi[:, a, b] = Pphi[:, b, a] = cov[:, j] * s
+    J = att.euler_error_jacobian(att.quat_to_euler(q))
+    var = np.einsum("kij,kjl,kil->ki", J, Pphi, J)
+    return sd, np.sqrt(np.maximum(var, 0.0))
