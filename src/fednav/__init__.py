@@ -13,4 +13,17 @@ _compat.install()
 
 from .navigator.system import System, load_system  # noqa: E402
 
-__all__ = ["System", "load_system"]
+__all__ = ["InitialState", "NavResult", "Navigator", "Snapshot", "Solution", "System",
+           "load_system"]
+
+_LAZY = {"InitialState": "navigator", "NavResult": "navigator", "Navigator": "navigator",
+         "Snapshot": "navigator", "Solution": "solution"}
+
+
+def __getattr__(name: str):
+    """The navigator's names, imported on first use (``fednav --help`` stays quick)."""
+    if name in _LAZY:
+        import importlib
+
+        return getattr(importlib.import_module(f".navigator.{_LAZY[name]}", __name__), name)
+    raise AttributeError(f"module 'fednav' has no attribute '{name}'")

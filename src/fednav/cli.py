@@ -177,7 +177,8 @@ def _output_folder(out: Path) -> Path:
     return out
 
 
-def _run_process(read, imu, gnss, velocity, ref, smooth, out, config, output_rate) -> None:
+def _run_process(read, imu, gnss, velocity, ref, smooth, out, config, output_rate,
+                 files: dict | None = None) -> None:
     from .core.atomic import clear_results
     from .core.config import load_model
     from .navigator.system import System
@@ -189,10 +190,12 @@ def _run_process(read, imu, gnss, velocity, ref, smooth, out, config, output_rat
         cfg = System() if config is None else load_model(config, System, "processing config")
         data = read(cfg)
         clear_results(out)
-        res = process(data["imu"], data["gnss"], data["velocity"], cfg, smooth)
+        res = process(data["imu"], data["gnss"], data["velocity"], cfg, smooth,
+                      sensors=data.get("sensors"))
         files = process_output.write(out, res, data["ref"], {
             "imu": str(imu), "gnss": str(gnss),
             "velocity": None if velocity is None else str(velocity),
+            **{n: str(f) for n, f in (files or {}).items()},
             "reference": None if ref is None else str(ref),
             "config": None if config is None else str(config), "smooth": smooth,
             "output_rate_hz": output_rate}, output_rate, data["gnss"])
@@ -250,13 +253,20 @@ def _navego_reader(imu: Path, gnss: Path, visual: Path | None, ref: Path | None 
     return read
 
 
-def _csv_reader(imu: Path, gnss: Path, velocity: Path | None, ref: Path | None = None):
+def _csv_reader(imu: Path, gnss: Path, velocity: Path | None, ref: Path | None = None,
+                files: dict | None = None):
     """``read(cfg)`` of fednav CSV files (GNSS sigmas and lever arm from the config, else
-    5 m, 0.1 m/s and none)."""
+    5 m, 0.1 m/s and none; ``files``: other registered sensors' files by name)."""
     def read(cfg):
         import numpy as np
 
-        from .io import read_gnss_csv, read_imu_csv, read_reference_csv, read_velocity_csv
+        from .io import (
+            read_gnss_csv,
+            read_imu_csv,
+            read_reference_csv,
+            read_sensor_csv,
+            read_velocity_csv,
+        )
 
         gc = cfg.sensors.gnss
 
@@ -268,8 +278,39 @@ def _csv_reader(imu: Path, gnss: Path, velocity: Path | None, ref: Path | None =
                           given(gc and gc.lever_m, (0.0, 0.0, 0.0)))
         return {"imu": read_imu_csv(imu, cfg.imu.max_bridge_s), "gnss": g,
                 "velocity": None if velocity is None else read_velocity_csv(velocity),
-                "ref": None if ref is None else read_reference_csv(ref)}
+                "ref": None if ref is None else read_reference_csv(ref),
+                "sensors": {n: read_sensor_csv(n, f) for n, f in (files or {}).items()}}
     return read
+
+
+def _sensor_file_options(*exclude: str):
+    """Give a command that takes ``**files`` one ``--NAME FILE`` option per registered
+    sensor but ``exclude`` (from the sensor registry: a new sensor gets its option)."""
+    import inspect
+    from typing import Optional
+
+    from rich.markup import escape
+
+    from .sensors import registry
+
+    def add(command):
+        sig = inspect.signature(command)
+        params = [p for p in sig.parameters.values() if p.kind != p.VAR_KEYWORD]
+        ann = dict(command.__annotations__)
+        for name in registry.names():
+            if name in exclude:
+                continue
+            spec = registry.spec(name)
+            cols = ", ".join(["t_s"] + [c.name for c in spec.columns])
+            help_ = escape(f"{spec.summary}: CSV {cols} [, t_arrival_s]")
+            params.append(inspect.Parameter(
+                name, inspect.Parameter.KEYWORD_ONLY, annotation=Optional[Path],  # noqa: UP045
+                default=typer.Option(None, f"--{name}", help=help_)))
+            ann[name] = Optional[Path]  # noqa: UP045  (evaluated by typer, not a hint)
+        command.__signature__ = sig.replace(parameters=params)
+        command.__annotations__ = ann
+        return command
+    return add
 
 
 _OUT = typer.Option(Path("results/process"), help="output folder")
@@ -296,18 +337,20 @@ def process_navego(
 
 @process_app.command("csv")
 @_one_line_errors
+@_sensor_file_options("gnss", "velocity")
 def process_csv(
     imu: Path = typer.Option(..., help="IMU CSV (docs/data-formats.md)"),
     gnss: Path = typer.Option(..., help="GNSS CSV"),
     velocity: Path = typer.Option(None, help="velocity-sensor CSV"),
     ref: Path = typer.Option(None, help="reference CSV (for RMSE)"),
     smooth: bool = _SMOOTH, out: Path = _OUT, config: Path = _CONFIG,
-    output_rate: float = _RATE,
+    output_rate: float = _RATE, **files: Path,
 ) -> None:
-    """Loosely coupled INS/GNSS (+ velocity sensor) on fednav CSV files; the IMU noise
-    figures and GNSS sigmas come from --config."""
-    _run_process(_csv_reader(imu, gnss, velocity, ref), imu, gnss, velocity, ref, smooth, out,
-                 config, output_rate)
+    """INS/GNSS (+ velocity sensor, + any registered sensor's file) on fednav CSV files;
+    the IMU noise figures and sensor sigmas come from --config."""
+    files = {n: f for n, f in files.items() if f is not None}
+    _run_process(_csv_reader(imu, gnss, velocity, ref, files), imu, gnss, velocity, ref,
+                 smooth, out, config, output_rate, files)
 
 
 tune_app = typer.Typer(no_args_is_help=True,

@@ -8,27 +8,15 @@ from .federated import FederatedFilter, sharing_factors
 from .kf import KalmanFilter
 from .particle import ParticleFilter, systematic_resample
 from .quadrature import AdaptiveSparseGridFilter, SparseGridFilter
+from .registry import FILTERS, make_filter
 from .ukf import SimplifiedUKF, UnscentedKalmanFilter
 
-#: Names accepted in scenario files.
-REGISTRY = {"kf": KalmanFilter, "ekf": KalmanFilter, "ukf": UnscentedKalmanFilter,
-            "sukf": SimplifiedUKF, "cukf": ConstrainedUKF, "cekf": ConstrainedEKF,
-            "aekf": SageHusaEKF, "raukf": RobustAdaptiveUKF, "pf": ParticleFilter,
-            "sghqf": SparseGridFilter, "aasghqf": AdaptiveSparseGridFilter}
+#: The filter registry (:data:`fednav.filters.registry.FILTERS`; this name for 0.1's users).
+REGISTRY = FILTERS
 
 
-def make_filter(name: str, x0, P0, **options) -> Filter:
-    """Build a filter by its registry name (``kf``, ``ekf``, ``ukf``, ``sukf``, ``pf`` ...)."""
-    try:
-        cls = REGISTRY[name.lower()]
-    except KeyError:
-        raise ValueError(
-            f"unknown filter '{name}'; choose one of {', '.join(sorted(REGISTRY))}"
-        ) from None
-    return cls(x0, P0, name=name.lower(), **options)
-
-
-__all__ = ["AdaptiveSparseGridFilter", "ConstrainedEKF", "ConstrainedUKF", "FederatedFilter",
+__all__ = ["AdaptiveSparseGridFilter", "ConstrainedEKF", "ConstrainedUKF", "FILTERS",
+           "FederatedFilter",
            "Filter", "FilterError", "FunctionModel", "FunctionProcess", "Innovation",
            "KalmanFilter", "LinearModel", "ParticleFilter", "REGISTRY", "RobustAdaptiveUKF",
            "SageHusaEKF", "SimplifiedUKF", "SparseGridFilter", "UnscentedKalmanFilter",

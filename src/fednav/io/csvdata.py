@@ -129,13 +129,14 @@ def read_reference_csv(path) -> Reference:
     return Reference(src, df["t_s"].to_numpy(float), _lla(df), _cols(df, VEL_COLUMNS), euler)
 
 
-def write_csv(path, columns: dict[str, np.ndarray], decimals: dict[str, int] | None = None
-              ) -> Path:
+def write_csv(path, columns: dict[str, np.ndarray], decimals: dict[str, int] | None = None,
+              significant: int = 10) -> Path:
     """Write named numeric columns as a CSV file (written then renamed).
 
     With ``decimals`` (a count per column name) each column gets that many decimals, by
-    the compiled :func:`fednav.io.fixed_format.format_rows`; otherwise ``%.10g``, one
-    C-level format of a whole block of rows (5x faster than ``DataFrame.to_csv``)."""
+    the compiled :func:`fednav.io.fixed_format.format_rows`; otherwise ``significant``
+    digits (``%.10g``), one C-level format of a whole block of rows (5x faster than
+    ``DataFrame.to_csv``)."""
     path = Path(path)
     names = list(columns)
     X = np.column_stack([np.asarray(columns[k], dtype=float) for k in names])
@@ -147,7 +148,7 @@ def write_csv(path, columns: dict[str, np.ndarray], decimals: dict[str, int] | N
         if body is not None:
             write_bytes(path, header.encode() + body)
             return path
-    row = ",".join(["%.10g"] * len(names)) + "\n"
+    row = ",".join([f"%.{significant}g"] * len(names)) + "\n"
     parts = [header]
     for a in range(0, len(X), 50_000):
         block = X[a:a + 50_000]

@@ -88,11 +88,10 @@ def build_federation(system, names: list[str], P0: np.ndarray, n: int) -> Federa
     """The local filters (one per name) and the master of ``system``'s federated filter."""
     f = system.filter
 
+    common = {"alpha": f.alpha, "beta": f.beta, "kappa": f.kappa, "level": f.grid_level}
+
     def one(ftype, what):
-        opts = ({"alpha": f.alpha, "beta": f.beta, "kappa": f.kappa}
-                if ftype in ("ukf", "sukf", "cukf", "raukf") else
-                {"level": f.grid_level} if ftype in ("sghqf", "aasghqf") else {})
-        flt = make_filter(ftype, np.zeros(n), P0, **opts)
+        flt = make_filter(ftype, np.zeros(n), P0, common)
         flt.name = f"{ftype} {what}"
         return flt
 

@@ -8,7 +8,7 @@ is made of::
                 noise, lever arm, period, latency handling
     aiding:     which of them feed the filter (default: every one that can)
     constraint: wind — the air-data constraint in every local filter (paper 000)
-    filter:     local filter type (any name of fednav.filters.REGISTRY, per local filter
+    filter:     local filter type (any name of fednav.filters.registry.FILTERS, per local filter
                 in ``locals``), federated / centralized, sharing, reset, fault detection,
                 period, the filter's IMU bias model
     alignment:  how recorded data find the initial attitude
@@ -30,7 +30,7 @@ import numpy as np
 from pydantic import Field, field_validator, model_validator
 
 from ..core.config import _Model, nested_error, read_mapping, validate
-from ..filters import REGISTRY as FILTERS
+from ..filters.registry import FILTERS
 from ..ins.error_model import ImuNoiseModel
 from ..sensors.imu import ImuConfig
 from ..sensors.registry import SENSORS, SensorSet, check_names

@@ -16,18 +16,20 @@ import time
 from dataclasses import dataclass, field, replace
 
 import numpy as np
+from pydantic import ValidationError
 
 from ..core import attitude as att
 from ..core import earth, units
 from ..ins import error_model as em
 from ..ins.alignment import Alignment, align, coarse_level
 from ..io.data import DataError, GnssData, ImuData, Reference, VelocityData
+from ..io.sensorfile import SensorData
 from ..navigator.loop import InnovationRecord  # noqa: F401  (fednav.process's name)
 from ..navigator.navigator import InitialState, Navigator
 from ..navigator.solution import Solution, imu_rate
 from ..navigator.system import System, imu_noise_model
 from ..navigator.system import imu_figures as _imu_figures
-from ..sensors import GnssConfig, GnssPosVel, VelocityConfig
+from ..sensors import GnssConfig, GnssPosVel, VelocityConfig, registry
 from ..sensors.imu import FIGURES
 
 #: The processing config of fednav 0.1 is a system description now (one schema); the
@@ -241,6 +243,7 @@ class Prepared:
     warnings: list
     alignment: Alignment
     quality: dict
+    others: dict = field(default_factory=dict)
 
     def navigator(self, **options) -> Navigator:
         """A :class:`~fednav.navigator.Navigator` for this data (nothing fed yet)."""
@@ -251,15 +254,41 @@ class Prepared:
         """Every measurement, then every IMU sample, in one block each."""
         for name, (t, z, R) in self.measurements.items():
             nav.add_measurements(name, t, z, R=R)
+        for d in self.others.values():
+            nav.add_measurements(d.name, d.t, d.z, t_arrival=d.t_arrival)
         nav.add_imu(self.t, self.gyro, self.accel)
         return nav
 
 
+def _other_sensor(data: SensorData, cfg: System):
+    """The system's section for a recorded sensor other than GNSS and the velocity sensor
+    (its noise): the description's, else the section's defaults when they suffice."""
+    spec = registry.spec(data.name)
+    sc = cfg.sensors[data.name] if data.name in cfg.sensors else None
+    if sc is None:
+        try:
+            sc = spec.config()
+        except ValidationError:
+            raise DataError(f"{data.source}: the system description needs a "
+                            f"'sensors.{data.name}' section (its noise) to use this file"
+                            ) from None
+    if spec.aiding and sc.sigma() is None:
+        raise DataError(f"{data.source}: sensors.{data.name} gives no noise figure")
+    return sc
+
+
 def prepare(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
-            cfg: System | None = None) -> Prepared:
+            cfg: System | None = None, sensors: dict | None = None) -> Prepared:
     """The input checks, the sensor corrections, the initial attitude and P0 of
-    :func:`process` (one-line :class:`DataError` s for data it cannot use)."""
+    :func:`process` (one-line :class:`DataError` s for data it cannot use).  ``sensors``:
+    other registered sensors' recordings by name (:class:`~fednav.io.SensorData`, e.g.
+    from :func:`~fednav.io.read_sensor_csv`); their noise comes from the system
+    description."""
     cfg = cfg or System()
+    others = dict(sensors or {})
+    for name, d in others.items():
+        if name in ("gnss", "velocity"):
+            raise DataError(f"{d.source}: {name} data is given as its own argument")
     dt = imu.period()
     gnss, velocity = adjust_sensors(gnss, velocity, cfg)
     warnings = check_units(imu, gnss)
@@ -300,9 +329,16 @@ def prepare(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
     if velocity is not None:
         sensors["velocity"] = vc.model_copy(update={"lever_m": tuple(map(float, (
             velocity.lever if vc.lever_m is None else vc.lever_m)))})
+    for name, d in others.items():
+        sensors[name] = _other_sensor(d, cfg)
+    have = [n for n in sensors if registry.spec(n).aiding]
+    aiding = have if cfg.aiding is None else [n for n in cfg.aiding if n in have]
+    if not aiding:
+        raise DataError(f"the system's aiding list {cfg.aiding} names none of the sensors "
+                        f"given ({', '.join(have)})")
     system = cfg.model_copy(update={
         "filter": cfg.filter.model_copy(update={"period_s": T}),
-        "sensors": cfg.sensors.replace(**sensors), "aiding": list(sensors)})
+        "sensors": cfg.sensors.replace(**sensors), "aiding": aiding})
     meas = {"gnss": (gnss.t, np.column_stack([gnss.lla, gnss.vel]),
                      np.broadcast_to(R_gnss, (len(gnss.t), 6, 6)))}
     if velocity is not None:
@@ -311,20 +347,27 @@ def prepare(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
                             np.array([model.R(c) for c in velocity.cov]))
     m = slice(i0, i0 + n_cycles * n_per)
     quality = {**imu.quality, **gnss.quality, **(velocity.quality if velocity else {})}
+    for name, d in others.items():
+        quality.update(d.quality)
+        t_end = imu.t[m][-1] if n_cycles else t0
+        if d.t[-1] < t0 or d.t[0] > t_end:
+            warnings.append(f"{d.source}: no {name} measurement falls within the IMU "
+                            f"data's {t0:.1f}..{t_end:.1f} s (a time offset?)")
     return Prepared(system, InitialState(imu.t[i0], lla0, gnss.vel[0], al.euler, P0,
                                          gyro_bias=al.gyro_bias), dt, imu.t[m], imu.gyro[m],
-                    imu.accel[m], meas, imu.errors, n_per, warnings, al, quality)
+                    imu.accel[m], meas, imu.errors, n_per, warnings, al, quality, others)
 
 
 def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
             cfg: System | None = None, smooth: bool = False,
-            innovations: list | None = None) -> ProcessResult:
-    """Loosely coupled INS/GNSS(/velocity) processing; see the module docstring.
+            innovations: list | None = None, sensors: dict | None = None) -> ProcessResult:
+    """Loosely coupled INS/GNSS(/velocity, /any registered sensor) processing; see the
+    module docstring and :func:`prepare`.
 
     ``innovations``, when given a list, receives one :class:`InnovationRecord` per measurement
     (what :mod:`fednav.process.tuning` estimates noise figures from)."""
     t_start = time.perf_counter()
-    prep = prepare(imu, gnss, velocity, cfg)
+    prep = prepare(imu, gnss, velocity, cfg, sensors)
     nav = prep.feed(prep.navigator(record_rows=True, record_covariance=True,
                                    innovations=innovations is not None))
     out = nav.result()

@@ -1,0 +1,92 @@
+"""Any registered sensor's CSV file, from its entry in the sensor registry.
+
+A sensor's file is ``t_s`` (time of validity), the columns its
+:class:`~fednav.sensors.spec.SensorSpec` lists (one per component of its measurement,
+unit in the name: degrees and metres at the edge, converted here), and optionally
+``t_arrival_s`` (when the measurement reached the navigator, for processing delays).
+Adding a sensor to the registry adds its file layout; nothing here names a sensor.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..sensors import registry
+from .csvdata import _read, write_csv
+from .data import DataError, check_time
+
+#: Optional column: when the measurement reached the navigator [s].
+ARRIVAL = "t_arrival_s"
+
+
+@dataclass
+class SensorData:
+    """One sensor's recorded measurements: ``name`` (registered), ``source`` (the file),
+    times of validity ``t`` (N,) [s], values ``z`` (N, m) in SI units (radians, metres,
+    m/s) in the layout of the sensor's measurement model, arrival times ``t_arrival``
+    (N,) [s] or None, and what the reader found (``quality``: rows dropped)."""
+
+    name: str
+    source: str
+    t: np.ndarray
+    z: np.ndarray
+    t_arrival: np.ndarray | None = None
+    quality: dict = field(default_factory=dict)
+
+
+def columns(name: str) -> tuple[str, ...]:
+    """The header of sensor ``name``'s file (without the optional ``t_arrival_s``)."""
+    return ("t_s",) + tuple(c.name for c in registry.spec(name).columns)
+
+
+def read_sensor_csv(name: str, path) -> SensorData:
+    """Sensor ``name``'s CSV file as :class:`SensorData` (one-line :class:`DataError` for
+    a file it cannot use).  Rows with an empty or non-finite value are dropped and
+    counted; times must increase."""
+    spec = registry.spec(name)
+    if not spec.columns:
+        raise DataError(f"sensor '{name}' declares no file columns")
+    head = columns(name)
+    src, df = _read(path, f"{name} sensor", head)
+    t = df["t_s"].to_numpy(float)
+    z = np.column_stack([df[c.name].to_numpy(float) * c.to_si for c in spec.columns])
+    ta = None
+    if ARRIVAL in df.columns:
+        ta = df[ARRIVAL].to_numpy(float)
+    ok = np.isfinite(z).all(axis=1) & np.isfinite(t)
+    if ta is not None:
+        ok &= np.isfinite(ta)
+    quality = {f"{name}_rows_dropped": int((~ok).sum())}
+    t, z = t[ok], z[ok]
+    if not len(t):
+        raise DataError(f"{src}: no row with every value of {', '.join(head)} finite")
+    if len(t) > 1:
+        check_time(src, t, "t_s")
+    if ta is not None:
+        ta = ta[ok]
+        early = ta < t - 1e-9
+        if early.any():
+            i = int(np.argmax(early))
+            raise DataError(f"{src}: row {i + 1} arrives at {ta[i]:.6f} s, before the "
+                            f"time it describes ({t[i]:.6f} s)")
+    for j, c in enumerate(spec.columns):
+        if c.wrap_2pi:
+            z[:, j] = np.mod(z[:, j], 2.0 * np.pi)
+    return SensorData(name, src, t, z, ta, quality)
+
+
+def write_sensor_csv(path, series) -> Path:
+    """A simulated :class:`~fednav.sensors.base.MeasurementSeries` as its sensor's file
+    (``t_arrival_s`` when it arrives later than it describes), every value to 17
+    significant digits (the file reads back to the same doubles, but for the degree
+    conversion's rounding)."""
+    spec = registry.spec(series.kind)
+    cols = {"t_s": series.t}
+    for j, c in enumerate(spec.columns):
+        cols[c.name] = series.z[:, j] / c.to_si
+    if series.t_avail is not None and np.any(series.t_avail != series.t):
+        cols[ARRIVAL] = series.t_avail
+    return write_csv(path, cols, significant=17)
