@@ -86,3 +86,18 @@ def test_old_module_names_still_import_with_a_warning(old):
         import importlib
 
         assert importlib.import_module(old) is importlib.import_module(MOVED[old])
+
+
+def test_launch_scenario_keys_of_0_1_still_read():
+    import yaml
+
+    from fednav.launch import errors, scenario
+
+    d = yaml.safe_load((PKG / "scenarios" / "paper001.yaml").read_text())
+    d["gps"] = d.pop("gnss")
+    d["filters"]["pf_gps_likelihood"] = "mixture"
+    with pytest.warns(FutureWarning, match="are now"):
+        s = scenario.LaunchScenario.model_validate(d)
+    assert s.gnss.sigma_m == 15.0 and s.filters.pf_gnss_likelihood == "mixture"
+    with pytest.warns(FutureWarning, match="GnssPositionLI"):
+        assert errors.GpsPosition is errors.GnssPositionLI

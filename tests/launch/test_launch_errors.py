@@ -7,7 +7,7 @@ import pytest
 from fednav.core import attitude, units
 from fednav.launch.errors import (
     SCALE,
-    GpsPosition,
+    GnssPositionLI,
     ImuNoise,
     LaunchProcess,
     StarAttitudeLI,
@@ -102,13 +102,13 @@ def test_star_observation_and_exact_likelihood():
     assert -1e-3 < ll[1] < 0.0
 
 
-def test_gps_mixture_likelihood():
-    m = GpsPosition(0.05, 20.0)
+def test_gnss_mixture_likelihood():
+    m = GnssPositionLI(0.05, 20.0)
     R = np.eye(3) * 15.0**2
     X = np.zeros((2, 15))
     X[1, 3:6] = [300.0, 0.0, 0.0]
     ll = m.loglik(np.zeros(3), X, None, R)
-    g = GpsPosition()
+    g = GnssPositionLI()
     assert not hasattr(g, "loglik")
     # Far from the fix the mixture's tail keeps the weight from vanishing.
     assert ll[0] - ll[1] < 15.0 and 0.5 * (300 / 15) ** 2 > 150

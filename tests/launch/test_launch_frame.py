@@ -2,7 +2,14 @@ import numpy as np
 import pytest
 
 from fednav.core import earth, units
-from fednav.launch.frame import J2, J4, LaunchFrame, ecef_to_geodetic, gravitation_eci
+from fednav.launch.frame import (
+    J2,
+    J4,
+    LaunchFrame,
+    ecef_to_geodetic,
+    enu_axes_ecef,
+    gravitation_eci,
+)
 
 FRAME = LaunchFrame((units.deg(32.0), units.deg(118.0), 0.0), units.deg(90.0))
 
@@ -45,9 +52,10 @@ def test_gravitation_plus_centrifugal_is_normal_gravity(lat):
 
 def test_axes_at_launch():
     # Eastward launch: x = east, y = up, z = south (ENU at the pad, t = 0).
-    C = FRAME.C_li_enu(0.0, np.array(FRAME.lla))
+    A = enu_axes_ecef(FRAME.lla[0], FRAME.lla[1])  # C_enu^ecef at the pad
+    C = FRAME.C_ecef_li_at(0.0).T @ A               # ENU -> LI
     assert np.allclose(C.T, [[1, 0, 0], [0, 0, -1], [0, 1, 0]], atol=1e-12)
-    north = LaunchFrame(FRAME.lla, 0.0).C_li_enu(0.0, np.array(FRAME.lla))
+    north = LaunchFrame(FRAME.lla, 0.0).C_ecef_li_at(0.0).T @ A
     assert np.allclose(north.T @ [1, 0, 0], [0, 1, 0], atol=1e-12)  # x = north
 
 
@@ -77,9 +85,11 @@ def test_point_at_rest_traces_a_circle():
     c = (e0[:2] @ e1[:2]) / (np.linalg.norm(e0[:2]) * np.linalg.norm(e1[:2]))
     assert abs(c) < 1e-7
     # Its LI velocity at t = 0 is omega x r (eastward, ~394 m/s at 32 deg).
-    v_ecef = FRAME.li_velocity_to_ecef(np.zeros(3), FRAME.C_eci_li.T @ np.cross(
-        [0, 0, earth.OMEGA_IE], FRAME.r0_eci), 0.0)
-    assert np.linalg.norm(v_ecef) < 1e-9
+    w = np.array([0.0, 0.0, earth.OMEGA_IE])
+    v_li = FRAME.C_eci_li.T @ np.cross(w, FRAME.r0_eci)
+    v_eci = FRAME.C_eci_li @ v_li  # Earth-relative: remove omega x r, at t = 0
+    v_ecef = FRAME.C_ecef_eci(0.0) @ (v_eci - np.cross(w, FRAME.li_to_eci(np.zeros(3))))
+    assert np.linalg.norm(v_ecef) < 1e-9 and np.linalg.norm(v_li) > 390
 
 
 def test_bad_degree():

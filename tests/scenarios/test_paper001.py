@@ -70,8 +70,8 @@ def test_particles_only_for_paper_001(tmp_path):
 
 
 @pytest.mark.parametrize("edit, msg", [
-    (lambda d: d["gps"].update(sigma=3.0), "key 'gps.sigma': unknown key"),
-    (lambda d: d["gps"].update(sigma_m=-1.0), "key 'gps.sigma_m'"),
+    (lambda d: d["gnss"].update(sigma=3.0), "key 'gnss.sigma': unknown key"),
+    (lambda d: d["gnss"].update(sigma_m=-1.0), "key 'gnss.sigma_m'"),
     (lambda d: d["filters"].update(particles=3), "key 'filters.particles'"),
     (lambda d: d.update(filter_period_s=0.03), "multiple"),
     (lambda d: d.update(particle_sweep=[5]), "particle_sweep"),

@@ -1,5 +1,5 @@
 """Error-state model of the launch-frame SINS, its exact nonlinear propagation (particle
-transition) and linearisation (EKF), and the GPS and star-sensor measurement models.
+transition) and linearisation (EKF), and the GNSS and star-sensor measurement models.
 
 State (15, in *filter units* for conditioning; :data:`SCALE` converts to SI):
 
@@ -210,8 +210,8 @@ def _skew(v):
 
 
 # --- measurement models ------------------------------------------------------------------
-class GpsPosition:
-    """GPS position converted to LI: ``y = r_hat - r_gps`` [m] = dr + noise.
+class GnssPositionLI:
+    """GNSS position converted to LI: ``y = r_hat - r_gnss`` [m] = dr + noise.
 
     ``outlier_probability`` p and ``outlier_scale`` k: the particle filter's likelihood is
     the mixture ``(1 - p) N(0, R) + p N(0, k^2 R)`` (a heavy-tailed receiver); p = 0 is
@@ -225,6 +225,12 @@ class GpsPosition:
         self.p, self.k = float(outlier_probability), float(outlier_scale)
         if self.p > 0:
             self.loglik = self._mixture
+
+    @staticmethod
+    def residual(state, z) -> np.ndarray:
+        """``y`` from the INS state (:mod:`fednav.launch.strapdown` layout) and the fix in
+        LI [m]."""
+        return state[7:10] - z
 
     def h(self, X, nav=None):
         return np.atleast_2d(X)[:, POS]
@@ -274,6 +280,11 @@ class StarAttitudeLI:
         return misalignment_nb(np.ascontiguousarray(C_star, dtype=float),
                                np.ascontiguousarray(C_hat, dtype=float)) / units.ARCSEC
 
+    @classmethod
+    def residual(cls, state, z) -> np.ndarray:
+        """``y`` from the INS state and the star sensor's C_b^li (row-major, 9 values)."""
+        return cls.observe(quat_to_dcm(np.ascontiguousarray(state[0:4])), z.reshape(3, 3))
+
     def h(self, X, nav=None):
         return np.atleast_2d(X)[:, PHI]
 
@@ -284,3 +295,14 @@ class StarAttitudeLI:
         return _star_loglik(np.ascontiguousarray(y, dtype=float),
                             np.ascontiguousarray(X, dtype=float), SCALE,
                             np.linalg.inv(R))
+
+
+def __getattr__(name: str):
+    """0.1's name of the GNSS model, for one more release."""
+    if name == "GpsPosition":
+        import warnings
+
+        warnings.warn("fednav.launch.errors.GpsPosition is now GnssPositionLI",
+                      FutureWarning, stacklevel=2)
+        return GnssPositionLI
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

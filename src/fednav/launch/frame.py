@@ -198,24 +198,9 @@ class LaunchFrame:
         """LI -> ECEF rotation at ``t``: ``v_ecef = C @ v_li``."""
         return self.C_ecef_eci(t) @ self.C_eci_li
 
-    def C_li_enu(self, t, lla) -> np.ndarray:
-        """ENU (at geodetic ``lla``, time ``t``) -> LI rotation: ``C_b^li = C @ C_b^enu``."""
-        lla = np.asarray(lla, dtype=float)
-        A = enu_axes_ecef(lla[..., 0], lla[..., 1])
-        return np.swapaxes(self.C_ecef_li_at(t), -1, -2) @ A
-
     # --- positions --------------------------------------------------------------------
     def li_to_eci(self, r_li) -> np.ndarray:
         return self.r0_eci + np.asarray(r_li, dtype=float) @ self.C_eci_li.T
-
-    def eci_to_li(self, r_eci) -> np.ndarray:
-        return (np.asarray(r_eci, dtype=float) - self.r0_eci) @ self.C_eci_li
-
-    def eci_to_ecef(self, r_eci, t) -> np.ndarray:
-        return np.einsum("...ij,...j->...i", self.C_ecef_eci(t), r_eci)
-
-    def ecef_to_eci(self, r_ecef, t) -> np.ndarray:
-        return np.einsum("...ji,...j->...i", self.C_ecef_eci(t), r_ecef)
 
     def li_to_ecef(self, r_li, t) -> np.ndarray:
         R = self.C_ecef_eci(t)
@@ -233,13 +218,6 @@ class LaunchFrame:
     def geodetic_to_li(self, lla, t) -> np.ndarray:
         lla = np.asarray(lla, dtype=float)
         return self.ecef_to_li(earth.llh_to_ecef(lla[..., 0], lla[..., 1], lla[..., 2]), t)
-
-    def li_velocity_to_ecef(self, r_li, v_li, t) -> np.ndarray:
-        """Earth-relative velocity in ECEF for LI position/velocity (removes omega × r)."""
-        r_eci = self.li_to_eci(r_li)
-        v_eci = np.asarray(v_li, dtype=float) @ self.C_eci_li.T
-        w = np.array([0.0, 0.0, earth.OMEGA_IE])
-        return self.eci_to_ecef(v_eci - np.cross(w, r_eci), t)
 
     # --- gravitation ----------------------------------------------------------------------
     def gravity_li(self, r_li) -> np.ndarray:

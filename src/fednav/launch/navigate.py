@@ -1,10 +1,13 @@
-"""One closed-loop launch-frame run: simulated sensors, nominal SINS, federated PF or EKF.
+"""One closed-loop launch-frame run: simulated sensors, the launch-frame INS flown by the
+navigator (:class:`~fednav.navigator.Navigator`) with federated PF or EKF local filters.
 
-Per filter cycle (``filter_period_s``, 1 s in the paper):
+The launch inertial frame has its own mechanization and error model, so paper 001 brings
+its own core (:class:`LaunchCore`) to the navigator's cycle.  Per filter cycle
+(``filter_period_s``, 1 s in the paper):
 
 1. the nominal SINS integrates the cycle's IMU samples (bias-compensated with its current
    estimates) in one compiled call and returns the interval summary;
-2. both local filters (``gps``, ``cns``) time-update with their share of the process
+2. both local filters (``gnss``, ``star``) time-update with their share of the process
    noise (``Q / beta_i``) — the PFs by drawing every particle from the transition prior
    (:class:`~fednav.launch.errors.LaunchProcess`);
 3. each local filter takes its sensor's measurement (when one is due);
@@ -26,16 +29,19 @@ import numpy as np
 from ..core import units
 from ..core.attitude import dcm_to_quat, misalignment, quat_to_dcm, rotvec_to_dcm
 from ..core.kernels import quat_mul, rotvec_to_quat
-from ..core.kernels import quat_to_dcm as quat_to_dcm_nb
 from ..filters import FederatedFilter, KalmanFilter, ParticleFilter
+from ..navigator import System
+from ..navigator.loop import Mechanization
+from ..navigator.navigator import Navigator
 from ..sensors.imu import corrupt_imu
 from .errors import (
     ACC,
     GYRO,
+    N_STATES,
     POS,
     SCALE,
     VEL,
-    GpsPosition,
+    GnssPositionLI,
     ImuNoise,
     LaunchProcess,
     StarAttitudeLI,
@@ -53,8 +59,8 @@ class LaunchData:
     dtheta: np.ndarray         # (N, 3) measured angle increments [rad]
     dv: np.ndarray             # (N, 3) measured velocity increments [m/s]
     x0_err: np.ndarray         # (15,) initial navigation error, filter units (biases 0)
-    gps_t: np.ndarray
-    gps_lla: np.ndarray        # receiver output: geodetic lat, lon [rad], h [m]
+    gnss_t: np.ndarray
+    gnss_lla: np.ndarray       # receiver output: geodetic lat, lon [rad], h [m]
     star_t: np.ndarray
     star_q_eci: np.ndarray     # star-sensor attitude q_b^eci
 
@@ -111,7 +117,7 @@ def make_data(scn: LaunchScenario, seed: int, max_time: float | None = None) -> 
     x0 = rng.standard_normal(15) * np.sqrt(np.diag(P0))
     x0[9:] = 0.0  # the bias errors are those corrupt_imu drew
     fr, T = tr.frame, tr.t[-1]
-    g = scn.gps
+    g = scn.gnss
     gt = np.arange(max(g.period_s, g.available_from_s), T + 1e-9, g.period_s)
     gi = tr.index(gt)
     noise = rng.standard_normal((len(gt), 3)) * g.sigma_m
@@ -121,14 +127,14 @@ def make_data(scn: LaunchScenario, seed: int, max_time: float | None = None) -> 
     r_ecef = fr.li_to_ecef(tr.r[gi], gt) + noise
     from .frame import ecef_to_geodetic
 
-    gps_lla = ecef_to_geodetic(r_ecef)
+    gnss_lla = ecef_to_geodetic(r_ecef)
     s = scn.star
     st = np.arange(max(s.period_s, s.available_from_s), T + 1e-9, s.period_s)
     si = tr.index(st)
     n = rng.standard_normal((len(st), 3)) * float(units.arcsec(s.sigma_arcsec))
     C_star_li = rotvec_to_dcm(n) @ tr.C[si]
     q_eci = dcm_to_quat(fr.C_eci_li @ C_star_li)
-    return LaunchData(seed, dth, dv, x0, gt, gps_lla, st, q_eci)
+    return LaunchData(seed, dth, dv, x0, gt, gnss_lla, st, q_eci)
 
 
 def _make_locals(kind: str, scn: LaunchScenario, P0, seed: int, particles: int | None):
@@ -141,10 +147,79 @@ def _make_locals(kind: str, scn: LaunchScenario, P0, seed: int, particles: int |
                                      resample_threshold=fo.resample_threshold,
                                      roughening=fo.roughening,
                                      progressive=fo.progressive_correction)
-                for i, name in enumerate(("gps", "cns"))}
+                for i, name in enumerate(SENSORS)}
     if kind == "ekf":
-        return {name: KalmanFilter(x0, P0, name=f"ekf/{name}") for name in ("gps", "cns")}
+        return {name: KalmanFilter(x0, P0, name=f"ekf/{name}") for name in SENSORS}
     raise ValueError(f"unknown launch filter '{kind}'; choose pf or ekf")
+
+
+class LaunchCore:
+    """The launch-frame mechanization / error-model pair as a navigator core (see
+    :mod:`fednav.navigator.loop`): the nominal SINS (:class:`LaunchStrapdown`), its
+    15-state error model (:class:`LaunchProcess`) and the closed-loop feedback into the
+    attitude, velocity, position and the IMU bias compensation."""
+
+    n = N_STATES
+
+    def __init__(self, ins: LaunchStrapdown, frame, T: float, noise: ImuNoise):
+        self.ins, self.frame, self.T, self.noise = ins, frame, float(T), noise
+        self.eps = np.zeros(3)  # gyro bias estimate [rad/s]
+        self.nab = np.zeros(3)  # accelerometer bias estimate [m/s^2]
+
+    @property
+    def state(self) -> np.ndarray:
+        return self.ins.state
+
+    def snapshot(self) -> tuple:
+        return self.ins.state.copy(), self.eps.copy(), self.nab.copy()
+
+    def restore(self, snap) -> None:
+        state, eps, nab = snap
+        self.ins.state[:] = state
+        self.eps, self.nab = eps.copy(), nab.copy()
+
+    def propagate(self, fed, dtheta, dv, h_ref, dt: float, record: bool):
+        aux = self.ins.interval(dtheta - self.eps * dt, dv - self.nab * dt)
+        proc = LaunchProcess(self.frame, aux, self.T, self.noise)
+        fed.predict(proc)
+        return proc, None, None, None
+
+    def nav(self, omega=None):
+        return None  # the launch models read the INS state itself
+
+    def measure(self, m, i: int, nav):
+        return m.model.residual(self.ins.state, m.z[i]), m.model, None, m.R[i]
+
+    def feed_back(self, fed) -> np.ndarray:
+        """Fuse; closed loop: C <- exp([phi x]) C_hat, v -= dv, r -= dr, biases +=."""
+        fed.fuse()
+        dx = fed.feedback() * SCALE
+        st = self.ins.state
+        q = quat_mul(rotvec_to_quat(np.ascontiguousarray(dx[PHI_])), st[0:4])
+        st[0:4] = q / np.linalg.norm(q)
+        st[4:7] -= dx[VEL]
+        st[7:10] -= dx[POS]
+        self.eps += dx[GYRO]
+        self.nab += dx[ACC]
+        return dx
+
+
+#: The local filters, in the order they update each cycle.
+SENSORS = ("gnss", "star")
+
+
+def launch_system(scn: LaunchScenario, kind: str) -> System:
+    """The system description of a launch-frame run: its two sensors (used at the filter
+    epoch), the filter type and period."""
+    return System.model_validate({
+        "sensors": {"gnss": {"sigma_pos_m": scn.gnss.sigma_m, "period_s": scn.gnss.period_s,
+                             "timing": {"delay_compensation": "none"}},
+                    "star": {"sigma_arcsec": scn.star.sigma_arcsec,
+                             "period_s": scn.star.period_s,
+                             "timing": {"delay_compensation": "none"}}},
+        "aiding": list(SENSORS),
+        "filter": {"type": kind, "period_s": scn.filter_period_s,
+                   "sharing": scn.filters.sharing}})
 
 
 def run(scn: LaunchScenario, data: LaunchData, kind: str, max_time: float | None = None,
@@ -161,48 +236,35 @@ def run(scn: LaunchScenario, data: LaunchData, kind: str, max_time: float | None
     x0 = data.x0_err * SCALE
     C0 = rotvec_to_dcm(-x0[PHI_]) @ tr.C[0]
     ins = LaunchStrapdown(fr, dcm_to_quat(C0), tr.v[0] + x0[VEL], tr.r[0] + x0[POS], tr.dt)
-    eps_hat, nab_hat = np.zeros(3), np.zeros(3)
     fo = scn.filters
-    alpha = {"gps": fo.ekf_gate_alpha, "cns": None} if kind == "ekf" else None
+    alpha = {"gnss": fo.ekf_gate_alpha, "star": None} if kind == "ekf" else None
     fed = FederatedFilter(_make_locals(kind, scn, P0, data.seed, particles), master=None,
                           sharing=fo.sharing, reset=True, fdi_alpha=alpha)
-    gps_model = GpsPosition(scn.gps.outlier_probability, scn.gps.outlier_scale) \
-        if kind == "pf" and fo.pf_gps_likelihood == "mixture" else GpsPosition()
-    star_model = StarAttitudeLI()
-    R_gps = np.eye(3) * scn.gps.sigma_m**2
-    R_star = np.eye(3) * scn.star.sigma_arcsec**2
-    noise = _noise(scn)
-    g_idx = {int(round(t / T)): i for i, t in enumerate(data.gps_t)}
-    s_idx = {int(round(t / T)): i for i, t in enumerate(data.star_t)}
+    gnss_model = GnssPositionLI(scn.gnss.outlier_probability, scn.gnss.outlier_scale) \
+        if kind == "pf" and fo.pf_gnss_likelihood == "mixture" else GnssPositionLI()
+    core = LaunchCore(ins, fr, T, _noise(scn))
+    nav = Navigator(launch_system(scn, kind), None, tr.dt, record_rows=False,
+                    record_covariance=False,
+                    mechanization=Mechanization(core, fed, {"gnss": gnss_model,
+                                                            "star": StarAttitudeLI()},
+                                                float(tr.t[0]), "the launch-frame INS"))
     # Sensor outputs converted to LI once (each at its own time).
-    r_gps = fr.geodetic_to_li(data.gps_lla, data.gps_t) if len(data.gps_t) else None
-    C_star = fr.C_eci_li.T @ quat_to_dcm(data.star_q_eci) if len(data.star_t) else None
-    ts = (np.arange(K) + 1) * T
-    q_hat, v_hat, r_hat, sig = (np.empty((K, 4)), np.empty((K, 3)), np.empty((K, 3)),
-                                np.empty((K, 9)))
-    for k in range(K):
-        sl = slice(k * per, (k + 1) * per)
-        aux = ins.interval(data.dtheta[sl] - eps_hat * tr.dt, data.dv[sl] - nab_hat * tr.dt)
-        fed.predict(LaunchProcess(fr, aux, T, noise))
-        t = ts[k]
-        i = g_idx.get(k + 1)
-        if i is not None:
-            fed.update("gps", ins.state[7:10] - r_gps[i], gps_model, None, R_gps, t)
-        i = s_idx.get(k + 1)
-        if i is not None:
-            y = star_model.observe(quat_to_dcm_nb(ins.state[0:4]), C_star[i])
-            fed.update("cns", y, star_model, None, R_star, t)
-        fed.fuse()
-        dx = fed.feedback() * SCALE
-        # Closed loop: C <- exp([phi x]) C_hat, v -= dv, r -= dr, biases += residuals.
-        q = quat_mul(rotvec_to_quat(np.ascontiguousarray(dx[PHI_])), ins.state[0:4])
-        ins.state[0:4] = q / np.linalg.norm(q)
-        ins.state[4:7] -= dx[VEL]
-        ins.state[7:10] -= dx[POS]
-        eps_hat += dx[GYRO]
-        nab_hat += dx[ACC]
-        q_hat[k], v_hat[k], r_hat[k] = ins.state[0:4], ins.state[4:7], ins.state[7:10]
-        sig[k] = np.sqrt(np.diag(fed.P)[:9]) * SCALE[:9]
+    if len(data.gnss_t):
+        nav.add_measurements("gnss", data.gnss_t, fr.geodetic_to_li(data.gnss_lla, data.gnss_t),
+                             R=np.broadcast_to(np.eye(3) * scn.gnss.sigma_m**2,
+                                               (len(data.gnss_t), 3, 3)))
+    if len(data.star_t):
+        C_star = fr.C_eci_li.T @ quat_to_dcm(data.star_q_eci)
+        nav.add_measurements("star", data.star_t, C_star.reshape(-1, 9),
+                             R=np.broadcast_to(np.eye(3) * scn.star.sigma_arcsec**2,
+                                               (len(data.star_t), 3, 3)))
+    n = K * per
+    nav.add_imu(tr.t[:n], dtheta=data.dtheta[:n], dv=data.dv[:n])
+    res = nav.result()
+    st = res.states[1:]
+    q_hat, v_hat, r_hat = st[:, 0:4], st[:, 4:7], st[:, 7:10]
+    sig = np.sqrt(np.diagonal(res.P[1:], axis1=1, axis2=2)[:, :9]) * SCALE[:9]
+    ts = res.t[1:]
     j = (np.arange(K) + 1) * per
     att = misalignment(tr.C[j], quat_to_dcm(q_hat))
     pos, vel = r_hat - tr.r[j], v_hat - tr.v[j]

@@ -19,6 +19,22 @@ from ..sim.scenario import cached_flight
 from .frame import LaunchFrame
 from .trajectory import AscentProfile, Burn, LaunchTrajectory, Manoeuvre, generate
 
+#: Keys of fednav 0.1's launch scenarios, read for one more release.
+_RENAMED = {"gps": "gnss", "pf_gps_likelihood": "pf_gnss_likelihood"}
+
+
+def _renamed(data):
+    """0.1's ``gps`` keys under their name now (``gnss``), with a FutureWarning."""
+    if not isinstance(data, dict) or not any(k in data for k in _RENAMED):
+        return data
+    import warnings
+
+    old = [k for k in data if k in _RENAMED]
+    warnings.warn(f"launch scenario keys {', '.join(old)} are now "
+                  f"{', '.join(_RENAMED[k] for k in old)} (the old names are read for one "
+                  f"more release)", FutureWarning, stacklevel=2)
+    return {_RENAMED.get(k, k): v for k, v in data.items()}
+
 
 class LaunchSite(_Model):
     lat_deg: float = Field(ge=-89.0, le=89.0)
@@ -46,8 +62,8 @@ class ManoeuvreConfig(_Model):
     change_deg: float
 
 
-class GpsConfig(_Model):
-    """GPS position fixes: isotropic white noise ``sigma_m`` (1-sigma per axis); with
+class GnssConfig(_Model):
+    """GNSS position fixes: isotropic white noise ``sigma_m`` (1-sigma per axis); with
     ``outlier_probability`` a fix is instead drawn with ``outlier_scale`` times the sigma
     (a heavy-tailed receiver)."""
 
@@ -82,13 +98,13 @@ class InitialErrorConfig(_Model):
 
 
 class FilterOptions(_Model):
-    """Federated filter: two local filters (GPS, CNS), fusion and reset every cycle.
+    """Federated filter: two local filters (GNSS, star sensor), fusion and reset every cycle.
 
     ``particles`` per local PF; ``resample_threshold`` (ESS / N); ``roughening`` K;
     ``progressive_correction`` tempered updates when one update would collapse the set;
-    ``sharing`` equal (beta = 1/2) or adaptive; ``pf_gps_likelihood`` gaussian, or mixture
-    (the PF uses the GPS outlier model); ``ekf_gate_alpha`` chi-square test level on the
-    EKF's GPS local filter (none: off).
+    ``sharing`` equal (beta = 1/2) or adaptive; ``pf_gnss_likelihood`` gaussian, or
+    mixture (the PF uses the GNSS outlier model); ``ekf_gate_alpha`` chi-square test level
+    on the EKF's GNSS local filter (none: off).
     """
 
     particles: int = Field(default=1000, ge=10)
@@ -96,18 +112,28 @@ class FilterOptions(_Model):
     roughening: float = Field(default=0.0, ge=0.0)
     progressive_correction: bool = True
     sharing: Literal["equal", "adaptive"] = "equal"
-    pf_gps_likelihood: Literal["gaussian", "mixture"] = "gaussian"
+    pf_gnss_likelihood: Literal["gaussian", "mixture"] = "gaussian"
     ekf_gate_alpha: float | None = Field(default=None, gt=0.0, lt=1.0)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _legacy(cls, data):
+        return _renamed(data)
 
 
 class RegimeConfig(_Model):
     """A condition of the PF-vs-EKF sweep: the scenario with these parts replaced."""
 
     name: str
-    gps: GpsConfig | None = None
+    gnss: GnssConfig | None = None
     star: StarConfig | None = None
     initial_error: InitialErrorConfig | None = None
     filters: FilterOptions | None = None
+
+    @model_validator(mode="before")
+    @classmethod
+    def _legacy(cls, data):
+        return _renamed(data)
 
 
 class LaunchScenario(_Model):
@@ -124,7 +150,7 @@ class LaunchScenario(_Model):
     pitch_programme: list[ManoeuvreConfig] = []
     yaw_programme: list[ManoeuvreConfig] = []
     imu: ImuConfig
-    gps: GpsConfig
+    gnss: GnssConfig
     star: StarConfig
     initial_error: InitialErrorConfig
     filters: FilterOptions = FilterOptions()
@@ -133,12 +159,17 @@ class LaunchScenario(_Model):
     regimes: list[RegimeConfig] = []
     regime_runs: int = Field(default=5, ge=1)
 
+    @model_validator(mode="before")
+    @classmethod
+    def _legacy(cls, data):
+        return _renamed(data)
+
     @model_validator(mode="after")
     def _consistent(self):
         per = self.filter_period_s / self.imu_period_s
         if abs(per - round(per)) > 1e-9 or round(per) < 2:
             raise ValueError("filter_period_s must be a multiple (>= 2) of imu_period_s")
-        for s in (self.gps, self.star):
+        for s in (self.gnss, self.star):
             k = s.period_s / self.filter_period_s
             if abs(k - round(k)) > 1e-9:
                 raise ValueError("sensor period_s must be a multiple of filter_period_s")
@@ -172,7 +203,7 @@ class LaunchScenario(_Model):
         return cached_flight(key, lambda: generate(self.profile(max_time), self.imu_period_s))
 
     def with_regime(self, regime: RegimeConfig) -> LaunchScenario:
-        upd = {k: getattr(regime, k) for k in ("gps", "star", "initial_error", "filters")
+        upd = {k: getattr(regime, k) for k in ("gnss", "star", "initial_error", "filters")
                if getattr(regime, k) is not None}
         return self.model_copy(update=upd)
 
@@ -180,3 +211,14 @@ class LaunchScenario(_Model):
 def load_launch_scenario(path: str | Path) -> LaunchScenario:
     """Read and validate a launch scenario YAML (errors: one line naming file and key)."""
     return load_model(path, LaunchScenario, "scenario")
+
+
+def __getattr__(name: str):
+    """0.1's name of the GNSS section, for one more release."""
+    if name == "GpsConfig":
+        import warnings
+
+        warnings.warn("fednav.launch.scenario.GpsConfig is now GnssConfig", FutureWarning,
+                      stacklevel=2)
+        return GnssConfig
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

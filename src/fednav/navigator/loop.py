@@ -16,14 +16,21 @@ One filter epoch ``k`` (the interval from ``t_k-1`` to ``t_k = t0 + k T``):
    INS and the IMU compensation, and is zeroed in the filters.
 
 The mechanization / error-model pair is a *core*: :class:`ErrorStateCore` (ENU strapdown,
-18-state error model, closed loop) or :class:`TotalStateCore` (paper 003: a total-state
+18-state error model, closed loop), :class:`TotalStateCore` (paper 003: a total-state
 UKF master time-updates the navigation state itself, the local filters update linearly on
-its tangent space).  The compiled engine (:mod:`fednav.navigator.engine`) runs the same
+its tangent space) or one a caller brings (:class:`Mechanization`; paper 001's launch
+frame).  A core has the INS state (``state``, ``ins``), the number of error states ``n``
+and ``propagate`` (mechanize an interval, time-update the filters), ``nav`` (the INS as
+measurement models see it), ``measure`` (a measurement's residual, model, INS and noise),
+``feed_back`` (fuse, correct the INS; returns the correction), ``snapshot`` /
+``restore``.  The compiled engine (:mod:`fednav.navigator.engine`) runs the same
 cycle for the error-state core in one numba call when every filter and sensor of the
 system has a compiled form.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg
@@ -82,6 +89,20 @@ class Meas:
 
     def arrays(self):
         return self.t, self.ta, self.z
+
+
+@dataclass
+class Mechanization:
+    """A mechanization / error-model pair the navigator does not build itself: the
+    ``core`` (see the module docstring), its ``federation`` (local filters over the core's
+    error state), the measurement ``models`` its ``measure`` understands (by sensor name),
+    the time ``t0`` [s] of the first IMU sample, and a ``name`` for messages."""
+
+    core: object
+    federation: FederatedFilter
+    models: dict
+    t0: float = 0.0
+    name: str = "a mechanization of its own"
 
 
 def build_federation(system, names: list[str], P0: np.ndarray, n: int) -> FederatedFilter:
@@ -145,6 +166,11 @@ class ErrorStateCore:
             rows = (rec["q"], rec["vel"], rec["lla"], dth / dt)
         return proc, rows, dth.sum(axis=0) / self.T, s0
 
+    def nav(self, omega=None) -> NavSnapshot:
+        """The INS now, as measurement models see it (``omega``: body rate [rad/s])."""
+        ins = self.ins
+        return NavSnapshot(ins.lla, ins.vel, ins.dcm, omega)
+
     def measure(self, m: Meas, i: int, nav: NavSnapshot | None):
         """(residual, model, nav, R) of measurement ``i`` of sensor ``m`` against ``nav``."""
         return m.model.residual(nav, m.z[i]), m.model, nav, m.R[i]
@@ -179,6 +205,10 @@ class TotalStateCore:
         self.ukf.predict(dtheta, dv, h_ref)
         fed.share(np.zeros(self.n), self.ukf.P)
         return None, None, None, None
+
+    def nav(self, omega=None) -> NavSnapshot:
+        ins = self.ins
+        return NavSnapshot(ins.lla, ins.vel, ins.dcm, omega)
 
     def measure(self, m: Meas, i: int, nav):
         y, R = m.model.terms(self.ins.state, m.z[i], m.sigma[i])
@@ -253,7 +283,6 @@ class PythonLoop:
         linearised at, and the time it refers to: for ``interpolate`` the sample nearest
         the time of validity moved by the remaining lag (both), else the epoch (the
         residual's INS carried back for ``ins_increment`` and ``recompute``)."""
-        ins = self.core.ins
         tk = self.t_epoch(k)
         t = m.t[i]
         if m.how == "interpolate" and rows is not None:
@@ -264,7 +293,7 @@ class PythonLoop:
             nav = NavSnapshot(earth.move_enu(p[j], -lag * vel), vel, quat_to_dcm_nb(q[j]),
                               omega)
             return nav, nav, t
-        nav = NavSnapshot(ins.lla, ins.vel, ins.dcm, omega)
+        nav = self.core.nav(omega)
         if m.how == "interpolate":
             return nav, nav, t
         if m.how in ("ins_increment", "recompute"):
@@ -313,8 +342,7 @@ class PythonLoop:
         if todo:
             if self.central:
                 ys, models, Rs = [], [], []
-                ins = core.ins
-                nav = NavSnapshot(ins.lla, ins.vel, ins.dcm, omega)  # H at the epoch
+                nav = core.nav(omega)  # H at the epoch
                 for m, i in todo:
                     nav_i, _, _ = self._nav_at(m, i, k, rows, omega)
                     y, model, _, R = core.measure(m, i, nav_i)
@@ -362,8 +390,7 @@ class PythonLoop:
         i = int(np.searchsorted(ta, tk + 1e-9)) - 1
         if i < 0:
             return
-        ins = self.core.ins
-        nav = NavSnapshot(ins.lla, ins.vel, ins.dcm)
+        nav = self.core.nav()
         model = WindConstraint(z[i, 0])
         d, R = model.residual(nav, z[i]), model.R(m.sigma[i], nav)
         for name in self.fed.locals:

@@ -40,7 +40,14 @@ from ..ins.strapdown import STATE_LLA, STATE_Q, STATE_VEL, Strapdown
 from ..ins.total_state import GnssTotal, StarTotal
 from ..sensors.registry import SENSORS
 from .engine import CompiledLoop, why_not_compiled
-from .loop import ErrorStateCore, Meas, PythonLoop, TotalStateCore, build_federation
+from .loop import (
+    ErrorStateCore,
+    Meas,
+    Mechanization,
+    PythonLoop,
+    TotalStateCore,
+    build_federation,
+)
 from .record import Growing
 from .system import System, imu_noise_model
 from .total import NAV_BIAS
@@ -156,31 +163,39 @@ class Navigator:
     smoother need); a Monte Carlo run that reads only the epochs turns both off.
     ``innovations``: keep every measurement's innovation (what ``fednav tune`` reads).
     ``hold_s``: how long after an epoch its measurements may still arrive.  ``engine``:
+    ``mechanization``: a core of the caller's (:class:`~fednav.navigator.loop.
+    Mechanization`, e.g. paper 001's launch frame) flown instead of the ENU error-state
+    INS, with its federation and measurement models (``initial`` is then None; the loop is
+    Python).  ``engine``:
     ``auto`` (compiled when every part of the system has a compiled form, else Python;
     the environment variable ``FEDNAV_ENGINE`` can set it for a whole program, e.g. to
     compare the two), ``compiled`` or ``python`` (:attr:`engine` says which runs and
     :attr:`why_python` why not the compiled one).
     """
 
-    def __init__(self, system: System, initial: InitialState, imu_period: float, *,
+    def __init__(self, system: System, initial: InitialState | None, imu_period: float, *,
                  imu_errors=None, record_rows: bool = True, record_covariance: bool = True,
-                 innovations: bool = False, hold_s: float = 0.0, engine: str = "auto"):
+                 innovations: bool = False, hold_s: float = 0.0, engine: str = "auto",
+                 mechanization: Mechanization | None = None):
         self.system = system
         self.dt = float(imu_period)
         f = system.filter
         period = f.period_s if f.period_s is not None else self.dt
         self.n_per = max(1, int(round(period / self.dt)))
         self.T = self.n_per * self.dt
-        self.t0 = float(initial.t)
+        self.t0 = float(initial.t if mechanization is None else mechanization.t0)
         self.hold_s = float(hold_s)
         self.record_rows = record_rows
         self.aiding = system.aiding_sensors()
         self.quality = {"late_measurements_dropped": 0}
         baro = system.sensors.baro
         loop = baro.loop() if baro is not None else None
-        self.ins = Strapdown(np.asarray(initial.lla, dtype=float),
-                             np.asarray(initial.vel, dtype=float),
-                             np.asarray(initial.euler, dtype=float), self.dt, loop)
+        if mechanization is None:
+            self.ins = Strapdown(np.asarray(initial.lla, dtype=float),
+                                 np.asarray(initial.vel, dtype=float),
+                                 np.asarray(initial.euler, dtype=float), self.dt, loop)
+        else:
+            self.ins = mechanization.core.ins
         self._imu_dth = Growing((3,))
         self._imu_dv = Growing((3,))
         self._h_ref = Growing((), np.nan)
@@ -194,7 +209,8 @@ class Navigator:
             if total and a not in TOTAL_MODELS:
                 raise ValueError(f"the total-state navigator has no model of sensor '{a}' "
                                  f"(it has {', '.join(TOTAL_MODELS)})")
-            model = TOTAL_MODELS[a] if total else cfg.model()
+            model = (TOTAL_MODELS[a] if total else cfg.model()) if mechanization is None \
+                else mechanization.models[a]
             self._meas[a] = Meas(a, model, cfg.timing.delay_compensation, cfg.timing,
                                  SENSORS[a].angles)
             self._bucket[a] = {}
@@ -202,6 +218,15 @@ class Navigator:
         if system.constraint == "wind":
             cfg = system.sensors.airdata
             self._constraint = Meas("airdata", cfg.model(), "none", cfg.timing)
+        if mechanization is not None:
+            if engine == "compiled":
+                raise ValueError(f"the compiled engine cannot run {mechanization.name}")
+            self.engine, self.why_python = "python", mechanization.name
+            self.loop = PythonLoop(mechanization.core, mechanization.federation,
+                                   [self._meas[a] for a in self.aiding], False, None, self.t0,
+                                   self.T, self.dt, self.n_per, record_rows,
+                                   record_covariance, innovations)
+            return
         noise, _, _ = imu_noise_model(system, self.dt, imu_errors)
         self.noise = noise
         P0 = np.asarray(initial.P0, dtype=float)
@@ -340,7 +365,7 @@ class Navigator:
         t = np.asarray(t, dtype=float).ravel()
         z = np.asarray(z, dtype=float).reshape(len(t), -1)
         ta = t if t_arrival is None else np.asarray(t_arrival, dtype=float).ravel()
-        if sensor == "baro" and self.ins.baro is not None:
+        if sensor == "baro" and getattr(self.ins, "baro", None) is not None:
             self._baro_heights(t, z[:, 0])
         m = self._meas.get(sensor)
         if m is None:
@@ -489,6 +514,9 @@ class Navigator:
     def solution(self) -> Snapshot:
         """The latest solution: the last epoch's state mechanized through the samples
         added since (no filter update in between)."""
+        if not isinstance(self.ins, Strapdown):
+            raise ValueError(f"solution() gives the ENU solution; the navigator flies "
+                             f"{self.why_python}: read result().states")
         self._advance(final=False)
         k = self.loop.k if self.loop is not None else len(self._free["states"]) - 1
         n = self._imu_dth.n
