@@ -9,7 +9,11 @@
 * misalignment ``phi = [phiE, phiN, phiU]`` — platform error angles: the computed
   attitude is ``C_hat = C_n^n' C`` with ``C_n^n' = exp(-[phi x]) ~ I - [phi x]``.
 
-All functions are vectorised over leading dimensions.
+All functions are vectorised over leading dimensions.  Each conversion has one source,
+written once in :mod:`fednav.core.kernels` as a function of scalars: those without a branch
+(``euler_to_dcm``, ``quat_to_dcm``, ``quat_mul``) run here as plain Python on whole arrays,
+those with one (the small-angle forms of ``rotvec_to_quat``, ``quat_to_rotvec``) run
+compiled over the rows.
 """
 
 from __future__ import annotations
@@ -18,7 +22,23 @@ import math
 
 import numpy as np
 
+from . import kernels
+
 TWO_PI = 2.0 * np.pi
+
+
+def _matrix(e):
+    """9 elements, row by row (scalars or arrays) -> (..., 3, 3)."""
+    return np.stack([np.stack(e[0:3], -1), np.stack(e[3:6], -1), np.stack(e[6:9], -1)], -2)
+
+
+def _rows(kernel, a, n_in: int, n_out: int) -> np.ndarray:
+    """A compiled row kernel over the leading dimensions of ``a`` (..., n_in)."""
+    a = np.asarray(a, dtype=float)
+    flat = np.ascontiguousarray(a.reshape(-1, n_in))
+    out = np.empty((len(flat), n_out))
+    kernel(flat, out)
+    return out.reshape(a.shape[:-1] + (n_out,))
 
 
 def wrap_pi(a):
@@ -45,23 +65,10 @@ def skew(v):
 
 
 def euler_to_dcm(euler):
-    """Euler ``[pitch, roll, heading]`` -> C_b^n, shape (..., 3, 3)."""
+    """Euler ``[pitch, roll, heading]`` -> C_b^n, shape (..., 3, 3)
+    (:func:`fednav.core.kernels.euler_to_dcm_s`)."""
     e = np.asarray(euler, dtype=float)
-    st, ct = np.sin(e[..., 0]), np.cos(e[..., 0])
-    sg, cg = np.sin(e[..., 1]), np.cos(e[..., 1])
-    sp, cp = np.sin(e[..., 2]), np.cos(e[..., 2])
-    # C = Rz(-psi) Rx(theta) Ry(gamma); columns are body x, y, z axes in ENU.
-    c = np.empty(e.shape[:-1] + (3, 3))
-    c[..., 0, 0] = cg * cp + st * sg * sp
-    c[..., 1, 0] = -cg * sp + st * sg * cp
-    c[..., 2, 0] = -ct * sg
-    c[..., 0, 1] = sp * ct
-    c[..., 1, 1] = cp * ct
-    c[..., 2, 1] = st
-    c[..., 0, 2] = sg * cp - st * cg * sp
-    c[..., 1, 2] = -sg * sp - st * cg * cp
-    c[..., 2, 2] = ct * cg
-    return c
+    return _matrix(kernels.euler_to_dcm_s.py_func(e[..., 0], e[..., 1], e[..., 2]))
 
 
 def dcm_to_euler(C):
@@ -78,20 +85,12 @@ def dcm_to_euler(C):
 
 
 def quat_mul(p, q):
-    """Hamilton product ``p * q`` (scalar first)."""
+    """Hamilton product ``p * q`` (scalar first; :func:`fednav.core.kernels.quat_mul_s`)."""
     p = np.asarray(p, dtype=float)
     q = np.asarray(q, dtype=float)
-    pw, px, py, pz = p[..., 0], p[..., 1], p[..., 2], p[..., 3]
-    qw, qx, qy, qz = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    return np.stack(
-        [
-            pw * qw - px * qx - py * qy - pz * qz,
-            pw * qx + px * qw + py * qz - pz * qy,
-            pw * qy - px * qz + py * qw + pz * qx,
-            pw * qz + px * qy - py * qx + pz * qw,
-        ],
-        axis=-1,
-    )
+    return np.stack(kernels.quat_mul_s.py_func(p[..., 0], p[..., 1], p[..., 2], p[..., 3],
+                                               q[..., 0], q[..., 1], q[..., 2], q[..., 3]),
+                    axis=-1)
 
 
 def quat_conj(q):
@@ -101,20 +100,9 @@ def quat_conj(q):
 
 
 def quat_to_dcm(q):
-    """Unit quaternion -> DCM."""
+    """Unit quaternion -> DCM (:func:`fednav.core.kernels.quat_to_dcm_s`)."""
     q = np.asarray(q, dtype=float)
-    w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    c = np.empty(q.shape[:-1] + (3, 3))
-    c[..., 0, 0] = w * w + x * x - y * y - z * z
-    c[..., 0, 1] = 2 * (x * y - w * z)
-    c[..., 0, 2] = 2 * (x * z + w * y)
-    c[..., 1, 0] = 2 * (x * y + w * z)
-    c[..., 1, 1] = w * w - x * x + y * y - z * z
-    c[..., 1, 2] = 2 * (y * z - w * x)
-    c[..., 2, 0] = 2 * (x * z - w * y)
-    c[..., 2, 1] = 2 * (y * z + w * x)
-    c[..., 2, 2] = w * w - x * x - y * y + z * z
-    return c
+    return _matrix(kernels.quat_to_dcm_s.py_func(q[..., 0], q[..., 1], q[..., 2], q[..., 3]))
 
 
 def dcm_to_quat(C):
@@ -142,25 +130,15 @@ def dcm_to_quat(C):
 
 
 def rotvec_to_quat(r):
-    """Rotation vector -> unit quaternion (accurate for small angles)."""
-    r = np.asarray(r, dtype=float)
-    a = np.linalg.norm(r, axis=-1, keepdims=True)
-    half = 0.5 * a
-    # sin(a/2)/a with a Taylor series near zero.
-    with np.errstate(invalid="ignore", divide="ignore"):
-        k = np.where(a < 1e-6, 0.5 - a * a / 48.0, np.sin(half) / np.where(a == 0, 1, a))
-    return np.concatenate([np.cos(half), k * r], axis=-1)
+    """Rotation vector -> unit quaternion (:func:`fednav.core.kernels.rotvec_to_quat_s`,
+    the series form for tiny angles)."""
+    return _rows(kernels.rotvec_to_quat_rows, r, 3, 4)
 
 
 def quat_to_rotvec(q):
-    """Unit quaternion -> rotation vector with angle in [0, pi]."""
-    q = np.asarray(q, dtype=float)
-    q = q * np.where(q[..., :1] < 0, -1.0, 1.0)
-    s = np.linalg.norm(q[..., 1:], axis=-1, keepdims=True)
-    a = 2.0 * np.arctan2(s, q[..., :1])
-    with np.errstate(invalid="ignore", divide="ignore"):
-        k = np.where(s < 1e-9, 2.0 / q[..., :1], a / np.where(s == 0, 1, s))
-    return k * q[..., 1:]
+    """Unit quaternion -> rotation vector with angle in [0, pi]
+    (:func:`fednav.core.kernels.quat_to_rotvec_s`)."""
+    return _rows(kernels.quat_to_rotvec_rows, q, 4, 3)
 
 
 def rotvec_to_dcm(r):
@@ -169,8 +147,12 @@ def rotvec_to_dcm(r):
 
 
 def dcm_to_rotvec(C):
-    """DCM -> rotation vector."""
-    return quat_to_rotvec(dcm_to_quat(C))
+    """DCM -> rotation vector [rad] (:func:`fednav.core.kernels.dcm_to_rotvec`)."""
+    C = np.asarray(C, dtype=float)
+    flat = np.ascontiguousarray(C.reshape(-1, 3, 3))
+    out = np.empty((len(flat), 3))
+    kernels.dcm_to_rotvec_rows(flat, out)
+    return out.reshape(C.shape[:-2] + (3,))
 
 
 def euler_to_quat(euler):

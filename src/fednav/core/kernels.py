@@ -115,12 +115,20 @@ def spd_inverse(P):
 
 
 # --- Scalar forms for per-sample loops: tuples of floats, nothing allocated.
+#: Squared rotation angle [rad^2] below which :func:`rotvec_to_quat_s` takes the series
+#: ``cos(a/2) = 1 - a^2/8``, ``sin(a/2)/a = 1/2 - a^2/48`` (exact to rounding there: the
+#: next terms are below 1e-33); the one threshold of every rotation-vector conversion.
+SMALL_ANGLE2 = 1e-16
+
+
 @numba.njit(cache=True, inline="always")
-def rotvec_to_quat_s(x, y, z, small_a2=1e-12):
-    """Rotation vector -> quaternion as 4 scalars (scalar first); the series form is used
-    while the squared angle is below ``small_a2``."""
+def rotvec_to_quat_s(x, y, z):
+    """Rotation vector [rad] -> unit quaternion as 4 scalars (scalar first): the one source
+    of every rotation-vector-to-quaternion conversion in fednav (the compiled
+    :func:`rotvec_to_quat`, :func:`fednav.core.attitude.rotvec_to_quat` and the strapdowns
+    call it)."""
     a2 = x * x + y * y + z * z
-    if a2 < small_a2:
+    if a2 < SMALL_ANGLE2:
         c, s = 1.0 - a2 / 8.0, 0.5 - a2 / 48.0
     else:
         a = math.sqrt(a2)
@@ -153,79 +161,118 @@ def quat_to_dcm_s(w, x, y, z):
             2.0 * (x * z - w * y), 2.0 * (y * z + w * x), w * w - x * x - y * y + z * z)
 
 
-@numba.njit(cache=True)
-def rotvec_to_quat(r):
-    """Rotation vector -> unit quaternion (scalar first)."""
-    a2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2]
-    a = np.sqrt(a2)
-    if a < 1e-8:
-        c = 1.0 - a2 / 8.0
-        s = 0.5 - a2 / 48.0
-    else:
-        c = np.cos(0.5 * a)
-        s = np.sin(0.5 * a) / a
-    return np.array([c, s * r[0], s * r[1], s * r[2]])
+@numba.njit(cache=True, inline="always")
+def euler_to_dcm_s(pitch, roll, heading):
+    """Euler ``[pitch, roll, heading]`` [rad] -> the 9 elements of C_b^n (ENU), row by row:
+    ``C = Rz(-heading) Rx(pitch) Ry(roll)``, columns the body right, forward, up axes in
+    ENU.  One source: compiled here, and run by :func:`fednav.core.attitude.euler_to_dcm`
+    on whole arrays as plain Python (it has no branch)."""
+    st, ct = np.sin(pitch), np.cos(pitch)
+    sg, cg = np.sin(roll), np.cos(roll)
+    sp, cp = np.sin(heading), np.cos(heading)
+    return (cg * cp + st * sg * sp, sp * ct, sg * cp - st * cg * sp,
+            -cg * sp + st * sg * cp, cp * ct, -sg * sp - st * cg * cp,
+            -ct * sg, st, ct * cg)
 
 
 @numba.njit(cache=True)
-def quat_mul(p, q):
-    """Hamilton product (scalar first)."""
-    return np.array([
-        p[0] * q[0] - p[1] * q[1] - p[2] * q[2] - p[3] * q[3],
-        p[0] * q[1] + p[1] * q[0] + p[2] * q[3] - p[3] * q[2],
-        p[0] * q[2] - p[1] * q[3] + p[2] * q[0] + p[3] * q[1],
-        p[0] * q[3] + p[1] * q[2] - p[2] * q[1] + p[3] * q[0],
-    ])
-
-
-@numba.njit(cache=True)
-def quat_to_dcm(q):
-    """Unit quaternion -> DCM."""
-    w, x, y, z = q[0], q[1], q[2], q[3]
+def _matrix_nb(e):
     c = np.empty((3, 3))
-    c[0, 0] = w * w + x * x - y * y - z * z
-    c[0, 1] = 2 * (x * y - w * z)
-    c[0, 2] = 2 * (x * z + w * y)
-    c[1, 0] = 2 * (x * y + w * z)
-    c[1, 1] = w * w - x * x + y * y - z * z
-    c[1, 2] = 2 * (y * z - w * x)
-    c[2, 0] = 2 * (x * z - w * y)
-    c[2, 1] = 2 * (y * z + w * x)
-    c[2, 2] = w * w - x * x - y * y + z * z
+    c[0, 0], c[0, 1], c[0, 2] = e[0], e[1], e[2]
+    c[1, 0], c[1, 1], c[1, 2] = e[3], e[4], e[5]
+    c[2, 0], c[2, 1], c[2, 2] = e[6], e[7], e[8]
     return c
 
 
 @numba.njit(cache=True)
+def rotvec_to_quat(r):
+    """Rotation vector -> unit quaternion (scalar first), compiled (:func:`rotvec_to_quat_s`)."""
+    c, x, y, z = rotvec_to_quat_s(r[0], r[1], r[2])
+    return np.array([c, x, y, z])
+
+
+@numba.njit(cache=True)
+def rotvec_to_quat_rows(r, out):
+    """:func:`rotvec_to_quat_s` of every row of ``r`` (N, 3) into ``out`` (N, 4)."""
+    for i in range(r.shape[0]):
+        out[i, 0], out[i, 1], out[i, 2], out[i, 3] = rotvec_to_quat_s(r[i, 0], r[i, 1],
+                                                                      r[i, 2])
+
+
+@numba.njit(cache=True)
+def quat_mul(p, q):
+    """Hamilton product (scalar first), compiled (:func:`quat_mul_s`)."""
+    a, b, c, d = quat_mul_s(p[0], p[1], p[2], p[3], q[0], q[1], q[2], q[3])
+    return np.array([a, b, c, d])
+
+
+@numba.njit(cache=True)
+def quat_to_dcm(q):
+    """Unit quaternion -> DCM, compiled (:func:`quat_to_dcm_s`)."""
+    return _matrix_nb(quat_to_dcm_s(q[0], q[1], q[2], q[3]))
+
+
+@numba.njit(cache=True)
 def quat_to_rotvec(q):
-    """Unit quaternion -> rotation vector (angle in [0, pi])."""
-    w, x, y, z = q[0], q[1], q[2], q[3]
-    if w < 0.0:
-        w, x, y, z = -w, -x, -y, -z
-    s = np.sqrt(x * x + y * y + z * z)
-    if s < 1e-9:
-        k = 2.0 / w
-    else:
-        k = 2.0 * np.arctan2(s, w) / s
-    return np.array([k * x, k * y, k * z])
+    """Unit quaternion -> rotation vector (angle in [0, pi]), compiled
+    (:func:`quat_to_rotvec_s`)."""
+    x, y, z = quat_to_rotvec_s(q[0], q[1], q[2], q[3])
+    return np.array([x, y, z])
+
+
+@numba.njit(cache=True)
+def quat_to_rotvec_rows(q, out):
+    """:func:`quat_to_rotvec_s` of every row of ``q`` (N, 4) into ``out`` (N, 3)."""
+    for i in range(q.shape[0]):
+        out[i, 0], out[i, 1], out[i, 2] = quat_to_rotvec_s(q[i, 0], q[i, 1], q[i, 2], q[i, 3])
+
+
+@numba.njit(cache=True)
+def euler_to_dcm(pitch, roll, heading):
+    """Euler ``[pitch, roll, heading]`` -> C_b^n, compiled (:func:`euler_to_dcm_s`)."""
+    return _matrix_nb(euler_to_dcm_s(pitch, roll, heading))
 
 
 @numba.njit(cache=True, inline="always")
 def dcm_to_rotvec(C, out):
-    """Rotation vector of the DCM ``C`` [rad], written into ``out``.
+    """Rotation vector of the DCM ``C`` [rad] (angle in [0, pi]), written into ``out``.
 
     Small angles (below 1e-3 rad) take ``a / sin a`` as a series in ``sin a`` (half the
-    antisymmetric part): no inverse trigonometric call, and exact to rounding."""
+    antisymmetric part): no inverse trigonometric call, and exact to rounding; angles up
+    to 2.8 rad ``a / (2 sin a)`` times that part.  Beyond (where ``sin a`` vanishes) the
+    rotation goes through the quaternion (Shepperd's choice of the largest component,
+    then :func:`quat_to_rotvec_s`), accurate up to and at pi."""
     v0, v1, v2 = C[2, 1] - C[1, 2], C[0, 2] - C[2, 0], C[1, 0] - C[0, 1]
     tr = C[0, 0] + C[1, 1] + C[2, 2]
-    s2 = 0.25 * (v0 * v0 + v1 * v1 + v2 * v2)  # sin(a)^2
-    if tr > 1.0 and s2 < 1e-6:
-        k = 0.5 * (1.0 + s2 * (1.0 / 6.0 + s2 * (3.0 / 40.0 + s2 * 5.0 / 112.0)))
+    if tr > -0.9:
+        s2 = 0.25 * (v0 * v0 + v1 * v1 + v2 * v2)  # sin(a)^2
+        if tr > 1.0 and s2 < 1e-6:
+            k = 0.5 * (1.0 + s2 * (1.0 / 6.0 + s2 * (3.0 / 40.0 + s2 * 5.0 / 112.0)))
+        else:
+            a = np.arccos(min(1.0, max(-1.0, 0.5 * (tr - 1.0))))
+            k = 0.5 * (1.0 + a * a / 6.0) if a < 1e-6 else a / (2.0 * np.sin(a))
+        out[0] = k * v0
+        out[1] = k * v1
+        out[2] = k * v2
+        return
+    d0, d1, d2 = C[0, 0], C[1, 1], C[2, 2]
+    if tr >= d0 and tr >= d1 and tr >= d2:
+        w, x, y, z = 1.0 + tr, v0, v1, v2
+    elif d0 >= d1 and d0 >= d2:
+        w, x, y, z = v0, 1.0 + 2.0 * d0 - tr, C[0, 1] + C[1, 0], C[0, 2] + C[2, 0]
+    elif d1 >= d2:
+        w, x, y, z = v1, C[0, 1] + C[1, 0], 1.0 + 2.0 * d1 - tr, C[1, 2] + C[2, 1]
     else:
-        a = np.arccos(min(1.0, max(-1.0, 0.5 * (tr - 1.0))))
-        k = 0.5 * (1.0 + a * a / 6.0) if a < 1e-6 else a / (2.0 * np.sin(a))
-    out[0] = k * v0
-    out[1] = k * v1
-    out[2] = k * v2
+        w, x, y, z = v2, C[0, 2] + C[2, 0], C[1, 2] + C[2, 1], 1.0 + 2.0 * d2 - tr
+    n = math.sqrt(w * w + x * x + y * y + z * z)
+    out[0], out[1], out[2] = quat_to_rotvec_s(w / n, x / n, y / n, z / n)
+
+
+@numba.njit(cache=True)
+def dcm_to_rotvec_rows(C, out):
+    """:func:`dcm_to_rotvec` of every DCM of ``C`` (N, 3, 3) into ``out`` (N, 3)."""
+    for i in range(C.shape[0]):
+        dcm_to_rotvec(C[i], out[i])
 
 
 @numba.njit(cache=True, inline="always")
@@ -242,22 +289,3 @@ def coning_sculling_s(ax, ay, az, bx, by, bz, pax, pay, paz, pbx, pby, pbz, has_
             ((pay * bz - paz * by) + (pby * az - pbz * ay)) / 12.0,
             ((paz * bx - pax * bz) + (pbz * ax - pbx * az)) / 12.0,
             ((pax * by - pay * bx) + (pbx * ay - pby * ax)) / 12.0)
-
-
-@numba.njit(cache=True)
-def euler_to_dcm(pitch, roll, heading):
-    """Compiled scalar twin of :func:`fednav.core.attitude.euler_to_dcm` (tested equal)."""
-    st, ct = np.sin(pitch), np.cos(pitch)
-    sg, cg = np.sin(roll), np.cos(roll)
-    sp, cp = np.sin(heading), np.cos(heading)
-    c = np.empty((3, 3))
-    c[0, 0] = cg * cp + st * sg * sp
-    c[1, 0] = -cg * sp + st * sg * cp
-    c[2, 0] = -ct * sg
-    c[0, 1] = sp * ct
-    c[1, 1] = cp * ct
-    c[2, 1] = st
-    c[0, 2] = sg * cp - st * cg * sp
-    c[1, 2] = -sg * sp - st * cg * cp
-    c[2, 2] = ct * cg
-    return c

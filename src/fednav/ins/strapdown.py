@@ -68,12 +68,6 @@ class BaroLoop:
 
 
 @numba.njit(cache=True)
-def _cross(a, b):
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
-                     a[0] * b[1] - a[1] * b[0]])
-
-
-@numba.njit(cache=True)
 def _run(state, dtheta, dv, dt, h_ref, gains, out_q, out_v, out_p):
     # Scalar arithmetic throughout: no array is allocated per sample.
     n = dtheta.shape[0]
@@ -143,10 +137,9 @@ def _run(state, dtheta, dv, dt, h_ref, gains, out_q, out_v, out_p):
         rm2, rn2 = earth.radii_nb(lat_a)
         lon_new = lon + 0.5 * dt * (ve + ve_n) / ((rn2 + h_a) * math.cos(lat_a))
         # Attitude: q <- r(-zeta) * q * r(phi) (body rotation, then navigation frame).
-        # (series below 1e-8 rad, as kernels.rotvec_to_quat)
-        r0, r1, r2, r3 = rotvec_to_quat_s(fx, fy, fz, 1e-16)
+        r0, r1, r2, r3 = rotvec_to_quat_s(fx, fy, fz)
         t0, t1, t2, t3 = quat_mul_s(q0, q1, q2, q3, r0, r1, r2, r3)
-        r0, r1, r2, r3 = rotvec_to_quat_s(-ze, -zn, -zu, 1e-16)
+        r0, r1, r2, r3 = rotvec_to_quat_s(-ze, -zn, -zu)
         q0, q1, q2, q3 = quat_mul_s(r0, r1, r2, r3, t0, t1, t2, t3)
         qn = math.sqrt(q0 ** 2 + q1 ** 2 + q2 ** 2 + q3 ** 2)
         q0, q1, q2, q3 = q0 / qn, q1 / qn, q2 / qn, q3 / qn

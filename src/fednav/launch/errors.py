@@ -141,8 +141,9 @@ def gravity_gradient(frame: LaunchFrame, r_li, step: float = 10.0) -> np.ndarray
 
 @numba.njit(cache=True)
 def misalignment_nb(C_true, C_hat):
-    """phi with C_hat = exp(-[phi x]) C_true [rad] (compiled single-attitude twin of
-    :func:`fednav.core.attitude.misalignment`)."""
+    """phi with C_hat = exp(-[phi x]) C_true [rad] for one attitude, compiled (the
+    rotation of :func:`fednav.core.kernels.dcm_to_rotvec`, as
+    :func:`fednav.core.attitude.misalignment` for arrays)."""
     M = C_hat @ C_true.T
     out = np.empty(3)
     dcm_to_rotvec(M, out)
