@@ -158,9 +158,9 @@ t0 = time.perf_counter()
 out = sys.argv[1]
 sys.argv = ["fednav", *sys.argv[2:]]
 marks = {}
+from fednav.campaign import paper
 from fednav.campaign import store as campaign
-from fednav.scenarios import paper002
-start_client, run_seeds = campaign._start_client, paper002.run_seeds
+start_client, run_seeds = campaign._start_client, paper.run_seeds
 def timed_start_client(*a, **k):
     marks.setdefault("asked", time.perf_counter() - t0)
     r = start_client(*a, **k)
@@ -170,7 +170,7 @@ def timed_run_seeds(*a, **k):
     r = run_seeds(*a, **k)
     marks["last"] = time.perf_counter() - t0
     return r
-campaign._start_client, paper002.run_seeds = timed_start_client, timed_run_seeds
+campaign._start_client, paper.run_seeds = timed_start_client, timed_run_seeds
 from fednav.cli import main
 try:
     main()

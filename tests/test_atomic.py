@@ -51,7 +51,7 @@ def test_a_run_that_fails_does_not_leave_the_previous_summary(tmp_path, monkeypa
     def boom(*a, **k):
         raise FilterError("ukf 'star': step 17 (update): innovation covariance not PD")
 
-    monkeypatch.setattr(paper002, "reproduce", boom)
+    monkeypatch.setattr(paper002.EXPERIMENT, "reproduce", boom)
     out = _stale(tmp_path)
     r = CliRunner().invoke(app, ["reproduce", "002", "--out", str(out)])
     assert r.exit_code == 2 and "Traceback" not in r.output

@@ -93,19 +93,23 @@ def reproduce(
         typer.echo(f"error: --max-time must be positive, got {max_time}", err=True)
         raise typer.Exit(2)
     mod = _paper_module(paper)
+    exp = mod.EXPERIMENT
     extra = {}
-    for opt, value, only, low in (("--particles", particles, "001", 10),
-                                  ("--t4-runs", t4_runs, "002", 1)):
+    for opt, value, low in (("--particles", particles, 10), ("--t4-runs", t4_runs, 1)):
         if value is None:
             continue
-        if mod.PAPER != only:
-            typer.echo(f"error: {opt} applies to paper {only} only, not {mod.PAPER}",
-                       err=True)
+        name = opt.strip("-").replace("-", "_")
+        if name not in exp.options:
+            from .scenarios import papers
+
+            owners = [m.PAPER for m in papers() if name in m.EXPERIMENT.options]
+            typer.echo(f"error: {opt} applies to paper {', '.join(owners)} only, not "
+                       f"{exp.number}", err=True)
             raise typer.Exit(2)
         if value < low:
             typer.echo(f"error: {opt} must be at least {low}, got {value}", err=True)
             raise typer.Exit(2)
-        extra[opt.strip("-").replace("-", "_")] = value
+        extra[name] = value
     from rich.progress import (
         BarColumn,
         MofNCompleteColumn,
@@ -117,35 +121,35 @@ def reproduce(
     from .campaign.store import Campaign
     from .core.atomic import clear_results
 
-    out = _output_folder(out or Path("results") / mod.PAPER)
-    scn = mod.load_scenario(scenario)
-    camp = Campaign(out, mod.PAPER, scn, seed, fresh, dask)
+    out = _output_folder(out or Path("results") / exp.number)
+    scn = exp.load_scenario(scenario)
+    camp = Campaign(out, exp.number, scn, seed, fresh, dask)
     clear_results(out)
-    extra["campaign"] = camp
     t0 = time.perf_counter()
-    total = mod.n_tasks(scn, runs, **extra) if hasattr(mod, "n_tasks") else runs
+    total = len(exp.units(scn, runs, seed, max_time, **extra))
     with Progress("[progress.description]{task.description}", BarColumn(),
                   MofNCompleteColumn(), TimeElapsedColumn(), TimeRemainingColumn(),
                   console=console, transient=False) as prog:
-        task = prog.add_task(f"paper {mod.PAPER}: {scn.name}", total=total)
+        task = prog.add_task(f"paper {exp.number}: {scn.name}", total=total)
         try:
             with camp:
-                rep = mod.reproduce(scn, runs, seed, jobs, max_time,
-                                    progress=lambda: prog.advance(task), **extra)
+                rep = exp.reproduce(scn, runs, seed, jobs, max_time,
+                                    progress=lambda: prog.advance(task), campaign=camp,
+                                    **extra)
         except KeyboardInterrupt:
             prog.stop()
             typer.echo(f"interrupted: {camp.computed + camp.reused} of {total} units of work "
                        f"are stored in {out}; the same command computes the others", err=True)
             raise typer.Exit(130) from None
     rep["summary"]["campaign"] = camp.summary()
-    mod.print_summary(rep["summary"], console)
+    exp.print_summary(rep["summary"], console)
     c = camp.summary()
     console.print(f"campaign {out}: {c['runs_computed']} units of work computed, "
                   f"{c['runs_reused']} reused ({c['engine']})")
-    files = mod.write_outputs(out, rep)
+    files = exp.write_outputs(out, rep)
     from .campaign.html_report import write_report
 
-    files.append(write_report(out, getattr(mod, "TABLE_TITLES", None)))
+    files.append(write_report(out, exp.titles))
     console.print(f"wrote {', '.join(str(f) for f in files)} "
                   f"in {time.perf_counter() - t0:.1f} s")
 
@@ -482,7 +486,7 @@ def _report_titles(folder: Path) -> dict | None:
     from .scenarios import paper_module
 
     mod = paper_module(paper)
-    return getattr(mod, "TABLE_TITLES", None) if mod is not None else None
+    return mod.EXPERIMENT.titles if mod is not None else None
 
 
 @app.command()

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..campaign.montecarlo import run_seeds
+from ..campaign.paper import Paper, Unit
 from ..core.atomic import save_figure
 from ..sim.runs import make_run_data, run_configured_mode
 from ..sim.scenario import Scenario
@@ -82,26 +82,6 @@ def one_run(args):
     return rows, series
 
 
-def reproduce(scn: Scenario, runs: int, seed: int, jobs: int = 1,
-              max_time: float | None = None, progress=None, campaign=None) -> dict:
-    from ..campaign.report import summarize
-
-    out = run_seeds(one_run, [(scn, seed + i, max_time) for i in range(runs)], jobs, progress,
-                    campaign)
-    rows = [r for o in out for r in o[0]]
-    tables = dict(PAPER_TABLES)
-    tables["limitation"] = {k: dict.fromkeys(COLS) for k in LIMITATION}
-    tables["limitation"]["CUKF/wind"] = dict(PAPER_TABLES["T1"]["CUKF/wind"])
-    summary = summarize(rows, tables, PAPER, runs, seed)
-    return {"rows": rows, "series": out[0][1], "summary": summary}
-
-
-def print_summary(summary: dict, console) -> None:
-    from ..campaign.report import print_tables
-
-    print_tables(summary, TABLE_TITLES, console)
-
-
 def plot_window(series: dict, path, window=WINDOW):
     """Horizontal position and velocity error norms over the wind window, every filter
     without and with wind (first Monte Carlo run)."""
@@ -131,14 +111,42 @@ def plot_window(series: dict, path, window=WINDOW):
     return path
 
 
-def write_outputs(out, rep: dict) -> list:
-    from ..campaign.report import write_outputs as _write
+class Paper000(Paper):
+    """Paper 000 as a campaign: one unit per Monte Carlo run (every filter without and
+    with wind, and the CUKF limitation variants, on the run's data)."""
 
-    series = {k: v for k, v in rep["series"].items() if "," not in k}
-    files = _write(out, rep["summary"], rep["rows"], series)
-    files.append(plot_window(rep["series"], out / "wind_window.png"))
-    return files
+    number = PAPER
+    tables = PAPER_TABLES
+    titles = TABLE_TITLES
+
+    def load_scenario(self, path=None) -> Scenario:
+        return load_scenario(path)
+
+    def units(self, scn, runs, seed, max_time=None, **_) -> list[Unit]:
+        return [Unit(one_run, (scn, seed + i, max_time)) for i in range(runs)]
+
+    def summarize(self, scn, runs, seed, max_time, results, **_) -> dict:
+        from ..campaign.report import summarize
+
+        rows = [r for o in results for r in o[0]]
+        tables = dict(PAPER_TABLES)
+        tables["limitation"] = {k: dict.fromkeys(COLS) for k in LIMITATION}
+        tables["limitation"]["CUKF/wind"] = dict(PAPER_TABLES["T1"]["CUKF/wind"])
+        return {"rows": rows, "series": results[0][1],
+                "summary": summarize(rows, tables, PAPER, runs, seed)}
+
+    def plots(self, out, rep) -> list:
+        from ..campaign.report import plot_errors
+
+        series = {k: v for k, v in rep["series"].items() if "," not in k}
+        return [plot_errors(series, out / "errors.png"),
+                plot_window(rep["series"], out / "wind_window.png")]
 
 
-__all__ = ["ALIASES", "PAPER", "PAPER_TABLES", "TABLE_TITLES", "load_scenario",
-           "print_summary", "reproduce", "run_statistics", "write_outputs"]
+EXPERIMENT = Paper000()
+reproduce = EXPERIMENT.reproduce
+print_summary = EXPERIMENT.print_summary
+write_outputs = EXPERIMENT.write_outputs
+
+__all__ = ["ALIASES", "EXPERIMENT", "PAPER", "PAPER_TABLES", "TABLE_TITLES", "load_scenario",
+           "print_summary", "reproduce", "write_outputs"]

@@ -19,9 +19,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..campaign.evaluation import mean_ci95
-from ..campaign.montecarlo import run_seeds
+from ..campaign.paper import Paper, Unit
 from ..core import units
-from ..core.atomic import save_figure, write_frame, write_text
+from ..core.atomic import save_figure
 from ..filters import FilterError
 from ..launch.navigate import make_data, run
 from ..launch.scenario import LaunchScenario, load_launch_scenario
@@ -120,11 +120,6 @@ def tasks(scn: LaunchScenario, runs: int, seed: int, max_time=None,
     return out
 
 
-def n_tasks(scn: LaunchScenario, runs: int, **_) -> int:
-    return (runs + len(scn.particle_sweep) * scn.particle_sweep_runs
-            + len(scn.regimes) * scn.regime_runs)
-
-
 def _table(rows: list[dict], table: str, cols: tuple[str, ...]) -> dict:
     out: dict[str, dict] = {}
     for r in rows:
@@ -135,14 +130,10 @@ def _table(rows: list[dict], table: str, cols: tuple[str, ...]) -> dict:
             for name, rs in out.items()}
 
 
-def reproduce(scn: LaunchScenario, runs: int, seed: int, jobs: int = 1,
-              max_time: float | None = None, progress=None, campaign=None,
-              particles: int | None = None) -> dict:
+def _summarize(scn, runs, seed, max_time, results, particles=None) -> dict:
     from ..campaign.report import summarize
 
-    work = tasks(scn, runs, seed, max_time, particles)
-    out = run_seeds(_task, work, jobs, progress, campaign)
-    rows = [r for o in out for r in o[0]]
+    rows = [r for o in results for r in o[0]]
     t1 = [r for r in rows if r["table"] == "T1"]
     summary = summarize(t1, PAPER_TABLES, PAPER, runs, seed)
     summary["particles_per_local_filter"] = particles or scn.filters.particles
@@ -156,11 +147,11 @@ def reproduce(scn: LaunchScenario, runs: int, seed: int, jobs: int = 1,
     #: Filter runs that stopped with a FilterError (left out of the means).
     summary["failures"] = [{"table": r["table"], "row": r["mode"], "seed": r["seed"],
                             "error": r["failure"]} for r in rows if r["failure"]]
-    return {"rows": rows, "series": out[0][1], "summary": summary, "scenario": scn,
+    return {"rows": rows, "series": results[0][1], "summary": summary, "scenario": scn,
             "max_time": max_time}
 
 
-def print_summary(summary: dict, console) -> None:
+def _print_summary(summary: dict, console) -> None:
     from ..campaign.report import print_tables
 
     print_tables(summary, TABLE_TITLES, console)
@@ -245,19 +236,36 @@ def plot_ascent(scn: LaunchScenario, path, max_time=None):
     return path
 
 
-def write_outputs(out, rep: dict) -> list:
-    import json
+class Paper001(Paper):
+    """Paper 001 as a campaign: one unit per (table, run): Table 1's PF and EKF runs, the
+    particle sweep, the regimes."""
 
-    import pandas as pd
+    number = PAPER
+    tables = PAPER_TABLES
+    titles = TABLE_TITLES
+    options = ("particles",)
 
-    out.mkdir(parents=True, exist_ok=True)
-    files = [write_frame(pd.DataFrame(rep["rows"]), out / "runs.csv"),
-             plot_errors(rep["series"], out / "errors.png"),
-             plot_ascent(rep["scenario"], out / "ascent.png", rep["max_time"])]
-    # summary.json last: its presence means the run finished (fednav.core.atomic)
-    files.insert(0, write_text(out / "summary.json", json.dumps(rep["summary"], indent=2)))
-    return files
+    def load_scenario(self, path=None) -> LaunchScenario:
+        return load_scenario(path)
+
+    def units(self, scn, runs, seed, max_time=None, particles=None, **_) -> list[Unit]:
+        return [Unit(_task, t) for t in tasks(scn, runs, seed, max_time, particles)]
+
+    def summarize(self, scn, runs, seed, max_time, results, particles=None, **_) -> dict:
+        return _summarize(scn, runs, seed, max_time, results, particles)
+
+    def print_summary(self, summary, console) -> None:
+        _print_summary(summary, console)
+
+    def plots(self, out, rep) -> list:
+        return [plot_errors(rep["series"], out / "errors.png"),
+                plot_ascent(rep["scenario"], out / "ascent.png", rep["max_time"])]
 
 
-__all__ = ["ALIASES", "PAPER", "PAPER_TABLES", "TABLE_TITLES", "load_scenario", "n_tasks",
+EXPERIMENT = Paper001()
+reproduce = EXPERIMENT.reproduce
+print_summary = EXPERIMENT.print_summary
+write_outputs = EXPERIMENT.write_outputs
+
+__all__ = ["ALIASES", "EXPERIMENT", "PAPER", "PAPER_TABLES", "TABLE_TITLES", "load_scenario",
            "print_summary", "reproduce", "write_outputs"]

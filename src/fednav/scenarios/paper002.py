@@ -21,6 +21,7 @@ import numpy as np
 
 from ..campaign.evaluation import error_stats
 from ..campaign.montecarlo import run_seeds
+from ..campaign.paper import Paper, Unit
 from ..core import units
 from ..sim.runs import make_run_data, run_all_modes
 from ..sim.scenario import Scenario
@@ -228,58 +229,58 @@ def run_monte_carlo(scn: Scenario, runs: int, seed: int, jobs: int = 1,
     return [r for rows, _ in out for r in rows], out[0][1]
 
 
-def n_tasks(scn: Scenario, runs: int, t4_runs: int | None = None, **_) -> int:
-    return 1 + runs + (min(runs, 3) if t4_runs is None else t4_runs)
-
-
 def observability_unit(args) -> dict:
     """:func:`observability` as a campaign unit (``args`` = (scenario, max_time))."""
     return observability(*args)
 
 
-def reproduce(scn: Scenario, runs: int, seed: int, jobs: int = 1,
-              max_time: float | None = None, progress=None, campaign=None,
-              t4_runs: int | None = None) -> dict:
-    """Monte Carlo reproduction: per-run rows, the first run's series and the summary
-    (Tables 2-3 over ``runs`` runs, Table 4 over the first ``t4_runs`` of them — default
-    min(runs, 3) — and Table 1, which needs no Monte Carlo but is one more unit of the
-    same batch, so a worker computes it while the others fly runs)."""
-    from ..campaign.report import summarize
+class Paper002(Paper):
+    """Paper 002 as a campaign: Table 4's runs (the long units, first), Table 1's
+    observability analysis (one more unit of the same batch, so a worker computes it while
+    the others fly runs), then the Monte Carlo runs of Tables 2-3."""
 
-    n4 = min(runs, 3) if t4_runs is None else t4_runs
-    # One batch, the long units first (Table 4, then Table 1's analysis): the Monte Carlo
-    # runs fill in around them.
-    args = [(scn, seed + i, max_time) for i in range(n4)] + [(scn, max_time)] + [
-        (scn, seed + i, max_time) for i in range(runs)]
-    out = run_seeds([one_run_t4] * n4 + [observability_unit] + [one_run] * runs, args, jobs,
-                    progress, campaign)
-    rows4 = [r for o in out[:n4] for r in o]
-    obs = out[n4]
-    rows = [r for rws, _ in out[n4 + 1:] for r in rws]
-    series = out[n4 + 1][1]
-    summary = summarize(rows, PAPER_TABLES, PAPER, runs, seed)
-    t4 = summarize(rows4, {"T4": {k: dict(zip(T4_COLS, v, strict=True))
-                                  for k, v in PAPER_T4.items()}}, PAPER, n4, seed)
-    tables = {"T1": {"rows": obs["rows"]}, **summary["tables"],
-              "T4": {"runs": n4, **t4["tables"]["T4"]}}
-    summary["tables"] = tables
-    summary["observability_phases"] = obs["phases"]
-    return {"rows": rows + [{**r, "table": "T4"} for r in rows4], "series": series,
-            "summary": summary}
+    number = PAPER
+    tables = PAPER_TABLES
+    titles = TABLE_TITLES
+    options = ("t4_runs",)
+
+    def load_scenario(self, path=None) -> Scenario:
+        return load_scenario(path)
+
+    @staticmethod
+    def _n4(runs: int, t4_runs: int | None) -> int:
+        return min(runs, 3) if t4_runs is None else t4_runs
+
+    def units(self, scn, runs, seed, max_time=None, t4_runs=None, **_) -> list[Unit]:
+        n4 = self._n4(runs, t4_runs)
+        return ([Unit(one_run_t4, (scn, seed + i, max_time)) for i in range(n4)]
+                + [Unit(observability_unit, (scn, max_time))]
+                + [Unit(one_run, (scn, seed + i, max_time)) for i in range(runs)])
+
+    def summarize(self, scn, runs, seed, max_time, results, t4_runs=None, **_) -> dict:
+        """Tables 2-3 over ``runs`` runs, Table 4 over the first ``t4_runs`` of them
+        (default min(runs, 3)), Table 1."""
+        from ..campaign.report import summarize
+
+        n4 = self._n4(runs, t4_runs)
+        rows4 = [r for o in results[:n4] for r in o]
+        obs = results[n4]
+        rows = [r for rws, _ in results[n4 + 1:] for r in rws]
+        summary = summarize(rows, PAPER_TABLES, PAPER, runs, seed)
+        t4 = summarize(rows4, {"T4": {k: dict(zip(T4_COLS, v, strict=True))
+                                      for k, v in PAPER_T4.items()}}, PAPER, n4, seed)
+        summary["tables"] = {"T1": {"rows": obs["rows"]}, **summary["tables"],
+                             "T4": {"runs": n4, **t4["tables"]["T4"]}}
+        summary["observability_phases"] = obs["phases"]
+        return {"rows": rows + [{**r, "table": "T4"} for r in rows4],
+                "series": results[n4 + 1][1], "summary": summary}
 
 
-def print_summary(summary: dict, console) -> None:
-    from ..campaign.report import print_tables
+EXPERIMENT = Paper002()
+reproduce = EXPERIMENT.reproduce
+print_summary = EXPERIMENT.print_summary
+write_outputs = EXPERIMENT.write_outputs
 
-    print_tables(summary, TABLE_TITLES, console)
-
-
-def write_outputs(out, rep: dict) -> list:
-    from ..campaign.report import write_outputs as _write
-
-    return _write(out, rep["summary"], rep["rows"], rep["series"])
-
-
-__all__ = ["ALIASES", "PAPER", "PAPER_TABLES", "TABLE_TITLES", "load_scenario", "n_tasks",
+__all__ = ["ALIASES", "EXPERIMENT", "PAPER", "PAPER_TABLES", "TABLE_TITLES", "load_scenario",
            "observability", "print_summary", "reproduce", "run_monte_carlo", "run_statistics",
            "write_outputs"]

@@ -12,9 +12,9 @@ import numpy as np
 from scipy.stats import chi2
 
 from ..campaign.evaluation import mean_ci95
-from ..campaign.montecarlo import run_seeds
+from ..campaign.paper import Paper, Unit
 from ..core import units
-from ..core.atomic import write_frame, write_text
+from ..core.atomic import write_frame
 from ..sim.runs import make_run_data, run_all_modes, run_configured_mode
 from ..sim.scenario import Scenario
 from ..sim.scenario import load_scenario as _load
@@ -115,16 +115,6 @@ def one_run(args):
     return rows, series, fault_rows, fault_series
 
 
-def reproduce(scn: Scenario, runs: int, seed: int, jobs: int = 1,
-              max_time: float | None = None, progress=None, campaign=None) -> dict:
-    out = run_seeds(one_run, [(scn, seed + i, max_time) for i in range(runs)], jobs, progress,
-                    campaign)
-    rows = [r for o in out for r in o[0]]
-    fault_rows = [r for o in out for r in o[2]]
-    return {"rows": rows, "fault_rows": fault_rows, "series": out[0][1],
-            "fault_series": out[0][3], "summary": summarize(rows, fault_rows, runs, seed)}
-
-
 def summarize(rows: list[dict], fault_rows: list[dict], runs: int, seed: int) -> dict:
     import pandas as pd
 
@@ -174,7 +164,7 @@ def _fmt(x) -> str:
     return f"{x:.0f}" if a >= 100 else f"{x:.2f}" if a >= 1 else f"{x:.3g}"
 
 
-def print_summary(summary: dict, console) -> None:
+def _print_summary(summary: dict, console) -> None:
     from rich.table import Table
 
     t = summary["tables"]
@@ -217,22 +207,52 @@ def print_summary(summary: dict, console) -> None:
         console.print(tab)
 
 
-def write_outputs(out, rep: dict) -> list:
-    import json
+class Paper003(Paper):
+    """Paper 003 as a campaign: one unit per Monte Carlo run (every mode, and the fault
+    experiment with and without isolation, on the run's data)."""
 
-    import pandas as pd
+    number = PAPER
+    titles = {"T1": "Table 1 — error max / min / std over the flight",
+              "improvement": "Improvement of FUKF over FKF",
+              "analysis": "Mean std per group for every mode",
+              "fault": "Fault experiment — 5-sigma GNSS step fault (FUKF)"}
 
-    from ..campaign.report import plot_errors, plot_fdi
+    def load_scenario(self, path=None) -> Scenario:
+        return load_scenario(path)
 
-    out.mkdir(parents=True, exist_ok=True)
-    files = [out / "summary.json", out / "runs.csv", out / "errors.png"]
-    write_frame(pd.DataFrame(rep["rows"]), files[1])
-    plot_errors(rep["series"], files[2])
-    if rep["fault_rows"]:
-        files.append(out / "fault_runs.csv")
-        write_frame(pd.DataFrame(rep["fault_rows"]), files[-1])
-        files.append(plot_fdi(rep["fault_series"]["isolated"].fdi, out / "fdi.png",
-                              "Fault experiment: chi-square statistics, 5-sigma GNSS fault"))
-        files.append(plot_errors(rep["fault_series"], out / "fault_errors.png"))
-    write_text(files[0], json.dumps(rep["summary"], indent=2))  # last: the run finished
-    return files
+    def units(self, scn, runs, seed, max_time=None, **_) -> list[Unit]:
+        return [Unit(one_run, (scn, seed + i, max_time)) for i in range(runs)]
+
+    def summarize(self, scn, runs, seed, max_time, results, **_) -> dict:
+        rows = [r for o in results for r in o[0]]
+        fault_rows = [r for o in results for r in o[2]]
+        return {"rows": rows, "fault_rows": fault_rows, "series": results[0][1],
+                "fault_series": results[0][3],
+                "summary": summarize(rows, fault_rows, runs, seed)}
+
+    def print_summary(self, summary, console) -> None:
+        _print_summary(summary, console)
+
+    def files(self, out, rep) -> list:
+        import pandas as pd
+
+        if not rep["fault_rows"]:
+            return []
+        return [write_frame(pd.DataFrame(rep["fault_rows"]), out / "fault_runs.csv")]
+
+    def plots(self, out, rep) -> list:
+        from ..campaign.report import plot_errors, plot_fdi
+
+        files = [plot_errors(rep["series"], out / "errors.png")]
+        if rep["fault_rows"]:
+            files.append(plot_fdi(rep["fault_series"]["isolated"].fdi, out / "fdi.png",
+                                  "Fault experiment: chi-square statistics, 5-sigma GNSS "
+                                  "fault"))
+            files.append(plot_errors(rep["fault_series"], out / "fault_errors.png"))
+        return files
+
+
+EXPERIMENT = Paper003()
+reproduce = EXPERIMENT.reproduce
+print_summary = EXPERIMENT.print_summary
+write_outputs = EXPERIMENT.write_outputs

@@ -16,7 +16,7 @@ import time
 import numpy as np
 
 from ..campaign.evaluation import mean_ci95
-from ..campaign.montecarlo import run_seeds
+from ..campaign.paper import Paper, Unit
 from ..core import units
 from ..core.atomic import save_figure, write_frame
 from ..sim.runs import make_run_data, run_configured_mode
@@ -110,23 +110,6 @@ def sweep_run(args):
     return [{"scale": f, "max_latency_s": f * 6.0, **r} for r in rows]
 
 
-def reproduce(scn: Scenario, runs: int, seed: int, jobs: int = 1,
-              max_time: float | None = None, progress=None, campaign=None) -> dict:
-    from ..campaign.report import summarize
-
-    out = run_seeds(one_run, [(scn, seed + i, max_time) for i in range(runs)], jobs, progress,
-                    campaign)
-    rows = [r for o in out for r in o[0]]
-    summary = summarize(rows, PAPER_TABLES, PAPER, runs, seed)
-    summary["tables"]["cost"] = {"rows": _cost(rows)}
-    n_sweep = min(runs, 4)
-    sw = run_seeds(sweep_run, [(scn, seed + i, max_time, f) for f in SWEEP
-                               for i in range(n_sweep)], jobs, None, campaign)
-    sweep_rows = [r for o in sw for r in o]
-    summary["tables"]["sweep"] = {"rows": _sweep(sweep_rows), "runs": n_sweep}
-    return {"rows": rows, "series": out[0][1], "sweep_rows": sweep_rows, "summary": summary}
-
-
 def _cost(rows) -> dict:
     import pandas as pd
 
@@ -154,12 +137,6 @@ def _sweep(rows) -> dict:
     return out
 
 
-def print_summary(summary: dict, console) -> None:
-    from ..campaign.report import print_tables
-
-    print_tables(summary, TABLE_TITLES, console)
-
-
 def plot_sweep(rows, path):
     import matplotlib
 
@@ -183,16 +160,47 @@ def plot_sweep(rows, path):
     return path
 
 
-def write_outputs(out, rep: dict) -> list:
-    import pandas as pd
+class Paper004(Paper):
+    """Paper 004 as a campaign: one unit per Monte Carlo run (every delay strategy on the
+    run's data) and one per latency-sweep point and run (the first min(runs, 4) seeds)."""
 
-    from ..campaign.report import write_outputs as _write
+    number = PAPER
+    tables = PAPER_TABLES
+    titles = TABLE_TITLES
 
-    out.mkdir(parents=True, exist_ok=True)
-    extra = [write_frame(pd.DataFrame(rep["sweep_rows"]), out / "sweep_runs.csv"),
-             plot_sweep(rep["sweep_rows"], out / "latency_sweep.png")]
-    return _write(out, rep["summary"], rep["rows"], rep["series"]) + extra
+    def load_scenario(self, path=None) -> Scenario:
+        return load_scenario(path)
+
+    def units(self, scn, runs, seed, max_time=None, **_) -> list[Unit]:
+        return ([Unit(one_run, (scn, seed + i, max_time)) for i in range(runs)]
+                + [Unit(sweep_run, (scn, seed + i, max_time, f)) for f in SWEEP
+                   for i in range(min(runs, 4))])
+
+    def summarize(self, scn, runs, seed, max_time, results, **_) -> dict:
+        from ..campaign.report import summarize
+
+        rows = [r for o in results[:runs] for r in o[0]]
+        summary = summarize(rows, PAPER_TABLES, PAPER, runs, seed)
+        summary["tables"]["cost"] = {"rows": _cost(rows)}
+        sweep_rows = [r for o in results[runs:] for r in o]
+        summary["tables"]["sweep"] = {"rows": _sweep(sweep_rows), "runs": min(runs, 4)}
+        return {"rows": rows, "series": results[0][1], "sweep_rows": sweep_rows,
+                "summary": summary}
+
+    def files(self, out, rep) -> list:
+        import pandas as pd
+
+        return [write_frame(pd.DataFrame(rep["sweep_rows"]), out / "sweep_runs.csv")]
+
+    def plots(self, out, rep) -> list:
+        return [*super().plots(out, rep), plot_sweep(rep["sweep_rows"],
+                                                     out / "latency_sweep.png")]
 
 
-__all__ = ["ALIASES", "PAPER", "PAPER_TABLES", "TABLE_TITLES", "load_scenario",
+EXPERIMENT = Paper004()
+reproduce = EXPERIMENT.reproduce
+print_summary = EXPERIMENT.print_summary
+write_outputs = EXPERIMENT.write_outputs
+
+__all__ = ["ALIASES", "EXPERIMENT", "PAPER", "PAPER_TABLES", "TABLE_TITLES", "load_scenario",
            "print_summary", "reproduce", "run_statistics", "write_outputs"]
