@@ -51,3 +51,20 @@ def test_fault_experiment_requires_detection_level(tmp_path):
     p.write_text(yaml.safe_dump(d))
     with pytest.raises(ConfigError, match="fdi_alpha"):
         load_scenario(p)
+
+
+def test_the_documented_processing_config_validates():
+    """docs/data-formats.md's example is a valid system description, without warnings."""
+    import warnings
+    from pathlib import Path
+
+    import yaml
+
+    from fednav import load_system
+
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "data-formats.md").read_text()
+    block = doc.split("## Processing config")[1].split("```yaml\n")[1].split("```")[0]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        s = load_system(yaml.safe_load(block))
+    assert s.sensors.gnss.lever_m == (0.51, -0.16, 0.0) and s.filter.period_s == 0.05

@@ -59,6 +59,12 @@ class Paper:
         long ones first)."""
         raise NotImplementedError
 
+    @staticmethod
+    def per_seed(fn: Callable, scn, runs: int, seed: int, max_time: float | None,
+                 *extra) -> list[Unit]:
+        """``fn((scn, seed + i, max_time, *extra))`` for the ``runs`` Monte Carlo runs."""
+        return [Unit(fn, (scn, seed + i, max_time, *extra)) for i in range(runs)]
+
     def summarize(self, scn, runs: int, seed: int, max_time: float | None, results: list,
                   **options) -> dict:
         """The report from the units' results (in :meth:`units` order): ``rows`` (one

@@ -123,7 +123,7 @@ class Paper000(Paper):
         return load_scenario(path)
 
     def units(self, scn, runs, seed, max_time=None, **_) -> list[Unit]:
-        return [Unit(one_run, (scn, seed + i, max_time)) for i in range(runs)]
+        return self.per_seed(one_run, scn, runs, seed, max_time)
 
     def summarize(self, scn, runs, seed, max_time, results, **_) -> dict:
         from ..campaign.report import summarize

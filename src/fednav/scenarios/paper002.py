@@ -253,9 +253,9 @@ class Paper002(Paper):
 
     def units(self, scn, runs, seed, max_time=None, t4_runs=None, **_) -> list[Unit]:
         n4 = self._n4(runs, t4_runs)
-        return ([Unit(one_run_t4, (scn, seed + i, max_time)) for i in range(n4)]
+        return (self.per_seed(one_run_t4, scn, n4, seed, max_time)
                 + [Unit(observability_unit, (scn, max_time))]
-                + [Unit(one_run, (scn, seed + i, max_time)) for i in range(runs)])
+                + self.per_seed(one_run, scn, runs, seed, max_time))
 
     def summarize(self, scn, runs, seed, max_time, results, t4_runs=None, **_) -> dict:
         """Tables 2-3 over ``runs`` runs, Table 4 over the first ``t4_runs`` of them

@@ -172,9 +172,9 @@ class Paper004(Paper):
         return load_scenario(path)
 
     def units(self, scn, runs, seed, max_time=None, **_) -> list[Unit]:
-        return ([Unit(one_run, (scn, seed + i, max_time)) for i in range(runs)]
-                + [Unit(sweep_run, (scn, seed + i, max_time, f)) for f in SWEEP
-                   for i in range(min(runs, 4))])
+        return (self.per_seed(one_run, scn, runs, seed, max_time)
+                + [u for f in SWEEP
+                   for u in self.per_seed(sweep_run, scn, min(runs, 4), seed, max_time, f)])
 
     def summarize(self, scn, runs, seed, max_time, results, **_) -> dict:
         from ..campaign.report import summarize

@@ -16,9 +16,6 @@ import numpy as np
 
 from .base import MeasurementSeries, position_noise_to_llh
 
-#: Components holding (latitude, longitude) for the sensors that have them.
-_LATLON = {"sar": (0, 1), "gnss": (0, 1)}
-
 
 @dataclass(frozen=True)
 class Fault:
@@ -66,9 +63,12 @@ def inject_faults(series: MeasurementSeries, faults: list[Fault]) -> Measurement
         return series
     d = sum(f.offsets(series) for f in mine)
     z = series.z.copy()
-    ll = _LATLON.get(series.kind)
+    from .registry import spec
+
+    sp = spec(series.kind)
+    ll = sp.latlon  # components holding latitude and longitude: faults are metres there
     if ll is not None:
-        h = z[:, 2] if series.kind == "gnss" else np.zeros(len(z))
+        h = z[:, sp.height] if sp.height is not None else np.zeros(len(z))
         pos = position_noise_to_llh(np.column_stack([z[:, ll[0]], z[:, ll[1]], h]),
                                     np.column_stack([d[:, ll[0]], d[:, ll[1]],
                                                      np.zeros(len(z))]))

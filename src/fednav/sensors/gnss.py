@@ -96,4 +96,4 @@ SPEC = SensorSpec(
     "gnss", "GNSS receiver: position and ENU velocity of its antenna", GnssConfig, GnssPosVel,
     columns=(Column("lat_deg", _DEG), Column("lon_deg", _DEG), Column("h_m"),
              Column("vE_mps"), Column("vN_mps"), Column("vU_mps")),
-    latlon=(0, 1))
+    latlon=(0, 1), height=2)

@@ -78,7 +78,7 @@ class SensorSpec:
     component of ``z``, in order); ``aiding``: whether it can feed a local filter (air
     data only constrains); ``angles``: components of ``z`` that are angles (unwrapped
     before curve fitting); ``latlon``: components holding latitude and longitude (faults
-    are metric offsets there).
+    are metric offsets there), ``height``: the component holding the height, if any.
     """
 
     name: str
@@ -89,6 +89,7 @@ class SensorSpec:
     aiding: bool = True
     angles: tuple[int, ...] = ()
     latlon: tuple[int, int] | None = None
+    height: int | None = None
 
     @property
     def compiled(self) -> bool:
