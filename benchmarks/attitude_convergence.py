@@ -1,5 +1,5 @@
 """Forward-filter attitude RMSE on simulated MEMS car drives: the alignment of
-``fednav process`` (``initial_attitude: align``) against starting from a file attitude
+``fednav process`` (``alignment.initial_attitude: align``) against starting from a file attitude
 with 1/1/2 deg (roll, pitch, yaw) 1-sigma errors, over several seeds and two IMU classes.
 
     python benchmarks/attitude_convergence.py [--seeds 5]
@@ -21,10 +21,10 @@ from pathlib import Path
 
 import numpy as np
 
+from fednav import load_system
 from fednav.core import units
-from fednav.core.config import load_model
 from fednav.io import read_gnss_csv, read_imu_csv, read_reference_csv
-from fednav.process.run import ProcessConfig, errors_against, process, rmse
+from fednav.process.run import errors_against, process, rmse
 from fednav.sim.dataset import load_dataset_config, simulate_dataset, write_csv_dataset
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -43,9 +43,9 @@ def one(imu_class: str, seed: int, folder: Path) -> dict[str, dict[str, float]]:
     cfg = cfg.model_copy(update=upd)
     d = folder / f"{imu_class}-{seed}"
     write_csv_dataset(simulate_dataset(cfg), d)
-    pc = load_model(d / "process.yaml", ProcessConfig, "processing config")
-    g = read_gnss_csv(d / "gnss.csv", pc.gnss_sigma_pos_m, pc.gnss_sigma_vel_mps,
-                      pc.gnss_lever_m)
+    pc = load_system(d / "process.yaml")
+    gc = pc.sensors.gnss
+    g = read_gnss_csv(d / "gnss.csv", gc.sigma_pos_m, gc.sigma_vel_mps, gc.lever_m)
     imu = read_imu_csv(d / "imu.csv")
     ref = read_reference_csv(d / "reference.csv")
     rng = np.random.default_rng(seed + 1000)
@@ -54,7 +54,8 @@ def one(imu_class: str, seed: int, folder: Path) -> dict[str, dict[str, float]]:
                                    initial_euler_sigma=sig)
     out = {}
     for how, data in (("file 1/1/2 deg", file_imu), ("align", imu)):
-        c = pc.model_copy(update={"initial_attitude": "file" if how != "align" else "align"})
+        c = pc.model_copy(update={"alignment": pc.alignment.model_copy(
+            update={"initial_attitude": "file" if how != "align" else "align"})})
         t0 = time.perf_counter()
         r = rmse(errors_against(process(data, g, None, c).forward, ref))
         out[how] = {**{k: r[k] for k in KEYS}, "s": time.perf_counter() - t0}

@@ -41,8 +41,7 @@ def main(runs: int = 3):
         d_mix = make_run_data(v["wind"], seed)
         d_mix.dtheta, d_mix.dv = d_none.dtheta, d_none.dv
         sar = v["none"].sensors.sar.model_copy(update={"sigma_pos_m": 2.5})
-        s25 = v["none"].model_copy(update={"sensors": v["none"].sensors.model_copy(
-            update={"sar": sar})})
+        s25 = v["none"].model_copy(update={"sensors": v["none"].sensors.replace(sar=sar)})
         for name, (s, d) in {"no wind": (v["none"], d_none), "wind": (v["wind"], d_wind),
                              "wind, IMU without the wind": (v["wind"], d_mix),
                              "no wind, SAR 2.5 m": (s25, make_run_data(s25, seed))}.items():

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fednav.core.config import load_model
+from fednav import System, load_system
 from fednav.io import (
     read_navego_gnss,
     read_navego_imu,
@@ -27,10 +27,11 @@ from fednav.io import (
     read_navego_visual,
 )
 from fednav.process.output import consistency
-from fednav.process.run import ProcessConfig, errors_against, process, rmse
+from fednav.process.run import errors_against, process, rmse
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT.parent / "shared" / "data" / "canada-planetary"
+EXAMPLE = ROOT / "examples" / "canada-planetary.yaml"
 KEYS = ("north_m", "east_m", "down_m", "vn_mps", "ve_mps", "vd_mps")
 
 
@@ -44,11 +45,11 @@ def load():
 
 def cases():
     imu, g, gs, vis, ref = load()
-    example = load_model(ROOT / "examples" / "canada-planetary.yaml", ProcessConfig, "config")
-    process(imu, g, None, ProcessConfig())  # warm the compiled kernels
+    example = load_system(EXAMPLE)
+    process(imu, g, None, System())  # warm the compiled kernels
     print("RMSE against gnss_planetary_r (N/E/D m, vN/vE/vD m/s); time = forward + smoother")
     print(f"{'case':58s} " + " ".join(f"{k:>8s}" for k in KEYS) + "   time s  NIS/dof")
-    for cname, cfg in (("file figures", ProcessConfig()), ("examples/canada-planetary", example)):
+    for cname, cfg in (("file figures", System()), ("examples/canada-planetary", example)):
         for gname, gd in (("GNSS", g), ("sparse GNSS", gs)):
             for vname, v in (("", None), ("+visual", vis)):
                 t0 = time.perf_counter()
@@ -80,7 +81,7 @@ def noise():
     print("file figures: arw", imu.errors.gyro_arw, "vrw", imu.errors.accel_vrw)
     print("mean GNSS NIS/dof against the accelerometer noise figure (gyro 6e-4):")
     for vrw in (2e-5, 6e-3, 0.03, 0.06, 0.1):
-        cfg = ProcessConfig(imu={"gyro_arw_rad_sqrt_s": 6e-4, "accel_vrw_mps_sqrt_s": vrw})
+        cfg = System(imu={"gyro_arw_rad_sqrt_s": 6e-4, "accel_vrw_mps_sqrt_s": vrw})
         c = consistency(process(imu, g, None, cfg).forward)["gnss"]
         print(f"  vrw {vrw:7.0e}: NIS/dof {c['nis_per_dof']:.2f}")
 
@@ -119,9 +120,10 @@ def corrections():
     """The visual data as filed and corrected (examples/canada-planetary.yaml), with the
     full and the sparse GNSS file (docs/real-data.md, "The visual data corrected")."""
     imu, g, gs, vis, ref = load()
-    ex = load_model(ROOT / "examples" / "canada-planetary.yaml", ProcessConfig, "config")
-    raw = ex.model_copy(update={"velocity_time_offset_s": 0.0, "velocity_axes": ("E", "N", "U"),
-                                "velocity_sigma_mps": None})
+    ex = load_system(EXAMPLE)
+    raw = ex.model_copy(update={"sensors": ex.sensors.replace(
+        velocity=ex.sensors.velocity.model_copy(
+            update={"time_offset_s": 0.0, "axes": ("E", "N", "U"), "sigma_mps": None}))})
     print("forward RMSE N/E/D m, vN/vE/vD m/s [smoothed]; max horizontal error 100-200 s")
     for gname, gd in (("GNSS", g), ("sparse GNSS", gs)):
         for cname, cfg, v in (("no visual", ex, None), ("visual as filed", raw, vis),
@@ -147,11 +149,13 @@ def tune():
     from fednav.process.tuning import tune as tune_figures
 
     imu, g, gs, vis, ref = load()
-    ex = load_model(ROOT / "examples" / "canada-planetary.yaml", ProcessConfig, "config")
+    ex = load_system(EXAMPLE)
     keys = ("gyro_arw_rad_sqrt_s", "accel_vrw_mps_sqrt_s", "gyro_markov_radps",
             "accel_markov_mps2")
-    bare = ex.model_copy(update={"imu": ex.imu.model_copy(update=dict.fromkeys(keys)),
-                                 "velocity_sigma_mps": None})
+    bare = ex.model_copy(update={
+        "imu": ex.imu.model_copy(update=dict.fromkeys(keys)),
+        "sensors": ex.sensors.replace(
+            velocity=ex.sensors.velocity.model_copy(update={"sigma_mps": None}))})
     print("forward RMSE N/E/D m, vN/vE/vD m/s [smoothed]; NIS/dof; max horizontal error "
           "100-200 s with the sparse GNSS file")
     # the example's gyro ARW is the sample scatter; set in the base, tune keeps it

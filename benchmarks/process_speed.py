@@ -20,10 +20,11 @@ import tempfile
 import time
 from pathlib import Path
 
+from fednav import System, load_system
 from fednav.io import read_gnss_csv, read_imu_csv
 from fednav.io.csvdata import write_csv
 from fednav.process.output import solution_columns, solution_decimals
-from fednav.process.run import ProcessConfig, process
+from fednav.process.run import process
 from fednav.process.tuning import tune
 from fednav.sim.dataset import load_dataset_config, simulate_dataset, write_csv_dataset
 
@@ -65,8 +66,8 @@ def main() -> None:
         imu, gnss, lever = drive(tmp)
         span = imu.t[-1] - imu.t[0]
         print(f"drive: {span:.0f} s, {len(imu.t)} IMU samples, {len(gnss.t)} GNSS fixes")
-        cfg = ProcessConfig.model_validate({
-            "gnss_lever_m": lever,
+        cfg = load_system({
+            "sensors": {"gnss": {"lever_m": lever}},
             "imu": {"gyro_arw_rad_sqrt_s": 5.8e-4, "accel_vrw_mps_sqrt_s": 2e-3,
                     "gyro_bias_radps": 1e-3, "accel_bias_mps2": 2e-2,
                     "gyro_markov_radps": 1.2e-4, "accel_markov_mps2": 2e-3,
@@ -85,7 +86,7 @@ def main() -> None:
         print(f"forward + smoother, IMU-rate solutions ({len(res.forward.t)} rows): "
               f"{t_proc:.2f} s; writing both CSVs {t_write:.2f} s; total {total:.2f} s "
               f"(target < 2 s), {span / total:.0f} x real time")
-        base = ProcessConfig(gnss_lever_m=lever)
+        base = System(sensors={"gnss": {"lever_m": lever}})
         tuned, t_tune = best_of(1, lambda: tune(imu, gnss, None, base))
         print(f"fednav tune: {t_tune:.1f} s, {tuned.runs} filter runs (target < 30 s), "
               f"{span / t_tune:.0f} x real time")
