@@ -165,6 +165,17 @@ def _run(state, dtheta, dv, dt, h_ref, gains, out_q, out_v, out_p):
 
 
 @numba.njit(cache=True)
+def _run_intervals(state, dtheta, dv, dt, h_ref, gains, n_per, out, no_q, no_3):
+    """:func:`_run` over consecutive intervals of ``n_per`` samples (recording nothing:
+    ``no_q``, ``no_3`` are empty), the state after each into the rows of ``out``."""
+    for k in range(out.shape[0]):
+        a = k * n_per
+        _run(state, dtheta[a:a + n_per], dv[a:a + n_per], dt, h_ref[a:a + n_per], gains,
+             no_q, no_3, no_3)
+        out[k] = state
+
+
+@numba.njit(cache=True)
 def _correct(state, phi, dvel, dpos):
     q = _qmul(_rv2q(phi), state[0:4])
     state[0:4] = q / np.sqrt(q[0] ** 2 + q[1] ** 2 + q[2] ** 2 + q[3] ** 2)
@@ -278,6 +289,23 @@ class Strapdown:
         if record:
             return {"q": out_q, "vel": out_v, "lla": out_p}
         return None
+
+    def run_intervals(self, dtheta, dv, h_ref, n_per: int) -> np.ndarray:
+        """Integrate whole intervals of ``n_per`` samples (N = K n_per) in one compiled
+        call, as K calls of :meth:`run` would; returns the state after each (K, 22)."""
+        dtheta = np.ascontiguousarray(dtheta, dtype=float)
+        dv = np.ascontiguousarray(dv, dtype=float)
+        n = dtheta.shape[0]
+        if h_ref is None or self.baro is None:
+            h_ref = np.full(n, np.nan)
+        else:
+            h_ref = np.ascontiguousarray(h_ref, dtype=float)
+        out = np.empty((n // n_per, STATE_SIZE))
+        _run_intervals(self.state, dtheta, dv, self.dt, h_ref, self._gains, int(n_per), out,
+                       _NO_Q, _NO_3)
+        if not math.isfinite(out[-1].sum() if len(out) else 0.0):
+            raise FloatingPointError("Strapdown.run: navigation state became non-finite")
+        return out
 
     def correct(self, phi, dvel, dpos) -> None:
         """Feedback: remove estimated errors (computed minus true) from the INS.

@@ -283,8 +283,6 @@ class CompiledLoop:
 
     def __init__(self, core, fed, meas, t0, T, dt, n_per, record_rows, record_cov,
                  innovations):
-        from scipy.stats import chi2
-
         self.core, self.fed, self.meas = core, fed, meas
         self.t0, self.T, self.dt, self.n_per = float(t0), float(T), float(dt), int(n_per)
         self.record_rows, self.record_cov, self.innovations = (record_rows, record_cov,
@@ -308,6 +306,8 @@ class CompiledLoop:
         for i, k in enumerate(self.names):
             a = fed.fdi_alphas.get(k)
             if a is not None:
+                from scipy.stats import chi2  # (0.4 s to import: only with detection on)
+
                 self.thr[i, 1:] = [float(chi2.ppf(1.0 - a, d)) for d in range(1, 7)]
         self.recovery = int(fed.fdi_recovery)
         self.sharing = {"equal": 0, "fixed": 1, "adaptive": 2}[fed.sharing]
@@ -364,28 +364,19 @@ class CompiledLoop:
         return [(t, self.names[int(f)], nis, int(dof), thr, not acc)
                 for t, f, nis, dof, thr, acc in self._log.view.tolist()]
 
-    def run(self, k0: int, k1: int, dtheta, dv, h_ref, todo: list) -> None:
-        """Epochs ``k0 + 1 .. k1`` with their IMU data and ``todo`` = [(epoch, [(sensor
-        position in aiding order, measurement indices), ...]), ...] in application order."""
+    def run(self, k0: int, k1: int, dtheta, dv, h_ref, m_epoch, m_sens, m_idx) -> None:
+        """Epochs ``k0 + 1 .. k1`` with their IMU data and measurements, in application
+        order: epoch, sensor position in aiding order, index into that sensor's."""
         from ..filters import FilterError
 
         n_ep = k1 - k0
         if n_ep <= 0:
             return
-        ep, sens, idx = [], [], []
-        for k, lst in todo:
-            for s, ii in lst:
-                ep += [k] * len(ii)
-                sens += [s] * len(ii)
-                idx += ii
-        M = len(idx)
-        m_epoch = np.array(ep, dtype=np.int64)
-        m_sens = np.array(sens, dtype=np.int64)
+        M = len(m_idx)
         m_t = np.empty(M)
         m_z = np.zeros((M, 6))
         m_R = np.zeros((M, 6, 6))
         if M:
-            m_idx = np.array(idx, dtype=np.int64)
             for s, m in enumerate(self.meas):
                 sel = m_sens == s if len(self.meas) > 1 else slice(None)
                 ii = m_idx[sel]
@@ -411,8 +402,9 @@ class CompiledLoop:
             out_Phi, out_Qd, out_dx = self._none_cov
         log = self._log
         j0 = log.n
-        log._room(M)
-        lg = log.a[j0:j0 + M]
+        log._room(M + 2)
+        # columns of at least two rows: always strided views, one compiled signature
+        lg = log.a[j0:j0 + max(M, 2)]
         if self.innovations:
             out_r, out_S, out_bm = np.zeros((M, 6)), np.zeros((M, 6, 6)), np.empty(M)
         else:
@@ -441,8 +433,8 @@ class CompiledLoop:
             rec.rows.n += n_rows
         self.Pg = rec.P.a[rec.P.n - 1]
         if M:
-            lg[:, 1] = self.s_filter[m_sens]
-            lg[:, 3] = self.s_dim[m_sens]
+            lg[:M, 1] = self.s_filter[m_sens]
+            lg[:M, 3] = self.s_dim[m_sens]
             log.n += M
             if self.innovations:
                 for j in range(M):

@@ -456,6 +456,26 @@ class Navigator:
                 out.append((s, idx))
         return out
 
+    def _schedule(self, k0: int, k1: int):
+        """The measurements of epochs ``k0 + 1 .. k1`` in the order :meth:`_todo` applies
+        them, as arrays: epoch, sensor position in aiding order, index (the compiled
+        engine's form; one sort instead of a list per epoch)."""
+        parts = []
+        for s, a in enumerate(self.aiding):
+            m = self._meas[a]
+            if not len(m):
+                continue
+            e = m.epoch
+            ii = np.flatnonzero((e > k0) & (e <= k1))
+            if len(ii):
+                parts.append((e[ii], np.full(len(ii), s, dtype=np.int64), ii, m.t[ii]))
+        if not parts:
+            z = np.zeros(0, dtype=np.int64)
+            return z, z, z
+        e, sens, idx, t = (np.concatenate(x) for x in zip(*parts, strict=True))
+        order = np.lexsort((t, sens, e))  # stable: equal times keep their arrival order
+        return e[order], sens[order], idx[order]
+
     def _pairs(self, todo) -> list:
         """:meth:`_todo` as [(Meas, index)] (the Python loop's form)."""
         return [(self._meas[self.aiding[s]], i) for s, idx in todo for i in idx]
@@ -470,19 +490,18 @@ class Navigator:
                                           + 1e-9))
         if k_max <= done:
             return
+        sl = slice(done * self.n_per, k_max * self.n_per)
         if isinstance(self.loop, CompiledLoop):
-            if k_max > done:
-                sl = slice(done * self.n_per, k_max * self.n_per)
-                todo = [(k, self._todo(k, k)) for k in range(done + 1, k_max + 1)]
-                self.loop.run(done, k_max, self._imu_dth.view[sl], self._imu_dv.view[sl],
-                              self._h_ref.view[sl], todo)
+            self.loop.run(done, k_max, self._imu_dth.view[sl], self._imu_dv.view[sl],
+                          self._h_ref.view[sl], *self._schedule(done, k_max))
+            return
+        if self.loop is None:  # a free INS: every interval in one compiled call
+            self._free["states"].extend(self.ins.run_intervals(
+                self._imu_dth.view[sl], self._imu_dv.view[sl], self._h_ref.view[sl],
+                self.n_per))
             return
         for k in range(done + 1, k_max + 1):
             dth, dv, h_ref = self._imu(k)
-            if self.loop is None:
-                self.ins.run(dth, dv, h_ref, record=False)
-                self._free["states"].append(self.ins.state.copy())
-                continue
             recompute = [m for m in self._meas.values() if m.how == "recompute"]
             if not recompute:
                 self.loop.cycle(k, dth, dv, h_ref, self._pairs(self._todo(k, k)))
