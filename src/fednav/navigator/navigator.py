@@ -382,9 +382,10 @@ class Navigator:
             if sigma is None:
                 raise ValueError(f"{sensor}: no noise given and none in the system "
                                  f"description (sensors.{sensor})")
+        one_sigma = sigma is not None and np.ndim(sigma) == 1  # the same for every row
         if sigma is not None:
             sigma = np.broadcast_to(np.asarray(sigma, dtype=float), (len(t),) + np.shape(
-                sigma)[-1:]) if np.ndim(sigma) == 1 else np.asarray(sigma, dtype=float)
+                sigma)[-1:]) if one_sigma else np.asarray(sigma, dtype=float)
         epochs = self._epoch_of(ta)
         keep = np.ones(len(t), dtype=bool)
         if self.loop is not None:
@@ -398,6 +399,9 @@ class Navigator:
             R = np.asarray(R, dtype=float)[keep]
         elif m is self._constraint or not hasattr(m.model, "R"):
             R = np.full((len(t), 1, 1), np.nan)
+        elif one_sigma and len(t):
+            R0 = m.model.R(sigma[0])
+            R = np.broadcast_to(R0, (len(t),) + R0.shape)
         else:
             R = np.array([m.model.R(s) for s in sigma])
         if sigma is None:
@@ -459,7 +463,18 @@ class Navigator:
     def _schedule(self, k0: int, k1: int):
         """The measurements of epochs ``k0 + 1 .. k1`` in the order :meth:`_todo` applies
         them, as arrays: epoch, sensor position in aiding order, index (the compiled
-        engine's form; one sort instead of a list per epoch)."""
+        engine's form): from the epochs' lists when they are few (a stream), else by one
+        sort of the measurements of those epochs (a batch)."""
+        n_meas = sum(len(self._meas[a]) for a in self.aiding)
+        if (k1 - k0) * len(self.aiding) < n_meas:
+            ep, sens, idx = [], [], []
+            for k in range(k0 + 1, k1 + 1):
+                for s, ii in self._todo(k, k):
+                    ep += [k] * len(ii)
+                    sens += [s] * len(ii)
+                    idx += ii
+            return (np.array(ep, dtype=np.int64), np.array(sens, dtype=np.int64),
+                    np.array(idx, dtype=np.int64))
         parts = []
         for s, a in enumerate(self.aiding):
             m = self._meas[a]
