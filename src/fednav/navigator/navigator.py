@@ -233,7 +233,8 @@ class Navigator:
         if not self.aiding:
             self.loop = None  # a free INS
             self.engine, self.why_python = "compiled", None
-            self._free = {"states": [self.ins.state.copy()]}
+            self._free = Growing((len(self.ins.state),))
+            self._free.append(self.ins.state)
             return
         if total:
             from .total import total_state_ukf
@@ -497,7 +498,7 @@ class Navigator:
 
     def _advance(self, final: bool) -> None:
         n = self._imu_dth.n
-        done = self.loop.k if self.loop is not None else len(self._free["states"]) - 1
+        done = self.loop.k if self.loop is not None else self._free.n - 1
         k_max = n // self.n_per
         if not final and self._t_last is not None:
             # epochs the stream has passed by hold_s (measurements can no longer arrive)
@@ -511,7 +512,7 @@ class Navigator:
                           self._h_ref.view[sl], *self._schedule(done, k_max))
             return
         if self.loop is None:  # a free INS: every interval in one compiled call
-            self._free["states"].extend(self.ins.run_intervals(
+            self._free.extend(self.ins.run_intervals(
                 self._imu_dth.view[sl], self._imu_dv.view[sl], self._h_ref.view[sl],
                 self.n_per))
             return
@@ -552,7 +553,7 @@ class Navigator:
             raise ValueError(f"solution() gives the ENU solution; the navigator flies "
                              f"{self.why_python}: read result().states")
         self._advance(final=False)
-        k = self.loop.k if self.loop is not None else len(self._free["states"]) - 1
+        k = self.loop.k if self.loop is not None else self._free.n - 1
         n = self._imu_dth.n
         tmp = Strapdown.__new__(Strapdown)
         tmp.__dict__.update(self.ins.__dict__)
@@ -575,10 +576,12 @@ class Navigator:
                         att.quat_to_euler(s[STATE_Q]), sd)
 
     def result(self) -> NavResult:
-        """Every complete epoch processed, and what the run produced."""
+        """Every complete epoch processed, and what the run produced.  Its arrays are views
+        of the navigator's records, which only grow: they keep their values when more
+        data are added (a later ``result()`` has the later epochs too)."""
         self._advance(final=True)
         if self.loop is None:
-            st = np.array(self._free["states"])
+            st = self._free.view
             K = len(st) - 1
             return NavResult(self.t0 + self.T * np.arange(K + 1), st,
                              np.full((K + 1, em.N_STATES, em.N_STATES), np.nan), {}, [],
@@ -589,14 +592,13 @@ class Navigator:
         beta = {nm: r.beta.view[:, j].copy() for j, nm in enumerate(names)}
         rows = None
         if r.rows is not None:
-            a = r.rows.view.copy()
+            a = r.rows.view
             if len(a) > 1:
                 a[0, 10:13] = self._imu_dth.view[0] / self.dt  # the first sample's rate
             rows = {"q": a[:, 0:4], "vel": a[:, 4:7], "lla": a[:, 7:10], "omega": a[:, 10:13]}
         cov = r.covariance
-        return NavResult(self.t0 + self.T * np.arange(K + 1), r.states.view.copy(),
-                         r.P.view.copy(), beta, list(self.loop.log),
-                         list(r.innovations or []), r.Phi.view.copy() if cov else None,
-                         r.Qd.view.copy() if cov else None, r.dx.view.copy() if cov else None,
-                         rows, dict(self.quality), self.engine, self.dt,
-                         self.system.smoother)
+        return NavResult(self.t0 + self.T * np.arange(K + 1), r.states.view, r.P.view, beta,
+                         list(self.loop.log), list(r.innovations or []),
+                         r.Phi.view if cov else None, r.Qd.view if cov else None,
+                         r.dx.view if cov else None, rows, dict(self.quality), self.engine,
+                         self.dt, self.system.smoother)

@@ -12,18 +12,24 @@ import numpy as np
 
 
 class Growing:
-    """A float array that grows along its first axis (capacity doubling)."""
+    """A float array that grows along its first axis (capacity doubling); new capacity
+    holds ``fill`` (None: left uninitialised, for arrays written before they are read)."""
 
-    def __init__(self, shape_tail=(), fill=0.0, dtype=float):
+    def __init__(self, shape_tail=(), fill=None, dtype=float):
         self.tail = tuple(shape_tail)
         self.fill, self.dtype = fill, dtype
-        self.a = np.full((16, *self.tail), fill, dtype=dtype)
+        self.a = self._new(16)
         self.n = 0
+
+    def _new(self, cap: int) -> np.ndarray:
+        if self.fill is None:
+            return np.empty((cap, *self.tail), dtype=self.dtype)
+        return np.full((cap, *self.tail), self.fill, dtype=self.dtype)
 
     def _room(self, m: int) -> None:
         if self.n + m > len(self.a):
             cap = max(2 * len(self.a), self.n + m)
-            a = np.full((cap, *self.tail), self.fill, dtype=self.dtype)
+            a = self._new(cap)
             a[:self.n] = self.a[:self.n]
             self.a = a
 
