@@ -29,7 +29,10 @@ TWO_PI = 2.0 * np.pi
 
 def _matrix(e):
     """9 elements, row by row (scalars or arrays) -> (..., 3, 3)."""
-    return np.stack([np.stack(e[0:3], -1), np.stack(e[3:6], -1), np.stack(e[6:9], -1)], -2)
+    out = np.empty(np.broadcast_shapes(*(np.shape(v) for v in e)) + (3, 3))
+    for k, v in enumerate(e):
+        out[..., k // 3, k % 3] = v
+    return out
 
 
 def _rows(kernel, a, n_in: int, n_out: int) -> np.ndarray:
