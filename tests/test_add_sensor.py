@@ -178,3 +178,65 @@ def make_flight_cached():
     if not _FLIGHT:
         _FLIGHT["f"] = make_flight()
     return _FLIGHT["f"]
+
+
+def test_bad_sensor_files_are_one_line_errors_naming_the_file_and_row(tmp_path):
+    from fednav.io import DataError
+
+    p = tmp_path / "baro.csv"
+    p.write_text("t_s,h_m,t_arrival_s\n1,100,1.1\n2,101,x\n")
+    with pytest.raises(DataError, match=r"baro.csv: column 't_arrival_s' has a non-numeric"):
+        read_sensor_csv("baro", p)
+    p.write_text("t_s,h_m\n1,100\n2,nan\n3,101\n2.5,102\n")
+    with pytest.raises(DataError, match=r"baro.csv: column 't_s' is not increasing at data "
+                                       r"row 4 "):
+        read_sensor_csv("baro", p)
+    p.write_text("t_s,h_m,t_arrival_s\n1,100,1.1\n2,101,1.5\n")
+    with pytest.raises(DataError, match="data row 2 arrives at 1.500000 s, before"):
+        read_sensor_csv("baro", p)
+    p.write_text("t_s,h_m\n1,100\n2,nan\n3,101\n")
+    d = read_sensor_csv("baro", p)
+    assert d.quality["baro_rows_dropped"] == 1 and len(d.t) == 2
+
+
+def test_process_refuses_or_warns_about_what_it_cannot_use():
+    from fednav.io import DataError, SensorData
+    from fednav.process.run import prepare
+
+    imu, gnss, _ = make_flight_cached()
+    with pytest.raises(DataError, match="filter.state: fednav process flies the error-state"):
+        prepare(imu, gnss, None, load_system({"filter": {"state": "total"}}))
+    air = SensorData("airdata", "air.csv", np.arange(1.0, 50.0), np.ones((49, 3)))
+    cfg = load_system({"sensors": {"airdata": {"sigma_airspeed_mps": 0.1,
+                                               "wind_sigma_mps": 0.1}}})
+    prep = prepare(imu, gnss, None, cfg, sensors={"airdata": air})
+    assert any("air.csv: not used (air data feed only the wind constraint" in w
+               for w in prep.warnings)
+    with pytest.raises(DataError, match="airdata data given as sensor 'baro'"):
+        prepare(imu, gnss, None, cfg, sensors={"baro": air})
+
+
+def test_a_scenario_states_its_filter_period(tmp_path):
+    import yaml
+
+    from fednav.scenarios import scenario_path
+    from fednav.sim.scenario import load_scenario
+
+    d = yaml.safe_load(scenario_path("paper002").read_text())
+    del d["filter"]["period_s"]
+    (tmp_path / "s.yaml").write_text(yaml.safe_dump(d))
+    with pytest.raises(ConfigError, match="filter.period_s: a scenario states"):
+        load_scenario(tmp_path / "s.yaml")
+
+
+def test_a_launch_scenario_with_both_gps_and_gnss_is_refused(tmp_path):
+    import yaml
+
+    from fednav.launch.scenario import load_launch_scenario
+    from fednav.scenarios import scenario_path
+
+    d = yaml.safe_load(scenario_path("paper001").read_text())
+    d["gps"] = dict(d["gnss"])
+    (tmp_path / "s.yaml").write_text(yaml.safe_dump(d))
+    with pytest.raises(ConfigError, match="'gps' and 'gnss' are the same setting"):
+        load_launch_scenario(tmp_path / "s.yaml")

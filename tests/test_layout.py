@@ -101,3 +101,24 @@ def test_launch_scenario_keys_of_0_1_still_read():
     assert s.gnss.sigma_m == 15.0 and s.filters.pf_gnss_likelihood == "mixture"
     with pytest.warns(FutureWarning, match="GnssPositionLI"):
         assert errors.GpsPosition is errors.GnssPositionLI
+
+
+def test_names_users_imported_from_0_1_modules_still_import():
+    import importlib
+
+    names = {
+        "fednav.config": ["GnssConfig", "StarConfig", "SarConfig", "SarVelocityConfig",
+                          "AirDataConfig", "BaroConfig", "TimingConfig", "FilterConfig",
+                          "SensorsConfig", "read_text_file", "load_scenario", "Scenario"],
+        "fednav.process": ["gnss_course", "check_units", "adjust_sensors", "gnss_z",
+                           "imu_figures", "ImuNoiseConfig", "ProcessConfig", "process"],
+        "fednav.simulate": ["TOTAL_MODELS", "total_state_models", "run_mode",
+                            "make_run_data"],
+        "fednav.measurements": ["euler_error_nb", "MODELS", "NavSnapshot"],
+    }
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", FutureWarning)
+        for mod, attrs in names.items():
+            m = importlib.import_module(mod)
+            missing = [a for a in attrs if not hasattr(m, a)]
+            assert not missing, (mod, missing)

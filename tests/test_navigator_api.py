@@ -157,3 +157,106 @@ def test_bad_stream_input_is_one_line(drive):
         nav.add_imu(prep.t[0] + 3 * prep.dt, prep.gyro[1], prep.accel[1])
     with pytest.raises(ValueError, match=r"unknown sensor 'lidar'; registered: "):
         nav.add_measurement("lidar", 0.0, [1.0])
+
+
+# ------------------------------------------------------------ review fixes, pinned
+def _baro_prep(drive, seconds: float, offset: float):
+    """The drive with a damping, aiding barometer whose heights fall ``offset`` [s] after
+    IMU sample times (a logger's own clock)."""
+    from fednav.io.sensorfile import SensorData
+
+    imu, gnss, ref = drive
+    tb = np.arange(1.0, seconds, 1.0) + offset
+    h = np.interp(tb, ref.t, ref.lla[:, 2]) + np.random.default_rng(3).normal(0, 0.3, len(tb))
+    cfg = load_system({"sensors": {"baro": {"sigma_m": 0.3, "damping_loop": True}}})
+    prep = prepare(imu, gnss, None, cfg, sensors={"baro": SensorData("baro", "b", tb,
+                                                                     h[:, None])})
+    n = int(round(seconds / prep.dt))
+    n -= n % prep.n_per
+    prep.t, prep.gyro, prep.accel = prep.t[:n], prep.gyro[:n], prep.accel[:n]
+    return prep
+
+
+def test_a_damping_barometer_streamed_one_value_at_a_time_equals_the_batch(drive):
+    prep = _baro_prep(drive, 60.0, 0.0)
+    ref = _batch(prep)
+    d = prep.others["baro"]
+    R = prep.system.sensors.baro.model().R(prep.system.sensors.baro.sigma())
+    nav = prep.navigator()
+    ev = sorted([(t, "gnss", t, z, r) for t, z, r in zip(*prep.measurements["gnss"],
+                                                          strict=True)]
+                + [(t, "baro", t, z, R) for t, z in zip(d.t, d.z, strict=True)],
+                key=lambda e: e[0])
+    j = 0
+    for i in range(len(prep.t)):
+        while j < len(ev) and ev[j][0] <= prep.t[i] + 1e-9:
+            _, name, t, z, r = ev[j]
+            nav.add_measurement(name, t, z, R=r)
+            j += 1
+        nav.add_imu(prep.t[i], prep.gyro[i], prep.accel[i])
+    for _, name, t, z, r in ev[j:]:  # (those of the last epoch's time)
+        nav.add_measurement(name, t, z, R=r)
+    _same(nav.result(), ref)
+
+
+def test_baro_heights_between_imu_samples_feed_the_damping_loop(drive):
+    prep = _baro_prep(drive, 30.0, 0.0013)  # 1.3 ms after the samples
+    nav = prep.feed(prep.navigator())
+    used = np.isfinite(nav._h_ref.view).sum()
+    assert used == np.count_nonzero(prep.others["baro"].t < prep.t[-1] + prep.dt)
+
+
+def test_a_free_ins_applies_the_initial_imu_compensation(drive):
+    from fednav import InitialState
+
+    prep = _prep(drive, 20.0)
+    free = prep.system.model_copy(update={"aiding": [], "sensors":
+                                          prep.system.sensors.replace(gnss=None)})
+    bias = np.array([1e-3, -2e-3, 5e-4])
+    ini = prep.initial
+    a = Navigator(free, ini, prep.dt)
+    a.add_imu(prep.t, prep.gyro, prep.accel)
+    b = Navigator(free, InitialState(ini.t, ini.lla, ini.vel, ini.euler, ini.P0,
+                                     gyro_bias=bias), prep.dt)
+    b.add_imu(prep.t, prep.gyro + bias, prep.accel)
+    np.testing.assert_allclose(b.result().states, a.result().states, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(b.solution().lla, a.solution().lla, rtol=1e-12)
+
+
+def test_unix_time_stamps_keep_measurements_at_their_epoch(drive):
+    prep = _prep(drive, 10.0)
+    nav = prep.navigator()
+    nav.t0 = 1.7e9
+    t = nav.t0 + 3 * nav.T
+    assert nav._epoch_of(np.nextafter(t, np.inf)) == 3
+    assert nav._epoch_of(t) == 3 and nav._epoch_of(t + 1e-5) == 4
+
+
+def test_no_complete_epoch_yet_is_a_one_line_error(drive):
+    prep = _prep(drive, 10.0)
+    nav = prep.navigator()
+    nav.add_imu(prep.t[:3], prep.gyro[:3], prep.accel[:3])
+    with pytest.raises(ValueError, match="one complete filter epoch"):
+        _ = nav.result().forward
+
+
+def test_the_total_state_navigator_runs_with_the_default_records():
+    from fednav.scenarios import paper003
+    from fednav.sim.runs import _initial_state, make_run_data
+    from fednav.sim.scenario import ModeConfig
+
+    scn = paper003.load_scenario()
+    data = make_run_data(scn, 1, 20.0)
+    truth = scn.trajectory(20.0)
+    system = scn.system_for(ModeConfig(name="FUKF", aiding=["gnss", "star"],
+                                       filter="total-ukf"))
+    nav = Navigator(system, _initial_state(scn, truth, data), truth.dt)
+    s = data.series["gnss"]
+    with pytest.raises(ValueError, match="total-state navigator takes .* sigma, not R"):
+        nav.add_measurement("gnss", s.t[0], s.z[0], R=np.eye(6))
+    for a in ("gnss", "star"):
+        nav.add_series(data.series[a])
+    nav.add_imu(truth.t[:-1], dtheta=data.dtheta[:len(truth.t) - 1],
+                dv=data.dv[:len(truth.t) - 1])
+    res = nav.result()
+    assert res.rows is None and len(res.t) > 10 and np.isfinite(res.states).all()

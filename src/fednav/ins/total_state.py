@@ -281,7 +281,7 @@ class GnssTotal:
 
 @numba.njit(cache=True)
 def _star_terms(q_est, z, sigma, unit):
-    """Residual log(C_cns C_est') and its covariance from Euler-angle noise ``sigma``
+    """Residual log(C_star C_est') and its covariance from Euler-angle noise ``sigma``
     (both in units of ``unit`` radians)."""
     C_est = quat_to_dcm(q_est)
     M = euler_to_dcm(z[0], z[1], z[2]) @ C_est.T
@@ -298,7 +298,7 @@ def _star_terms(q_est, z, sigma, unit):
 
 
 class StarTotal:
-    """Star sensor on the total state: residual = ``log(C_cns C_est')`` (arc-minutes);
+    """Star sensor on the total state: residual = ``log(C_star C_est')`` (arc-minutes);
     ``H = [I 0 0]``.  The Euler-angle noise of the sensor maps to the rotation space with
     the inverse of :func:`~fednav.core.attitude.euler_error_jacobian`."""
 

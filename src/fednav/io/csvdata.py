@@ -39,7 +39,9 @@ VEL_SIGMA_COLUMNS = ("sigma_vE_mps", "sigma_vN_mps", "sigma_vU_mps")
 EULER_COLUMNS = ("pitch_deg", "roll_deg", "heading_deg")
 
 
-def _read(path, kind: str, required: tuple) -> tuple[str, pd.DataFrame]:
+def _read(path, kind: str, required: tuple, numeric: tuple = ()) -> tuple[str, pd.DataFrame]:
+    """The CSV file as a DataFrame: ``required`` columns present, they and the known
+    optional ones (and ``numeric``) numbers; one-line :class:`DataError` s."""
     path = Path(path)
     require_file(path, kind)
     src = str(path)
@@ -65,7 +67,7 @@ def _read(path, kind: str, required: tuple) -> tuple[str, pd.DataFrame]:
     if df.empty:
         raise DataError(f"{src}: no data rows (header only)")
     for c in df.columns:
-        if c in required or c in VEL_COLUMNS + EULER_COLUMNS + VEL_SIGMA_COLUMNS:
+        if c in required or c in numeric or c in VEL_COLUMNS + EULER_COLUMNS + VEL_SIGMA_COLUMNS:
             v = pd.to_numeric(df[c], errors="coerce")
             # empty cells, NaN and inf are faulty samples (the data policy screens them);
             # text that is not a number means the file is not what it claims to be

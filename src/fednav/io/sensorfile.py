@@ -16,7 +16,7 @@ import numpy as np
 
 from ..sensors import registry
 from .csvdata import _read, write_csv
-from .data import DataError, check_time
+from .data import DataError
 
 #: Optional column: when the measurement reached the navigator [s].
 ARRIVAL = "t_arrival_s"
@@ -50,7 +50,7 @@ def read_sensor_csv(name: str, path) -> SensorData:
     if not spec.columns:
         raise DataError(f"sensor '{name}' declares no file columns")
     head = columns(name)
-    src, df = _read(path, f"{name} sensor", head)
+    src, df = _read(path, f"{name} sensor", head, numeric=(ARRIVAL,))
     t = df["t_s"].to_numpy(float)
     z = np.column_stack([df[c.name].to_numpy(float) * c.to_si for c in spec.columns])
     ta = None
@@ -60,18 +60,23 @@ def read_sensor_csv(name: str, path) -> SensorData:
     if ta is not None:
         ok &= np.isfinite(ta)
     quality = {f"{name}_rows_dropped": int((~ok).sum())}
+    rows = np.flatnonzero(ok) + 1  # data row numbers in the file
     t, z = t[ok], z[ok]
     if not len(t):
         raise DataError(f"{src}: no row with every value of {', '.join(head)} finite")
     if len(t) > 1:
-        check_time(src, t, "t_s")
+        d = np.diff(t)
+        if np.any(d <= 0):
+            i = int(np.argmax(d <= 0)) + 1
+            raise DataError(f"{src}: column 't_s' is not increasing at data row {rows[i]} "
+                            f"({t[i - 1]:.6f} s then {t[i]:.6f} s)")
     if ta is not None:
         ta = ta[ok]
         early = ta < t - 1e-9
         if early.any():
             i = int(np.argmax(early))
-            raise DataError(f"{src}: row {i + 1} arrives at {ta[i]:.6f} s, before the "
-                            f"time it describes ({t[i]:.6f} s)")
+            raise DataError(f"{src}: data row {rows[i]} arrives at {ta[i]:.6f} s, before "
+                            f"the time it describes ({t[i]:.6f} s)")
     for j, c in enumerate(spec.columns):
         if c.wrap_2pi:
             z[:, j] = np.mod(z[:, j], 2.0 * np.pi)

@@ -30,6 +30,10 @@ def _renamed(data):
     import warnings
 
     old = [k for k in data if k in _RENAMED]
+    both = [k for k in old if _RENAMED[k] in data]
+    if both:
+        raise ValueError(f"'{both[0]}' and '{_RENAMED[both[0]]}' are the same setting; give "
+                         f"it once")
     warnings.warn(f"launch scenario keys {', '.join(old)} are now "
                   f"{', '.join(_RENAMED[k] for k in old)} (the old names are read for one "
                   f"more release)", FutureWarning, stacklevel=2)

@@ -71,6 +71,9 @@ def why_not_compiled(system, sensors: list, specs: dict) -> str | None:
     for a in sensors:
         if not specs[a].compiled:
             return f"sensor '{a}' (its model is Python)"
+        model = system.sensors[a].model()
+        if model.dim > 6 or (len(model.zindex) and int(max(model.zindex)) >= 6):
+            return f"sensor '{a}' (more than 6 rows or values)"
         how = system.sensors[a].timing.delay_compensation
         if how not in HOWS:
             return f"delay compensation '{how}' ({a})"

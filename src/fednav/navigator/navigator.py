@@ -162,11 +162,12 @@ class Navigator:
     transition and noise and each epoch's correction (what the IMU-rate sigmas and the
     smoother need); a Monte Carlo run that reads only the epochs turns both off.
     ``innovations``: keep every measurement's innovation (what ``fednav tune`` reads).
-    ``hold_s``: how long after an epoch its measurements may still arrive.  ``engine``:
+    ``hold_s``: how long after an epoch its measurements may still arrive.
     ``mechanization``: a core of the caller's (:class:`~fednav.navigator.loop.
     Mechanization`, e.g. paper 001's launch frame) flown instead of the ENU error-state
     INS, with its federation and measurement models (``initial`` is then None; the loop is
-    Python).  ``engine``:
+    Python).  The total-state and caller's cores record no IMU-rate rows or interval
+    covariances (``record_rows`` and ``record_covariance`` are off for them).  ``engine``:
     ``auto`` (compiled when every part of the system has a compiled form, else Python;
     the environment variable ``FEDNAV_ENGINE`` can set it for a whole program, e.g. to
     compare the two), ``compiled`` or ``python`` (:attr:`engine` says which runs and
@@ -185,6 +186,8 @@ class Navigator:
         self.T = self.n_per * self.dt
         self.t0 = float(initial.t if mechanization is None else mechanization.t0)
         self.hold_s = float(hold_s)
+        if mechanization is not None or f.state == "total":
+            record_rows = record_covariance = False  # (these cores make neither)
         self.record_rows = record_rows
         self.aiding = system.aiding_sensors()
         self.quality = {"late_measurements_dropped": 0}
@@ -196,6 +199,8 @@ class Navigator:
                                  np.asarray(initial.euler, dtype=float), self.dt, loop)
         else:
             self.ins = mechanization.core.ins
+        self._damping = getattr(self.ins, "baro", None) is not None
+        self._total = mechanization is None and f.state == "total"
         self._imu_dth = Growing((3,))
         self._imu_dv = Growing((3,))
         self._h_ref = Growing((), np.nan)
@@ -235,6 +240,8 @@ class Navigator:
             self.engine, self.why_python = "compiled", None
             self._free = Growing((len(self.ins.state),))
             self._free.append(self.ins.state)
+            self._free_comp = tuple(np.zeros(3) if b is None else np.asarray(b, dtype=float)
+                                    for b in (initial.gyro_bias, initial.accel_bias))
             return
         if total:
             from .total import total_state_ukf
@@ -248,8 +255,12 @@ class Navigator:
                 fixed=f.fixed_factors, reset=True, fdi_alpha=f.fdi_alpha,
                 fdi_recovery=f.fdi_recovery)
         else:
-            baro_q = (baro.sigma_m**2 * baro.period_s
-                      if baro is not None and baro.damping_loop else 0.0)
+            baro_q = 0.0
+            if baro is not None and baro.damping_loop:
+                if baro.period_s is None:
+                    raise ValueError("sensors.baro.period_s: the damping loop's noise needs "
+                                     "the barometer's period")
+                baro_q = baro.sigma_m**2 * baro.period_s
             core = ErrorStateCore(self.ins, noise, self.T, f.substeps, baro_q,
                                   np.zeros(3) if initial.gyro_bias is None
                                   else initial.gyro_bias,
@@ -341,10 +352,11 @@ class Navigator:
         ``z`` in the sensor's layout, its noise as 1-sigma ``sigma`` of each component of
         ``z`` or as the residual covariance ``R``; neither: the system's figure."""
         m = self._meas.get(sensor)
-        if R is not None and m is not None and m.how != "recompute" and len(m):
+        if R is not None and m is not None and m.how != "recompute" and len(m) and not (
+                sensor == "baro" and self._damping) and not self._total:
             # the common case of a stream: one value with its noise, appended in place
             ta = float(t if t_arrival is None else t_arrival)
-            x = ta - 1e-9  # (the epoch of _epoch_of, for one time)
+            x = ta - max(1e-9, 4.0 * math.ulp(abs(ta)))  # (as _epoch_of, for one time)
             k = max(math.ceil((x - self.t0) / self.T), 0)
             k -= k > 0 and self.t0 + self.T * (k - 1) >= x
             k += self.t0 + self.T * k < x
@@ -366,7 +378,7 @@ class Navigator:
         t = np.asarray(t, dtype=float).ravel()
         z = np.asarray(z, dtype=float).reshape(len(t), -1)
         ta = t if t_arrival is None else np.asarray(t_arrival, dtype=float).ravel()
-        if sensor == "baro" and getattr(self.ins, "baro", None) is not None:
+        if sensor == "baro" and self._damping:
             self._baro_heights(t, z[:, 0])
         m = self._meas.get(sensor)
         if m is None:
@@ -378,6 +390,9 @@ class Navigator:
                 raise ValueError(f"unknown sensor '{sensor}'; registered: "
                                  f"{', '.join(sorted(SENSORS))}")
         cfg = self.system.sensors[sensor]
+        if self._total and R is not None and sigma is None:
+            raise ValueError(f"{sensor}: the total-state navigator takes each measurement's "
+                             f"noise as sigma, not R")
         if sigma is None and R is None:
             sigma = cfg.sigma()
             if sigma is None:
@@ -423,18 +438,22 @@ class Navigator:
 
     def _epoch_of(self, t) -> np.ndarray:
         """The epoch at or after each time (0: at or before the start): the first ``k``
-        with ``t0 + k T >= t - 1e-9`` on the epoch grid as computed."""
-        x = np.asarray(t, dtype=float) - 1e-9
+        with ``t0 + k T >= t - tol`` on the epoch grid as computed (``tol`` 1 ns, or four
+        units in the last place of large time stamps such as Unix time)."""
+        t = np.asarray(t, dtype=float)
+        x = t - np.maximum(1e-9, 4.0 * np.spacing(np.abs(t)))
         k = np.maximum(np.ceil((x - self.t0) / self.T), 0.0).astype(np.int64)
         k -= (k > 0) & (self.t0 + self.T * (k - 1) >= x)  # rounding at a grid point
         k += self.t0 + self.T * k < x
         return k
 
     def _baro_heights(self, t, h) -> None:
-        """Baro heights for the vertical-channel loop at the IMU sample that starts at
-        their time (the loop holds the last INS - baro difference)."""
-        idx = np.rint((t - self.t0) / self.dt).astype(int)
-        ok = (idx >= 0) & (np.abs(self.t0 + idx * self.dt - t) < 1e-6)
+        """Baro heights for the vertical-channel loop at the IMU sample whose interval holds
+        their time (the loop holds the last INS - baro difference; a height measured
+        between samples is used from the start of its sample, less than one IMU period
+        early)."""
+        idx = np.floor((np.asarray(t, dtype=float) - self.t0) / self.dt + 1e-6).astype(int)
+        ok = idx >= 0
         need = int(idx[ok].max()) + 1 if ok.any() else 0
         if need > self._h_ref.n:
             self._h_ref.grow(need - self._h_ref.n)
@@ -512,9 +531,10 @@ class Navigator:
                           self._h_ref.view[sl], *self._schedule(done, k_max))
             return
         if self.loop is None:  # a free INS: every interval in one compiled call
+            gb, ab = self._free_comp
             self._free.extend(self.ins.run_intervals(
-                self._imu_dth.view[sl], self._imu_dv.view[sl], self._h_ref.view[sl],
-                self.n_per))
+                self._imu_dth.view[sl] - gb * self.dt, self._imu_dv.view[sl] - ab * self.dt,
+                self._h_ref.view[sl], self.n_per))
             return
         for k in range(done + 1, k_max + 1):
             dth, dv, h_ref = self._imu(k)
@@ -561,8 +581,7 @@ class Navigator:
         sl = slice(k * self.n_per, n)
         if n > k * self.n_per:
             loop = self.loop
-            comp_g = np.zeros(3) if loop is None else loop.comp_g
-            comp_a = np.zeros(3) if loop is None else loop.comp_a
+            comp_g, comp_a = self._free_comp if loop is None else (loop.comp_g, loop.comp_a)
             tmp.run(self._imu_dth.view[sl] - comp_g * self.dt,
                     self._imu_dv.view[sl] - comp_a * self.dt, self._h_ref.view[sl],
                     record=False)

@@ -60,6 +60,8 @@ def imu_rate(res, smooth: bool = False) -> tuple[Solution, Solution | None]:
         raise ValueError("the IMU-rate solution needs a navigator built with "
                          "record_rows=True and record_covariance=True")
     n_cycles = len(res.states) - 1
+    if n_cycles < 1:
+        raise ValueError("the IMU-rate solution needs one complete filter epoch; none yet")
     n_rows = len(res.rows["q"])
     n_per = (n_rows - 1) // max(n_cycles, 1)
     rows_q, rows_v, rows_p = res.rows["q"], res.rows["vel"], res.rows["lla"]

@@ -77,10 +77,11 @@ class FilterConfig(_Model):
     sensor): equal, fixed (``fixed_factors``) or adaptive (paper 002, eq. 13).  ``reset``:
     fusion-reset every epoch.  ``fdi_alpha``: chi-square fault detection level, one for
     every local filter or by name; ``fdi_recovery``: passes in a row before an isolated
-    local filter returns.  ``period_s``: the filter epoch (default: the period of the
-    first aiding sensor's data).  ``substeps`` of the nonlinear error propagation;
-    ``alpha``, ``beta``, ``kappa`` of the unscented transform; ``grid_level`` of the
-    sparse-grid filters.  ``accel_bias``: the filter's accelerometer-bias state —
+    local filter returns.  ``period_s``: the filter epoch (default: every IMU sample
+    for a navigator, the GNSS period for ``fednav process``; scenarios state it).
+    ``substeps`` of the nonlinear error propagation; ``alpha``, ``beta``, ``kappa`` of the
+    unscented transform; ``grid_level`` of the sparse-grid filters.  ``accel_bias``: the
+    filter's accelerometer-bias state —
     ``random_walk`` (a random constant, 1-sigma ``hypot(bias, markov)``, driven by the
     random walk whose short-term growth equals the Gauss–Markov process's) or
     ``gauss_markov`` (the Gauss–Markov process with its correlation time; 1-sigma

@@ -274,6 +274,8 @@ def _other_sensor(data: SensorData, cfg: System):
                             ) from None
     if spec.aiding and sc.sigma() is None:
         raise DataError(f"{data.source}: sensors.{data.name} gives no noise figure")
+    if sc.period_s is None and len(data.t) > 1:  # the data's own
+        sc = sc.model_copy(update={"period_s": float(np.median(np.diff(data.t)))})
     return sc
 
 
@@ -285,8 +287,13 @@ def prepare(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
     from :func:`~fednav.io.read_sensor_csv`); their noise comes from the system
     description."""
     cfg = cfg or System()
+    if cfg.filter.state != "error":
+        raise DataError("filter.state: fednav process flies the error-state filter (the "
+                        "total-state navigator has no IMU-rate solution or smoother)")
     others = dict(sensors or {})
     for name, d in others.items():
+        if name != d.name:
+            raise DataError(f"{d.source}: {d.name} data given as sensor '{name}'")
         if name in ("gnss", "velocity"):
             raise DataError(f"{d.source}: {name} data is given as its own argument")
     dt = imu.period()
@@ -333,6 +340,13 @@ def prepare(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
         sensors[name] = _other_sensor(d, cfg)
     have = [n for n in sensors if registry.spec(n).aiding]
     aiding = have if cfg.aiding is None else [n for n in cfg.aiding if n in have]
+    for name, d in others.items():
+        damps = name == "baro" and sensors[name].damping_loop
+        wind = name == "airdata" and cfg.constraint == "wind"
+        if name not in aiding and not damps and not wind:
+            why = ("air data feed only the wind constraint (constraint: wind)"
+                   if name == "airdata" else "it is not in the system's aiding list")
+            warnings.append(f"{d.source}: not used ({why})")
     if not aiding:
         raise DataError(f"the system's aiding list {cfg.aiding} names none of the sensors "
                         f"given ({', '.join(have)})")

@@ -10,7 +10,7 @@ from .base import MeasurementSeries, sample_times
 from .faults import Fault, inject_faults
 from .gnss import Gnss, GnssConfig, GnssPosVel
 from .imu import ImuConfig, ImuErrors, ImuErrorState, corrupt_imu
-from .measurement import NavSnapshot, StackedModel
+from .measurement import NavSnapshot, StackedModel, euler_error_nb
 from .sar import SarConfig, SarFix, SarMatcher
 from .sarvel import SarVelocity, SarVelocityConfig, SarVelocityEN
 from .spec import Column, SensorConfig, SensorSpec
@@ -25,7 +25,7 @@ __all__ = ["AirData", "AirDataConfig", "BaroConfig", "BaroHeight", "Barometer", 
            "SensorSpec", "StackedModel", "StarAttitude", "StarConfig", "StarSensor",
            "TimingConfig", "VelocityConfig", "VelocityENU", "VelocitySensor", "WindConstraint",
            "corrupt_imu", "inject_faults", "measurement_times", "sample_times",
-           "sequential_times"]
+           "euler_error_nb", "sequential_times"]
 
 #: One model of each aiding sensor with default settings (no lever arm), by name —
 #: fednav 0.1's ``fednav.measurements.MODELS``; build a configured one with

@@ -34,20 +34,6 @@ class Barometer:
         z = h + rng.standard_normal(len(t)) * self.sigma
         return MeasurementSeries("baro", t, z[:, None], np.array([self.sigma]), t_avail)
 
-    @staticmethod
-    def on_imu_grid(series: MeasurementSeries, t_imu: np.ndarray) -> np.ndarray:
-        """Baro heights placed on the IMU sample grid for the damping loop.
-
-        Sample k of the result (covering ``(t_imu[k], t_imu[k+1]]``) holds the baro height
-        measured at ``t_imu[k]``, NaN elsewhere.  ``t_imu`` are the IMU interval start times.
-        """
-        out = np.full(len(t_imu), np.nan)
-        idx = np.searchsorted(t_imu, series.t - 1e-9)
-        ok = (idx < len(t_imu)) & (np.abs(t_imu[np.minimum(idx, len(t_imu) - 1)] - series.t)
-                                   < 1e-6)
-        out[idx[ok]] = series.z[ok, 0]
-        return out
-
 
 class BaroHeight(RowModel):
     """Barometric altimeter as a filter measurement: residual = h(INS) - h(baro) [m]."""

@@ -13,7 +13,7 @@ first epoch ``t_k`` after it is available.  The strategies (per sensor, see
   increments are those of the mechanization alone (the filter's feedback corrections in
   between are not motion and are excluded), for position, velocity and attitude;
 * ``recompute`` — re-run the filter from the capture epoch with the stored IMU data
-  (:func:`fednav.sim.runs.run_mode`); the measurement is used at the first epoch after
+  (the navigator's ``_advance``); the measurement is used at the first epoch after
   ``t_c`` with the fractional increment above (the previous interval's).
 """
 
@@ -24,9 +24,6 @@ import numpy as np
 from ..core import earth
 from ..core.attitude import dcm_to_rotvec, rotvec_to_dcm
 from .measurement import NavSnapshot
-
-#: Components of each sensor's z that are angles (unwrapped before curve fitting).
-ANGLE_COLUMNS = {"sar": (2,), "star": (0, 1, 2)}
 
 
 class InsIncrements:

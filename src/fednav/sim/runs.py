@@ -17,9 +17,10 @@ from ..core import attitude as att
 from ..core import earth, units
 from ..ins import error_model as em
 from ..ins.strapdown import STATE_LLA, STATE_Q, STATE_VEL
+from ..navigator.navigator import TOTAL_MODELS  # noqa: F401  (0.1's fednav.simulate names)
 from ..navigator.system import imu_noise_model
+from ..navigator.total import total_state_models  # noqa: F401
 from ..sensors import (
-    Barometer,
     MeasurementSeries,
     corrupt_imu,
     inject_faults,
@@ -36,7 +37,6 @@ class RunData:
     dtheta: np.ndarray
     dv: np.ndarray
     series: dict[str, MeasurementSeries]
-    h_ref: np.ndarray
     init_phi: np.ndarray
     init_dv: np.ndarray
     init_dp: np.ndarray
@@ -79,10 +79,7 @@ def make_run_data(scn: Scenario, seed: int, max_time: float | None = None) -> Ru
         cfg = scn.sensors.get(name)
         if cfg is not None:
             series[name] = inject_faults(cfg.simulate(truth, rng, name), faults)
-    baro = scn.sensors.baro
-    h_ref = (Barometer.on_imu_grid(series["baro"], truth.t[:-1])
-             if baro is not None and baro.damping_loop else np.full(len(truth.t) - 1, np.nan))
-    return RunData(seed, dth, dv, series, h_ref, init_phi, init_dv, init_dp)
+    return RunData(seed, dth, dv, series, init_phi, init_dv, init_dp)
 
 
 def initial_covariance(scn: Scenario) -> np.ndarray:

@@ -18,10 +18,25 @@ import numpy as np
 from pydantic import Field, field_validator, model_validator
 
 from ..core import units
-from ..core.config import ConfigError, _Model, load_model  # noqa: F401
-from ..navigator.system import System
-from ..sensors import Fault
+from ..core.config import (  # noqa: F401
+    ConfigError,
+    _Model,
+    load_model,
+    read_text_file,  # noqa: F401  (0.1's fednav.config names)
+)
+from ..navigator.system import FilterConfig, System  # noqa: F401
+from ..sensors import (  # noqa: F401  (0.1's fednav.config names)
+    AirDataConfig,
+    BaroConfig,
+    Fault,
+    GnssConfig,
+    SarConfig,
+    SarVelocityConfig,
+    StarConfig,
+    TimingConfig,
+)
 from ..sensors.imu import ImuConfig  # noqa: F401  (the section's class, for its users)
+from ..sensors.registry import SensorSet as SensorsConfig  # noqa: F401  (0.1's name)
 from ..sensors.registry import check_names
 from ..sensors.timing import DELAY_COMPENSATIONS
 from .trajectory import Segment
@@ -175,6 +190,12 @@ class Scenario(System):
     fault_experiment: FaultExperimentConfig | None = None
     stats_period_s: float = Field(default=1.0, gt=0.0)
     wind: WindConfig | None = None  # segments then describe the flight through the air
+
+    @model_validator(mode="after")
+    def _filter_period_stated(self):
+        if self.filter.period_s is None:
+            raise ValueError("filter.period_s: a scenario states its filter period")
+        return self
 
     @model_validator(mode="after")
     def _constraint_needs_air_data(self):
