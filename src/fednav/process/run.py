@@ -395,7 +395,6 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
 def solution(res, prep: Prepared, smooth: bool = False) -> ProcessResult:
     """The IMU-rate forward solution (and the smoothed one) of a navigator's result on
     prepared recorded data."""
-    res.rows["omega"][0] = prep.gyro[0]  # the raw rate of the first sample
     forward, smoothed = imu_rate(res, smooth or prep.system.smoother)
     return ProcessResult(forward, smoothed, 0.0, len(res.states) - 1, dict(prep.quality),
                          list(prep.warnings), prep.alignment.report)
