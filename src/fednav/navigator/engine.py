@@ -392,7 +392,8 @@ class CompiledLoop:
         rec = self.rec
         e0 = rec.states.n
         for g in self._outs:
-            g._room(n_ep)
+            if g.n + n_ep > len(g.a):
+                g._room(n_ep)
         n_rows = n_ep * self.n_per if self.record_rows else 0
         out_rows = self._none_rows
         if n_rows:

@@ -48,7 +48,8 @@ class Growing:
         self.n += m
 
     def append(self, item) -> None:
-        self._room(1)
+        if self.n == len(self.a):
+            self._room(1)
         self.a[self.n] = item
         self.n += 1
 
