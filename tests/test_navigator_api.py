@@ -69,14 +69,26 @@ def _batch(prep, engine="auto") -> NavResult:
     return prep.feed(prep.navigator(engine=engine)).result()
 
 
-def _same(a: NavResult, b: NavResult):
-    assert len(a.t) == len(b.t)
-    np.testing.assert_allclose(a.states, b.states, rtol=RTOL, atol=0)
-    np.testing.assert_allclose(a.P, b.P, rtol=RTOL, atol=1e-300)
-    for k in a.rows:
-        np.testing.assert_allclose(a.rows[k], b.rows[k], rtol=RTOL, atol=1e-12)
-    assert [e[:2] for e in a.fdi] == [e[:2] for e in b.fdi]
-    np.testing.assert_allclose([e[2] for e in a.fdi], [e[2] for e in b.fdi], rtol=RTOL)
+def _differences(a: NavResult, b: NavResult) -> list[str]:
+    """What differs between two results beyond 1e-9 relative: epochs, states, covariances,
+    IMU-rate rows, the FDI log (empty when they are the same)."""
+    def close(x, y, atol):
+        x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+        return x.shape == y.shape and bool(np.all(np.abs(x - y) <= atol + RTOL * np.abs(y)))
+
+    out = []
+    if len(a.t) != len(b.t):
+        return [f"epochs {len(a.t)} vs {len(b.t)}"]
+    for name, x, y, atol in (("states", a.states, b.states, 0.0), ("P", a.P, b.P, 1e-300),
+                             *((f"rows {k}", a.rows[k], b.rows[k], 1e-12)
+                               for k in (a.rows or {})),
+                             ("fdi statistics", [e[2] for e in a.fdi],
+                              [e[2] for e in b.fdi], 0.0)):
+        if not close(x, y, atol):
+            out.append(name)
+    if [e[:2] for e in a.fdi] != [e[:2] for e in b.fdi]:
+        out.append("fdi times and filters")
+    return out
 
 
 @pytest.mark.parametrize("block", [1, 7, 100])
@@ -85,7 +97,7 @@ def test_stream_equals_batch_compiled(drive, block):
     ref = _batch(prep)
     assert ref.engine == "compiled"
     res, _ = _stream(prep, block)
-    _same(res, ref)
+    assert not _differences(res, ref)
 
 
 def test_late_out_of_order_measurements_within_hold_equal_batch(drive):
@@ -93,7 +105,7 @@ def test_late_out_of_order_measurements_within_hold_equal_batch(drive):
     ref = _batch(prep)
     res, _ = _stream(prep, 1, delay_s=0.9, hold_s=1.0, seed=4)
     assert res.data_quality["late_measurements_dropped"] == 0
-    _same(res, ref)
+    assert not _differences(res, ref)
 
 
 def test_measurements_later_than_hold_are_dropped_and_counted(drive):
@@ -108,16 +120,17 @@ def test_stream_equals_batch_in_the_python_loop(drive):
     ref = _batch(prep)
     assert ref.engine == "python"
     res, _ = _stream(prep, 1, delay_s=0.5, hold_s=0.6, seed=2)
-    _same(res, ref)
+    assert not _differences(res, ref)
     res, _ = _stream(prep, 33)
-    _same(res, ref)
+    assert not _differences(res, ref)
 
 
 def test_python_loop_equals_the_compiled_engine_on_the_stream(drive):
     prep = _prep(drive, 40.0)
     a, _ = _stream(prep, 10, engine="python")
     b, _ = _stream(prep, 10, engine="compiled")
-    _same(a, b)
+    assert (a.engine, b.engine) == ("python", "compiled")
+    assert not _differences(a, b)
 
 
 def test_solution_mid_stream_is_the_rows_of_the_result(drive):
@@ -196,7 +209,9 @@ def test_a_damping_barometer_streamed_one_value_at_a_time_equals_the_batch(drive
         nav.add_imu(prep.t[i], prep.gyro[i], prep.accel[i])
     for _, name, t, z, r in ev[j:]:  # (those of the last epoch's time)
         nav.add_measurement(name, t, z, R=r)
-    _same(nav.result(), ref)
+    res = nav.result()
+    assert np.isfinite(nav._h_ref.view).sum() == len(d.t)  # every height reached the loop
+    assert not _differences(res, ref)
 
 
 def test_baro_heights_between_imu_samples_feed_the_damping_loop(drive):

@@ -16,14 +16,11 @@ from .navigator.system import System, load_system  # noqa: E402
 __all__ = ["InitialState", "NavResult", "Navigator", "Snapshot", "Solution", "System",
            "load_system"]
 
-_LAZY = {"InitialState": "navigator", "NavResult": "navigator", "Navigator": "navigator",
-         "Snapshot": "navigator", "Solution": "solution"}
-
 
 def __getattr__(name: str):
     """The navigator's names, imported on first use (``fednav --help`` stays quick)."""
-    if name in _LAZY:
-        import importlib
+    from . import navigator
 
-        return getattr(importlib.import_module(f".navigator.{_LAZY[name]}", __name__), name)
+    if name in navigator.__all__:
+        return getattr(navigator, name)
     raise AttributeError(f"module 'fednav' has no attribute '{name}'")

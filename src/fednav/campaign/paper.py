@@ -13,6 +13,7 @@ files, and ``summary.json`` last (its presence means the run finished).
 from __future__ import annotations
 
 import json
+from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -33,7 +34,7 @@ class Unit:
     args: tuple
 
 
-class Paper:
+class Paper(ABC):
     """A paper's experiment.
 
     Attributes: ``number`` ("002"), ``tables`` (the paper's published values: table ->
@@ -49,15 +50,15 @@ class Paper:
     options: tuple[str, ...] = ()
 
     # ------------------------------------------------------------------ the experiment
+    @abstractmethod
     def load_scenario(self, path=None):
         """The packaged scenario (or another file of the same layout)."""
-        raise NotImplementedError
 
+    @abstractmethod
     def units(self, scn, runs: int, seed: int, max_time: float | None = None,
               **options) -> list[Unit]:
         """Every unit of work of a reproduction, in the order they are handed out (the
         long ones first)."""
-        raise NotImplementedError
 
     @staticmethod
     def per_seed(fn: Callable, scn, runs: int, seed: int, max_time: float | None,
@@ -65,13 +66,13 @@ class Paper:
         """``fn((scn, seed + i, max_time, *extra))`` for the ``runs`` Monte Carlo runs."""
         return [Unit(fn, (scn, seed + i, max_time, *extra)) for i in range(runs)]
 
+    @abstractmethod
     def summarize(self, scn, runs: int, seed: int, max_time: float | None, results: list,
                   **options) -> dict:
         """The report from the units' results (in :meth:`units` order): ``rows`` (one
         dict per run and mode, ``runs.csv``), ``series`` (the first run's error series,
         by mode), ``summary`` (the tables, ``summary.json``) and whatever the paper's
         plots and files read."""
-        raise NotImplementedError
 
     def reproduce(self, scn, runs: int, seed: int, jobs: int = 1,
                   max_time: float | None = None, progress=None, campaign=None,

@@ -31,6 +31,7 @@ import os
 from dataclasses import dataclass, field
 from functools import cached_property
 
+import numba
 import numpy as np
 
 from ..core import attitude as att
@@ -51,6 +52,22 @@ from .loop import (
 from .record import Growing
 from .system import System, imu_noise_model
 from .total import NAV_BIAS
+
+
+@numba.vectorize(["int64(float64, float64, float64)"], cache=True)
+def epoch_at(t, t0, T):
+    """The filter epoch at or after time ``t`` (0: at or before the start ``t0``): the
+    first ``k`` with ``t0 + k T >= t - tol`` on the epoch grid as computed (``tol`` 1 ns,
+    or four units in the last place of large time stamps such as Unix time).  One
+    compiled source for one time (a stream) and for arrays (a batch)."""
+    x = t - max(1e-9, 4.0 * np.spacing(abs(t)))
+    k = max(math.ceil((x - t0) / T), 0)
+    if k > 0 and t0 + T * (k - 1) >= x:  # rounding at a grid point
+        k -= 1
+    if t0 + T * k < x:
+        k += 1
+    return k
+
 
 #: Measurement models of the total-state navigator, by sensor.
 TOTAL_MODELS = {"gnss": GnssTotal(), "star": StarTotal()}
@@ -200,7 +217,7 @@ class Navigator:
         else:
             self.ins = mechanization.core.ins
         self._damping = getattr(self.ins, "baro", None) is not None
-        self._total = mechanization is None and f.state == "total"
+        total = self._total = mechanization is None and f.state == "total"
         self._imu_dth = Growing((3,))
         self._imu_dv = Growing((3,))
         self._h_ref = Growing((), np.nan)
@@ -208,7 +225,6 @@ class Navigator:
         self._meas: dict[str, Meas] = {}
         self._bucket: dict[str, dict[int, list[int]]] = {}  # sensor -> epoch -> indices
         self._snaps: dict[int, tuple] = {}  # epoch -> loop snapshot (recompute)
-        total = f.state == "total"
         for a in self.aiding:
             cfg = system.sensors[a]
             if total and a not in TOTAL_MODELS:
@@ -235,13 +251,14 @@ class Navigator:
         noise, _, _ = imu_noise_model(system, self.dt, imu_errors)
         self.noise = noise
         P0 = np.asarray(initial.P0, dtype=float)
+        comp0 = tuple(np.zeros(3) if b is None else np.asarray(b, dtype=float)
+                      for b in (initial.gyro_bias, initial.accel_bias))
         if not self.aiding:
             self.loop = None  # a free INS
             self.engine, self.why_python = "compiled", None
             self._free = Growing((len(self.ins.state),))
             self._free.append(self.ins.state)
-            self._free_comp = tuple(np.zeros(3) if b is None else np.asarray(b, dtype=float)
-                                    for b in (initial.gyro_bias, initial.accel_bias))
+            self._free_comp = comp0
             return
         if total:
             from .total import total_state_ukf
@@ -261,11 +278,7 @@ class Navigator:
                     raise ValueError("sensors.baro.period_s: the damping loop's noise needs "
                                      "the barometer's period")
                 baro_q = baro.sigma_m**2 * baro.period_s
-            core = ErrorStateCore(self.ins, noise, self.T, f.substeps, baro_q,
-                                  np.zeros(3) if initial.gyro_bias is None
-                                  else initial.gyro_bias,
-                                  np.zeros(3) if initial.accel_bias is None
-                                  else initial.accel_bias)
+            core = ErrorStateCore(self.ins, noise, self.T, f.substeps, baro_q, *comp0)
             central = f.architecture == "centralized"
             names = ["central"] if central else self.aiding
             fed = build_federation(system, names, P0, em.N_STATES)
@@ -352,14 +365,13 @@ class Navigator:
         ``z`` in the sensor's layout, its noise as 1-sigma ``sigma`` of each component of
         ``z`` or as the residual covariance ``R``; neither: the system's figure."""
         m = self._meas.get(sensor)
-        if R is not None and m is not None and m.how != "recompute" and len(m) and not (
-                sensor == "baro" and self._damping) and not self._total:
+        if R is not None and m is not None and m.how != "recompute" and len(m) \
+                and not self._total:
             # the common case of a stream: one value with its noise, appended in place
+            if sensor == "baro" and self._damping:  # (as add_measurements: kept if late)
+                self._baro_heights(np.array([float(t)]), np.ravel(z)[:1])
             ta = float(t if t_arrival is None else t_arrival)
-            x = ta - max(1e-9, 4.0 * math.ulp(abs(ta)))  # (as _epoch_of, for one time)
-            k = max(math.ceil((x - self.t0) / self.T), 0)
-            k -= k > 0 and self.t0 + self.T * (k - 1) >= x
-            k += self.t0 + self.T * k < x
+            k = int(epoch_at(ta, self.t0, self.T))
             if self.loop is not None and 0 < k <= self.loop.k:
                 self.quality["late_measurements_dropped"] += 1
                 return
@@ -437,15 +449,8 @@ class Navigator:
                               t_arrival=series.t_avail)
 
     def _epoch_of(self, t) -> np.ndarray:
-        """The epoch at or after each time (0: at or before the start): the first ``k``
-        with ``t0 + k T >= t - tol`` on the epoch grid as computed (``tol`` 1 ns, or four
-        units in the last place of large time stamps such as Unix time)."""
-        t = np.asarray(t, dtype=float)
-        x = t - np.maximum(1e-9, 4.0 * np.spacing(np.abs(t)))
-        k = np.maximum(np.ceil((x - self.t0) / self.T), 0.0).astype(np.int64)
-        k -= (k > 0) & (self.t0 + self.T * (k - 1) >= x)  # rounding at a grid point
-        k += self.t0 + self.T * k < x
-        return k
+        """The epoch at or after each time (:func:`epoch_at`)."""
+        return epoch_at(np.asarray(t, dtype=float), self.t0, self.T)
 
     def _baro_heights(self, t, h) -> None:
         """Baro heights for the vertical-channel loop at the IMU sample whose interval holds

@@ -173,10 +173,14 @@ def euler_jacobian_rows(pitch, heading, H, row0, rows):
 
 
 @numba.njit(cache=True, inline="always")
-def lever_offsets(C, omega, lx, ly, lz):
-    """ENU offsets of a sensor at the body lever ``(lx, ly, lz)`` [m] from the IMU:
-    position ``C l`` [m] and velocity ``C (omega x l)`` [m/s] (the ``w_in x C l`` term,
-    < 1e-4 m/s per metre of lever, is left out)."""
+def lever_offsets(C, omega, lever):
+    """Whether the sensor sits away from the IMU, and the ENU offsets of its point at the
+    body ``lever`` [m]: position ``C l`` [m] and velocity ``C (omega x l)`` [m/s] (the
+    ``w_in x C l`` term, < 1e-4 m/s per metre of lever, is left out; zeros without a
+    lever)."""
+    lx, ly, lz = lever[0], lever[1], lever[2]
+    if lx == 0.0 and ly == 0.0 and lz == 0.0:
+        return False, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
     wx, wy, wz = omega[0], omega[1], omega[2]
     ux, uy, uz = wy * lz - wz * ly, wz * lx - wx * lz, wx * ly - wy * lx
     p = (C[0, 0] * lx + C[0, 1] * ly + C[0, 2] * lz,
@@ -185,7 +189,7 @@ def lever_offsets(C, omega, lx, ly, lz):
     v = (C[0, 0] * ux + C[0, 1] * uy + C[0, 2] * uz,
          C[1, 0] * ux + C[1, 1] * uy + C[1, 2] * uz,
          C[2, 0] * ux + C[2, 1] * uy + C[2, 2] * uz)
-    return p, v
+    return True, p, v
 
 
 @numba.njit(cache=True, inline="always")
@@ -202,11 +206,7 @@ def skew_row(H, r, which, a0, a1, a2, k):
 @numba.njit(cache=True)
 def row_residual(kinds, zindex, lla, vel, C, omega, z, lever, out):
     """The residual of each row (INS-derived - ``z``) into ``out``."""
-    has_lever = lever[0] != 0.0 or lever[1] != 0.0 or lever[2] != 0.0
-    if has_lever:
-        p, v = lever_offsets(C, omega, lever[0], lever[1], lever[2])
-    else:
-        p, v = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
+    has_lever, p, v = lever_offsets(C, omega, lever)
     pitch, roll, heading = euler_of(C)
     lat, lon, h = lla[0], lla[1], lla[2]
     rm, rn = earth.radii_nb(lat)
@@ -237,11 +237,7 @@ def row_jacobian(kinds, lla, vel, C, omega, lever, H):
     """The non-zero entries of each row of ``H`` (filter units; ``H`` zeroed by the
     caller): 1 on the position / velocity error, the lever arm's attitude coupling
     ``[(C l) x]`` / ``[(C (w x l)) x]``, the Euler-error Jacobian of attitude rows."""
-    has_lever = lever[0] != 0.0 or lever[1] != 0.0 or lever[2] != 0.0
-    if has_lever:
-        p, v = lever_offsets(C, omega, lever[0], lever[1], lever[2])
-    else:
-        p, v = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
+    has_lever, p, v = lever_offsets(C, omega, lever)
     pitch, _, heading = euler_of(C)
     one = np.zeros(1, dtype=np.int64)
     for r in range(kinds.shape[0]):

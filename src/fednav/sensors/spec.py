@@ -14,6 +14,7 @@ A sensor module holds, for one aiding sensor, everything fednav knows of it:
 
 from __future__ import annotations
 
+from abc import abstractmethod
 from dataclasses import dataclass
 
 import numpy as np
@@ -25,18 +26,19 @@ from .timing import TimingConfig, measurement_times
 
 
 class SensorConfig(_Model):
-    """Common to every sensor's section: its period (for simulation) and timing."""
+    """Common to every sensor's section: its period (for simulation) and timing; a
+    sensor's section gives its simulator (``sensor``) and measurement model (``model``)."""
 
     period_s: float | None = Field(default=None, gt=0.0)
     timing: TimingConfig = TimingConfig()
 
+    @abstractmethod
     def sensor(self):
         """The simulator of this sensor (a frozen dataclass with ``simulate``)."""
-        raise NotImplementedError
 
+    @abstractmethod
     def model(self):
         """The filter-side measurement model (residual, ``h``, ``H``, ``R``)."""
-        raise NotImplementedError
 
     def sigma(self) -> np.ndarray | None:
         """1-sigma of each component of ``z`` (the units of the sensor's series), or None
