@@ -54,12 +54,12 @@ from .system import System, imu_noise_model
 from .total import NAV_BIAS
 
 
-@numba.vectorize(["int64(float64, float64, float64)"], cache=True)
+@numba.njit(cache=True)
 def epoch_at(t, t0, T):
     """The filter epoch at or after time ``t`` (0: at or before the start ``t0``): the
     first ``k`` with ``t0 + k T >= t - tol`` on the epoch grid as computed (``tol`` 1 ns,
     or four units in the last place of large time stamps such as Unix time).  One
-    compiled source for one time (a stream) and for arrays (a batch)."""
+    compiled source for one time (a stream) and for arrays (:func:`epochs_at`)."""
     x = t - max(1e-9, 4.0 * np.spacing(abs(t)))
     k = max(math.ceil((x - t0) / T), 0)
     if k > 0 and t0 + T * (k - 1) >= x:  # rounding at a grid point
@@ -67,6 +67,15 @@ def epoch_at(t, t0, T):
     if t0 + T * k < x:
         k += 1
     return k
+
+
+@numba.njit(cache=True)
+def epochs_at(t, t0, T):
+    """:func:`epoch_at` of every time of ``t`` (1-D)."""
+    out = np.empty(t.shape[0], dtype=np.int64)
+    for i in range(t.shape[0]):
+        out[i] = epoch_at(t[i], t0, T)
+    return out
 
 
 #: Measurement models of the total-state navigator, by sensor.
@@ -450,7 +459,8 @@ class Navigator:
 
     def _epoch_of(self, t) -> np.ndarray:
         """The epoch at or after each time (:func:`epoch_at`)."""
-        return epoch_at(np.asarray(t, dtype=float), self.t0, self.T)
+        t = np.asarray(t, dtype=float)
+        return epochs_at(np.ascontiguousarray(t.ravel()), self.t0, self.T).reshape(t.shape)
 
     def _baro_heights(self, t, h) -> None:
         """Baro heights for the vertical-channel loop at the IMU sample whose interval holds
