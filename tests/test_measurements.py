@@ -166,3 +166,44 @@ def test_wind_constraint_matches_truth(euler):
     np.testing.assert_allclose(lin, d, atol=2e-4)
     assert np.abs(d - dx[3:5]).max() > 0.03  # the heading term matters (catches its sign)
     del C
+
+
+@pytest.mark.parametrize("euler", EULERS)
+def test_body_velocity_models_match_truth(euler):
+    """Odometer / DVL rows: the INS-derived body velocity of a point at a lever arm minus
+    the true one equals H dx to first order (sign and frame of the attitude coupling)."""
+    from fednav.sensors.bodyvel import DvlVelocity, OdometerSpeed
+
+    rng = np.random.default_rng(3)
+    dx = np.zeros(18)
+    dx[em.PHI] = units.arcsec(rng.uniform(-60, 60, 3))
+    dx[em.DV] = rng.uniform(-0.2, 0.2, 3)
+    lever = np.array([0.4, 1.2, -0.5])
+    omega = np.array([0.05, -0.02, 0.3])
+    lla, C, nav = perturbed_nav(euler, dx)
+    nav.omega_b = omega
+    v_true = np.array([200.0, 150.0, 5.0])
+    vb = C.T @ v_true + np.cross(omega, lever)   # the truth the sensor measures
+    xf = em.from_si(dx)
+    for m, z in ((DvlVelocity(lever), vb), (OdometerSpeed(lever), vb[1:2])):
+        y = m.residual(nav, z)
+        # the residual is what the error state predicts, to second order (|phi|^2 |v|,
+        # |phi| |dv|: ~3e-5 m/s here) ...
+        np.testing.assert_allclose(m.H(nav) @ xf, y, rtol=2e-3, atol=6e-5)
+        np.testing.assert_allclose(m.h(xf[None], nav)[0], m.H(nav) @ xf, atol=1e-12)
+        # ... and it is the body-frame difference, not an ENU one
+        C_hat = nav.C
+        np.testing.assert_allclose(y, (C_hat.T @ nav.vel + np.cross(omega, lever)
+                                       )[[0, 1, 2] if m.dim == 3 else [1]] - z, atol=1e-9)
+    assert DvlVelocity(lever).linear and OdometerSpeed().dim == 1
+
+
+def test_zupt_model_is_the_ins_velocity():
+    from fednav.sensors.bodyvel import ZeroVelocity
+
+    dx = np.zeros(18)
+    dx[em.DV] = [0.1, -0.2, 0.05]
+    lla, C, nav = perturbed_nav([0.0, 0.0, 1.0], dx, vel=(0.0, 0.0, 0.0))
+    m = ZeroVelocity()
+    np.testing.assert_allclose(m.residual(nav, np.zeros(3)), [0.1, -0.2, 0.05])
+    np.testing.assert_allclose(m.H(nav) @ em.from_si(dx), [0.1, -0.2, 0.05])

@@ -33,13 +33,17 @@ from .data import (
 
 IMU_COLUMNS = ("t_s", "gyro_x_radps", "gyro_y_radps", "gyro_z_radps", "accel_x_mps2",
                "accel_y_mps2", "accel_z_mps2")
+#: IMU increments over the interval that ends at ``t_s`` (instead of the rates).
+INCREMENT_COLUMNS = ("dtheta_x_rad", "dtheta_y_rad", "dtheta_z_rad", "dv_x_mps", "dv_y_mps",
+                     "dv_z_mps")
 POS_COLUMNS = ("lat_deg", "lon_deg", "h_m")
 VEL_COLUMNS = ("vE_mps", "vN_mps", "vU_mps")
 VEL_SIGMA_COLUMNS = ("sigma_vE_mps", "sigma_vN_mps", "sigma_vU_mps")
 EULER_COLUMNS = ("pitch_deg", "roll_deg", "heading_deg")
 
 
-def _read(path, kind: str, required: tuple, numeric: tuple = ()) -> tuple[str, pd.DataFrame]:
+def _read(path, kind: str, required: tuple, numeric: tuple = (),
+          expected: tuple | None = None) -> tuple[str, pd.DataFrame]:
     """The CSV file as a DataFrame: ``required`` columns present, they and the known
     optional ones (and ``numeric``) numbers; one-line :class:`DataError` s."""
     path = Path(path)
@@ -52,7 +56,7 @@ def _read(path, kind: str, required: tuple, numeric: tuple = ()) -> tuple[str, p
         raise DataError(f"{src}: not a UTF-8 text file") from None
     if not header.strip():
         raise DataError(f"{src}: empty file (expected a header row: "
-                        f"{', '.join(required)})")
+                        f"{', '.join(expected or required)})")
     if ";" in header and "," not in header:
         raise DataError(f"{src}: columns are separated by ';': fednav's CSV files use ','")
     try:
@@ -92,11 +96,26 @@ def _has(df, names) -> bool:
 
 
 def read_imu_csv(path, max_bridge_s: float = 0.1) -> ImuData:
-    """IMU CSV (rates in rad/s, specific force in m/s^2, body right-forward-up); faulty
-    samples are bridged up to ``max_bridge_s`` (:class:`~fednav.io.data.ImuData`)."""
-    src, df = _read(path, "IMU", IMU_COLUMNS)
-    return ImuData(src, df["t_s"].to_numpy(float), _cols(df, IMU_COLUMNS[1:4]),
-                   _cols(df, IMU_COLUMNS[4:7]), max_bridge_s=max_bridge_s)
+    """IMU CSV, body right-forward-up: rates (``gyro_*_radps``, ``accel_*_mps2``: the
+    rate at ``t_s``, held until the next sample) or increments (``dtheta_*_rad``,
+    ``dv_*_mps``: over the interval that ends at ``t_s``), as the column names declare.
+    Jittered or missing time stamps are integrated over each sample's own interval onto
+    a uniform grid; faulty samples and gaps are bridged up to ``max_bridge_s``
+    (:class:`~fednav.io.data.ImuData`, :func:`~fednav.io.data.regular_imu`)."""
+    src, df = _read(path, "IMU", ("t_s",), numeric=IMU_COLUMNS[1:] + INCREMENT_COLUMNS,
+                    expected=IMU_COLUMNS)
+    t = df["t_s"].to_numpy(float)
+    if _has(df, INCREMENT_COLUMNS):
+        return ImuData.from_increments(src, t, _cols(df, INCREMENT_COLUMNS[:3]),
+                                       _cols(df, INCREMENT_COLUMNS[3:]),
+                                       max_bridge_s=max_bridge_s)
+    missing = [c for c in IMU_COLUMNS if c not in df.columns]
+    if missing:
+        raise DataError(f"{src}: missing column(s) {', '.join(missing)} (have "
+                        f"{', '.join(map(str, df.columns))}; increments instead of rates: "
+                        f"dtheta_x_rad ... dv_z_mps)")
+    return ImuData(src, t, _cols(df, IMU_COLUMNS[1:4]), _cols(df, IMU_COLUMNS[4:7]),
+                   max_bridge_s=max_bridge_s)
 
 
 def _lla(df) -> np.ndarray:

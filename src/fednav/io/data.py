@@ -137,6 +137,50 @@ def check_rows(source: str, n: int, **fields) -> None:
             raise DataError(f"{source}: field '{name}' has {len(a)} rows but 't' has {n}")
 
 
+#: Sampling intervals within this fraction of the median are uniform (taken as they are).
+UNIFORM_TOLERANCE = 1e-6
+
+
+def regular_imu(source: str, t, gyro, accel, max_gap_s: float):
+    """IMU samples on a uniform grid, from samples whose time stamps jitter or miss.
+
+    Sample ``i``'s rates hold over its own interval ``[t_i, t_(i+1)]`` (the last one's: the
+    median interval ``dt``); the integrated rotation and velocity increments are
+    interpolated linearly at ``t_0 + k dt`` and differenced, so every increment of the
+    recording is kept (nothing is dropped or counted twice), and a missing sample is
+    bridged by its neighbours' rates.  A gap longer than ``max_gap_s`` plus ``dt`` is a
+    :class:`DataError` naming where.  Uniform sampling (within
+    :data:`UNIFORM_TOLERANCE`) is returned unchanged.
+
+    Returns (t, gyro, accel, quality); when it resampled, quality says so:
+    ``imu_resampled`` 1, ``imu_samples_missing`` (intervals longer than 1.5 ``dt``, in
+    samples), ``imu_jitter_s`` (largest departure of an interval from ``dt``)."""
+    d = np.diff(t)
+    dt = float(np.median(d))
+    dev = np.abs(d - dt)
+    if not len(d) or dev.max() <= UNIFORM_TOLERANCE * dt:
+        return t, gyro, accel, {}
+    quality = {"imu_resampled": 1, "imu_samples_missing": 0, "imu_jitter_s": float(dev.max())}
+    gap = d > max_gap_s + dt
+    if gap.any():
+        i = int(np.argmax(gap))
+        raise DataError(f"{source}: IMU sampling has a gap of {d[i]:.6f} s between t = "
+                        f"{t[i]:.6f} s and {t[i + 1]:.6f} s (median interval {dt:.6f} s; "
+                        f"gaps up to imu.max_bridge_s = {max_gap_s:g} s are bridged)")
+    long = d > 1.5 * dt
+    quality["imu_samples_missing"] = int(np.sum(np.rint(d[long] / dt) - 1))
+    dur = np.r_[d, dt]
+    nodes = np.r_[t, t[-1] + dt]
+    n = int(np.floor((nodes[-1] - t[0]) / dt + 1e-9)) + 1
+    grid = t[0] + dt * np.arange(n)
+    out = []
+    for rate in (gyro, accel):
+        cum = np.vstack([np.zeros(3), np.cumsum(rate * dur[:, None], axis=0)])
+        at = np.column_stack([np.interp(grid, nodes, cum[:, j]) for j in range(3)])
+        out.append(np.diff(at, axis=0) / dt)
+    return grid[:-1], out[0], out[1], quality
+
+
 @dataclass
 class ImuErrors:
     """IMU error figures (SI, per body axis, right-forward-up).
@@ -171,9 +215,12 @@ class ImuData:
     initial_euler: np.ndarray | None = None
     initial_euler_sigma: np.ndarray | None = None
     #: longest run of faulty samples (NaN/inf/absurd) bridged by holding the last good
-    #: sample [s]; longer runs are a DataError naming their time
+    #: sample, and longest gap in the time stamps bridged by the neighbours' rates [s];
+    #: longer ones are a DataError naming their time
     max_bridge_s: float = 0.1
-    #: what the checks did: {"imu_samples_bridged": n}
+    #: what the checks did: {"imu_samples_bridged": n} and, when the time stamps were
+    #: not uniform, "imu_resampled", "imu_samples_missing", "imu_jitter_s"
+    #: (:func:`regular_imu`)
     quality: dict = field(default_factory=dict)
 
     def __post_init__(self):
@@ -184,56 +231,84 @@ class ImuData:
         self.gyro, self.accel, n = bridge_imu(self.source, self.t, self.gyro, self.accel,
                                               self.max_bridge_s)
         self.quality["imu_samples_bridged"] = n
+        self.t, self.gyro, self.accel, q = regular_imu(self.source, self.t, self.gyro,
+                                                       self.accel, self.max_bridge_s)
+        self.quality.update(q)
+
+    @classmethod
+    def from_increments(cls, source: str, t_end, dtheta, dv, **kw) -> ImuData:
+        """IMU data from increments ``dtheta`` [rad] and ``dv`` [m/s] (N, 3) over the
+        intervals that end at ``t_end`` [s] (how loggers stamp them); the first
+        interval is taken as long as the median one.  Each increment becomes a rate over
+        its own interval, stamped at the interval's start (fednav's convention)."""
+        t_end = check_time(source, t_end)
+        d = np.diff(t_end)
+        d = np.r_[np.median(d), d]
+        dth = _as_float(source, "dtheta", dtheta, (-1, 3))
+        dvv = _as_float(source, "dv", dv, (-1, 3))
+        check_rows(source, len(t_end), dtheta=dth, dv=dvv)
+        return cls(source, t_end - d, dth / d[:, None], dvv / d[:, None], **kw)
 
     def period(self) -> float:
-        """The sampling period [s]; DataError if the sampling is not uniform (a gap)."""
-        d = np.diff(self.t)
-        dt = float(np.median(d))
-        bad = np.abs(d - dt) > 0.1 * dt
-        if bad.any():
-            i = int(np.argmax(bad))
-            raise DataError(f"{self.source}: IMU sampling is not uniform: {d[i]:.6f} s "
-                            f"between t = {self.t[i]:.6f} s and {self.t[i + 1]:.6f} s "
-                            f"(median {dt:.6f} s)")
-        return dt
+        """The sampling period [s] (uniform: :func:`regular_imu` made it so)."""
+        return float(np.median(np.diff(self.t)))
 
 
 @dataclass
 class GnssData:
-    """GNSS fixes: ``t`` (N,) [s], ``lla`` (N, 3), ENU ``vel`` (N, 3) [m/s] (or None for
-    position-only receivers), 1-sigma ``sigma_pos`` (3,) [north, east, up] [m] and
-    ``sigma_vel`` (3,) [east, north, up] [m/s], antenna ``lever`` arm (3,) from the IMU,
-    body right-forward-up [m]."""
+    """GNSS fixes: ``t`` (N,) [s], ``lla`` (N, 3) (or None for velocity-only data), ENU
+    ``vel`` (N, 3) [m/s] (or None for position-only receivers), 1-sigma ``sigma_pos``
+    (3,) [north, east, up] [m] and ``sigma_vel`` (3,) [east, north, up] [m/s], antenna
+    ``lever`` arm (3,) from the IMU, body right-forward-up [m]; optionally each fix's
+    own 1-sigma ``sigma_rows`` (N, 6) [north, east, up m, vE, vN, vU m/s] (the file's)."""
 
     source: str
     t: np.ndarray
-    lla: np.ndarray
+    lla: np.ndarray | None
     vel: np.ndarray | None
     sigma_pos: np.ndarray
     sigma_vel: np.ndarray
     lever: np.ndarray
     #: what the checks did: {"gnss_epochs_skipped": n}
     quality: dict = field(default_factory=dict)
+    sigma_rows: np.ndarray | None = None
 
     def __post_init__(self):
         t = _as_float(self.source, "t", self.t, (-1,))
-        lla = _as_float(self.source, "lat/lon/h", self.lla, (-1, 3))
+        if self.lla is None and self.vel is None:
+            raise DataError(f"{self.source}: GNSS data without positions and velocities")
+        lla = None if self.lla is None else _as_float(self.source, "lat/lon/h", self.lla,
+                                                      (-1, 3))
         vel = None if self.vel is None else _as_float(self.source, "vel", self.vel, (-1, 3))
-        check_rows(self.source, len(t), lla=lla, vel=vel)
+        sig = (None if self.sigma_rows is None
+               else _as_float(self.source, "sigma", self.sigma_rows, (-1, 6)))
+        check_rows(self.source, len(t), lla=lla, vel=vel, sigma=sig)
+        insane = np.zeros(len(t), dtype=bool)
         with np.errstate(invalid="ignore"):
-            insane = ((np.abs(lla[:, 0]) > np.pi / 2) | (np.abs(lla[:, 1]) > 2 * np.pi)
-                      | (np.abs(lla[:, 2]) > ABSURD_HEIGHT_M))
+            if lla is not None:
+                insane |= ((np.abs(lla[:, 0]) > np.pi / 2) | (np.abs(lla[:, 1]) > 2 * np.pi)
+                           | (np.abs(lla[:, 2]) > ABSURD_HEIGHT_M))
             if vel is not None:
                 insane |= np.linalg.norm(vel, axis=1) > ABSURD_SPEED_MPS
-        keep, n = screen_rows(self.source, "GNSS", t, {"lla": lla, "vel": vel}, insane)
+        keep, n = screen_rows(self.source, "GNSS", t, {"lla": lla, "vel": vel, "sigma": sig},
+                              insane)
         self.quality["gnss_epochs_skipped"] = n
         self.t = check_time(self.source, t[keep])
-        self.lla = lla[keep]
+        self.lla = None if lla is None else lla[keep]
         self.vel = None if vel is None else vel[keep]
+        if sig is not None:
+            sig = sig[keep]
+            used = np.r_[np.full(3, lla is not None), np.full(3, vel is not None)]
+            if np.any(sig[:, used] <= 0):
+                i = int(np.argmax((sig[:, used] <= 0).any(axis=1)))
+                raise DataError(f"{self.source}: a 1-sigma of fix {i} (at {self.t[i]:.6f} s) "
+                                f"is not positive")
+        self.sigma_rows = sig
         self.sigma_pos = check_array(self.source, "sigma_pos", self.sigma_pos, (3,))
         self.sigma_vel = check_array(self.source, "sigma_vel", self.sigma_vel, (3,))
         self.lever = check_array(self.source, "lever", self.lever, (3,))
-        if np.any(self.sigma_pos <= 0) or (self.vel is not None and np.any(self.sigma_vel <= 0)):
+        if (self.lla is not None and np.any(self.sigma_pos <= 0)) or (
+                self.vel is not None and np.any(self.sigma_vel <= 0)):
             raise DataError(f"{self.source}: GNSS standard deviations must be positive")
 
 

@@ -26,8 +26,11 @@ ARRIVAL = "t_arrival_s"
 class SensorData:
     """One sensor's recorded measurements: ``name`` (registered), ``source`` (the file),
     times of validity ``t`` (N,) [s], values ``z`` (N, m) in SI units (radians, metres,
-    m/s) in the layout of the sensor's measurement model, arrival times ``t_arrival``
-    (N,) [s] or None, and what the reader found (``quality``: rows dropped)."""
+    m/s) in the layout of the sensor's measurement model, each row's 1-sigma ``sigma``
+    (N, m) in the units of the sensor's series (metres north/east for latitude and
+    longitude, radians, m/s) or None (the system description's figure), arrival times
+    ``t_arrival`` (N,) [s] or None, and what the reader found (``quality``: rows
+    dropped)."""
 
     name: str
     source: str
@@ -35,30 +38,61 @@ class SensorData:
     z: np.ndarray
     t_arrival: np.ndarray | None = None
     quality: dict = field(default_factory=dict)
+    sigma: np.ndarray | None = None
 
 
 def columns(name: str) -> tuple[str, ...]:
-    """The header of sensor ``name``'s file (without the optional ``t_arrival_s``)."""
+    """The header of sensor ``name``'s file (without the optional ``t_arrival_s`` and
+    1-sigma columns)."""
     return ("t_s",) + tuple(c.name for c in registry.spec(name).columns)
+
+
+def sigma_columns(name: str) -> tuple[str, ...]:
+    """The optional per-row 1-sigma columns of sensor ``name``'s file."""
+    return tuple(c.sigma_column[0] for c in registry.spec(name).columns)
 
 
 def read_sensor_csv(name: str, path) -> SensorData:
     """Sensor ``name``'s CSV file as :class:`SensorData` (one-line :class:`DataError` for
     a file it cannot use).  Rows with an empty or non-finite value are dropped and
-    counted; times must increase."""
+    counted; times must increase; 1-sigma columns (all of the sensor's or none) must be
+    positive."""
     spec = registry.spec(name)
     if not spec.columns:
         raise DataError(f"sensor '{name}' declares no file columns")
     head = columns(name)
-    src, df = _read(path, f"{name} sensor", head, numeric=(ARRIVAL,))
+    sig_cols = sigma_columns(name)
+    alt = spec.alternative
+    optional = (ARRIVAL,) + sig_cols + (alt[0] if alt else ())
+    src, df = _read(path, f"{name} sensor", ("t_s",), numeric=optional + head[1:])
+    have = set(df.columns)
+    if all(c in have for c in head):
+        z = np.column_stack([df[c.name].to_numpy(float) * c.to_si for c in spec.columns])
+    elif alt and all(c in have for c in alt[0]):
+        z = np.asarray(alt[1](df[list(alt[0])].to_numpy(float)), dtype=float)
+    else:
+        missing = [c for c in head if c not in have]
+        other = f" (or {', '.join(alt[0])})" if alt else ""
+        raise DataError(f"{src}: missing column(s) {', '.join(missing)}{other} "
+                        f"(have {', '.join(map(str, df.columns))})")
     t = df["t_s"].to_numpy(float)
-    z = np.column_stack([df[c.name].to_numpy(float) * c.to_si for c in spec.columns])
+    given = [c in have for c in sig_cols]
+    sig = None
+    if any(given):
+        if not all(given):
+            lack = [c for c, g in zip(sig_cols, given, strict=True) if not g]
+            raise DataError(f"{src}: 1-sigma columns are all of {', '.join(sig_cols)} or "
+                            f"none; missing {', '.join(lack)}")
+        sig = np.column_stack([df[c.sigma_column[0]].to_numpy(float) * c.sigma_column[1]
+                               for c in spec.columns])
     ta = None
-    if ARRIVAL in df.columns:
+    if ARRIVAL in have:
         ta = df[ARRIVAL].to_numpy(float)
     ok = np.isfinite(z).all(axis=1) & np.isfinite(t)
     if ta is not None:
         ok &= np.isfinite(ta)
+    if sig is not None:
+        ok &= np.isfinite(sig).all(axis=1)
     quality = {f"{name}_rows_dropped": int((~ok).sum())}
     rows = np.flatnonzero(ok) + 1  # data row numbers in the file
     t, z = t[ok], z[ok]
@@ -70,6 +104,15 @@ def read_sensor_csv(name: str, path) -> SensorData:
             i = int(np.argmax(d <= 0)) + 1
             raise DataError(f"{src}: column 't_s' is not increasing at data row {rows[i]} "
                             f"({t[i - 1]:.6f} s then {t[i]:.6f} s)")
+    if sig is not None:
+        sig = sig[ok]
+        bad = (sig <= 0).any(axis=1)
+        if bad.any():
+            i = int(np.argmax(bad))
+            j = int(np.argmax(sig[i] <= 0))
+            v = sig[i, j] / spec.columns[j].sigma_column[1]
+            raise DataError(f"{src}: column '{sig_cols[j]}' is {v:g} at data row {rows[i]}: "
+                            f"a 1-sigma must be positive")
     if ta is not None:
         ta = ta[ok]
         early = ta < t - 1e-9
@@ -80,18 +123,23 @@ def read_sensor_csv(name: str, path) -> SensorData:
     for j, c in enumerate(spec.columns):
         if c.wrap_2pi:
             z[:, j] = np.mod(z[:, j], 2.0 * np.pi)
-    return SensorData(name, src, t, z, ta, quality)
+    return SensorData(name, src, t, z, ta, quality, sig)
 
 
-def write_sensor_csv(path, series) -> Path:
+def write_sensor_csv(path, series, sigma: bool = False) -> Path:
     """A simulated :class:`~fednav.sensors.base.MeasurementSeries` as its sensor's file
-    (``t_arrival_s`` when it arrives later than it describes), every value to 17
-    significant digits (the file reads back to the same doubles, but for the degree
-    conversion's rounding)."""
+    (``t_arrival_s`` when it arrives later than it describes; with ``sigma`` each row's
+    1-sigma columns), every value to 17 significant digits (the file reads back to the
+    same doubles, but for the unit conversions' rounding)."""
     spec = registry.spec(series.kind)
     cols = {"t_s": series.t}
     for j, c in enumerate(spec.columns):
         cols[c.name] = series.z[:, j] / c.to_si
     if series.t_avail is not None and np.any(series.t_avail != series.t):
         cols[ARRIVAL] = series.t_avail
+    if sigma:
+        s = np.broadcast_to(np.asarray(series.sigma, dtype=float), series.z.shape)
+        for j, c in enumerate(spec.columns):
+            name, to_si = c.sigma_column
+            cols[name] = s[:, j] / to_si
     return write_csv(path, cols, significant=17)

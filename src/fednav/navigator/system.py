@@ -147,6 +147,44 @@ class AlignmentConfig(_Model):
     coarse_seconds: float = Field(1.0, gt=0.0)
 
 
+class InitialSigmaConfig(_Model):
+    """1-sigma of the initial state (the filter's P0): ``attitude_arcsec`` platform
+    misalignment about east, north, up (tilts and heading), ``velocity_mps`` (one value
+    or [east, north, up]), ``position_m`` (one value or [east, north, up]).  The IMU bias
+    states take theirs from the ``imu:`` figures."""
+
+    attitude_arcsec: _V3
+    velocity_mps: float | _V3 = 0.0
+    position_m: float | _V3 = 0.0
+
+
+class InitialConfig(_Model):
+    """Where the navigator starts, when it is known (a transfer alignment, a surveyed
+    start, a simulation) or cannot come from the data (no GNSS): time ``t_s`` (default:
+    the first IMU sample), ``lat_deg``, ``lon_deg``, ``h_m`` (the IMU's point), ENU
+    ``vel_mps``, attitude ``euler_deg`` [pitch, roll, heading] and the 1-sigma of each
+    (``sigma``).  Given, it replaces the alignment and the start from the first GNSS
+    fix."""
+
+    t_s: float | None = None
+    lat_deg: float = Field(ge=-90.0, le=90.0)
+    lon_deg: float = Field(ge=-180.0, le=360.0)
+    h_m: float
+    vel_mps: _V3 = (0.0, 0.0, 0.0)
+    euler_deg: _V3
+    sigma: InitialSigmaConfig
+
+    def lla(self) -> np.ndarray:
+        return np.array([np.radians(self.lat_deg), np.radians(self.lon_deg), self.h_m])
+
+    def euler(self) -> np.ndarray:
+        return np.radians(np.asarray(self.euler_deg, dtype=float))
+
+
+#: Keys of ``files:`` besides the registered sensors' names.
+FILE_KEYS = ("imu", "reference")
+
+
 #: Keys of the flat processing config of fednav 0.1 -> their place in a system description.
 LEGACY_KEYS = {
     "period_s": ("filter", "period_s"), "substeps": ("filter", "substeps"),
@@ -200,8 +238,22 @@ class System(_Model):
     constraint: Literal["wind"] | None = None
     filter: FilterConfig = FilterConfig()
     alignment: AlignmentConfig = AlignmentConfig()
+    initial: InitialConfig | None = None
     smoother: bool = False
     output_rate_hz: float | None = Field(default=None, gt=0.0)
+    #: recorded data of this system: ``imu``, ``reference`` and sensor name -> CSV file
+    #: (relative to the description's folder; what ``fednav process csv`` reads when its
+    #: options do not name a file)
+    files: dict[str, str] = {}
+
+    @field_validator("files")
+    @classmethod
+    def _files(cls, v):
+        for k in v:
+            if k not in FILE_KEYS and k not in SENSORS:
+                raise ValueError(f"unknown file '{k}' (files are {', '.join(FILE_KEYS)} or a "
+                                 f"registered sensor: {', '.join(sorted(SENSORS))})")
+        return v
 
     @model_validator(mode="before")
     @classmethod
@@ -257,6 +309,25 @@ _SCENARIO_KEYS = {"start", "segments", "modes", "imu_period_s"}
 
 
 # ---------------------------------------------------------------- the filter's IMU model
+def initial_covariance(system: System, dt: float, attitude, velocity, position,
+                       file_errors=None) -> np.ndarray:
+    """The filter's P0 (filter units of :mod:`fednav.ins.error_model`, diagonal) from the
+    1-sigma of the initial platform misalignment ``attitude`` [rad] (east, north, up),
+    ``velocity`` [m/s] and ``position`` [m] (one value or ENU) and the IMU figures
+    (:func:`imu_noise_model`): the bias states' sigmas.  A state with no uncertainty gets
+    1e-6 filter units (P0 stays positive definite)."""
+    from ..ins.error_model import SCALE
+
+    _, gb, ab = imu_noise_model(system, dt, file_errors)
+    markov = imu_figures(system.imu, file_errors)["gyro_markov"] or 0.0
+    sd = np.r_[np.broadcast_to(np.asarray(attitude, dtype=float), (3,)),
+               np.broadcast_to(np.asarray(velocity, dtype=float), (3,)),
+               np.broadcast_to(np.asarray(position, dtype=float), (3,)),
+               np.full(3, gb), np.full(3, markov), np.full(3, ab)]
+    sd = np.maximum(sd / SCALE, 1e-6)
+    return np.diag(sd**2)
+
+
 def imu_noise_model(system: System, dt: float, file_errors=None
                     ) -> tuple[ImuNoiseModel, float | None, float | None]:
     """The filter's IMU model and the 1-sigma of its gyro constant bias [rad/s] and

@@ -27,9 +27,9 @@ from ..io.sensorfile import SensorData
 from ..navigator.loop import InnovationRecord  # noqa: F401  (fednav.process's name)
 from ..navigator.navigator import InitialState, Navigator
 from ..navigator.solution import Solution, imu_rate
-from ..navigator.system import System, imu_noise_model
+from ..navigator.system import System, imu_noise_model, initial_covariance
 from ..navigator.system import imu_figures as _imu_figures
-from ..sensors import GnssConfig, GnssPosVel, VelocityConfig, registry
+from ..sensors import GnssConfig, VelocityConfig, registry
 from ..sensors.imu import FIGURES
 
 #: The processing config of fednav 0.1 is a system description now (one schema); the
@@ -69,7 +69,7 @@ def adjust_sensors(gnss: GnssData, velocity: VelocityData | None, cfg: System):
         return out
 
     gc, vc = _gnss_cfg(cfg), _velocity_cfg(cfg)
-    if gc.time_offset_s:
+    if gnss is not None and gc.time_offset_s:
         gnss = again(gnss, t=gnss.t + gc.time_offset_s)
     if velocity is None:
         return gnss, None
@@ -108,10 +108,7 @@ def _noise(imu: ImuData, cfg: System, dt: float):
     growth equals the Markov process's, ``q = 2 sigma_m^2 / tau``.
     Returns (noise model, gyro constant-bias sigma, accelerometer bias sigma).
     """
-    missing = [k for k, v in imu_figures(imu, cfg).items() if v is None]
-    if missing:
-        raise DataError(f"{imu.source}: no IMU error figures in the file; give "
-                        f"imu.{missing[0]} in the processing config")
+    _check_figures(imu, cfg)
     return imu_noise_model(cfg, dt, imu.errors)
 
 
@@ -173,7 +170,7 @@ def _initial_covariance(al: Alignment, sig_vel, sig_pos, gb: float, ab: float,
     return P0 / np.outer(em.SCALE, em.SCALE)
 
 
-def check_units(imu: ImuData, gnss: GnssData) -> list[str]:
+def check_units(imu: ImuData, gnss: GnssData | None) -> list[str]:
     """Refuse IMU data in the wrong unit; warn about GNSS positions that look like radians.
 
     * accelerometer: the median specific-force magnitude of a vehicle on or near the
@@ -191,6 +188,8 @@ def check_units(imu: ImuData, gnss: GnssData) -> list[str]:
     if 0.5 < fmag < 1.5:
         raise DataError(f"{imu.source}: median specific force {fmag:.3f}: looks like g; "
                         f"fednav expects m/s^2")
+    if gnss is None:
+        return warnings
     if gnss.vel is not None and len(gnss.t) > 5:
         up = np.mean(imu.accel, axis=0)
         up /= max(np.linalg.norm(up), 1e-12)
@@ -215,6 +214,8 @@ def check_units(imu: ImuData, gnss: GnssData) -> list[str]:
             if 20.0 < abs(slope) < 200.0:
                 raise DataError(f"{imu.source}: gyro rates are {slope:.1f} x the GNSS course "
                                 f"rate while turning: looks like deg/s; fednav expects rad/s")
+    if gnss.lla is None:
+        return warnings
     lat, lon = np.degrees(gnss.lla[:, 0]), np.degrees(gnss.lla[:, 1])
     if np.all(np.abs(lat) < 1.6) and np.all(np.abs(lon) < 3.2):
         warnings.append(f"{gnss.source}: every position lies within 1.6 deg of latitude 0 and "
@@ -255,7 +256,7 @@ class Prepared:
         for name, (t, z, R) in self.measurements.items():
             nav.add_measurements(name, t, z, R=R)
         for d in self.others.values():
-            nav.add_measurements(d.name, d.t, d.z, t_arrival=d.t_arrival)
+            nav.add_measurements(d.name, d.t, d.z, sigma=d.sigma, t_arrival=d.t_arrival)
         nav.add_imu(self.t, self.gyro, self.accel)
         return nav
 
@@ -279,13 +280,57 @@ def _other_sensor(data: SensorData, cfg: System):
     return sc
 
 
-def prepare(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
+def _position_velocity(gnss: GnssData) -> np.ndarray:
+    """ENU velocity [m/s] from the differences of position-only fixes (the alignment's
+    course and the initial velocity; central differences, one-sided at the ends)."""
+    lla = gnss.lla
+    d = earth.llh_difference_enu(lla[:, 0], lla[:, 1], lla[:, 2], lla[0, 0], lla[0, 1],
+                                 lla[0, 2])
+    if len(gnss.t) < 2:
+        return np.zeros((len(gnss.t), 3))
+    return np.column_stack([np.gradient(d[:, j], gnss.t) for j in range(3)])
+
+
+def _period(cfg: System, gnss: GnssData | None, others: dict) -> float:
+    """The filter epoch: the system's, else the GNSS period, else the shortest median
+    period of the other aiding sensors' data."""
+    if cfg.filter.period_s is not None:
+        return cfg.filter.period_s
+    if gnss is not None and len(gnss.t) > 1:
+        return float(np.median(np.diff(gnss.t)))
+    periods = [float(np.median(np.diff(d.t))) for d in others.values()
+               if len(d.t) > 1 and registry.spec(d.name).aiding]
+    if not periods:
+        raise DataError("filter.period_s: give the filter period (no aiding sensor's data "
+                        "has two measurements to take it from)")
+    return min(periods)
+
+
+def _check_figures(imu: ImuData, cfg: System) -> None:
+    """Refuse to run without IMU figures: neither the system description's ``imu:``
+    section nor the data file gives any (figures a section leaves out are zero, as in a
+    scenario)."""
+    figures = set(cfg.imu.model_fields_set) - {"max_bridge_s"}
+    if figures or imu.errors is not None:
+        return
+    missing = [k for k, v in imu_figures(imu, cfg).items() if v is None]
+    if missing:
+        raise DataError(f"{imu.source}: no IMU error figures in the file; give "
+                        f"imu.{missing[0]} in the processing config")
+
+
+def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData | None = None,
             cfg: System | None = None, sensors: dict | None = None) -> Prepared:
-    """The input checks, the sensor corrections, the initial attitude and P0 of
-    :func:`process` (one-line :class:`DataError` s for data it cannot use).  ``sensors``:
-    other registered sensors' recordings by name (:class:`~fednav.io.SensorData`, e.g.
-    from :func:`~fednav.io.read_sensor_csv`); their noise comes from the system
-    description."""
+    """The input checks, the sensor corrections, the initial state and P0 of
+    :func:`process` (one-line :class:`DataError` s for data it cannot use).
+
+    ``gnss``: GNSS fixes (position and velocity, position only, or velocity only);
+    ``sensors``: other registered sensors' recordings by name
+    (:class:`~fednav.io.SensorData`, e.g. from :func:`~fednav.io.read_sensor_csv`) — their
+    noise is each row's 1-sigma when the file gives it, else the system description's.
+    The initial state is the system description's ``initial:`` section when it has one,
+    else the first GNSS fix with the alignment's attitude (``alignment:``); without GNSS
+    positions the section is needed."""
     cfg = cfg or System()
     if cfg.filter.state != "error":
         raise DataError("filter.state: fednav process flies the error-state filter (the "
@@ -296,43 +341,85 @@ def prepare(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
             raise DataError(f"{d.source}: {d.name} data given as sensor '{name}'")
         if name in ("gnss", "velocity"):
             raise DataError(f"{d.source}: {name} data is given as its own argument")
+    init = cfg.initial
+    if init is None and (gnss is None or gnss.lla is None):
+        raise DataError("the initial position: no GNSS positions to start from; give the "
+                        "initial state in the system description (initial: lat_deg, "
+                        "lon_deg, h_m, vel_mps, euler_deg, sigma)")
     dt = imu.period()
+    _check_figures(imu, cfg)
     gnss, velocity = adjust_sensors(gnss, velocity, cfg)
     warnings = check_units(imu, gnss)
-    if gnss.vel is None:
-        raise DataError(f"{gnss.source}: GNSS velocity is required by the loosely coupled "
-                        f"filter")
-    period = cfg.filter.period_s or float(np.median(np.diff(gnss.t)))
+    period = _period(cfg, gnss, others)
     n_per = max(1, int(round(period / dt)))
     T = n_per * dt
-    t0 = max(imu.t[0], gnss.t[0])
-    i0 = int(np.searchsorted(imu.t, t0 - 1e-9))
+    if init is not None and init.t_s is not None:
+        t0 = init.t_s
+        if not imu.t[0] - 0.5 * dt <= t0 <= imu.t[-1]:
+            raise DataError(f"initial.t_s = {t0:.6f} s is outside the IMU data "
+                            f"({imu.t[0]:.6f} .. {imu.t[-1]:.6f} s)")
+    else:
+        t0 = imu.t[0] if gnss is None or init is not None else max(imu.t[0], gnss.t[0])
+    i0 = int(np.searchsorted(imu.t, t0 - 0.5 * dt))
     n_cycles = (len(imu.t) - 1 - i0) // n_per
     if n_cycles < 1:
-        raise DataError(f"{imu.source}: IMU data does not overlap the GNSS data")
-    noise, gb, ab = _noise(imu, cfg, dt)
+        what = "the GNSS data" if gnss is not None else "the initial time"
+        raise DataError(f"{imu.source}: IMU data does not overlap {what} by one filter "
+                        f"period ({T:g} s)")
+    noise, gb, ab = imu_noise_model(cfg, dt, imu.errors)
 
-    gc = _gnss_cfg(cfg)
-    sig_pos = np.broadcast_to(np.asarray(gc.sigma_pos_m if gc.sigma_pos_m is not None
-                                         else gnss.sigma_pos, dtype=float), (3,))
-    sig_vel = np.broadcast_to(np.asarray(gc.sigma_vel_mps if gc.sigma_vel_mps is not None
-                                         else gnss.sigma_vel, dtype=float), (3,))
-    lever = np.asarray(gc.lever_m or gnss.lever, dtype=float)
-    R_gnss = GnssPosVel(lever).R(np.r_[sig_pos, sig_vel])
+    sensors = {}
+    meas = {}
+    if gnss is not None:
+        gc = _gnss_cfg(cfg)
+        sig_pos = np.broadcast_to(np.asarray(gc.sigma_pos_m if gc.sigma_pos_m is not None
+                                             else gnss.sigma_pos, dtype=float), (3,))
+        sig_vel = np.broadcast_to(np.asarray(gc.sigma_vel_mps if gc.sigma_vel_mps is not None
+                                             else gnss.sigma_vel, dtype=float), (3,))
+        lever = np.asarray(gc.lever_m or gnss.lever, dtype=float)
+        has = ("position" if gnss.vel is None else "velocity" if gnss.lla is None
+               else "position_velocity")
+        if gc.measures is not None and gc.measures != has and has != "position_velocity":
+            raise DataError(f"{gnss.source}: sensors.gnss.measures is {gc.measures}, the "
+                            f"file has {has.replace('_', ' and ')} only")
+        has = gc.measures or has
+        sensors["gnss"] = gc.model_copy(update={
+            "lever_m": tuple(map(float, lever)), "sigma_pos_m": tuple(map(float, sig_pos)),
+            "sigma_vel_mps": tuple(map(float, sig_vel)), "measures": has})
+        n = len(gnss.t)
+        z = np.column_stack([np.full((n, 3), np.nan) if gnss.lla is None else gnss.lla,
+                             np.full((n, 3), np.nan) if gnss.vel is None else gnss.vel])
+        model = sensors["gnss"].model()
+        R = (np.broadcast_to(model.R(np.r_[sig_pos, sig_vel]), (n, model.dim, model.dim))
+             if gnss.sigma_rows is None else np.array([model.R(s) for s in gnss.sigma_rows]))
+        meas["gnss"] = (gnss.t, z, R)
 
-    # Initial state: first GNSS fix (antenna moved to the IMU), its velocity, attitude.
-    al = _initial_attitude(imu, gnss, cfg, t0, i0, dt, noise, ab)
+    # Initial state: the description's, else the first GNSS fix (antenna moved to the
+    # IMU), its velocity and the alignment's attitude.
+    if init is not None:
+        sig = init.sigma
+        lla0, vel0, euler0 = init.lla(), np.asarray(init.vel_mps, dtype=float), init.euler()
+        P0 = initial_covariance(cfg, dt, units.arcsec(np.asarray(sig.attitude_arcsec)),
+                                sig.velocity_mps, sig.position_m, imu.errors)
+        al = Alignment(euler0, units.arcsec(np.asarray(sig.attitude_arcsec)),
+                       report={"levelling": "initial", "heading": "initial"})
+        gyro_bias = None
+    else:
+        if gnss.vel is None:  # the alignment's course from the positions' differences
+            gnss_v = replace(gnss, vel=_position_velocity(gnss), quality={})
+        else:
+            gnss_v = gnss
+        al = _initial_attitude(imu, gnss_v, cfg, t0, i0, dt, noise, ab)
+        C0 = att.euler_to_dcm(al.euler)
+        lla0 = earth.move_enu(gnss.lla[0], -(C0 @ lever))
+        vel0 = gnss_v.vel[0]
+        P0 = _initial_covariance(al, sig_vel, sig_pos, gb, ab, noise)
+        euler0, gyro_bias = al.euler, al.gyro_bias
     warnings += al.warnings
-    C0 = att.euler_to_dcm(al.euler)
-    lla0 = earth.move_enu(gnss.lla[0], -(C0 @ lever))
-    P0 = _initial_covariance(al, sig_vel, sig_pos, gb, ab, noise)
 
     # The system the navigator flies: the config with the epoch period and the sensors'
     # effective settings (the data files' where the config leaves them out).
     vc = _velocity_cfg(cfg)
-    sensors = {"gnss": gc.model_copy(update={"lever_m": tuple(map(float, lever)),
-                                             "sigma_pos_m": tuple(map(float, sig_pos)),
-                                             "sigma_vel_mps": tuple(map(float, sig_vel))})}
     if velocity is not None:
         sensors["velocity"] = vc.model_copy(update={"lever_m": tuple(map(float, (
             velocity.lever if vc.lever_m is None else vc.lever_m)))})
@@ -349,26 +436,26 @@ def prepare(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
             warnings.append(f"{d.source}: not used ({why})")
     if not aiding:
         raise DataError(f"the system's aiding list {cfg.aiding} names none of the sensors "
-                        f"given ({', '.join(have)})")
+                        f"given ({', '.join(have) or 'none'})")
     system = cfg.model_copy(update={
         "filter": cfg.filter.model_copy(update={"period_s": T}),
         "sensors": cfg.sensors.replace(**sensors), "aiding": aiding})
-    meas = {"gnss": (gnss.t, np.column_stack([gnss.lla, gnss.vel]),
-                     np.broadcast_to(R_gnss, (len(gnss.t), 6, 6)))}
     if velocity is not None:
         model = system.sensors.velocity.model()
         meas["velocity"] = (velocity.t, velocity.vel,
                             np.array([model.R(c) for c in velocity.cov]))
     m = slice(i0, i0 + n_cycles * n_per)
-    quality = {**imu.quality, **gnss.quality, **(velocity.quality if velocity else {})}
+    quality = {**imu.quality, **(gnss.quality if gnss else {}),
+               **(velocity.quality if velocity else {})}
+    t_start = init.t_s if init is not None and init.t_s is not None else float(imu.t[i0])
     for name, d in others.items():
         quality.update(d.quality)
-        t_end = imu.t[m][-1] if n_cycles else t0
-        if d.t[-1] < t0 or d.t[0] > t_end:
+        t_end = imu.t[m][-1]
+        if d.t[-1] < t_start or d.t[0] > t_end:
             warnings.append(f"{d.source}: no {name} measurement falls within the IMU "
-                            f"data's {t0:.1f}..{t_end:.1f} s (a time offset?)")
-    return Prepared(system, InitialState(imu.t[i0], lla0, gnss.vel[0], al.euler, P0,
-                                         gyro_bias=al.gyro_bias), dt, imu.t[m], imu.gyro[m],
+                            f"data's {t_start:.1f}..{t_end:.1f} s (a time offset?)")
+    return Prepared(system, InitialState(t_start, lla0, vel0, euler0, P0,
+                                         gyro_bias=gyro_bias), dt, imu.t[m], imu.gyro[m],
                     imu.accel[m], meas, imu.errors, n_per, warnings, al, quality, others)
 
 

@@ -11,6 +11,7 @@ File columns: ``t_s, lat_deg, lon_deg, h_m, vE_mps, vN_mps, vU_mps``
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 
@@ -57,9 +58,17 @@ class GnssPosVel(RowModel):
     kind = "gnss"
     rows = ((POS_E, 1), (POS_N, 0), (POS_U, 2), (VEL_E, 3), (VEL_N, 4), (VEL_U, 5))
 
+    def __init__(self, lever=(0.0, 0.0, 0.0), measures: str = "position_velocity"):
+        # z keeps its 6 components; a receiver without velocity (or position) has rows
+        # for the others only
+        keep = {"position_velocity": slice(0, 6), "position": slice(0, 3),
+                "velocity": slice(3, 6)}[measures]
+        self.rows = GnssPosVel.rows[keep]
+        super().__init__(lever)
+
     def R(self, sigma) -> np.ndarray:
         s = np.asarray(sigma, dtype=float)  # [north, east, up m, vE, vN, vU], as z
-        return np.diag(s[[1, 0, 2, 3, 4, 5]] ** 2)
+        return np.diag(s[self.zindex] ** 2)
 
 
 class GnssConfig(SensorConfig):
@@ -72,6 +81,8 @@ class GnssConfig(SensorConfig):
     sigma_vel_mps: float | _V3 | None = None
     lever_m: _V3 | None = None
     time_offset_s: float = 0.0
+    #: what the local filter uses (None: what the data hold; both in a simulation)
+    measures: Literal["position_velocity", "position", "velocity"] | None = None
 
     def sensor(self) -> Gnss:
         from ..core.config import ConfigError
@@ -82,18 +93,24 @@ class GnssConfig(SensorConfig):
         return Gnss(self.sigma_pos_m, self.sigma_vel_mps, self.period_s)
 
     def model(self) -> GnssPosVel:
-        return GnssPosVel(self.lever_m or (0.0, 0.0, 0.0))
+        return GnssPosVel(self.lever_m or (0.0, 0.0, 0.0),
+                          self.measures or "position_velocity")
 
     def sigma(self) -> np.ndarray | None:
-        if self.sigma_pos_m is None or self.sigma_vel_mps is None:
+        m = self.measures or "position_velocity"
+        pos = self.sigma_pos_m if m != "velocity" else 1.0
+        vel = self.sigma_vel_mps if m != "position" else 1.0
+        if pos is None or vel is None:
             return None
-        return np.r_[np.broadcast_to(np.asarray(self.sigma_pos_m, dtype=float), (3,)),
-                     np.broadcast_to(np.asarray(self.sigma_vel_mps, dtype=float), (3,))]
+        return np.r_[np.broadcast_to(np.asarray(pos, dtype=float), (3,)),
+                     np.broadcast_to(np.asarray(vel, dtype=float), (3,))]
 
 
 _DEG = float(np.radians(1.0))
 SPEC = SensorSpec(
     "gnss", "GNSS receiver: position and ENU velocity of its antenna", GnssConfig, GnssPosVel,
-    columns=(Column("lat_deg", _DEG), Column("lon_deg", _DEG), Column("h_m"),
+    columns=(Column("lat_deg", _DEG, sigma=("sigma_north_m", 1.0)),
+             Column("lon_deg", _DEG, sigma=("sigma_east_m", 1.0)),
+             Column("h_m", sigma=("sigma_up_m", 1.0)),
              Column("vE_mps"), Column("vN_mps"), Column("vU_mps")),
     latlon=(0, 1), height=2)

@@ -33,11 +33,13 @@ from ..ins.error_model import N_STATES, SCALE
 
 #: Row kinds: position east, north, up [m]; velocity east, north, up [m/s] (both of the
 #: sensor's point at its lever arm); pitch, roll, heading [arcmin; roll and heading
-#: wrapped to +-180 deg].  A row compares its quantity with ``z[index]`` (latitude,
+#: wrapped to +-180 deg]; velocity of the sensor's point in body axes right, forward,
+#: up [m/s] (odometer, DVL).  A row compares its quantity with ``z[index]`` (latitude,
 #: longitude [rad] and height [m] for the position rows, m/s, rad).
-POS_E, POS_N, POS_U, VEL_E, VEL_N, VEL_U, PITCH, ROLL, HEADING = range(9)
+POS_E, POS_N, POS_U, VEL_E, VEL_N, VEL_U, PITCH, ROLL, HEADING, BVEL_R, BVEL_F, BVEL_U = \
+    range(12)
 #: Error-state column of each position / velocity row kind.
-_COLUMN = np.array([6, 7, 8, 3, 4, 5, -1, -1, -1])
+_COLUMN = np.array([6, 7, 8, 3, 4, 5, -1, -1, -1, -1, -1, -1])
 
 
 @dataclass
@@ -80,8 +82,8 @@ class RowModel:
 
     @property
     def linear(self) -> bool:
-        """Whether ``h(x) = H x`` (no attitude rows)."""
-        return bool(np.all(self.kinds < PITCH))
+        """Whether ``h(x) = H x`` (no Euler-angle rows)."""
+        return not bool(np.any((self.kinds >= PITCH) & (self.kinds <= HEADING)))
 
     def _nav(self, nav: NavSnapshot):
         return (_v(nav.lla), _v(nav.vel), _v(nav.C),
@@ -193,6 +195,16 @@ def lever_offsets(C, omega, lever):
 
 
 @numba.njit(cache=True, inline="always")
+def _cross_j(a, b, j):
+    """Component ``j`` of ``a x b``."""
+    if j == 0:
+        return a[1] * b[2] - a[2] * b[1]
+    if j == 1:
+        return a[2] * b[0] - a[0] * b[2]
+    return a[0] * b[1] - a[1] * b[0]
+
+
+@numba.njit(cache=True, inline="always")
 def skew_row(H, r, which, a0, a1, a2, k):
     """Row ``which`` (0, 1, 2) of ``k [a x]`` into ``H[r, 0:3]``."""
     if which == 0:
@@ -224,8 +236,12 @@ def row_residual(kinds, zindex, lla, vel, C, omega, z, lever, out):
             out[r] = (pitch - z[zi]) / ARCMIN
         elif k == ROLL:
             out[r] = wrap_pi_nb(roll - z[zi]) / ARCMIN
-        else:
+        elif k == HEADING:
             out[r] = wrap_pi_nb(heading - z[zi]) / ARCMIN
+        else:  # body axis j: (C^T v)_j + (omega x l)_j
+            j = k - BVEL_R
+            u = _cross_j(omega, lever, j)
+            out[r] = C[0, j] * vel[0] + C[1, j] * vel[1] + C[2, j] * vel[2] + u - z[zi]
         if has_lever and k <= POS_U:
             out[r] += p[k - POS_E]
         elif has_lever and k <= VEL_U:
@@ -247,9 +263,18 @@ def row_jacobian(kinds, lla, vel, C, omega, lever, H):
             if has_lever:
                 a = p if k <= POS_U else v
                 skew_row(H, r, (k - POS_E) % 3, a[0], a[1], a[2], ARCMIN)
-        else:
+        elif k <= HEADING:
             one[0] = k - PITCH
             euler_jacobian_rows(pitch, heading, H, r, one)
+        else:
+            # C_hat^T v_hat = C^T (I + [phi x]) (v + dv): row j is c_j . dv - (c_j x v) . phi
+            # (c_j: column j of C)
+            j = k - BVEL_R
+            c0, c1, c2 = C[0, j], C[1, j], C[2, j]
+            H[r, 3], H[r, 4], H[r, 5] = c0, c1, c2
+            H[r, 0] = (vel[1] * c2 - vel[2] * c1) * ARCMIN
+            H[r, 1] = (vel[2] * c0 - vel[0] * c2) * ARCMIN
+            H[r, 2] = (vel[0] * c1 - vel[1] * c0) * ARCMIN
 
 
 @numba.njit(cache=True)
@@ -260,13 +285,19 @@ def row_predict(kinds, lla, vel, C, omega, lever, X, Z):
     row_jacobian(kinds, lla, vel, C, omega, lever, H)
     has_lever = lever[0] != 0.0 or lever[1] != 0.0 or lever[2] != 0.0
     e = np.empty((0, 3))
-    if np.any(kinds >= PITCH):
+    if np.any((kinds >= PITCH) & (kinds <= HEADING)):
         e = euler_error_nb(C, X)
     for r in range(kinds.shape[0]):
         k = kinds[r]
-        if k >= PITCH:
+        if PITCH <= k <= HEADING:
             for i in range(X.shape[0]):
                 Z[i, r] = e[i, k - PITCH]
+        elif k >= BVEL_R:
+            for i in range(X.shape[0]):
+                s = 0.0
+                for j in range(6):
+                    s += H[r, j] * X[i, j]
+                Z[i, r] = s
         elif has_lever:
             for i in range(X.shape[0]):
                 s = X[i, _COLUMN[k]]

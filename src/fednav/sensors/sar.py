@@ -82,6 +82,7 @@ class SarConfig(SensorConfig):
 _DEG = float(units.deg(1.0))
 SPEC = SensorSpec(
     "sar", "SAR image matching: position fix and heading", SarConfig, SarFix,
-    columns=(Column("lat_deg", _DEG), Column("lon_deg", _DEG),
+    columns=(Column("lat_deg", _DEG, sigma=("sigma_north_m", 1.0)),
+             Column("lon_deg", _DEG, sigma=("sigma_east_m", 1.0)),
              Column("heading_deg", _DEG, wrap_2pi=True)),
     angles=(2,), latlon=(0, 1))

@@ -15,10 +15,10 @@ A sensor module holds, for one aiding sensor, everything fednav knows of it:
 from __future__ import annotations
 
 from abc import abstractmethod
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
-from pydantic import Field
+from pydantic import Field, field_validator
 
 from ..core.config import ConfigError, _Model
 from .measurement import RowModel
@@ -26,11 +26,22 @@ from .timing import TimingConfig, measurement_times
 
 
 class SensorConfig(_Model):
-    """Common to every sensor's section: its period (for simulation) and timing; a
-    sensor's section gives its simulator (``sensor``) and measurement model (``model``)."""
+    """Common to every sensor's section: its period (for simulation), timing and
+    outages (simulated windows ``[start_s, end_s)`` without measurements: a GNSS
+    dropout, a star sensor blinded by the sun); a sensor's section gives its simulator
+    (``sensor``) and measurement model (``model``)."""
 
     period_s: float | None = Field(default=None, gt=0.0)
     timing: TimingConfig = TimingConfig()
+    outages_s: list[tuple[float, float]] = []
+
+    @field_validator("outages_s")
+    @classmethod
+    def _outages(cls, v):
+        for a, b in v:
+            if not b > a:
+                raise ValueError(f"an outage ends after it starts, got [{a}, {b}]")
+        return v
 
     @abstractmethod
     def sensor(self):
@@ -51,21 +62,39 @@ class SensorConfig(_Model):
             raise ConfigError(f"sensors.{name}.period_s: needed to simulate the sensor")
         tm = self.timing
         if not tm.delayed:
-            return self.sensor().simulate(truth, rng)
-        t, ta = measurement_times(float(truth.t[0]), float(truth.t[-1]), self.period_s,
-                                  tm.latency(), tm.sequential, rng, truth.dt)
-        return self.sensor().simulate(truth, rng, t, ta)
+            series = self.sensor().simulate(truth, rng)
+        else:
+            t, ta = measurement_times(float(truth.t[0]), float(truth.t[-1]), self.period_s,
+                                      tm.latency(), tm.sequential, rng, truth.dt)
+            series = self.sensor().simulate(truth, rng, t, ta)
+        if not self.outages_s:
+            return series
+        # every measurement is drawn first (the run's random numbers stay the same), then
+        # those inside an outage are removed
+        keep = np.ones(len(series.t), dtype=bool)
+        for a, b in self.outages_s:
+            keep &= ~((series.t >= a) & (series.t < b))
+        return replace(series, t=series.t[keep], z=series.z[keep],
+                       t_avail=series.t_avail[keep])
 
 
 @dataclass(frozen=True)
 class Column:
     """One column of a sensor's CSV file: its header ``name`` (unit in the name), the
     factor that turns its values into the SI value of ``z`` and, for angles, whether it
-    is wrapped to [0, 2 pi)."""
+    is wrapped to [0, 2 pi).  ``sigma``: the header and SI factor of the optional column
+    holding each row's 1-sigma of this component (default ``sigma_<name>`` in the same
+    unit; latitude and longitude give theirs in metres, north and east)."""
 
     name: str
     to_si: float = 1.0
     wrap_2pi: bool = False
+    sigma: tuple[str, float] | None = None
+
+    @property
+    def sigma_column(self) -> tuple[str, float]:
+        """(header, factor to SI) of this component's 1-sigma column."""
+        return self.sigma or (f"sigma_{self.name}", self.to_si)
 
 
 @dataclass(frozen=True)
@@ -92,6 +121,9 @@ class SensorSpec:
     angles: tuple[int, ...] = ()
     latlon: tuple[int, int] | None = None
     height: int | None = None
+    #: another layout of the same measurement: (its columns after ``t_s``, a function
+    #: of their values (N, k) -> ``z`` (N, m) in SI), e.g. the star sensor's quaternion
+    alternative: tuple[tuple[str, ...], object] | None = None
 
     @property
     def compiled(self) -> bool:

@@ -14,7 +14,7 @@ import numpy as np
 from pydantic import Field
 
 from ..core import units
-from ..core.attitude import wrap_2pi
+from ..core.attitude import dcm_to_euler, quat_to_dcm, wrap_2pi
 from ..core.units import ARCMIN
 from .base import MeasurementSeries, flight_times
 from .measurement import HEADING, PITCH, ROLL, RowModel
@@ -63,10 +63,22 @@ class StarConfig(SensorConfig):
         return np.full(3, float(units.arcsec(self.sigma_arcsec)))
 
 
+def euler_of_quaternion(q) -> np.ndarray:
+    """The star sensor's other file layout: unit quaternions ``q_b^n`` (N, 4) scalar
+    first, rotating body right-forward-up into ENU (fednav's ``q``,
+    ``docs/conventions.md``; not normalised in the file: normalised here) -> Euler
+    ``[pitch, roll, heading]`` [rad]."""
+    q = np.asarray(q, dtype=float)
+    return dcm_to_euler(quat_to_dcm(q / np.linalg.norm(q, axis=1)[:, None]))
+
+
 _DEG = float(units.deg(1.0))
+_ARCSEC = float(units.arcsec(1.0))
 SPEC = SensorSpec(
     "star", "star sensor (CNS): attitude as Euler angles [pitch, roll, heading]",
     StarConfig, StarAttitude,
-    columns=(Column("pitch_deg", _DEG), Column("roll_deg", _DEG),
-             Column("heading_deg", _DEG, wrap_2pi=True)),
-    angles=(0, 1, 2))
+    columns=(Column("pitch_deg", _DEG, sigma=("sigma_pitch_arcsec", _ARCSEC)),
+             Column("roll_deg", _DEG, sigma=("sigma_roll_arcsec", _ARCSEC)),
+             Column("heading_deg", _DEG, wrap_2pi=True,
+                    sigma=("sigma_heading_arcsec", _ARCSEC))),
+    angles=(0, 1, 2), alternative=(("qw", "qx", "qy", "qz"), euler_of_quaternion))

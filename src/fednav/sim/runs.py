@@ -18,7 +18,7 @@ from ..core import earth, units
 from ..ins import error_model as em
 from ..ins.strapdown import STATE_LLA, STATE_Q, STATE_VEL
 from ..navigator.navigator import TOTAL_MODELS  # noqa: F401  (0.1's fednav.simulate names)
-from ..navigator.system import imu_noise_model
+from ..navigator.system import initial_covariance as _p0
 from ..navigator.total import total_state_models  # noqa: F401
 from ..sensors import (
     MeasurementSeries,
@@ -85,14 +85,8 @@ def make_run_data(scn: Scenario, seed: int, max_time: float | None = None) -> Ru
 def initial_covariance(scn: Scenario) -> np.ndarray:
     """Filter P0 (filter units) from the scenario's initial errors and IMU specification."""
     ie = scn.initial_errors
-    _, gb, ab = imu_noise_model(scn, scn.imu_period_s)
-    sd = np.r_[
-        units.arcsec(np.asarray(ie.attitude_arcsec)), np.full(3, ie.velocity_mps),
-        np.broadcast_to(np.asarray(ie.position_m, dtype=float), (3,)),
-        np.full(3, gb), np.full(3, scn.imu.si("gyro_markov") or 0.0), np.full(3, ab),
-    ]
-    sd = np.maximum(sd / em.SCALE, 1e-6)  # keep P0 positive definite for states set to 0
-    return np.diag(sd**2)
+    return _p0(scn, scn.imu_period_s,
+               units.arcsec(np.asarray(ie.attitude_arcsec)), ie.velocity_mps, ie.position_m)
 
 
 def _initial_state(scn: Scenario, truth, data: RunData):

@@ -1,0 +1,177 @@
+"""Velocity sensors in body axes and zero-velocity updates: odometer, DVL, ZUPT.
+
+* ``odometer`` — forward speed of the point at its lever arm (a wheel's axle), body
+  axes.  Section ``sensors.odometer``: ``sigma_mps``, ``lever_m`` (body
+  right-forward-up, m), ``period_s``.  File columns: ``t_s, speed_mps``.
+* ``dvl`` — 3-axis velocity of the point at its lever arm in body axes (a Doppler
+  velocity log, a body-mounted velocity sensor).  Section ``sensors.dvl``:
+  ``sigma_mps`` (one value or [right, forward, up]), ``lever_m``, ``period_s``.  File
+  columns: ``t_s, vR_mps, vF_mps, vU_mps``.
+* ``zupt`` — zero-velocity update: the vehicle stands still (ENU velocity zero) at the
+  listed times.  Section ``sensors.zupt``: ``sigma_mps`` (how still "still" is: engine
+  vibration, a rocking hull), ``period_s`` (how often a stop is used), and for
+  simulation ``stationary_below_mps`` (the true speed under which the vehicle counts as
+  stopped).  File columns: ``t_s, vE_mps, vN_mps, vU_mps`` (zeros: the rows of a
+  stop detector's output).
+
+Residuals (linear in the error state, compiled rows of
+:mod:`fednav.sensors.measurement`): odometer and DVL ``C^T v + omega x l - z`` (body
+right, forward, up; the attitude error couples through ``-(c_j x v) . phi``); ZUPT
+``v - z`` (ENU).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from pydantic import Field
+
+from ..core import attitude, earth
+from .base import MeasurementSeries, flight_times
+from .measurement import BVEL_F, BVEL_R, BVEL_U, VEL_E, VEL_N, VEL_U, RowModel
+from .spec import Column, SensorConfig, SensorSpec
+
+_V3 = tuple[float, float, float]
+
+
+def body_velocity(truth, t, lever) -> np.ndarray:
+    """True velocity of the point at ``lever`` (body, m) in body axes right, forward, up
+    [m/s] at times ``t`` (the trajectory's samples nearest them)."""
+    idx = np.rint((np.asarray(t) - truth.t[0]) / truth.dt).astype(int)
+    w = truth.dtheta[np.maximum(idx - 1, 0)] / truth.dt
+    C = attitude.euler_to_dcm(truth.euler[idx])
+    _, v = earth.lever_arm_point(truth.lla[idx], truth.vel[idx], C, w, lever)
+    return np.einsum("nji,nj->ni", C, v)
+
+
+@dataclass(frozen=True)
+class BodyVelocitySensor:
+    """Body-axis velocity of the point at ``lever`` with white noise ``sigma`` (per
+    component of ``axes``: 0 right, 1 forward, 2 up) every ``period`` [s]."""
+
+    kind: str
+    axes: tuple[int, ...]
+    sigma: tuple
+    lever: tuple
+    period: float
+
+    def simulate(self, truth, rng: np.random.Generator, t=None,
+                 t_avail=None) -> MeasurementSeries:
+        t = flight_times(truth, self.period, t)
+        v = body_velocity(truth, t, self.lever)[:, list(self.axes)]
+        sig = np.broadcast_to(np.asarray(self.sigma, dtype=float), (len(self.axes),))
+        z = v + rng.standard_normal(v.shape) * sig
+        return MeasurementSeries(self.kind, t, z, sig.copy(), t_avail)
+
+
+@dataclass(frozen=True)
+class StandstillDetector:
+    """Zero-velocity measurements every ``period`` [s] while the true speed is below
+    ``below`` [m/s] (an ideal stop detector); the noise ``sigma`` is not drawn (the
+    vehicle really stands still: ``sigma`` says how still the filter takes that to be)."""
+
+    sigma: float
+    below: float
+    period: float
+
+    def simulate(self, truth, rng: np.random.Generator, t=None,
+                 t_avail=None) -> MeasurementSeries:
+        t = flight_times(truth, self.period, t)
+        idx = np.rint((t - truth.t[0]) / truth.dt).astype(int)
+        still = np.linalg.norm(truth.vel[idx], axis=1) < self.below
+        t = t[still]
+        if t_avail is not None:
+            t_avail = np.asarray(t_avail)[still]
+        return MeasurementSeries("zupt", t, np.zeros((len(t), 3)), np.full(3, self.sigma),
+                                 t_avail)
+
+
+class _Diagonal(RowModel):
+    def R(self, sigma) -> np.ndarray:
+        return np.diag(np.broadcast_to(np.asarray(sigma, dtype=float), (self.dim,)) ** 2)
+
+
+class OdometerSpeed(_Diagonal):
+    """Odometer: residual = INS-derived forward speed of the wheel point - measured [m/s]."""
+
+    kind = "odometer"
+    rows = ((BVEL_F, 0),)
+
+
+class DvlVelocity(_Diagonal):
+    """DVL: residual = INS-derived body velocity (right, forward, up) of the sensor's point
+    - measured [m/s]."""
+
+    kind = "dvl"
+    rows = ((BVEL_R, 0), (BVEL_F, 1), (BVEL_U, 2))
+
+
+class ZeroVelocity(_Diagonal):
+    """ZUPT: residual = INS velocity (ENU) - 0 [m/s]."""
+
+    kind = "zupt"
+    rows = ((VEL_E, 0), (VEL_N, 1), (VEL_U, 2))
+
+
+class OdometerConfig(SensorConfig):
+    """Odometer: 1-sigma of the forward speed [m/s], lever arm of the measuring wheel's
+    contact point (body right-forward-up, m)."""
+
+    sigma_mps: float = Field(gt=0.0)
+    lever_m: _V3 = (0.0, 0.0, 0.0)
+
+    def sensor(self) -> BodyVelocitySensor:
+        return BodyVelocitySensor("odometer", (1,), (self.sigma_mps,), self.lever_m,
+                                  self.period_s)
+
+    def model(self) -> OdometerSpeed:
+        return OdometerSpeed(self.lever_m)
+
+    def sigma(self) -> np.ndarray:
+        return np.array([self.sigma_mps])
+
+
+class DvlConfig(SensorConfig):
+    """DVL / body velocity sensor: 1-sigma (one value or [right, forward, up] m/s) and
+    lever arm (body right-forward-up, m)."""
+
+    sigma_mps: float | _V3
+    lever_m: _V3 = (0.0, 0.0, 0.0)
+
+    def sensor(self) -> BodyVelocitySensor:
+        return BodyVelocitySensor("dvl", (0, 1, 2), tuple(self.sigma()), self.lever_m,
+                                  self.period_s)
+
+    def model(self) -> DvlVelocity:
+        return DvlVelocity(self.lever_m)
+
+    def sigma(self) -> np.ndarray:
+        return np.broadcast_to(np.asarray(self.sigma_mps, dtype=float), (3,)).copy()
+
+
+class ZuptConfig(SensorConfig):
+    """Zero-velocity updates: 1-sigma of "still" [m/s]; in simulation, stops are where
+    the true speed is below ``stationary_below_mps``."""
+
+    sigma_mps: float = Field(default=0.02, gt=0.0)
+    stationary_below_mps: float = Field(default=1e-3, gt=0.0)
+
+    def sensor(self) -> StandstillDetector:
+        return StandstillDetector(self.sigma_mps, self.stationary_below_mps, self.period_s)
+
+    def model(self) -> ZeroVelocity:
+        return ZeroVelocity()
+
+    def sigma(self) -> np.ndarray:
+        return np.full(3, self.sigma_mps)
+
+
+ODOMETER = SensorSpec("odometer", "odometer: forward speed in body axes at its lever arm",
+                      OdometerConfig, OdometerSpeed, columns=(Column("speed_mps"),))
+DVL = SensorSpec("dvl", "DVL / body velocity sensor: velocity in body axes right, forward, "
+                 "up at its lever arm", DvlConfig, DvlVelocity,
+                 columns=(Column("vR_mps"), Column("vF_mps"), Column("vU_mps")))
+ZUPT = SensorSpec("zupt", "zero-velocity update: ENU velocity zero while stopped",
+                  ZuptConfig, ZeroVelocity,
+                  columns=(Column("vE_mps"), Column("vN_mps"), Column("vU_mps")))
