@@ -193,14 +193,14 @@ def _run_process(read, imu, gnss, velocity, ref, smooth, out, config, output_rat
     try:
         cfg = System() if config is None else load_model(config, System, "processing config")
         data = read(cfg)
+        # the files read (the options', else those the description lists)
+        paths = {"imu": imu, "gnss": gnss, "velocity": velocity, **(files or {}),
+                 "reference": ref, **data.get("paths", {})}
         clear_results(out)
         res = process(data["imu"], data["gnss"], data["velocity"], cfg, smooth,
                       sensors=data.get("sensors"))
         files = process_output.write(out, res, data["ref"], {
-            "imu": str(imu), "gnss": str(gnss),
-            "velocity": None if velocity is None else str(velocity),
-            **{n: str(f) for n, f in (files or {}).items()},
-            "reference": None if ref is None else str(ref),
+            **{n: None if f is None else str(f) for n, f in paths.items()},
             "config": None if config is None else str(config), "smooth": smooth,
             "output_rate_hz": output_rate}, output_rate, data["gnss"])
     except (FednavError, ValueError) as e:
@@ -257,10 +257,12 @@ def _navego_reader(imu: Path, gnss: Path, visual: Path | None, ref: Path | None 
     return read
 
 
-def _csv_reader(imu: Path, gnss: Path, velocity: Path | None, ref: Path | None = None,
-                files: dict | None = None):
+def _csv_reader(imu: Path | None, gnss: Path | None, velocity: Path | None,
+                ref: Path | None = None, files: dict | None = None, config: Path | None = None):
     """``read(cfg)`` of fednav CSV files (GNSS sigmas and lever arm from the config, else
-    5 m, 0.1 m/s and none; ``files``: other registered sensors' files by name)."""
+    5 m, 0.1 m/s and none; ``files``: other registered sensors' files by name).  A file
+    the options leave out is taken from the system description's ``files:`` (relative to
+    its folder); ``read`` returns the paths it used under ``paths``."""
     def read(cfg):
         import numpy as np
 
@@ -272,18 +274,34 @@ def _csv_reader(imu: Path, gnss: Path, velocity: Path | None, ref: Path | None =
             read_velocity_csv,
         )
 
+        base = Path(config).parent if config is not None else Path(".")
+        listed = {k: base / v for k, v in cfg.files.items()}
+        paths = {"imu": imu or listed.get("imu"), "gnss": gnss or listed.get("gnss"),
+                 "reference": ref or listed.get("reference")}
+        others = {n: f for n, f in listed.items()
+                  if n not in ("imu", "gnss", "reference", "velocity")}
+        others.update(files or {})
+        vel = velocity or listed.get("velocity")
+        if paths["imu"] is None:
+            raise typer.BadParameter("no IMU file: give --imu FILE or files: {imu: FILE} in "
+                                     "--config", param_hint="--imu")
         gc = cfg.sensors.gnss
 
         def given(v, default):
             return default if v is None else np.broadcast_to(np.asarray(v, float), (3,))
 
-        g = read_gnss_csv(gnss, given(gc and gc.sigma_pos_m, (5.0, 5.0, 5.0)),
-                          given(gc and gc.sigma_vel_mps, (0.1, 0.1, 0.1)),
-                          given(gc and gc.lever_m, (0.0, 0.0, 0.0)))
-        return {"imu": read_imu_csv(imu, cfg.imu.max_bridge_s), "gnss": g,
-                "velocity": None if velocity is None else read_velocity_csv(velocity),
-                "ref": None if ref is None else read_reference_csv(ref),
-                "sensors": {n: read_sensor_csv(n, f) for n, f in (files or {}).items()}}
+        g = None
+        if paths["gnss"] is not None:
+            g = read_gnss_csv(paths["gnss"], given(gc and gc.sigma_pos_m, (5.0, 5.0, 5.0)),
+                              given(gc and gc.sigma_vel_mps, (0.1, 0.1, 0.1)),
+                              given(gc and gc.lever_m, (0.0, 0.0, 0.0)))
+        return {"imu": read_imu_csv(paths["imu"], cfg.imu.max_bridge_s), "gnss": g,
+                "velocity": None if vel is None else read_velocity_csv(vel),
+                "ref": None if paths["reference"] is None
+                else read_reference_csv(paths["reference"]),
+                "sensors": {n: read_sensor_csv(n, f) for n, f in others.items()},
+                "paths": {k: v for k, v in {**paths, **others, "velocity": vel}.items()
+                          if v is not None}}
     return read
 
 
@@ -343,18 +361,20 @@ def process_navego(
 @_one_line_errors
 @_sensor_file_options("gnss", "velocity")
 def process_csv(
-    imu: Path = typer.Option(..., help="IMU CSV (docs/data-formats.md)"),
-    gnss: Path = typer.Option(..., help="GNSS CSV"),
+    imu: Path = typer.Option(None, help="IMU CSV: rates or increments (docs/data-formats.md)"),
+    gnss: Path = typer.Option(None, help="GNSS CSV: positions and/or velocities"),
     velocity: Path = typer.Option(None, help="velocity-sensor CSV"),
-    ref: Path = typer.Option(None, help="reference CSV (for RMSE)"),
+    ref: Path = typer.Option(None, help="reference CSV (for RMSE and errors.csv)"),
     smooth: bool = _SMOOTH, out: Path = _OUT, config: Path = _CONFIG,
     output_rate: float = _RATE, **files: Path,
 ) -> None:
-    """INS/GNSS (+ velocity sensor, + any registered sensor's file) on fednav CSV files;
-    the IMU noise figures and sensor sigmas come from --config."""
+    """The system described by --config (any registered sensors, local filters, fault
+    detection, delay handling, smoother) on fednav CSV files: one option per sensor, or
+    the files the description lists (files:); the IMU noise figures and sensor sigmas
+    come from --config (or each row's sigma columns)."""
     files = {n: f for n, f in files.items() if f is not None}
-    _run_process(_csv_reader(imu, gnss, velocity, ref, files), imu, gnss, velocity, ref,
-                 smooth, out, config, output_rate, files)
+    _run_process(_csv_reader(imu, gnss, velocity, ref, files, config), imu, gnss, velocity,
+                 ref, smooth, out, config, output_rate, files)
 
 
 tune_app = typer.Typer(no_args_is_help=True,
@@ -440,15 +460,41 @@ def tune_csv(
 @app.command()
 @_one_line_errors
 def simulate(
-    scenario: Path = typer.Argument(..., help="dataset scenario YAML (examples/car-drive.yaml)"),
-    out: Path = typer.Option(Path("results/dataset"), help="output folder"),
-    fmt: str = typer.Option("csv", "--format", help="csv (fednav layout) or navego (.mat)"),
-    seed: int = typer.Option(None, help="override the scenario's seed"),
+    scenario: str = typer.Argument(..., help="a paper (000, 002, 003, 004 or its alias), a "
+                                             "paper-layout scenario YAML (with modes), or a "
+                                             "dataset scenario YAML (examples/car-drive.yaml)"),
+    out: Path = typer.Option(None, help="output folder", show_default="results/dataset"),
+    fmt: str = typer.Option("csv", "--format", help="csv (fednav layout) or navego (.mat; "
+                                                    "dataset scenarios)"),
+    seed: int = typer.Option(None, help="the run's seed (a paper's run S of `fednav "
+                                        "reproduce --seed S`; default 1 or the dataset's)"),
+    mode: str = typer.Option(None, help="the mode whose sensors and system to write (papers "
+                                        "and scenarios; default: the last, the full system)"),
+    max_time: float = typer.Option(None, help="truncate the flight (as reproduce --max-time)"),
 ) -> None:
-    """Simulate a dataset (IMU, GNSS, velocity sensor, reference) from a scenario, in the
-    layouts `fednav process csv|navego` reads."""
+    """Simulate recorded data in the layouts `fednav process csv|navego` reads: a paper's
+    or scenario's run (IMU increments, each sensor of the mode, reference, system.yaml) or
+    a dataset scenario (IMU, GNSS, velocity sensor, reference)."""
     if fmt not in ("csv", "navego"):
         typer.echo(f"error: --format must be csv or navego, got '{fmt}'", err=True)
+        raise typer.Exit(2)
+    if seed is not None and seed < 0:
+        typer.echo(f"error: --seed must be 0 or more, got {seed}", err=True)
+        raise typer.Exit(2)
+    from .scenarios import paper_module
+
+    mod = paper_module(scenario)
+    path = Path(scenario)
+    if mod is None and not path.exists():
+        typer.echo(f"error: '{scenario}' is neither a paper (000, 002, 003, 004 or an alias) "
+                   f"nor a scenario file", err=True)
+        raise typer.Exit(2)
+    if mod is not None or _has_modes(path):
+        _simulate_run(mod, path, out, fmt, 1 if seed is None else seed, mode, max_time)
+        return
+    if mode is not None or max_time is not None:
+        typer.echo("error: --mode and --max-time apply to papers and scenarios with modes, "
+                   f"not to the dataset scenario {path}", err=True)
         raise typer.Exit(2)
     from .sim.dataset import (
         load_dataset_config,
@@ -457,15 +503,51 @@ def simulate(
         write_navego_dataset,
     )
 
-    cfg = load_dataset_config(scenario)
+    cfg = load_dataset_config(path)
     if seed is not None:
         cfg = cfg.model_copy(update={"seed": seed})
-    out = _output_folder(out)
+    out = _output_folder(out or Path("results/dataset"))
     ds = simulate_dataset(cfg)
     files = (write_csv_dataset if fmt == "csv" else write_navego_dataset)(ds, out)
     console.print(f"{cfg.name}: {ds.t[-1] - ds.t[0]:.0f} s, {len(ds.t)} IMU samples, "
                   f"{len(ds.gnss_t)} GNSS fixes (seed {cfg.seed})")
     console.print(f"wrote {', '.join(str(f) for f in files)}")
+
+
+def _has_modes(path: Path) -> bool:
+    """Whether a YAML file is a paper-layout scenario (it has ``modes``)."""
+    from .core.config import read_mapping
+
+    try:
+        return "modes" in read_mapping(path, "scenario")
+    except FednavError:
+        return False  # the dataset reader says what is wrong
+
+
+def _simulate_run(mod, path: Path, out: Path | None, fmt: str, seed: int, mode: str | None,
+                  max_time: float | None) -> None:
+    """``fednav simulate PAPER|SCENARIO``: run ``seed``'s data of one mode as files."""
+    from .sim.export import find_mode, write_run
+    from .sim.scenario import Scenario, load_scenario
+
+    if fmt != "csv":
+        typer.echo("error: --format navego applies to dataset scenarios (NaveGo has no "
+                   "star sensor or SAR layout)", err=True)
+        raise typer.Exit(2)
+    scn = mod.EXPERIMENT.load_scenario() if mod is not None else load_scenario(path)
+    if not isinstance(scn, Scenario):
+        typer.echo(f"error: paper {mod.PAPER} flies in its own frame (the launch frame); "
+                   f"fednav simulate writes the ENU papers 000, 002, 003 and 004", err=True)
+        raise typer.Exit(2)
+    m = find_mode(scn, mode)
+    out = _output_folder(out or Path("results") / f"{scn.name}-{seed}")
+    files = write_run(scn, seed, m, out, max_time)
+    truth = scn.trajectory(max_time)
+    console.print(f"{scn.name}: run seed {seed}, mode {m.name}: {truth.t[-1] - truth.t[0]:.0f} "
+                  f"s, {len(truth.t) - 1} IMU samples")
+    console.print(f"wrote {', '.join(str(f) for f in files)}")
+    console.print(f"process them: fednav process csv --config {out / 'system.yaml'} "
+                  f"--out {out / 'processed'}")
 
 
 @app.command()

@@ -123,14 +123,48 @@ def _lla(df) -> np.ndarray:
     return np.column_stack([units.deg(p[:, 0]), units.deg(p[:, 1]), p[:, 2]])
 
 
+#: Optional per-fix 1-sigma of a GNSS file [north, east, up m, vE, vN, vU m/s].
+GNSS_SIGMA_COLUMNS = ("sigma_north_m", "sigma_east_m", "sigma_up_m") + VEL_SIGMA_COLUMNS
+
+
 def read_gnss_csv(path, sigma_pos=(5.0, 5.0, 5.0), sigma_vel=(0.1, 0.1, 0.1),
                   lever=(0.0, 0.0, 0.0)) -> GnssData:
-    """GNSS CSV; the noise figures [north, east, up] m / [E, N, U] m/s and the antenna
-    lever arm (body right-forward-up, m) come from the caller (the processing config)."""
-    src, df = _read(path, "GNSS", ("t_s",) + POS_COLUMNS)
-    vel = _cols(df, VEL_COLUMNS) if _has(df, VEL_COLUMNS) else None
-    return GnssData(src, df["t_s"].to_numpy(float), _lla(df), vel, np.asarray(sigma_pos),
-                    np.asarray(sigma_vel), np.asarray(lever))
+    """GNSS CSV: positions ``lat_deg, lon_deg, h_m`` and/or ENU velocities ``vE_mps,
+    vN_mps, vU_mps`` (a position-only or velocity-only receiver), optionally each fix's
+    1-sigma (``sigma_north_m, sigma_east_m, sigma_up_m`` and/or ``sigma_vE_mps ...``,
+    for the components the file has).  The noise figures [north, east, up] m / [E, N,
+    U] m/s used where the file has none and the antenna lever arm (body
+    right-forward-up, m) come from the caller (the processing config)."""
+    src, df = _read(path, "GNSS", ("t_s",), numeric=POS_COLUMNS + GNSS_SIGMA_COLUMNS,
+                    expected=("t_s",) + POS_COLUMNS + VEL_COLUMNS)
+    has_pos, has_vel = _has(df, POS_COLUMNS), _has(df, VEL_COLUMNS)
+    partial = [g for g in (POS_COLUMNS, VEL_COLUMNS)
+               if not _has(df, g) and any(c in df.columns for c in g)]
+    have = ", ".join(map(str, df.columns))
+    if partial:
+        missing = [c for c in partial[0] if c not in df.columns]
+        raise DataError(f"{src}: missing column(s) {', '.join(missing)} (have {have})")
+    if not has_pos and not has_vel:
+        raise DataError(f"{src}: missing column(s) {', '.join(POS_COLUMNS)} and/or "
+                        f"{', '.join(VEL_COLUMNS)} (a GNSS file has positions, velocities or "
+                        f"both; have {have})")
+    n = len(df)
+    lla = _lla(df) if has_pos else None
+    vel = _cols(df, VEL_COLUMNS) if has_vel else None
+    sig = None
+    want = [c for c, used in zip(GNSS_SIGMA_COLUMNS, [has_pos] * 3 + [has_vel] * 3,
+                                 strict=True) if used]
+    given = [c for c in want if c in df.columns]
+    if given:
+        if len(given) != len(want):
+            raise DataError(f"{src}: 1-sigma columns are all of {', '.join(want)} or none; "
+                            f"missing {', '.join(c for c in want if c not in given)}")
+        sig = np.ones((n, 6))
+        for j, c in enumerate(GNSS_SIGMA_COLUMNS):
+            if c in df.columns and c in want:
+                sig[:, j] = df[c].to_numpy(float)
+    return GnssData(src, df["t_s"].to_numpy(float), lla, vel, np.asarray(sigma_pos),
+                    np.asarray(sigma_vel), np.asarray(lever), sigma_rows=sig)
 
 
 def read_velocity_csv(path, lever=(0.0, 0.0, 0.0)) -> VelocityData:

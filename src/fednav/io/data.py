@@ -247,7 +247,8 @@ class ImuData:
         dth = _as_float(source, "dtheta", dtheta, (-1, 3))
         dvv = _as_float(source, "dv", dv, (-1, 3))
         check_rows(source, len(t_end), dtheta=dth, dv=dvv)
-        return cls(source, t_end - d, dth / d[:, None], dvv / d[:, None], **kw)
+        t_start = np.r_[t_end[0] - d[0], t_end[:-1]]
+        return cls(source, t_start, dth / d[:, None], dvv / d[:, None], **kw)
 
     def period(self) -> float:
         """The sampling period [s] (uniform: :func:`regular_imu` made it so)."""

@@ -140,6 +140,26 @@ def plot_errors(res: ProcessResult, ref: Reference, path: Path) -> Path:
     return path
 
 
+def write_errors(res: ProcessResult, ref: Reference, path: Path) -> Path:
+    """``errors.csv``: the forward (and smoothed, ``*_smoothed``) solution minus the
+    reference at the reference's time stamps: ``north_m, east_m, down_m, vn_mps, ve_mps,
+    vd_mps`` and, with a reference attitude, ``pitch_deg, roll_deg, yaw_deg``
+    (:func:`~fednav.process.run.errors_against`; 10 significant digits)."""
+    cols = {}
+    for sol, tag in ((res.forward, ""), (res.smoothed, "_smoothed")):
+        if sol is None:
+            continue
+        err = errors_against(sol, ref)
+        if not cols:
+            cols["t_s"] = err["t"]
+        for k, v in err.items():
+            if k.endswith("_rad"):
+                cols[k[:-4] + "_deg" + tag] = units.to_deg(v)
+            elif k != "t":
+                cols[k + tag] = v
+    return write_csv(path, cols)
+
+
 def plot_track(res: ProcessResult, gnss, ref: Reference | None, path: Path) -> Path:
     """East/north track [m] from the first GNSS fix: GNSS fixes, the forward and smoothed
     solutions and the reference; GNSS outages (gaps over 3 median periods) drawn in red on
@@ -151,14 +171,16 @@ def plot_track(res: ProcessResult, gnss, ref: Reference | None, path: Path) -> P
 
     from ..core import earth
 
-    o = gnss.lla[0]
+    fixes = gnss is not None and gnss.lla is not None
+    o = gnss.lla[0] if fixes else res.forward.lla[0]
 
     def en(lla):
         d = earth.llh_difference_enu(lla[:, 0], lla[:, 1], lla[:, 2], o[0], o[1], o[2])
         return d[:, 0], d[:, 1]
 
     fig, ax = plt.subplots(figsize=(8, 7))
-    ax.plot(*en(gnss.lla), ".", ms=2, color="0.6", label="GNSS")
+    if fixes:
+        ax.plot(*en(gnss.lla), ".", ms=2, color="0.6", label="GNSS")
     if ref is not None:
         k = _thin(len(ref.t))
         ax.plot(*en(ref.lla[k]), "k-", lw=1.5, alpha=0.35, label="reference")
@@ -167,14 +189,16 @@ def plot_track(res: ProcessResult, gnss, ref: Reference | None, path: Path) -> P
             k = _thin(len(s.t))
             ax.plot(*en(s.lla[k]), lw=0.9, label=s.label)
     f = res.forward
-    gap = 3.0 * float(np.median(np.diff(gnss.t)))
-    outages = [(a, b) for a, b in zip(gnss.t[:-1], gnss.t[1:], strict=True) if b - a > gap]
+    outages = []
+    if gnss is not None and len(gnss.t) > 1:
+        gap = 3.0 * float(np.median(np.diff(gnss.t)))
+        outages = [(a, b) for a, b in zip(gnss.t[:-1], gnss.t[1:], strict=True) if b - a > gap]
     for i, (a, b) in enumerate(outages):
         m = (f.t > a) & (f.t < b)
         ax.plot(*en(f.lla[m]), "r-", lw=2.0, label="GNSS outage" if i == 0 else None)
     if f.fdi:
         log = pd.DataFrame(f.fdi, columns=["t", "local", "nis", "dof", "thr", "isolated"])
-        for name, marker in (("gnss", "x"), ("velocity", "+")):
+        for name, marker in zip(log.local.unique(), "x+*^vo<>sd", strict=False):
             t_iso = log.t[(log.local == name) & log.isolated].to_numpy(dtype=float)
             if len(t_iso):
                 i = np.clip(np.searchsorted(f.t, t_iso), 0, len(f.t) - 1)
@@ -202,9 +226,9 @@ def write(out: Path, res: ProcessResult, ref: Reference | None, inputs: dict,
         if sol is not None:
             cols = solution_columns(decimate(sol, output_rate))
             files.append(write_csv(out / name, cols, solution_decimals(cols)))
-    if gnss is not None:
-        files.append(plot_track(res, gnss, ref, out / "track.png"))
+    files.append(plot_track(res, gnss, ref, out / "track.png"))
     if ref is not None:
+        files.append(write_errors(res, ref, out / "errors.csv"))
         files.append(plot_errors(res, ref, out / "errors.png"))
     s = summary(res, ref, inputs)
     p = out / "summary.json"

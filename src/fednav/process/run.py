@@ -497,7 +497,9 @@ def errors_against(sol: Solution, ref: Reference) -> dict[str, np.ndarray]:
     north/east/down [m], vN/vE/vD [m/s] and, if the reference has attitude, roll, pitch,
     yaw [rad] (``*_rad``; NED naming, as navigation users report them).  The solution is moved to
     the point the reference describes (its lever arm) before differencing."""
-    m = (ref.t >= sol.t[0]) & (ref.t <= sol.t[-1])
+    # (the solution's time stamps t0 + k dt may end a few ulp before a reference stamp)
+    tol = 1e-6 * float(sol.t[1] - sol.t[0]) if len(sol.t) > 1 else 0.0
+    m = (ref.t >= sol.t[0] - tol) & (ref.t <= sol.t[-1] + tol)
     if not m.any():
         raise DataError(f"{ref.source}: reference does not overlap the solution in time")
     tr = ref.t[m]
