@@ -135,5 +135,6 @@ def test_imu_gap_is_reported(tmp_path):
     f = _imu_fields()
     f["t"] = f["t"].copy()
     f["t"][30:] += 0.5
-    with pytest.raises(DataError, match=r"IMU sampling has a gap of 0.510000 s between t = 0.290000 s"):
+    with pytest.raises(DataError, match=r"IMU sampling has a gap of 0.510000 s between t = "
+                                        r"0.290000 s"):
         read_navego_imu(_save(tmp_path, "imu", **f))

@@ -170,7 +170,8 @@ def main():
         (HERE / f"{kind}-empty.csv").write_text("")
         a = proc(f"{kind}-empty.csv") if kind == "imu" else proc(gnss_p=f"{kind}-empty.csv")
         need = ("t_s, gyro_x_radps, gyro_y_radps, gyro_z_radps, accel_x_mps2, accel_y_mps2, "
-                "accel_z_mps2" if kind == "imu" else "t_s, lat_deg, lon_deg, h_m, vE_mps, vN_mps, vU_mps")
+                "accel_z_mps2" if kind == "imu"
+                else "t_s, lat_deg, lon_deg, h_m, vE_mps, vN_mps, vU_mps")
         csv_case(f"csv-{kind}-empty", a, 2,
                  f"error: {kind}-empty.csv: empty file (expected a header row: {need})")
         f = edit(f"{kind}-header-only.csv", src, lambda t: t.splitlines()[0] + "\n")
