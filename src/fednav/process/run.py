@@ -280,15 +280,27 @@ def _other_sensor(data: SensorData, cfg: System):
     return sc
 
 
-def _position_velocity(gnss: GnssData) -> np.ndarray:
-    """ENU velocity [m/s] from the differences of position-only fixes (the alignment's
-    course and the initial velocity; central differences, one-sided at the ends)."""
+#: Half-width [s] of the window over which position-only fixes give a velocity.
+VELOCITY_WINDOW_S = 2.0
+
+
+def _position_velocity(gnss: GnssData) -> tuple[np.ndarray, float]:
+    """ENU velocity [m/s] of position-only fixes, for the alignment's course and the
+    initial velocity: the position difference across a window of +-
+    :data:`VELOCITY_WINDOW_S` around each fix (one-sided at the ends), and its 1-sigma
+    [m/s] from the position noise (``sqrt(2) sigma / 2W``)."""
     lla = gnss.lla
     d = earth.llh_difference_enu(lla[:, 0], lla[:, 1], lla[:, 2], lla[0, 0], lla[0, 1],
                                  lla[0, 2])
-    if len(gnss.t) < 2:
-        return np.zeros((len(gnss.t), 3))
-    return np.column_stack([np.gradient(d[:, j], gnss.t) for j in range(3)])
+    t = gnss.t
+    lo = np.searchsorted(t, t - VELOCITY_WINDOW_S)
+    hi = np.minimum(np.searchsorted(t, t + VELOCITY_WINDOW_S, side="right") - 1, len(t) - 1)
+    span = t[hi] - t[lo]
+    vel = np.zeros((len(t), 3))
+    ok = span > 0
+    vel[ok] = (d[hi[ok]] - d[lo[ok]]) / span[ok, None]
+    sigma = float(np.sqrt(2.0) * np.max(gnss.sigma_pos) / (2.0 * VELOCITY_WINDOW_S))
+    return vel, sigma
 
 
 def _period(cfg: System, gnss: GnssData | None, others: dict) -> float:
@@ -405,15 +417,16 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
                        report={"levelling": "initial", "heading": "initial"})
         gyro_bias = None
     else:
+        gnss_v, sig_vel0 = gnss, sig_vel
         if gnss.vel is None:  # the alignment's course from the positions' differences
-            gnss_v = replace(gnss, vel=_position_velocity(gnss), quality={})
-        else:
-            gnss_v = gnss
+            v, s_v = _position_velocity(gnss)
+            sig_vel0 = np.full(3, s_v)
+            gnss_v = replace(gnss, vel=v, sigma_vel=sig_vel0, quality={})
         al = _initial_attitude(imu, gnss_v, cfg, t0, i0, dt, noise, ab)
         C0 = att.euler_to_dcm(al.euler)
         lla0 = earth.move_enu(gnss.lla[0], -(C0 @ lever))
         vel0 = gnss_v.vel[0]
-        P0 = _initial_covariance(al, sig_vel, sig_pos, gb, ab, noise)
+        P0 = _initial_covariance(al, sig_vel0, sig_pos, gb, ab, noise)
         euler0, gyro_bias = al.euler, al.gyro_bias
     warnings += al.warnings
 

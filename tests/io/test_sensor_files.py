@@ -1,0 +1,165 @@
+"""Each aiding sensor's CSV layout against its documented meaning (docs/data-formats.md):
+units, frames, the sign of heading, quaternion order, per-row sigma; bad files are one
+line naming the file, the column and the row."""
+
+import numpy as np
+import pytest
+
+from fednav.core import attitude as att
+from fednav.io import read_sensor_csv
+from fednav.io.csvdata import read_gnss_csv, read_imu_csv
+from fednav.io.data import DataError
+
+
+def _write(path, text):
+    path.write_text(text)
+    return path
+
+
+def test_star_euler_row_with_sigma_in_arcseconds(tmp_path):
+    f = _write(tmp_path / "star.csv", "t_s,pitch_deg,roll_deg,heading_deg,sigma_pitch_arcsec,"
+               "sigma_roll_arcsec,sigma_heading_arcsec,t_arrival_s\n"
+               "1.5,2.0,-3.0,370.0,3,4,5,1.75\n")
+    d = read_sensor_csv("star", f)
+    np.testing.assert_allclose(d.z[0], np.radians([2.0, -3.0, 10.0]))  # heading wrapped
+    np.testing.assert_allclose(d.sigma[0], np.radians(np.array([3, 4, 5]) / 3600.0))
+    assert d.t[0] == 1.5 and d.t_arrival[0] == 1.75
+
+
+def test_star_quaternion_layout_is_body_to_enu_scalar_first(tmp_path):
+    # heading 90 deg (body forward = east): a rotation of -90 deg about up (ENU z),
+    # q = [cos(-45 deg), 0, 0, sin(-45 deg)] by hand; fednav's own quaternion agrees
+    q = np.array([np.cos(np.radians(-45.0)), 0.0, 0.0, np.sin(np.radians(-45.0))])
+    np.testing.assert_allclose(att.euler_to_quat([0.0, 0.0, np.pi / 2]), q, atol=1e-15)
+    f = _write(tmp_path / "star.csv", "t_s,qw,qx,qy,qz\n"
+               f"0.0,{float(2 * q[0])!r},0,0,{float(2 * q[3])!r}\n")  # (not normalised in the file)
+    d = read_sensor_csv("star", f)
+    np.testing.assert_allclose(d.z[0], [0.0, 0.0, np.pi / 2], atol=1e-12)
+    assert d.sigma is None
+
+
+def test_sar_fix_row_sigma_in_metres(tmp_path):
+    f = _write(tmp_path / "sar.csv", "t_s,lat_deg,lon_deg,heading_deg,sigma_north_m,"
+               "sigma_east_m,sigma_heading_deg\n10,39.5,-117.25,-1.0,3,4,0.5\n")
+    d = read_sensor_csv("sar", f)
+    np.testing.assert_allclose(d.z[0], [np.radians(39.5), np.radians(-117.25),
+                                        np.radians(359.0)])
+    np.testing.assert_allclose(d.sigma[0], [3.0, 4.0, np.radians(0.5)])
+
+
+@pytest.mark.parametrize(("name", "header", "row", "z"), [
+    ("sarvel", "vE_mps,vN_mps", "1.0,-2.0", [1.0, -2.0]),
+    ("baro", "h_m", "120.5", [120.5]),
+    ("odometer", "speed_mps", "12.5", [12.5]),
+    ("dvl", "vR_mps,vF_mps,vU_mps", "0.1,2.0,-0.05", [0.1, 2.0, -0.05]),
+    ("zupt", "vE_mps,vN_mps,vU_mps", "0,0,0", [0.0, 0.0, 0.0]),
+    ("airdata", "airspeed_mps,wind_e_mps,wind_n_mps", "50,3,-4", [50.0, 3.0, -4.0]),
+])
+def test_metric_layouts_read_as_written(tmp_path, name, header, row, z):
+    f = _write(tmp_path / f"{name}.csv", f"t_s,{header}\n0.5,{row}\n1.5,{row}\n")
+    d = read_sensor_csv(name, f)
+    np.testing.assert_allclose(d.z, [z, z])
+    np.testing.assert_allclose(d.t, [0.5, 1.5])
+
+
+@pytest.mark.parametrize("name", ["star", "sar", "sarvel", "baro", "odometer", "dvl", "zupt"])
+def test_bad_files_of_each_layout_are_one_line_errors(tmp_path, name):
+    from fednav.io.sensorfile import columns, sigma_columns
+
+    head = columns(name)
+    sig = sigma_columns(name)
+    vals = ",".join(["1"] * (len(head) - 1))
+    ones = ",".join(["1"] * len(sig))
+    # a missing column
+    f = _write(tmp_path / "a.csv", ",".join(head[:-1]) + "\n" + "0," + ",".join(
+        ["1"] * (len(head) - 2)) + "\n")
+    with pytest.raises(DataError, match=rf"a.csv: missing column\(s\) {head[-1]}") as e:
+        read_sensor_csv(name, f)
+    assert "\n" not in str(e.value)
+    # a NaN row is dropped and counted
+    f = _write(tmp_path / "b.csv", ",".join(head) + f"\n0,{vals}\n1,nan{',1' * (len(head) - 2)}"
+               f"\n2,{vals}\n")
+    d = read_sensor_csv(name, f)
+    assert len(d.t) == 2 and d.quality[f"{name}_rows_dropped"] == 1
+    # time going backwards
+    f = _write(tmp_path / "c.csv", ",".join(head) + f"\n0,{vals}\n2,{vals}\n1,{vals}\n")
+    with pytest.raises(DataError, match=r"c.csv: column 't_s' is not increasing at data row 3"):
+        read_sensor_csv(name, f)
+    # a sigma that is not positive
+    zero = ",".join(["1"] * (len(sig) - 1) + ["0"])
+    f = _write(tmp_path / "d.csv", ",".join(head + sig) + f"\n0,{vals},{ones}\n1,{vals},{zero}\n")
+    with pytest.raises(DataError, match=rf"d.csv: column '{sig[-1]}' is 0 at data row 2: a "
+                                        r"1-sigma must be positive"):
+        read_sensor_csv(name, f)
+    # some sigma columns but not all
+    if len(sig) > 1:
+        f = _write(tmp_path / "e.csv", ",".join(head + sig[:1]) + f"\n0,{vals},1\n")
+        with pytest.raises(DataError, match="1-sigma columns are all of"):
+            read_sensor_csv(name, f)
+
+
+def test_gnss_position_only_velocity_only_and_per_fix_sigma(tmp_path):
+    f = _write(tmp_path / "p.csv", "t_s,lat_deg,lon_deg,h_m,sigma_north_m,sigma_east_m,"
+               "sigma_up_m\n0,45,-75,10,1,2,3\n1,45.00001,-75,10,1,2,3\n")
+    g = read_gnss_csv(f)
+    assert g.vel is None and g.lla.shape == (2, 3)
+    np.testing.assert_allclose(g.sigma_rows[0, :3], [1, 2, 3])
+    f = _write(tmp_path / "v.csv", "t_s,vE_mps,vN_mps,vU_mps\n0,1,2,0\n1,1,2,0\n")
+    g = read_gnss_csv(f)
+    assert g.lla is None and g.vel.shape == (2, 3) and g.sigma_rows is None
+    f = _write(tmp_path / "h.csv", "t_s,lat_deg,lon_deg,vE_mps,vN_mps,vU_mps\n0,45,-75,1,2,0\n")
+    with pytest.raises(DataError, match=r"missing column\(s\) h_m \(have"):
+        read_gnss_csv(f)
+    f = _write(tmp_path / "n.csv", "t_s,speed\n0,1\n")
+    with pytest.raises(DataError, match="positions, velocities or both"):
+        read_gnss_csv(f)
+    f = _write(tmp_path / "s.csv", "t_s,lat_deg,lon_deg,h_m,sigma_north_m,sigma_east_m,"
+               "sigma_up_m\n0,45,-75,10,1,2,3\n1,45,-75,10,1,-2,3\n")
+    with pytest.raises(DataError, match="is not positive"):
+        read_gnss_csv(f)
+
+
+def test_imu_increments_are_over_the_interval_ending_at_the_stamp(tmp_path):
+    # 100 Hz, a constant 0.1 rad/s about up and 9.8 m/s^2 up: increments 1e-3 rad, 0.098 m/s
+    t = np.arange(1, 6) * 0.01
+    rows = "\n".join(f"{float(x)!r},0,0,0.001,0,0,0.098" for x in t)
+    f = _write(tmp_path / "imu.csv", "t_s,dtheta_x_rad,dtheta_y_rad,dtheta_z_rad,dv_x_mps,"
+               "dv_y_mps,dv_z_mps\n" + rows + "\n")
+    imu = read_imu_csv(f)
+    np.testing.assert_allclose(imu.t, t - 0.01, atol=1e-15)  # stamped at the interval start
+    np.testing.assert_allclose(imu.gyro[:, 2], 0.1)
+    np.testing.assert_allclose(imu.accel[:, 2], 9.8)
+    assert imu.quality == {"imu_samples_bridged": 0}
+
+
+def test_jittered_and_missing_imu_stamps_keep_every_increment(tmp_path):
+    rng = np.random.default_rng(5)
+    d = rng.uniform(0.008, 0.011, 400)
+    d[100] = 0.02  # a dropped sample
+    t = np.cumsum(d)
+    w = np.column_stack([np.sin(t), np.cos(2 * t), 0.3 * t])  # rad/s
+    dth = w * d[:, None]
+    rows = "\n".join(",".join(repr(float(v)) for v in (a, *b)) + ",0,0,0.1"
+                     for a, b in zip(t, dth, strict=True))
+    f = _write(tmp_path / "imu.csv", "t_s,dtheta_x_rad,dtheta_y_rad,dtheta_z_rad,dv_x_mps,"
+               "dv_y_mps,dv_z_mps\n" + rows + "\n")
+    imu = read_imu_csv(f)
+    dt = imu.period()
+    np.testing.assert_allclose(np.diff(imu.t), dt, rtol=1e-9)
+    q = imu.quality
+    assert q["imu_resampled"] == 1 and q["imu_samples_missing"] == 1
+    assert 0.0005 < q["imu_jitter_s"] < 0.011
+    # every increment is kept: the integral over the grid equals the file's total
+    n_full = len(imu.t)
+    np.testing.assert_allclose((imu.gyro * dt).sum(axis=0)[:2],
+                               dth.sum(axis=0)[:2], rtol=0, atol=2 * np.abs(w).max() * dt)
+    assert n_full == int(np.floor((t[-1] - (t[0] - d[0])) / dt + 1e-9))
+    # a gap beyond imu.max_bridge_s is refused where it is
+    t2 = t.copy()
+    t2[200:] += 0.5
+    rows = "\n".join(f"{float(a)!r},0,0,0,0,0,0.1" for a in t2)
+    f = _write(tmp_path / "gap.csv", "t_s,dtheta_x_rad,dtheta_y_rad,dtheta_z_rad,dv_x_mps,"
+               "dv_y_mps,dv_z_mps\n" + rows + "\n")
+    where = rf"between t = {t2[199]:.6f} s and {t2[200]:.6f} s"
+    with pytest.raises(DataError, match=rf"gap of 0\.5\d+ s {where}"):
+        read_imu_csv(f)
