@@ -219,9 +219,10 @@ def _print_process(s: dict) -> None:
     console.print(f"{s['epochs']} filter epochs in {s['run_time_s']:.2f} s")
     al = s.get("alignment") or {}
     if al:
-        console.print(f"initial attitude: levelling {al.get('levelling')}, heading "
-                      f"{al.get('heading')}; pitch/roll/heading {al.get('euler_deg')} deg, "
-                      f"1-sigma {al.get('sigma_deg')} deg")
+        how = (f"levelling {al.get('levelling')}, heading {al.get('heading')}"
+               if al.get("levelling") != "initial" else "the system description's initial:")
+        console.print(f"initial attitude: {how}; pitch/roll/heading {al.get('euler_deg')} "
+                      f"deg, 1-sigma {al.get('sigma_deg')} deg")
     for w in s.get("warnings", []):
         console.print(f"[yellow]warning:[/] {w}")
     q = {k: v for k, v in s.get("data_quality", {}).items() if v}
