@@ -11,13 +11,20 @@ from fednav.cli import app
 from fednav.scenarios import paper_module
 from fednav.sim.export import find_mode, truth_errors
 
-CASES = [("002", "SINS/CNS/SAR", 3, 150.0), ("003", "FKF", 2, 150.0),
-         ("004", "recompute", 5, 150.0), ("004", "curve_fit", 5, 150.0)]
+#: (paper, mode, seed, seconds, position tolerance [m], attitude tolerance [rad])
+CASES = [("002", "SINS/CNS/SAR", 3, 150.0, 1e-6, 1e-9), ("003", "FKF", 2, 150.0, 1e-6, 1e-9),
+         ("004", "recompute", 5, 150.0, 1e-6, 1e-9), ("004", "curve_fit", 5, 150.0, 1e-6, 1e-9),
+         # Paper 003's total-state UKF: the files' angles in degrees read back within one
+         # ulp of the simulation's radians, and this filter magnifies one ulp (measured: a
+         # 1e-19 state difference at epoch 4 grows to 3e-3 m by 150 s; its state holds
+         # latitude/longitude in radians and its sigma-point weights are ~ -1e6 at alpha
+         # 1e-3), where the error-state filters keep it below 1e-9 m: 1 cm over 150 s
+         ("003", "FUKF", 2, 150.0, 1e-2, 1e-6)]
 
 
-@pytest.mark.parametrize(("paper", "mode", "seed", "max_time"), CASES)
+@pytest.mark.parametrize(("paper", "mode", "seed", "max_time", "tol_m", "tol_rad"), CASES)
 def test_process_on_simulated_files_equals_the_reproduced_run(tmp_path, paper, mode, seed,
-                                                              max_time):
+                                                              max_time, tol_m, tol_rad):
     runner = CliRunner()
     sim, out = tmp_path / "sim", tmp_path / "out"
     r = runner.invoke(app, ["simulate", paper, "--seed", str(seed), "--mode", mode,
@@ -40,7 +47,7 @@ def test_process_on_simulated_files_equals_the_reproduced_run(tmp_path, paper, m
     pos = np.column_stack([e.east_m, e.north_m, -e.down_m])
     vel = np.column_stack([e.ve_mps, e.vn_mps, -e.vd_mps])
     eul = np.radians(np.column_stack([e.pitch_deg, e.roll_deg, e.yaw_deg]))
-    assert np.abs(pos - run.pos).max() < 1e-6
-    assert np.abs(vel - run.vel).max() < 1e-6
-    assert np.abs(eul - run.euler).max() < 1e-9
+    assert np.abs(pos - run.pos).max() < tol_m
+    assert np.abs(vel - run.vel).max() < tol_m
+    assert np.abs(eul - run.euler).max() < tol_rad
     assert np.abs(run.pos).max() > 1e-3  # (a real error series, not zeros on both sides)

@@ -222,6 +222,11 @@ class ImuData:
     #: not uniform, "imu_resampled", "imu_samples_missing", "imu_jitter_s"
     #: (:func:`regular_imu`)
     quality: dict = field(default_factory=dict)
+    #: the file's own increments ``(dtheta [rad], dv [m/s])`` (N, 3) each, kept when the
+    #: file held increments that needed no bridging or regridding: the navigator
+    #: integrates them as they are (no rate round trip; a sigma-point filter with a
+    #: small ``alpha`` magnifies even one-ulp differences)
+    increments: tuple | None = None
 
     def __post_init__(self):
         self.t = check_time(self.source, self.t)
@@ -234,6 +239,8 @@ class ImuData:
         self.t, self.gyro, self.accel, q = regular_imu(self.source, self.t, self.gyro,
                                                        self.accel, self.max_bridge_s)
         self.quality.update(q)
+        if n or q:
+            self.increments = None
 
     @classmethod
     def from_increments(cls, source: str, t_end, dtheta, dv, **kw) -> ImuData:
@@ -248,11 +255,14 @@ class ImuData:
         dvv = _as_float(source, "dv", dv, (-1, 3))
         check_rows(source, len(t_end), dtheta=dth, dv=dvv)
         t_start = np.r_[t_end[0] - d[0], t_end[:-1]]
-        return cls(source, t_start, dth / d[:, None], dvv / d[:, None], **kw)
+        return cls(source, t_start, dth / d[:, None], dvv / d[:, None],
+                   increments=(dth, dvv), **kw)
 
     def period(self) -> float:
-        """The sampling period [s] (uniform: :func:`regular_imu` made it so)."""
-        return float(np.median(np.diff(self.t)))
+        """The sampling period [s]: the mean interval (uniform: :func:`regular_imu` made it
+        so; the mean carries the time stamps' full precision, one difference of two large
+        stamps does not)."""
+        return float((self.t[-1] - self.t[0]) / (len(self.t) - 1))
 
 
 @dataclass

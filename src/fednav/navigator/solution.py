@@ -86,6 +86,21 @@ def imu_rate(res, smooth: bool = False) -> tuple[Solution, Solution | None]:
     return forward, smoothed
 
 
+def epoch_rate(res) -> Solution:
+    """The :class:`Solution` at the filter epochs of a navigator's result whose core
+    records no IMU-rate rows (the total-state navigator of paper 003): the state after
+    each epoch's update and its 1-sigma; ``omega`` (not recorded) is zero."""
+    from ..ins.strapdown import STATE_LLA, STATE_Q, STATE_VEL
+
+    st = res.states
+    q = st[:, STATE_Q]
+    cov = _nav_cov(res.P)
+    sd, sd_euler = _sigmas(q, cov)
+    return Solution(res.t.copy(), st[:, STATE_LLA].copy(), st[:, STATE_VEL].copy(),
+                    att.quat_to_euler(q), sd, sd_euler, np.zeros((len(st), 3)), "forward",
+                    res.fdi, np.arange(len(st)))
+
+
 def consistency(fdi: list) -> dict[str, dict[str, float]]:
     """Per local filter: mean normalized innovation squared per degree of freedom (about 1
     for a consistent filter; well above 1: the noise figures are too optimistic) and the

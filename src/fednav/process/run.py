@@ -26,7 +26,7 @@ from ..io.data import DataError, GnssData, ImuData, Reference, VelocityData
 from ..io.sensorfile import SensorData
 from ..navigator.loop import InnovationRecord  # noqa: F401  (fednav.process's name)
 from ..navigator.navigator import InitialState, Navigator
-from ..navigator.solution import Solution, imu_rate
+from ..navigator.solution import Solution, epoch_rate, imu_rate
 from ..navigator.system import System, imu_noise_model, initial_covariance
 from ..navigator.system import imu_figures as _imu_figures
 from ..sensors import GnssConfig, VelocityConfig, registry
@@ -245,6 +245,10 @@ class Prepared:
     alignment: Alignment
     quality: dict
     others: dict = field(default_factory=dict)
+    #: each measurement stream's 1-sigma, by sensor (what the total-state navigator takes)
+    sigmas: dict = field(default_factory=dict)
+    #: the IMU file's own increments (dtheta, dv) of these samples, when it held them
+    increments: tuple | None = None
 
     def navigator(self, **options) -> Navigator:
         """A :class:`~fednav.navigator.Navigator` for this data (nothing fed yet)."""
@@ -253,11 +257,18 @@ class Prepared:
 
     def feed(self, nav: Navigator) -> Navigator:
         """Every measurement, then every IMU sample, in one block each."""
+        total = self.system.filter.state == "total"
         for name, (t, z, R) in self.measurements.items():
-            nav.add_measurements(name, t, z, R=R)
+            if total:
+                nav.add_measurements(name, t, z, sigma=self.sigmas[name])
+            else:
+                nav.add_measurements(name, t, z, R=R)
         for d in self.others.values():
             nav.add_measurements(d.name, d.t, d.z, sigma=d.sigma, t_arrival=d.t_arrival)
-        nav.add_imu(self.t, self.gyro, self.accel)
+        if self.increments is not None:
+            nav.add_imu(self.t, dtheta=self.increments[0], dv=self.increments[1])
+        else:
+            nav.add_imu(self.t, self.gyro, self.accel)
         return nav
 
 
@@ -344,9 +355,9 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
     else the first GNSS fix with the alignment's attitude (``alignment:``); without GNSS
     positions the section is needed."""
     cfg = cfg or System()
-    if cfg.filter.state != "error":
-        raise DataError("filter.state: fednav process flies the error-state filter (the "
-                        "total-state navigator has no IMU-rate solution or smoother)")
+    if cfg.filter.state == "total" and (cfg.smoother or cfg.output_rate_hz):
+        raise DataError("filter.state: total — the total-state navigator's solution is at "
+                        "its filter epochs (no IMU-rate rows to smooth or thin)")
     others = dict(sensors or {})
     for name, d in others.items():
         if name != d.name:
@@ -380,8 +391,7 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
                         f"period ({T:g} s)")
     noise, gb, ab = imu_noise_model(cfg, dt, imu.errors)
 
-    sensors = {}
-    meas = {}
+    sensors, meas, sigmas = {}, {}, {}
     if gnss is not None:
         gc = _gnss_cfg(cfg)
         sig_pos = np.broadcast_to(np.asarray(gc.sigma_pos_m if gc.sigma_pos_m is not None
@@ -405,6 +415,8 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
         R = (np.broadcast_to(model.R(np.r_[sig_pos, sig_vel]), (n, model.dim, model.dim))
              if gnss.sigma_rows is None else np.array([model.R(s) for s in gnss.sigma_rows]))
         meas["gnss"] = (gnss.t, z, R)
+        sigmas["gnss"] = (np.r_[sig_pos, sig_vel] if gnss.sigma_rows is None
+                          else gnss.sigma_rows)
 
     # Initial state: the description's, else the first GNSS fix (antenna moved to the
     # IMU), its velocity and the alignment's attitude.
@@ -469,7 +481,9 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
                             f"data's {t_start:.1f}..{t_end:.1f} s (a time offset?)")
     return Prepared(system, InitialState(t_start, lla0, vel0, euler0, P0,
                                          gyro_bias=gyro_bias), dt, imu.t[m], imu.gyro[m],
-                    imu.accel[m], meas, imu.errors, n_per, warnings, al, quality, others)
+                    imu.accel[m], meas, imu.errors, n_per, warnings, al, quality, others,
+                    sigmas, None if imu.increments is None
+                    else (imu.increments[0][m], imu.increments[1][m]))
 
 
 def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
@@ -494,7 +508,14 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
 
 def solution(res, prep: Prepared, smooth: bool = False) -> ProcessResult:
     """The IMU-rate forward solution (and the smoothed one) of a navigator's result on
-    prepared recorded data."""
+    prepared recorded data; the total-state navigator's at its filter epochs (no
+    smoother)."""
+    if prep.system.filter.state == "total":
+        if smooth:
+            raise DataError("--smooth: the total-state navigator (filter.state: total) has "
+                            "no smoother")
+        return ProcessResult(epoch_rate(res), None, 0.0, len(res.states) - 1,
+                             dict(prep.quality), list(prep.warnings), prep.alignment.report)
     forward, smoothed = imu_rate(res, smooth or prep.system.smoother)
     return ProcessResult(forward, smoothed, 0.0, len(res.states) - 1, dict(prep.quality),
                          list(prep.warnings), prep.alignment.report)
