@@ -204,8 +204,9 @@ def test_process_refuses_or_warns_about_what_it_cannot_use():
     from fednav.process.run import prepare
 
     imu, gnss, _ = make_flight_cached()
-    with pytest.raises(DataError, match="filter.state: fednav process flies the error-state"):
-        prepare(imu, gnss, None, load_system({"filter": {"state": "total"}}))
+    with pytest.raises(DataError, match="filter.state: total — the total-state navigator's "
+                                        "solution is at its filter epochs"):
+        prepare(imu, gnss, None, load_system({"filter": {"state": "total"}, "smoother": True}))
     air = SensorData("airdata", "air.csv", np.arange(1.0, 50.0), np.ones((49, 3)))
     cfg = load_system({"sensors": {"airdata": {"sigma_airspeed_mps": 0.1,
                                                "wind_sigma_mps": 0.1}}})
