@@ -51,3 +51,29 @@ def test_process_on_simulated_files_equals_the_reproduced_run(tmp_path, paper, m
     assert np.abs(vel - run.vel).max() < tol_m
     assert np.abs(eul - run.euler).max() < tol_rad
     assert np.abs(run.pos).max() > 1e-3  # (a real error series, not zeros on both sides)
+
+
+def test_simulate_a_scenario_file_and_its_refusals(tmp_path):
+    from fednav.scenarios import scenario_path
+
+    runner = CliRunner()
+    a, b = tmp_path / "a", tmp_path / "b"
+    for src, out in (("sar-delay", a), (str(scenario_path("paper004")), b)):
+        r = runner.invoke(app, ["simulate", src, "--seed", "4", "--mode", "curve_fit",
+                                "--max-time", "30", "--out", str(out)])
+        assert r.exit_code == 0, r.output
+    names = sorted(p.name for p in a.iterdir())
+    assert names == ["baro.csv", "imu.csv", "reference.csv", "sar.csv", "sarvel.csv",
+                     "system.yaml"]
+    for n in names:  # a paper by name and its scenario file give the same data
+        assert (a / n).read_text().splitlines()[1:] == (b / n).read_text().splitlines()[1:]
+    sar = pd.read_csv(a / "sar.csv")
+    assert (sar.t_arrival_s > sar.t_s).all()  # the delayed SAR fixes say when they arrived
+    for args, msg in ((["001"], "paper 001 flies in its own frame"),
+                      (["002", "--mode", "nope"], "has no mode 'nope'; its modes: SINS, "),
+                      (["002", "--seed", "-1"], "--seed must be 0 or more"),
+                      (["002", "--format", "navego"], "--format navego applies to dataset"),
+                      (["nothing-here"], "is neither a paper")):
+        r = runner.invoke(app, ["simulate", *args, "--out", str(tmp_path / "x")])
+        assert r.exit_code == 2 and msg in r.output, r.output
+        assert len(r.output.strip().splitlines()) == 1
