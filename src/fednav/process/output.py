@@ -68,8 +68,10 @@ def consistency(sol: Solution) -> dict[str, dict[str, float]]:
     return _consistency(sol.fdi)
 
 
-def summary(res: ProcessResult, ref: Reference | None, inputs: dict) -> dict:
-    """``summary.json`` content."""
+def summary(res: ProcessResult, ref: Reference | None, inputs: dict,
+            others: dict | None = None) -> dict:
+    """``summary.json`` content; ``others``: further references by name (an autopilot's
+    own estimate), each compared under ``against``."""
     quality = dict(res.data_quality)
     if ref is not None:
         quality.update(ref.quality)
@@ -80,6 +82,11 @@ def summary(res: ProcessResult, ref: Reference | None, inputs: dict) -> dict:
         out["rmse"] = _rmse_block(res.forward, ref)
         if res.smoothed is not None:
             out["rmse_smoothed"] = _rmse_block(res.smoothed, ref)
+    for name, other in (others or {}).items():
+        block = {"source": other.source, "rmse": _rmse_block(res.forward, other)}
+        if res.smoothed is not None:
+            block["rmse_smoothed"] = _rmse_block(res.smoothed, other)
+        out.setdefault("against", {})[name] = block
     return out
 
 
@@ -216,9 +223,12 @@ def plot_track(res: ProcessResult, gnss, ref: Reference | None, path: Path) -> P
 
 
 def write(out: Path, res: ProcessResult, ref: Reference | None, inputs: dict,
-          output_rate: float | None = None, gnss=None) -> list[Path]:
+          output_rate: float | None = None, gnss=None,
+          others: dict | None = None) -> list[Path]:
     """Write solution CSV(s) (every IMU sample, or decimated to ``output_rate`` Hz), the
-    plots and summary.json into ``out``; returns the files."""
+    plots and summary.json into ``out``; returns the files.  ``others``: further
+    references by name (``errors_NAME.csv``, ``errors_NAME.png``, ``against`` in the
+    summary)."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     files = []
@@ -230,7 +240,10 @@ def write(out: Path, res: ProcessResult, ref: Reference | None, inputs: dict,
     if ref is not None:
         files.append(write_errors(res, ref, out / "errors.csv"))
         files.append(plot_errors(res, ref, out / "errors.png"))
-    s = summary(res, ref, inputs)
+    for name, other in (others or {}).items():
+        files.append(write_errors(res, other, out / f"errors_{name}.csv"))
+        files.append(plot_errors(res, other, out / f"errors_{name}.png"))
+    s = summary(res, ref, inputs, others)
     p = out / "summary.json"
     write_text(p, json.dumps(s, indent=2))
     files.append(p)
