@@ -4,7 +4,9 @@ The page holds every table of ``summary.json`` beside the paper's values (the ra
 fednav / paper is coloured when it lies outside ×3 either way), the error plots of the
 folder embedded as base64 PNG, and the run metadata (fednav version, scenario hash,
 seeds, engine, times) from ``campaign.json`` and ``summary.json``. Nothing is fetched
-from the network: the file can be mailed or archived as it is.
+from the network: the file can be mailed or archived as it is.  A design's folder
+(``fednav run``: ``summary.json`` names a ``design``, not a paper) has no paper column:
+its tables give each statistic's value ± 95 % CI, one column per statistic.
 """
 
 from __future__ import annotations
@@ -101,6 +103,38 @@ def _image(path: Path) -> str:
             f"<figcaption class='note'>{escape(path.name)}</figcaption></figure>")
 
 
+def design_table_html(name: str, table: dict, title: str, seed,
+                      labels: dict | None = None) -> str:
+    """One table of a design (``fednav run``): mode, quantity (its label in ``labels``),
+    then value ± 95 % CI of each statistic (rows -> quantity -> statistic -> {value,
+    ci95})."""
+    labels = labels or {}
+    cols: list[str] = []
+    for qs in table["rows"].values():
+        for stats in qs.values():
+            cols += [c for c in stats if c not in cols]
+    runs = table.get("runs")
+    out = [f"<h2>{escape(title)}</h2><p class='note'>Monte Carlo mean ± half-width of its "
+           f"95 % confidence interval over {escape(str(runs))} runs (seed "
+           f"{escape(str(seed))})</p>",
+           f"<table id='table-{escape(name)}'><tr><th class='l'>mode</th>"
+           "<th class='l'>quantity</th>"
+           + "".join(f"<th>{escape(c)}</th>" for c in cols) + "</tr>"]
+    for row, qs in table["rows"].items():
+        for i, (q, stats) in enumerate(qs.items()):
+            cells = []
+            for c in cols:
+                v = stats.get(c) or {}
+                h = v.get("ci95")
+                cells.append(f"<td>{_num(v.get('value'))}"
+                             + ("" if h is None else f" ± {_num(h)}") + "</td>")
+            first = " class='first'" if i == 0 else ""
+            out.append(f"<tr{first}><td class='l'>{escape(str(row)) if i == 0 else ''}</td>"
+                       f"<td class='l'>{escape(str(labels.get(q, q)))}</td>{''.join(cells)}</tr>")
+    out.append("</table>")
+    return "\n".join(out)
+
+
 def render(folder: Path, titles: dict[str, str] | None = None) -> str:
     """The HTML text of the report on reproduction folder ``folder``; ``titles``: the
     heading of each table by its key (the paper module's ``TABLE_TITLES``)."""
@@ -122,13 +156,14 @@ def render(folder: Path, titles: dict[str, str] | None = None) -> str:
         except json.JSONDecodeError:
             manifest = {}
     paper = str(summary.get("paper", "?"))
+    design = summary.get("design")
     titles = titles or {}
     runs, seed = summary.get("runs"), summary.get("seed")
     camp = summary.get("campaign", {})
     seeds = (f"{seed} … {seed + runs - 1} (run i uses seed + i)"
              if isinstance(seed, int) and isinstance(runs, int) else str(seed))
     meta = {
-        "paper": paper,
+        **({"design": design} if design is not None else {"paper": paper}),
         "fednav version": manifest.get("fednav_version", "?"),
         "scenario hash": manifest.get("scenario_hash", "?"),
         "seeds": seeds,
@@ -141,20 +176,28 @@ def render(folder: Path, titles: dict[str, str] | None = None) -> str:
                                    .isoformat(timespec="seconds"),
         "folder": str(folder.resolve()),
     }
+    what = f"design {design}" if design is not None else f"paper {paper}"
+    head = (f"fednav design {design} (fednav run)" if design is not None
+            else f"fednav reproduction of paper {paper}")
     parts = ["<!doctype html><html lang='en'><head><meta charset='utf-8'>",
-             f"<title>fednav — paper {escape(paper)}</title><style>{_CSS}</style></head><body>",
-             f"<h1>fednav reproduction of paper {escape(paper)}</h1>",
+             f"<title>fednav — {escape(what)}</title><style>{_CSS}</style></head><body>",
+             f"<h1>{escape(head)}</h1>",
              "<dl>" + "".join(f"<dt>{escape(k)}</dt><dd>{escape(str(v))}</dd>"
                               for k, v in meta.items()) + "</dl>"]
     for name, t in tables.items():
-        if isinstance(t, dict) and t.get("rows"):
-            parts.append(table_html(name, t, titles.get(name, name), runs, seed))
+        if not (isinstance(t, dict) and t.get("rows")):
+            continue
+        title = titles.get(name) or t.get("title") or name
+        if design is not None:
+            parts.append(design_table_html(name, t, title, seed, summary.get("quantities")))
+        else:
+            parts.append(table_html(name, t, title, runs, seed))
     images = sorted(folder.glob("*.png"))
     if images:
         parts.append("<h2>Plots</h2>")
         parts.extend(_image(p) for p in images)
     rest = {k: v for k, v in summary.items()
-            if k not in ("paper", "runs", "seed", "tables", "campaign")}
+            if k not in ("paper", "design", "runs", "seed", "tables", "campaign")}
     if rest:
         parts.append("<h2>Other results in summary.json</h2><details><summary>show"
                      f"</summary><pre>{escape(json.dumps(rest, indent=1))}</pre></details>")

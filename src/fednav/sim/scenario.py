@@ -175,10 +175,11 @@ class FaultExperimentConfig(_Model):
 
 
 class Scenario(System):
-    """A paper's experiment: the system description (IMU, sensors, filter) and the
-    flight, the simulated errors and the modes to compare."""
+    """A paper's experiment or a user's design (``fednav run``): the system description
+    (IMU, sensors, filter) and the flight, the simulated errors and the modes to compare.
+    ``paper``: the paper number a packaged scenario reproduces (None for a design)."""
 
-    paper: str
+    paper: str | None = None
     name: str
     description: str = ""
     start: StartConfig
