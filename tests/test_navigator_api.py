@@ -275,3 +275,13 @@ def test_the_total_state_navigator_runs_with_the_default_records():
                 dv=data.dv[:len(truth.t) - 1])
     res = nav.result()
     assert res.rows is None and len(res.t) > 10 and np.isfinite(res.states).all()
+
+
+def test_a_sensor_that_delivered_nothing_is_no_error():
+    """A stop detector before the first stop, an empty file after screening: no rows."""
+    imu, gnss, _ = make_flight()
+    prep = prepare(imu, gnss, None, System())
+    nav = prep.feed(prep.navigator())
+    before = nav.result().states.copy()
+    nav.add_measurements("gnss", np.zeros(0), np.zeros((0, 6)), sigma=np.ones(6))
+    np.testing.assert_array_equal(nav.result().states, before)

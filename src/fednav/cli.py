@@ -193,16 +193,18 @@ def _run_process(read, imu, gnss, velocity, ref, smooth, out, config, output_rat
     try:
         cfg = System() if config is None else load_model(config, System, "processing config")
         data = read(cfg)
+        cfg = data.get("system", cfg)  # (a reader that completes the description)
         # the files read (the options', else those the description lists)
         paths = {"imu": imu, "gnss": gnss, "velocity": velocity, **(files or {}),
                  "reference": ref, **data.get("paths", {})}
         clear_results(out)
         res = process(data["imu"], data["gnss"], data["velocity"], cfg, smooth,
                       sensors=data.get("sensors"))
+        res.warnings[:0] = data.get("warnings", [])
         files = process_output.write(out, res, data["ref"], {
             **{n: None if f is None else str(f) for n, f in paths.items()},
             "config": None if config is None else str(config), "smooth": smooth,
-            "output_rate_hz": output_rate}, output_rate, data["gnss"])
+            "output_rate_hz": output_rate}, output_rate, data["gnss"], data.get("others"))
     except (FednavError, ValueError) as e:
         if _state["debug"]:
             raise
@@ -211,6 +213,32 @@ def _run_process(read, imu, gnss, velocity, ref, smooth, out, config, output_rat
     s = json.loads(files[-1].read_text())
     _print_process(s)
     console.print(f"wrote {', '.join(str(f) for f in files)}")
+
+
+def _ulog_reader(log: Path):
+    """``read(cfg)`` of a PX4 ULog: the IMU, GNSS, baro and magnetometer, the reference
+    (the log's ground truth, else none) and PX4's own estimate to compare with; the
+    description completed from the log (:mod:`fednav.process.flight_log`)."""
+    def read(cfg):
+        from .io import read_ulog
+        from .process.flight_log import ulog_system
+
+        rec = read_ulog(log, cfg.imu.max_bridge_s)
+        system, warnings = ulog_system(rec, cfg)
+        truth = rec.truth
+        if truth is not None and rec.quality.get("truth_height") == "unset":
+            warnings.append(f"{log}: the ground truth has no height (0 in every row): "
+                            f"not used as the reference")
+            truth = None
+        for note in rec.notes:
+            if not (note.startswith("imu: PX4 logs carry no IMU noise figures")
+                    and any("no IMU noise figures" in w for w in warnings)):
+                warnings.append(f"{log}: {note}")
+        return {"imu": rec.imu, "gnss": rec.gnss, "velocity": None, "ref": truth,
+                "sensors": rec.sensors, "system": system, "warnings": warnings,
+                "others": {} if rec.px4 is None else {"px4": rec.px4},
+                "paths": {"ulog": log}}
+    return read
 
 
 def _print_process(s: dict) -> None:
@@ -232,13 +260,17 @@ def _print_process(s: dict) -> None:
     for name, c in s["consistency"].items():
         console.print(f"  local '{name}': mean NIS/dof {c['nis_per_dof']:.2f}, isolated "
                       f"{100 * c['isolated_fraction']:.1f} % of {c['measurements']}")
-    for key in ("rmse", "rmse_smoothed"):
-        if key in s:
-            tab = Table(title=f"{key.replace('_', ' ')} against the reference")
-            for k in s[key]:
-                tab.add_column(k, justify="right")
-            tab.add_row(*(f"{v:.3f}" for v in s[key].values()))
-            console.print(tab)
+    blocks = [(f"{key.replace('_', ' ')} against the reference", s[key])
+              for key in ("rmse", "rmse_smoothed") if key in s]
+    for name, other in s.get("against", {}).items():
+        blocks += [(f"{key.replace('_', ' ')} against {name}", other[key])
+                   for key in ("rmse", "rmse_smoothed") if key in other]
+    for title, block in blocks:
+        tab = Table(title=title)
+        for k in block:
+            tab.add_column(k, justify="right")
+        tab.add_row(*(f"{v:.3f}" for v in block.values()))
+        console.print(tab)
 
 
 def _navego_reader(imu: Path, gnss: Path, visual: Path | None, ref: Path | None = None):
@@ -376,6 +408,23 @@ def process_csv(
     files = {n: f for n, f in files.items() if f is not None}
     _run_process(_csv_reader(imu, gnss, velocity, ref, files, config), imu, gnss, velocity,
                  ref, smooth, out, config, output_rate, files)
+
+
+@process_app.command("ulog")
+@_one_line_errors
+def process_ulog(
+    log: Path = typer.Argument(..., help="PX4 flight log (.ulg)"),
+    smooth: bool = _SMOOTH, out: Path = _OUT,
+    config: Path = typer.Option(None, help="system description YAML: IMU figures, which "
+                                           "sensors aid (aiding:), filters; what it leaves "
+                                           "out comes from the log"),
+    output_rate: float = _RATE,
+) -> None:
+    """A PX4 autopilot log (ULog, read with pyulog): its IMU, GNSS, barometer and
+    magnetometer through the navigator, compared with PX4's own estimate (and the log's
+    ground truth when it has one)."""
+    _run_process(_ulog_reader(log), log, None, None, None, smooth, out, config,
+                 output_rate)
 
 
 tune_app = typer.Typer(no_args_is_help=True,

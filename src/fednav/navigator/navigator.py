@@ -397,6 +397,8 @@ class Navigator:
         """Several measurements of ``sensor`` (arrays along the first axis; see
         :meth:`add_measurement`).  ``sigma`` may be one row for all."""
         t = np.asarray(t, dtype=float).ravel()
+        if not len(t):
+            return  # (a sensor that delivered nothing: a stop detector before any stop)
         z = np.asarray(z, dtype=float).reshape(len(t), -1)
         ta = t if t_arrival is None else np.asarray(t_arrival, dtype=float).ravel()
         if sensor == "baro" and self._damping:
