@@ -461,7 +461,7 @@ def main():
     scenario("unknown-aiding", mod(lambda d: d["modes"][1].__setitem__("aiding", ["gps"])),
              "key 'modes.1.aiding': unknown aiding sensor 'gps'; registered:")
     scenario("list-not-mapping", "- 1\n- 2\n", "expected a mapping at the top level")
-    scenario("empty", "", "key 'paper': missing value (and 5 more)")
+    scenario("empty", "", "key 'name': missing value (and 4 more)")
     (HERE / "scenario-not-utf8.yaml").write_bytes("paper: '002'\nname: caf\u00e9\n"
                                                   .encode("latin-1"))
     yaml_case("yaml-scenario-not-utf8", ["reproduce", "002", "--scenario",
