@@ -110,6 +110,16 @@ def reproduce(
             typer.echo(f"error: {opt} must be at least {low}, got {value}", err=True)
             raise typer.Exit(2)
         extra[name] = value
+    out = _output_folder(out or Path("results") / exp.number)
+    scn = exp.load_scenario(scenario)
+    _campaign(exp, scn, exp.number, f"paper {exp.number}: {scn.name}", "units of work", out,
+              runs, seed, jobs, max_time, fresh, dask, extra)
+
+
+def _campaign(exp, scn, identity: str, label: str, unit: str, out: Path, runs: int,
+              seed: int, jobs: int, max_time, fresh: bool, dask, extra: dict) -> None:
+    """Run (or resume) experiment ``exp``'s campaign of ``scn`` in ``out`` with a progress
+    bar, print its tables, write its outputs and report.html (``reproduce``, ``run``)."""
     from rich.progress import (
         BarColumn,
         MofNCompleteColumn,
@@ -118,19 +128,18 @@ def reproduce(
         TimeRemainingColumn,
     )
 
+    from .campaign.html_report import write_report
     from .campaign.store import Campaign
     from .core.atomic import clear_results
 
-    out = _output_folder(out or Path("results") / exp.number)
-    scn = exp.load_scenario(scenario)
-    camp = Campaign(out, exp.number, scn, seed, fresh, dask)
+    camp = Campaign(out, identity, scn, seed, fresh, dask)
     clear_results(out)
     t0 = time.perf_counter()
     total = len(exp.units(scn, runs, seed, max_time, **extra))
     with Progress("[progress.description]{task.description}", BarColumn(),
                   MofNCompleteColumn(), TimeElapsedColumn(), TimeRemainingColumn(),
                   console=console, transient=False) as prog:
-        task = prog.add_task(f"paper {exp.number}: {scn.name}", total=total)
+        task = prog.add_task(label, total=total)
         try:
             with camp:
                 rep = exp.reproduce(scn, runs, seed, jobs, max_time,
@@ -138,17 +147,15 @@ def reproduce(
                                     **extra)
         except KeyboardInterrupt:
             prog.stop()
-            typer.echo(f"interrupted: {camp.computed + camp.reused} of {total} units of work "
+            typer.echo(f"interrupted: {camp.computed + camp.reused} of {total} {unit} "
                        f"are stored in {out}; the same command computes the others", err=True)
             raise typer.Exit(130) from None
     rep["summary"]["campaign"] = camp.summary()
     exp.print_summary(rep["summary"], console)
     c = camp.summary()
-    console.print(f"campaign {out}: {c['runs_computed']} units of work computed, "
+    console.print(f"campaign {out}: {c['runs_computed']} {unit} computed, "
                   f"{c['runs_reused']} reused ({c['engine']})")
     files = exp.write_outputs(out, rep)
-    from .campaign.html_report import write_report
-
     files.append(write_report(out, exp.titles))
     console.print(f"wrote {', '.join(str(f) for f in files)} "
                   f"in {time.perf_counter() - t0:.1f} s")
@@ -651,50 +658,13 @@ def run_design(
     if max_time is not None and not max_time > 0:
         typer.echo(f"error: --max-time must be positive, got {max_time}", err=True)
         raise typer.Exit(2)
-    from rich.progress import (
-        BarColumn,
-        MofNCompleteColumn,
-        Progress,
-        TimeElapsedColumn,
-        TimeRemainingColumn,
-    )
-
     from .campaign.design import DESIGN
-    from .campaign.store import Campaign
-    from .core.atomic import clear_results
 
-    exp = DESIGN
-    scn = exp.load_scenario(scenario)
-    exp.check(scn, scenario, max_time)
+    scn = DESIGN.load_scenario(scenario)
+    DESIGN.check(scn, scenario, max_time)
     out = _output_folder(out or Path("results") / scn.name)
-    camp = Campaign(out, exp.identity(scn), scn, seed, fresh, dask)
-    clear_results(out)
-    t0 = time.perf_counter()
-    total = len(exp.units(scn, runs, seed, max_time))
-    with Progress("[progress.description]{task.description}", BarColumn(),
-                  MofNCompleteColumn(), TimeElapsedColumn(), TimeRemainingColumn(),
-                  console=console, transient=False) as prog:
-        task = prog.add_task(f"design {scn.name}", total=total)
-        try:
-            with camp:
-                rep = exp.reproduce(scn, runs, seed, jobs, max_time,
-                                    progress=lambda: prog.advance(task), campaign=camp)
-        except KeyboardInterrupt:
-            prog.stop()
-            typer.echo(f"interrupted: {camp.computed + camp.reused} of {total} runs are "
-                       f"stored in {out}; the same command computes the others", err=True)
-            raise typer.Exit(130) from None
-    rep["summary"]["campaign"] = camp.summary()
-    exp.print_summary(rep["summary"], console)
-    c = camp.summary()
-    console.print(f"campaign {out}: {c['runs_computed']} runs computed, "
-                  f"{c['runs_reused']} reused ({c['engine']})")
-    files = exp.write_outputs(out, rep)
-    from .campaign.html_report import write_report
-
-    files.append(write_report(out, exp.titles))
-    console.print(f"wrote {', '.join(str(f) for f in files)} "
-                  f"in {time.perf_counter() - t0:.1f} s")
+    _campaign(DESIGN, scn, DESIGN.identity(scn), f"design {scn.name}", "runs", out, runs,
+              seed, jobs, max_time, fresh, dask, {})
 
 
 def main() -> None:  # pragma: no cover

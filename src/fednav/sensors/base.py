@@ -64,3 +64,16 @@ def flight_times(truth, period: float, t=None) -> np.ndarray:
     if t is not None:
         return np.asarray(t, dtype=float)
     return sample_times(truth.t[-1], period, truth.t[0] + period)
+
+
+def point_velocity(truth, t, lever) -> tuple[np.ndarray, np.ndarray]:
+    """True ENU velocity [m/s] of the point at ``lever`` (body right-forward-up, m) at
+    times ``t`` (the trajectory's samples nearest them; body rate from the true angle
+    increments), and the attitude ``C_b^n`` there (N, 3, 3)."""
+    from ..core import attitude, earth
+
+    idx = np.rint((np.asarray(t) - truth.t[0]) / truth.dt).astype(int)
+    w = truth.dtheta[np.maximum(idx - 1, 0)] / truth.dt
+    C = attitude.euler_to_dcm(truth.euler[idx])
+    _, v = earth.lever_arm_point(truth.lla[idx], truth.vel[idx], C, w, lever)
+    return v, C

@@ -27,8 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 from pydantic import Field
 
-from ..core import attitude, earth
-from .base import MeasurementSeries, flight_times
+from .base import MeasurementSeries, flight_times, point_velocity
 from .measurement import BVEL_F, BVEL_R, BVEL_U, VEL_E, VEL_N, VEL_U, RowModel
 from .spec import Column, SensorConfig, SensorSpec
 
@@ -38,10 +37,7 @@ _V3 = tuple[float, float, float]
 def body_velocity(truth, t, lever) -> np.ndarray:
     """True velocity of the point at ``lever`` (body, m) in body axes right, forward, up
     [m/s] at times ``t`` (the trajectory's samples nearest them)."""
-    idx = np.rint((np.asarray(t) - truth.t[0]) / truth.dt).astype(int)
-    w = truth.dtheta[np.maximum(idx - 1, 0)] / truth.dt
-    C = attitude.euler_to_dcm(truth.euler[idx])
-    _, v = earth.lever_arm_point(truth.lla[idx], truth.vel[idx], C, w, lever)
+    v, C = point_velocity(truth, t, lever)
     return np.einsum("nji,nj->ni", C, v)
 
 

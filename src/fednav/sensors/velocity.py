@@ -15,8 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 from pydantic import field_validator
 
-from ..core import attitude, earth
-from .base import MeasurementSeries, flight_times
+from .base import MeasurementSeries, flight_times, point_velocity
 from .measurement import VEL_E, VEL_N, VEL_U, RowModel
 from .spec import Column, SensorConfig, SensorSpec
 
@@ -35,10 +34,7 @@ class VelocitySensor:
     def simulate(self, truth, rng: np.random.Generator, t=None,
                  t_avail=None) -> MeasurementSeries:
         t = flight_times(truth, self.period, t)
-        idx = np.rint((t - truth.t[0]) / truth.dt).astype(int)
-        w = truth.dtheta[np.maximum(idx - 1, 0)] / truth.dt
-        _, v = earth.lever_arm_point(truth.lla[idx], truth.vel[idx],
-                                     attitude.euler_to_dcm(truth.euler[idx]), w, self.lever)
+        v, _ = point_velocity(truth, t, self.lever)
         sig = np.asarray(self.sigma, dtype=float)
         z = v + rng.standard_normal(v.shape) * sig
         return MeasurementSeries("velocity", t, z, sig.copy(), t_avail)
