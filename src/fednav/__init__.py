@@ -7,7 +7,11 @@ positive toward east, SI units and radians inside the library.
 
 __version__ = "0.1.0"
 
-from . import _compat
+from . import _kernel_cache
+
+_kernel_cache.install(__version__)  # (before any numba kernel is compiled or loaded)
+
+from . import _compat  # noqa: E402
 
 _compat.install()
 

@@ -1,0 +1,43 @@
+"""numba's cache of fednav's kernels is per version of the sources: a change of any module
+(not only of the kernel's own file) compiles afresh (fednav._kernel_cache)."""
+
+import os
+import subprocess
+import sys
+
+from fednav import _kernel_cache
+
+
+def test_the_cache_folder_is_named_by_every_source_file(tmp_path):
+    (tmp_path / "a.py").write_text("x = 1\n")
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "sub" / "b.py").write_text("y = 2\n")
+    h0 = _kernel_cache.source_hash(tmp_path)
+    (tmp_path / "sub" / "b.py").write_text("y = 3\n")  # another module than the kernel's
+    h1 = _kernel_cache.source_hash(tmp_path)
+    (tmp_path / "sub" / "b.py").write_text("y = 2\n")  # reverted: the old kernels again
+    assert h1 != h0 and _kernel_cache.source_hash(tmp_path) == h0
+
+
+def test_fednav_sets_numba_cache_dir_and_respects_the_users(tmp_path):
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    env["XDG_CACHE_HOME"] = str(tmp_path)
+    code = "import fednav, os, numba; print(os.environ['NUMBA_CACHE_DIR'])"
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                         text=True, check=True).stdout.strip()
+    assert out.startswith(str(tmp_path / "fednav" / "kernels" / "0.1.0-"))
+    env["NUMBA_CACHE_DIR"] = str(tmp_path / "mine")
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                         text=True, check=True).stdout.strip()
+    assert out == str(tmp_path / "mine")
+
+
+def test_old_versions_are_pruned(tmp_path):
+    import time
+
+    for i in range(6):
+        (tmp_path / f"v{i}").mkdir()
+        t = time.time() - 100 + i
+        os.utime(tmp_path / f"v{i}", (t, t))
+    _kernel_cache._prune(tmp_path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["v2", "v3", "v4", "v5"]
