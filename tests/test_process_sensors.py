@@ -103,3 +103,37 @@ def test_jittered_imu_against_its_uniform_twin():
     d = np.radians(1.0) * 6.4e6 * np.abs(a.lla[:2] - b.lla[:2]) / np.radians(1.0)
     assert d.max() < 0.02, d
     assert np.abs(a.vel - b.vel).max() < 1e-3
+
+
+def test_what_process_refuses_or_moves_in_these_sets(flight):
+    from fednav.io.data import DataError
+
+    imu, gnss, ref = flight
+    pos = replace(gnss, vel=None, quality={})
+    with pytest.raises(DataError, match="total-state navigator's GNSS model needs positions "
+                                        "and velocities"):
+        process(imu, pos, None, load_system({"filter": {"state": "total"}}))
+    # an initial time between two IMU stamps moves to the nearest one, and says so
+    init = _initial(ref, imu.t[0])
+    init["t_s"] = float(imu.t[10] + 0.3 * (imu.t[11] - imu.t[10]))
+    res = process(imu, gnss, None, load_system({"initial": init}))
+    assert res.forward.t[0] == imu.t[10]
+    assert any("moved to the nearest IMU time stamp" in w for w in res.warnings)
+    # a figure left out of the imu: section (and the file) is named, not taken as 0
+    bare = replace(imu, errors=None, quality={})
+    with pytest.raises(DataError, match=r"give imu\.accel_vrw_mps_sqrt_s"):
+        process(bare, gnss, None, load_system({"imu": {"gyro_arw_rad_sqrt_s": 1e-4}}))
+
+
+def test_position_only_velocity_sigma_is_that_of_its_window():
+    from fednav.process.run import VELOCITY_WINDOW_S, _position_velocity
+
+    t = np.arange(0.0, 20.0, 0.2)
+    lla = np.column_stack([np.full_like(t, 0.7), 0.1 + t * 1e-6, np.zeros_like(t)])
+    g = GnssData("p", t, lla, None, np.full(3, 2.0), np.full(3, 0.1), np.zeros(3))
+    v, s = _position_velocity(g)
+    # one-sided at the start (2 s apart), centred inside (4 s apart)
+    assert s[0] == pytest.approx(np.hypot(2.0, 2.0) / VELOCITY_WINDOW_S)
+    assert s[50] == pytest.approx(np.hypot(2.0, 2.0) / (2 * VELOCITY_WINDOW_S))
+    east = 1e-6 * 6.378e6 * np.cos(0.7)  # longitude 1e-6 rad a second [m/s]
+    assert v[50, 0] == pytest.approx(east, rel=1e-2)

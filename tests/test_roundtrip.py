@@ -73,6 +73,9 @@ def test_simulate_a_scenario_file_and_its_refusals(tmp_path):
                       (["002", "--mode", "nope"], "has no mode 'nope'; its modes: SINS, "),
                       (["002", "--seed", "-1"], "--seed must be 0 or more"),
                       (["002", "--format", "navego"], "--format navego applies to dataset"),
+                      (["002", "--mode", "SINS"], "mode SINS has no aiding sensor"),
+                      (["002", "--max-time", "-5"], "--max-time must be positive"),
+                      (["002", "--max-time", "0.005"], "--max-time 0.005: trajectory"),
                       (["nothing-here"], "is neither a paper")):
         r = runner.invoke(app, ["simulate", *args, "--out", str(tmp_path / "x")])
         assert r.exit_code == 2 and msg in r.output, r.output

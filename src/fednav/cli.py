@@ -227,10 +227,15 @@ def _ulog_reader(log: Path):
     (the log's ground truth, else none) and PX4's own estimate to compare with; the
     description completed from the log (:mod:`fednav.process.flight_log`)."""
     def read(cfg):
-        from .io import read_ulog
+        from .io import DataError, read_ulog
         from .process.flight_log import ulog_system
 
         rec = read_ulog(log, cfg.imu.max_bridge_s)
+        if rec.gnss is None and cfg.initial is None:
+            why = [n for n in rec.notes if "gnss" in n.lower() or "gps" in n.lower()]
+            raise DataError(f"{log}: no GNSS fix to start from"
+                            + (f" ({why[0]})" if why else "")
+                            + "; give the initial state in --config (initial:)")
         system, warnings = ulog_system(rec, cfg)
         truth = rec.truth
         if truth is not None and rec.quality.get("truth_height") == "unset":
@@ -538,6 +543,9 @@ def simulate(
     if seed is not None and seed < 0:
         typer.echo(f"error: --seed must be 0 or more, got {seed}", err=True)
         raise typer.Exit(2)
+    if max_time is not None and not max_time > 0:
+        typer.echo(f"error: --max-time must be positive, got {max_time}", err=True)
+        raise typer.Exit(2)
     from .scenarios import paper_module
 
     mod = paper_module(scenario)
@@ -597,9 +605,18 @@ def _simulate_run(mod, path: Path, out: Path | None, fmt: str, seed: int, mode: 
                    f"fednav simulate writes the ENU papers 000, 002, 003 and 004", err=True)
         raise typer.Exit(2)
     m = find_mode(scn, mode)
+    if not m.aiding:
+        aided = ", ".join(x.name for x in scn.modes if x.aiding)
+        typer.echo(f"error: mode {m.name} has no aiding sensor (a free INS): fednav process "
+                   f"needs one; give --mode ({aided})", err=True)
+        raise typer.Exit(2)
+    try:
+        truth = scn.trajectory(max_time)
+    except ValueError as e:
+        typer.echo(f"error: --max-time {max_time:g}: {e}", err=True)
+        raise typer.Exit(2) from None
     out = _output_folder(out or Path("results") / f"{scn.name}-{seed}")
     files = write_run(scn, seed, m, out, max_time)
-    truth = scn.trajectory(max_time)
     console.print(f"{scn.name}: run seed {seed}, mode {m.name}: {truth.t[-1] - truth.t[0]:.0f} "
                   f"s, {len(truth.t) - 1} IMU samples")
     console.print(f"wrote {', '.join(str(f) for f in files)}")

@@ -62,7 +62,8 @@ def test_metric_layouts_read_as_written(tmp_path, name, header, row, z):
     np.testing.assert_allclose(d.t, [0.5, 1.5])
 
 
-@pytest.mark.parametrize("name", ["star", "sar", "sarvel", "baro", "odometer", "dvl", "zupt"])
+@pytest.mark.parametrize("name", ["star", "sar", "sarvel", "baro", "airdata", "odometer",
+                                  "dvl", "zupt", "mag"])
 def test_bad_files_of_each_layout_are_one_line_errors(tmp_path, name):
     from fednav.io.sensorfile import columns, sigma_columns
 
@@ -70,10 +71,10 @@ def test_bad_files_of_each_layout_are_one_line_errors(tmp_path, name):
     sig = sigma_columns(name)
     vals = ",".join(["1"] * (len(head) - 1))
     ones = ",".join(["1"] * len(sig))
-    # a missing column
-    f = _write(tmp_path / "a.csv", ",".join(head[:-1]) + "\n" + "0," + ",".join(
+    # a missing column (the first: the others may be optional, as a SAR fix's heading)
+    f = _write(tmp_path / "a.csv", ",".join(head[:1] + head[2:]) + "\n" + "0," + ",".join(
         ["1"] * (len(head) - 2)) + "\n")
-    with pytest.raises(DataError, match=rf"a.csv: missing column\(s\) {head[-1]}") as e:
+    with pytest.raises(DataError, match=rf"a.csv: missing column\(s\) {head[1]}") as e:
         read_sensor_csv(name, f)
     assert "\n" not in str(e.value)
     # a NaN row is dropped and counted
@@ -133,12 +134,15 @@ def test_imu_increments_are_over_the_interval_ending_at_the_stamp(tmp_path):
 
 
 def test_jittered_and_missing_imu_stamps_keep_every_increment(tmp_path):
+    """Stamps jittering 8-11 ms and one record lost: every kept increment is integrated
+    over its own interval, the lost record's time is bridged by its neighbour's rate."""
     rng = np.random.default_rng(5)
-    d = rng.uniform(0.008, 0.011, 400)
-    d[100] = 0.02  # a dropped sample
+    d = rng.uniform(0.008, 0.011, 401)
     t = np.cumsum(d)
     w = np.column_stack([np.sin(t), np.cos(2 * t), 0.3 * t])  # rad/s
-    dth = w * d[:, None]
+    dth_all = w * d[:, None]
+    keep = np.r_[0:100, 101:401]  # record 100 is lost (its increment with it)
+    t, dth, d = t[keep], dth_all[keep], np.r_[d[:100], d[100] + d[101], d[102:]]
     rows = "\n".join(",".join(repr(float(v)) for v in (a, *b)) + ",0,0,0.1"
                      for a, b in zip(t, dth, strict=True))
     f = _write(tmp_path / "imu.csv", "t_s,dtheta_x_rad,dtheta_y_rad,dtheta_z_rad,dv_x_mps,"
@@ -148,11 +152,13 @@ def test_jittered_and_missing_imu_stamps_keep_every_increment(tmp_path):
     np.testing.assert_allclose(np.diff(imu.t), dt, rtol=1e-9)
     q = imu.quality
     assert q["imu_resampled"] == 1 and q["imu_samples_missing"] == 1
-    assert 0.0005 < q["imu_jitter_s"] < 0.011
-    # every increment is kept: the integral over the grid equals the file's total
+    assert 0.0005 < q["imu_jitter_s"] < 0.015  # (the lost record's interval included)
+    # every kept increment is there, and the lost one is bridged: the integral over the
+    # grid equals the true total (to about one increment: the grid's ends, the bridge)
     n_full = len(imu.t)
     np.testing.assert_allclose((imu.gyro * dt).sum(axis=0)[:2],
-                               dth.sum(axis=0)[:2], rtol=0, atol=2 * np.abs(w).max() * dt)
+                               dth_all.sum(axis=0)[:2], rtol=0,
+                               atol=2 * np.abs(w).max() * dt)
     assert n_full == int(np.floor((t[-1] - (t[0] - d[0])) / dt + 1e-9))
     # a gap beyond imu.max_bridge_s is refused where it is
     t2 = t.copy()
@@ -163,3 +169,19 @@ def test_jittered_and_missing_imu_stamps_keep_every_increment(tmp_path):
     where = rf"between t = {t2[199]:.6f} s and {t2[200]:.6f} s"
     with pytest.raises(DataError, match=rf"gap of 0\.5\d+ s {where}"):
         read_imu_csv(f)
+
+
+def test_a_sar_fix_without_heading_and_a_magnetometer_reporting_zeros(tmp_path):
+    f = _write(tmp_path / "sar.csv", "t_s,lat_deg,lon_deg,sigma_north_m,sigma_east_m\n"
+               "10,39.5,-117.25,3,4\n11,39.5,-117.25,3,4\n")
+    d = read_sensor_csv("sar", f)
+    assert d.absent == (2,) and np.isnan(d.z[:, 2]).all()
+    np.testing.assert_allclose(d.sigma[:, :2], [[3, 4], [3, 4]])
+    from fednav.sensors.registry import spec
+
+    cfg = spec("sar").config(sigma_pos_m=3.0, use_heading=False)
+    assert cfg.model().dim == 2 and cfg.model().R(cfg.sigma()).shape == (2, 2)
+    f = _write(tmp_path / "mag.csv", "t_s,magR_gauss,magF_gauss,magU_gauss\n"
+               "1,0.2,0.1,-0.4\n2,0,0,0\n3,0.2,0.1,-0.4\n")
+    d = read_sensor_csv("mag", f)
+    assert list(d.t) == [1.0, 3.0] and d.quality["mag_rows_dropped"] == 1

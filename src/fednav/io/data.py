@@ -137,8 +137,9 @@ def check_rows(source: str, n: int, **fields) -> None:
             raise DataError(f"{source}: field '{name}' has {len(a)} rows but 't' has {n}")
 
 
-#: Sampling intervals within this fraction of the median are uniform (taken as they are).
-UNIFORM_TOLERANCE = 1e-6
+#: Sampling intervals within this fraction of the median are uniform (taken as they are:
+#: time stamps rounded to 1 us at 300 Hz differ by 3e-4).
+UNIFORM_TOLERANCE = 1e-3
 
 
 def regular_imu(source: str, t, gyro, accel, max_gap_s: float):
@@ -247,16 +248,20 @@ class ImuData:
         """IMU data from increments ``dtheta`` [rad] and ``dv`` [m/s] (N, 3) over the
         intervals that end at ``t_end`` [s] (how loggers stamp them); the first
         interval is taken as long as the median one.  Each increment becomes a rate over
-        its own interval, stamped at the interval's start (fednav's convention)."""
+        its own interval, stamped at the interval's start (fednav's convention).  An
+        interval longer than 1.5 median intervals means lost records: the row's
+        increment covers one median interval, and its rate bridges the lost ones
+        (:func:`regular_imu` counts them)."""
         t_end = check_time(source, t_end)
         d = np.diff(t_end)
-        d = np.r_[np.median(d), d]
+        dt = float(np.median(d)) if len(d) else 0.0
+        d = np.r_[dt, d]
         dth = _as_float(source, "dtheta", dtheta, (-1, 3))
         dvv = _as_float(source, "dv", dv, (-1, 3))
         check_rows(source, len(t_end), dtheta=dth, dv=dvv)
         t_start = np.r_[t_end[0] - d[0], t_end[:-1]]
-        return cls(source, t_start, dth / d[:, None], dvv / d[:, None],
-                   increments=(dth, dvv), **kw)
+        over = np.where(d > 1.5 * dt, dt, d)[:, None]  # the time each increment covers
+        return cls(source, t_start, dth / over, dvv / over, increments=(dth, dvv), **kw)
 
     def period(self) -> float:
         """The sampling period [s]: the mean interval (uniform: :func:`regular_imu` made it

@@ -39,6 +39,8 @@ class SensorData:
     t_arrival: np.ndarray | None = None
     quality: dict = field(default_factory=dict)
     sigma: np.ndarray | None = None
+    #: components of ``z`` the file does not have (optional columns; NaN in ``z``)
+    absent: tuple[int, ...] = ()
 
 
 def columns(name: str) -> tuple[str, ...]:
@@ -48,26 +50,32 @@ def columns(name: str) -> tuple[str, ...]:
 
 
 def sigma_columns(name: str) -> tuple[str, ...]:
-    """The optional per-row 1-sigma columns of sensor ``name``'s file."""
-    return tuple(c.sigma_column[0] for c in registry.spec(name).columns)
+    """The optional per-row 1-sigma columns of sensor ``name``'s file (one per component,
+    or one for several: the magnetometer's heading)."""
+    return tuple(dict.fromkeys(c.sigma_column[0] for c in registry.spec(name).columns))
 
 
 def read_sensor_csv(name: str, path) -> SensorData:
     """Sensor ``name``'s CSV file as :class:`SensorData` (one-line :class:`DataError` for
-    a file it cannot use).  Rows with an empty or non-finite value are dropped and
-    counted; times must increase; 1-sigma columns (all of the sensor's or none) must be
+    a file it cannot use).  Rows with an empty or non-finite value, or that the sensor
+    does not take for a measurement (its spec's ``valid``), are dropped and counted;
+    times must increase; 1-sigma columns (all of the sensor's or none) must be
     positive."""
     spec = registry.spec(name)
     if not spec.columns:
         raise DataError(f"sensor '{name}' declares no file columns")
     head = columns(name)
-    sig_cols = sigma_columns(name)
+    sig_cols = tuple(c.sigma_column[0] for c in spec.columns)  # (per component)
     alt = spec.alternative
     optional = (ARRIVAL,) + sig_cols + (alt[0] if alt else ())
     src, df = _read(path, f"{name} sensor", ("t_s",), numeric=optional + head[1:])
     have = set(df.columns)
-    if all(c in have for c in head):
-        z = np.column_stack([df[c.name].to_numpy(float) * c.to_si for c in spec.columns])
+    absent = tuple(j for j, c in enumerate(spec.columns)
+                   if c.absent is not None and c.name not in have)
+    if all(c.name in have or j in absent for j, c in enumerate(spec.columns)):
+        z = np.column_stack([df[c.name].to_numpy(float) * c.to_si if j not in absent
+                             else np.full(len(df), np.nan)
+                             for j, c in enumerate(spec.columns)])
     elif alt and all(c in have for c in alt[0]):
         z = np.asarray(alt[1](df[list(alt[0])].to_numpy(float)), dtype=float)
     else:
@@ -76,19 +84,25 @@ def read_sensor_csv(name: str, path) -> SensorData:
         raise DataError(f"{src}: missing column(s) {', '.join(missing)}{other} "
                         f"(have {', '.join(map(str, df.columns))})")
     t = df["t_s"].to_numpy(float)
-    given = [c in have for c in sig_cols]
+    want = list(dict.fromkeys(c for j, c in enumerate(sig_cols) if j not in absent))
+    given = [c in have for c in want]
     sig = None
     if any(given):
         if not all(given):
-            lack = [c for c, g in zip(sig_cols, given, strict=True) if not g]
-            raise DataError(f"{src}: 1-sigma columns are all of {', '.join(sig_cols)} or "
+            lack = [c for c, g in zip(want, given, strict=True) if not g]
+            raise DataError(f"{src}: 1-sigma columns are all of {', '.join(want)} or "
                             f"none; missing {', '.join(lack)}")
         sig = np.column_stack([df[c.sigma_column[0]].to_numpy(float) * c.sigma_column[1]
-                               for c in spec.columns])
+                               if j not in absent else np.ones(len(df))
+                               for j, c in enumerate(spec.columns)])
     ta = None
     if ARRIVAL in have:
         ta = df[ARRIVAL].to_numpy(float)
-    ok = np.isfinite(z).all(axis=1) & np.isfinite(t)
+    used = [j for j in range(z.shape[1]) if j not in absent]
+    ok = np.isfinite(z[:, used]).all(axis=1) & np.isfinite(t)
+    if spec.valid is not None:
+        with np.errstate(invalid="ignore"):
+            ok &= spec.valid(z)
     if ta is not None:
         ok &= np.isfinite(ta)
     if sig is not None:
@@ -106,7 +120,7 @@ def read_sensor_csv(name: str, path) -> SensorData:
                             f"({t[i - 1]:.6f} s then {t[i]:.6f} s)")
     if sig is not None:
         sig = sig[ok]
-        bad = (sig <= 0).any(axis=1)
+        bad = (sig[:, used] <= 0).any(axis=1)
         if bad.any():
             i = int(np.argmax(bad))
             j = int(np.argmax(sig[i] <= 0))
@@ -123,7 +137,7 @@ def read_sensor_csv(name: str, path) -> SensorData:
     for j, c in enumerate(spec.columns):
         if c.wrap_2pi:
             z[:, j] = np.mod(z[:, j], 2.0 * np.pi)
-    return SensorData(name, src, t, z, ta, quality, sig)
+    return SensorData(name, src, t, z, ta, quality, sig, absent)
 
 
 def write_sensor_csv(path, series, sigma: bool = False) -> Path:

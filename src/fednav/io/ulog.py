@@ -28,7 +28,7 @@ import numpy as np
 
 from ..core import attitude as att
 from ..core import units
-from ..sensors.mag import GAUSS
+from ..sensors.mag import GAUSS, MIN_FIELD_GAUSS
 from .data import DataError, GnssData, ImuData, Reference, require_file
 from .navego import FRD_TO_RFU
 from .sensorfile import SensorData
@@ -311,7 +311,8 @@ def _mag(log: _Log, quality: dict, notes: list):
         notes.append("mag: from sensor_mag (no calibration applied: hard and soft iron)")
     else:
         return None
-    ok = np.isfinite(b).all(axis=1)
+    with np.errstate(invalid="ignore"):
+        ok = np.isfinite(b).all(axis=1) & (np.linalg.norm(b, axis=1) > MIN_FIELD_GAUSS)
     quality["mag_topic"] = topic
     if "EKF2_MAG_DECL" in log.params:
         quality["mag_declination_deg"] = _param(log, "EKF2_MAG_DECL", 0.0)
@@ -367,6 +368,10 @@ def _optional(read, notes: list, *args):
     except DataError as e:
         notes.append(f"not used: {e}")
         return None
+    except KeyError as e:  # a firmware whose topic lacks a field
+        notes.append(f"not used: {getattr(read, '__name__', 'stream').strip('_')}: the log "
+                     f"has no field {e}")
+        return None
 
 
 def read_ulog(path, max_bridge_s: float = 0.1) -> UlogRecording:
@@ -418,11 +423,14 @@ def read_ulog(path, max_bridge_s: float = 0.1) -> UlogRecording:
     log = _Log(path)
     quality: dict = {}
     notes: list[str] = list(log.parser_notes)
-    imu = _imu(log, max_bridge_s, quality, notes)
+    try:
+        imu = _imu(log, max_bridge_s, quality, notes)
+    except KeyError as e:
+        raise DataError(f"{path}: the IMU topic has no field {e}") from None
     gnss = _optional(_gnss, notes, log, quality, notes)
     sensors = {}
-    for name, s in (("baro", _baro(log, gnss, quality, notes)),
-                    ("mag", _mag(log, quality, notes))):
+    for name, s in (("baro", _optional(_baro, notes, log, gnss, quality, notes)),
+                    ("mag", _optional(_mag, notes, log, quality, notes))):
         if s is not None:
             sensors[name] = s
     air = [t for t in ("airspeed_validated", "airspeed") if t in log]

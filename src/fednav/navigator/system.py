@@ -382,3 +382,21 @@ def imu_figures(imu: ImuConfig, file_errors=None) -> dict[str, float | None]:
             v = getattr(file_errors, name)
         out[key] = None if v is None else float(np.max(v))
     return out
+
+
+def missing_figures(imu: ImuConfig, file_errors=None) -> list[str]:
+    """The IMU figures (SI keys of the ``imu:`` section) that neither ``imu`` nor the data
+    file's ``file_errors`` gives (a white noise given per sample counts; a correlation
+    time is not needed without its Gauss–Markov figure)."""
+    from ..sensors.imu import FIGURES
+
+    f = {FIGURES[k][2]: v for k, v in imu_figures(imu, file_errors).items()}
+    if imu.gyro_white_deg_h is not None:
+        f["gyro_arw_rad_sqrt_s"] = f["gyro_arw_rad_sqrt_s"] or 0.0
+    if imu.accel_white_ug is not None:
+        f["accel_vrw_mps_sqrt_s"] = f["accel_vrw_mps_sqrt_s"] or 0.0
+    for markov, tau in (("gyro_markov_radps", "gyro_tau_s"),
+                        ("accel_markov_mps2", "accel_tau_s")):
+        if f[markov] == 0.0:
+            f[tau] = f[tau] or float("inf")
+    return [k for k, v in f.items() if v is None]

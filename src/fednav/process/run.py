@@ -27,7 +27,7 @@ from ..io.sensorfile import SensorData
 from ..navigator.loop import InnovationRecord  # noqa: F401  (fednav.process's name)
 from ..navigator.navigator import InitialState, Navigator
 from ..navigator.solution import Solution, epoch_rate, imu_rate
-from ..navigator.system import System, imu_noise_model, initial_covariance
+from ..navigator.system import System, imu_noise_model, initial_covariance, missing_figures
 from ..navigator.system import imu_figures as _imu_figures
 from ..sensors import GnssConfig, VelocityConfig, registry
 from ..sensors.imu import FIGURES
@@ -167,6 +167,8 @@ def _initial_covariance(al: Alignment, sig_vel, sig_pos, gb: float, ab: float,
         P0[0:2, 0:2] = ab**2 * A @ A.T + np.diag(al.sigma[:2] ** 2 - ab**2 * np.sum(A**2, 1))
         P0[0:2, 15:18] = ab**2 * A
         P0[15:18, 0:2] = P0[0:2, 15:18].T
+    d = np.diag_indices(len(P0))  # (a figure given as 0: no state without uncertainty)
+    P0[d] = np.maximum(P0[d], (1e-6 * em.SCALE) ** 2)
     return P0 / np.outer(em.SCALE, em.SCALE)
 
 
@@ -281,10 +283,15 @@ def _other_sensor(data: SensorData, cfg: System):
         try:
             sc = spec.config()
         except ValidationError:
-            raise DataError(f"{data.source}: the system description needs a "
-                            f"'sensors.{data.name}' section (its noise) to use this file"
-                            ) from None
-    if spec.aiding and sc.sigma() is None:
+            if data.sigma is None:
+                raise DataError(f"{data.source}: the system description needs a "
+                                f"'sensors.{data.name}' section (its noise) to use this "
+                                f"file, or the file each row's 1-sigma") from None
+            # each row gives its noise: the section's other settings at their defaults
+            sc = spec.config.model_construct()
+    for j in data.absent:  # a column the file leaves out: the section says so
+        sc = sc.model_copy(update=spec.columns[j].absent)
+    if spec.aiding and data.sigma is None and sc.sigma() is None:
         raise DataError(f"{data.source}: sensors.{data.name} gives no noise figure")
     if sc.period_s is None and len(data.t) > 1:  # the data's own
         sc = sc.model_copy(update={"period_s": float(np.median(np.diff(data.t)))})
@@ -295,11 +302,11 @@ def _other_sensor(data: SensorData, cfg: System):
 VELOCITY_WINDOW_S = 2.0
 
 
-def _position_velocity(gnss: GnssData) -> tuple[np.ndarray, float]:
+def _position_velocity(gnss: GnssData) -> tuple[np.ndarray, np.ndarray]:
     """ENU velocity [m/s] of position-only fixes, for the alignment's course and the
     initial velocity: the position difference across a window of +-
-    :data:`VELOCITY_WINDOW_S` around each fix (one-sided at the ends), and its 1-sigma
-    [m/s] from the position noise (``sqrt(2) sigma / 2W``)."""
+    :data:`VELOCITY_WINDOW_S` around each fix (one-sided at the ends), and the 1-sigma
+    of each [m/s] from the two fixes' position noise over the span they are apart."""
     lla = gnss.lla
     d = earth.llh_difference_enu(lla[:, 0], lla[:, 1], lla[:, 2], lla[0, 0], lla[0, 1],
                                  lla[0, 2])
@@ -310,7 +317,11 @@ def _position_velocity(gnss: GnssData) -> tuple[np.ndarray, float]:
     vel = np.zeros((len(t), 3))
     ok = span > 0
     vel[ok] = (d[hi[ok]] - d[lo[ok]]) / span[ok, None]
-    sigma = float(np.sqrt(2.0) * np.max(gnss.sigma_pos) / (2.0 * VELOCITY_WINDOW_S))
+    sp = (np.broadcast_to(gnss.sigma_pos, (len(t), 3)) if gnss.sigma_rows is None
+          else gnss.sigma_rows[:, :3])
+    s = np.max(sp, axis=1)
+    sigma = np.full(len(t), np.inf)
+    sigma[ok] = np.hypot(s[hi[ok]], s[lo[ok]]) / span[ok]
     return vel, sigma
 
 
@@ -330,13 +341,10 @@ def _period(cfg: System, gnss: GnssData | None, others: dict) -> float:
 
 
 def _check_figures(imu: ImuData, cfg: System) -> None:
-    """Refuse to run without IMU figures: neither the system description's ``imu:``
-    section nor the data file gives any (figures a section leaves out are zero, as in a
-    scenario)."""
-    figures = set(cfg.imu.model_fields_set) - {"max_bridge_s"}
-    if figures or imu.errors is not None:
-        return
-    missing = [k for k, v in imu_figures(imu, cfg).items() if v is None]
+    """Refuse to run without an IMU figure: neither the system description's ``imu:``
+    section nor the data file gives it (0 must be said: a filter that trusts the IMU
+    completely is a choice)."""
+    missing = missing_figures(cfg.imu, imu.errors)
     if missing:
         raise DataError(f"{imu.source}: no IMU error figures in the file; give "
                         f"imu.{missing[0]} in the processing config")
@@ -381,6 +389,12 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
         if not imu.t[0] - 0.5 * dt <= t0 <= imu.t[-1]:
             raise DataError(f"initial.t_s = {t0:.6f} s is outside the IMU data "
                             f"({imu.t[0]:.6f} .. {imu.t[-1]:.6f} s)")
+        j = int(np.argmin(np.abs(imu.t - t0)))
+        if abs(imu.t[j] - t0) > 1e-6 * dt:  # the navigator starts on an IMU time stamp
+            warnings.append(f"initial.t_s = {t0:.6f} s moved to the nearest IMU time stamp "
+                            f"{imu.t[j]:.6f} s (the initial state is taken to hold there)")
+            init = init.model_copy(update={"t_s": float(imu.t[j])})
+            t0 = init.t_s
     else:
         t0 = imu.t[0] if gnss is None or init is not None else max(imu.t[0], gnss.t[0])
     i0 = int(np.searchsorted(imu.t, t0 - 0.5 * dt))
@@ -405,6 +419,10 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
             raise DataError(f"{gnss.source}: sensors.gnss.measures is {gc.measures}, the "
                             f"file has {has.replace('_', ' and ')} only")
         has = gc.measures or has
+        if cfg.filter.state == "total" and has != "position_velocity":
+            raise DataError(f"{gnss.source}: filter.state: total — the total-state "
+                            f"navigator's GNSS model needs positions and velocities; the "
+                            f"file has {has.replace('_', ' and ')} only")
         sensors["gnss"] = gc.model_copy(update={
             "lever_m": tuple(map(float, lever)), "sigma_pos_m": tuple(map(float, sig_pos)),
             "sigma_vel_mps": tuple(map(float, sig_vel)), "measures": has})
@@ -432,7 +450,10 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
         gnss_v, sig_vel0 = gnss, sig_vel
         if gnss.vel is None:  # the alignment's course from the positions' differences
             v, s_v = _position_velocity(gnss)
-            sig_vel0 = np.full(3, s_v)
+            if not np.isfinite(s_v[0]):
+                raise DataError(f"{gnss.source}: one position-only fix: no initial "
+                                f"velocity; give the initial state (initial:)")
+            sig_vel0 = np.full(3, s_v[0])
             gnss_v = replace(gnss, vel=v, sigma_vel=sig_vel0, quality={})
         al = _initial_attitude(imu, gnss_v, cfg, t0, i0, dt, noise, ab)
         C0 = att.euler_to_dcm(al.euler)

@@ -50,6 +50,15 @@ from .spec import Column, SensorConfig, SensorSpec
 
 #: Tesla per gauss (the unit PX4 and most magnetometers report).
 GAUSS = 1.0e-4
+#: A field weaker than this [gauss] is no measurement (the Earth's is 0.25-0.65 gauss): a
+#: sensor reporting zeros, a saturated or disconnected one.
+MIN_FIELD_GAUSS = 1.0e-3
+
+
+def usable(z) -> np.ndarray:
+    """Rows of fields ``z`` (N, 3) [T] that can give a heading (stronger than
+    :data:`MIN_FIELD_GAUSS`)."""
+    return np.linalg.norm(np.asarray(z, dtype=float), axis=1) > MIN_FIELD_GAUSS * GAUSS
 
 
 def field_enu(inclination: float, declination: float, strength: float = 1.0) -> np.ndarray:
@@ -178,4 +187,4 @@ SPEC = SensorSpec(
            "pitch", MagConfig, MagHeading,
     columns=(Column("magR_gauss", GAUSS, sigma=_SIGMA),
              Column("magF_gauss", GAUSS, sigma=_SIGMA),
-             Column("magU_gauss", GAUSS, sigma=_SIGMA)))
+             Column("magU_gauss", GAUSS, sigma=_SIGMA)), valid=usable)

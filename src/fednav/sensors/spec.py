@@ -84,12 +84,17 @@ class Column:
     factor that turns its values into the SI value of ``z`` and, for angles, whether it
     is wrapped to [0, 2 pi).  ``sigma``: the header and SI factor of the optional column
     holding each row's 1-sigma of this component (default ``sigma_<name>`` in the same
-    unit; latitude and longitude give theirs in metres, north and east)."""
+    unit; latitude and longitude give theirs in metres, north and east).  ``absent``:
+    for a column a file may leave out, the section's settings that say so (its model
+    then has no row for the component, whose ``z`` is NaN)."""
 
     name: str
     to_si: float = 1.0
     wrap_2pi: bool = False
     sigma: tuple[str, float] | None = None
+    #: an optional column: the sensor section's settings when a file lacks it (e.g. a
+    #: SAR fix without heading: ``{"use_heading": False}``); None: required
+    absent: dict | None = None
 
     @property
     def sigma_column(self) -> tuple[str, float]:
@@ -124,6 +129,9 @@ class SensorSpec:
     #: another layout of the same measurement: (its columns after ``t_s``, a function
     #: of their values (N, k) -> ``z`` (N, m) in SI), e.g. the star sensor's quaternion
     alternative: tuple[tuple[str, ...], object] | None = None
+    #: which rows of ``z`` (N, m) [SI] are measurements at all (a function -> (N,) bool;
+    #: the others are dropped and counted), e.g. a magnetometer reporting zeros
+    valid: object = None
 
     @property
     def compiled(self) -> bool:

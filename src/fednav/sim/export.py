@@ -29,6 +29,7 @@ import numpy as np
 from ..core import units
 from ..io.csvdata import INCREMENT_COLUMNS, write_csv
 from ..io.sensorfile import write_sensor_csv
+from ..navigator.system import missing_figures
 from .runs import make_run_data
 from .scenario import ModeConfig, Scenario
 
@@ -69,6 +70,11 @@ def system_yaml(scn: Scenario, mode: ModeConfig, truth, data, files: dict[str, s
     system = scn.system_for(mode)
     out = system.model_dump(mode="json", exclude_none=True,
                             exclude={"alignment", "smoother", "files", "initial"})
+    # the figures the scenario leaves out are zero in a simulation; recorded data must say
+    # so (fednav process refuses a figure it is not given)
+    for key in missing_figures(system.imu):
+        if not key.endswith("tau_s"):
+            out["imu"][key] = 0.0
     ie = scn.initial_errors
     lat, lon = (float(v) for v in units.to_deg(init.lla[:2]))
     pos = np.broadcast_to(np.asarray(ie.position_m, dtype=float), (3,))
