@@ -168,6 +168,34 @@ def test_wind_constraint_matches_truth(euler):
     del C
 
 
+@pytest.mark.parametrize("euler", [[0.0, 0.0, units.deg(90)], [0.08, -0.1, units.deg(20)],
+                                   [-0.05, 0.3, units.deg(250)]])
+def test_wind_constraint_with_air_data_angles_matches_truth(euler):
+    """With angle of attack and sideslip the true airspeed is directed in the body by
+    them: the ground velocity is C (V b) + w, b = [sin beta, cos alpha cos beta,
+    -sin alpha cos beta]; D dx = d to first order, and perfect data give d = 0."""
+    from fednav.sensors import WindConstraint
+
+    C = att.euler_to_dcm(euler)
+    alpha, beta, V = units.deg(4.0), units.deg(-3.0), 30.0
+    b = np.array([np.sin(beta), np.cos(alpha) * np.cos(beta), -np.sin(alpha) * np.cos(beta)])
+    w = np.array([8.0, -3.0, 0.0])
+    v = C @ (V * b) + w
+    z = np.array([V, w[0], w[1], alpha, beta])
+    m = WindConstraint.of(z)
+    _, _, exact = perturbed_nav(euler, np.zeros(18), vel=v)
+    np.testing.assert_allclose(m.residual(exact, z), 0.0, atol=1e-9)
+    dx = np.zeros(18)
+    dx[em.PHI] = units.arcmin([2.0, -3.0, 10.0])
+    dx[em.DV] = [0.05, -0.08, 0.01]
+    _, _, nav = perturbed_nav(euler, dx, vel=v)
+    d = m.residual(nav, z)
+    np.testing.assert_allclose(m.H(nav) @ em.from_si(dx), d, atol=2e-4)
+    assert np.abs(d - dx[3:5]).max() > 0.03  # the attitude term matters (catches its sign)
+    # a file without the angles (NaN) is the horizontal-airspeed model of paper 000
+    assert WindConstraint.of([V, 1.0, 2.0, np.nan, np.nan]).b is None
+
+
 @pytest.mark.parametrize("euler", EULERS)
 def test_body_velocity_models_match_truth(euler):
     """Odometer / DVL rows: the INS-derived body velocity of a point at a lever arm minus

@@ -58,7 +58,8 @@ def test_sar_fix_row_sigma_in_metres(tmp_path):
 def test_metric_layouts_read_as_written(tmp_path, name, header, row, z):
     f = _write(tmp_path / f"{name}.csv", f"t_s,{header}\n0.5,{row}\n1.5,{row}\n")
     d = read_sensor_csv(name, f)
-    np.testing.assert_allclose(d.z, [z, z])
+    np.testing.assert_allclose(d.z[:, :len(z)], [z, z])
+    assert np.isnan(d.z[:, len(z):]).all()  # (optional columns the file leaves out)
     np.testing.assert_allclose(d.t, [0.5, 1.5])
 
 
@@ -185,3 +186,11 @@ def test_a_sar_fix_without_heading_and_a_magnetometer_reporting_zeros(tmp_path):
                "1,0.2,0.1,-0.4\n2,0,0,0\n3,0.2,0.1,-0.4\n")
     d = read_sensor_csv("mag", f)
     assert list(d.t) == [1.0, 3.0] and d.quality["mag_rows_dropped"] == 1
+
+
+def test_air_data_angles_in_degrees(tmp_path):
+    f = _write(tmp_path / "air.csv", "t_s,airspeed_mps,wind_e_mps,wind_n_mps,aoa_deg,"
+               "sideslip_deg\n1,30,2,-1,4,-3\n")
+    d = read_sensor_csv("airdata", f)
+    np.testing.assert_allclose(d.z[0], [30, 2, -1, np.radians(4), np.radians(-3)])
+    assert d.absent == ()

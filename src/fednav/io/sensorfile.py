@@ -147,13 +147,14 @@ def write_sensor_csv(path, series, sigma: bool = False) -> Path:
     same doubles, but for the unit conversions' rounding)."""
     spec = registry.spec(series.kind)
     cols = {"t_s": series.t}
-    for j, c in enumerate(spec.columns):
+    columns = spec.columns[:series.z.shape[1]]  # (optional columns a simulation lacks)
+    for j, c in enumerate(columns):
         cols[c.name] = series.z[:, j] / c.to_si
     if series.t_avail is not None and np.any(series.t_avail != series.t):
         cols[ARRIVAL] = series.t_avail
     if sigma:
         s = np.broadcast_to(np.asarray(series.sigma, dtype=float), series.z.shape)
-        for j, c in enumerate(spec.columns):
+        for j, c in enumerate(columns):
             name, to_si = c.sigma_column
             cols[name] = s[:, j] / to_si
     return write_csv(path, cols, significant=17)

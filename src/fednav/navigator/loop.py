@@ -391,7 +391,7 @@ class PythonLoop:
         if i < 0:
             return
         nav = self.core.nav()
-        model = WindConstraint(z[i, 0])
+        model = WindConstraint.of(z[i])
         d, R = model.residual(nav, z[i]), model.R(m.sigma[i], nav)
         for name in self.fed.locals:
             self.fed.update(name, d, model, nav, R, t=tk)

@@ -9,8 +9,11 @@ knob that shows what a wrong wind estimate does to the constrained filter.
 
 Section ``sensors.airdata``: ``sigma_airspeed_mps``, ``wind_sigma_mps``,
 ``wind_bias_mps`` (east, north), ``period_s``.  File columns: ``t_s, airspeed_mps,
-wind_e_mps, wind_n_mps``.  It does not feed a local filter: the wind constraint
-(:class:`WindConstraint`) uses it in every local filter.
+wind_e_mps, wind_n_mps`` and optionally ``aoa_deg, sideslip_deg``: without the angles
+the airspeed is the horizontal airspeed along the heading (the airship of paper 000);
+with them it is the true airspeed, directed in the body by the angle of attack and the
+sideslip.  It does not feed a local filter: the wind constraint (:class:`WindConstraint`)
+uses it in every local filter.
 """
 
 from __future__ import annotations
@@ -76,33 +79,59 @@ class WindConstraint:
     dim = 2
     constraint = True
 
-    def __init__(self, airspeed: float = 0.0):
+    def __init__(self, airspeed: float = 0.0, aoa: float | None = None,
+                 sideslip: float | None = None):
         self.va = float(airspeed)  # measured airspeed [m/s] (enters D)
+        # with the angles the airspeed is the true airspeed and the air velocity's
+        # direction in the body is b = [sin beta, cos alpha cos beta, -sin alpha cos beta]
+        # (right, forward, up; alpha > 0: the body moves below its nose, beta > 0: to its
+        # right); without them, the horizontal airspeed along the heading
+        self.b = None
+        if aoa is not None or sideslip is not None:
+            a, bb = (0.0 if v is None or not np.isfinite(v) else float(v)
+                     for v in (aoa, sideslip))
+            self.b = np.array([np.sin(bb), np.cos(a) * np.cos(bb), -np.sin(a) * np.cos(bb)])
+
+    @classmethod
+    def of(cls, z) -> WindConstraint:
+        """The constraint for one air-data row ``z = [airspeed, wind E, wind N]`` (and,
+        in a file with them, ``angle of attack, sideslip`` [rad]; NaN: absent)."""
+        z = np.asarray(z, dtype=float)
+        angles = z[3:5] if len(z) >= 5 and np.isfinite(z[3:5]).any() else (None, None)
+        return cls(z[0], *angles)
+
+    def _air(self, nav: NavSnapshot, va: float) -> np.ndarray:
+        """Horizontal air velocity (east, north) [m/s] the INS attitude gives."""
+        if self.b is None:
+            psi = nav.euler[2]
+            return va * np.array([np.sin(psi), np.cos(psi)])
+        return va * (nav.C @ self.b)[:2]
 
     def residual(self, nav: NavSnapshot, z) -> np.ndarray:
-        psi = nav.euler[2]
-        u = np.array([np.sin(psi), np.cos(psi)])
-        return np.asarray(nav.vel[:2], dtype=float) - (z[0] * u + np.asarray(z[1:3]))
+        return np.asarray(nav.vel[:2], dtype=float) - (self._air(nav, z[0])
+                                                       + np.asarray(z[1:3]))
 
     def h(self, X, nav: NavSnapshot) -> np.ndarray:
         return np.atleast_2d(X) @ self.H(nav).T
 
     def H(self, nav: NavSnapshot) -> np.ndarray:
         va = self.va
-        psi = nav.euler[2]
-        du = np.array([np.cos(psi), -np.sin(psi)])
-        jpsi = att.euler_error_jacobian(nav.euler)[2]  # d(heading error)/d(phi)
         D = np.zeros((2, N_STATES))
-        D[:, PHI] = -va * np.outer(du, jpsi) * ARCMIN
+        if self.b is None:
+            psi = nav.euler[2]
+            du = np.array([np.cos(psi), -np.sin(psi)])
+            jpsi = att.euler_error_jacobian(nav.euler)[2]  # d(heading error)/d(phi)
+            D[:, PHI] = -va * np.outer(du, jpsi) * ARCMIN
+        else:  # C_hat a = C a + [(C a) x] phi: d loses the first two rows of that
+            D[:, PHI] = -att.skew(va * (nav.C @ self.b))[:2] * ARCMIN
         D[0, 3] = D[1, 4] = 1.0
         return D
 
     def R(self, sigma, nav: NavSnapshot | None = None) -> np.ndarray:
-        s = np.asarray(sigma, dtype=float)  # [airspeed, wind E, wind N]
+        s = np.asarray(sigma, dtype=float)  # [airspeed, wind E, wind N, ...]
         R = np.diag(s[1:3] ** 2)
         if nav is not None:
-            psi = nav.euler[2]
-            u = np.array([np.sin(psi), np.cos(psi)])
+            u = self._air(nav, 1.0)
             R = R + s[0] ** 2 * np.outer(u, u)
         return R
 
@@ -126,7 +155,10 @@ class AirDataConfig(SensorConfig):
         return np.array([self.sigma_airspeed_mps, w, w])
 
 
+_DEG = float(np.radians(1.0))
 SPEC = SensorSpec("airdata", "air data: true airspeed and the wind estimate (the wind "
                   "constraint; no local filter of its own)", AirDataConfig, WindConstraint,
                   columns=(Column("airspeed_mps"), Column("wind_e_mps"),
-                           Column("wind_n_mps")), aiding=False)
+                           Column("wind_n_mps"), Column("aoa_deg", _DEG, absent={}),
+                           Column("sideslip_deg", _DEG, absent={})),
+                  aiding=False, angles=(3, 4))
