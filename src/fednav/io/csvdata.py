@@ -95,6 +95,11 @@ def _has(df, names) -> bool:
     return all(c in df.columns for c in names)
 
 
+def _arrival(df) -> np.ndarray | None:
+    """The optional ``t_arrival_s`` column (when each row reached the navigator)."""
+    return df["t_arrival_s"].to_numpy(float) if "t_arrival_s" in df.columns else None
+
+
 def read_imu_csv(path, max_bridge_s: float = 0.1) -> ImuData:
     """IMU CSV, body right-forward-up: rates (``gyro_*_radps``, ``accel_*_mps2``: the
     rate at ``t_s``, held until the next sample) or increments (``dtheta_*_rad``,
@@ -135,7 +140,8 @@ def read_gnss_csv(path, sigma_pos=(5.0, 5.0, 5.0), sigma_vel=(0.1, 0.1, 0.1),
     for the components the file has).  The noise figures [north, east, up] m / [E, N,
     U] m/s used where the file has none and the antenna lever arm (body
     right-forward-up, m) come from the caller (the processing config)."""
-    src, df = _read(path, "GNSS", ("t_s",), numeric=POS_COLUMNS + GNSS_SIGMA_COLUMNS,
+    src, df = _read(path, "GNSS", ("t_s",),
+                    numeric=POS_COLUMNS + GNSS_SIGMA_COLUMNS + ("t_arrival_s",),
                     expected=("t_s",) + POS_COLUMNS + VEL_COLUMNS)
     has_pos, has_vel = _has(df, POS_COLUMNS), _has(df, VEL_COLUMNS)
     partial = [g for g in (POS_COLUMNS, VEL_COLUMNS)
@@ -164,17 +170,19 @@ def read_gnss_csv(path, sigma_pos=(5.0, 5.0, 5.0), sigma_vel=(0.1, 0.1, 0.1),
             if c in df.columns and c in want:
                 sig[:, j] = df[c].to_numpy(float)
     return GnssData(src, df["t_s"].to_numpy(float), lla, vel, np.asarray(sigma_pos),
-                    np.asarray(sigma_vel), np.asarray(lever), sigma_rows=sig)
+                    np.asarray(sigma_vel), np.asarray(lever), sigma_rows=sig,
+                    t_arrival=_arrival(df))
 
 
 def read_velocity_csv(path, lever=(0.0, 0.0, 0.0)) -> VelocityData:
     """Velocity CSV (ENU m/s with per-axis 1-sigma)."""
-    src, df = _read(path, "velocity", ("t_s",) + VEL_COLUMNS + VEL_SIGMA_COLUMNS)
+    src, df = _read(path, "velocity", ("t_s",) + VEL_COLUMNS + VEL_SIGMA_COLUMNS,
+                    numeric=("t_arrival_s",))
     sig = _cols(df, VEL_SIGMA_COLUMNS)
     cov = np.zeros((len(df), 3, 3))
     cov[:, np.arange(3), np.arange(3)] = sig**2
     return VelocityData(src, df["t_s"].to_numpy(float), _cols(df, VEL_COLUMNS), cov,
-                        np.asarray(lever))
+                        np.asarray(lever), t_arrival=_arrival(df))
 
 
 def read_reference_csv(path) -> Reference:

@@ -182,6 +182,20 @@ def regular_imu(source: str, t, gyro, accel, max_gap_s: float):
     return grid[:-1], out[0], out[1], quality
 
 
+def check_arrival(source: str, t: np.ndarray, ta) -> np.ndarray | None:
+    """Arrival times ``ta`` [s] of measurements valid at ``t`` (None: on time); a
+    measurement arriving before the time it describes is a DataError naming it."""
+    if ta is None:
+        return None
+    ta = check_array(source, "t_arrival", ta, (-1,))
+    early = ta < t - 1e-9
+    if early.any():
+        i = int(np.argmax(early))
+        raise DataError(f"{source}: row {i} arrives at {ta[i]:.6f} s, before the time it "
+                        f"describes ({t[i]:.6f} s)")
+    return ta
+
+
 @dataclass
 class ImuErrors:
     """IMU error figures (SI, per body axis, right-forward-up).
@@ -288,6 +302,8 @@ class GnssData:
     #: what the checks did: {"gnss_epochs_skipped": n}
     quality: dict = field(default_factory=dict)
     sigma_rows: np.ndarray | None = None
+    #: when each fix reached the navigator [s] (None: at its time of validity)
+    t_arrival: np.ndarray | None = None
 
     def __post_init__(self):
         t = _as_float(self.source, "t", self.t, (-1,))
@@ -306,10 +322,14 @@ class GnssData:
                            | (np.abs(lla[:, 2]) > ABSURD_HEIGHT_M))
             if vel is not None:
                 insane |= np.linalg.norm(vel, axis=1) > ABSURD_SPEED_MPS
-        keep, n = screen_rows(self.source, "GNSS", t, {"lla": lla, "vel": vel, "sigma": sig},
-                              insane)
+        ta = (None if self.t_arrival is None
+              else _as_float(self.source, "t_arrival", self.t_arrival, (-1,)))
+        check_rows(self.source, len(t), t_arrival=ta)
+        keep, n = screen_rows(self.source, "GNSS", t, {"lla": lla, "vel": vel, "sigma": sig,
+                                                       "t_arrival": ta}, insane)
         self.quality["gnss_epochs_skipped"] = n
         self.t = check_time(self.source, t[keep])
+        self.t_arrival = check_arrival(self.source, self.t, None if ta is None else ta[keep])
         self.lla = None if lla is None else lla[keep]
         self.vel = None if vel is None else vel[keep]
         if sig is not None:
@@ -341,6 +361,8 @@ class VelocityData:
     lever: np.ndarray
     #: what the checks did: {"velocity_epochs_skipped": n}
     quality: dict = field(default_factory=dict)
+    #: when each measurement reached the navigator [s] (None: at its time of validity)
+    t_arrival: np.ndarray | None = None
 
     def __post_init__(self):
         t = _as_float(self.source, "t", self.t, (-1,))
@@ -355,10 +377,15 @@ class VelocityData:
             not_pd[finite] = np.linalg.eigvalsh(sym[finite])[:, 0] <= 0
         with np.errstate(invalid="ignore"):
             insane = not_pd | (np.linalg.norm(vel, axis=1) > ABSURD_SPEED_MPS)
-        keep, n = screen_rows(self.source, "velocity", t, {"vel": vel, "cov": cov}, insane)
+        ta = (None if self.t_arrival is None
+              else _as_float(self.source, "t_arrival", self.t_arrival, (-1,)))
+        check_rows(self.source, len(t), t_arrival=ta)
+        keep, n = screen_rows(self.source, "velocity", t, {"vel": vel, "cov": cov,
+                                                           "t_arrival": ta}, insane)
         self.quality["velocity_epochs_skipped"] = n
         self.t = check_time(self.source, t[keep])
         self.vel, self.cov = vel[keep], cov[keep]
+        self.t_arrival = check_arrival(self.source, self.t, None if ta is None else ta[keep])
 
 
 @dataclass

@@ -69,8 +69,12 @@ def adjust_sensors(gnss: GnssData, velocity: VelocityData | None, cfg: System):
         return out
 
     gc, vc = _gnss_cfg(cfg), _velocity_cfg(cfg)
+    def shifted(ta, dt):
+        return None if ta is None else ta + dt
+
     if gnss is not None and gc.time_offset_s:
-        gnss = again(gnss, t=gnss.t + gc.time_offset_s)
+        gnss = again(gnss, t=gnss.t + gc.time_offset_s,
+                     t_arrival=shifted(gnss.t_arrival, gc.time_offset_s))
     if velocity is None:
         return gnss, None
     vel, cov = velocity.vel, velocity.cov
@@ -84,7 +88,8 @@ def adjust_sensors(gnss: GnssData, velocity: VelocityData | None, cfg: System):
     if vc.sigma_mps is not None:
         cov = np.broadcast_to(np.diag(np.square(vc.sigma_mps)), cov.shape).copy()
     if vc.time_offset_s or vel is not velocity.vel or cov is not velocity.cov:
-        velocity = again(velocity, t=velocity.t + vc.time_offset_s, vel=vel, cov=cov)
+        velocity = again(velocity, t=velocity.t + vc.time_offset_s, vel=vel, cov=cov,
+                         t_arrival=shifted(velocity.t_arrival, vc.time_offset_s))
     return gnss, velocity
 
 
@@ -251,6 +256,8 @@ class Prepared:
     sigmas: dict = field(default_factory=dict)
     #: the IMU file's own increments (dtheta, dv) of these samples, when it held them
     increments: tuple | None = None
+    #: when each measurement of ``measurements`` reached the navigator, by sensor
+    arrivals: dict = field(default_factory=dict)
 
     def navigator(self, **options) -> Navigator:
         """A :class:`~fednav.navigator.Navigator` for this data (nothing fed yet)."""
@@ -261,10 +268,11 @@ class Prepared:
         """Every measurement, then every IMU sample, in one block each."""
         total = self.system.filter.state == "total"
         for name, (t, z, R) in self.measurements.items():
+            ta = self.arrivals.get(name)
             if total:
-                nav.add_measurements(name, t, z, sigma=self.sigmas[name])
+                nav.add_measurements(name, t, z, sigma=self.sigmas[name], t_arrival=ta)
             else:
-                nav.add_measurements(name, t, z, R=R)
+                nav.add_measurements(name, t, z, R=R, t_arrival=ta)
         for d in self.others.values():
             nav.add_measurements(d.name, d.t, d.z, sigma=d.sigma, t_arrival=d.t_arrival)
         if self.increments is not None:
@@ -486,6 +494,20 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
     system = cfg.model_copy(update={
         "filter": cfg.filter.model_copy(update={"period_s": T}),
         "sensors": cfg.sensors.replace(**sensors), "aiding": aiding})
+    late = {"gnss": gnss.t_arrival - gnss.t if gnss is not None and gnss.t_arrival
+            is not None else None,
+            "velocity": velocity.t_arrival - velocity.t if velocity is not None and
+            velocity.t_arrival is not None else None,
+            **{n: d.t_arrival - d.t for n, d in others.items() if d.t_arrival is not None}}
+    for name, lag in late.items():
+        if lag is None or name not in aiding or not len(lag):
+            continue
+        how = system.sensors[name].timing.delay_compensation
+        if how == "interpolate" and float(lag.max()) > T:
+            warnings.append(f"{name}: measurements arrive up to {lag.max():.3f} s after their "
+                            f"time of validity, more than the filter period ({T:g} s) that "
+                            f"sensors.{name}.timing.delay_compensation: interpolate corrects; "
+                            f"use recompute or ins_increment (docs/paper004.md)")
     if velocity is not None:
         model = system.sensors.velocity.model()
         meas["velocity"] = (velocity.t, velocity.vel,
@@ -504,7 +526,9 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
                                          gyro_bias=gyro_bias), dt, imu.t[m], imu.gyro[m],
                     imu.accel[m], meas, imu.errors, n_per, warnings, al, quality, others,
                     sigmas, None if imu.increments is None
-                    else (imu.increments[0][m], imu.increments[1][m]))
+                    else (imu.increments[0][m], imu.increments[1][m]),
+                    {n: d.t_arrival for n, d in (("gnss", gnss), ("velocity", velocity))
+                     if d is not None and d.t_arrival is not None})
 
 
 def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
