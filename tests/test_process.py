@@ -180,13 +180,24 @@ def test_cli_bad_config_is_one_line(tmp_path, flight, cfg, message):
     assert message in res.output and "Traceback" not in res.output
 
 
-def test_csv_without_noise_figures_names_the_key(tmp_path, flight):
-    imu, gnss, _ = flight
+def test_csv_without_noise_figures_takes_a_preset_or_names_the_key(tmp_path, flight):
+    """No figure anywhere: the consumer MEMS preset, said; some figures but not all: the
+    missing one named (a grade fills them)."""
+    imu, gnss, ref = flight
     bare = ImuData("bare.csv", imu.t, imu.gyro, imu.accel)
     from fednav.io import DataError
 
-    with pytest.raises(DataError, match="bare.csv: no IMU error figures.*imu.gyro_arw"):
-        process(bare, gnss)
+    res = process(bare, gnss)
+    assert any("bare.csv: no IMU error figures in the file or the config: the 'consumer' "
+               "MEMS preset is assumed" in w for w in res.warnings)
+    r = rmse(errors_against(res.forward, ref))
+    assert np.hypot(r["north_m"], r["east_m"]) < 1.0
+    with pytest.raises(DataError, match=r"bare.csv: no IMU error figures.*imu\.accel_vrw"
+                                        r".*imu\.grade"):
+        process(bare, gnss, None, load_system({"imu": {"gyro_arw_rad_sqrt_s": 1e-4}}))
+    res = process(bare, gnss, None, load_system({"imu": {"gyro_arw_rad_sqrt_s": 1e-4,
+                                                         "grade": "industrial"}}))
+    assert not any("preset is assumed" in w for w in res.warnings)
 
 
 def test_solution_is_at_imu_rate_with_the_epochs_after_feedback(flight, result):

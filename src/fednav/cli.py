@@ -243,9 +243,8 @@ def _ulog_reader(log: Path):
                             f"not used as the reference")
             truth = None
         for note in rec.notes:
-            if not (note.startswith("imu: PX4 logs carry no IMU noise figures")
-                    and any("no IMU noise figures" in w for w in warnings)):
-                warnings.append(f"{log}: {note}")
+            if not note.startswith("imu: PX4 logs carry no IMU noise figures"):
+                warnings.append(f"{log}: {note}")  # (process says what it assumes)
         return {"imu": rec.imu, "gnss": rec.gnss, "velocity": None, "ref": truth,
                 "sensors": rec.sensors, "system": system, "warnings": warnings,
                 "others": {} if rec.px4 is None else {"px4": rec.px4},

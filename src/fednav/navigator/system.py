@@ -374,12 +374,14 @@ FILE_FIELDS = {"gyro_arw": "gyro_arw", "accel_vrw": "accel_vrw", "gyro_bias": "g
 
 def imu_figures(imu: ImuConfig, file_errors=None) -> dict[str, float | None]:
     """Every IMU figure (SI, by figure name): the system's, else the data file's (its
-    largest axis), else None."""
+    largest axis), else the system's ``grade`` preset, else None."""
     out = {}
     for key, name in FILE_FIELDS.items():
         v = imu.si(key)
         if v is None and file_errors is not None:
             v = getattr(file_errors, name)
+        if v is None:
+            v = imu.preset(key)
         out[key] = None if v is None else float(np.max(v))
     return out
 

@@ -4,8 +4,8 @@ A PX4 log (:func:`fednav.io.read_ulog`) holds the IMU, GNSS, barometer and magne
 but no IMU noise figures; :func:`ulog_system` completes the user's system description
 from the log:
 
-* the ``imu:`` figures, when the description gives none, are :data:`PX4_IMU` — a generic
-  autopilot MEMS IMU (a guess, said in a warning: give yours);
+* the ``imu:`` figures, when the description gives none, are the ``consumer`` grade
+  preset (:data:`fednav.sensors.imu.GRADES`: autopilot MEMS; said in a warning);
 * ``sensors.gnss``: the receiver's own accuracy figures from the log (the reader's
   medians of ``eph``/``epv``/``s_variance_m_s``);
 * ``sensors.mag``: the declination from the log's ``EKF2_MAG_DECL``, the inclination from
@@ -25,11 +25,6 @@ import numpy as np
 
 from ..navigator.system import System
 
-#: IMU figures for a PX4 log when the system description gives none: a generic
-#: autopilot MEMS IMU (ICM-20602 / BMI088 class on a vibrating airframe), SI.
-PX4_IMU = {"gyro_arw_rad_sqrt_s": 3e-3, "accel_vrw_mps_sqrt_s": 3e-2,
-           "gyro_bias_radps": 0.01, "accel_bias_mps2": 0.2, "gyro_markov_radps": 1e-4,
-           "gyro_tau_s": 100.0, "accel_markov_mps2": 1e-3, "accel_tau_s": 100.0}
 #: Heading 1-sigma of a magnetometer on an autopilot (motor currents, calibration) [deg].
 MAG_SIGMA_DEG = 2.0
 #: Barometric height 1-sigma [m].
@@ -80,11 +75,6 @@ def ulog_system(rec, cfg: System) -> tuple[System, list[str]]:
     warnings saying what was assumed."""
     warnings = []
     data = cfg.model_dump(exclude_unset=True, mode="json")
-    if not set(cfg.imu.model_fields_set) - {"max_bridge_s"}:
-        data["imu"] = {**data.get("imu", {}), **PX4_IMU}
-        warnings.append("the log has no IMU noise figures: generic autopilot MEMS figures "
-                        "assumed (fednav.process.flight_log.PX4_IMU); give the IMU's in "
-                        "--config (imu:)")
     sensors = data.setdefault("sensors", {})
     g = rec.gnss
     if g is not None:

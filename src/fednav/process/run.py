@@ -348,14 +348,34 @@ def _period(cfg: System, gnss: GnssData | None, others: dict) -> float:
     return min(periods)
 
 
-def _check_figures(imu: ImuData, cfg: System) -> None:
-    """Refuse to run without an IMU figure: neither the system description's ``imu:``
-    section nor the data file gives it (0 must be said: a filter that trusts the IMU
-    completely is a choice)."""
+#: The IMU grade assumed for data that come with no IMU figure at all (with a warning).
+DEFAULT_GRADE = "consumer"
+
+
+def with_imu_figures(imu: ImuData, cfg: System) -> tuple[System, list[str]]:
+    """``cfg``, with the :data:`DEFAULT_GRADE` preset (and a warning naming it) when
+    neither its ``imu:`` section nor the data file gives any IMU figure; a one-line
+    :class:`DataError` naming a figure that some are given but not that one (0 must be
+    said: a filter that trusts the IMU completely is a choice)."""
+    figures = set(cfg.imu.model_fields_set) - {"max_bridge_s", "random_bias"}
+    if not figures and imu.errors is None:
+        cfg = cfg.model_copy(update={"imu": cfg.imu.model_copy(
+            update={"grade": DEFAULT_GRADE})})
+        return cfg, [f"{imu.source}: no IMU error figures in the file or the config: the "
+                     f"'{DEFAULT_GRADE}' MEMS preset is assumed (fednav.sensors.imu.GRADES); "
+                     f"give the IMU's figures or imu.grade (consumer, industrial, tactical, "
+                     f"navigation)"]
     missing = missing_figures(cfg.imu, imu.errors)
     if missing:
         raise DataError(f"{imu.source}: no IMU error figures in the file; give "
-                        f"imu.{missing[0]} in the processing config")
+                        f"imu.{missing[0]} in the processing config (or imu.grade: consumer, "
+                        f"industrial, tactical or navigation, for the figures left out)")
+    return cfg, []
+
+
+def _check_figures(imu: ImuData, cfg: System) -> None:
+    """:func:`with_imu_figures`' refusal alone."""
+    with_imu_figures(imu, cfg)
 
 
 def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData | None = None,
@@ -386,9 +406,9 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
                         "initial state in the system description (initial: lat_deg, "
                         "lon_deg, h_m, vel_mps, euler_deg, sigma)")
     dt = imu.period()
-    _check_figures(imu, cfg)
+    cfg, assumed = with_imu_figures(imu, cfg)
     gnss, velocity = adjust_sensors(gnss, velocity, cfg)
-    warnings = check_units(imu, gnss)
+    warnings = assumed + check_units(imu, gnss)
     period = _period(cfg, gnss, others)
     n_per = max(1, int(round(period / dt)))
     T = n_per * dt

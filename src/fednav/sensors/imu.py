@@ -7,6 +7,7 @@ gyro [rad/s] / [rad/sqrt(s)], accelerometer [m/s^2] / [m/s/sqrt(s)].
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal
 
 import numba
 import numpy as np
@@ -132,6 +133,35 @@ FIGURES = {
 _NONNEG = Field(None, ge=0.0)
 _POS = Field(None, gt=0.0)
 
+#: IMU grade presets: every figure of :data:`FIGURES` (SI keys), for data that come
+#: without them.  Orders of magnitude of each class as Groves (*Principles of GNSS,
+#: Inertial, and Multisensor Integrated Navigation Systems*, 2nd ed., 2013, sec. 4.4 and
+#: table 4.1) gives them, set toward the noisy end of the class — a filter that trusts a
+#: preset too much diverges, one that trusts it too little only converges slower:
+#:
+#: * ``consumer`` — phone / autopilot MEMS (ICM-20602, BMI088 class) on a vibrating
+#:   vehicle: turn-on bias 0.5 deg/s and 0.2 m/s^2, white noise 10 deg/sqrt(h) and
+#:   0.03 m/s/sqrt(s);
+#: * ``industrial`` — calibrated MEMS units (ADIS16488 class): 0.05 deg/s, 5 mg,
+#:   0.3 deg/sqrt(h), 2 mg/sqrt(Hz) (vibration included);
+#: * ``tactical`` — FOG / high-end MEMS: 1 deg/h, 1 mg, 0.05 deg/sqrt(h), 100 ug/sqrt(Hz);
+#: * ``navigation`` — RLG / FOG navigation grade: 0.01 deg/h, 50 ug, 0.002 deg/sqrt(h),
+#:   20 ug/sqrt(Hz).
+#:
+#: Each has a Gauss–Markov bias instability of a tenth of its turn-on bias (300 s
+#: correlation; 3600 s for navigation grade).
+GRADES: dict[str, dict[str, float]] = {
+    name: {"gyro_bias_radps": units.deg_per_h(gb), "gyro_markov_radps": units.deg_per_h(gb) / 10,
+           "gyro_tau_s": tau, "gyro_arw_rad_sqrt_s": units.deg_per_sqrt_h(arw),
+           "accel_bias_mps2": units.micro_g(ab), "accel_markov_mps2": units.micro_g(ab) / 10,
+           "accel_tau_s": tau, "accel_vrw_mps_sqrt_s": units.micro_g(vrw)}
+    for name, gb, arw, ab, vrw, tau in (
+        # (gyro bias [deg/h], ARW [deg/sqrt h], accel bias [ug], VRW [ug/sqrt Hz], tau [s])
+        ("consumer", 1800.0, 10.0, 20_000.0, 3_000.0, 300.0),
+        ("industrial", 180.0, 0.3, 5_000.0, 2_000.0, 300.0),
+        ("tactical", 1.0, 0.05, 1_000.0, 100.0, 300.0),
+        ("navigation", 0.01, 0.002, 50.0, 20.0, 3600.0))}
+
 
 class ImuConfig(_Model):
     """IMU error figures, per axis (isotropic); each in whichever unit its key names.
@@ -175,6 +205,9 @@ class ImuConfig(_Model):
     accel_bias_rw_ug_sqrt_h: float | None = _NONNEG
     random_bias: bool = False
     max_bridge_s: float = Field(0.1, gt=0.0)
+    #: a preset (:data:`GRADES`) for the figures neither this section nor the data file
+    #: gives: consumer, industrial, tactical or navigation
+    grade: Literal["consumer", "industrial", "tactical", "navigation"] | None = None
 
     @model_validator(mode="after")
     def _one_key_per_figure(self):
@@ -192,8 +225,14 @@ class ImuConfig(_Model):
         v = getattr(self, si)
         return None if v is None else float(v)
 
+    def preset(self, figure: str) -> float | None:
+        """Figure ``figure`` of the section's ``grade`` (SI), None without a grade."""
+        return None if self.grade is None else GRADES[self.grade][FIGURES[figure][2]]
+
     def _or(self, figure: str, default: float = 0.0) -> float:
         v = self.si(figure)
+        if v is None:
+            v = self.preset(figure)
         return default if v is None else v
 
     # -- the figures of a simulation (unknown = 0, correlation time unknown = infinite)
