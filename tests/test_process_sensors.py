@@ -171,3 +171,26 @@ def test_gnss_arriving_late_is_used_when_it_arrives(flight, tmp_path):
 
     with pytest.raises(DataError, match="row 3 arrives at .* before the time it describes"):
         read_gnss_csv(f)
+
+
+def test_the_non_holonomic_constraint_holds_the_drift_through_a_gnss_outage(flight):
+    """The 240 s drive with GNSS withheld for 60 s (120-180 s): the non-holonomic
+    constraint (no file: applied every filter epoch) cuts the horizontal drift inside the
+    outage (measured: RMS 5.5 -> 0.89 m, max 11.9 -> 1.5 m)."""
+    imu, gnss, ref = flight
+    keep = (gnss.t < 120.0) | (gnss.t > 180.0)
+    out = replace(gnss, t=gnss.t[keep], lla=gnss.lla[keep], vel=gnss.vel[keep], quality={})
+
+    def drift(cfg):
+        res = process(imu, out, None, cfg)
+        e = errors_against(res.forward, ref)
+        m = (e["t"] >= 120.0) & (e["t"] <= 180.0)
+        return float(np.sqrt(np.mean(e["north_m"][m] ** 2 + e["east_m"][m] ** 2))), res
+
+    free, _ = drift(System())
+    held, res = drift(load_system({"sensors": {"nhc": {"sigma_mps": [0.1, 0.1]}}}))
+    assert held < 0.3 * free, (free, held)
+    assert res.forward.fdi and {e[1] for e in res.forward.fdi} == {"gnss", "nhc"}
+    c = res.forward.fdi
+    nis = np.mean([e[2] / e[3] for e in c if e[1] == "nhc"])
+    assert nis < 2.0  # (measured 0.009: the simulated drive has no slip, 0.1 m/s is loose)

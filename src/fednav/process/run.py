@@ -282,6 +282,16 @@ class Prepared:
         return nav
 
 
+def _pseudo(name: str, cfg: System, imu: ImuData, T: float) -> SensorData:
+    """Rows ``z = 0`` of a pseudo-measurement (a non-holonomic constraint) every
+    ``sensors.NAME.period_s`` (default: the filter period ``T``) over the IMU data."""
+    period = cfg.sensors[name].period_s or T
+    t = np.arange(imu.t[0] + period, imu.t[-1] + 1e-9, period)
+    m = len(registry.spec(name).columns)
+    return SensorData(name, f"sensors.{name} (no file: every {period:g} s)", t,
+                      np.zeros((len(t), m)), quality={})
+
+
 def _other_sensor(data: SensorData, cfg: System):
     """The system's section for a recorded sensor other than GNSS and the velocity sensor
     (its noise): the description's, else the section's defaults when they suffice."""
@@ -412,6 +422,10 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
     period = _period(cfg, gnss, others)
     n_per = max(1, int(round(period / dt)))
     T = n_per * dt
+    for name in cfg.sensors:  # constraints the vehicle always obeys need no file
+        if registry.spec(name).pseudo and name not in others and (
+                cfg.aiding is None or name in cfg.aiding):
+            others[name] = _pseudo(name, cfg, imu, T)
     if init is not None and init.t_s is not None:
         t0 = init.t_s
         if not imu.t[0] - 0.5 * dt <= t0 <= imu.t[-1]:

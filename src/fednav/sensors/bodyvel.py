@@ -7,6 +7,10 @@
   velocity log, a body-mounted velocity sensor).  Section ``sensors.dvl``:
   ``sigma_mps`` (one value or [right, forward, up]), ``lever_m``, ``period_s``.  File
   columns: ``t_s, vR_mps, vF_mps, vU_mps``.
+* ``nhc`` — non-holonomic constraint: the wheel-ground contact point of a land vehicle
+  (``lever_m``) moves neither sideways nor up; ``sigma_mps`` (lateral, vertical);
+  without a file ``fednav process`` applies it every ``period_s`` (default: each filter
+  epoch).  File columns (if any): ``t_s, vR_mps, vU_mps`` (zeros).
 * ``zupt`` — zero-velocity update: the vehicle stands still (ENU velocity zero) at the
   listed times.  Section ``sensors.zupt``: ``sigma_mps`` (how still "still" is: engine
   vibration, a rocking hull), ``period_s`` (how often a stop is used), and for
@@ -83,6 +87,24 @@ class StandstillDetector:
                                  t_avail)
 
 
+@dataclass(frozen=True)
+class ZeroPseudo:
+    """Pseudo-measurements ``z = 0`` of ``dim`` components every ``period`` [s] (a
+    constraint the vehicle always obeys: no noise is drawn, ``sigma`` says how softly
+    the filter takes it)."""
+
+    kind: str
+    sigma: tuple
+    period: float
+
+    def simulate(self, truth, rng: np.random.Generator, t=None,
+                 t_avail=None) -> MeasurementSeries:
+        t = flight_times(truth, self.period, t)
+        sig = np.asarray(self.sigma, dtype=float)
+        return MeasurementSeries(self.kind, t, np.zeros((len(t), len(sig))), sig.copy(),
+                                 t_avail)
+
+
 class _Diagonal(RowModel):
     def R(self, sigma) -> np.ndarray:
         return np.diag(np.broadcast_to(np.asarray(sigma, dtype=float), (self.dim,)) ** 2)
@@ -101,6 +123,14 @@ class DvlVelocity(_Diagonal):
 
     kind = "dvl"
     rows = ((BVEL_R, 0), (BVEL_F, 1), (BVEL_U, 2))
+
+
+class NonHolonomic(_Diagonal):
+    """Non-holonomic constraint: residual = INS-derived body velocity (right, up) of the
+    wheel-ground contact point - 0 [m/s]."""
+
+    kind = "nhc"
+    rows = ((BVEL_R, 0), (BVEL_U, 1))
 
 
 class ZeroVelocity(_Diagonal):
@@ -146,6 +176,34 @@ class DvlConfig(SensorConfig):
         return np.broadcast_to(np.asarray(self.sigma_mps, dtype=float), (3,)).copy()
 
 
+class NhcConfig(SensorConfig):
+    """Non-holonomic constraint of a land vehicle: the wheel-ground contact point (lever
+    arm, body right-forward-up, m: the rear axle's middle for a car) moves neither
+    sideways nor up; 1-sigma of the lateral and vertical velocity that allows [m/s]
+    (tyre slip, suspension, a road's camber).  Without a file, ``fednav process`` applies
+    it every ``period_s`` (default: every filter epoch)."""
+
+    sigma_mps: float | tuple[float, float] = (0.1, 0.1)
+    lever_m: _V3 = (0.0, 0.0, 0.0)
+
+    def _sig(self) -> tuple[float, float]:
+        s = np.broadcast_to(np.asarray(self.sigma_mps, dtype=float), (2,))
+        if np.any(s <= 0):
+            from ..core.config import ConfigError
+
+            raise ConfigError("sensors.nhc.sigma_mps: sigmas must be positive")
+        return tuple(map(float, s))
+
+    def sensor(self) -> ZeroPseudo:
+        return ZeroPseudo("nhc", self._sig(), self.period_s)
+
+    def model(self) -> NonHolonomic:
+        return NonHolonomic(self.lever_m)
+
+    def sigma(self) -> np.ndarray:
+        return np.array(self._sig())
+
+
 class ZuptConfig(SensorConfig):
     """Zero-velocity updates: 1-sigma of "still" [m/s]; in simulation, stops are where
     the true speed is below ``stationary_below_mps``."""
@@ -168,6 +226,9 @@ ODOMETER = SensorSpec("odometer", "odometer: forward speed in body axes at its l
 DVL = SensorSpec("dvl", "DVL / body velocity sensor: velocity in body axes right, forward, "
                  "up at its lever arm", DvlConfig, DvlVelocity,
                  columns=(Column("vR_mps"), Column("vF_mps"), Column("vU_mps")))
+NHC = SensorSpec("nhc", "non-holonomic constraint: no lateral or vertical velocity at the "
+                 "wheel-ground contact (land vehicles)", NhcConfig, NonHolonomic,
+                 columns=(Column("vR_mps"), Column("vU_mps")), pseudo=True)
 ZUPT = SensorSpec("zupt", "zero-velocity update: ENU velocity zero while stopped",
                   ZuptConfig, ZeroVelocity,
                   columns=(Column("vE_mps"), Column("vN_mps"), Column("vU_mps")))

@@ -23,7 +23,7 @@ from .spec import SensorConfig, SensorSpec
 #: from a run's generator (so seeded runs reproduce: new sensors go at the end).
 SENSORS: dict[str, SensorSpec] = {s.name: s for s in (
     star.SPEC, sar.SPEC, gnss.SPEC, baro.SPEC, sarvel.SPEC, airdata.SPEC, velocity.SPEC,
-    bodyvel.ODOMETER, bodyvel.DVL, bodyvel.ZUPT, mag.SPEC,
+    bodyvel.ODOMETER, bodyvel.DVL, bodyvel.ZUPT, mag.SPEC, bodyvel.NHC,
 )}
 
 

@@ -132,6 +132,9 @@ class SensorSpec:
     #: which rows of ``z`` (N, m) [SI] are measurements at all (a function -> (N,) bool;
     #: the others are dropped and counted), e.g. a magnetometer reporting zeros
     valid: object = None
+    #: a constraint with ``z = 0`` always (non-holonomic): recorded data need no file —
+    #: ``fednav process`` makes its rows every ``period_s`` (default: each filter epoch)
+    pseudo: bool = False
 
     @property
     def compiled(self) -> bool:
