@@ -194,3 +194,22 @@ def test_the_non_holonomic_constraint_holds_the_drift_through_a_gnss_outage(flig
     c = res.forward.fdi
     nis = np.mean([e[2] / e[3] for e in c if e[1] == "nhc"])
     assert nis < 2.0  # (measured 0.009: the simulated drive has no slip, 0.1 m/s is loose)
+
+
+def test_a_gnss_time_offset_is_seen_and_said(flight):
+    """The GNSS course against the gyro's heading shows a receiver clock offset (here the
+    fixes stamped 0.5 s and 18 s late: UTC vs GPS time); the estimate is within 0.1 s
+    (measured -0.07 s on time: the antenna's lever arm turns the course a little) and
+    only an offset beyond 0.1 s, or half a GNSS period, is a warning."""
+    from fednav.process.run import time_offset
+
+    imu, gnss, _ = flight
+    assert abs(time_offset(imu, gnss)) < 0.1
+    for late in (0.5, 18.0):
+        g = replace(gnss, t=gnss.t + late, quality={})
+        assert time_offset(imu, g) == pytest.approx(-late, abs=0.1)
+    res = process(imu, replace(gnss, t=gnss.t + 0.5, quality={}), None, System())
+    assert any("moved by -0.5" in w and "time_offset_s" in w for w in res.warnings)
+    assert res.data_quality["gnss_time_offset_seen_s"] == pytest.approx(-0.5, abs=0.1)
+    res = process(imu, gnss, None, System())
+    assert not any("time_offset_s" in w for w in res.warnings)

@@ -264,7 +264,7 @@ def _print_process(s: dict) -> None:
                       f"deg, 1-sigma {al.get('sigma_deg')} deg")
     for w in s.get("warnings", []):
         console.print(f"[yellow]warning:[/] {w}")
-    q = {k: v for k, v in s.get("data_quality", {}).items() if v}
+    q = {k: v for k, v in s.get("data_quality", {}).items() if v and not k.endswith("_seen_s")}
     if q:
         console.print("data: " + ", ".join(f"{k.replace('_', ' ')} {v}" for k, v in q.items())
                       + " (docs/reliability.md)")

@@ -177,6 +177,55 @@ def _initial_covariance(al: Alignment, sig_vel, sig_pos, gb: float, ab: float,
     return P0 / np.outer(em.SCALE, em.SCALE)
 
 
+#: Largest GNSS-IMU time offset :func:`time_offset` looks for [s] (GPS - UTC is 18 s).
+OFFSET_SEARCH_S = 30.0
+
+
+def time_offset(imu: ImuData, gnss: GnssData, step: float = 0.01) -> float | None:
+    """The GNSS-IMU time offset [s] the data show, to add to the GNSS time stamps (as
+    ``sensors.gnss.time_offset_s``): the shift of the GNSS course that best matches the
+    heading the gyro integrates (about the mean specific force's axis, at rest "up"),
+    searched over +-:data:`OFFSET_SEARCH_S` in ``step`` s — None when the vehicle turns
+    too little while moving (less than 30 deg of course change above 2 m/s) for the
+    offset to be observable."""
+    if gnss.vel is None or len(gnss.t) < 10:
+        return None
+    speed = np.hypot(gnss.vel[:, 0], gnss.vel[:, 1])
+    moving = speed > 2.0
+    if moving.sum() < 10:
+        return None
+    tg = gnss.t[moving]
+    course = np.unwrap(np.arctan2(gnss.vel[moving, 0], gnss.vel[moving, 1]))
+    if np.ptp(course) < np.radians(30.0):
+        return None
+    up = np.mean(imu.accel, axis=0)
+    up /= max(np.linalg.norm(up), 1e-12)
+    dt = imu.period()
+    heading = -np.concatenate([[0.0], np.cumsum(imu.gyro[:-1] @ up) * dt])  # (gyro bias
+    # and Earth rate drift slowly: a straight-line trend is removed from the misfit below)
+    x = tg - tg.mean()
+
+    def best(lags):
+        """The lag of the least misfit (after a straight line over time is removed)."""
+        t = tg[None, :] + lags[:, None]
+        w = ((t >= imu.t[0]) & (t <= imu.t[-1])).astype(float)
+        r = (course[None, :] - np.interp(t, imu.t, heading)) * w
+        n, sx, sxx = w.sum(1), w @ x, w @ x**2
+        sr, sxr, srr = r.sum(1), r @ x, (r * r).sum(1)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            b = (n * sxr - sx * sr) / (n * sxx - sx**2)
+            a = (sr - b * sx) / n
+            cost = (srr - a * sr - b * sxr) / n
+        cost[~(n >= max(10, 0.5 * len(tg)))] = np.inf
+        cost[~np.isfinite(cost)] = np.inf
+        return None if not np.isfinite(cost).any() else float(lags[int(np.argmin(cost))])
+
+    coarse = best(np.arange(-OFFSET_SEARCH_S, OFFSET_SEARCH_S + 0.05, 0.1))
+    if coarse is None:
+        return None
+    return best(np.arange(coarse - 0.2, coarse + 0.2 + step / 2, step))
+
+
 def check_units(imu: ImuData, gnss: GnssData | None) -> list[str]:
     """Refuse IMU data in the wrong unit; warn about GNSS positions that look like radians.
 
@@ -419,6 +468,17 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
     cfg, assumed = with_imu_figures(imu, cfg)
     gnss, velocity = adjust_sensors(gnss, velocity, cfg)
     warnings = assumed + check_units(imu, gnss)
+    quality_extra = {}
+    if gnss is not None:
+        off = time_offset(imu, gnss)
+        if off is not None:
+            quality_extra["gnss_time_offset_seen_s"] = round(off, 2)
+            if abs(off) > max(0.1, 0.5 * float(np.median(np.diff(gnss.t)))):
+                warnings.append(f"{gnss.source}: the GNSS course matches the gyro's heading "
+                                f"best with the GNSS time stamps moved by {off:+.2f} s: a "
+                                f"time offset between the receiver's and the IMU's clock "
+                                f"(UTC vs GPS time: 18 s)? sensors.gnss.time_offset_s "
+                                f"corrects it")
     period = _period(cfg, gnss, others)
     n_per = max(1, int(round(period / dt)))
     T = n_per * dt
@@ -548,7 +608,7 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
                             np.array([model.R(c) for c in velocity.cov]))
     m = slice(i0, i0 + n_cycles * n_per)
     quality = {**imu.quality, **(gnss.quality if gnss else {}),
-               **(velocity.quality if velocity else {})}
+               **(velocity.quality if velocity else {}), **quality_extra}
     t_start = init.t_s if init is not None and init.t_s is not None else float(imu.t[i0])
     for name, d in others.items():
         quality.update(d.quality)
