@@ -93,6 +93,7 @@ def test_cli_tune_writes_a_config_that_process_accepts(short, tmp_path):
                                  "--out", str(out)])
     assert r.exit_code == 0, r.output
     assert "NIS/dof before -> after" in r.output and "velocity.sigma_mps" in r.output
+    assert "no GNSS antenna lever arm" not in r.output
     cfg = load_system(out)  # the base config's 0.1 keys are written in today's places
     assert "gnss_lever_m" not in out.read_text()
     assert cfg.sensors.gnss.lever_m == (0.3, -1.0, 1.2)
@@ -118,3 +119,15 @@ def test_cli_tune_bad_input_is_one_line(short, tmp_path):
     r = CliRunner().invoke(app, ["tune", "csv", "--imu", str(short / "imu.csv"), "--gnss",
                                  str(short / "gnss.csv"), "--config", str(bad)])
     assert r.exit_code == 2 and "gyro_arw" in r.output
+
+
+def test_tune_says_when_no_lever_arm_is_set(short, tmp_path):
+    from fednav.io import read_gnss_csv, read_imu_csv
+    from fednav.process.tuning import tune
+
+    imu = read_imu_csv(short / "imu.csv")
+    gnss = read_gnss_csv(short / "gnss.csv")
+    res = tune(imu, gnss, None, load_system({"imu": {"gyro_arw_rad_sqrt_s": 1e-3,
+                                                     "accel_vrw_mps_sqrt_s": 1e-2}}),
+               matching_passes=1)
+    assert any(n.startswith("no GNSS antenna lever arm is set") for n in res.notes)

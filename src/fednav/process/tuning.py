@@ -160,6 +160,11 @@ def tune(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
     dt = imu.period()
     gc = base.sensors.gnss or GnssConfig()
     vc = base.sensors.velocity or VelocityConfig()
+    if gc.lever_m is None and not np.any(gnss.lever):
+        notes.append("no GNSS antenna lever arm is set (sensors.gnss.lever_m, nor in the "
+                     "file): the figures are estimated for an antenna at the IMU — a lever "
+                     "arm left out is absorbed into them; give it in the base config, and "
+                     "process with a config that has it")
     # Figures the base config sets, by their SI key (however the config spells them).
     fixed = {FIGURES[f][2] for f in FIGURES if base.imu.si(f) is not None}
     fixed |= {k for k, v in (("sensors.gnss.sigma_pos_m", gc.sigma_pos_m),
