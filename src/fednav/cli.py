@@ -683,5 +683,51 @@ def run_design(
               seed, jobs, max_time, fresh, dask, {})
 
 
+@app.command("allan")
+@_one_line_errors
+def allan_command(
+    imu: Path = typer.Argument(..., help="IMU CSV of a static recording (rates or "
+                                         "increments, docs/data-formats.md)"),
+    out: Path = typer.Option(None, help="output folder", show_default="results/allan"),
+) -> None:
+    """Noise figures from a static recording: the overlapping Allan deviation of each
+    gyro and accelerometer axis, with the fitted white noise (ARW/VRW), bias instability
+    and rate random walk; writes allan.png, summary.json and imu-figures.yaml (the imu:
+    section of a processing config)."""
+    from .io import read_imu_csv
+    from .process.allan import allan, write
+
+    res = allan(read_imu_csv(imu))
+    out = _output_folder(out or Path("results/allan"))
+    files = write(res, out)
+    _print_allan(res)
+    console.print(f"wrote {', '.join(str(f) for f in files)}")
+
+
+def _print_allan(res) -> None:
+    from rich.markup import escape
+    from rich.table import Table
+
+    from .process.allan import ACCEL_UNITS, GYRO_UNITS, display_rows
+
+    console.print(f"{escape(res.source)}: {res.duration_s:.0f} s at {res.rate_hz:.4g} Hz, "
+                  f"{res.taus_s.size} averaging times {res.taus_s[0]:.3g} to "
+                  f"{res.taus_s[-1]:.4g} s")
+    for sensor, title, u, white in (("gyro", "gyro", GYRO_UNITS, "ARW"),
+                                    ("accel", "accelerometer", ACCEL_UNITS, "VRW")):
+        tab = Table(title=f"{title} (IEEE Std 952 reading; ? = floor not reached)")
+        for col in ("axis", f"{white}\n{u['white'][0]}", f"bias instab.\n{u['adev'][0]}",
+                    f"RRW\n{u['rrw'][0]}", "floor at\ns", f"G-M σ\n{u['adev'][0]}",
+                    "G-M τ_c\ns"):
+            tab.add_column(col, justify="right")
+        for row in display_rows(res, sensor):
+            tab.add_row(*row)
+        console.print(tab)
+    for w in res.warnings:
+        console.print(f"[yellow]warning:[/] {escape(w)}")
+    console.print("processing-config snippet (largest axis):")
+    console.print(escape(res.config_yaml()), highlight=False, end="")
+
+
 def main() -> None:  # pragma: no cover
     app()
