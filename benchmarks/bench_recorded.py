@@ -23,18 +23,13 @@ Targets (issue 25): processing <= 2 x the reproduce run; reading <= processing.
 from __future__ import annotations
 
 import argparse
+import sys
 import tempfile
-import time
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-def best_of(n, f):
-    out, best = None, float("inf")
-    for _ in range(n):
-        t0 = time.perf_counter()
-        out = f()
-        best = min(best, time.perf_counter() - t0)
-    return out, best
+from bench_navigator import best_of  # noqa: E402
 
 
 def main() -> None:

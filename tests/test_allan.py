@@ -158,7 +158,9 @@ def test_rate_random_walk_comes_back():
     _within([f.rate_random_walk for f in res.gyro], k_g, 0.30)
     _within([f.rate_random_walk for f in res.accel], k_a, 0.30)
     cfg = res.config()
-    ImuConfig(**cfg)
+    back = ImuConfig(**cfg)  # the snippet is a valid imu: section giving the fitted K back
+    assert back.gyro_rw() == pytest.approx(max(f.rate_random_walk for f in res.gyro),
+                                           rel=1e-3)
     _within(cfg["gyro_bias_rw_deg_h_sqrt_h"], 100.0, 0.30)
     _within(cfg["accel_bias_rw_ug_sqrt_h"], 1000.0, 0.30)
 

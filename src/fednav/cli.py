@@ -52,6 +52,18 @@ def _one_line_errors(command):
     return run
 
 
+def _check_counts(runs: int = 1, jobs: int = 1, max_time: float | None = None) -> None:
+    """End with a one-line error for ``--runs`` or ``--jobs`` below 1 or a ``--max-time``
+    that is not positive."""
+    for opt, value in (("--runs", runs), ("--jobs", jobs)):
+        if value < 1:
+            typer.echo(f"error: {opt} must be at least 1, got {value}", err=True)
+            raise typer.Exit(2)
+    if max_time is not None and not max_time > 0:
+        typer.echo(f"error: --max-time must be positive, got {max_time}", err=True)
+        raise typer.Exit(2)
+
+
 def _paper_module(paper: str):
     from .scenarios import ALIASES, paper_module
 
@@ -85,13 +97,7 @@ def reproduce(
                                                   "to run on instead of local processes"),
 ) -> None:
     """Reproduce a paper's experiment and print its tables beside the paper's."""
-    for opt, value in (("--runs", runs), ("--jobs", jobs)):
-        if value < 1:
-            typer.echo(f"error: {opt} must be at least 1, got {value}", err=True)
-            raise typer.Exit(2)
-    if max_time is not None and not max_time > 0:
-        typer.echo(f"error: --max-time must be positive, got {max_time}", err=True)
-        raise typer.Exit(2)
+    _check_counts(runs=runs, jobs=jobs, max_time=max_time)
     mod = _paper_module(paper)
     exp = mod.EXPERIMENT
     extra = {}
@@ -242,9 +248,7 @@ def _ulog_reader(log: Path):
             warnings.append(f"{log}: the ground truth has no height (0 in every row): "
                             f"not used as the reference")
             truth = None
-        for note in rec.notes:
-            if not note.startswith("imu: PX4 logs carry no IMU noise figures"):
-                warnings.append(f"{log}: {note}")  # (process says what it assumes)
+        warnings += [f"{log}: {note}" for note in rec.notes]
         return {"imu": rec.imu, "gnss": rec.gnss, "velocity": None, "ref": truth,
                 "sensors": rec.sensors, "system": system, "warnings": warnings,
                 "others": {} if rec.px4 is None else {"px4": rec.px4},
@@ -542,9 +546,7 @@ def simulate(
     if seed is not None and seed < 0:
         typer.echo(f"error: --seed must be 0 or more, got {seed}", err=True)
         raise typer.Exit(2)
-    if max_time is not None and not max_time > 0:
-        typer.echo(f"error: --max-time must be positive, got {max_time}", err=True)
-        raise typer.Exit(2)
+    _check_counts(max_time=max_time)
     from .scenarios import paper_module
 
     mod = paper_module(scenario)
@@ -667,13 +669,7 @@ def run_design(
     """Monte Carlo campaign of your own design: every mode of SCENARIO flown on the same
     runs; tables of RMSE / mean / max errors per mode with 95 % confidence intervals,
     error plots with the Monte Carlo spread, report.html."""
-    for opt, value in (("--runs", runs), ("--jobs", jobs)):
-        if value < 1:
-            typer.echo(f"error: {opt} must be at least 1, got {value}", err=True)
-            raise typer.Exit(2)
-    if max_time is not None and not max_time > 0:
-        typer.echo(f"error: --max-time must be positive, got {max_time}", err=True)
-        raise typer.Exit(2)
+    _check_counts(runs=runs, jobs=jobs, max_time=max_time)
     from .campaign.design import DESIGN
 
     scn = DESIGN.load_scenario(scenario)

@@ -201,11 +201,11 @@ def _imu(log: _Log, max_bridge_s: float, quality: dict, notes: list) -> ImuData:
                         f"vehicle_imu){why}")
     quality.update(imu.quality)
     quality["imu_rate_hz"] = round(1.0 / imu.period(), 6)
-    tuning = "".join(f", {k} {_param(log, k, 0.0):g}" for k in ("EKF2_GYR_NOISE",
-                                                                "EKF2_ACC_NOISE")
-                     if k in log.params)
-    notes.append(f"imu: PX4 logs carry no IMU noise figures: give them in the system "
-                 f"description's imu: section (PX4's own filter tuning{tuning or ': none'})")
+    # (the log has no IMU noise figures: PX4's own filter tuning, for the user's
+    # reference; fednav process says which figures it assumes)
+    for k in ("EKF2_GYR_NOISE", "EKF2_ACC_NOISE"):
+        if k in log.params:
+            quality[k.lower()] = _param(log, k, 0.0)
     return imu
 
 
@@ -409,7 +409,9 @@ def read_ulog(path, max_bridge_s: float = 0.1) -> UlogRecording:
       ``*_groundtruth`` topics (a simulator's log), else None.
 
     ``quality``: ``imu_topic``, ``imu_rate_hz``, ImuData's ``imu_samples_bridged`` (and,
-    when it resampled, ``imu_resampled``, ``imu_samples_missing``, ``imu_jitter_s``);
+    when it resampled, ``imu_resampled``, ``imu_samples_missing``, ``imu_jitter_s``),
+    ``ekf2_gyr_noise`` / ``ekf2_acc_noise`` (PX4's own filter tuning: the log has no
+    IMU noise figures);
     ``gnss_topic``, ``gnss_epochs_no_fix`` (``fix_type`` < 3), ``gnss_epochs_skipped``,
     ``gnss_height`` ('ellipsoid' or 'amsl'), ``gnss_sigma_pos_m``, ``gnss_sigma_vel_mps``;
     ``baro_offset_m``; ``mag_topic``, ``mag_declination_deg`` (PX4's EKF2_MAG_DECL, for
