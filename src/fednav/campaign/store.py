@@ -286,8 +286,10 @@ def _start_client(address: str | None, jobs: int):
                               "distributed.admin.tick.interval": "500ms",
                               "distributed.worker.memory.monitor-interval": "1s"}), \
                 _no_sigint():
+            # (workers log only CRITICAL: a task's error comes back through its future,
+            # and a Ctrl-C must not print their heartbeat tracebacks as the scheduler goes)
             cluster = LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True,
-                                   dashboard_address=None, silence_logs=40)
+                                   dashboard_address=None, silence_logs=50)
         client, engine = Client(cluster), f"dask local, {jobs} worker processes"
     client.run(_single_threaded)
     return client, cluster, engine
