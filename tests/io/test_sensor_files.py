@@ -172,6 +172,30 @@ def test_jittered_and_missing_imu_stamps_keep_every_increment(tmp_path):
         read_imu_csv(f)
 
 
+def test_stamps_jittering_beyond_half_a_period_are_not_lost_records(tmp_path):
+    """Stamps jittering +-3 ms at 100 Hz (intervals 4..16 ms: some beyond 1.5 periods)
+    whose increments cover their own intervals, and one record truly lost: only that one
+    is read as lost (its velocity increment is one period's, the others' their own
+    interval's: gravity makes |dv| = |f| T), and the integral keeps every increment."""
+    rng = np.random.default_rng(8)
+    stamps = np.arange(1, 2002) * 0.01 + rng.uniform(-0.003, 0.003, 2001)
+    d = np.diff(np.r_[0.0, stamps])
+    w = np.column_stack([np.sin(stamps), np.cos(2 * stamps), 0.3 + 0 * stamps])
+    f = np.column_stack([0.3 * np.sin(stamps), 0.5 + 0 * stamps, 9.8 + 0 * stamps])
+    dth_all, dv_all = w * d[:, None], f * d[:, None]
+    keep = np.r_[0:1000, 1001:2001]  # record 1000 lost, its increment with it
+    rows = "\n".join(",".join(repr(float(v)) for v in (stamps[k], *dth_all[k], *dv_all[k]))
+                     for k in keep)
+    path = _write(tmp_path / "imu.csv", "t_s,dtheta_x_rad,dtheta_y_rad,dtheta_z_rad,"
+                  "dv_x_mps,dv_y_mps,dv_z_mps\n" + rows + "\n")
+    imu = read_imu_csv(path)
+    assert np.sum(d[keep][1:] > 0.015) > 20  # jitter beyond 1.5 periods, often
+    assert imu.quality["imu_samples_missing"] == 1
+    dt = imu.period()
+    total = (imu.accel * dt).sum(axis=0)
+    np.testing.assert_allclose(total, dv_all.sum(axis=0), rtol=0, atol=3 * 9.8 * 0.01)
+
+
 def test_a_sar_fix_without_heading_and_a_magnetometer_reporting_zeros(tmp_path):
     f = _write(tmp_path / "sar.csv", "t_s,lat_deg,lon_deg,sigma_north_m,sigma_east_m\n"
                "10,39.5,-117.25,3,4\n11,39.5,-117.25,3,4\n")

@@ -142,6 +142,25 @@ def check_rows(source: str, n: int, **fields) -> None:
 UNIFORM_TOLERANCE = 1e-3
 
 
+def lost_records(d: np.ndarray, dt: float, dv: np.ndarray) -> np.ndarray:
+    """Which increments follow lost records (bool, (N,)): of the intervals ``d`` [s]
+    longer than 1.5 median intervals ``dt``, those whose velocity increment ``dv``
+    [m/s] (N, 3) is the size of one median interval's rather than of its own interval.
+    The specific force's magnitude (near g for anything on or over the Earth, and
+    smooth) is the local median of ``|dv| / d`` over 21 rows; an increment over ``T``
+    seconds is ``|f| T`` long.  Jittered stamps whose increments cover their own
+    intervals (intervals 4..16 ms at 100 Hz) are then not read as lost records."""
+    long = d > 1.5 * dt
+    if not long.any():
+        return long
+    from scipy.ndimage import median_filter
+
+    mag = np.linalg.norm(dv, axis=1)
+    f = median_filter(mag / np.maximum(d, 1e-12), size=21, mode="nearest")
+    cover = mag / np.maximum(f, 1e-12)  # the time the increment covers [s]
+    return long & (np.abs(cover - dt) < np.abs(cover - d))
+
+
 def regular_imu(source: str, t, gyro, accel, max_gap_s: float):
     """IMU samples on a uniform grid, from samples whose time stamps jitter or miss.
 
@@ -263,9 +282,10 @@ class ImuData:
         intervals that end at ``t_end`` [s] (how loggers stamp them); the first
         interval is taken as long as the median one.  Each increment becomes a rate over
         its own interval, stamped at the interval's start (fednav's convention).  An
-        interval longer than 1.5 median intervals means lost records: the row's
-        increment covers one median interval, and its rate bridges the lost ones
-        (:func:`regular_imu` counts them)."""
+        interval longer than 1.5 median intervals is either jitter (the increment covers
+        it) or lost records (the increment covers one median interval, and its rate
+        bridges the lost ones): :func:`lost_records` tells them apart by the size of the
+        velocity increment."""
         t_end = check_time(source, t_end)
         d = np.diff(t_end)
         dt = float(np.median(d)) if len(d) else 0.0
@@ -274,8 +294,12 @@ class ImuData:
         dvv = _as_float(source, "dv", dv, (-1, 3))
         check_rows(source, len(t_end), dtheta=dth, dv=dvv)
         t_start = np.r_[t_end[0] - d[0], t_end[:-1]]
-        over = np.where(d > 1.5 * dt, dt, d)[:, None]  # the time each increment covers
-        return cls(source, t_start, dth / over, dvv / over, increments=(dth, dvv), **kw)
+        lost = lost_records(d, dt, dvv)
+        over = np.where(lost, dt, d)[:, None]  # the time each increment covers
+        imu = cls(source, t_start, dth / over, dvv / over, increments=(dth, dvv), **kw)
+        if "imu_samples_missing" in imu.quality:
+            imu.quality["imu_samples_missing"] = int(np.sum(np.rint(d[lost] / dt) - 1))
+        return imu
 
     def period(self) -> float:
         """The sampling period [s]: the mean interval (uniform: :func:`regular_imu` made it
