@@ -444,23 +444,41 @@ def process_ulog(
 
 tune_app = typer.Typer(no_args_is_help=True,
                        help="Estimate IMU and sensor noise figures from the data "
-                            "(innovation-based) and write a processing config.")
+                            "(innovation-based, scored on held-back time blocks) and write "
+                            "a processing config.")
 app.add_typer(tune_app, name="tune")
 _TUNE_OUT = typer.Option(Path("tuned.yaml"), help="config YAML to write")
-_TUNE_CONFIG = typer.Option(None, help="base processing config: its settings are kept, "
-                                       "the figures it leaves unset are estimated")
+_TUNE_CONFIG = typer.Option(None, help="base processing config: its figures are the "
+                                       "starting point, its lever arms, options and sensor "
+                                       "sigmas are kept")
+_TUNE_FIX = typer.Option(None, "--fix", help="a figure to keep as the base config gives it "
+                                             "(an imu: key such as gyro_arw_deg_sqrt_h, "
+                                             "'imu' for all; sensors.gnss.sigma_pos_m ...); "
+                                             "repeat for more")
+_TUNE_SENSORS = typer.Option(False, "--tune-sensors",
+                             help="also estimate the sensor sigmas the files or the base "
+                                  "config give (by covariance matching, never below the "
+                                  "data's scatter)")
+_TUNE_BLOCK = typer.Option(60.0, "--block-s", min=1.0,
+                           help="length of the alternating fitted / held-back time blocks "
+                                "[s]")
+_TUNE_OUTAGES = typer.Option(3, "--outages", min=0,
+                             help="GNSS outages (30 s, in held-back blocks) simulated to "
+                                  "measure the drift before -> after")
 
 
-def _run_tune(read, inputs: list, config, out: Path) -> None:
+def _run_tune(read, inputs: list, config, out: Path, fix=None, tune_sensors=False,
+              block_s=60.0, outages=3, sigma_from_file=()) -> None:
     from rich.table import Table
 
     from .core.atomic import write_text
     from .core.config import load_model
     from .navigator.system import System
-    from .process.tuning import config_yaml, format_value, tune
+    from .process.tuning import config_yaml, fixed_keys, format_value, tune
 
     base = {}
     cfg = System()
+    fixed_keys(fix)  # a bad --fix is refused before the data are read
     if config is not None:
         import yaml
 
@@ -469,26 +487,40 @@ def _run_tune(read, inputs: list, config, out: Path) -> None:
     data = read(cfg)
     with console.status("tuning") as status:
         res = tune(data["imu"], data["gnss"], data["velocity"], cfg,
-                   progress=lambda what: status.update(f"filter run: {what}"))
-    tab = Table(title="noise figures (SI units)")
+                   progress=lambda what: status.update(f"filter run: {what}"),
+                   fixed=fix or (), tune_sensors=tune_sensors, block_s=block_s,
+                   outages=outages, sigma_from_file=sigma_from_file)
+    tab = Table(title="noise figures (SI units); fitted on alternate "
+                      f"{res.blocks.length_s:.0f} s blocks, scored on the others")
     tab.add_column("figure", no_wrap=True)
     tab.add_column("start")
     tab.add_column("tuned")
+    tab.add_column("floor")
     tab.add_column("how / why")
     for f in res.figures:
         tab.add_row(f.key.removeprefix("imu."), format_value(f.start), format_value(f.value),
-                    f.how)
+                    format_value(f.floor), f.how)
+    gc = res.config.sensors.gnss
+    lever = gc.lever_m if gc is not None and gc.lever_m is not None else res.lever_from_file
+    if lever is None:
+        tab.add_row("sensors.gnss.lever_m", "-", "-", "-",
+                    "[bold red]WARNING: none set[/]")
+    else:
+        tab.add_row("sensors.gnss.lever_m", format_value(list(lever)),
+                    format_value(list(lever)), "-",
+                    "kept: from the " + ("base config" if res.lever_from_file is None
+                                         else "file (written into the config)"))
     console.print(tab)
     for n in res.notes:
         console.print(f"note: {n}")
-    console.print("mean NIS/dof before -> after: " + ", ".join(
-        f"{k} {res.before.nis_per_dof[k]:.2f} -> {res.after.nis_per_dof[k]:.2f}"
-        for k in res.after.nis_per_dof)
-        + f"; log-likelihood {res.before.loglik:.1f} -> {res.after.loglik:.1f}")
+    for line in res.summary():
+        console.print(line)
+    for w in res.warnings:
+        typer.echo(f"warning: {w}", err=True)
     header = (f"fednav tune {__version__}: " + " ".join(str(i) for i in inputs if i)
               + (f" (base config {config})" if config else "")
-              + f"\n{res.runs} filter runs in {res.run_time_s:.1f} s; see "
-                f"src/fednav/process/tuning.py for the method")
+              + f"\n{res.runs} filter runs in {res.run_time_s:.1f} s; see docs/tuning.md "
+                f"for the method")
     try:
         write_text(out, config_yaml(res, base, header))
     except OSError as e:
@@ -503,10 +535,14 @@ def tune_navego(
     imu: Path = typer.Option(..., help="NaveGo IMU .mat"),
     gnss: Path = typer.Option(..., help="NaveGo GNSS .mat"),
     visual: Path = typer.Option(None, help="NaveGo visual-odometry .mat (velocity)"),
-    config: Path = _TUNE_CONFIG, out: Path = _TUNE_OUT,
+    config: Path = _TUNE_CONFIG, out: Path = _TUNE_OUT, fix: list[str] = _TUNE_FIX,
+    tune_sensors: bool = _TUNE_SENSORS, block_s: float = _TUNE_BLOCK,
+    outages: int = _TUNE_OUTAGES,
 ) -> None:
-    """Noise figures from NaveGo .mat files (start: the files' figures)."""
-    _run_tune(_navego_reader(imu, gnss, visual), [imu, gnss, visual], config, out)
+    """Noise figures from NaveGo .mat files (start: the base config's figures, else the
+    files'; the files' GNSS and visual sigmas are kept unless --tune-sensors)."""
+    _run_tune(_navego_reader(imu, gnss, visual), [imu, gnss, visual], config, out, fix,
+              tune_sensors, block_s, outages, sigma_from_file=("gnss",))
 
 
 @tune_app.command("csv")
@@ -515,11 +551,15 @@ def tune_csv(
     imu: Path = typer.Option(..., help="IMU CSV (docs/data-formats.md)"),
     gnss: Path = typer.Option(..., help="GNSS CSV"),
     velocity: Path = typer.Option(None, help="velocity-sensor CSV"),
-    config: Path = _TUNE_CONFIG, out: Path = _TUNE_OUT,
+    config: Path = _TUNE_CONFIG, out: Path = _TUNE_OUT, fix: list[str] = _TUNE_FIX,
+    tune_sensors: bool = _TUNE_SENSORS, block_s: float = _TUNE_BLOCK,
+    outages: int = _TUNE_OUTAGES,
 ) -> None:
     """Noise figures from fednav CSV files (start: the base config's figures, else a
-    generic MEMS IMU; give the GNSS lever arm in the base config)."""
-    _run_tune(_csv_reader(imu, gnss, velocity), [imu, gnss, velocity], config, out)
+    generic MEMS IMU; the GNSS sigma is estimated when neither the file nor the base
+    config gives it; give the GNSS lever arm in the base config)."""
+    _run_tune(_csv_reader(imu, gnss, velocity), [imu, gnss, velocity], config, out, fix,
+              tune_sensors, block_s, outages)
 
 
 @app.command()

@@ -1,50 +1,73 @@
-"""Noise figures from the data alone (``fednav tune``).
+"""Noise figures from the data (``fednav tune``), scored on data they were not fitted to.
 
 The processing filter (:func:`fednav.process.process`) needs the IMU's white noise (ARW,
 VRW), its bias instability (the Gauss–Markov sigmas) and the 1-sigma of every aiding
 sensor.  Data sheets give lower bounds at best (vibration, temperature, multipath are
-not in them), so fednav estimates them from the data the way the filter sees them:
+not in them), so fednav estimates them from the data the way the filter sees them, and
+checks the result on data it did not fit (docs/tuning.md has the method with measured
+figures):
 
-1. **White noise floor** — the robust sample-to-sample scatter of the raw IMU:
-   ``N = 1.4826 MAD(diff x) / sqrt(2) * sqrt(dt)`` per axis (the largest axis is kept).
-   The vehicle's own motion changes little between two samples, and the median ignores
-   the steps where it does, so this needs no static period.  It is the noise at the IMU
-   rate, vibration included.
-2. **Aiding-sensor noise** — innovation covariance matching: with ``nu = z - H x^-`` and
-   ``S = H P^- H' + R``, ``E[nu nu'] = H P^- H' + R``, so ``R_jj = mean(nu_j^2) -
-   mean((H P^- H')_jj)`` per component, iterated to its fixed point (a few filter runs).
-   In the federated filter each local filter holds ``P / beta``; the centralized
-   ``H P^- H' = beta (S_local - R)`` is used.
-3. **IMU process noise** — maximum of the innovation likelihood ``L = -1/2 sum(log det S
-   + nu' S^-1 nu)`` over one figure at a time (log scale: the figure x 1/3 and x 3, the
-   bracket widened while an end wins, then the vertex of the parabola through the best
-   three).  A figure changes only when the likelihood rises by more than 1.92 (the
-   likelihood-ratio test at 95 %, one degree of freedom); otherwise it keeps its value
-   and the table says the data do not determine it: the white noise of a MEMS IMU, for
-   instance, is invisible in 5 Hz GNSS innovations.  One data set holds one turn-on bias,
-   not its spread, so the turn-on bias sigmas and the correlation times are never changed.
+0. **Held-back blocks** — the run is cut into alternating time blocks (60 s): the filter
+   runs over all of it, but only the innovations of the even blocks are *fitted* (the
+   covariance matching and the likelihood below); those of the odd blocks are *held back*
+   and score the result (time-series cross-validation with contiguous blocks, so that
+   the autocorrelated innovations of one stretch of road do not score themselves).
+1. **Floors: what the data's own scatter supports** — the IMU's white noise from the
+   robust sample-to-sample scatter (``N = 1.4826 MAD(diff x) / sqrt(2) * sqrt(dt)``, the
+   largest axis; vibration included) and from the scatter of the filter-period means
+   (second differences); the smaller of the two is the floor below which a white-noise
+   figure is never set.  A sensor's floor is the robust scatter of the differences of
+   its own measurements that cancel the motion (third differences of positions, second
+   of velocities): its white part, the least 1-sigma its data show.
+2. **Aiding-sensor noise** (only where no one gave it, or with ``tune_sensors``) —
+   innovation covariance matching on the fitted blocks (Mehra 1970): ``R_jj =
+   mean(nu_j^2) - mean((H P^- H')_jj)``, iterated to its fixed point, never below the
+   floor.  In the federated filter each local filter holds ``P / beta``; the centralized
+   ``H P^- H' = beta (S_local - R)`` is used.  The 1-sigma the base config, the file or
+   the receiver gives is kept by default: matching a time-correlated error (multipath,
+   atmosphere) drives it toward the white part alone, the filter then follows the
+   fixes' wander, and the drift through an outage grows.
+3. **IMU process noise** — maximum of the fitted blocks' innovation likelihood ``L =
+   -1/2 sum(log det S + nu' S^-1 nu)`` over one figure at a time (log scale: x 1/3 and
+   x 3, the bracket widened while an end wins, then the vertex of the parabola through
+   the best three; a white-noise figure never below its floor).  A figure moves only
+   when the likelihood rises by more than 1.92 (the likelihood-ratio test at 95 %, one
+   degree of freedom).  The base config's figures are the starting point, not a
+   constraint: a white-noise figure below its floor starts at the floor.  One data set
+   holds one turn-on bias, not its spread, so the turn-on bias sigmas and the
+   correlation times are never changed.
+4. **Acceptance** — the tuned config replaces the untuned one (the base config's
+   figures, else the file's, else a generic MEMS IMU) only if, on the held-back blocks,
+   the innovation log-likelihood is not lower and no sensor's NIS/dof moves further out
+   of [0.5, 2]; otherwise the base figures are kept and the result says why.
+5. **Simulated outages** — GNSS withheld in a few windows of the held-back blocks (3 x
+   30 s): the horizontal distance of the solution from the withheld fixes at each
+   window's end, before and after tuning (reported; the held-back innovations decide).
 
-Figures the base config sets are kept as they are: ``fednav tune`` estimates what the
-config leaves open (start values then come from the data file, else a generic MEMS IMU).
-Measurements that fault detection isolates (``fdi_alpha`` of the base config) are left
-out of the matching, and every measurement's ``nu' S^-1 nu`` is capped at its 99.9 %
-chi-square point in the likelihood, so a few outliers do not set the noise figures.
-Units: SI (rad, m, s) as in the ``imu:`` section's SI keys
+Figures the user marks as fixed (``fixed``) are kept, whatever the data say; so are the
+lever arms, the options and the sensor sigmas that the files or the base config give
+(unless ``tune_sensors``).  Measurements that fault detection isolates (``fdi_alpha`` of
+the base config) are left out of the matching, and every measurement's ``nu' S^-1 nu`` is
+capped at its 99.9 % chi-square point in the likelihood, so a few outliers do not set the
+noise figures.  Units: SI (rad, m, s) as in the ``imu:`` section's SI keys
 (:class:`fednav.sensors.imu.ImuConfig`).
 """
 
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+from math import comb
 
 import numpy as np
 
-from ..io.data import GnssData, ImuData, VelocityData
+from ..core import attitude, earth
+from ..core.config import ConfigError
+from ..io.data import DataError, GnssData, ImuData, VelocityData
 from ..navigator.system import System, _translate_legacy
 from ..sensors import GnssConfig, VelocityConfig
 from ..sensors.imu import FIGURES
-from .run import InnovationRecord, adjust_sensors, imu_figures, process
+from .run import InnovationRecord, adjust_sensors, imu_figures, process, with_imu_figures
 
 #: Starting IMU figures (a generic MEMS IMU) where neither the file nor the config has one.
 MEMS_DEFAULTS = {"gyro_arw_rad_sqrt_s": 5.8e-4, "accel_vrw_mps_sqrt_s": 2.0e-3,
@@ -54,6 +77,16 @@ MEMS_DEFAULTS = {"gyro_arw_rad_sqrt_s": 5.8e-4, "accel_vrw_mps_sqrt_s": 2.0e-3,
 #: IMU figures estimated by the likelihood, in the order searched.
 LIKELIHOOD_KEYS = ("accel_vrw_mps_sqrt_s", "gyro_arw_rad_sqrt_s", "accel_markov_mps2",
                    "gyro_markov_radps")
+#: The white-noise figures (with a sample-scatter floor) and their per-sample spelling.
+WHITE_KEYS = {"gyro_arw_rad_sqrt_s": "gyro_white_deg_h",
+              "accel_vrw_mps_sqrt_s": "accel_white_ug"}
+#: IMU figures tune never changes (one data set holds one draw of a turn-on bias).
+KEPT_KEYS = ("gyro_bias_radps", "accel_bias_mps2", "gyro_tau_s", "accel_tau_s")
+#: Sensor sigmas tune may estimate, by their config key.
+SENSOR_KEYS = ("sensors.gnss.sigma_pos_m", "sensors.gnss.sigma_vel_mps",
+               "sensors.velocity.sigma_mps")
+#: The band of NIS/dof a consistent filter's held-back innovations fall in.
+NIS_BAND = (0.5, 2.0)
 #: ln of the likelihood-search step (a factor 3).
 _STEP = float(np.log(3.0))
 #: log-likelihood gain a new figure must bring (the likelihood-ratio test at 95 %, 1 dof)
@@ -66,27 +99,51 @@ _CAP_P = 0.999
 
 @dataclass
 class Figure:
-    """One tuned figure: its config ``key``, ``start`` and tuned ``value`` (SI; a float or
-    a 3-list), how it was found and why."""
+    """One figure: its config ``key``, ``start`` and written ``value`` (SI; a float or a
+    3-list), how it was found and why; ``floor``: the least value the data's scatter
+    supports (None where the scatter says nothing)."""
 
     key: str
     start: float | list
     value: float | list
     how: str
+    floor: float | list | None = None
 
 
 @dataclass
 class Evaluation:
-    """One filter run: log-likelihood and, per local filter, NIS/dof and the matched R
-    diagonal (residual order)."""
+    """One filter run, per local filter: NIS/dof and log-likelihood of the fitted blocks
+    (``nis_per_dof``, ``loglik``) and of the held-back ones (``nis_held``,
+    ``loglik_held``), the matched R diagonal of the fitted blocks (residual order)."""
 
     loglik: float
     nis_per_dof: dict[str, float]
     matched: dict[str, np.ndarray]
+    loglik_held: float = float("nan")
+    nis_held: dict[str, float] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Blocks:
+    """Alternating time blocks of ``length_s`` from ``t0``: even ones fitted, odd ones
+    held back."""
+
+    t0: float
+    length_s: float
+
+    def held(self, t) -> np.ndarray:
+        return (np.floor((np.asarray(t, dtype=float) - self.t0) / self.length_s) % 2) == 1
 
 
 @dataclass
 class TuneResult:
+    """The config to write (``config``: the tuned one if ``accepted``, else the base's
+    figures), every figure, the untuned (``before``) and tuned (``after``) evaluations,
+    the simulated outages (``outages``: (start, end) s) and the horizontal distance [m]
+    from the withheld fixes at the end of each, untuned and tuned (``drift_before``,
+    ``drift_after``); ``warnings`` (no lever arm, a sensor out of the NIS band) and
+    ``notes``."""
+
     config: System
     figures: list[Figure]
     before: Evaluation
@@ -94,6 +151,41 @@ class TuneResult:
     runs: int
     run_time_s: float
     notes: list[str] = field(default_factory=list)
+    accepted: bool = True
+    tuned: Evaluation | None = None
+    blocks: Blocks | None = None
+    outages: list[tuple[float, float]] = field(default_factory=list)
+    drift_before: list[float] = field(default_factory=list)
+    drift_after: list[float] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
+    fixed: set[str] = field(default_factory=set)
+    #: the GNSS lever arm of the file where the base config has none (written with it)
+    lever_from_file: tuple | None = None
+
+    def summary(self) -> list[str]:
+        """The before -> after lines the command prints and the config's header holds."""
+        def nis(d):
+            return ", ".join(f"{k} {v:.2f}" for k, v in d.items())
+
+        b, a = self.before, self.after
+        lines = [f"held-back NIS/dof (band {NIS_BAND[0]:g}..{NIS_BAND[1]:g}) before -> "
+                 f"after: " + ", ".join(f"{k} {b.nis_held.get(k, np.nan):.2f} -> "
+                                       f"{a.nis_held.get(k, np.nan):.2f}"
+                                       for k in a.nis_held),
+                 f"held-back log-likelihood before -> after: {b.loglik_held:.1f} -> "
+                 f"{a.loglik_held:.1f}; fitted blocks NIS/dof: {nis(b.nis_per_dof)} -> "
+                 f"{nis(a.nis_per_dof)}"]
+        if self.outages:
+            lines.append(
+                f"drift through {len(self.outages)} simulated GNSS outages of "
+                f"{self.outages[0][1] - self.outages[0][0]:.0f} s (horizontal distance from "
+                f"the withheld fixes at the end; mean, max) before -> after: "
+                f"{np.mean(self.drift_before):.2f} m, {np.max(self.drift_before):.2f} m -> "
+                f"{np.mean(self.drift_after):.2f} m, {np.max(self.drift_after):.2f} m")
+        if not self.accepted:
+            lines.append("the tuned figures fit the held-back blocks worse than the untuned "
+                         "ones: the untuned figures are kept")
+        return lines
 
 
 def white_noise(x: np.ndarray, dt: float) -> np.ndarray:
@@ -104,18 +196,44 @@ def white_noise(x: np.ndarray, dt: float) -> np.ndarray:
     return 1.4826 * mad / np.sqrt(2.0) * np.sqrt(dt)
 
 
+def scatter(x: np.ndarray, order: int) -> np.ndarray:
+    """1-sigma of the white part of each column of ``x`` (N, k) from the robust scatter
+    of its ``order``-th differences (which cancel a polynomial motion of degree
+    ``order - 1``; white noise has variance ``C(2 order, order) sigma^2`` there)."""
+    d = np.diff(np.asarray(x, dtype=float), order, axis=0)
+    if len(d) < 3:
+        return np.zeros(d.shape[1])
+    mad = np.median(np.abs(d - np.median(d, axis=0)), axis=0)
+    return 1.4826 * mad / np.sqrt(comb(2 * order, order))
+
+
+def white_noise_floor(x: np.ndarray, dt: float, n_per: int) -> float:
+    """The least white-noise density [unit * sqrt(s)] the samples ``x`` (N, 3) support:
+    per axis the smaller of the density from the sample-to-sample scatter and that from
+    the scatter of the means over ``n_per`` samples (the filter period; vibration above
+    the filter's bandwidth averages out there), the largest axis (the figure is one for
+    all axes)."""
+    x = np.asarray(x, dtype=float)
+    fast = white_noise(x, dt)
+    m = len(x) // n_per * n_per
+    if n_per > 1 and m // n_per > 10:
+        means = x[:m].reshape(-1, n_per, x.shape[1]).mean(axis=1)
+        slow = scatter(means, 2) * np.sqrt(n_per * dt)
+        fast = np.minimum(fast, slow)
+    return float(np.max(fast))
+
+
 def _cap(dof: int) -> float:
     from scipy.stats import chi2
 
     return float(chi2.ppf(_CAP_P, dof))
 
 
-def evaluate(imu: ImuData, gnss: GnssData, velocity: VelocityData | None,
-             cfg: System) -> Evaluation:
-    """Run the forward filter with ``cfg`` and sum up its innovations."""
-    inns: list[InnovationRecord] = []
-    process(imu, gnss, velocity, cfg, innovations=inns)
-    ll, nis, matched = 0.0, {}, {}
+def innovation_statistics(inns: list[InnovationRecord],
+                          blocks: Blocks | None = None) -> Evaluation:
+    """Sum up one filter run's innovations, fitted blocks and held-back ones."""
+    ll = ll_held = 0.0
+    nis, nis_held, matched = {}, {}, {}
     for local in dict.fromkeys(i.local for i in inns):
         mine = [i for i in inns if i.local == local]
         r = np.array([i.r for i in mine])
@@ -128,17 +246,86 @@ def evaluate(imu: ImuData, gnss: GnssData, velocity: VelocityData | None,
         d = r.shape[1]
         cap = _cap(d)
         logdet = 2.0 * np.log(np.diagonal(L, axis1=1, axis2=2)).sum(axis=1)
-        ll -= 0.5 * float(np.sum(logdet + np.minimum(q, cap) + d * np.log(2 * np.pi)))
-        nis[local] = float(np.mean(q) / d)
-        use = np.array([i.accepted for i in mine]) & (q <= cap)
+        each = -0.5 * (logdet + np.minimum(q, cap) + d * np.log(2 * np.pi))
+        held = (np.zeros(len(mine), dtype=bool) if blocks is None
+                else blocks.held([i.t for i in mine]))
+        fit = ~held
+        ll += float(np.sum(each[fit]))
+        ll_held += float(np.sum(each[held]))
+        if fit.any():
+            nis[local] = float(np.mean(q[fit]) / d)
+        if held.any():
+            nis_held[local] = float(np.mean(q[held]) / d)
+        use = np.array([i.accepted for i in mine]) & (q <= cap) & fit
         if use.any():
             hph = np.diagonal(Sc - R, axis1=1, axis2=2)
             matched[local] = np.mean(r[use] ** 2, axis=0) - np.mean(hph[use], axis=0)
-    return Evaluation(ll, nis, matched)
+    return Evaluation(ll, nis, matched, ll_held if blocks is not None else float("nan"),
+                      nis_held)
+
+
+def evaluate(imu: ImuData, gnss: GnssData, velocity: VelocityData | None,
+             cfg: System, blocks: Blocks | None = None) -> Evaluation:
+    """Run the forward filter with ``cfg`` and sum up its innovations (all of them
+    fitted without ``blocks``)."""
+    inns: list[InnovationRecord] = []
+    process(imu, gnss, velocity, cfg, innovations=inns)
+    return innovation_statistics(inns, blocks)
+
+
+def withheld(gnss: GnssData, windows) -> GnssData:
+    """``gnss`` without the fixes inside the ``windows`` ((start, end) s)."""
+    out = np.zeros(len(gnss.t), dtype=bool)
+    for a, b in windows:
+        out |= (gnss.t >= a) & (gnss.t <= b)
+    keep = ~out
+
+    def sub(a):
+        return None if a is None else a[keep]
+
+    g = replace(gnss, t=gnss.t[keep], lla=sub(gnss.lla), vel=sub(gnss.vel),
+                sigma_rows=sub(gnss.sigma_rows), t_arrival=sub(gnss.t_arrival), quality={})
+    g.quality = dict(gnss.quality)
+    return g
+
+
+def outage_drift(imu: ImuData, gnss: GnssData, velocity: VelocityData | None, cfg: System,
+                 windows) -> list[float]:
+    """Process with the GNSS fixes of ``windows`` withheld; the horizontal distance [m]
+    of the solution (moved to the antenna) from the last withheld fix of each window."""
+    res = process(imu, withheld(gnss, windows), velocity, cfg)
+    sol = res.forward
+    gc = cfg.sensors.gnss or GnssConfig()
+    lever = np.asarray(gc.lever_m if gc.lever_m is not None else gnss.lever, dtype=float)
+    out = []
+    for a, b in windows:
+        inside = np.flatnonzero((gnss.t >= a) & (gnss.t <= b))
+        j = inside[-1]
+        i = int(np.clip(np.searchsorted(sol.t, gnss.t[j]), 0, len(sol.t) - 1))
+        lla, _ = earth.lever_arm_point(sol.lla[i], sol.vel[i],
+                                       attitude.euler_to_dcm(sol.euler[i]), sol.omega[i],
+                                       lever)
+        fix = gnss.lla[j]
+        d = earth.llh_difference_enu(lla[0], lla[1], lla[2], fix[0], fix[1], fix[2])
+        out.append(float(np.hypot(d[0], d[1])))
+    return out
 
 
 def _starting_imu(imu: ImuData, base: System, notes: list) -> dict[str, float]:
+    """The untuned IMU figures: what ``process`` flies with ``base`` (its figures, else the
+    file's, else the grade preset it assumes when neither gives any), the generic MEMS
+    IMU's for the rest."""
+    try:
+        base, assumed = with_imu_figures(imu, base)
+        notes.extend(assumed)
+    except DataError:  # some figures given, not all: process would refuse; tune fills them
+        pass
     out = imu_figures(imu, base)
+    dt = imu.period()
+    if base.imu.gyro_white_deg_h is not None:  # a per-sample figure adds to the density
+        out["gyro_arw_rad_sqrt_s"] = base.imu.arw(dt)
+    if base.imu.accel_white_ug is not None:
+        out["accel_vrw_mps_sqrt_s"] = base.imu.vrw(dt)
     generic = [k for k, v in out.items() if v is None]
     if generic:
         out.update({k: MEMS_DEFAULTS[k] for k in generic})
@@ -147,141 +334,356 @@ def _starting_imu(imu: ImuData, base: System, notes: list) -> dict[str, float]:
     return out
 
 
+def fixed_keys(names) -> set[str]:
+    """The figures ``names`` marks as fixed, by their SI key (``imu:`` keys, in any of
+    their spellings, with or without ``imu.``; ``imu`` for all of them) or sensor key
+    (``sensors.gnss.sigma_pos_m``, ``gnss.sigma_vel_mps``, ``velocity.sigma_mps``;
+    ``gnss``, ``velocity`` for a sensor's every sigma).  A :class:`ConfigError` names
+    one that is none of these."""
+    alias = {}
+    for fig, (eng, _, si) in FIGURES.items():
+        for a in (fig, eng, si):
+            alias[a] = {si}
+    alias["imu"] = {si for _, _, si in FIGURES.values()}
+    for white, si in ((v, k) for k, v in WHITE_KEYS.items()):
+        alias[white] = {si}
+    for key in SENSOR_KEYS:
+        alias[key] = {key}
+        alias[key.removeprefix("sensors.")] = {key}
+    alias["gnss"] = set(SENSOR_KEYS[:2])
+    alias["velocity"] = {SENSOR_KEYS[2]}
+    out: set[str] = set()
+    for n in names or ():
+        k = str(n).strip()
+        k = k.removeprefix("imu.") if k != "imu." else k
+        if k not in alias:
+            raise ConfigError(f"--fix {n}: not a figure tune estimates; give an imu: key "
+                              f"(e.g. gyro_arw_deg_sqrt_h, accel_markov_mps2; 'imu' for all), "
+                              f"sensors.gnss.sigma_pos_m, sensors.gnss.sigma_vel_mps, "
+                              f"sensors.velocity.sigma_mps, 'gnss' or 'velocity'")
+        out |= alias[k]
+    return out
+
+
+def _split(gnss: GnssData, velocity: VelocityData | None, block_s: float, n_out: int,
+           outage_s: float) -> tuple[Blocks, list[tuple[float, float]]]:
+    """The blocks (at least four over the aiding data) and the outage windows: one in
+    the middle of each of ``n_out`` held-back blocks spread over the run, of at most half
+    a block, where there are GNSS positions to withhold."""
+    ts = [d.t for d in (gnss, velocity) if d is not None and len(d.t)]
+    t0 = float(min(t[0] for t in ts))
+    t1 = float(max(t[-1] for t in ts))
+    length = float(min(block_s, (t1 - t0) / 4.0)) if t1 > t0 else block_s
+    blocks = Blocks(t0, length)
+    windows: list[tuple[float, float]] = []
+    if gnss is not None and gnss.lla is not None and n_out > 0:
+        odd = [k for k in range(1, int((t1 - t0) // length) + 1, 2)
+               if t0 + (k + 1) * length <= t1 + 1e-9]
+        pick = sorted({int(round(x)) for x in np.linspace(0, len(odd) - 1, min(n_out,
+                                                                              len(odd)))})
+        w = min(outage_s, 0.5 * length)
+        for p in pick if odd else []:
+            mid = t0 + (odd[p] + 0.5) * length
+            a, b = mid - 0.5 * w, mid + 0.5 * w
+            if np.count_nonzero((gnss.t >= a) & (gnss.t <= b)):
+                windows.append((a, b))
+    return blocks, windows
+
+
+def _band_excess(nis: float) -> float:
+    """How far (log) a NIS/dof lies outside :data:`NIS_BAND` (0 inside)."""
+    if not np.isfinite(nis) or nis <= 0:
+        return np.inf
+    return max(0.0, float(np.log(nis / NIS_BAND[1])), float(np.log(NIS_BAND[0] / nis)))
+
+
+def worse(after: Evaluation, before: Evaluation) -> str | None:
+    """Why ``after`` fits the held-back blocks worse than ``before``, or None."""
+    if after.loglik_held < before.loglik_held:
+        return (f"held-back log-likelihood {before.loglik_held:.1f} -> "
+                f"{after.loglik_held:.1f}, {after.loglik_held - before.loglik_held:+.2g}")
+    for k, v in after.nis_held.items():
+        b = before.nis_held.get(k, np.nan)
+        if _band_excess(v) > _band_excess(b) + 1e-9:
+            return (f"held-back NIS/dof of {k} {b:.2f} -> {v:.2f}, further out of "
+                    f"{NIS_BAND[0]:g}..{NIS_BAND[1]:g}")
+    return None
+
+
 def tune(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
-         base: System | None = None, matching_passes: int = 2,
-         progress=None) -> TuneResult:
-    """Estimate the noise figures that ``base`` (default :class:`System`) leaves
-    unset from the data (see the module docstring); figures ``base`` sets are kept as
-    they are.  ``progress(text)`` is called before each filter run."""
+         base: System | None = None, matching_passes: int = 2, progress=None, *,
+         fixed=(), tune_sensors: bool = False, sigma_from_file=(),
+         block_s: float = 60.0, outages: int = 3, outage_s: float = 30.0) -> TuneResult:
+    """Tune the noise figures of ``base`` (default :class:`System`) on the data (see the
+    module docstring).
+
+    ``fixed``: figures kept as they are (:func:`fixed_keys`); ``tune_sensors``: estimate
+    the sensor sigmas the base config or the files give too (those that no one gives are
+    always estimated); ``sigma_from_file``: the sensors whose files give their sigma
+    (``"gnss"``: e.g. NaveGo's ``stdm``/``stdv``; a GNSS CSV's sigma columns and a
+    velocity file's sigma are seen without it); ``block_s``: the length of the fitted
+    and held-back blocks [s]; ``outages`` windows of ``outage_s`` [s] withheld to measure
+    the drift.  ``progress(text)`` is called before each filter run."""
     t_start = time.perf_counter()
     base = base or System()
     notes: list[str] = []
+    warns: list[str] = []
     runs = 0
     dt = imu.period()
     gc = base.sensors.gnss or GnssConfig()
     vc = base.sensors.velocity or VelocityConfig()
+    fixed = fixed_keys(fixed)
     if gc.lever_m is None and not np.any(gnss.lever):
-        notes.append("no GNSS antenna lever arm is set (sensors.gnss.lever_m, nor in the "
+        warns.append("no GNSS antenna lever arm is set (sensors.gnss.lever_m, nor in the "
                      "file): the figures are estimated for an antenna at the IMU — a lever "
                      "arm left out is absorbed into them; give it in the base config, and "
                      "process with a config that has it")
-    # Figures the base config sets, by their SI key (however the config spells them).
-    fixed = {FIGURES[f][2] for f in FIGURES if base.imu.si(f) is not None}
-    fixed |= {k for k, v in (("sensors.gnss.sigma_pos_m", gc.sigma_pos_m),
-                             ("sensors.gnss.sigma_vel_mps", gc.sigma_vel_mps),
-                             ("sensors.velocity.sigma_mps", vc.sigma_mps)) if v is not None}
+    blocks, windows = _split(gnss, velocity, block_s, outages, outage_s)
+    # -- the sensor sigmas: which are given (kept unless tune_sensors), which are free
+    from_file = set(sigma_from_file or ())
+    rows = gnss.sigma_rows is not None
+    given = {"sensors.gnss.sigma_pos_m": gc.sigma_pos_m is not None or rows
+             or "gnss" in from_file,
+             "sensors.gnss.sigma_vel_mps": gc.sigma_vel_mps is not None or rows
+             or "gnss" in from_file,
+             "sensors.velocity.sigma_mps": velocity is not None}
+    free = {k: k not in fixed and (tune_sensors or not given[k]) for k in SENSOR_KEYS}
+    if rows and tune_sensors:
+        free["sensors.gnss.sigma_pos_m"] = free["sensors.gnss.sigma_vel_mps"] = False
+        notes.append(f"{gnss.source} gives each fix's 1-sigma, which processing uses over "
+                     f"the config's: the GNSS sigmas are kept")
     # Sensor noise variances in the order of the residuals: GNSS [E, N, U] m, [E, N, U]
-    # m/s; velocity sensor [E, N, U] m/s.
+    # m/s (the components the file has); velocity sensor [E, N, U] m/s.
     _, v_adj = adjust_sensors(gnss, velocity, base)
     pos0 = np.broadcast_to(np.asarray(gnss.sigma_pos if gc.sigma_pos_m is None
                                       else gc.sigma_pos_m, dtype=float), (3,))  # N, E, U
     vel0 = np.broadcast_to(np.asarray(gnss.sigma_vel if gc.sigma_vel_mps is None
                                       else gc.sigma_vel_mps, dtype=float), (3,))  # E, N, U
     r_gnss = np.r_[pos0[[1, 0, 2]], vel0] ** 2
+    has = np.r_[np.full(3, gnss.lla is not None and gc.measures != "velocity"),
+                np.full(3, gnss.vel is not None and gc.measures != "position")]
+    free_g = np.r_[np.full(3, free["sensors.gnss.sigma_pos_m"]),
+                   np.full(3, free["sensors.gnss.sigma_vel_mps"])] & has
     r_vel = None
     if velocity is not None:
         r_vel = np.square(vc.sigma_mps) if vc.sigma_mps is not None \
             else np.median(np.diagonal(v_adj.cov, axis1=1, axis2=2), axis=0)
     start_r = (r_gnss.copy(), None if r_vel is None else r_vel.copy())
-    free_g = np.r_[np.full(3, "sensors.gnss.sigma_pos_m" not in fixed),
-                   np.full(3, "sensors.gnss.sigma_vel_mps" not in fixed)]
-    free_v = "sensors.velocity.sigma_mps" not in fixed
+    free_v = velocity is not None and free["sensors.velocity.sigma_mps"]
+    # -- floors: what the data's own scatter supports
+    floor_g = np.zeros(6)
+    if gnss.lla is not None:
+        ll = gnss.lla
+        floor_g[:3] = scatter(earth.llh_difference_enu(ll[:, 0], ll[:, 1], ll[:, 2], ll[0, 0],
+                                                       ll[0, 1], ll[0, 2]), 3)
+    if gnss.vel is not None:
+        floor_g[3:] = scatter(gnss.vel, 2)
+    floor_v = None if velocity is None else scatter(v_adj.vel, 2)
+    period = base.filter.period_s or (float(np.median(np.diff(gnss.t))) if len(gnss.t) > 1
+                                      else dt)
+    n_per = max(1, int(round(period / dt)))
+    floor_imu = {"gyro_arw_rad_sqrt_s": white_noise_floor(imu.gyro, dt, n_per),
+                 "accel_vrw_mps_sqrt_s": white_noise_floor(imu.accel, dt, n_per)}
+    from_scatter = {"gyro_arw_rad_sqrt_s": float(np.max(white_noise(imu.gyro, dt))),
+                    "accel_vrw_mps_sqrt_s": float(np.max(white_noise(imu.accel, dt)))}
+
+    given_imu = imu_figures(imu, base)
 
     def config(fig_imu, rg, rv):
         """``base`` with these IMU figures and sensor variances (residual order)."""
-        sd = np.sqrt(rg)
-        sensors = {"gnss": gc.model_copy(update={
-            "sigma_pos_m": tuple(map(float, sd[[1, 0, 2]])),
-            "sigma_vel_mps": tuple(map(float, sd[3:]))})}
-        if rv is not None or base.sensors.velocity is not None:
+        update = {}
+        for eng, _, si in FIGURES.values():
+            if si in fig_imu and not (si in fixed and given_imu[si] is not None):
+                update.update({si: float(fig_imu[si]), eng: None})
+        for si, white in WHITE_KEYS.items():
+            if si in update:
+                update[white] = None
+        sensors = {}
+        if base.sensors.gnss is not None or np.any(free_g):
+            sd = np.sqrt(rg)
+            up = {}
+            if free["sensors.gnss.sigma_pos_m"] and has[0]:
+                up["sigma_pos_m"] = tuple(map(float, sd[[1, 0, 2]]))
+            if free["sensors.gnss.sigma_vel_mps"] and has[3]:
+                up["sigma_vel_mps"] = tuple(map(float, sd[3:]))
+            sensors["gnss"] = gc.model_copy(update=up)
+        if free_v:
             sensors["velocity"] = vc.model_copy(update={
-                "sigma_mps": None if rv is None else tuple(map(float, np.sqrt(rv)))})
+                "sigma_mps": tuple(map(float, np.sqrt(rv)))})
         return base.model_copy(update={
-            "imu": base.imu.model_copy(update={k: v for k, v in fig_imu.items()
-                                               if k not in fixed}),
-            "sensors": base.sensors.replace(**sensors)})
+            "imu": base.imu.model_copy(update=update),
+            "sensors": base.sensors.replace(**sensors) if sensors else base.sensors})
 
     def run(fig_imu, rg, rv, what):
         nonlocal runs
         runs += 1
         if progress is not None:
             progress(what)
-        return evaluate(imu, gnss, velocity, config(fig_imu, rg, rv))
+        return evaluate(imu, gnss, velocity, config(fig_imu, rg, rv), blocks)
 
     def match(rg, rv, ev):
-        """Covariance matching of the free sensor variances (floored at 1e-3 of the
-        current value: one pass cannot zero a variance)."""
-        new_g = rg if "gnss" not in ev.matched else \
-            np.where(free_g, np.maximum(ev.matched["gnss"], 1e-3 * rg), rg)
-        if rv is not None and free_v and "velocity" in ev.matched:
-            rv = np.maximum(ev.matched["velocity"], 1e-3 * rv)
-        return new_g, rv
+        """Covariance matching of the free sensor variances on the fitted blocks, never
+        below the floor (nor below 1e-3 of the current value: one pass cannot zero a
+        variance)."""
+        if "gnss" in ev.matched and np.any(free_g):
+            m = np.full(6, np.nan)
+            m[has] = ev.matched["gnss"]
+            rg = np.where(free_g, np.maximum.reduce([m, floor_g ** 2, 1e-3 * rg]), rg)
+        if free_v and "velocity" in ev.matched:
+            rv = np.maximum.reduce([ev.matched["velocity"], floor_v ** 2, 1e-3 * rv])
+        return rg, rv
 
-    fig_imu = _starting_imu(imu, base, notes)
-    start_imu = dict(fig_imu)
+    start_imu = _starting_imu(imu, base, notes)
+    fig_imu = dict(start_imu)
     figures: list[Figure] = []
-    before = run(start_imu, r_gnss, r_vel, "starting figures")
-    # 1. White-noise floor from the sample-to-sample scatter.
-    scatter = {"gyro_arw_rad_sqrt_s": float(np.max(white_noise(imu.gyro, dt))),
-               "accel_vrw_mps_sqrt_s": float(np.max(white_noise(imu.accel, dt)))}
-    fig_imu.update({k: v for k, v in scatter.items() if k not in fixed})
-    # 2. Aiding-sensor noise by covariance matching (the first pass from the run with
-    # the starting figures).
+    # The untuned config: the base's figures as they are (the file's, else generic).
+    before = run(start_imu, r_gnss, r_vel, "untuned figures")
+    # 1. The white noise: from the sample scatter where no one gave it; a figure given
+    # below the floor starts at the floor.
+    raised = {}
+    for key, s in from_scatter.items():
+        if key in fixed:
+            continue
+        if given_imu[key] is None and getattr(base.imu, WHITE_KEYS[key]) is None:
+            fig_imu[key] = max(s, floor_imu[key])
+        elif fig_imu[key] < floor_imu[key]:
+            raised[key] = fig_imu[key]
+            fig_imu[key] = floor_imu[key]
+    # 2. Aiding-sensor noise by covariance matching (the first pass from the untuned run).
     ev = before
-    for p in range(matching_passes):
-        r_gnss, r_vel = match(r_gnss, r_vel, ev)
-        ev = run(fig_imu, r_gnss, r_vel, f"covariance matching {p + 1}")
+    if np.any(free_g) or free_v:
+        for p in range(matching_passes):
+            r_gnss, r_vel = match(r_gnss, r_vel, ev)
+            ev = run(fig_imu, r_gnss, r_vel, f"covariance matching {p + 1}")
+    elif fig_imu != start_imu:
+        ev = run(fig_imu, r_gnss, r_vel, "white noise at its floor")
     # 3. IMU process noise by the likelihood, one figure at a time.
     for key in LIKELIHOOD_KEYS:
+        floor = floor_imu.get(key)
         if key in fixed:
-            figures.append(Figure(f"imu.{key}", start_imu[key], start_imu[key],
-                                  "kept: set in the config"))
+            how = "kept: marked fixed"
+            if floor is not None and start_imu[key] < floor:
+                how += f" (below the floor {floor:.3g} the sample scatter supports)"
+            figures.append(Figure(f"imu.{key}", start_imu[key], start_imu[key], how, floor))
             continue
+        origin = ("raised to the sample-scatter floor" if key in raised else
+                  "sample scatter" if fig_imu[key] != start_imu[key] else "start")
         ev, figure = _search(key, fig_imu, ev, lambda f, what: run(f, r_gnss, r_vel, what),
-                             "sample scatter" if key in scatter else "start")
+                             origin, floor)
         figure.start = start_imu[key]
+        figure.floor = floor
         figures.append(figure)
     # 4. The sensor noise again, with the process noise found.
-    r_gnss, r_vel = match(r_gnss, r_vel, ev)
-    ev = run(fig_imu, r_gnss, r_vel, "covariance matching, final")
+    if np.any(free_g) or free_v:
+        r_gnss, r_vel = match(r_gnss, r_vel, ev)
+        ev = run(fig_imu, r_gnss, r_vel, "covariance matching, final")
+    tuned = ev
     sd0, sd = np.sqrt(start_r[0]), np.sqrt(r_gnss)
-    sensors = [("sensors.gnss.sigma_pos_m", sd0[[1, 0, 2]], sd[[1, 0, 2]]),
-               ("sensors.gnss.sigma_vel_mps", sd0[3:], sd[3:])]
+    fl = floor_g
+    sensors = []
+    if has[0]:
+        sensors.append(("sensors.gnss.sigma_pos_m", sd0[[1, 0, 2]], sd[[1, 0, 2]],
+                        fl[[1, 0, 2]]))
+    if has[3]:
+        sensors.append(("sensors.gnss.sigma_vel_mps", sd0[3:], sd[3:], fl[3:]))
     if r_vel is not None:
-        sensors.append(("sensors.velocity.sigma_mps", np.sqrt(start_r[1]), np.sqrt(r_vel)))
-    for key, s0, s1 in sensors:
-        figures.append(Figure(key, [float(x) for x in s0], [float(x) for x in s1],
-                              "kept: set in the config" if key in fixed
-                              else "innovation covariance matching"))
-    for key in ("gyro_bias_radps", "accel_bias_mps2", "gyro_tau_s", "accel_tau_s"):
+        sensors.append(("sensors.velocity.sigma_mps", np.sqrt(start_r[1]), np.sqrt(r_vel),
+                        floor_v))
+    for key, s0, s1, f in sensors:
+        who = "the base config" if _in_config(gc, vc, key) else "the file"
+        how = ("kept: marked fixed" if key in fixed else
+               "innovation covariance matching on the fitted blocks, floored at the "
+               "scatter of the data" if free[key] else
+               f"kept: {who} gives it" + ("" if rows and key.startswith("sensors.gnss")
+                                          else " (--tune-sensors estimates it)"))
+        figures.append(Figure(key, [float(x) for x in s0], [float(x) for x in s1], how,
+                              [float(x) for x in f]))
+    for key in KEPT_KEYS:
         figures.append(Figure(f"imu.{key}", start_imu[key], fig_imu[key],
-                              "kept: set in the config" if key in fixed else
-                              "kept: one data set holds one draw of it, not its "
-                              "spread"))
-    return TuneResult(config(fig_imu, r_gnss, r_vel), figures, before, ev, runs,
-                      time.perf_counter() - t_start, notes)
+                              "kept: marked fixed" if key in fixed else
+                              "kept: one data set holds one draw of it, not its spread"))
+    # 5. Acceptance on the held-back blocks.
+    tuned_cfg = config(fig_imu, r_gnss, r_vel)
+    start_cfg = config(start_imu, *start_r)
+    why = worse(tuned, before)
+    accepted = why is None
+    if not accepted:
+        notes.append(f"the tuned figures fit the held-back blocks worse ({why}): the untuned "
+                     f"figures are kept")
+        for f in figures:
+            if f.value != f.start:
+                f.how = f"not applied: {format_value(f.value)}, {f.how}"
+                f.value = f.start
+    after = tuned if accepted else before
+    for k, v in after.nis_held.items():
+        if _band_excess(v) > 0:
+            warns.append(f"held-back NIS/dof of {k} is {v:.2f}, outside "
+                         f"{NIS_BAND[0]:g}..{NIS_BAND[1]:g}: its noise model does not "
+                         f"describe its errors (time-correlated errors? a sigma kept from "
+                         f"the file or the config?)")
+    # 6. Drift through simulated outages.
+    drift_before = drift_after = []
+    if windows:
+        if progress is not None:
+            progress("simulated GNSS outages, untuned")
+        drift_before = outage_drift(imu, gnss, velocity, start_cfg, windows)
+        runs += 1
+        if accepted:
+            if progress is not None:
+                progress("simulated GNSS outages, tuned")
+            drift_after = outage_drift(imu, gnss, velocity, tuned_cfg, windows)
+            runs += 1
+        else:
+            drift_after = drift_before
+        if np.mean(drift_after) > 1.25 * np.mean(drift_before):
+            notes.append(
+                f"the drift through the simulated outages grew with the tuned figures "
+                f"({np.mean(drift_before):.2f} m -> {np.mean(drift_after):.2f} m, mean): over "
+                f"a few outages partly chance (both runs integrate the same IMU samples; "
+                f"only the state at each outage's start differs)"
+                + ("; sensor sigmas matched to time-correlated errors make the filter "
+                   "follow them (keep the given ones: no --tune-sensors)"
+                   if any(free[k] for k in SENSOR_KEYS) else ""))
+    lever = (tuple(map(float, gnss.lever)) if gc.lever_m is None and np.any(gnss.lever)
+             else None)
+    return TuneResult(tuned_cfg if accepted else start_cfg, figures, before, after, runs,
+                      time.perf_counter() - t_start, notes, accepted, tuned, blocks,
+                      windows, drift_before, drift_after, warns, fixed, lever)
 
 
-def _search(key: str, fig_imu: dict, ev: Evaluation, run, origin: str):
-    """Maximise the likelihood over ``fig_imu[key]`` (log scale) from the evaluation
-    ``ev`` of the current figures; ``fig_imu`` is updated in place when the best value
-    beats the current one by more than :data:`LR_95`.  Returns (evaluation of the figures
-    kept, :class:`Figure`)."""
+def _in_config(gc: GnssConfig, vc: VelocityConfig, key: str) -> bool:
+    section, name = key.split(".")[1:]
+    return getattr(gc if section == "gnss" else vc, name) is not None
+
+
+def _search(key: str, fig_imu: dict, ev: Evaluation, run, origin: str,
+            floor: float | None = None):
+    """Maximise the fitted blocks' likelihood over ``fig_imu[key]`` (log scale, never
+    below ``floor``) from the evaluation ``ev`` of the current figures; ``fig_imu`` is
+    updated in place when the best value beats the current one by more than
+    :data:`LR_95` and the held-back blocks' likelihood does not fall with it.  Returns
+    (evaluation of the figures kept, :class:`Figure`)."""
     x0 = float(np.log(fig_imu[key]))
+    low = -np.inf if not floor else float(np.log(floor)) - x0
     tried = {0.0: ev}
 
     def at(u):
+        u = max(u, low)
         if u not in tried:
             tried[u] = run({**fig_imu, key: float(np.exp(x0 + u))},
                            f"likelihood of imu.{key} x {np.exp(u):.3g}")
         return tried[u].loglik
 
-    at(-_STEP), at(_STEP)
+    if low < -1e-9:
+        at(-_STEP)
+    at(_STEP)
     for _ in range(6):  # widen while an end of the bracket wins (by more than noise)
         us = sorted(tried)
         best = max(tried, key=at)
         if best not in (us[0], us[-1]) or at(best) - tried[0.0].loglik < _WIDEN:
             break
+        if best == us[0] and best <= low + 1e-9:
+            break  # at the floor
         at(best + (2 * _STEP if best == us[-1] else -2 * _STEP))
     us = sorted(tried)
     best = max(tried, key=at)
@@ -292,23 +694,30 @@ def _search(key: str, fig_imu: dict, ev: Evaluation, run, origin: str):
         if a < 0:
             vertex = float(np.clip(-b / (2 * a), u[0], u[2]))
             if abs(vertex - best) > 0.1 and at(vertex) > at(best):
-                best = vertex
+                best = max(vertex, low)
     gain = at(best) - tried[0.0].loglik
     lo, hi = float(np.exp(min(tried))), float(np.exp(max(tried)))
     if gain <= LR_95:
         return ev, Figure(f"imu.{key}", fig_imu[key], fig_imu[key],
                           f"kept ({origin}): likelihood at most {gain:+.1f} "
                           f"over x{lo:.2g}..x{hi:.2g}")
+    held = tried[best].loglik_held - tried[0.0].loglik_held
+    if held < 0:  # what the fitted blocks gained, the held-back ones lose: not moved
+        return ev, Figure(f"imu.{key}", fig_imu[key], fig_imu[key],
+                          f"kept ({origin}): x{np.exp(best):.2g} gains {gain:+.1f} on the "
+                          f"fitted blocks but {held:+.1f} on the held-back ones")
     start = fig_imu[key]
     fig_imu[key] = float(np.exp(x0 + best))
+    at_floor = " (at the floor)" if floor and best <= low + 1e-9 else ""
     return tried[best], Figure(f"imu.{key}", start, fig_imu[key],
                                f"innovation likelihood: {gain:+.1f} over the "
-                               f"{origin} value")
+                               f"{origin} value{at_floor}")
 
 
 def config_yaml(res: TuneResult, base: dict | None = None, header: str = "") -> str:
     """The tuned config as YAML for ``fednav process --config``: the ``base`` mapping
-    (the user's config, kept key for key) with the tuned figures, a comment per figure."""
+    (the user's config, kept key for key but for the figures tune changed, written by
+    their SI key) with a comment per figure, the held-back scores and the warnings."""
     import warnings
 
     import yaml
@@ -317,25 +726,39 @@ def config_yaml(res: TuneResult, base: dict | None = None, header: str = "") -> 
         warnings.simplefilter("ignore", FutureWarning)
         data = _translate_legacy(dict(base or {}))
     c = res.config
-    given = data.get("imu") or {}  # the user's own figures are written as given
-    data["imu"] = {**given, **{k: float(f"{v:.6g}") for k, v in
-                               c.imu.model_dump(exclude_defaults=True).items()
-                               if k not in given}}
+    imu = dict(data.get("imu") or {})
+    changed = {f.key.removeprefix("imu.") for f in res.figures
+               if f.key.startswith("imu.") and f.value != f.start}
+    for fig, (eng, _, si) in FIGURES.items():
+        spelled = [k for k in (eng, si, WHITE_KEYS.get(si)) if k and k in imu]
+        if spelled and si not in changed:
+            continue  # the user's own, unchanged or marked fixed: as given
+        v = c.imu.si(fig)
+        if v is None:
+            continue
+        for k in spelled:
+            del imu[k]
+        imu[si] = float(f"{v:.6g}")
+    data["imu"] = imu
     sensors = {k: dict(v or {}) for k, v in (data.get("sensors") or {}).items()}
-    for name, key in (("gnss", "sigma_pos_m"), ("gnss", "sigma_vel_mps"),
-                      ("velocity", "sigma_mps")):
-        section = c.sensors.get(name)
-        v = None if section is None else getattr(section, key)
-        if v is not None and key not in sensors.get(name, {}):
-            sensors.setdefault(name, {})[key] = [float(f"{x:.6g}") for x in v]
+    written = {f.key for f in res.figures if f.how.startswith("innovation covariance")}
+    for key in written:
+        _, name, k = key.split(".")
+        v = getattr(c.sensors.get(name), k)
+        sensors.setdefault(name, {})[k] = [float(f"{x:.6g}") for x in v]
+    gc = c.sensors.gnss
+    if (gc is None or gc.lever_m is None) and res.lever_from_file is not None:
+        sensors.setdefault("gnss", {})["lever_m"] = [float(f"{x:.6g}")
+                                                     for x in res.lever_from_file]
     if sensors:
         data["sensors"] = sensors
     lines = [f"# {line}" for line in header.splitlines()]
-    lines.append("# mean NIS/dof before -> after: " + ", ".join(
-        f"{k} {res.before.nis_per_dof[k]:.2f} -> {res.after.nis_per_dof[k]:.2f}"
-        for k in res.after.nis_per_dof))
+    lines += [f"# {line}" for line in res.summary()]
     for f in res.figures:
-        lines.append(f"# {f.key}: {format_value(f.start)} -> {format_value(f.value)} ({f.how})")
+        lines.append(f"# {f.key}: {format_value(f.start)} -> {format_value(f.value)} "
+                     f"({f.how})")
+    for n in res.warnings:
+        lines.append(f"# WARNING: {n}")
     for n in res.notes:
         lines.append(f"# note: {n}")
     return "\n".join(lines) + "\n" + yaml.safe_dump(data, sort_keys=False)
@@ -343,6 +766,8 @@ def config_yaml(res: TuneResult, base: dict | None = None, header: str = "") -> 
 
 def format_value(v) -> str:
     """A figure (a number or a 3-list) to 3 significant digits."""
-    if isinstance(v, (list, tuple)):
+    if v is None:
+        return "-"
+    if isinstance(v, (list, tuple, np.ndarray)):
         return "[" + ", ".join(f"{x:.3g}" for x in v) + "]"
     return f"{v:.3g}"
