@@ -1,30 +1,43 @@
-"""Initial alignment for post-processing: levelling while static, heading from the GNSS
-course once moving, and an initial covariance that says what the alignment achieved.
+"""Initial alignment for post-processing: levelling, heading from the GNSS course, and
+an initial covariance that never claims more than the alignment achieved.
 
 A MEMS IMU cannot find north by gyrocompassing (its gyro bias, ~200 deg/h, dwarfs the
 Earth rate, 15 deg/h), and a vehicle standing still gives no heading information at all.
-Post-processing may look ahead, so fednav aligns as a surveyor would:
+Post-processing may look ahead, so fednav aligns as a surveyor would
+(docs/recorded-data.md, "Alignment"):
 
-* **Levelling.** Over the static period at the start (GNSS horizontal speed below
-  ``0.5 m/s``, less a 1 s margin before motion) the mean specific force is the reaction
-  to gravity: pitch and roll follow (:func:`coarse_level`).  The mean accelerometer bias
-  is inseparable from the tilt here: levelling makes the computed horizontal specific
-  force zero, so the tilt error is ``phiE = -(C nabla)_N / g``, ``phiN = (C nabla)_E / g``
-  (``C = C_b^n``).  The initial covariance carries exactly this correlation, so the
-  filter separates tilt from bias as soon as the vehicle turns.
+* **Static start.** The IMU's stand-still detector (:func:`fednav.ins.stops.stationary`,
+  thresholds from the IMU's noise figures) and the GNSS speed (below ``0.5 m/s``, less a
+  1 s margin before motion) find the static period at the start.
+* **Levelling.**  Over a static period of 2 s or more the mean specific force is the
+  reaction to gravity: pitch and roll follow (:func:`coarse_level`).  Otherwise, in
+  motion, the mean specific force over the first 2 s (at least 5 GNSS periods) is the
+  mean acceleration there — ``(v_end - v_start) / T`` from the GNSS velocity, turned into
+  the vehicle's frame by its course — plus the gravity reaction
+  (:func:`level_in_motion`); the sigma holds the acceleration's uncertainty.  A vehicle
+  pulling away at 1 m/s^2 is then levelled to ~0.2 deg instead of 5.8 deg off.  Either
+  way the mean accelerometer bias is inseparable from the tilt: levelling makes the
+  computed horizontal specific force match, so the tilt error is ``phiE = -(C nabla)_N /
+  g``, ``phiN = (C nabla)_E / g`` (``C = C_b^n``), a correlation the initial covariance
+  carries.
 * **Gyro bias.** The mean gyro output over the static period is bias plus the Earth rate;
-  removing ``C_n^b w_ie`` leaves the bias, known to ``ARW / sqrt(T_static)``.  It becomes
-  the initial gyro compensation, with that 1-sigma for the constant-bias state.
-* **Heading.** From the GNSS course (``atan2(vE, vN)``) at the first epochs faster than
-  ``course_speed`` (3 m/s), carried back to the start by the bias-compensated gyro's
-  rotation about the levelled up axis (a vehicle moves along its forward axis: sideslip
-  and the IMU's mounting yaw are inside the 1-sigma floor ``heading_floor``, 1 deg).
-  Its 1-sigma is the scatter of those epochs' estimates over sqrt(n), with the floor.
+  removing ``C_n^b w_ie`` leaves the bias, known to ``ARW / sqrt(T_static)``.
+* **Heading** (:func:`heading_from_course`).  Each GNSS epoch's course, corrected for the
+  antenna's lever arm, is a heading with the 1-sigma ``sigma_v / speed`` (used up to
+  20 deg), carried back to the start by the gyro with the carry's own sigma (bias sigma
+  times the time, ARW times its root).  The course is tested against the gyro first: if
+  the carried-back courses of the first minute scatter beyond three times their sigmas
+  about a line in time, the course is not this vehicle's heading (it slides, or the IMU
+  is not aligned with the direction of travel) and is not used, with a warning.  The 1 deg
+  ``heading_floor`` covers sideslip.
 
-Without a static start the tilt comes from the file's attitude (or from the mean specific
-force over the first ``coarse_seconds``, which assumes no acceleration); a vehicle that
-never moves gets the file's heading, or 0 with a 10 deg sigma and a warning (the error
-filter is linearised: it cannot start from an unknown heading).
+Where nothing gives the heading (the vehicle never moves fast enough for a course, or the
+course fails its test, and no file or config heading is there) the heading is unknown:
+0 with the 1-sigma of a uniform angle (``pi / sqrt(3)``, 104 deg) and a warning.  The
+error-state filter is linearised: from such a start its heading converges only where the
+motion makes heading strongly observable, and its sigma is then no promise.  A constant
+mounting yaw of the IMU against the direction of travel is not seen by the course test
+(the course still follows the gyro): give the heading in the config for such a mount.
 Units: SI, radians; Euler ``[pitch, roll, heading]`` (docs/conventions.md).
 """
 
@@ -36,6 +49,7 @@ import numpy as np
 
 from ..core import attitude as att
 from ..core import earth, units
+from .stops import stationary
 
 #: GNSS horizontal speed [m/s] above which the vehicle counts as moving.
 MOVING_SPEED = 0.5
@@ -43,6 +57,25 @@ MOVING_SPEED = 0.5
 STATIC_MARGIN = 1.0
 #: Shortest static period [s] used for levelling and the gyro bias.
 MIN_STATIC = 2.0
+#: Window [s] of the in-motion levelling (no static start): at least this, and at least
+#: :data:`LEVEL_EPOCHS` GNSS periods.
+LEVEL_SECONDS = 2.0
+LEVEL_EPOCHS = 5
+#: Largest 1-sigma [rad] of one GNSS epoch's course (velocity sigma / speed) that the
+#: heading uses: 20 deg (speed above 2.9 sigma_v), where the course's error is still
+#: close to Gaussian; many such epochs average to a heading.
+MAX_COURSE_SIGMA = np.radians(20.0)
+#: Time [s] over which the course errors of consecutive GNSS epochs are taken as one
+#: (the vehicle's sideslip and the receiver's velocity filter are correlated over ~1 s).
+COURSE_DECORRELATION_S = 1.0
+#: Chi-square per degree of freedom of the carried-back courses about a line in time
+#: beyond which the course is not a heading measurement (:func:`heading_from_course`):
+#: 9, a scatter three times the stated sigmas.
+SCATTER_LIMIT = 9.0
+#: Span [s] of GNSS epochs over which the course's consistency is tested.
+TEST_SPAN_S = 60.0
+#: 1-sigma [rad] of a heading nothing tells: uniform over the circle (pi / sqrt(3)).
+UNKNOWN_HEADING_SIGMA = np.pi / np.sqrt(3.0)
 
 
 @dataclass
@@ -74,109 +107,291 @@ def coarse_level(accel_mean, heading: float = 0.0) -> np.ndarray:
     return np.array([pitch, roll, heading])
 
 
-def static_span(t_gnss, vel_gnss, t_imu0: float) -> float:
+def level_in_motion(f_body, f_level) -> np.ndarray:
+    """Euler ``[pitch, roll, 0]`` of the body whose mean specific force ``f_body`` (body
+    right-forward-up, m/s^2) is ``f_level`` in the level frame of the vehicle's heading
+    (right, forward, up: the acceleration there plus the gravity reaction): the two
+    directions fix pitch and roll with the heading held at 0 (Newton's method from the
+    levelling of each vector, :func:`coarse_level`; converged to 1e-12 rad)."""
+    fb = np.asarray(f_body, dtype=float) / np.linalg.norm(f_body)
+    fl = np.asarray(f_level, dtype=float) / np.linalg.norm(f_level)
+    x = coarse_level(fb)[:2] - coarse_level(fl)[:2]
+
+    def r(x):
+        return (att.euler_to_dcm(np.r_[x, 0.0]) @ fb)[:2] - fl[:2]
+
+    for _ in range(20):
+        J = np.column_stack([(r(x + h) - r(x - h)) / 2e-7 for h in np.eye(2) * 1e-7])
+        step = np.linalg.solve(J, r(x))
+        x = x - step
+        if np.max(np.abs(step)) < 1e-13:
+            break
+    return np.array([x[0], x[1], 0.0])
+
+
+def static_span(t_gnss, vel_gnss, t_imu0: float, t_imu=None, still=None) -> float:
     """Length [s] of the static period at the start: from ``t_imu0`` to 1 s before the
     first GNSS epoch moving faster than :data:`MOVING_SPEED` (0 if moving at once; the
-    whole GNSS span if it never moves)."""
+    whole GNSS span if it never moves) — and, given the IMU's stand-still flags ``still``
+    at ``t_imu`` (:func:`fednav.ins.stops.stationary`), no later than the first sample
+    that moves."""
     speed = np.hypot(vel_gnss[:, 0], vel_gnss[:, 1])
     moving = np.flatnonzero(speed > MOVING_SPEED)
-    end = t_gnss[moving[0]] if len(moving) else t_gnss[-1] + STATIC_MARGIN
-    return max(0.0, float(end - STATIC_MARGIN - t_imu0))
+    end = t_gnss[moving[0]] - STATIC_MARGIN if len(moving) else t_gnss[-1]
+    if still is not None:
+        after = np.flatnonzero(~np.asarray(still) & (np.asarray(t_imu) >= t_imu0))
+        if len(after):
+            end = min(end, float(t_imu[after[0]]))
+    return max(0.0, float(end - t_imu0))
+
+
+def mean_acceleration(t_gnss, vel_gnss, sigma_v, ta: float, tb: float):
+    """Mean ENU acceleration [m/s^2] over ``[ta, tb]`` from the GNSS velocity there
+    (interpolated; the mean of any acceleration history is ``(v_b - v_a) / T``), its
+    1-sigma per axis [m/s^2] (``sqrt(2) sigma_v / T``) and the course [rad] at ``tb``
+    (None where the speed is within 3 sigma of zero)."""
+    va = np.array([np.interp(ta, t_gnss, vel_gnss[:, j]) for j in range(3)])
+    vb = np.array([np.interp(tb, t_gnss, vel_gnss[:, j]) for j in range(3)])
+    s = np.asarray(sigma_v, dtype=float)
+    T = max(tb - ta, 1e-9)
+    sig = np.sqrt(2.0) * s / T
+    course = (float(np.arctan2(vb[0], vb[1])) if np.hypot(vb[0], vb[1]) > 3.0 * max(s[:2])
+              else None)
+    return (vb - va) / T, sig, course
+
+
+def _horizontal_sigma(gnss, idx) -> np.ndarray:
+    """1-sigma [m/s] of the horizontal GNSS velocity at epochs ``idx`` (the larger of east
+    and north; per fix when the file gives one)."""
+    if getattr(gnss, "sigma_rows", None) is not None:
+        return np.max(gnss.sigma_rows[idx, 3:5], axis=1)
+    return np.full(len(idx), float(np.max(np.asarray(gnss.sigma_vel, dtype=float)[:2])))
+
+
+@dataclass
+class CourseHeading:
+    """:func:`heading_from_course`'s answer: ``heading`` [rad] at ``t0`` and its honest
+    1-sigma ``sigma`` [rad], the time ``t_first`` [s] of the first epoch used, and the
+    consistency test: ``scatter`` (chi-square per degree of freedom of the courses against
+    the gyro-carried heading, 0 when untested) and whether the course ``follows`` the
+    gyro's heading (False: it is not a heading measurement for this vehicle)."""
+
+    heading: float
+    sigma: float
+    t_first: float
+    scatter: float
+    follows: bool
 
 
 def heading_from_course(t_imu, gyro, up_b, gyro_bias, t_gnss, vel_gnss, t0: float,
-                        course_speed: float = 3.0, n_fix: int = 10):
-    """Heading [rad] at ``t0`` from the first ``n_fix`` GNSS epochs faster than
-    ``course_speed`` [m/s], each carried back to ``t0`` by the gyro rotation about the
-    body up axis ``up_b``; returns (heading, scatter / sqrt(n), time of the first epoch) or
-    None when the vehicle never gets that fast (then the fastest epochs above
-    :data:`MOVING_SPEED` are tried)."""
+                        sigma_v=0.05, lever=(0.0, 0.0, 0.0), gyro_bias_sigma: float = 0.0,
+                        gyro_arw: float = 0.0, floor: float = units.deg(1.0),
+                        decorrelation_s: float = COURSE_DECORRELATION_S,
+                        n_fix: int = 10) -> CourseHeading | None:
+    """Heading [rad] at ``t0`` from the GNSS course, carried back to ``t0`` by the gyro
+    rotation about the body up axis ``up_b``, with an honest 1-sigma.
+
+    Each GNSS epoch ``i`` faster than :data:`MOVING_SPEED` gives the heading
+    ``course_i - asin((w x l)_right / speed_i)`` (the antenna at lever arm ``l`` moves
+    sideways by ``w x l`` while the vehicle turns), with the course's 1-sigma
+    ``sigma_v,i / speed_i`` (``sigma_v`` [m/s]: one value or one per epoch) — used when
+    at most :data:`MAX_COURSE_SIGMA` — and the carry-back's ``gyro_bias_sigma |dt| +
+    gyro_arw sqrt|dt|``.  One epoch per ``decorrelation_s`` is kept (the best), so that
+    the kept epochs' errors are independent.
+
+    **Consistency.**  Over the first :data:`TEST_SPAN_S` of kept epochs, the carried-back
+    headings must agree with a straight line in time (its slope: the gyro's residual
+    bias) within their sigmas and the sideslip ``floor``: chi-square per degree of freedom
+    at most :data:`SCATTER_LIMIT`.  Beyond it the course does not follow the gyro's
+    heading (the vehicle slides, the IMU is not aligned with the direction of travel, the
+    gyro's axes are wrong) and ``follows`` is False.
+
+    **Estimate.**  The kept epochs, in order of their own total sigma, are averaged
+    (weights 1 / course variance) as far as the mean's sigma falls (at most ``n_fix``);
+    the sigma is inflated by the consistency test's scatter where it exceeds 1.  Returns
+    None when no epoch qualifies."""
     speed = np.hypot(vel_gnss[:, 0], vel_gnss[:, 1])
-    idx = np.flatnonzero((speed > course_speed) & (t_gnss >= t0))[:n_fix]
-    if len(idx) == 0:
-        idx = np.flatnonzero((speed > MOVING_SPEED) & (t_gnss >= t0))
-        idx = idx[np.argsort(-speed[idx])][:n_fix]
-        if len(idx) == 0:
-            return None
-        idx = np.sort(idx)
+    sv = np.broadcast_to(np.asarray(sigma_v, dtype=float), speed.shape)
+    with np.errstate(divide="ignore"):
+        sc = sv / speed
+    ok = np.flatnonzero((speed > MOVING_SPEED) & (sc <= MAX_COURSE_SIGMA) & (t_gnss >= t0)
+                        & (t_gnss <= t_imu[-1]))
+    if len(ok) == 0:
+        return None
+    # One epoch (the least course sigma) per decorrelation time.
+    bins = np.floor((t_gnss[ok] - t0) / max(decorrelation_s, 1e-9)).astype(np.int64)
+    order = np.lexsort((sc[ok], bins))
+    first = np.r_[True, np.diff(bins[order]) != 0]
+    ok = np.sort(ok[order[first]])
+    w_c = gyro - gyro_bias
     # Heading rate = -(yaw rate about up); integrate from t0 (rectangle rule per sample).
-    w_up = (gyro - gyro_bias) @ up_b
-    dpsi = -np.concatenate([[0.0], np.cumsum(w_up[:-1] * np.diff(t_imu))])
-    turn0 = np.interp(t0, t_imu, dpsi)
-    course = np.arctan2(vel_gnss[idx, 0], vel_gnss[idx, 1])
-    back = course - (np.interp(t_gnss[idx], t_imu, dpsi) - turn0)
-    z = np.exp(1j * back)
-    mean = np.angle(z.mean())
-    spread = np.abs(att.wrap_pi(back - mean))
-    scatter = float(np.sqrt(np.mean(spread**2)) / np.sqrt(len(idx))) if len(idx) > 1 else 0.0
-    return float(mean % (2 * np.pi)), scatter, float(t_gnss[idx[0]])
+    dpsi = -np.concatenate([[0.0], np.cumsum((w_c @ up_b)[:-1] * np.diff(t_imu))])
+    w = np.column_stack([np.interp(t_gnss[ok], t_imu, w_c[:, j]) for j in range(3)])
+    side = np.cross(w, np.asarray(lever, dtype=float)) @ np.cross(
+        np.array([0.0, 1.0, 0.0]), up_b)  # (w x l) along the body's level right axis
+    slip = np.arcsin(np.clip(side / speed[ok], -1.0, 1.0))
+    course = np.arctan2(vel_gnss[ok, 0], vel_gnss[ok, 1]) - slip
+    back = course - (np.interp(t_gnss[ok], t_imu, dpsi) - np.interp(t0, t_imu, dpsi))
+
+    # Consistency: a straight line in time through the first TEST_SPAN_S of epochs.
+    tt = t_gnss[ok] - t0
+    m = tt <= tt[0] + TEST_SPAN_S
+    scatter, follows = 0.0, True
+    if m.sum() >= 5:
+        ref = float(np.angle(np.sum(np.exp(1j * back[m]))))
+        y = att.wrap_pi(back[m] - ref)
+        wts = 1.0 / (sc[ok][m] ** 2 + floor**2)
+        X = np.column_stack([np.ones(m.sum()), tt[m]])
+        coef = np.linalg.lstsq(X * np.sqrt(wts)[:, None], y * np.sqrt(wts), rcond=None)[0]
+        scatter = float(np.sum(wts * (y - X @ coef) ** 2)) / (m.sum() - 2)
+        follows = scatter <= SCATTER_LIMIT
+
+    lag = np.abs(tt)
+    s_gyro = gyro_bias_sigma * lag + gyro_arw * np.sqrt(lag)
+    # The epochs in order of their own sigma; as many as make the mean's sigma least.
+    order = np.argsort(sc[ok] ** 2 + s_gyro**2, kind="stable")
+    info = np.cumsum(1.0 / sc[ok][order] ** 2)
+    lag_mean = np.cumsum(lag[order] / sc[ok][order] ** 2) / info
+    total = 1.0 / info + (gyro_bias_sigma * lag_mean + gyro_arw * np.sqrt(lag_mean)) ** 2
+    best = int(np.argmin(total[:n_fix]))
+    pick = np.sort(order[:best + 1])
+    wt = 1.0 / sc[ok][pick] ** 2
+    mean = float(np.angle(np.sum(wt * np.exp(1j * back[pick]))))
+    s_course = np.sqrt(1.0 / wt.sum()) * np.sqrt(max(1.0, scatter))
+    sigma = float(np.hypot(s_course, np.sqrt(total[best] - 1.0 / info[best])))
+    return CourseHeading(mean % (2 * np.pi), sigma, float(t_gnss[ok][pick[0]]), scatter,
+                         follows)
 
 
 def align(imu, gnss, t0: float, i0: int, dt: float, gyro_arw: float, accel_noise: float,
           accel_bias_sigma: float, file_euler=None, file_sigma=None,
           coarse_seconds: float = 1.0, heading_override: float | None = None,
-          heading_floor: float = units.deg(1.0)) -> Alignment:
+          heading_floor: float = units.deg(1.0), gyro_bias_sigma: float = 0.0,
+          velocity_decorrelation_s: float = COURSE_DECORRELATION_S) -> Alignment:
     """Initial attitude at ``t0`` (IMU sample ``i0``) for :func:`fednav.process.process`.
 
     ``gyro_arw`` [rad/sqrt(s)], ``accel_noise`` white accelerometer noise [m/s/sqrt(s)],
-    ``accel_bias_sigma`` [m/s^2] set the achieved accuracy; ``file_euler`` / ``file_sigma``
-    the attitude a data file provides (used where the data cannot align).
+    ``accel_bias_sigma`` [m/s^2] and ``gyro_bias_sigma`` [rad/s] (the turn-on biases' 1-sigma)
+    set the achieved accuracy; ``file_euler`` / ``file_sigma`` the attitude a data file
+    provides (used where the data cannot align); ``velocity_decorrelation_s``: the time
+    [s] over which GNSS velocity errors are correlated (1 s for Doppler velocities; the
+    window of velocities from position differences).
     """
     report: dict = {}
     warnings: list[str] = []
-    T_static = static_span(gnss.t, gnss.vel, t0) if gnss.vel is not None else 0.0
+    still = stationary(imu.gyro[i0:], imu.accel[i0:], dt, gyro_arw, accel_noise,
+                       gyro_bias_sigma)
+    T_static = (static_span(gnss.t, gnss.vel, t0, imu.t[i0:], still)
+                if gnss.vel is not None else 0.0)
     static = T_static >= MIN_STATIC
     lat = float(gnss.lla[0, 0])
     g = earth.gravity(lat, float(gnss.lla[0, 2]))
     w_ie = earth.earth_rate(lat)
-    tilt_bias = None
-    gyro_bias = None
-    gyro_bias_sigma = None
+    sv = np.asarray(gnss.sigma_vel, dtype=float)
+    n_static = max(1, int(round(T_static / dt)))
+    w_mean = imu.gyro[i0:i0 + n_static].mean(axis=0)
+    carry_sigma = gyro_arw / np.sqrt(T_static) if static else gyro_bias_sigma
+
+    def course(euler):
+        """The heading from the GNSS course, the gyro integrated about the up axis of
+        the tilt ``euler`` (less the static gyro mean's bias)."""
+        if gnss.vel is None or heading_override is not None:
+            return None
+        up_b = att.euler_to_dcm(np.r_[euler[:2], 0.0])[2]  # body components of ENU up
+        w_bias = w_mean - up_b * w_ie[2] if static else np.zeros(3)
+        return heading_from_course(imu.t, imu.gyro, up_b, w_bias, gnss.t, gnss.vel, t0,
+                                   _horizontal_sigma(gnss, np.arange(len(gnss.t))),
+                                   gnss.lever, carry_sigma, gyro_arw, heading_floor,
+                                   velocity_decorrelation_s)
+
+    # The course first, on a provisional tilt: whether it follows the gyro decides if
+    # it may orient the acceleration of an in-motion levelling.
+    n1 = max(1, int(round(max(coarse_seconds, T_static) / dt)))
+    hc = course(coarse_level(imu.accel[i0:i0 + n1].mean(axis=0)))
+    if gnss.vel is not None:  # the mean acceleration over the first seconds
+        period = float(np.median(np.diff(gnss.t))) if len(gnss.t) > 1 else 1.0
+        T = max(LEVEL_SECONDS, LEVEL_EPOCHS * period)
+        n = max(1, int(round((min(t0 + T, float(gnss.t[-1]), float(imu.t[-1])) - t0) / dt)))
+        T = n * dt
+        a, s_a, heading_at_T = mean_acceleration(gnss.t, gnss.vel, sv, t0, t0 + T)
+        a_h = float(np.hypot(a[0], a[1]))
     if static:
-        n = max(1, int(round(T_static / dt)))
-        f_mean = imu.accel[i0:i0 + n].mean(axis=0)
-        w_mean = imu.gyro[i0:i0 + n].mean(axis=0)
-        euler = coarse_level(f_mean)
+        euler = coarse_level(imu.accel[i0:i0 + n_static].mean(axis=0))
         tilt_sigma = np.hypot(accel_bias_sigma / g, accel_noise / np.sqrt(T_static) / g)
-        sig = np.array([tilt_sigma, tilt_sigma, np.nan])
         report["levelling"] = f"static {T_static:.1f} s"
+    elif gnss.vel is not None and (hc is None or hc.follows):
+        # In motion: the mean specific force over the first seconds is the mean
+        # acceleration (from the GNSS velocity) plus the gravity reaction, the
+        # acceleration turned into the vehicle's frame by its course.
+        if heading_at_T is None:  # hardly moving yet: the acceleration is along the vehicle
+            a_level = np.array([0.0, a_h if a_h > 3.0 * max(s_a[:2]) else 0.0, a[2]])
+        else:
+            c, s_ = np.cos(heading_at_T), np.sin(heading_at_T)
+            a_level = np.array([a[0] * c - a[1] * s_, a[0] * s_ + a[1] * c, a[2]])
+        euler = level_in_motion(imu.accel[i0:i0 + n].mean(axis=0), a_level + [0.0, 0.0, g])
+        tilt_sigma = np.sqrt((accel_bias_sigma / g) ** 2 + (max(s_a[:2]) / g) ** 2
+                             + (accel_noise / np.sqrt(T) / g) ** 2)
+        report["levelling"] = (f"in motion {T:.1f} s (mean acceleration {a_h:.2f} m/s^2 "
+                               f"from the GNSS velocity)")
     elif file_euler is not None:
         euler = np.array(file_euler, dtype=float)
         sig = np.array(file_sigma if file_sigma is not None else units.deg([2.0, 2.0, 10.0]),
                        dtype=float)
+        tilt_sigma = None
         report["levelling"] = "file"
     else:
+        # Levelled as if not accelerating: the acceleration the GNSS shows is the error.
         n = max(1, int(round(coarse_seconds / dt)))
         euler = coarse_level(imu.accel[i0:i0 + n].mean(axis=0))
-        sig = np.array([units.deg(2.0), units.deg(2.0), np.nan])
+        tilt_sigma = (units.deg(2.0) if gnss.vel is None else
+                      float(np.sqrt((a_h / g) ** 2 + (max(s_a[:2]) / g) ** 2
+                                    + (accel_bias_sigma / g) ** 2)))
         report["levelling"] = f"coarse {coarse_seconds:g} s (no static start)"
-    up_b = att.euler_to_dcm(np.r_[euler[:2], 0.0])[2]  # body components of the ENU up axis
-    w_bias = w_mean - up_b * w_ie[2] if static else np.zeros(3)  # less the up Earth rate
+    if tilt_sigma is not None:
+        sig = np.array([tilt_sigma, tilt_sigma, np.nan])
+    if hc is not None:
+        hc = course(euler)  # on the final tilt
     if heading_override is not None:
         euler[2], sig[2] = heading_override, units.deg(2.0)
         report["heading"] = "config"
     else:
-        hc = None if gnss.vel is None else heading_from_course(
-            imu.t, imu.gyro, up_b, w_bias, gnss.t, gnss.vel, t0)
         if hc is not None:
-            euler[2] = hc[0]
-            sig[2] = np.hypot(hc[1], heading_floor)
-            report["heading"] = f"GNSS course from t = {hc[2] - t0:.1f} s"
+            report["course_scatter"] = round(float(hc.scatter), 2)
+            if not hc.follows:
+                warnings.append(
+                    f"the GNSS course does not follow the gyro's heading (scatter "
+                    f"{np.sqrt(hc.scatter):.1f} x its sigma over the first "
+                    f"{TEST_SPAN_S:g} s of motion): the vehicle slides sideways, the IMU is "
+                    f"not aligned with the direction of travel, or the gyro's axes are "
+                    f"wrong; the initial heading is "
+                    + ("the file's" if file_euler is not None else
+                       "unknown (+-180 deg, and so is the solution's)")
+                    + " — give alignment.coarse_heading_deg or the initial attitude")
+        if hc is not None and hc.follows:
+            euler[2] = hc.heading
+            sig[2] = np.hypot(hc.sigma, heading_floor)
+            report["heading"] = f"GNSS course from t = {hc.t_first - t0:.1f} s"
+        elif hc is not None and file_euler is None:
+            euler[2], sig[2] = hc.heading, UNKNOWN_HEADING_SIGMA
+            report["heading"] = "unknown (GNSS course inconsistent with the gyro)"
         elif file_euler is not None:
             euler[2] = file_euler[2]
             sig[2] = file_sigma[2] if file_sigma is not None else units.deg(10.0)
             report["heading"] = "file"
         else:
-            sig[2] = units.deg(10.0)
-            report["heading"] = "none (0)"
-            warnings.append("the vehicle never moves: no heading from the GNSS course; "
-                            "initial heading 0 (give coarse_heading_deg)")
+            euler[2], sig[2] = 0.0, UNKNOWN_HEADING_SIGMA
+            report["heading"] = "unknown (0)"
+            warnings.append(f"the vehicle never moves faster than the GNSS velocity can tell "
+                            f"a course ({units.to_deg(MAX_COURSE_SIGMA):g} deg): the heading "
+                            f"is unknown (0 +- 180 deg, and so is the solution's); give "
+                            f"alignment.coarse_heading_deg or the initial attitude")
+    C = att.euler_to_dcm(euler)
+    # Levelling zeroes the computed horizontal specific force (less the known
+    # acceleration): g phiN = (C nabla)_E, -g phiE = (C nabla)_N.
+    tilt_bias = np.vstack([-C[1], C[0]]) / g if report["levelling"] != "file" else None
+    gyro_bias = gyro_bias_sigma_out = None
     if static:
-        C = att.euler_to_dcm(euler)
-        # Levelling zeroes the computed horizontal specific force: g phiN = (C nabla)_E,
-        # -g phiE = (C nabla)_N.
-        tilt_bias = np.vstack([-C[1], C[0]]) / g
         # Static gyro mean = bias + C_n^b w_ie (now with the heading).
         gyro_bias = w_mean - C.T @ w_ie
-        gyro_bias_sigma = gyro_arw / np.sqrt(T_static)
-    return Alignment(euler, sig, tilt_bias, gyro_bias, gyro_bias_sigma, report, warnings)
+        gyro_bias_sigma_out = gyro_arw / np.sqrt(T_static)
+    return Alignment(euler, sig, tilt_bias, gyro_bias, gyro_bias_sigma_out, report, warnings)

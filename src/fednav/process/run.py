@@ -21,7 +21,7 @@ from pydantic import ValidationError
 from ..core import attitude as att
 from ..core import earth, units
 from ..ins import error_model as em
-from ..ins.alignment import Alignment, align, coarse_level
+from ..ins.alignment import UNKNOWN_HEADING_SIGMA, Alignment, align, coarse_level
 from ..io.data import DataError, GnssData, ImuData, Reference, VelocityData
 from ..io.sensorfile import SensorData
 from ..navigator.loop import InnovationRecord  # noqa: F401  (fednav.process's name)
@@ -129,7 +129,8 @@ def gnss_course(gnss: GnssData, seconds: float, min_speed: float = 0.5) -> float
 
 
 def _initial_attitude(imu: ImuData, gnss: GnssData, system: System, t0: float, i0: int,
-                      dt: float, noise: em.ImuNoiseModel, accel_bias_sigma: float) -> Alignment:
+                      dt: float, noise: em.ImuNoiseModel, accel_bias_sigma: float,
+                      gyro_bias_sigma: float, decorrelation_s: float = 1.0) -> Alignment:
     cfg = system.alignment
     sig = None if cfg.initial_attitude_sigma_deg is None else units.deg(
         np.asarray(cfg.initial_attitude_sigma_deg))
@@ -138,7 +139,8 @@ def _initial_attitude(imu: ImuData, gnss: GnssData, system: System, t0: float, i
     if cfg.initial_attitude == "align":
         a = align(imu, gnss, t0, i0, dt, noise.gyro_arw, noise.accel_vrw, accel_bias_sigma,
                   imu.initial_euler, imu.initial_euler_sigma if sig is None else sig,
-                  cfg.coarse_seconds, heading)
+                  cfg.coarse_seconds, heading, gyro_bias_sigma=gyro_bias_sigma,
+                  velocity_decorrelation_s=decorrelation_s)
         if sig is not None:  # the user's sigmas win over what the alignment claims
             a = Alignment(a.euler, sig, None, a.gyro_bias, a.gyro_bias_sigma,
                           {k: a.report[k] for k in ("levelling", "heading")}, a.warnings)
@@ -179,6 +181,11 @@ def _initial_covariance(al: Alignment, sig_vel, sig_pos, gb: float, ab: float,
 
 #: Largest GNSS-IMU time offset :func:`time_offset` looks for [s] (GPS - UTC is 18 s).
 OFFSET_SEARCH_S = 30.0
+#: An offset :func:`time_offset` finds is a warning beyond this [s] (or half a GNSS
+#: period): the course departs from the heading systematically (the antenna's lever arm,
+#: body roll, the angle of attack in banked turns), which moved the estimate by up to
+#: 0.25 s on data with no offset (docs/real-data.md, "Independent data").
+OFFSET_WARN_S = 0.3
 
 
 def time_offset(imu: ImuData, gnss: GnssData, step: float = 0.01) -> float | None:
@@ -386,7 +393,7 @@ def _position_velocity(gnss: GnssData) -> tuple[np.ndarray, np.ndarray]:
     vel[ok] = (d[hi[ok]] - d[lo[ok]]) / span[ok, None]
     sp = (np.broadcast_to(gnss.sigma_pos, (len(t), 3)) if gnss.sigma_rows is None
           else gnss.sigma_rows[:, :3])
-    s = np.max(sp, axis=1)
+    s = np.max(sp[:, :2], axis=1)  # (horizontal: the course's)
     sigma = np.full(len(t), np.inf)
     sigma[ok] = np.hypot(s[hi[ok]], s[lo[ok]]) / span[ok]
     return vel, sigma
@@ -473,7 +480,7 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
         off = time_offset(imu, gnss)
         if off is not None:
             quality_extra["gnss_time_offset_seen_s"] = round(off, 2)
-            if abs(off) > max(0.1, 0.5 * float(np.median(np.diff(gnss.t)))):
+            if abs(off) > max(OFFSET_WARN_S, 0.5 * float(np.median(np.diff(gnss.t)))):
                 warnings.append(f"{gnss.source}: the GNSS course matches the gyro's heading "
                                 f"best with the GNSS time stamps moved by {off:+.2f} s: a "
                                 f"time offset between the receiver's and the IMU's clock "
@@ -549,15 +556,18 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
                        report={"levelling": "initial", "heading": "initial"})
         gyro_bias = None
     else:
-        gnss_v, sig_vel0 = gnss, sig_vel
+        gnss_v, sig_vel0, decorrelation = gnss, sig_vel, 1.0
         if gnss.vel is None:  # the alignment's course from the positions' differences
             v, s_v = _position_velocity(gnss)
             if not np.isfinite(s_v[0]):
                 raise DataError(f"{gnss.source}: one position-only fix: no initial "
                                 f"velocity; give the initial state (initial:)")
             sig_vel0 = np.full(3, s_v[0])
-            gnss_v = replace(gnss, vel=v, sigma_vel=sig_vel0, quality={})
-        al = _initial_attitude(imu, gnss_v, cfg, t0, i0, dt, noise, ab)
+            rows = np.column_stack([np.ones((len(v), 3)), np.repeat(
+                np.minimum(s_v, 1e6)[:, None], 3, axis=1)])
+            gnss_v = replace(gnss, vel=v, sigma_vel=sig_vel0, quality={}, sigma_rows=rows)
+            decorrelation = 2.0 * VELOCITY_WINDOW_S  # (neighbours share their fixes)
+        al = _initial_attitude(imu, gnss_v, cfg, t0, i0, dt, noise, ab, gb, decorrelation)
         C0 = att.euler_to_dcm(al.euler)
         lla0 = earth.move_enu(gnss.lla[0], -(C0 @ lever))
         vel0 = gnss_v.vel[0]
@@ -656,6 +666,15 @@ def solution(res, prep: Prepared, smooth: bool = False) -> ProcessResult:
         return ProcessResult(epoch_rate(res), None, 0.0, len(res.states) - 1,
                              dict(prep.quality), list(prep.warnings), prep.alignment.report)
     forward, smoothed = imu_rate(res, smooth or prep.system.smoother)
+    if prep.alignment.report.get("heading", "").startswith("unknown"):
+        # A linearised filter started from an unknown heading converges only where the
+        # motion makes the heading strongly observable; its heading sigma is no promise
+        # there (a standing vehicle's shrinks through the lever arm while 40 deg off).
+        for sol in (forward, smoothed):
+            if sol is not None:
+                sol.sigma_euler[:, 2] = np.maximum(sol.sigma_euler[:, 2],
+                                                   UNKNOWN_HEADING_SIGMA)
+                sol.sigma[:, 2] = np.maximum(sol.sigma[:, 2], UNKNOWN_HEADING_SIGMA)
     return ProcessResult(forward, smoothed, 0.0, len(res.states) - 1, dict(prep.quality),
                          list(prep.warnings), prep.alignment.report)
 
