@@ -460,8 +460,8 @@ _TUNE_SENSORS = typer.Option(False, "--tune-sensors",
                                   "config give (by covariance matching, never below the "
                                   "data's scatter)")
 _TUNE_BLOCK = typer.Option(60.0, "--block-s", min=1.0,
-                           help="length of the alternating fitted / held-back time blocks "
-                                "[s]")
+                           help="length of the alternating fitted / held-back time blocks, "
+                                "seconds")
 _TUNE_OUTAGES = typer.Option(3, "--outages", min=0,
                              help="GNSS outages (30 s, in held-back blocks) simulated to "
                                   "measure the drift before -> after")
