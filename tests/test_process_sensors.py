@@ -9,6 +9,7 @@ import pytest
 from test_process import make_flight
 
 from fednav import System, load_system
+from fednav.core import attitude as att
 from fednav.core import units
 from fednav.io.data import GnssData, ImuData
 from fednav.process import errors_against, process, rmse
@@ -213,3 +214,64 @@ def test_a_gnss_time_offset_is_seen_and_said(flight):
     assert res.data_quality["gnss_time_offset_seen_s"] == pytest.approx(-0.5, abs=0.1)
     res = process(imu, gnss, None, System())
     assert not any("time_offset_s" in w for w in res.warnings)
+
+
+def _outage_drive():
+    """The ~100 s car drive of fednav.sim.drives (a stop at 48-56 s), with road vibration
+    while moving (0.1 m/s^2, 0.002 rad/s per 100 Hz sample: what a stand-still detector
+    sees on real roads) and the GNSS withheld for 60 s (30-90 s)."""
+    from fednav.io.data import ImuData
+    from fednav.sim.drives import car_drive
+
+    d = car_drive(40.0, 0.0, seed=6, static_s=5.0)
+    rng = np.random.default_rng(61)
+    speed = np.linalg.norm(d.reference.vel, axis=1)
+    shake = (speed > 0.05)[:, None]
+    imu = ImuData("shaken", d.imu.t, d.imu.gyro + shake * rng.normal(0, 0.002, (len(speed), 3)),
+                  d.imu.accel + shake * rng.normal(0, 0.1, (len(speed), 3)), d.imu.errors)
+    keep = (d.gnss.t < 30.0) | (d.gnss.t > 90.0)
+    gnss = replace(d.gnss, t=d.gnss.t[keep], lla=d.gnss.lla[keep], vel=d.gnss.vel[keep],
+                   quality={})
+    return d, imu, gnss
+
+
+def _outage_rms(res, ref):
+    e = errors_against(res.forward, ref)
+    m = (e["t"] >= 30.0) & (e["t"] <= 90.0)
+    return float(np.sqrt(np.mean(e["north_m"][m] ** 2 + e["east_m"][m] ** 2)))
+
+
+def test_detected_stops_and_an_odometer_hold_the_drift_through_a_gnss_outage():
+    """Issue 26: ZUPT on stops the IMU detects (no file), the non-holonomic constraint and
+    an odometer each cut the horizontal drift through a 60 s GNSS outage of a car drive,
+    and all three together almost remove it (measured RMS 18.8 m free; ZUPT 4.5, NHC 7.5,
+    odometer 9.5, all three 0.31 m; 59 of the 65 stopped epochs detected, none moving;
+    docs/recorded-data.md, "Land-vehicle aids")."""
+    from fednav.io.sensorfile import SensorData
+
+    d, imu, gnss = _outage_drive()
+    base = d.system.model_dump(exclude_unset=True)
+
+    def run(extra=None, sensors=None):
+        cfg = load_system({**base, "sensors": {**base["sensors"], **(extra or {})}})
+        return process(imu, gnss, None, cfg, sensors=sensors)
+
+    free = _outage_rms(run(), d.reference)
+    res = run({"zupt": {"sigma_mps": 0.02}})
+    zupt = _outage_rms(res, d.reference)
+    n = res.data_quality["zupt_epochs_detected"]
+    stop_epochs = 8.0 / 0.2 + 5.0 / 0.2  # the 5 s static start and the 8 s stop
+    assert 0.7 * stop_epochs < n <= stop_epochs + 2, n  # no stop while moving
+    nhc = _outage_rms(run({"nhc": {"sigma_mps": [0.1, 0.1]}}), d.reference)
+    C = att.euler_to_dcm(d.reference.euler)
+    fwd = np.einsum("ni,ni->n", C[:, :, 1], d.reference.vel)  # body forward speed
+    k = np.arange(10, len(d.reference.t), 10)  # 10 Hz
+    rng = np.random.default_rng(62)
+    odo = SensorData("odometer", "sim odometer", d.reference.t[k],
+                     (fwd[k] + rng.normal(0, 0.05, len(k)))[:, None])
+    odom = _outage_rms(run({"odometer": {"sigma_mps": 0.05}}, {"odometer": odo}),
+                       d.reference)
+    both = _outage_rms(run({"odometer": {"sigma_mps": 0.05}, "nhc": {"sigma_mps": [0.1, 0.1]},
+                            "zupt": {"sigma_mps": 0.02}}, {"odometer": odo}), d.reference)
+    assert max(zupt, nhc, odom) < 0.6 * free and both < 0.2 * free, (free, zupt, nhc, odom,
+                                                                     both)

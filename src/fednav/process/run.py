@@ -489,10 +489,6 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
     period = _period(cfg, gnss, others)
     n_per = max(1, int(round(period / dt)))
     T = n_per * dt
-    for name in cfg.sensors:  # constraints the vehicle always obeys need no file
-        if registry.spec(name).pseudo and name not in others and (
-                cfg.aiding is None or name in cfg.aiding):
-            others[name] = _pseudo(name, cfg, imu, T)
     if init is not None and init.t_s is not None:
         t0 = init.t_s
         if not imu.t[0] - 0.5 * dt <= t0 <= imu.t[-1]:
@@ -513,6 +509,22 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
         raise DataError(f"{imu.source}: IMU data does not overlap {what} by one filter "
                         f"period ({T:g} s)")
     noise, gb, ab = imu_noise_model(cfg, dt, imu.errors)
+    for name in cfg.sensors:  # constraints the vehicle always obeys, detected stops
+        spec = registry.spec(name)
+        if name in others or (cfg.aiding is not None and name not in cfg.aiding):
+            continue
+        if spec.pseudo:
+            others[name] = _pseudo(name, cfg, imu, T)
+        elif spec.detector is not None:
+            t_det = np.asarray(spec.detector(imu, gnss, cfg.sensors[name], noise, gb, T),
+                               dtype=float)
+            quality_extra[f"{name}_epochs_detected"] = len(t_det)
+            if not len(t_det):
+                warnings.append(f"sensors.{name}: its detector found nothing in the data "
+                                f"(not used)")
+                continue
+            others[name] = SensorData(name, f"sensors.{name} (no file: detected)", t_det,
+                                      np.zeros((len(t_det), len(spec.columns))), quality={})
 
     sensors, meas, sigmas = {}, {}, {}
     if gnss is not None:

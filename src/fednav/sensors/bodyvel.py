@@ -16,7 +16,8 @@
   vibration, a rocking hull), ``period_s`` (how often a stop is used), and for
   simulation ``stationary_below_mps`` (the true speed under which the vehicle counts as
   stopped).  File columns: ``t_s, vE_mps, vN_mps, vU_mps`` (zeros: the rows of a
-  stop detector's output).
+  stop detector's output); without a file ``fednav process`` detects the stops itself
+  (:func:`detect_stops`).
 
 Residuals (linear in the error state, compiled rows of
 :mod:`fednav.sensors.measurement`): odometer and DVL ``C^T v + omega x l - z`` (body
@@ -206,10 +207,17 @@ class NhcConfig(SensorConfig):
 
 class ZuptConfig(SensorConfig):
     """Zero-velocity updates: 1-sigma of "still" [m/s]; in simulation, stops are where
-    the true speed is below ``stationary_below_mps``."""
+    the true speed is below ``stationary_below_mps``; on recorded data without a file,
+    where the stand-still detector (:func:`detect_stops`) finds them: its window
+    ``detect_window_s`` [s], its false-alarm probability ``detect_alpha`` (a still
+    window called moving), and the GNSS horizontal speed a stop must stay under where a
+    fix lies within 1 s (``max_gnss_speed_mps``)."""
 
     sigma_mps: float = Field(default=0.02, gt=0.0)
     stationary_below_mps: float = Field(default=1e-3, gt=0.0)
+    detect_window_s: float = Field(default=0.5, gt=0.0)
+    detect_alpha: float = Field(default=1e-3, gt=0.0, lt=1.0)
+    max_gnss_speed_mps: float = Field(default=0.3, gt=0.0)
 
     def sensor(self) -> StandstillDetector:
         return StandstillDetector(self.sigma_mps, self.stationary_below_mps, self.period_s)
@@ -221,6 +229,38 @@ class ZuptConfig(SensorConfig):
         return np.full(3, self.sigma_mps)
 
 
+def detect_stops(imu, gnss, section: ZuptConfig, noise, gyro_bias: float,
+                 period: float) -> np.ndarray:
+    """Times [s] (every ``section.period_s``, default the filter ``period``) whose whole
+    interval the vehicle stands still: every IMU sample of it in a still window of the
+    SHOE detector (:func:`fednav.ins.stops.stationary`, thresholds from the filter's IMU
+    white noise ``noise.gyro_arw``, ``noise.accel_vrw`` and the turn-on ``gyro_bias``),
+    and the GNSS horizontal speed below ``section.max_gnss_speed_mps`` where a fix lies
+    within 1 s (during an outage the IMU alone decides).  Vibration beyond the data
+    sheet's noise (an idling engine) makes windows "moving": fewer stops, never false
+    ones; a vehicle cruising without any vibration (a simulation) would look still, which
+    the GNSS gate catches while there is GNSS."""
+    from ..ins.stops import stationary
+
+    dt = imu.period()
+    still = stationary(imu.gyro, imu.accel, dt, noise.gyro_arw, noise.accel_vrw, gyro_bias,
+                       section.detect_window_s, section.detect_alpha)
+    step = section.period_s or period
+    t = np.arange(imu.t[0] + step, imu.t[-1] + 1e-9, step)
+    # an epoch is still when no moving sample lies in (t - step, t]
+    moving = np.concatenate([[0], np.cumsum(~still)])
+    hi = np.searchsorted(imu.t, t, side="right")
+    lo = np.searchsorted(imu.t, t - step, side="right")
+    ok = (moving[hi] - moving[lo]) == 0
+    if gnss is not None and gnss.vel is not None and len(gnss.t):
+        j = np.clip(np.searchsorted(gnss.t, t), 1, len(gnss.t) - 1)
+        j = np.where(np.abs(gnss.t[j - 1] - t) < np.abs(gnss.t[j] - t), j - 1, j)
+        near = np.abs(gnss.t[j] - t) <= 1.0
+        fast = np.hypot(gnss.vel[j, 0], gnss.vel[j, 1]) > section.max_gnss_speed_mps
+        ok &= ~(near & fast)
+    return t[ok]
+
+
 ODOMETER = SensorSpec("odometer", "odometer: forward speed in body axes at its lever arm",
                       OdometerConfig, OdometerSpeed, columns=(Column("speed_mps"),))
 DVL = SensorSpec("dvl", "DVL / body velocity sensor: velocity in body axes right, forward, "
@@ -229,6 +269,7 @@ DVL = SensorSpec("dvl", "DVL / body velocity sensor: velocity in body axes right
 NHC = SensorSpec("nhc", "non-holonomic constraint: no lateral or vertical velocity at the "
                  "wheel-ground contact (land vehicles)", NhcConfig, NonHolonomic,
                  columns=(Column("vR_mps"), Column("vU_mps")), pseudo=True)
-ZUPT = SensorSpec("zupt", "zero-velocity update: ENU velocity zero while stopped",
-                  ZuptConfig, ZeroVelocity,
-                  columns=(Column("vE_mps"), Column("vN_mps"), Column("vU_mps")))
+ZUPT = SensorSpec("zupt", "zero-velocity update: ENU velocity zero while stopped (no "
+                  "file: stops detected from the IMU)", ZuptConfig, ZeroVelocity,
+                  columns=(Column("vE_mps"), Column("vN_mps"), Column("vU_mps")),
+                  detector=detect_stops)
