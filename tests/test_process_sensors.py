@@ -275,3 +275,63 @@ def test_detected_stops_and_an_odometer_hold_the_drift_through_a_gnss_outage():
                             "zupt": {"sigma_mps": 0.02}}, {"odometer": odo}), d.reference)
     assert max(zupt, nhc, odom) < 0.6 * free and both < 0.2 * free, (free, zupt, nhc, odom,
                                                                      both)
+
+
+def test_zero_angular_rate_rows_predict_their_residual():
+    """ZARU's compiled rows: at rest the compensated rate is C^T w_ie plus the drift still
+    uncompensated; the residual against an attitude off by phi is H x to first order."""
+    from fednav.core import earth
+    from fednav.ins.error_model import SCALE
+    from fednav.sensors.measurement import NavSnapshot
+    from fednav.sensors.zaru import ZeroRate
+
+    lat = units.deg(50.0)
+    C = att.euler_to_dcm(units.deg(np.array([3.0, -2.0, 70.0])))
+    w_ie = np.array([0.0, earth.OMEGA_IE * np.cos(lat), earth.OMEGA_IE * np.sin(lat)])
+    phi = units.deg(np.array([0.5, -0.3, 2.0]))
+    eps = units.deg_per_h(np.array([30.0, -50.0, 80.0]))
+    nav = NavSnapshot(np.array([lat, 0.2, 100.0]), np.zeros(3),
+                      att.apply_misalignment(C, phi), C.T @ w_ie + eps)
+    x = np.zeros(18)
+    x[0:3], x[9:12] = phi / SCALE[0:3], eps / SCALE[9:12]
+    m = ZeroRate()
+    y = m.residual(nav, np.zeros(3))
+    np.testing.assert_allclose(y, units.to_deg(eps) * 3600.0, atol=0.5)  # deg/h
+    np.testing.assert_allclose(m.H(nav) @ x, y, atol=0.02)  # the attitude term, 1st order
+    np.testing.assert_allclose(m.h(x[None, :], nav)[0], m.H(nav) @ x, rtol=1e-12)
+    x[12:15] = x[9:12]  # the Markov drift enters the same way
+    np.testing.assert_allclose(m.H(nav) @ x - y, units.to_deg(eps) * 3600.0, atol=0.05)
+
+
+def test_zero_angular_rate_updates_at_detected_stops_hold_the_heading():
+    """ZARU on the stops fednav detects makes the gyro bias observable at each stop: over
+    6 vibrating car drives (figures holding the vibration) with a 60 s GNSS outage around
+    an 8 s stop, the heading RMS through the outage falls with ZARU beside ZUPT (measured
+    over 8 drives: 0.67 -> 0.48 deg; ZARU alone 0.62 -> 0.51 deg)."""
+    from fednav.io.data import ImuData
+    from fednav.sim.drives import car_drive
+
+    yaw = {"zupt": [], "zupt+zaru": []}
+    for seed in range(1, 7):
+        d = car_drive(40.0, 0.0, seed=seed, static_s=5.0)
+        rng = np.random.default_rng(100 + seed)
+        shake = (np.linalg.norm(d.reference.vel, axis=1) > 0.05)[:, None]
+        n = len(d.imu.t)
+        imu = ImuData("shaken", d.imu.t, d.imu.gyro + shake * rng.normal(0, 0.002, (n, 3)),
+                      d.imu.accel + shake * rng.normal(0, 0.1, (n, 3)), d.imu.errors)
+        keep = (d.gnss.t < 30.0) | (d.gnss.t > 90.0)
+        gnss = replace(d.gnss, t=d.gnss.t[keep], lla=d.gnss.lla[keep], vel=d.gnss.vel[keep],
+                       quality={})
+        base = d.system.model_dump(exclude_unset=True)
+        im = dict(base["imu"])
+        im["accel_vrw_mps_sqrt_s"] = float(np.hypot(im["accel_vrw_mps_sqrt_s"], 0.01))
+        im["gyro_arw_rad_sqrt_s"] = float(np.hypot(im["gyro_arw_rad_sqrt_s"], 2e-4))
+        for name, extra in (("zupt", {"zupt": {}}), ("zupt+zaru", {"zupt": {}, "zaru": {}})):
+            cfg = load_system({**base, "imu": im, "sensors": {**base["sensors"], **extra}})
+            res = process(imu, gnss, None, cfg)
+            if name == "zupt+zaru":  # the stops, not the vibrating motion (figures hold it)
+                assert 0.7 * 65 < res.data_quality["zaru_epochs_detected"] <= 67
+            e = errors_against(res.forward, d.reference)
+            m = (e["t"] >= 30.0) & (e["t"] <= 90.0)
+            yaw[name].append(float(np.mean(e["yaw_rad"][m] ** 2)))
+    assert np.sqrt(np.mean(yaw["zupt+zaru"])) < 0.85 * np.sqrt(np.mean(yaw["zupt"])), yaw

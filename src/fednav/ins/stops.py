@@ -8,9 +8,12 @@ over a window of ``W`` samples around sample ``k``,
 
 with ``a`` the specific force [m/s^2] and ``w`` the angular rate [rad/s] of the body,
 ``sigma_a``, ``sigma_w`` their per-sample white noise (the IMU's VRW and ARW over
-``sqrt(dt)``).  Skog's detector compares ``a_i`` with ``g`` along the mean direction; the
-scatter about the window mean used here is the same test without the local gravity
-(one accelerometer bias along the vertical does not matter).  At rest each term is a
+``sqrt(dt)``; or the recording's quietest windows' own noise where that is less than
+half of it: a config whose figures hold the vehicle's vibration, as a tuned one's do,
+would otherwise call a moving vehicle still).  Skog's detector compares ``a_i`` with
+``g`` along the mean direction; the scatter about the window mean used here is the same
+test without the local gravity (one accelerometer bias along the vertical does not
+matter).  At rest each term is a
 sum of squares of unit-variance noise: ``W T_k`` is chi-square with ``3 (W - 1) + 3 W``
 degrees of freedom, so the threshold is its ``1 - alpha`` point (``alpha`` = 0.001: one
 window in a thousand of a still vehicle is called moving).  The gyro term's sigma holds
@@ -35,6 +38,9 @@ from ..core import earth
 WINDOW_S = 0.5
 #: Probability that a window of a vehicle at rest is called moving.
 ALPHA = 1e-3
+#: Percentile of the recording's window variances taken as the noise at rest when it is
+#: below the figures' (the quietest windows: stops, if there are any).
+QUIET_PERCENTILE = 2.0
 
 
 def _window_sums(x: np.ndarray, W: int) -> np.ndarray:
@@ -63,13 +69,27 @@ def stationary(gyro: np.ndarray, accel: np.ndarray, dt: float, gyro_arw: float,
     if n == 0:
         return np.zeros(0, dtype=bool)
     W = max(2, int(round(window_s / dt)))
-    sa2 = max(accel_vrw, 1e-12) ** 2 / dt
-    sw2 = max(gyro_arw, 1e-15) ** 2 / dt + earth.OMEGA_IE**2 + gyro_bias**2
     s_a, cnt = _window_sums(accel, W)
     s_aa, _ = _window_sums(np.sum(accel**2, axis=1), W)
     s_ww, _ = _window_sums(np.sum(gyro**2, axis=1), W)
-    scatter = s_aa - np.sum(s_a**2, axis=1) / cnt  # sum ||a_i - mean||^2
-    stat = np.maximum(scatter, 0.0) / sa2 + s_ww / sw2
+    scatter = np.maximum(s_aa - np.sum(s_a**2, axis=1) / cnt, 0.0)  # sum ||a_i - mean||^2
+    # Per-sample variances at rest: the figures', unless the data's quietest windows are
+    # less than half as noisy (figures that hold vibration, as a tuned config's do, would
+    # call motion "still"): the QUIET_PERCENTILE-th percentile of the windows' own
+    # variances, scaled by the chi-square's at that percentile (unbiased if at least that
+    # share of the windows is still; else it is motion's, above the figures, unused).
+    q = QUIET_PERCENTILE / 100.0
+    quiet_a = (np.percentile(scatter / (3 * np.maximum(cnt - 1, 1)), QUIET_PERCENTILE)
+               / (chi2.ppf(q, 3 * (W - 1)) / (3 * (W - 1))))
+    quiet_w = np.percentile(s_ww / (3 * cnt), QUIET_PERCENTILE) / (chi2.ppf(q, 3 * W)
+                                                                   / (3 * W))
+    sa2 = accel_vrw**2 / dt
+    sw2 = gyro_arw**2 / dt + earth.OMEGA_IE**2 + gyro_bias**2
+    # (never below 1e-4 of the figures': 100 times less noise, a noise-free simulation
+    # with round-off for its scatter)
+    sa2 = max(quiet_a if quiet_a < 0.5 * sa2 else sa2, 1e-4 * sa2, 1e-24)
+    sw2 = max(quiet_w if quiet_w < 0.5 * sw2 else sw2, 1e-4 * sw2, 1e-30)
+    stat = scatter / sa2 + s_ww / sw2
     dof = 3 * (cnt - 1) + 3 * cnt
     return stat <= chi2.ppf(1.0 - alpha, dof)
 

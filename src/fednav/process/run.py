@@ -516,15 +516,17 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
         if spec.pseudo:
             others[name] = _pseudo(name, cfg, imu, T)
         elif spec.detector is not None:
-            t_det = np.asarray(spec.detector(imu, gnss, cfg.sensors[name], noise, gb, T),
-                               dtype=float)
+            found = spec.detector(imu, gnss, cfg.sensors[name], noise, gb, T)
+            t_det, sig = found if isinstance(found, tuple) else (found, None)
+            t_det = np.asarray(t_det, dtype=float)
             quality_extra[f"{name}_epochs_detected"] = len(t_det)
             if not len(t_det):
                 warnings.append(f"sensors.{name}: its detector found nothing in the data "
                                 f"(not used)")
                 continue
             others[name] = SensorData(name, f"sensors.{name} (no file: detected)", t_det,
-                                      np.zeros((len(t_det), len(spec.columns))), quality={})
+                                      np.zeros((len(t_det), len(spec.columns))), quality={},
+                                      sigma=sig)
 
     sensors, meas, sigmas = {}, {}, {}
     if gnss is not None:

@@ -68,13 +68,15 @@ class BodyVelocitySensor:
 
 @dataclass(frozen=True)
 class StandstillDetector:
-    """Zero-velocity measurements every ``period`` [s] while the true speed is below
-    ``below`` [m/s] (an ideal stop detector); the noise ``sigma`` is not drawn (the
-    vehicle really stands still: ``sigma`` says how still the filter takes that to be)."""
+    """Zero measurements (velocity: ZUPT; angular rate: ZARU) every ``period`` [s] while
+    the true speed is below ``below`` [m/s] (an ideal stop detector); the noise ``sigma``
+    is not drawn (the vehicle really stands still: ``sigma`` says how still the filter
+    takes that to be)."""
 
     sigma: float
     below: float
     period: float
+    kind: str = "zupt"
 
     def simulate(self, truth, rng: np.random.Generator, t=None,
                  t_avail=None) -> MeasurementSeries:
@@ -84,7 +86,7 @@ class StandstillDetector:
         t = t[still]
         if t_avail is not None:
             t_avail = np.asarray(t_avail)[still]
-        return MeasurementSeries("zupt", t, np.zeros((len(t), 3)), np.full(3, self.sigma),
+        return MeasurementSeries(self.kind, t, np.zeros((len(t), 3)), np.full(3, self.sigma),
                                  t_avail)
 
 
@@ -205,19 +207,24 @@ class NhcConfig(SensorConfig):
         return np.array(self._sig())
 
 
-class ZuptConfig(SensorConfig):
-    """Zero-velocity updates: 1-sigma of "still" [m/s]; in simulation, stops are where
-    the true speed is below ``stationary_below_mps``; on recorded data without a file,
-    where the stand-still detector (:func:`detect_stops`) finds them: its window
+class StopConfig(SensorConfig):
+    """What updates at stops share: in simulation, stops are where the true speed is
+    below ``stationary_below_mps``; on recorded data without a file, where the
+    stand-still detector (:func:`detect_stops`) finds them: its window
     ``detect_window_s`` [s], its false-alarm probability ``detect_alpha`` (a still
     window called moving), and the GNSS horizontal speed a stop must stay under where a
     fix lies within 1 s (``max_gnss_speed_mps``)."""
 
-    sigma_mps: float = Field(default=0.02, gt=0.0)
     stationary_below_mps: float = Field(default=1e-3, gt=0.0)
     detect_window_s: float = Field(default=0.5, gt=0.0)
     detect_alpha: float = Field(default=1e-3, gt=0.0, lt=1.0)
     max_gnss_speed_mps: float = Field(default=0.3, gt=0.0)
+
+
+class ZuptConfig(StopConfig):
+    """Zero-velocity updates: 1-sigma of "still" [m/s]; stops as :class:`StopConfig`."""
+
+    sigma_mps: float = Field(default=0.02, gt=0.0)
 
     def sensor(self) -> StandstillDetector:
         return StandstillDetector(self.sigma_mps, self.stationary_below_mps, self.period_s)
@@ -229,7 +236,7 @@ class ZuptConfig(SensorConfig):
         return np.full(3, self.sigma_mps)
 
 
-def detect_stops(imu, gnss, section: ZuptConfig, noise, gyro_bias: float,
+def detect_stops(imu, gnss, section: StopConfig, noise, gyro_bias: float,
                  period: float) -> np.ndarray:
     """Times [s] (every ``section.period_s``, default the filter ``period``) whose whole
     interval the vehicle stands still: every IMU sample of it in a still window of the

@@ -34,12 +34,17 @@ from ..ins.error_model import N_STATES, SCALE
 #: Row kinds: position east, north, up [m]; velocity east, north, up [m/s] (both of the
 #: sensor's point at its lever arm); pitch, roll, heading [arcmin; roll and heading
 #: wrapped to +-180 deg]; velocity of the sensor's point in body axes right, forward,
-#: up [m/s] (odometer, DVL).  A row compares its quantity with ``z[index]`` (latitude,
-#: longitude [rad] and height [m] for the position rows, m/s, rad).
-POS_E, POS_N, POS_U, VEL_E, VEL_N, VEL_U, PITCH, ROLL, HEADING, BVEL_R, BVEL_F, BVEL_U = \
-    range(12)
+#: up [m/s] (odometer, DVL); body angular rate about x, y, z less the Earth rate seen
+#: there, ``omega - C^T w_ie`` [deg/h] (zero-angular-rate updates of a vehicle at rest;
+#: ``omega`` the epoch's mean compensated gyro rate).  A row compares its quantity with
+#: ``z[index]`` (latitude, longitude [rad] and height [m] for the position rows, m/s,
+#: rad, rad/s).
+(POS_E, POS_N, POS_U, VEL_E, VEL_N, VEL_U, PITCH, ROLL, HEADING, BVEL_R, BVEL_F, BVEL_U,
+ RATE_X, RATE_Y, RATE_Z) = range(15)
 #: Error-state column of each position / velocity row kind.
-_COLUMN = np.array([6, 7, 8, 3, 4, 5, -1, -1, -1, -1, -1, -1])
+_COLUMN = np.array([6, 7, 8, 3, 4, 5, -1, -1, -1, -1, -1, -1, -1, -1, -1])
+#: rad/s per deg/h (the residual unit of the rate rows: the gyro drift's filter unit)
+_DEG_H = float(SCALE[9])
 
 
 @dataclass
@@ -238,6 +243,10 @@ def row_residual(kinds, zindex, lla, vel, C, omega, z, lever, out):
             out[r] = wrap_pi_nb(roll - z[zi]) / ARCMIN
         elif k == HEADING:
             out[r] = wrap_pi_nb(heading - z[zi]) / ARCMIN
+        elif k >= RATE_X:  # body axis j: omega_j - (C^T w_ie)_j
+            j = k - RATE_X
+            w_ie = earth.OMEGA_IE * (C[1, j] * np.cos(lat) + C[2, j] * np.sin(lat))
+            out[r] = (omega[j] - w_ie - z[zi]) / _DEG_H
         else:  # body axis j: (C^T v)_j + (omega x l)_j
             j = k - BVEL_R
             u = _cross_j(omega, lever, j)
@@ -266,6 +275,15 @@ def row_jacobian(kinds, lla, vel, C, omega, lever, H):
         elif k <= HEADING:
             one[0] = k - PITCH
             euler_jacobian_rows(pitch, heading, H, r, one)
+        elif k >= RATE_X:
+            # omega - C_hat^T w_ie with C_hat^T = C^T (I + [phi x]): the residual drift
+            # (constant and Markov) plus c_j . (w_ie x phi) = (c_j x w_ie) . phi
+            j = k - RATE_X
+            H[r, 9 + j], H[r, 12 + j] = 1.0, 1.0
+            wn, wu = earth.OMEGA_IE * np.cos(lla[0]), earth.OMEGA_IE * np.sin(lla[0])
+            c0, c1, c2 = C[0, j], C[1, j], C[2, j]
+            f = ARCMIN / _DEG_H
+            H[r, 0], H[r, 1], H[r, 2] = (c1 * wu - c2 * wn) * f, -c0 * wu * f, c0 * wn * f
         else:
             # C_hat^T v_hat = C^T (I + [phi x]) (v + dv): row j is c_j . dv - (c_j x v) . phi
             # (c_j: column j of C)
@@ -292,6 +310,11 @@ def row_predict(kinds, lla, vel, C, omega, lever, X, Z):
         if PITCH <= k <= HEADING:
             for i in range(X.shape[0]):
                 Z[i, r] = e[i, k - PITCH]
+        elif k >= RATE_X:
+            j = k - RATE_X
+            for i in range(X.shape[0]):
+                Z[i, r] = (H[r, 0] * X[i, 0] + H[r, 1] * X[i, 1] + H[r, 2] * X[i, 2]
+                           + X[i, 9 + j] + X[i, 12 + j])
         elif k >= BVEL_R:
             for i in range(X.shape[0]):
                 s = 0.0

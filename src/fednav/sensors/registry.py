@@ -16,14 +16,14 @@ from pydantic import ValidationError
 from pydantic_core import core_schema
 
 from ..core.config import nested_error, nested_validation_error
-from . import airdata, baro, bodyvel, gnss, mag, sar, sarvel, star, velocity
+from . import airdata, baro, bodyvel, gnss, mag, sar, sarvel, star, velocity, zaru
 from .spec import SensorConfig, SensorSpec
 
 #: name -> spec of every registered sensor, in the order a simulation draws their noise
 #: from a run's generator (so seeded runs reproduce: new sensors go at the end).
 SENSORS: dict[str, SensorSpec] = {s.name: s for s in (
     star.SPEC, sar.SPEC, gnss.SPEC, baro.SPEC, sarvel.SPEC, airdata.SPEC, velocity.SPEC,
-    bodyvel.ODOMETER, bodyvel.DVL, bodyvel.ZUPT, mag.SPEC, bodyvel.NHC,
+    bodyvel.ODOMETER, bodyvel.DVL, bodyvel.ZUPT, mag.SPEC, bodyvel.NHC, zaru.SPEC,
 )}
 
 
