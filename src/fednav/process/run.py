@@ -75,6 +75,13 @@ def adjust_sensors(gnss: GnssData, velocity: VelocityData | None, cfg: System):
     if gnss is not None and gc.time_offset_s:
         gnss = again(gnss, t=gnss.t + gc.time_offset_s,
                      t_arrival=shifted(gnss.t_arrival, gc.time_offset_s))
+    if gnss is not None and gnss.vel is not None and gc.velocity_latency_s:
+        # the velocity stamped t is the one of t - L: the velocity of t is the one
+        # stamped t + L (interpolated between fixes; held at the last)
+        L = gc.velocity_latency_s
+        vel = np.column_stack([np.interp(gnss.t + L, gnss.t, gnss.vel[:, j])
+                               for j in range(3)])
+        gnss = again(gnss, vel=vel)
     if velocity is None:
         return gnss, None
     vel, cov = velocity.vel, velocity.cov
@@ -231,6 +238,48 @@ def time_offset(imu: ImuData, gnss: GnssData, step: float = 0.01) -> float | Non
     if coarse is None:
         return None
     return best(np.arange(coarse - 0.2, coarse + 0.2 + step / 2, step))
+
+
+#: A GNSS velocity latency :func:`velocity_latency` finds is a warning beyond this [s]
+#: (and three of its sigmas).
+LATENCY_WARN_S = 0.05
+
+
+def velocity_latency(gnss: GnssData) -> tuple[float, float] | None:
+    """How much older than its stamp the GNSS velocity is [s], and the estimate's 1-sigma,
+    from the positions: the velocity of position differences over about 1 s
+    (``v_p(t) = (p(t + h) - p(t - h)) / 2h``, valid at ``t``) minus the reported velocity
+    is ``L a(t)`` for a velocity that lags by ``L`` (``a``: the reported velocity's rate),
+    so ``L`` is the least-squares slope of that difference on ``a`` over the horizontal
+    components.  None without positions and velocities, or with too little acceleration
+    (the slope's sigma above 0.1 s)."""
+    if gnss.lla is None or gnss.vel is None or len(gnss.t) < 20:
+        return None
+    t = gnss.t
+    period = float(np.median(np.diff(t)))
+    k = max(1, int(round(0.5 / period)))
+    d = earth.llh_difference_enu(gnss.lla[:, 0], gnss.lla[:, 1], gnss.lla[:, 2],
+                                 gnss.lla[0, 0], gnss.lla[0, 1], gnss.lla[0, 2])
+    i = np.arange(k, len(t) - k)
+    span = t[i + k] - t[i - k]
+    ok = np.abs(span - 2 * k * period) < 0.25 * period  # no gap inside
+    i, span = i[ok], span[ok]
+    if len(i) < 10:
+        return None
+    vp = (d[i + k, :2] - d[i - k, :2]) / span[:, None]
+    a = (gnss.vel[i + k, :2] - gnss.vel[i - k, :2]) / span[:, None]
+    r = vp - gnss.vel[i, :2]
+    aa = float(np.sum(a * a))
+    if aa <= 0.0:
+        return None
+    L = float(np.sum(r * a)) / aa
+    res = r - L * a
+    sigma = float(np.sqrt(np.sum(res * res) / max(res.size - 1, 1) / aa))
+    # neighbouring differences share fixes: about 2k of them carry one error
+    sigma *= np.sqrt(2 * k)
+    if sigma > 0.1:
+        return None
+    return L, sigma
 
 
 def check_units(imu: ImuData, gnss: GnssData | None) -> list[str]:
@@ -486,6 +535,14 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
                                 f"time offset between the receiver's and the IMU's clock "
                                 f"(UTC vs GPS time: 18 s)? sensors.gnss.time_offset_s "
                                 f"corrects it")
+    if gnss is not None:
+        lat = velocity_latency(gnss)
+        if lat is not None:
+            quality_extra["gnss_velocity_latency_seen_s"] = round(lat[0], 3)
+            if abs(lat[0]) > max(LATENCY_WARN_S, 3.0 * lat[1]):
+                warnings.append(f"{gnss.source}: the GNSS velocity lags its positions by "
+                                f"{lat[0]:+.3f} s (+-{lat[1]:.3f} s, from the positions' "
+                                f"differences): sensors.gnss.velocity_latency_s corrects it")
     period = _period(cfg, gnss, others)
     n_per = max(1, int(round(period / dt)))
     T = n_per * dt

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
+from pydantic import Field
 
 from .base import MeasurementSeries, flight_times, position_noise_to_llh
 from .measurement import POS_E, POS_N, POS_U, VEL_E, VEL_N, VEL_U, RowModel
@@ -74,13 +75,17 @@ class GnssPosVel(RowModel):
 class GnssConfig(SensorConfig):
     """GNSS receiver: 1-sigma position noise (one value or [north, east, up] m) and
     velocity noise (one value or [east, north, up] m/s) — the data file's when left out —
-    antenna ``lever_m`` from the IMU (body right-forward-up; the file's when left out) and
-    ``time_offset_s`` added to the file's time stamps."""
+    antenna ``lever_m`` from the IMU (body right-forward-up; the file's when left out),
+    ``time_offset_s`` added to the file's time stamps, and ``velocity_latency_s``: how
+    much older than its stamp each velocity is (a receiver's Doppler velocity lagging its
+    position; ``fednav process`` reports the latency it sees as
+    ``gnss_velocity_latency_seen_s``)."""
 
     sigma_pos_m: float | _V3 | None = None
     sigma_vel_mps: float | _V3 | None = None
     lever_m: _V3 | None = None
     time_offset_s: float = 0.0
+    velocity_latency_s: float = Field(default=0.0, ge=0.0, le=2.0)
     #: what the local filter uses (None: what the data hold; both in a simulation)
     measures: Literal["position_velocity", "position", "velocity"] | None = None
 
