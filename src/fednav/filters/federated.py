@@ -35,6 +35,8 @@ is recorded in :attr:`FederatedFilter.log`.
 
 from __future__ import annotations
 
+import copy
+
 import numba
 import numpy as np
 
@@ -164,6 +166,11 @@ class FederatedFilter:
             raise ValueError(f"fdi_recovery must be >= 1, got {fdi_recovery}")
         self.fdi_recovery = fdi_recovery
         self._passes = dict.fromkeys(self.locals, fdi_recovery)  # consecutive passes
+        #: online process-noise adaptation (:meth:`adapt_q`): step per NIS/dof excess and
+        #: the bound of ln(scale); 0, 0: off
+        self.q_step, self.q_logmax = 0.0, 0.0
+        #: ln of each filter's process-noise scale (0: the figures' Qd)
+        self.qlog = dict.fromkeys(self.filters, 0.0)
         self._thresholds: dict[tuple, float] = {}
         #: One entry per local measurement: t, local, statistic, dof, threshold, isolated.
         self.log: list[tuple] = []
@@ -181,10 +188,26 @@ class FederatedFilter:
             f.P = np.asarray(P, dtype=float) / self.beta[k]
             f.step += 1
 
+    def adapt_q(self, step: float, max_scale: float) -> None:
+        """Adapt each local filter's process noise online: after every accepted
+        measurement ``ln s += step (NIS/dof - 1)`` within ``[0, ln max_scale]``, and the
+        filter's time update scales the white part of ``Qd`` (``process.Qd_white``: the
+        IMU's ARW and VRW) by ``s`` (:class:`fednav.navigator.system.QAdaptationConfig`)."""
+        self.q_step, self.q_logmax = float(step), float(np.log(max_scale))
+
+    def q_scales(self) -> dict[str, float]:
+        """Each filter's process-noise scale now (1: the figures')."""
+        return {k: float(np.exp(v)) for k, v in self.qlog.items()}
+
     def predict(self, process) -> None:
-        """Time update of every filter with its share of the process noise."""
+        """Time update of every filter with its share of the process noise (the white
+        part scaled by the filter's adapted factor, :meth:`adapt_q`)."""
         for k, f in self.filters.items():
-            f.predict(process, q_scale=1.0 / self.beta[k] if self.reset else 1.0)
+            proc = process
+            if self.q_step and self.qlog[k] > 0.0:
+                proc = copy.copy(process)
+                proc.Qd = process.Qd + (np.exp(self.qlog[k]) - 1.0) * process.Qd_white
+            f.predict(proc, q_scale=1.0 / self.beta[k] if self.reset else 1.0)
 
     def threshold(self, dof: int, local: str | None = None) -> float:
         """Chi-square detection threshold for ``dof`` measurement components of local filter
@@ -220,6 +243,9 @@ class FederatedFilter:
             inn = f.update(y, model, nav, R, gate=thr)
             self._passes[local] = self.fdi_recovery if inn.accepted else 0
         self.log.append((t, local, inn.nis, dof, thr, not inn.accepted))
+        if self.q_step and inn.accepted:
+            self.qlog[local] = min(max(self.qlog[local] + self.q_step * (inn.nis / dof - 1.0),
+                                       0.0), self.q_logmax)
         return inn
 
     def fuse(self) -> tuple[np.ndarray, np.ndarray]:
@@ -256,11 +282,12 @@ class FederatedFilter:
         :meth:`restore`); the log keeps its entries up to this point."""
         return ([(f.x.copy(), f.P.copy(), f.step) for f in self.filters.values()],
                 self.x.copy(), self.P.copy(), dict(self.beta), set(self.isolated),
-                dict(self._passes), len(self.log))
+                dict(self._passes), len(self.log), dict(self.qlog))
 
     def restore(self, snap: tuple) -> None:
         """Return to a :meth:`snapshot` (log entries made since are dropped)."""
-        filters, self.x, self.P, beta, isolated, passes, n_log = snap
+        filters, self.x, self.P, beta, isolated, passes, n_log, qlog = snap
+        self.qlog = dict(qlog)
         for f, (x, P, step) in zip(self.filters.values(), filters, strict=True):
             f.x, f.P, f.step = x.copy(), P.copy(), step
         self.x, self.P = self.x.copy(), self.P.copy()

@@ -403,6 +403,29 @@ def _discretize(p, C, q, T, scale):
     return Phi, 0.5 * (Qd + Qd.T)
 
 
+@numba.njit(cache=True)
+def white_qd(Phi, noise, T, scale):
+    """The part of Qd (filter units) that the IMU's white noise makes — ARW and VRW,
+    ``noise[0]``, ``noise[1]`` (the vector of :func:`model_constants`) — by the same
+    trapezoid as :func:`_discretize`: ``0.5 (Phi Qc_w Phi' + Qc_w) T``, ``Qc_w`` the white
+    blocks of ``_Qc`` (``C C' = I``).  What an online adaptation of the white noise scales
+    (:class:`fednav.navigator.system.QAdaptationConfig`)."""
+    n = Phi.shape[0]
+    q = np.zeros(n)
+    for i in range(3):
+        q[i] = noise[0] ** 2 / scale[i] ** 2
+        q[3 + i] = noise[1] ** 2 / scale[3 + i] ** 2
+    A = np.empty((n, n))
+    for i in range(n):
+        for j in range(n):
+            A[i, j] = Phi[i, j] * q[j]
+    Qw = A @ Phi.T
+    for i in range(n):
+        Qw[i, i] += q[i]
+    Qw *= 0.5 * T
+    return 0.5 * (Qw + Qw.T)
+
+
 @dataclass
 class Nominal:
     """INS (computed) navigation over one filter interval, at its midpoint.
@@ -468,6 +491,11 @@ class ErrorProcess:
         self.rm, self.rn = params[8], params[9]
         self.nom = nom if nom is not None else Nominal(
             lat=params[0], h=params[1], vel=params[2:5].copy(), C=C0, fn=params[5:8].copy())
+
+    @property
+    def Qd_white(self) -> np.ndarray:
+        """The part of ``Qd`` the IMU's white noise makes (:func:`white_qd`)."""
+        return white_qd(self.Phi, self._noise, self.T, SCALE)
 
     # ------------------------------------------------------------------ SI models
     def F_si(self) -> np.ndarray:

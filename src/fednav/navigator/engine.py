@@ -31,7 +31,7 @@ from ..filters.federated import _fuse
 from ..filters.kf import _joseph_update, _propagate
 from ..filters.ukf import _predict_moments, _sigma_points, _update
 from ..ins import error_model as em
-from ..ins.error_model import _interval, _transition
+from ..ins.error_model import _interval, _transition, white_qd
 from ..ins.strapdown import _correct
 from ..ins.strapdown import _run as _strapdown_run
 from ..sensors.measurement import RowModel, row_jacobian, row_predict, row_residual
@@ -89,7 +89,7 @@ def _nav_buffers(lla, vel, src_p, src_v):
 
 @numba.njit(cache=True)
 def run_epochs(k0, n_ep, state, comp, dtheta, dv, h_ref, gains, cst, noise, nsub, n_per,
-               X, P, beta, passes, fam, c, Wm, Wc, thr, recovery, sharing,
+               X, P, beta, qlog, passes, fam, c, Wm, Wc, thr, recovery, sharing,
                m_epoch, m_sens, m_t, m_z, m_R, s_filter, s_how, s_dim, s_kinds, s_zi,
                s_lever, s_linear, out_states, out_P, out_beta, out_Phi, out_Qd, out_dx, out_rows,
                out_nis, out_acc, out_r, out_S, out_bm, out_thr, out_tlog):
@@ -97,7 +97,9 @@ def run_epochs(k0, n_ep, state, comp, dtheta, dv, h_ref, gains, cst, noise, nsub
     ``comp`` (gyro and accelerometer compensation) and the filters ``X``, ``P``, ``beta``,
     ``passes`` (locals, then the master).
 
-    ``cst`` = [dt, T, t0, k1, k2, 1/tau_g, 1/tau_a]; ``dtheta``, ``dv``, ``h_ref``: the
+    ``cst`` = [dt, T, t0, k1, k2, 1/tau_g, 1/tau_a, q_step, ln max q scale]; ``qlog``
+    each filter's ln process-noise scale (adapted in place when ``q_step`` > 0, as
+    :meth:`fednav.filters.federated.FederatedFilter.adapt_q`); ``dtheta``, ``dv``, ``h_ref``: the
     epochs' IMU increments and baro heights; ``fam`` (nf, 2) each filter's time/
     measurement-update family; ``c``, ``Wm``, ``Wc`` its unscented constants; ``thr``
     (nf, 7) its chi-square threshold by dof (NaN: no detection); ``sharing`` 0 equal,
@@ -108,6 +110,7 @@ def run_epochs(k0, n_ep, state, comp, dtheta, dv, h_ref, gains, cst, noise, nsub
     no IMU-rate rows).  Returns (failure code, epoch, filter); code 0 when all flew."""
     dt, T, t0 = cst[0], cst[1], cst[2]
     k1g, k2g, itg, ita = cst[3], cst[4], cst[5], cst[6]
+    q_step, q_logmax = cst[7], cst[8]
     nf, n = X.shape
     scale = em.SCALE
     rows_on = out_rows.shape[0] > 0
@@ -133,10 +136,18 @@ def run_epochs(k0, n_ep, state, comp, dtheta, dv, h_ref, gains, cst, noise, nsub
         _strapdown_run(state, dth, dvc, dt, h_ref[b:b + n_per], gains, rq, rv, rp)
         if not math.isfinite(state.sum()):
             return 1, k, -1
-        params, Cm, Phi, Qd = _interval(s0, state, dvc.sum(axis=0), T, k1g, k2g, itg, ita,
-                                        noise, scale)
+        params, Cm, Phi, Qd0 = _interval(s0, state, dvc.sum(axis=0), T, k1g, k2g, itg, ita,
+                                         noise, scale)
+        Qd = Qd0
+        Qw = Qd0
+        if q_step > 0.0:
+            Qw = white_qd(Phi, noise, T, scale)
         for f in range(nf):
             q_scale = 1.0 / beta[f]
+            if q_step > 0.0 and qlog[f] > 0.0:  # the adapted white noise (adapt_q)
+                Qd = Qd0 + (math.exp(qlog[f]) - 1.0) * Qw
+            else:
+                Qd = Qd0
             if fam[f, 0] == 0:  # Kalman: the mean through the nonlinear model
                 x1 = _transition(X[f].copy().reshape(1, n), T, nsub, params, Cm, scale)[0]
                 Pn, ok = _propagate(Phi, P[f], Qd, q_scale)
@@ -229,6 +240,8 @@ def run_epochs(k0, n_ep, state, comp, dtheta, dv, h_ref, gains, cst, noise, nsub
                     return 5, k, f
                 X[f] = x1
                 P[f] = Pn
+                if q_step > 0.0:
+                    qlog[f] = min(max(qlog[f] + q_step * (ni / d - 1.0), 0.0), q_logmax)
             out_nis[m] = ni
             out_acc[m] = 1.0 if accepted else 0.0
             out_thr[m] = th
@@ -258,7 +271,7 @@ def run_epochs(k0, n_ep, state, comp, dtheta, dv, h_ref, gains, cst, noise, nsub
         out_P[e] = Pg
         if out_Phi.shape[0] > 0:
             out_Phi[e] = Phi
-            out_Qd[e] = Qd
+            out_Qd[e] = Qd0
             out_dx[e] = xg
         if rows_on:
             r0 = e * n_per
@@ -333,7 +346,9 @@ class CompiledLoop:
         self.gains = core.ins.baro_gains
         k1, k2, itg, ita, noise = em.model_constants(core.noise, core.baro_gains, core.baro_q)
         self.noise_vec = noise
-        self.cst = np.array([self.dt, self.T, self.t0, k1, k2, itg, ita])
+        self.cst = np.array([self.dt, self.T, self.t0, k1, k2, itg, ita, fed.q_step,
+                             fed.q_logmax])
+        self.qlog = np.array([fed.qlog[k] for k in self.names])
         self.rec = Record(len(core.state), n, nf, record_cov, record_rows, innovations)
         self.k = 0
         s = core.state
@@ -349,6 +364,10 @@ class CompiledLoop:
         self._none_rows = np.empty((0, 13))
         self._none_cov = (np.empty((0, n, n)), np.empty((0, n, n)), np.empty((0, n)))
         self._none_inn = (np.empty((0, 6)), np.empty((0, 6, 6)), np.empty(0))
+
+    def q_scales(self) -> dict[str, float]:
+        """Each filter's process-noise scale now (1: the figures')."""
+        return {k: float(np.exp(v)) for k, v in zip(self.names, self.qlog, strict=True)}
 
     @property
     def comp_g(self) -> np.ndarray:
@@ -416,7 +435,7 @@ class CompiledLoop:
         code, k, f = run_epochs(
             k0, n_ep, self.core.state, self.comp, dtheta, dv, h_ref, self.gains,
             self.cst, self.noise_vec, self.core.nsub, self.n_per, self.X, self.P, self.beta,
-            self.passes, self.fam, self.c, self.Wm, self.Wc, self.thr, self.recovery,
+            self.qlog, self.passes, self.fam, self.c, self.Wm, self.Wc, self.thr, self.recovery,
             self.sharing, m_epoch, m_sens, m_t, m_z, m_R, self.s_filter, self.s_how,
             self.s_dim, self.s_kinds, self.s_zi, self.s_lever, self.s_linear,
             rec.states.a[e0:e0 + n_ep],

@@ -270,6 +270,10 @@ class PythonLoop:
         return getattr(self.core, "comp_a", np.zeros(3))
 
     # -- snapshots for re-running the filter from the past (recompute)
+    def q_scales(self) -> dict[str, float]:
+        """Each filter's process-noise scale now (1: the figures')."""
+        return self.fed.q_scales()
+
     def snapshot(self) -> tuple:
         return (self.core.snapshot(), self.fed.snapshot())
 

@@ -291,6 +291,8 @@ class Navigator:
             central = f.architecture == "centralized"
             names = ["central"] if central else self.aiding
             fed = build_federation(system, names, P0, em.N_STATES)
+        if f.q_adaptation is not None:
+            fed.adapt_q(self.T / f.q_adaptation.time_constant_s, f.q_adaptation.max_scale)
         meas = [self._meas[a] for a in self.aiding]
         self.why_python = why_not_compiled(system, self.aiding, SENSORS)
         if engine == "auto":

@@ -63,6 +63,20 @@ class LocalFilterConfig(_Model):
         return _check_filter(v)
 
 
+class QAdaptationConfig(_Model):
+    """Online process-noise adaptation of each local filter (recorded data whose IMU
+    figures, often a data sheet's, leave out the vehicle's vibration): after every
+    accepted measurement ``log s += (T / time_constant_s) (NIS/dof - 1)``, held within
+    ``[0, ln max_scale]``, and the white part of the filter's process noise (the IMU's
+    ARW and VRW: what vibration adds to) is ``s`` times the figures' — slow (the time
+    constant), bounded (``max_scale``: 1e4 is 100 times the white noise's sigma) and never
+    below the figures (``s >= 1``); the bias instabilities keep theirs.  Covariance
+    matching in the manner of Sage–Husa Q estimation, on one scalar per filter."""
+
+    time_constant_s: float = Field(default=60.0, gt=0.0)
+    max_scale: float = Field(default=1e4, ge=1.0)
+
+
 class FilterConfig(_Model):
     """The estimator.
 
@@ -85,7 +99,8 @@ class FilterConfig(_Model):
     ``random_walk`` (a random constant, 1-sigma ``hypot(bias, markov)``, driven by the
     random walk whose short-term growth equals the Gauss–Markov process's) or
     ``gauss_markov`` (the Gauss–Markov process with its correlation time; 1-sigma
-    ``max(bias, markov)``).
+    ``max(bias, markov)``).  ``q_adaptation``: online process-noise adaptation
+    (:class:`QAdaptationConfig`; off when absent).
     """
 
     type: str = "kf"
@@ -105,6 +120,7 @@ class FilterConfig(_Model):
     fdi_recovery: int = Field(default=1, ge=1)
     grid_level: int = Field(default=3, ge=1, le=5)
     accel_bias: Literal["random_walk", "gauss_markov"] = "random_walk"
+    q_adaptation: QAdaptationConfig | None = None
 
     @field_validator("type")
     @classmethod

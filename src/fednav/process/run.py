@@ -720,6 +720,9 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
                                    innovations=innovations is not None))
     out = nav.result()
     res = solution(out, prep, smooth)
+    if prep.system.filter.q_adaptation is not None and hasattr(nav.loop, "q_scales"):
+        res.data_quality["q_scale_final"] = {k: round(v, 3)
+                                             for k, v in nav.loop.q_scales().items()}
     res.run_time_s = time.perf_counter() - t_start
     if innovations is not None:
         innovations.extend(out.innovations)
