@@ -397,6 +397,36 @@ def _pseudo(name: str, cfg: System, imu: ImuData, T: float) -> SensorData:
                       np.zeros((len(t), m)), quality={})
 
 
+def _odometer_scaled(data: SensorData, gnss: GnssData | None, cfg: System):
+    """The odometer's speeds divided by its scale factor (``sensors.odometer.scale``; or,
+    with ``auto``, the one :func:`~fednav.sensors.bodyvel.odometer_scale` finds against
+    the GNSS speed), with what was seen: (data, ({quality}, [warnings]))."""
+    from ..sensors.bodyvel import odometer_scale
+
+    sc = cfg.sensors["odometer"] if "odometer" in cfg.sensors else None
+    given = 1.0 if sc is None else sc.scale
+    seen = odometer_scale(data.t, data.z[:, 0], gnss)
+    quality, warnings = {}, []
+    if seen is not None:
+        quality["odometer_scale_seen"] = round(seen[0], 5)
+        quality["odometer_scale_sigma"] = round(seen[1], 5)
+    if given == "auto":
+        if seen is None:
+            raise DataError(f"{data.source}: sensors.odometer.scale: auto needs GNSS "
+                            f"velocities while faster than 2 m/s (20 odometer samples)")
+        use = seen[0]
+    else:
+        use = float(given)
+        if seen is not None and abs(seen[0] - use) > max(0.005, 3.0 * seen[1]):
+            warnings.append(f"{data.source}: the odometer reads {seen[0]:.4f} x the GNSS "
+                            f"speed (+-{seen[1]:.4f}), its scale is taken as {use:g}: "
+                            f"sensors.odometer.scale (or auto) corrects it")
+    if use != 1.0:
+        data = replace(data, z=data.z / use,
+                       sigma=None if data.sigma is None else data.sigma / use)
+    return data, (quality, warnings)
+
+
 def _other_sensor(data: SensorData, cfg: System):
     """The system's section for a recorded sensor other than GNSS and the velocity sensor
     (its noise): the description's, else the section's defaults when they suffice."""
@@ -584,6 +614,11 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
             others[name] = SensorData(name, f"sensors.{name} (no file: detected)", t_det,
                                       np.zeros((len(t_det), len(spec.columns))), quality={},
                                       sigma=sig)
+
+    if "odometer" in others:
+        others["odometer"], note = _odometer_scaled(others["odometer"], gnss, cfg)
+        quality_extra.update(note[0])
+        warnings += note[1]
 
     sensors, meas, sigmas = {}, {}, {}
     if gnss is not None:

@@ -28,9 +28,10 @@ right, forward, up; the attitude error couples through ``-(c_j x v) . phi``); ZU
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
-from pydantic import Field
+from pydantic import Field, field_validator
 
 from .base import MeasurementSeries, flight_times, point_velocity
 from .measurement import BVEL_F, BVEL_R, BVEL_U, VEL_E, VEL_N, VEL_U, RowModel
@@ -145,10 +146,20 @@ class ZeroVelocity(_Diagonal):
 
 class OdometerConfig(SensorConfig):
     """Odometer: 1-sigma of the forward speed [m/s], lever arm of the measuring wheel's
-    contact point (body right-forward-up, m)."""
+    contact point (body right-forward-up, m), and its ``scale`` factor on recorded data
+    (measured = scale x true speed: a worn or under-inflated tyre; ``auto``: estimated
+    against the GNSS speed, :func:`odometer_scale`); ``fednav process`` divides it out."""
 
     sigma_mps: float = Field(gt=0.0)
     lever_m: _V3 = (0.0, 0.0, 0.0)
+    scale: float | Literal["auto"] = 1.0
+
+    @field_validator("scale")
+    @classmethod
+    def _scale(cls, v):
+        if v != "auto" and not 0.5 < v < 2.0:
+            raise ValueError(f"an odometer scale factor is near 1 (0.5..2), got {v}")
+        return v
 
     def sensor(self) -> BodyVelocitySensor:
         return BodyVelocitySensor("odometer", (1,), (self.sigma_mps,), self.lever_m,
@@ -234,6 +245,38 @@ class ZuptConfig(StopConfig):
 
     def sigma(self) -> np.ndarray:
         return np.full(3, self.sigma_mps)
+
+
+#: GNSS speed [m/s] above which an odometer sample counts for its scale factor.
+SCALE_SPEED = 2.0
+
+
+def odometer_scale(t, speed, gnss) -> tuple[float, float] | None:
+    """The odometer's scale factor ``k`` (measured = ``k`` x true forward speed) and its
+    1-sigma, from the GNSS speed (3-D, interpolated at the odometer's times ``t`` [s],
+    not across a gap in the fixes) at the samples faster than :data:`SCALE_SPEED`: the
+    least-squares slope of ``speed`` [m/s] on it (a constant ``k``: tyre wear and
+    pressure change it slowly).  Sideslip
+    and the antenna's lever arm in turns leave a bias of a few 1e-4.  None without GNSS
+    velocities or with fewer than 20 such samples."""
+    if gnss is None or gnss.vel is None or len(gnss.t) < 2:
+        return None
+    t = np.asarray(t, dtype=float)
+    inside = (t >= gnss.t[0]) & (t <= gnss.t[-1])
+    # only between fixes that are near each other (not across an outage)
+    j = np.clip(np.searchsorted(gnss.t, t), 1, len(gnss.t) - 1)
+    inside &= (gnss.t[j] - gnss.t[j - 1]) <= 2.0 * float(np.median(np.diff(gnss.t)))
+    g = np.linalg.norm(np.column_stack([np.interp(t, gnss.t, gnss.vel[:, j])
+                                        for j in range(3)]), axis=1)
+    m = inside & (g > SCALE_SPEED) & np.isfinite(speed)
+    if m.sum() < 20:
+        return None
+    o, g = np.asarray(speed, dtype=float)[m], g[m]
+    k = float(o @ g / (g @ g))
+    res = o - k * g
+    per_fix = max(1.0, m.sum() / max(1, np.sum((gnss.t >= t[m][0]) & (gnss.t <= t[m][-1]))))
+    sigma = float(np.sqrt(res @ res / (len(o) - 1) / (g @ g) * per_fix))
+    return k, sigma
 
 
 def detect_stops(imu, gnss, section: StopConfig, noise, gyro_bias: float,
