@@ -130,3 +130,23 @@ def test_debug_shows_the_traceback(tmp_path):
                                  "--gnss", "missing.csv", "--out", str(tmp_path)])
     assert r.exit_code != 0 and r.exception is not None
     assert "not found" in str(r.exception)
+
+
+def test_json_outputs_never_hold_nan_or_infinity(tmp_path):
+    """Issue 27: with --runs 1 a confidence interval is NaN; JSON has no NaN (a strict
+    reader refuses it): it is written as null."""
+    import json
+    import math
+
+    import numpy as np
+
+    from fednav.core.atomic import write_json
+
+    p = write_json(tmp_path / "s.json", {"ci": float("nan"), "x": np.float64(1.5),
+                                         "inf": [np.inf, -math.inf], "a": np.array([1, 2])})
+
+    def refuse(c):
+        raise ValueError(c)
+
+    assert json.loads(p.read_text(), parse_constant=refuse) == {
+        "ci": None, "x": 1.5, "inf": [None, None], "a": [1, 2]}

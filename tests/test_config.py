@@ -68,3 +68,13 @@ def test_the_documented_processing_config_validates():
         warnings.simplefilter("error")
         s = load_system(yaml.safe_load(block))
     assert s.sensors.gnss.lever_m == (0.51, -0.16, 0.0) and s.filter.period_s == 0.05
+
+
+def test_a_key_given_twice_in_a_yaml_is_refused_naming_it(tmp_path):
+    """Issue 27: PyYAML keeps the last of two equal keys silently."""
+    from fednav.core.config import ConfigError, read_mapping
+
+    p = tmp_path / "c.yaml"
+    p.write_text("sensors:\n  gnss:\n    sigma_pos_m: 1.0\n    sigma_pos_m: 5.0\n")
+    with pytest.raises(ConfigError, match=r"key 'sigma_pos_m' given twice \(lines 3 and 4\)"):
+        read_mapping(p, "processing config")

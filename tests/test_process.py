@@ -281,3 +281,33 @@ def test_cli_output_rate_decimates_and_refuses_a_rate_above_the_imu(tmp_path, fl
     r = CliRunner().invoke(app, [*args, str(tmp_path / "bad"), "--output-rate", "500"])
     assert r.exit_code == 2
     assert "--output-rate 500 Hz: must be positive and at most the IMU rate (100 Hz)" in r.output
+
+
+def test_an_output_folder_that_would_overwrite_an_input_is_refused(tmp_path, flight):
+    """Issue 27: `--ref D/solution.csv --out D` replaced the user's reference with
+    fednav's solution, exit 0; `tune --out` naming its own base config likewise."""
+    imu, gnss, ref = flight
+    write_csv(tmp_path / "imu.csv", {"t_s": imu.t, **{c: imu.gyro[:, i] for i, c in
+                                                      enumerate(IMU_COLUMNS[1:4])},
+                                     **{c: imu.accel[:, i] for i, c in
+                                        enumerate(IMU_COLUMNS[4:7])}})
+    deg = units.to_deg
+    write_csv(tmp_path / "gnss.csv", {"t_s": gnss.t, "lat_deg": deg(gnss.lla[:, 0]),
+                                      "lon_deg": deg(gnss.lla[:, 1]), "h_m": gnss.lla[:, 2],
+                                      "vE_mps": gnss.vel[:, 0], "vN_mps": gnss.vel[:, 1],
+                                      "vU_mps": gnss.vel[:, 2]})
+    mine = tmp_path / "solution.csv"
+    mine.write_text("t_s,lat_deg,lon_deg,h_m\n0,45,-75,50\n")
+    before = mine.read_bytes()
+    r = CliRunner().invoke(app, ["process", "csv", "--imu", str(tmp_path / "imu.csv"),
+                                 "--gnss", str(tmp_path / "gnss.csv"), "--ref", str(mine),
+                                 "--out", str(tmp_path)])
+    assert r.exit_code == 2 and "would overwrite the reference file" in r.output
+    assert mine.read_bytes() == before
+    base = tmp_path / "base.yaml"
+    base.write_text("sensors: {gnss: {lever_m: [0.6, -1.2, 0.4]}}\n")
+    r = CliRunner().invoke(app, ["tune", "csv", "--imu", str(tmp_path / "imu.csv"),
+                                 "--gnss", str(tmp_path / "gnss.csv"), "--config", str(base),
+                                 "--out", str(base)])
+    assert r.exit_code == 2 and "is one of the inputs" in r.output
+    assert "lever_m: [0.6" in base.read_text()

@@ -203,13 +203,23 @@ def _run_process(read, imu, gnss, velocity, ref, smooth, out, config, output_rat
     from .process.run import process
 
     out = _output_folder(out)
+
+    def refuse_overwrite(paths: dict) -> None:
+        for name, p in paths.items():
+            if p is not None and process_output.would_overwrite(out, Path(p)):
+                raise ValueError(f"--out {out}: writing there would overwrite the {name} "
+                                 f"file {p}, an input; choose another output folder")
+
     try:
+        refuse_overwrite({"imu": imu, "gnss": gnss, "velocity": velocity, **(files or {}),
+                          "reference": ref, "config": config})
         cfg = System() if config is None else load_model(config, System, "processing config")
         data = read(cfg)
         cfg = data.get("system", cfg)  # (a reader that completes the description)
         # the files read (the options', else those the description lists)
         paths = {"imu": imu, "gnss": gnss, "velocity": velocity, **(files or {}),
                  "reference": ref, **data.get("paths", {})}
+        refuse_overwrite(paths)  # (and the files the description lists)
         clear_results(out)
         res = process(data["imu"], data["gnss"], data["velocity"], cfg, smooth,
                       sensors=data.get("sensors"))
@@ -479,11 +489,16 @@ def _run_tune(read, inputs: list, config, out: Path, fix=None, tune_sensors=Fals
     base = {}
     cfg = System()
     fixed_keys(fix)  # a bad --fix is refused before the data are read
+    for p in [*inputs, config]:
+        if p is not None and Path(p).resolve() == Path(out).resolve():
+            typer.echo(f"error: --out {out} is one of the inputs ({p}); choose another file",
+                       err=True)
+            raise typer.Exit(2)
     if config is not None:
-        import yaml
+        from .core.config import read_mapping
 
         cfg = load_model(config, System, "processing config")
-        base = yaml.safe_load(config.read_text()) or {}
+        base = read_mapping(config, "processing config")
     data = read(cfg)
     with console.status("tuning") as status:
         res = tune(data["imu"], data["gnss"], data["velocity"], cfg,

@@ -40,7 +40,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core import units
-from ..core.atomic import save_figure, write_frame, write_text
+from ..core.atomic import json_safe, save_figure, write_frame, write_text
 from ..sim.runs import make_run_data, run_all_modes
 from ..sim.scenario import Scenario, load_scenario
 from .evaluation import mean_ci95
@@ -187,17 +187,6 @@ def _cell(values) -> dict:
     return {"value": m, "ci95": h}
 
 
-def json_safe(obj):
-    """``obj`` with every non-finite float replaced by None (numpy scalars as Python)."""
-    if isinstance(obj, dict):
-        return {str(k): json_safe(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [json_safe(v) for v in obj]
-    if isinstance(obj, np.generic):
-        obj = obj.item()
-    if isinstance(obj, float):
-        return obj if math.isfinite(obj) else None
-    return obj
 
 
 # ----------------------------------------------------------------------- the experiment

@@ -12,7 +12,6 @@ files, and ``summary.json`` last (its presence means the run finished).
 
 from __future__ import annotations
 
-import json
 from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -20,7 +19,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from ..core.atomic import write_frame, write_text
+from ..core.atomic import write_frame, write_json
 from .montecarlo import run_seeds
 
 
@@ -106,5 +105,5 @@ class Paper(ABC):
         out.mkdir(parents=True, exist_ok=True)
         written = [write_frame(pd.DataFrame(rep["rows"]), out / "runs.csv")]
         written += self.files(out, rep) + self.plots(out, rep)
-        summary = write_text(out / "summary.json", json.dumps(rep["summary"], indent=2))
+        summary = write_json(out / "summary.json", rep["summary"])
         return [summary, *written]

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
@@ -11,7 +10,7 @@ from rich.console import Console
 from rich.table import Table
 
 from ..core import units
-from ..core.atomic import save_figure, write_frame, write_text
+from ..core.atomic import save_figure, write_frame, write_json
 from .evaluation import mean_ci95
 
 
@@ -79,7 +78,7 @@ def write_outputs(out: Path, summary: dict, rows: list[dict], series: dict) -> l
     written = [write_frame(pd.DataFrame(rows), out / "runs.csv")]
     if series:
         written.append(plot_errors(series, out / "errors.png"))
-    written.insert(0, write_text(out / "summary.json", json.dumps(summary, indent=2)))
+    written.insert(0, write_json(out / "summary.json", summary))
     return written
 
 

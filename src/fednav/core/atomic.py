@@ -11,10 +11,14 @@ its own.
 
 from __future__ import annotations
 
+import json
+import math
 import os
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
+
+import numpy as np
 
 #: Files that mark a finished run (removed when a new run starts in the folder).
 RESULT_MARKERS = ("summary.json", "report.html")
@@ -39,6 +43,28 @@ def write_text(path, text: str) -> Path:
     with replacing(path) as tmp:
         tmp.write_text(text, encoding="utf-8")
     return Path(path)
+
+
+def json_safe(obj):
+    """``obj`` with every non-finite float replaced by None (JSON has no NaN or
+    Infinity: a strict reader refuses them) and numpy scalars as Python's."""
+    if isinstance(obj, dict):
+        return {str(k): json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [json_safe(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return json_safe(obj.tolist())
+    if isinstance(obj, np.generic):
+        obj = obj.item()
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    return obj
+
+
+def write_json(path, obj, indent: int = 2) -> Path:
+    """Write ``obj`` as strict JSON (non-finite numbers as null, :func:`json_safe`) to
+    ``path`` atomically."""
+    return write_text(path, json.dumps(json_safe(obj), indent=indent, allow_nan=False))
 
 
 def write_bytes(path, data: bytes) -> Path:

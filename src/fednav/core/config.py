@@ -74,12 +74,40 @@ def read_text_file(path: Path, what: str) -> str:
     raise ConfigError(f"{what} file {path}: {why}")
 
 
+class _UniqueKeyLoader(yaml.SafeLoader):
+    """YAML's safe loader, refusing a key given twice in one mapping (PyYAML keeps the
+    last one silently: a config's second ``sigma_mps`` would win unseen)."""
+
+
+def _unique_mapping(loader, node, deep=False):
+    seen = {}
+    for key_node, _ in node.value:
+        key = loader.construct_object(key_node, deep=deep)
+        if key in seen:
+            raise yaml.constructor.ConstructorError(
+                None, None, f"key '{key}' given twice (lines {seen[key] + 1} and "
+                f"{key_node.start_mark.line + 1})", key_node.start_mark)
+        seen[key] = key_node.start_mark.line
+    return loader.construct_mapping(node, deep=deep)
+
+
+_UniqueKeyLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG,
+                                 _unique_mapping)
+
+
+def parse_yaml(text: str):
+    """YAML ``text`` parsed safely, a key given twice in one mapping refused
+    (``yaml.YAMLError``)."""
+    return yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 (a SafeLoader subclass)
+
+
 def read_mapping(path: str | Path, what: str = "scenario") -> dict:
-    """The top-level mapping of a YAML file (errors: :class:`ConfigError`, one line)."""
+    """The top-level mapping of a YAML file (errors: :class:`ConfigError`, one line; a key
+    given twice is one)."""
     path = Path(path)
     text = read_text_file(path, what)
     try:
-        data = yaml.safe_load(text)
+        data = parse_yaml(text)
     except yaml.YAMLError as e:
         raise ConfigError(f"{what} file {path}: not valid YAML ({str(e).splitlines()[0]})") \
             from None

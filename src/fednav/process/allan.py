@@ -73,7 +73,6 @@ and σ reads 1.5–3 times too low.  A longer recording is the cure for both.
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -81,7 +80,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core import units
-from ..core.atomic import clear_results, save_figure, write_text
+from ..core.atomic import clear_results, save_figure, write_json, write_text
 from ..io.data import DataError, ImuData
 
 #: √(2 ln 2 / π): the Allan-deviation floor of flicker rate noise per unit of the bias
@@ -634,5 +633,5 @@ def write(res: AllanResult, out) -> list[Path]:
     files = [plot(res, out / "allan.png"),
              write_text(out / "imu-figures.yaml", res.config_yaml())]
     s = res.summary()
-    files.append(write_text(out / "summary.json", json.dumps(s, indent=2, allow_nan=False)))
+    files.append(write_json(out / "summary.json", s))
     return files

@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from ..core import units
-from ..core.atomic import save_figure, write_text
+from ..core.atomic import save_figure, write_json
 from ..io.csvdata import write_csv
 from ..io.data import Reference
 from ..navigator.solution import consistency as _consistency
@@ -222,6 +221,19 @@ def plot_track(res: ProcessResult, gnss, ref: Reference | None, path: Path) -> P
     return path
 
 
+#: the files :func:`write` may write into its folder (``errors_NAME.*`` besides)
+OUTPUT_NAMES = ("solution.csv", "solution_smoothed.csv", "errors.csv", "errors.png",
+                "track.png", "summary.json", "report.html")
+
+
+def would_overwrite(out: Path, path: Path) -> bool:
+    """Whether writing ``process``'s outputs into ``out`` would replace ``path``."""
+    path, out = Path(path).resolve(), Path(out).resolve()
+    return path.parent == out and (path.name in OUTPUT_NAMES
+                                   or (path.name.startswith("errors_")
+                                       and path.suffix in (".csv", ".png")))
+
+
 def write(out: Path, res: ProcessResult, ref: Reference | None, inputs: dict,
           output_rate: float | None = None, gnss=None,
           others: dict | None = None) -> list[Path]:
@@ -245,6 +257,6 @@ def write(out: Path, res: ProcessResult, ref: Reference | None, inputs: dict,
         files.append(plot_errors(res, other, out / f"errors_{name}.png"))
     s = summary(res, ref, inputs, others)
     p = out / "summary.json"
-    write_text(p, json.dumps(s, indent=2))
+    write_json(p, s)
     files.append(p)
     return files
