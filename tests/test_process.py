@@ -311,3 +311,25 @@ def test_an_output_folder_that_would_overwrite_an_input_is_refused(tmp_path, fli
                                  "--out", str(base)])
     assert r.exit_code == 2 and "is one of the inputs" in r.output
     assert "lever_m: [0.6" in base.read_text()
+
+
+def test_misleading_messages_are_gone(tmp_path, flight, result):
+    """Issue 27: a tab-separated file names its separator; a filter period longer than the
+    data says so; a reference with longitudes in -180..180 against a solution in 0..360
+    (or a track across the antimeridian) is compared across the wrap."""
+    from dataclasses import replace
+
+    from fednav.io.csvdata import read_imu_csv
+    from fednav.io.data import DataError
+
+    f = tmp_path / "imu.csv"
+    f.write_text("t_s\tgyro_x_radps\n0\t1\n")
+    with pytest.raises(DataError, match="separated by tabs"):
+        read_imu_csv(f)
+    imu, gnss, ref = flight
+    with pytest.raises(DataError, match=r"filter.period_s = 1e\+300 s is longer than the IMU"):
+        process(imu, gnss, None, load_system({"filter": {"period_s": 1e300}}))
+    shifted = replace(ref, lla=ref.lla + np.array([0.0, 2 * np.pi, 0.0]), quality={})
+    e0 = rmse(errors_against(result.forward, ref))
+    e1 = rmse(errors_against(result.forward, shifted))
+    assert e1["east_m"] == pytest.approx(e0["east_m"], rel=1e-6)

@@ -115,10 +115,14 @@ def llh_difference_enu(lat, lon, h, lat_ref, lon_ref, h_ref):
     """Small position difference (lat, lon, h) - reference, expressed in metres ENU.
 
     Uses the local radii of curvature at the reference; exact to first order, which is
-    what error statistics over kilometre-scale errors need.
+    what error statistics over kilometre-scale errors need.  The longitude difference is
+    wrapped to +-180 deg (a track crossing the antimeridian; longitudes in 0..360 against
+    -180..180).
     """
     rm, rn = radii(lat_ref)
-    de = (np.asarray(lon) - lon_ref) * (rn + h_ref) * np.cos(lat_ref)
+    dlon = np.asarray(lon) - lon_ref
+    dlon = np.where(np.abs(dlon) > np.pi, (dlon + np.pi) % (2.0 * np.pi) - np.pi, dlon)
+    de = dlon * (rn + h_ref) * np.cos(lat_ref)
     dn = (np.asarray(lat) - lat_ref) * (rm + h_ref)
     du = np.asarray(h) - h_ref
     return np.stack(np.broadcast_arrays(de, dn, du), axis=-1)

@@ -171,6 +171,7 @@ class FederatedFilter:
         self.q_step, self.q_logmax = 0.0, 0.0
         #: ln of each filter's process-noise scale (0: the figures' Qd)
         self.qlog = dict.fromkeys(self.filters, 0.0)
+        self.q_scale_fused = 1.0
         self._thresholds: dict[tuple, float] = {}
         #: One entry per local measurement: t, local, statistic, dof, threshold, isolated.
         self.log: list[tuple] = []
@@ -202,12 +203,19 @@ class FederatedFilter:
     def predict(self, process) -> None:
         """Time update of every filter with its share of the process noise (the white
         part scaled by the filter's adapted factor, :meth:`adapt_q`)."""
+        inv = 0.0
         for k, f in self.filters.items():
             proc = process
+            s = np.exp(self.qlog[k])
+            inv += self.beta[k] / s
             if self.q_step and self.qlog[k] > 0.0:
                 proc = copy.copy(process)
-                proc.Qd = process.Qd + (np.exp(self.qlog[k]) - 1.0) * process.Qd_white
+                proc.Qd = process.Qd + (s - 1.0) * process.Qd_white
             f.predict(proc, q_scale=1.0 / self.beta[k] if self.reset else 1.0)
+        #: the fused prior's white-noise scale this interval (the filters' information
+        #: summed: 1 / sum(beta_i / s_i); exact when the scales are equal) — what the
+        #: smoother's prior must use
+        self.q_scale_fused = 1.0 / inv if inv > 0.0 else 1.0
 
     def threshold(self, dof: int, local: str | None = None) -> float:
         """Chi-square detection threshold for ``dof`` measurement components of local filter

@@ -44,8 +44,9 @@ QUIET_PERCENTILE = 2.0
 
 
 def _window_sums(x: np.ndarray, W: int) -> np.ndarray:
-    """Sums of ``x`` (N, ...) over the centred windows of ``W`` samples (shortened at
-    the ends: the sums are over the samples that exist), and their counts."""
+    """Sums of ``x`` (N, ...) over the centred windows of ``W`` samples (at the ends the
+    window is shifted inside the data, still ``W`` long unless N < W), and their
+    counts."""
     c = np.concatenate([np.zeros((1,) + x.shape[1:]), np.cumsum(x, axis=0)])
     n = len(x)
     lo = np.clip(np.arange(n) - W // 2, 0, n)

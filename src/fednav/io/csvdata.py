@@ -57,8 +57,10 @@ def _read(path, kind: str, required: tuple, numeric: tuple = (),
     if not header.strip():
         raise DataError(f"{src}: empty file (expected a header row: "
                         f"{', '.join(expected or required)})")
-    if ";" in header and "," not in header:
-        raise DataError(f"{src}: columns are separated by ';': fednav's CSV files use ','")
+    for sep, name in ((";", "';'"), ("\t", "tabs"), ("|", "'|'")):
+        if sep in header and "," not in header:
+            raise DataError(f"{src}: columns are separated by {name}: fednav's CSV files "
+                            f"use ','")
     try:
         df = pd.read_csv(path, skipinitialspace=True, encoding="utf-8-sig")
     except Exception as e:  # pandas raises several types for unreadable content

@@ -148,7 +148,8 @@ def lost_records(d: np.ndarray, dt: float, dv: np.ndarray) -> np.ndarray:
     [m/s] (N, 3) is the size of one median interval's rather than of its own interval.
     The specific force's magnitude (near g for anything on or over the Earth, and
     smooth) is the local median of ``|dv| / d`` over 21 rows; an increment over ``T``
-    seconds is ``|f| T`` long.  Jittered stamps whose increments cover their own
+    seconds is ``|f| T`` long.  (In free fall or in orbit ``|f|`` is noise and the choice
+    is a guess: such data should not jitter.)  Jittered stamps whose increments cover their own
     intervals (intervals 4..16 ms at 100 Hz) are then not read as lost records."""
     long = d > 1.5 * dt
     if not long.any():

@@ -140,8 +140,14 @@ def run_epochs(k0, n_ep, state, comp, dtheta, dv, h_ref, gains, cst, noise, nsub
                                          noise, scale)
         Qd = Qd0
         Qw = Qd0
+        Qrec = Qd0
         if q_step > 0.0:
             Qw = white_qd(Phi, noise, T, scale)
+            inv = 0.0
+            for f in range(nf):
+                inv += beta[f] / math.exp(qlog[f])
+            if inv > 0.0:  # the fused prior's scale (FederatedFilter.q_scale_fused)
+                Qrec = Qd0 + (1.0 / inv - 1.0) * Qw
         for f in range(nf):
             q_scale = 1.0 / beta[f]
             if q_step > 0.0 and qlog[f] > 0.0:  # the adapted white noise (adapt_q)
@@ -271,7 +277,7 @@ def run_epochs(k0, n_ep, state, comp, dtheta, dv, h_ref, gains, cst, noise, nsub
         out_P[e] = Pg
         if out_Phi.shape[0] > 0:
             out_Phi[e] = Phi
-            out_Qd[e] = Qd0
+            out_Qd[e] = Qrec
             out_dx[e] = xg
         if rows_on:
             r0 = e * n_per

@@ -375,9 +375,11 @@ class PythonLoop:
         if replay:
             return
         r = self.rec
+        Qd = None if proc is None else proc.Qd
+        if proc is not None and fed.q_step and fed.q_scale_fused != 1.0:
+            Qd = proc.Qd + (fed.q_scale_fused - 1.0) * proc.Qd_white  # (what was flown)
         r.epoch(core.state, fed.P, [fed.beta[nm] for nm in self.names],
-                proc.Phi if proc is not None else None, proc.Qd if proc is not None else None,
-                dx)
+                proc.Phi if proc is not None else None, Qd, dx)
         if self.record_rows:
             q, v, p, w = block
             q, v, p = q.copy(), v.copy(), p.copy()

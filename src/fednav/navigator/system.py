@@ -142,6 +142,13 @@ class FilterConfig(_Model):
         _check_locals(v)
         return v
 
+    @model_validator(mode="after")
+    def _q_adaptation(self):
+        if self.q_adaptation is not None and self.state == "total":
+            raise ValueError("q_adaptation adapts the error-state filters' process noise "
+                             "(filter.state: error); the total-state UKF has its own")
+        return self
+
     def type_of(self, local: str) -> str:
         """The estimator of local filter ``local``."""
         c = self.locals.get(local)

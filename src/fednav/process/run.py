@@ -591,6 +591,10 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
         t0 = imu.t[0] if gnss is None or init is not None else max(imu.t[0], gnss.t[0])
     i0 = int(np.searchsorted(imu.t, t0 - 0.5 * dt))
     n_cycles = (len(imu.t) - 1 - i0) // n_per
+    span = float(imu.t[-1] - imu.t[0])
+    if T > span:
+        raise DataError(f"filter.period_s = {T:g} s is longer than the IMU data "
+                        f"({span:g} s)")
     if n_cycles < 1:
         what = "the GNSS data" if gnss is not None else "the initial time"
         raise DataError(f"{imu.source}: IMU data does not overlap {what} by one filter "
@@ -603,7 +607,8 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
         if spec.pseudo:
             others[name] = _pseudo(name, cfg, imu, T)
         elif spec.detector is not None:
-            found = spec.detector(imu, gnss, cfg.sensors[name], noise, gb, T)
+            t_nav = init.t_s if init is not None and init.t_s is not None else imu.t[i0]
+            found = spec.detector(imu, gnss, cfg.sensors[name], noise, gb, T, float(t_nav))
             t_det, sig = found if isinstance(found, tuple) else (found, None)
             t_det = np.asarray(t_det, dtype=float)
             quality_extra[f"{name}_epochs_detected"] = len(t_det)
@@ -662,7 +667,10 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
                        report={"levelling": "initial", "heading": "initial"})
         gyro_bias = None
     else:
-        gnss_v, sig_vel0, decorrelation = gnss, sig_vel, 1.0
+        # (the alignment sees the antenna's lever arm and velocity sigma the filter flies)
+        gnss_v = replace(gnss, lever=lever, sigma_vel=np.asarray(sig_vel, dtype=float),
+                         quality={})
+        sig_vel0, decorrelation = sig_vel, 1.0
         if gnss.vel is None:  # the alignment's course from the positions' differences
             v, s_v = _position_velocity(gnss)
             if not np.isfinite(s_v[0]):
@@ -671,7 +679,7 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
             sig_vel0 = np.full(3, s_v[0])
             rows = np.column_stack([np.ones((len(v), 3)), np.repeat(
                 np.minimum(s_v, 1e6)[:, None], 3, axis=1)])
-            gnss_v = replace(gnss, vel=v, sigma_vel=sig_vel0, quality={}, sigma_rows=rows)
+            gnss_v = replace(gnss_v, vel=v, sigma_vel=sig_vel0, quality={}, sigma_rows=rows)
             decorrelation = 2.0 * VELOCITY_WINDOW_S  # (neighbours share their fixes)
         al = _initial_attitude(imu, gnss_v, cfg, t0, i0, dt, noise, ab, gb, decorrelation)
         C0 = att.euler_to_dcm(al.euler)
@@ -775,7 +783,8 @@ def solution(res, prep: Prepared, smooth: bool = False) -> ProcessResult:
         return ProcessResult(epoch_rate(res), None, 0.0, len(res.states) - 1,
                              dict(prep.quality), list(prep.warnings), prep.alignment.report)
     forward, smoothed = imu_rate(res, smooth or prep.system.smoother)
-    if prep.alignment.report.get("heading", "").startswith("unknown"):
+    if (prep.alignment.report.get("heading", "").startswith("unknown")
+            and prep.system.alignment.initial_attitude_sigma_deg is None):
         # A linearised filter started from an unknown heading converges only where the
         # motion makes the heading strongly observable; its heading sigma is no promise
         # there (a standing vehicle's shrinks through the lever arm while 40 deg off).

@@ -32,8 +32,10 @@ figures):
    x 3, the bracket widened while an end wins, then the vertex of the parabola through
    the best three; a white-noise figure never below its floor).  A figure moves only
    when the likelihood rises by more than 1.92 (the likelihood-ratio test at 95 %, one
-   degree of freedom).  The base config's figures are the starting point, not a
-   constraint: a white-noise figure below its floor starts at the floor.  One data set
+   degree of freedom) and the held-back blocks' likelihood does not fall with it (a veto:
+   the held-back blocks are therefore seen twice, here and at the acceptance).  The base
+   config's figures are the starting point, not a constraint: a white-noise figure below
+   its floor starts at the floor.  One data set
    holds one turn-on bias, not its spread, so the turn-on bias sigmas and the
    correlation times are never changed.
 4. **Acceptance** — the tuned config replaces the untuned one (the base config's

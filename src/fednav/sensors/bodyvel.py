@@ -280,13 +280,16 @@ def odometer_scale(t, speed, gnss) -> tuple[float, float] | None:
 
 
 def detect_stops(imu, gnss, section: StopConfig, noise, gyro_bias: float,
-                 period: float) -> np.ndarray:
-    """Times [s] (every ``section.period_s``, default the filter ``period``) whose whole
-    interval the vehicle stands still: every IMU sample of it in a still window of the
-    SHOE detector (:func:`fednav.ins.stops.stationary`, thresholds from the filter's IMU
-    white noise ``noise.gyro_arw``, ``noise.accel_vrw`` and the turn-on ``gyro_bias``),
-    and the GNSS horizontal speed below ``section.max_gnss_speed_mps`` where a fix lies
-    within 1 s (during an outage the IMU alone decides).  Vibration beyond the data
+                 period: float, t0: float) -> np.ndarray:
+    """Times [s] on the filter's epoch grid ``t0 + k period`` (every ``section.period_s``
+    when it is a multiple) whose whole interval the vehicle stands still: every IMU
+    sample of it in a still window of the SHOE detector
+    (:func:`fednav.ins.stops.stationary`, thresholds from the filter's IMU white noise
+    ``noise.gyro_arw``, ``noise.accel_vrw`` and the turn-on ``gyro_bias``), and the GNSS
+    horizontal speed below ``section.max_gnss_speed_mps`` where a fix lies within 1 s —
+    from the fixes' velocity, or from their positions' differences over 2 s (with a
+    3-sigma allowance for their noise) for position-only receivers; during an outage the
+    IMU alone decides.  Vibration beyond the data
     sheet's noise (an idling engine) makes windows "moving": fewer stops, never false
     ones; a vehicle cruising without any vibration (a simulation) would look still, which
     the GNSS gate catches while there is GNSS."""
@@ -295,19 +298,35 @@ def detect_stops(imu, gnss, section: StopConfig, noise, gyro_bias: float,
     dt = imu.period()
     still = stationary(imu.gyro, imu.accel, dt, noise.gyro_arw, noise.accel_vrw, gyro_bias,
                        section.detect_window_s, section.detect_alpha)
-    step = section.period_s or period
-    t = np.arange(imu.t[0] + step, imu.t[-1] + 1e-9, step)
+    step = max(1, int(round((section.period_s or period) / period))) * period
+    t = t0 + step * np.arange(1, int(np.floor((imu.t[-1] - t0) / step + 1e-9)) + 1)
     # an epoch is still when no moving sample lies in (t - step, t]
     moving = np.concatenate([[0], np.cumsum(~still)])
     hi = np.searchsorted(imu.t, t, side="right")
     lo = np.searchsorted(imu.t, t - step, side="right")
     ok = (moving[hi] - moving[lo]) == 0
-    if gnss is not None and gnss.vel is not None and len(gnss.t):
+    if gnss is not None and len(gnss.t) > 1:
         j = np.clip(np.searchsorted(gnss.t, t), 1, len(gnss.t) - 1)
         j = np.where(np.abs(gnss.t[j - 1] - t) < np.abs(gnss.t[j] - t), j - 1, j)
         near = np.abs(gnss.t[j] - t) <= 1.0
-        fast = np.hypot(gnss.vel[j, 0], gnss.vel[j, 1]) > section.max_gnss_speed_mps
-        ok &= ~(near & fast)
+        if gnss.vel is not None:
+            speed = np.hypot(gnss.vel[j, 0], gnss.vel[j, 1])
+            limit = section.max_gnss_speed_mps
+        else:  # position-only: the speed of the positions over +-1 s
+            from ..core import earth
+
+            lla = gnss.lla
+            d = earth.llh_difference_enu(lla[:, 0], lla[:, 1], lla[:, 2], lla[0, 0],
+                                         lla[0, 1], lla[0, 2])
+            lo = np.searchsorted(gnss.t, gnss.t[j] - 1.0)
+            hi = np.minimum(np.searchsorted(gnss.t, gnss.t[j] + 1.0, side="right") - 1,
+                            len(gnss.t) - 1)
+            span = np.maximum(gnss.t[hi] - gnss.t[lo], 1e-9)
+            speed = np.hypot(*(d[hi, :2] - d[lo, :2]).T) / span
+            s_p = float(np.max(np.asarray(gnss.sigma_pos, dtype=float)[:2]))
+            limit = np.maximum(section.max_gnss_speed_mps, 3.0 * np.sqrt(2.0) * s_p / span)
+            near &= (hi > lo)
+        ok &= ~(near & (speed > limit))
     return t[ok]
 
 

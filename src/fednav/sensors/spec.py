@@ -136,8 +136,8 @@ class SensorSpec:
     #: ``fednav process`` makes its rows every ``period_s`` (default: each filter epoch)
     pseudo: bool = False
     #: recorded data without a file: a function ``(imu, gnss, section, noise, gyro_bias,
-    #: period) -> times [s]`` (or ``(times, per-row 1-sigma)``) of the rows a detector
-    #: finds (``z = 0`` there), e.g. the
+    #: period, t0) -> times [s]`` (or ``(times, per-row 1-sigma)``) on the filter's epoch
+    #: grid ``t0 + k period`` of the rows a detector finds (``z = 0`` there), e.g. the
     #: stand-still detector of ZUPT; ``noise`` is the filter's
     #: :class:`~fednav.ins.error_model.ImuNoiseModel`, ``gyro_bias`` the turn-on gyro
     #: bias 1-sigma [rad/s], ``period`` the filter period [s]

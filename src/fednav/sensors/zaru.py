@@ -57,14 +57,15 @@ class ZaruConfig(StopConfig):
         return None if self.sigma_radps is None else np.full(3, self.sigma_radps)
 
 
-def detect(imu, gnss, section: ZaruConfig, noise, gyro_bias: float, period: float):
+def detect(imu, gnss, section: ZaruConfig, noise, gyro_bias: float, period: float,
+           t0: float):
     """The stops of :func:`~fednav.sensors.bodyvel.detect_stops`, each with the 1-sigma
-    of an epoch's mean gyro rate, ``ARW / sqrt(T)`` [rad/s] (None when the section gives
-    ``sigma_radps``)."""
-    t = detect_stops(imu, gnss, section, noise, gyro_bias, period)
+    of a filter epoch's mean gyro rate, ``ARW / sqrt(T)`` [rad/s] (None when the section
+    gives ``sigma_radps``)."""
+    t = detect_stops(imu, gnss, section, noise, gyro_bias, period, t0)
     if section.sigma_radps is not None:
         return t, None
-    s = noise.gyro_arw / np.sqrt(section.period_s or period)
+    s = noise.gyro_arw / np.sqrt(period)
     return t, np.full((len(t), 3), max(s, 1e-12))
 
 
