@@ -288,3 +288,20 @@ def test_ctrl_c_ends_in_one_line_and_resume_computes_the_rest(tmp_path):
     assert r.exit_code == 0, r.output
     s = json.loads((out / "summary.json").read_text())["campaign"]
     assert (s["runs_reused"], s["runs_computed"]) == (stored, units - stored)
+
+
+def test_a_flight_too_short_for_a_table_ends_in_one_line(tmp_path):
+    """Issue 27: `--max-time 0.5` ended in tracebacks (001, 003, 004: empty arrays),
+    paper 002's observability table in a ValueError below its first 10 s segment, and
+    `--seed -1` in numpy's ValueError."""
+    for paper, max_time, why in (("003", "0.5", "--max-time must be at least 1 s"),
+                                 ("002", "5", "observability table needs at least its "
+                                              "first flight segment")):
+        r = CliRunner().invoke(app, ["reproduce", paper, "--runs", "1", "--max-time",
+                                     max_time, "--jobs", "1", "--out", str(tmp_path / paper)])
+        assert r.exit_code == 2 and why in r.output, r.output
+    # seeds outside 0 .. 2^63-1 (numpy's own ValueError surfaced for -1)
+    for seed, runs in (("-1", "1"), (str(2**63 - 1), "2"), (str(2**64), "1")):
+        r = CliRunner().invoke(app, ["reproduce", "002", "--seed", seed, "--runs", runs,
+                                     "--out", str(tmp_path / "s")])
+        assert r.exit_code == 2 and "--seed must be 0 .. 2^63-1" in r.output, r.output

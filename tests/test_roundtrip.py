@@ -75,11 +75,11 @@ def test_simulate_a_scenario_file_and_its_refusals(tmp_path):
     assert (sar.t_arrival_s > sar.t_s).all()  # the delayed SAR fixes say when they arrived
     for args, msg in ((["001"], "paper 001 flies in its own frame"),
                       (["002", "--mode", "nope"], "has no mode 'nope'; its modes: SINS, "),
-                      (["002", "--seed", "-1"], "--seed must be 0 or more"),
+                      (["002", "--seed", "-1"], "--seed must be 0 .. 2^63-1, got -1"),
                       (["002", "--format", "navego"], "--format navego applies to dataset"),
                       (["002", "--mode", "SINS"], "mode SINS has no aiding sensor"),
-                      (["002", "--max-time", "-5"], "--max-time must be positive"),
-                      (["002", "--max-time", "0.005"], "--max-time 0.005: trajectory"),
+                      (["002", "--max-time", "-5"], "--max-time must be at least 1 s"),
+                      (["002", "--max-time", "0.005"], "--max-time must be at least 1 s"),
                       (["nothing-here"], "is neither a paper")):
         r = runner.invoke(app, ["simulate", *args, "--out", str(tmp_path / "x")])
         assert r.exit_code == 2 and msg in r.output, r.output

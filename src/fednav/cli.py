@@ -52,15 +52,32 @@ def _one_line_errors(command):
     return run
 
 
-def _check_counts(runs: int = 1, jobs: int = 1, max_time: float | None = None) -> None:
-    """End with a one-line error for ``--runs`` or ``--jobs`` below 1 or a ``--max-time``
-    that is not positive."""
+#: Shortest ``--max-time`` [s]: a shorter flight has no filter epochs to tabulate (paper
+#: 002's observability table needs its first 10 s segment and says so itself).
+MIN_MAX_TIME_S = 1.0
+
+
+#: Largest seed: numpy's generators take any non-negative integer, the stored runs'
+#: files an int64.
+MAX_SEED = 2**63 - 1
+
+
+def _check_counts(runs: int = 1, jobs: int = 1, max_time: float | None = None,
+                  seed: int | None = None) -> None:
+    """End with a one-line error for ``--runs`` or ``--jobs`` below 1, a ``--max-time``
+    shorter than :data:`MIN_MAX_TIME_S`, or seeds (``seed`` .. ``seed + runs - 1``)
+    outside 0 .. :data:`MAX_SEED`."""
+    if seed is not None and not 0 <= seed <= MAX_SEED - max(runs - 1, 0):
+        last = f" (its runs use {seed} .. {seed + runs - 1})" if runs > 1 else ""
+        typer.echo(f"error: --seed must be 0 .. 2^63-1, got {seed}{last}", err=True)
+        raise typer.Exit(2)
     for opt, value in (("--runs", runs), ("--jobs", jobs)):
         if value < 1:
             typer.echo(f"error: {opt} must be at least 1, got {value}", err=True)
             raise typer.Exit(2)
-    if max_time is not None and not max_time > 0:
-        typer.echo(f"error: --max-time must be positive, got {max_time}", err=True)
+    if max_time is not None and not max_time >= MIN_MAX_TIME_S:
+        typer.echo(f"error: --max-time must be at least {MIN_MAX_TIME_S:g} s, got {max_time}",
+                   err=True)
         raise typer.Exit(2)
 
 
@@ -97,7 +114,7 @@ def reproduce(
                                                   "to run on instead of local processes"),
 ) -> None:
     """Reproduce a paper's experiment and print its tables beside the paper's."""
-    _check_counts(runs=runs, jobs=jobs, max_time=max_time)
+    _check_counts(runs=runs, jobs=jobs, max_time=max_time, seed=seed)
     mod = _paper_module(paper)
     exp = mod.EXPERIMENT
     extra = {}
@@ -598,10 +615,7 @@ def simulate(
     if fmt not in ("csv", "navego"):
         typer.echo(f"error: --format must be csv or navego, got '{fmt}'", err=True)
         raise typer.Exit(2)
-    if seed is not None and seed < 0:
-        typer.echo(f"error: --seed must be 0 or more, got {seed}", err=True)
-        raise typer.Exit(2)
-    _check_counts(max_time=max_time)
+    _check_counts(max_time=max_time, seed=seed)
     from .scenarios import paper_module
 
     mod = paper_module(scenario)
@@ -724,7 +738,7 @@ def run_design(
     """Monte Carlo campaign of your own design: every mode of SCENARIO flown on the same
     runs; tables of RMSE / mean / max errors per mode with 95 % confidence intervals,
     error plots with the Monte Carlo spread, report.html."""
-    _check_counts(runs=runs, jobs=jobs, max_time=max_time)
+    _check_counts(runs=runs, jobs=jobs, max_time=max_time, seed=seed)
     from .campaign.design import DESIGN
 
     scn = DESIGN.load_scenario(scenario)

@@ -153,6 +153,12 @@ def observability(scn: Scenario, max_time: float | None = None) -> dict:
 
     bounds = np.cumsum([0.0] + [g.duration_s for g in scn.segments])
     bounds = bounds[bounds <= tr.t[-1] + 1e-9]
+    if len(bounds) < 2:
+        from ..core.config import ConfigError
+
+        raise ConfigError(f"--max-time {tr.t[-1]:g} s: paper 002's observability table "
+                          f"needs at least its first flight segment "
+                          f"({scn.segments[0].duration_s:g} s)")
     mids = [int(round(0.5 * (a + b) / tr.dt)) for a, b in zip(bounds[:-1], bounds[1:],
                                                                strict=True)]
     Fs = [proc(k).F_si() for k in mids]

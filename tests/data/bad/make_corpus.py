@@ -481,7 +481,7 @@ def main():
     cli_case("cli-jobs-zero", ["reproduce", "002", "--jobs", "0"], 2,
              "error: --jobs must be at least 1, got 0")
     cli_case("cli-max-time-negative", ["reproduce", "002", "--max-time", "-5"], 2,
-             "error: --max-time must be positive, got -5.0")
+             "error: --max-time must be at least 1 s, got -5.0")
     cli_case("cli-unknown-paper", ["reproduce", "042"], 2, "error: unknown paper '042'; available:")
     cli_case("cli-dask-address-without-port", ["reproduce", "002", "--runs", "1", "--max-time",
                                                "10", "--dask", "localhost"], 2,
