@@ -305,3 +305,24 @@ def test_a_flight_too_short_for_a_table_ends_in_one_line(tmp_path):
         r = CliRunner().invoke(app, ["reproduce", "002", "--seed", seed, "--runs", runs,
                                      "--out", str(tmp_path / "s")])
         assert r.exit_code == 2 and "--seed must be 0 .. 2^63-1" in r.output, r.output
+
+
+def test_dask_pointing_at_a_non_dask_server_fails_in_one_line(tmp_path):
+    """Issue 27: `--dask tcp://HOST:PORT` at an HTTP server (the dashboard's port, say)
+    waited forever: Dask's connect timeout does not cover its handshake."""
+    import http.server
+    import threading
+    import time
+
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0),
+                                             http.server.SimpleHTTPRequestHandler)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    try:
+        t0 = time.monotonic()
+        r = CliRunner().invoke(app, ["reproduce", "002", "--runs", "1", "--max-time", "30",
+                                     "--dask", f"tcp://127.0.0.1:{server.server_port}",
+                                     "--out", str(tmp_path / "d")])
+        assert time.monotonic() - t0 < 15.0
+        assert r.exit_code == 2 and "is not a Dask scheduler (it sent nothing" in r.output
+    finally:
+        server.shutdown()

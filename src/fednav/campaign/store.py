@@ -225,10 +225,18 @@ def _no_sigint():
         signal.signal(signal.SIGINT, old)
 
 
+#: Seconds a Dask scheduler has to send its handshake after a connect.
+HANDSHAKE_S = 5.0
+
+
 def _check_listening(address: str) -> None:
     """Refuse at once a TCP scheduler address where nothing listens or whose host does not
-    resolve (Dask would retry for its whole 30 s connect timeout).  Anything else (a
-    malformed address, a host that does not answer) is left to Dask's own connect."""
+    resolve (Dask would retry for its whole 30 s connect timeout), and within
+    :data:`HANDSHAKE_S` one where something listens that is not a Dask scheduler: a
+    scheduler sends its handshake as soon as a connection is made; an HTTP server (the
+    dashboard's port) or a silent one sends nothing, and Dask would wait for it forever;
+    a server that greets in text (SSH) is not Dask either.  Anything else (a malformed
+    address, a host that does not answer) is left to Dask's own connect."""
     import socket
 
     from distributed.comm import parse_address
@@ -242,7 +250,7 @@ def _check_listening(address: str) -> None:
     if scheme not in ("tcp", "tls"):
         return
     try:
-        socket.create_connection((host, port), timeout=5.0).close()
+        conn = socket.create_connection((host, port), timeout=5.0)
     except ConnectionRefusedError:
         raise CampaignError(f"Dask scheduler {address}: cannot connect (nothing listens on "
                             f"{host} port {port}; start one with 'dask scheduler')") from None
@@ -251,6 +259,20 @@ def _check_listening(address: str) -> None:
                             f"{e.strerror})") from None
     except OSError:
         return
+    with conn:
+        conn.settimeout(HANDSHAKE_S)
+        try:
+            first = conn.recv(8)
+        except TimeoutError:
+            first = None
+        except OSError:
+            return
+    if not first or first[:4] in (b"SSH-", b"HTTP") or first.isascii() and first.isalpha():
+        what = ("sent nothing" if first is None else "closed the connection" if not first
+                else f"greeted with {first!r}")
+        raise CampaignError(f"Dask scheduler {address}: what listens there is not a Dask "
+                            f"scheduler (it {what} within {HANDSHAKE_S:g} s; the "
+                            f"scheduler's port is usually 8786, its dashboard's 8787)")
 
 
 def _start_client(address: str | None, jobs: int):
@@ -260,7 +282,7 @@ def _start_client(address: str | None, jobs: int):
     if address is not None:
         _check_listening(address)
         try:
-            client = Client(address, timeout="30s")
+            client = Client(address, timeout="10s")
         except ValueError as e:
             raise CampaignError(f"Dask scheduler address {address!r}: {e} (expected "
                                 f"tcp://HOST:PORT)") from None
