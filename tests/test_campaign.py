@@ -326,3 +326,19 @@ def test_dask_pointing_at_a_non_dask_server_fails_in_one_line(tmp_path):
         assert r.exit_code == 2 and "is not a Dask scheduler (it sent nothing" in r.output
     finally:
         server.shutdown()
+
+
+def test_a_stored_run_of_another_campaign_is_refused_not_used(tmp_path):
+    """Issue 27: a stored run file replaced by one from another seed's campaign was used
+    silently (the tables changed); each run file now carries its work key."""
+    a, b = tmp_path / "a", tmp_path / "b"
+    for out, seed in ((a, "1"), (b, "5")):
+        r = CliRunner().invoke(app, ["reproduce", "002", *ARGS, "--seed", seed,
+                                     "--out", str(out)])
+        assert r.exit_code == 0, r.output
+    runs_a = sorted((a / "runs").iterdir())
+    runs_b = sorted((b / "runs").iterdir())
+    victim = next(f for f in runs_a if f.name not in {g.name for g in runs_b})
+    victim.write_bytes(runs_b[0].read_bytes())
+    r = CliRunner().invoke(app, ["reproduce", "002", *ARGS, "--seed", "1", "--out", str(a)])
+    assert r.exit_code == 2 and f"stored run {victim.name} is another run's" in r.output

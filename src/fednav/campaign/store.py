@@ -133,12 +133,18 @@ class Campaign:
         return self.runs_dir / f"{key}.nc"
 
     def load(self, key: str):
-        return _read_unit(self.path(key), self.out)
+        return _read_unit(self.path(key), self.out, key)
 
     def save(self, key: str, result) -> None:
         # Encoded to bytes, not to a path: xarray would take a Dask-distributed write lock
         # (two scheduler round trips per variable) whenever a Dask client is active.
-        data = encode(result).to_netcdf(engine="scipy")
+        ds = encode(result)
+        # what the run is: verified when it is read back (a file copied in from another
+        # campaign, another seed or scenario, is refused, not used)
+        ds.attrs.update({"fednav_work_key": key,
+                         "fednav_scenario_hash": self.manifest["scenario_hash"],
+                         "fednav_version": self.manifest["fednav_version"]})
+        data = ds.to_netcdf(engine="scipy")
         write_bytes(self.path(key), bytes(data))
 
     def summary(self) -> dict:
@@ -494,15 +500,28 @@ def _read_manifest(folder: Path) -> dict:
     return old
 
 
-def _read_unit(path: Path, folder) -> object:
+def _read_unit(path: Path, folder, key: str | None = None) -> object:
     """The unit of work stored in ``path`` (decoded), or a one-line :class:`CampaignError`
-    when the file is damaged."""
+    when the file is damaged or, its stored work key not ``key``, another run's (a file
+    written before the key was stored is read as it is)."""
     import xarray as xr
 
     try:
         with xr.open_dataset(path, engine="scipy") as ds:
-            return decode(ds.load())
+            ds = ds.load()
     except Exception as e:  # any damage: truncated, overwritten, not written by fednav
+        raise CampaignError(
+            f"campaign folder {folder}: stored run {path.name} cannot be read "
+            f"({type(e).__name__}); delete it to compute that run again") from None
+    stored = ds.attrs.get("fednav_work_key")
+    if key is not None and stored is not None and stored != key:
+        raise CampaignError(
+            f"campaign folder {folder}: stored run {path.name} is another run's (made for "
+            f"{stored}: another seed, scenario or campaign); delete it to compute that run "
+            f"again")
+    try:
+        return decode(ds)
+    except Exception as e:
         raise CampaignError(
             f"campaign folder {folder}: stored run {path.name} cannot be read "
             f"({type(e).__name__}); delete it to compute that run again") from None
