@@ -333,3 +333,23 @@ def test_misleading_messages_are_gone(tmp_path, flight, result):
     e0 = rmse(errors_against(result.forward, ref))
     e1 = rmse(errors_against(result.forward, shifted))
     assert e1["east_m"] == pytest.approx(e0["east_m"], rel=1e-6)
+
+
+def test_a_long_isolation_is_said(flight):
+    """Issue 27: a receiver that comes back from an outage 200 m off and stays there is
+    isolated by fault detection to the end — the solution drifts on the IMU alone — and
+    that ended with exit 0 and no word. Now a warning names the filter and the span."""
+    from dataclasses import replace
+
+    from fednav.core import earth
+
+    imu, gnss, _ = flight
+    off = gnss.t > 100.0
+    lla = gnss.lla.copy()
+    lla[off] = earth.move_enu(lla[off], np.array([200.0, 0.0, 0.0]))
+    bad = replace(gnss, lla=lla, quality={})
+    res = process(imu, bad, None, load_system({"filter": {"fdi_alpha": 0.001}}))
+    said = [w for w in res.warnings if "fault detection isolated the 'gnss'" in w]
+    assert len(said) == 1 and "from 100." in said[0], res.warnings
+    clean = process(imu, gnss, None, load_system({"filter": {"fdi_alpha": 0.001}}))
+    assert not any("fault detection isolated" in w for w in clean.warnings)

@@ -763,6 +763,7 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
                                    innovations=innovations is not None))
     out = nav.result()
     res = solution(out, prep, smooth)
+    res.warnings += isolation_warnings(res.forward.fdi)
     if prep.system.filter.q_adaptation is not None and hasattr(nav.loop, "q_scales"):
         res.data_quality["q_scale_final"] = {k: round(v, 3)
                                              for k, v in nav.loop.q_scales().items()}
@@ -770,6 +771,41 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
     if innovations is not None:
         innovations.extend(out.innovations)
     return res
+
+
+#: A local filter isolated by fault detection for longer than this [s] in one stretch
+#: gets a warning (an overconfident filter isolates a sound sensor and may never re-admit
+#: it: the solution then drifts with the IMU alone, silently).
+ISOLATION_WARN_S = 30.0
+
+
+def isolation_warnings(fdi: list) -> list[str]:
+    """Warnings for local filters that fault detection isolated for more than
+    :data:`ISOLATION_WARN_S` in one stretch, naming the span and the NIS/dof there (from the
+    FDI log: t, local, statistic, dof, threshold, isolated)."""
+    out = []
+    if not fdi:
+        return out
+    by: dict[str, list] = {}
+    for t, local, nis, dof, _thr, iso in fdi:
+        by.setdefault(local, []).append((t, nis / max(dof, 1), iso))
+    for local, rows in by.items():
+        t = np.array([r[0] for r in rows])
+        iso = np.array([r[2] for r in rows], dtype=bool)
+        if not iso.any():
+            continue
+        edges = np.flatnonzero(np.diff(np.r_[0, iso.astype(np.int8), 0]))
+        spans = [(a, b - 1) for a, b in zip(edges[::2], edges[1::2], strict=True)]
+        a, b = max(spans, key=lambda s: t[s[1]] - t[s[0]])
+        if t[b] - t[a] <= ISOLATION_WARN_S:
+            continue
+        nis = float(np.mean([rows[i][1] for i in range(a, b + 1)]))
+        out.append(f"fault detection isolated the '{local}' local filter from {t[a]:.1f} s "
+                   f"to {t[b]:.1f} s ({100 * iso.mean():.0f} % of its measurements; NIS/dof "
+                   f"{nis:.1f} there): a sensor fault — or a filter too confident of its IMU "
+                   f"figures (fednav tune), in which case the solution drifts on the IMU "
+                   f"alone; filter.fdi_recovery re-admits after passes in a row")
+    return out
 
 
 def solution(res, prep: Prepared, smooth: bool = False) -> ProcessResult:
