@@ -353,3 +353,23 @@ def test_a_long_isolation_is_said(flight):
     assert len(said) == 1 and "from 100." in said[0], res.warnings
     clean = process(imu, gnss, None, load_system({"filter": {"fdi_alpha": 0.001}}))
     assert not any("fault detection isolated" in w for w in clean.warnings)
+
+
+def test_innovations_far_beyond_their_sigma_end_the_run_unless_forced(flight):
+    """Issue 27: GNSS velocity written N, E, U under E, N, U headers ran to exit 0 with a
+    run NIS/dof in the hundreds and no word. Beyond 100 the run ends with one line naming
+    the likely causes; --force (force=True) writes it with a warning; a clean run says
+    nothing."""
+    from dataclasses import replace
+
+    from fednav.io.data import DataError
+
+    imu, gnss, _ = flight
+    swapped = replace(gnss, vel=gnss.vel[:, [1, 0, 2]], quality={})
+    with pytest.raises(DataError, match=r"'gnss' local filter's innovations are .* times "
+                                        r"their expected size.*axis order"):
+        process(imu, swapped, None, System())
+    res = process(imu, swapped, None, System(), force=True)
+    assert any("innovations are" in w and "too optimistic" in w for w in res.warnings)
+    clean = process(imu, gnss, None, System())
+    assert not any("innovations are" in w for w in clean.warnings)

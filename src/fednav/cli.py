@@ -212,7 +212,7 @@ def _output_folder(out: Path) -> Path:
 
 
 def _run_process(read, imu, gnss, velocity, ref, smooth, out, config, output_rate,
-                 files: dict | None = None) -> None:
+                 files: dict | None = None, force: bool = False) -> None:
     from .core.atomic import clear_results
     from .core.config import load_model
     from .navigator.system import System
@@ -239,7 +239,7 @@ def _run_process(read, imu, gnss, velocity, ref, smooth, out, config, output_rat
         refuse_overwrite(paths)  # (and the files the description lists)
         clear_results(out)
         res = process(data["imu"], data["gnss"], data["velocity"], cfg, smooth,
-                      sensors=data.get("sensors"))
+                      sensors=data.get("sensors"), force=force)
         res.warnings[:0] = data.get("warnings", [])
         files = process_output.write(out, res, data["ref"], {
             **{n: None if f is None else str(f) for n, f in paths.items()},
@@ -415,6 +415,8 @@ _SMOOTH = typer.Option(False, "--smooth", help="also run the RTS smoother")
 _CONFIG = typer.Option(None, help="processing config YAML (noise figures, options)")
 _RATE = typer.Option(None, "--output-rate", help="solution rows per second [Hz]; default: "
                      "every IMU sample")
+_FORCE = typer.Option(False, "--force", help="write the solution even when its innovations "
+                      "say the data are wrong (mean NIS/dof above 100)")
 
 
 @process_app.command("navego")
@@ -425,11 +427,11 @@ def process_navego(
     visual: Path = typer.Option(None, help="NaveGo visual-odometry .mat (velocity)"),
     ref: Path = typer.Option(None, help="NaveGo reference .mat (for RMSE)"),
     smooth: bool = _SMOOTH, out: Path = _OUT, config: Path = _CONFIG,
-    output_rate: float = _RATE,
+    output_rate: float = _RATE, force: bool = _FORCE,
 ) -> None:
     """Loosely coupled INS/GNSS (+ visual velocity) on NaveGo .mat files."""
     _run_process(_navego_reader(imu, gnss, visual, ref), imu, gnss, visual, ref, smooth, out,
-                 config, output_rate)
+                 config, output_rate, force=force)
 
 
 @process_app.command("csv")
@@ -441,7 +443,7 @@ def process_csv(
     velocity: Path = typer.Option(None, help="velocity-sensor CSV"),
     ref: Path = typer.Option(None, help="reference CSV (for RMSE and errors.csv)"),
     smooth: bool = _SMOOTH, out: Path = _OUT, config: Path = _CONFIG,
-    output_rate: float = _RATE, **files: Path,
+    output_rate: float = _RATE, force: bool = _FORCE, **files: Path,
 ) -> None:
     """The system described by --config (any registered sensors, local filters, fault
     detection, delay handling, smoother) on fednav CSV files: one option per sensor, or
@@ -449,7 +451,7 @@ def process_csv(
     come from --config (or each row's sigma columns)."""
     files = {n: f for n, f in files.items() if f is not None}
     _run_process(_csv_reader(imu, gnss, velocity, ref, files, config), imu, gnss, velocity,
-                 ref, smooth, out, config, output_rate, files)
+                 ref, smooth, out, config, output_rate, files, force=force)
 
 
 @process_app.command("ulog")
@@ -460,13 +462,13 @@ def process_ulog(
     config: Path = typer.Option(None, help="system description YAML: IMU figures, which "
                                            "sensors aid (aiding:), filters; what it leaves "
                                            "out comes from the log"),
-    output_rate: float = _RATE,
+    output_rate: float = _RATE, force: bool = _FORCE,
 ) -> None:
     """A PX4 autopilot log (ULog, read with pyulog): its IMU, GNSS, barometer and
     magnetometer through the navigator, compared with PX4's own estimate (and the log's
     ground truth when it has one)."""
     _run_process(_ulog_reader(log), log, None, None, None, smooth, out, config,
-                 output_rate)
+                 output_rate, force=force)
 
 
 tune_app = typer.Typer(no_args_is_help=True,

@@ -749,21 +749,59 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
                      if d is not None and d.t_arrival is not None})
 
 
+#: Mean NIS/dof of a local filter over the run above which ``process`` warns (a
+#: consistent filter gives about 1: the figures or the data are wrong) ...
+NIS_WARN = 3.0
+#: ... and above which the run ends with one line unless forced: data in a wrong unit,
+#: time base or axis order give 1e2 .. 1e12.
+NIS_REFUSE = 100.0
+
+
+def nis_check(fdi: list, force: bool = False, seen: list | None = None) -> list[str]:
+    """Warnings for local filters whose mean NIS/dof over the run's accepted measurements
+    exceeds :data:`NIS_WARN`, naming the likely causes; a one-line :class:`DataError`
+    beyond :data:`NIS_REFUSE` unless ``force`` (with the first of the input checks'
+    warnings ``seen``, the likeliest cause, in it).  Measurements fault detection isolated
+    did not touch the solution (a long isolation has its own warning)."""
+    from ..navigator.solution import consistency
+
+    out = []
+    for local, c in consistency([e for e in fdi if not e[5]]).items():
+        n = c["nis_per_dof"]
+        if not n > NIS_WARN:
+            continue
+        why = (f"the '{local}' local filter's innovations are {n:.3g} times their expected "
+               f"size (mean NIS/dof; a consistent filter gives 1)")
+        if n > NIS_REFUSE and not force:
+            hint = f"; the input checks said: {seen[0]}" if seen else ""
+            raise DataError(f"{why}: the data are likely wrong — a unit (deg/s, g, mg, ms), "
+                            f"a time base (GPS vs UTC, Unix time), the axis order or a stuck "
+                            f"axis; or the noise figures are far too small (--force to "
+                            f"write the solution anyway){hint}")
+        out.append(f"{why}: noise figures too optimistic (a vibrating vehicle: fednav "
+                   f"tune), or data in a wrong unit, time base or axis order")
+    return out
+
+
 def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
             cfg: System | None = None, smooth: bool = False,
-            innovations: list | None = None, sensors: dict | None = None) -> ProcessResult:
+            innovations: list | None = None, sensors: dict | None = None,
+            force: bool = False) -> ProcessResult:
     """Loosely coupled INS/GNSS(/velocity, /any registered sensor) processing; see the
     module docstring and :func:`prepare`.
 
     ``innovations``, when given a list, receives one :class:`InnovationRecord` per measurement
-    (what :mod:`fednav.process.tuning` estimates noise figures from)."""
+    (what :mod:`fednav.process.tuning` estimates noise figures from).  A local filter whose
+    mean NIS/dof exceeds :data:`NIS_REFUSE` ends the run with a :class:`DataError` unless
+    ``force`` (:func:`nis_check`)."""
     t_start = time.perf_counter()
     prep = prepare(imu, gnss, velocity, cfg, sensors)
     nav = prep.feed(prep.navigator(record_rows=True, record_covariance=True,
                                    innovations=innovations is not None))
     out = nav.result()
     res = solution(out, prep, smooth)
-    res.warnings += isolation_warnings(res.forward.fdi)
+    res.warnings += isolation_warnings(res.forward.fdi) + nis_check(res.forward.fdi, force,
+                                                                    list(res.warnings))
     if prep.system.filter.q_adaptation is not None and hasattr(nav.loop, "q_scales"):
         res.data_quality["q_scale_final"] = {k: round(v, 3)
                                              for k, v in nav.loop.q_scales().items()}
