@@ -271,7 +271,7 @@ def evaluate(imu: ImuData, gnss: GnssData, velocity: VelocityData | None,
     """Run the forward filter with ``cfg`` and sum up its innovations (all of them
     fitted without ``blocks``)."""
     inns: list[InnovationRecord] = []
-    process(imu, gnss, velocity, cfg, innovations=inns)
+    process(imu, gnss, velocity, cfg, innovations=inns, force=True)  # (candidates may fit badly)
     return innovation_statistics(inns, blocks)
 
 
@@ -295,7 +295,7 @@ def outage_drift(imu: ImuData, gnss: GnssData, velocity: VelocityData | None, cf
                  windows) -> list[float]:
     """Process with the GNSS fixes of ``windows`` withheld; the horizontal distance [m]
     of the solution (moved to the antenna) from the last withheld fix of each window."""
-    res = process(imu, withheld(gnss, windows), velocity, cfg)
+    res = process(imu, withheld(gnss, windows), velocity, cfg, force=True)
     sol = res.forward
     gc = cfg.sensors.gnss or GnssConfig()
     lever = np.asarray(gc.lever_m if gc.lever_m is not None else gnss.lever, dtype=float)
