@@ -373,3 +373,23 @@ def test_innovations_far_beyond_their_sigma_end_the_run_unless_forced(flight):
     assert any("innovations are" in w and "too optimistic" in w for w in res.warnings)
     clean = process(imu, gnss, None, System())
     assert not any("innovations are" in w for w in clean.warnings)
+
+
+def test_the_navigators_result_reports_its_health(flight):
+    """The checks `process` runs live in the navigator: NavResult.health() gives the same
+    warnings to streaming and batch users (never a refusal)."""
+    from dataclasses import replace
+
+    from fednav.process.run import prepare
+
+    imu, gnss, _ = flight
+    swapped = replace(gnss, vel=gnss.vel[:, [1, 0, 2]], quality={})
+    prep = prepare(imu, swapped, None, System())
+    nav = prep.feed(prep.navigator(record_rows=False, record_covariance=False,
+                                   innovations=False))
+    said = nav.result().health()
+    assert any("'gnss' local filter's innovations are" in w for w in said)
+    prep = prepare(imu, gnss, None, System())
+    clean = prep.feed(prep.navigator(record_rows=False, record_covariance=False,
+                                     innovations=False))
+    assert clean.result().health() == []

@@ -31,7 +31,6 @@ never holds NaN.
 
 from __future__ import annotations
 
-import json
 import math
 import warnings
 from dataclasses import replace
@@ -40,7 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core import units
-from ..core.atomic import json_safe, save_figure, write_frame, write_text
+from ..core.atomic import json_safe, save_figure, write_frame, write_json, write_text
 from ..sim.runs import make_run_data, run_all_modes
 from ..sim.scenario import Scenario, load_scenario
 from .evaluation import mean_ci95
@@ -283,8 +282,7 @@ class Design(Paper):
         out.mkdir(parents=True, exist_ok=True)
         written = [write_frame(pd.DataFrame(rep["rows"]), out / "runs.csv")]
         written += self.files(out, rep) + self.plots(out, rep)
-        text = json.dumps(json_safe(rep["summary"]), indent=2, allow_nan=False)
-        return [write_text(out / "summary.json", text), *written]
+        return [write_json(out / "summary.json", rep["summary"]), *written]
 
 
 DESIGN = Design()

@@ -372,6 +372,29 @@ class GnssData:
                 self.vel is not None and np.any(self.sigma_vel <= 0)):
             raise DataError(f"{self.source}: GNSS standard deviations must be positive")
 
+    def position_velocity(self, window_s: float) -> tuple[np.ndarray, np.ndarray]:
+        """ENU velocity [m/s] at each fix from the positions alone: their difference
+        across +-``window_s`` around it (one-sided at the ends), and its 1-sigma [m/s]
+        from the two fixes' horizontal position noise over the span they are apart (inf
+        where the window holds one fix)."""
+        from ..core import earth
+
+        lla, t = self.lla, self.t
+        d = earth.llh_difference_enu(lla[:, 0], lla[:, 1], lla[:, 2], lla[0, 0], lla[0, 1],
+                                     lla[0, 2])
+        lo = np.searchsorted(t, t - window_s)
+        hi = np.minimum(np.searchsorted(t, t + window_s, side="right") - 1, len(t) - 1)
+        span = t[hi] - t[lo]
+        vel = np.zeros((len(t), 3))
+        ok = span > 0
+        vel[ok] = (d[hi[ok]] - d[lo[ok]]) / span[ok, None]
+        sp = (np.broadcast_to(self.sigma_pos, (len(t), 3)) if self.sigma_rows is None
+              else self.sigma_rows[:, :3])
+        s = np.max(sp[:, :2], axis=1)  # (horizontal: the course's)
+        sigma = np.full(len(t), np.inf)
+        sigma[ok] = np.hypot(s[hi[ok]], s[lo[ok]]) / span[ok]
+        return vel, sigma
+
 
 @dataclass
 class VelocityData:

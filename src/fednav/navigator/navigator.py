@@ -166,6 +166,14 @@ class NavResult:
 
         return consistency(self.fdi)
 
+    def health(self) -> list[str]:
+        """Warnings about the run from its fault-detection log
+        (:mod:`fednav.navigator.health`): local filters whose innovations are far beyond
+        their sigma, and long isolations; empty when all is well."""
+        from .health import isolation_warnings, nis_check
+
+        return isolation_warnings(self.fdi) + nis_check(self.fdi, force=True)
+
     @property
     def sigma(self) -> np.ndarray:
         """1-sigma of the fused estimate per epoch (K+1, 18), SI (NaN where the filter has

@@ -24,6 +24,7 @@ from ..ins import error_model as em
 from ..ins.alignment import UNKNOWN_HEADING_SIGMA, Alignment, align, coarse_level
 from ..io.data import DataError, GnssData, ImuData, Reference, VelocityData
 from ..io.sensorfile import SensorData
+from ..navigator.health import isolation_warnings, nis_check
 from ..navigator.loop import InnovationRecord  # noqa: F401  (fednav.process's name)
 from ..navigator.navigator import InitialState, Navigator
 from ..navigator.solution import Solution, epoch_rate, imu_rate
@@ -397,36 +398,6 @@ def _pseudo(name: str, cfg: System, imu: ImuData, T: float) -> SensorData:
                       np.zeros((len(t), m)), quality={})
 
 
-def _odometer_scaled(data: SensorData, gnss: GnssData | None, cfg: System):
-    """The odometer's speeds divided by its scale factor (``sensors.odometer.scale``; or,
-    with ``auto``, the one :func:`~fednav.sensors.bodyvel.odometer_scale` finds against
-    the GNSS speed), with what was seen: (data, ({quality}, [warnings]))."""
-    from ..sensors.bodyvel import odometer_scale
-
-    sc = cfg.sensors["odometer"] if "odometer" in cfg.sensors else None
-    given = 1.0 if sc is None else sc.scale
-    seen = odometer_scale(data.t, data.z[:, 0], gnss)
-    quality, warnings = {}, []
-    if seen is not None:
-        quality["odometer_scale_seen"] = round(seen[0], 5)
-        quality["odometer_scale_sigma"] = round(seen[1], 5)
-    if given == "auto":
-        if seen is None:
-            raise DataError(f"{data.source}: sensors.odometer.scale: auto needs GNSS "
-                            f"velocities while faster than 2 m/s (20 odometer samples)")
-        use = seen[0]
-    else:
-        use = float(given)
-        if seen is not None and abs(seen[0] - use) > max(0.005, 3.0 * seen[1]):
-            warnings.append(f"{data.source}: the odometer reads {seen[0]:.4f} x the GNSS "
-                            f"speed (+-{seen[1]:.4f}), its scale is taken as {use:g}: "
-                            f"sensors.odometer.scale (or auto) corrects it")
-    if use != 1.0:
-        data = replace(data, z=data.z / use,
-                       sigma=None if data.sigma is None else data.sigma / use)
-    return data, (quality, warnings)
-
-
 def _other_sensor(data: SensorData, cfg: System):
     """The system's section for a recorded sensor other than GNSS and the velocity sensor
     (its noise): the description's, else the section's defaults when they suffice."""
@@ -456,26 +427,10 @@ VELOCITY_WINDOW_S = 2.0
 
 
 def _position_velocity(gnss: GnssData) -> tuple[np.ndarray, np.ndarray]:
-    """ENU velocity [m/s] of position-only fixes, for the alignment's course and the
-    initial velocity: the position difference across a window of +-
-    :data:`VELOCITY_WINDOW_S` around each fix (one-sided at the ends), and the 1-sigma
-    of each [m/s] from the two fixes' position noise over the span they are apart."""
-    lla = gnss.lla
-    d = earth.llh_difference_enu(lla[:, 0], lla[:, 1], lla[:, 2], lla[0, 0], lla[0, 1],
-                                 lla[0, 2])
-    t = gnss.t
-    lo = np.searchsorted(t, t - VELOCITY_WINDOW_S)
-    hi = np.minimum(np.searchsorted(t, t + VELOCITY_WINDOW_S, side="right") - 1, len(t) - 1)
-    span = t[hi] - t[lo]
-    vel = np.zeros((len(t), 3))
-    ok = span > 0
-    vel[ok] = (d[hi[ok]] - d[lo[ok]]) / span[ok, None]
-    sp = (np.broadcast_to(gnss.sigma_pos, (len(t), 3)) if gnss.sigma_rows is None
-          else gnss.sigma_rows[:, :3])
-    s = np.max(sp[:, :2], axis=1)  # (horizontal: the course's)
-    sigma = np.full(len(t), np.inf)
-    sigma[ok] = np.hypot(s[hi[ok]], s[lo[ok]]) / span[ok]
-    return vel, sigma
+    """ENU velocity [m/s] of position-only fixes and its 1-sigma, for the alignment's
+    course and the initial velocity (:meth:`GnssData.position_velocity` over +-
+    :data:`VELOCITY_WINDOW_S`)."""
+    return gnss.position_velocity(VELOCITY_WINDOW_S)
 
 
 def _period(cfg: System, gnss: GnssData | None, others: dict) -> float:
@@ -620,10 +575,13 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
                                       np.zeros((len(t_det), len(spec.columns))), quality={},
                                       sigma=sig)
 
-    if "odometer" in others:
-        others["odometer"], note = _odometer_scaled(others["odometer"], gnss, cfg)
-        quality_extra.update(note[0])
-        warnings += note[1]
+    for name, d in list(others.items()):  # corrections a sensor makes to its file
+        calibrate = registry.spec(name).calibrate
+        if calibrate is not None:
+            section = cfg.sensors[name] if name in cfg.sensors else None
+            others[name], q, w = calibrate(d, gnss, section)
+            quality_extra.update(q)
+            warnings += w
 
     sensors, meas, sigmas = {}, {}, {}
     if gnss is not None:
@@ -749,40 +707,6 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
                      if d is not None and d.t_arrival is not None})
 
 
-#: Mean NIS/dof of a local filter over the run above which ``process`` warns (a
-#: consistent filter gives about 1: the figures or the data are wrong) ...
-NIS_WARN = 3.0
-#: ... and above which the run ends with one line unless forced: data in a wrong unit,
-#: time base or axis order give 1e2 .. 1e12.
-NIS_REFUSE = 100.0
-
-
-def nis_check(fdi: list, force: bool = False, seen: list | None = None) -> list[str]:
-    """Warnings for local filters whose mean NIS/dof over the run's accepted measurements
-    exceeds :data:`NIS_WARN`, naming the likely causes; a one-line :class:`DataError`
-    beyond :data:`NIS_REFUSE` unless ``force`` (with the first of the input checks'
-    warnings ``seen``, the likeliest cause, in it).  Measurements fault detection isolated
-    did not touch the solution (a long isolation has its own warning)."""
-    from ..navigator.solution import consistency
-
-    out = []
-    for local, c in consistency([e for e in fdi if not e[5]]).items():
-        n = c["nis_per_dof"]
-        if not n > NIS_WARN:
-            continue
-        why = (f"the '{local}' local filter's innovations are {n:.3g} times their expected "
-               f"size (mean NIS/dof; a consistent filter gives 1)")
-        if n > NIS_REFUSE and not force:
-            hint = f"; the input checks said: {seen[0]}" if seen else ""
-            raise DataError(f"{why}: the data are likely wrong — a unit (deg/s, g, mg, ms), "
-                            f"a time base (GPS vs UTC, Unix time), the axis order or a stuck "
-                            f"axis; or the noise figures are far too small (--force to "
-                            f"write the solution anyway){hint}")
-        out.append(f"{why}: noise figures too optimistic (a vibrating vehicle: fednav "
-                   f"tune), or data in a wrong unit, time base or axis order")
-    return out
-
-
 def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
             cfg: System | None = None, smooth: bool = False,
             innovations: list | None = None, sensors: dict | None = None,
@@ -792,8 +716,8 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
 
     ``innovations``, when given a list, receives one :class:`InnovationRecord` per measurement
     (what :mod:`fednav.process.tuning` estimates noise figures from).  A local filter whose
-    mean NIS/dof exceeds :data:`NIS_REFUSE` ends the run with a :class:`DataError` unless
-    ``force`` (:func:`nis_check`)."""
+    mean NIS/dof exceeds :data:`~fednav.navigator.health.NIS_REFUSE` ends the run with a
+    :class:`DataError` unless ``force`` (:func:`~fednav.navigator.health.nis_check`)."""
     t_start = time.perf_counter()
     prep = prepare(imu, gnss, velocity, cfg, sensors)
     nav = prep.feed(prep.navigator(record_rows=True, record_covariance=True,
@@ -809,41 +733,6 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
     if innovations is not None:
         innovations.extend(out.innovations)
     return res
-
-
-#: A local filter isolated by fault detection for longer than this [s] in one stretch
-#: gets a warning (an overconfident filter isolates a sound sensor and may never re-admit
-#: it: the solution then drifts with the IMU alone, silently).
-ISOLATION_WARN_S = 30.0
-
-
-def isolation_warnings(fdi: list) -> list[str]:
-    """Warnings for local filters that fault detection isolated for more than
-    :data:`ISOLATION_WARN_S` in one stretch, naming the span and the NIS/dof there (from the
-    FDI log: t, local, statistic, dof, threshold, isolated)."""
-    out = []
-    if not fdi:
-        return out
-    by: dict[str, list] = {}
-    for t, local, nis, dof, _thr, iso in fdi:
-        by.setdefault(local, []).append((t, nis / max(dof, 1), iso))
-    for local, rows in by.items():
-        t = np.array([r[0] for r in rows])
-        iso = np.array([r[2] for r in rows], dtype=bool)
-        if not iso.any():
-            continue
-        edges = np.flatnonzero(np.diff(np.r_[0, iso.astype(np.int8), 0]))
-        spans = [(a, b - 1) for a, b in zip(edges[::2], edges[1::2], strict=True)]
-        a, b = max(spans, key=lambda s: t[s[1]] - t[s[0]])
-        if t[b] - t[a] <= ISOLATION_WARN_S:
-            continue
-        nis = float(np.mean([rows[i][1] for i in range(a, b + 1)]))
-        out.append(f"fault detection isolated the '{local}' local filter from {t[a]:.1f} s "
-                   f"to {t[b]:.1f} s ({100 * iso.mean():.0f} % of its measurements; NIS/dof "
-                   f"{nis:.1f} there): a sensor fault — or a filter too confident of its IMU "
-                   f"figures (fednav tune), in which case the solution drifts on the IMU "
-                   f"alone; filter.fdi_recovery re-admits after passes in a row")
-    return out
 
 
 def solution(res, prep: Prepared, smooth: bool = False) -> ProcessResult:

@@ -279,6 +279,38 @@ def odometer_scale(t, speed, gnss) -> tuple[float, float] | None:
     return k, sigma
 
 
+def calibrate_odometer(data, gnss, section: OdometerConfig | None):
+    """The odometer's speeds divided by its scale factor (``section.scale``; or, with
+    ``auto``, the one :func:`odometer_scale` finds against the GNSS speed), with what
+    was seen: (data, {quality}, [warnings]) — :attr:`SensorSpec.calibrate` of the
+    odometer."""
+    from dataclasses import replace
+
+    given = 1.0 if section is None else section.scale
+    seen = odometer_scale(data.t, data.z[:, 0], gnss)
+    quality, warnings = {}, []
+    if seen is not None:
+        quality["odometer_scale_seen"] = round(seen[0], 5)
+        quality["odometer_scale_sigma"] = round(seen[1], 5)
+    if given == "auto":
+        if seen is None:
+            from ..core.config import ConfigError
+
+            raise ConfigError(f"{data.source}: sensors.odometer.scale: auto needs GNSS "
+                              f"velocities while faster than 2 m/s (20 odometer samples)")
+        use = seen[0]
+    else:
+        use = float(given)
+        if seen is not None and abs(seen[0] - use) > max(0.005, 3.0 * seen[1]):
+            warnings.append(f"{data.source}: the odometer reads {seen[0]:.4f} x the GNSS "
+                            f"speed (+-{seen[1]:.4f}), its scale is taken as {use:g}: "
+                            f"sensors.odometer.scale (or auto) corrects it")
+    if use != 1.0:
+        data = replace(data, z=data.z / use,
+                       sigma=None if data.sigma is None else data.sigma / use)
+    return data, quality, warnings
+
+
 def detect_stops(imu, gnss, section: StopConfig, noise, gyro_bias: float,
                  period: float, t0: float) -> np.ndarray:
     """Times [s] on the filter's epoch grid ``t0 + k period`` (every ``section.period_s``
@@ -313,25 +345,18 @@ def detect_stops(imu, gnss, section: StopConfig, noise, gyro_bias: float,
             speed = np.hypot(gnss.vel[j, 0], gnss.vel[j, 1])
             limit = section.max_gnss_speed_mps
         else:  # position-only: the speed of the positions over +-1 s
-            from ..core import earth
-
-            lla = gnss.lla
-            d = earth.llh_difference_enu(lla[:, 0], lla[:, 1], lla[:, 2], lla[0, 0],
-                                         lla[0, 1], lla[0, 2])
-            lo = np.searchsorted(gnss.t, gnss.t[j] - 1.0)
-            hi = np.minimum(np.searchsorted(gnss.t, gnss.t[j] + 1.0, side="right") - 1,
-                            len(gnss.t) - 1)
-            span = np.maximum(gnss.t[hi] - gnss.t[lo], 1e-9)
-            speed = np.hypot(*(d[hi, :2] - d[lo, :2]).T) / span
-            s_p = float(np.max(np.asarray(gnss.sigma_pos, dtype=float)[:2]))
-            limit = np.maximum(section.max_gnss_speed_mps, 3.0 * np.sqrt(2.0) * s_p / span)
-            near &= (hi > lo)
+            vel, sigma = gnss.position_velocity(1.0)
+            speed = np.hypot(vel[j, 0], vel[j, 1])
+            near &= np.isfinite(sigma[j])
+            limit = np.maximum(section.max_gnss_speed_mps, 3.0 * np.where(
+                np.isfinite(sigma[j]), sigma[j], 0.0))
         ok &= ~(near & (speed > limit))
     return t[ok]
 
 
 ODOMETER = SensorSpec("odometer", "odometer: forward speed in body axes at its lever arm",
-                      OdometerConfig, OdometerSpeed, columns=(Column("speed_mps"),))
+                      OdometerConfig, OdometerSpeed, columns=(Column("speed_mps"),),
+                      calibrate=calibrate_odometer)
 DVL = SensorSpec("dvl", "DVL / body velocity sensor: velocity in body axes right, forward, "
                  "up at its lever arm", DvlConfig, DvlVelocity,
                  columns=(Column("vR_mps"), Column("vF_mps"), Column("vU_mps")))

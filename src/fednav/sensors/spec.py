@@ -142,6 +142,10 @@ class SensorSpec:
     #: :class:`~fednav.ins.error_model.ImuNoiseModel`, ``gyro_bias`` the turn-on gyro
     #: bias 1-sigma [rad/s], ``period`` the filter period [s]
     detector: object = None
+    #: recorded data: a function ``(data, gnss, section) -> (data, {quality},
+    #: [warnings])`` correcting a file's values before filtering, e.g. the odometer's
+    #: scale factor estimated against the GNSS speed
+    calibrate: object = None
 
     @property
     def compiled(self) -> bool:
