@@ -31,11 +31,27 @@ leaves the isolated filter out of the fusion altogether; fednav keeps its share 
 *prior* information in the fusion (it carries no measurement), so the fused covariance
 does not jump by the isolated filter's share of the prior.  Every statistic and decision
 is recorded in :attr:`FederatedFilter.log`.
+
+Fault isolation cannot lock out the last position source (``fdi_readmit_s``,
+:class:`Lockout`): a filter too confident of its IMU figures isolates a sound receiver —
+the innovation grows faster than the covariance that should cover it — and would never
+re-admit it.  When every position source has been isolated for ``fdi_readmit_s``, the
+candidate (the isolated source with the lowest latest NIS/dof) is re-admitted when its
+innovation has *drifted* since its isolation began by more than the test allows
+(``D = dr' (S + S0)^-1 dr > chi2.ppf(1 - 1e-7, m)``, :data:`READMIT_ALPHA`; ``dr`` the
+change of the residual,
+``S``, ``S0`` the innovation covariances now and then): the filter, not the sensor, is
+wrong.  Every filter's covariance is then inflated by the factor that gives the
+residual seen its expected statistic (``r' (s HPH' + R)^-1 r = m``) and the measurement is
+applied if it passes the test with it.  A true fault — a receiver that jumps and stays —
+shows a large residual that does *not* drift beyond the covariance, and stays isolated.
 """
 
 from __future__ import annotations
 
 import copy
+import functools
+import math
 
 import numba
 import numpy as np
@@ -94,6 +110,166 @@ def _fuse(xs, Ps):
     return Pg @ v, 0.5 * (Pg + Pg.T), tr, -1
 
 
+#: Test level of the drift test that re-admits a locked-out position source
+#: (:func:`_lockout`), per measurement: strict, as it is tried at every measurement of a
+#: long fault (at 20 Hz, 1e-7 is one false re-admission in ~140 h of a true fault, were
+#: the tests independent); never looser than the detection level itself.
+READMIT_ALPHA = 1e-7
+
+
+@functools.cache
+def drift_threshold(dof: int, alpha: float) -> float:
+    """The drift test's threshold for ``dof`` components: the chi-square quantile at
+    the stricter of :data:`READMIT_ALPHA` and the detection level ``alpha``."""
+    from scipy.stats import chi2
+
+    return float(chi2.ppf(1.0 - min(alpha, READMIT_ALPHA), dof))
+
+
+@numba.njit(cache=True)
+def _nis_inflated(r, A, R, s):
+    """``r' (s A + R)^-1 r`` (inf where that is not positive definite)."""
+    Inv, ok = spd_inverse(s * A + R)
+    return r @ Inv @ r if ok else np.inf
+
+
+@numba.njit(cache=True)
+def _inflation(r, S, R, nis):
+    """The factor ``s`` >= 1 of the filter's part ``A = S - R`` of the innovation
+    covariance ``S`` that gives the residual ``r`` its expected statistic, ``r' (s A +
+    R)^-1 r = m`` (bisection on ``ln s``; ``R`` not finite: taken as zero, ``s = NIS / m``)."""
+    m = r.shape[0]
+    if not math.isfinite(R.sum()):
+        return max(nis / m, 1.0)
+    A = S - R
+    lo = 0.0
+    hi = math.log(max(nis / m, 1.0))
+    while _nis_inflated(r, A, R, math.exp(hi)) > m:
+        if hi > 80.0:
+            return math.exp(hi)
+        lo = hi
+        hi = hi + 2.0
+    for _ in range(40):
+        mid = 0.5 * (lo + hi)
+        if _nis_inflated(r, A, R, math.exp(mid)) > m:
+            lo = mid
+        else:
+            hi = mid
+    return max(math.exp(hi), 1.0)
+
+
+@numba.njit(cache=True)
+def _lockout(f, t, accepted, nis, r, S, R, thr_drift, hold, pos, state, r0, S0, t_pos):
+    """One local measurement through the guard against locking out the last position
+    source (the same function in the Python loop and the compiled engine).
+
+    ``f``: the local filter's index; ``t`` [s]: the measurement's time; ``accepted``: what
+    the chi-square test decided; ``nis`` = ``r' S^-1 r`` with ``r`` (m,) and ``S`` (m, m)
+    its residual and covariance, ``R`` the measurement's noise covariance (filter units;
+    not finite where the model makes its own); ``thr_drift``: the drift test's threshold
+    for ``m`` (:func:`drift_threshold`; NaN: no detection); ``hold`` [s]:
+    ``fdi_readmit_s`` (NaN: never re-admit); ``pos`` (nf,): which filters are position
+    sources.  State, updated in place: ``state`` (nf, 3) per filter the start [s] of its
+    current run of isolated measurements (NaN: none), its ``m`` and the NIS/dof of its
+    latest isolated measurement; ``r0`` (nf, w), ``S0`` (nf, w, w) the residual and
+    covariance of the first of that run; ``t_pos`` (1,) the time [s] of the last accepted
+    position measurement.
+
+    Returns ``(s, t_start)``: ``s`` > 1 the factor by which to inflate every filter's
+    covariance to re-admit this measurement (0: no) — the factor that gives the residual
+    seen its expected statistic ``m`` (:func:`_inflation`) — and ``t_start`` [s] when the
+    lockout began."""
+    if not pos[f]:
+        return 0.0, np.nan
+    m = r.shape[0]
+    if accepted:
+        t_pos[0] = t
+        state[f, 0] = np.nan
+        state[f, 2] = np.inf
+        return 0.0, np.nan
+    state[f, 2] = nis / m
+    if math.isnan(state[f, 0]) or state[f, 1] != m:
+        state[f, 0] = t
+        state[f, 1] = m
+        r0[f, :m] = r
+        S0[f, :m, :m] = S
+        return 0.0, np.nan
+    if not (t - state[f, 0] >= hold and t - t_pos[0] >= hold):
+        return 0.0, np.nan
+    for g in range(pos.shape[0]):  # the most consistent source: the lowest NIS/dof
+        if g != f and pos[g] and not math.isnan(state[g, 0]) and state[g, 2] < state[f, 2]:
+            return 0.0, np.nan
+    dr = r - r0[f, :m]
+    Inv, ok = spd_inverse(S + S0[f, :m, :m])
+    if not ok:
+        return 0.0, np.nan
+    D = dr @ Inv @ dr
+    if not D > thr_drift:  # the residual moved no more than the covariance: a sensor fault
+        return 0.0, np.nan
+    # the filter, not the sensor: its covariance inflated to cover the innovation seen
+    return _inflation(r, S, R, nis), max(state[f, 0], t_pos[0])
+
+
+class Lockout:
+    """The state of :func:`_lockout` for local filters ``names`` of which ``positions``
+    fix the position, re-admitting after ``hold_s`` [s] (None: never); ``episodes``:
+    one entry per re-admission (:meth:`episode`)."""
+
+    def __init__(self, names: list[str], positions, hold_s: float | None, width: int = 6):
+        nf = len(names)
+        self.names = list(names)
+        self.pos = np.array([k in set(positions) for k in names], dtype=np.bool_)
+        self.hold = float("nan") if hold_s is None else float(hold_s)
+        self.state = np.zeros((nf, 3))
+        self.state[:, 0], self.state[:, 2] = np.nan, np.inf
+        self.r0 = np.zeros((nf, width))
+        self.S0 = np.zeros((nf, width, width))
+        self.t_pos = np.array([-np.inf])
+        self.episodes: list[dict] = []
+
+    @property
+    def on(self) -> bool:
+        return bool(self.pos.any()) and self.hold > 0.0
+
+    def track(self, f: int, t: float, accepted: bool, nis: float, r, S, R,
+              thr_drift: float):
+        """:func:`_lockout` for filter index ``f`` (widening the state for a measurement
+        of more than its width)."""
+        r = np.ascontiguousarray(r, dtype=float).ravel()
+        if len(r) > self.r0.shape[1]:
+            w, nf = len(r), len(self.names)
+            r0, S0 = np.zeros((nf, w)), np.zeros((nf, w, w))
+            r0[:, :self.r0.shape[1]] = self.r0
+            S0[:, :self.r0.shape[1], :self.r0.shape[1]] = self.S0
+            self.r0, self.S0 = r0, S0
+        S = np.ascontiguousarray(S, dtype=float).reshape(len(r), len(r))
+        R = np.asarray(R, dtype=float) if R is not None else None
+        R = (np.ascontiguousarray(R).reshape(len(r), len(r))
+             if R is not None and R.size == len(r) ** 2 else np.full_like(S, np.nan))
+        return _lockout(f, float(t), bool(accepted), float(nis), r, S, R, float(thr_drift),
+                        self.hold, self.pos, self.state, self.r0, self.S0, self.t_pos)
+
+    def episode(self, f: int, t_start: float, t: float, nis_before: float, s: float,
+                nis_after: float, dof: int) -> dict:
+        """Record a re-admission: local filter, lockout start and re-admission time [s],
+        duration [s], NIS/dof before and after, the covariance inflation."""
+        e = {"local": self.names[f], "t_start_s": float(t_start), "t_s": float(t),
+             "duration_s": float(t - t_start), "nis_per_dof": float(nis_before / dof),
+             "inflation": float(s), "nis_per_dof_after": float(nis_after / dof)}
+        self.episodes.append(e)
+        return e
+
+    def snapshot(self) -> tuple:
+        return (self.state.copy(), self.r0.copy(), self.S0.copy(), self.t_pos.copy(),
+                len(self.episodes))
+
+    def restore(self, snap: tuple) -> None:
+        state, r0, S0, t_pos, n = snap
+        self.state, self.r0, self.S0, self.t_pos = (state.copy(), r0.copy(), S0.copy(),
+                                                    t_pos.copy())
+        del self.episodes[n:]
+
+
 def _sampling_bias_correction(Pg, Ps, dofs, names) -> np.ndarray:
     """Remove the second-order bias of ``P_g = (sum P_i^-1)^-1`` when some ``P_i`` are sample
     covariances with ``dof_i`` degrees of freedom (particle filters).
@@ -135,7 +311,8 @@ class FederatedFilter:
     def __init__(self, locals: dict[str, Filter], master: Filter | None = None,
                  sharing: str = "adaptive", fixed: dict[str, float] | None = None,
                  reset: bool = True, fdi_alpha: float | dict[str, float] | None = None,
-                 fdi_recovery: int = 1):
+                 fdi_recovery: int = 1, fdi_readmit_s: float | None = None,
+                 positions=()):
         if not locals:
             raise ValueError("federated filter needs at least one local filter")
         self.locals = dict(locals)
@@ -166,6 +343,12 @@ class FederatedFilter:
             raise ValueError(f"fdi_recovery must be >= 1, got {fdi_recovery}")
         self.fdi_recovery = fdi_recovery
         self._passes = dict.fromkeys(self.locals, fdi_recovery)  # consecutive passes
+        if fdi_readmit_s is not None and not fdi_readmit_s > 0.0:
+            raise ValueError(f"fdi_readmit_s must be positive, got {fdi_readmit_s}")
+        #: the guard against isolating every position source for good: ``positions``
+        #: (local filter names) re-admitted after ``fdi_readmit_s`` [s] (None: never)
+        self.lockout = Lockout(list(self.filters), [k for k in positions if k in self.locals],
+                               fdi_readmit_s)
         #: online process-noise adaptation (:meth:`adapt_q`): step per NIS/dof excess and
         #: the bound of ln(scale); 0, 0: off
         self.q_step, self.q_logmax = 0.0, 0.0
@@ -230,9 +413,18 @@ class FederatedFilter:
             self._thresholds[key] = float(chi2.ppf(1.0 - alpha, dof))
         return self._thresholds[key]
 
-    def update(self, local: str, y, model, nav=None, R=None, t: float = float("nan")):
-        """Measurement update of local filter ``local`` (at time ``t``, for the log), with
-        chi-square fault detection when ``fdi_alpha`` is set."""
+    @property
+    def readmissions(self) -> list[dict]:
+        """One entry per re-admission of an isolated position source
+        (:meth:`Lockout.episode`)."""
+        return self.lockout.episodes
+
+    def update(self, local: str, y, model, nav=None, R=None, t: float = float("nan"),
+               readmit: bool = True):
+        """Measurement update of local filter ``local`` (at time ``t`` [s], for the log),
+        with chi-square fault detection when ``fdi_alpha`` is set; ``readmit``: whether
+        the measurement is one of its sensor's (a constraint applied to every local filter
+        is not), seen by the lockout guard (:func:`_lockout`)."""
         try:
             f = self.locals[local]
         except KeyError:
@@ -250,11 +442,39 @@ class FederatedFilter:
         else:
             inn = f.update(y, model, nav, R, gate=thr)
             self._passes[local] = self.fdi_recovery if inn.accepted else 0
+        if readmit and self.lockout.on:
+            inn = self._readmit(local, f, y, model, nav, R, t, thr, inn)
         self.log.append((t, local, inn.nis, dof, thr, not inn.accepted))
         if self.q_step and inn.accepted:
             self.qlog[local] = min(max(self.qlog[local] + self.q_step * (inn.nis / dof - 1.0),
                                        0.0), self.q_logmax)
         return inn
+
+    def _readmit(self, local, f, y, model, nav, R, t, thr, inn):
+        """The lockout guard on a measurement of ``local``: re-admitted, every filter's
+        covariance inflated, when :func:`_lockout` says so and it then passes the test."""
+        lk = self.lockout
+        i = lk.names.index(local)
+        alpha = self.fdi_alphas[local]
+        thr_drift = np.nan if alpha is None else drift_threshold(len(inn.r), alpha)
+        s, t_start = lk.track(i, t, inn.accepted, inn.nis, inn.r, inn.S, R, thr_drift)
+        if not s > 0.0:
+            return inn
+        saved = [(g, g.x, g.P) for g in self.filters.values()]
+        for g in self.filters.values():
+            g.P = g.P * s
+        try:
+            new = f.update(y, model, nav, R, gate=thr)
+        except FilterError:
+            new = None
+        if new is None or not new.accepted:
+            for g, x, P in saved:
+                g.x, g.P = x, P
+            return inn
+        self._passes[local] = self.fdi_recovery
+        lk.track(i, t, True, new.nis, new.r, new.S, R, thr_drift)
+        lk.episode(i, t_start, t, inn.nis, s, new.nis, len(new.r))
+        return new
 
     def fuse(self) -> tuple[np.ndarray, np.ndarray]:
         """Global fusion over the filters not isolated; then reset (in reset mode)."""
@@ -290,12 +510,13 @@ class FederatedFilter:
         :meth:`restore`); the log keeps its entries up to this point."""
         return ([(f.x.copy(), f.P.copy(), f.step) for f in self.filters.values()],
                 self.x.copy(), self.P.copy(), dict(self.beta), set(self.isolated),
-                dict(self._passes), len(self.log), dict(self.qlog))
+                dict(self._passes), len(self.log), dict(self.qlog), self.lockout.snapshot())
 
     def restore(self, snap: tuple) -> None:
         """Return to a :meth:`snapshot` (log entries made since are dropped)."""
-        filters, self.x, self.P, beta, isolated, passes, n_log, qlog = snap
+        filters, self.x, self.P, beta, isolated, passes, n_log, qlog, lockout = snap
         self.qlog = dict(qlog)
+        self.lockout.restore(lockout)
         for f, (x, P, step) in zip(self.filters.values(), filters, strict=True):
             f.x, f.P, f.step = x.copy(), P.copy(), step
         self.x, self.P = self.x.copy(), self.P.copy()

@@ -27,7 +27,7 @@ import numpy as np
 from ..core import earth
 from ..core.kernels import cholesky_lower
 from ..core.kernels import quat_to_dcm as _q2dcm
-from ..filters.federated import _fuse
+from ..filters.federated import _fuse, _lockout, drift_threshold
 from ..filters.kf import _joseph_update, _propagate
 from ..filters.ukf import _predict_moments, _sigma_points, _update
 from ..ins import error_model as em
@@ -88,11 +88,38 @@ def _nav_buffers(lla, vel, src_p, src_v):
 
 
 @numba.njit(cache=True)
+def _local_update(fam_u, x, P, c, Wm, Wc, kinds, lla, vel, C, omega, lever, linear, y, R):
+    """Measurement update of one local filter (``fam_u`` 0 Kalman, Joseph form; 1
+    unscented): (x, P, residual, its covariance, NIS, failure code 0 / 4 / 7)."""
+    d, n = y.shape[0], x.shape[0]
+    if fam_u == 0:
+        H = np.zeros((d, n))
+        row_jacobian(kinds, lla, vel, C, omega, lever, H)
+        if linear:
+            yhat = H @ x
+        else:
+            Z = np.empty((1, d))
+            row_predict(kinds, lla, vel, C, omega, lever, x.copy().reshape(1, n), Z)
+            yhat = Z[0]
+        r = y - yhat
+        x1, Pn, Sm, ni, ok = _joseph_update(x, P, H, r, R)
+        return x1, Pn, r, Sm, ni, 0 if ok else 4
+    Sg = _sigma_points(x, P, c)
+    if Sg.shape[0] == 0:
+        return x, P, y, R, np.nan, 7
+    Z = np.empty((Sg.shape[0], d))
+    row_predict(kinds, lla, vel, C, omega, lever, Sg, Z)
+    x1, Pn, r, Sm, ni, ok = _update(Sg, Z, Wm, Wc, x, P, y, R)
+    return x1, Pn, r, Sm, ni, 0 if ok and math.isfinite(ni) else 4
+
+
+@numba.njit(cache=True)
 def run_epochs(k0, n_ep, state, comp, dtheta, dv, h_ref, gains, cst, noise, nsub, n_per,
                X, P, beta, qlog, passes, fam, c, Wm, Wc, thr, recovery, sharing,
+               thr_drift, lk_pos, lk_hold, lk_state, lk_r0, lk_S0, lk_tpos,
                m_epoch, m_sens, m_t, m_z, m_R, s_filter, s_how, s_dim, s_kinds, s_zi,
                s_lever, s_linear, out_states, out_P, out_beta, out_Phi, out_Qd, out_dx, out_rows,
-               out_nis, out_acc, out_r, out_S, out_bm, out_thr, out_tlog):
+               out_nis, out_acc, out_r, out_S, out_bm, out_thr, out_tlog, out_re):
     """Fly epochs ``k0 + 1 .. k0 + n_ep`` (1-based) in place on ``state`` (the INS),
     ``comp`` (gyro and accelerometer compensation) and the filters ``X``, ``P``, ``beta``,
     ``passes`` (locals, then the master).
@@ -103,11 +130,16 @@ def run_epochs(k0, n_ep, state, comp, dtheta, dv, h_ref, gains, cst, noise, nsub
     epochs' IMU increments and baro heights; ``fam`` (nf, 2) each filter's time/
     measurement-update family; ``c``, ``Wm``, ``Wc`` its unscented constants; ``thr``
     (nf, 7) its chi-square threshold by dof (NaN: no detection); ``sharing`` 0 equal,
-    1 fixed, 2 adaptive.  ``m_*``: the epochs' measurements in the order they are applied
-    (epoch index, sensor, time of validity, z, R); ``s_*``: per sensor its local filter,
-    how, dimension, the rows of its model, its lever arm and whether it is linear.
+    1 fixed, 2 adaptive.  ``thr_drift`` (nf, 7), ``lk_*``: the lockout guard's drift
+    test thresholds, position sources, hold time and state
+    (:class:`fednav.filters.federated.Lockout`).  ``m_*``: the epochs' measurements
+    in the order they are applied (epoch index, sensor, time of validity, z, R); ``s_*``:
+    per sensor its local filter, how, dimension, the rows of its model, its lever arm and
+    whether it is linear.
     Outputs per epoch and per measurement (``out_rows`` of zero length:
-    no IMU-rate rows).  Returns (failure code, epoch, filter); code 0 when all flew."""
+    no IMU-rate rows; ``out_re`` (M, 3): lockout start, NIS before and inflation of a
+    re-admission, inflation 0 where none).  Returns (failure code, epoch, filter); code 0
+    when all flew."""
     dt, T, t0 = cst[0], cst[1], cst[2]
     k1g, k2g, itg, ita = cst[3], cst[4], cst[5], cst[6]
     q_step, q_logmax = cst[7], cst[8]
@@ -204,29 +236,11 @@ def run_epochs(k0, n_ep, state, comp, dtheta, dv, h_ref, gains, cst, noise, nsub
             y = np.empty(d)
             row_residual(kinds, zi, lla, vel, C, omega, m_z[m], lever, y)
             R = m_R[m, :d, :d].copy()
-            if fam[f, 1] == 0:  # Kalman: Joseph form
-                H = np.zeros((d, n))
-                row_jacobian(kinds, lla, vel, C, omega, lever, H)
-                if s_linear[sn]:
-                    yhat = H @ X[f]
-                else:
-                    Z = np.empty((1, d))
-                    row_predict(kinds, lla, vel, C, omega, lever, X[f].copy().reshape(1, n),
-                                Z)
-                    yhat = Z[0]
-                r = y - yhat
-                x1, Pn, Sm, ni, ok = _joseph_update(X[f], P[f], H, r, R)
-                if not ok:
-                    return 4, k, f
-            else:
-                Sg = _sigma_points(X[f], P[f], c[f])
-                if Sg.shape[0] == 0:
-                    return 7, k, f
-                Z = np.empty((Sg.shape[0], d))
-                row_predict(kinds, lla, vel, C, omega, lever, Sg, Z)
-                x1, Pn, r, Sm, ni, ok = _update(Sg, Z, Wm[f], Wc[f], X[f], P[f], y, R)
-                if not ok or not math.isfinite(ni):
-                    return 4, k, f
+            x1, Pn, r, Sm, ni, code = _local_update(fam[f, 1], X[f], P[f], c[f], Wm[f], Wc[f],
+                                                    kinds, lla, vel, C, omega, lever,
+                                                    s_linear[sn], y, R)
+            if code:
+                return code, k, f
             # chi-square fault detection (FederatedFilter.update)
             th = thr[f, d]
             gate = np.inf
@@ -239,6 +253,26 @@ def run_epochs(k0, n_ep, state, comp, dtheta, dv, h_ref, gains, cst, noise, nsub
             accepted = not (ni > gate)
             if not math.isnan(th) and gate != -1.0:
                 passes[f] = recovery if accepted else 0
+            out_re[m, 2] = 0.0
+            if lk_pos[f] and lk_hold > 0.0:  # the lockout guard (FederatedFilter._readmit)
+                s_in, t_start = _lockout(f, t_log, accepted, ni, r, Sm, R, thr_drift[f, d],
+                                         lk_hold, lk_pos, lk_state, lk_r0, lk_S0, lk_tpos)
+                if s_in > 0.0:
+                    P_saved = P.copy()
+                    for g in range(nf):
+                        P[g] = P[g] * s_in
+                    x2, P2, r2, S2, n2, code = _local_update(
+                        fam[f, 1], X[f], P[f], c[f], Wm[f], Wc[f], kinds, lla, vel, C, omega,
+                        lever, s_linear[sn], y, R)
+                    if (code == 0 and not n2 > th and math.isfinite(x2.sum() + P2.sum())
+                            and cholesky_lower(P2)[1]):
+                        out_re[m, 0], out_re[m, 1], out_re[m, 2] = t_start, ni, s_in
+                        x1, Pn, r, Sm, ni, accepted = x2, P2, r2, S2, n2, True
+                        passes[f] = recovery
+                        _lockout(f, t_log, True, ni, r, Sm, R, thr_drift[f, d], lk_hold,
+                                 lk_pos, lk_state, lk_r0, lk_S0, lk_tpos)
+                    else:
+                        P[:] = P_saved
             if accepted:
                 if not math.isfinite(x1.sum() + Pn.sum()):
                     return 8, k, f
@@ -325,13 +359,16 @@ class CompiledLoop:
             if hasattr(f, "Wm"):
                 self.c[i], self.Wm[i], self.Wc[i] = f.c, f.Wm, f.Wc
         self.thr = np.full((nf, 7), np.nan)
+        self.thr_drift = np.full((nf, 7), np.nan)  # (the lockout guard's, drift_threshold)
         for i, k in enumerate(self.names):
             a = fed.fdi_alphas.get(k)
             if a is not None:
                 from scipy.stats import chi2  # (0.4 s to import: only with detection on)
 
                 self.thr[i, 1:] = [float(chi2.ppf(1.0 - a, d)) for d in range(1, 7)]
+                self.thr_drift[i, 1:] = [drift_threshold(d, a) for d in range(1, 7)]
         self.recovery = int(fed.fdi_recovery)
+        self.lockout = fed.lockout  # (its state arrays are flown in place)
         self.sharing = {"equal": 0, "fixed": 1, "adaptive": 2}[fed.sharing]
         # Per sensor (aiding order): its local filter, how, rows, lever, linearity.
         for m in meas:
@@ -438,15 +475,19 @@ class CompiledLoop:
             out_r, out_S, out_bm = np.zeros((M, 6)), np.zeros((M, 6, 6)), np.empty(M)
         else:
             out_r, out_S, out_bm = self._none_inn
+        out_re = np.zeros((max(M, 1), 3))
+        lk = self.lockout
         code, k, f = run_epochs(
             k0, n_ep, self.core.state, self.comp, dtheta, dv, h_ref, self.gains,
             self.cst, self.noise_vec, self.core.nsub, self.n_per, self.X, self.P, self.beta,
             self.qlog, self.passes, self.fam, self.c, self.Wm, self.Wc, self.thr, self.recovery,
-            self.sharing, m_epoch, m_sens, m_t, m_z, m_R, self.s_filter, self.s_how,
+            self.sharing, self.thr_drift, lk.pos, lk.hold, lk.state, lk.r0, lk.S0, lk.t_pos,
+            m_epoch, m_sens, m_t, m_z, m_R, self.s_filter, self.s_how,
             self.s_dim, self.s_kinds, self.s_zi, self.s_lever, self.s_linear,
             rec.states.a[e0:e0 + n_ep],
             rec.P.a[e0:e0 + n_ep], rec.beta.a[e0 - 1:e0 - 1 + n_ep], out_Phi, out_Qd,
-            out_dx, out_rows, lg[:, 2], lg[:, 5], out_r, out_S, out_bm, lg[:, 4], lg[:, 0])
+            out_dx, out_rows, lg[:, 2], lg[:, 5], out_r, out_S, out_bm, lg[:, 4], lg[:, 0],
+            out_re)
         if code:
             phase, why = FAILURES[code]
             if code == 1:
@@ -464,6 +505,9 @@ class CompiledLoop:
         if M:
             lg[:M, 1] = self.s_filter[m_sens]
             lg[:M, 3] = self.s_dim[m_sens]
+            for j in np.flatnonzero(out_re[:M, 2] > 0.0).tolist():  # re-admissions (few)
+                lk.episode(int(lg[j, 1]), out_re[j, 0], lg[j, 0], out_re[j, 1], out_re[j, 2],
+                           lg[j, 2], int(lg[j, 3]))
             log.n += M
             if self.innovations:
                 for j in range(M):

@@ -81,3 +81,25 @@ def isolation_warnings(fdi: list) -> list[str]:
                    f"figures (fednav tune), in which case the solution drifts on the IMU "
                    f"alone; filter.fdi_recovery re-admits after passes in a row")
     return out
+
+
+def readmission_warnings(episodes: list[dict]) -> list[str]:
+    """One warning per local filter that fault detection had locked out with every other
+    position source and that was re-admitted (``filter.fdi_readmit_s``; ``episodes``:
+    :attr:`fednav.NavResult.readmissions`), naming each episode's span [s], NIS/dof and
+    the covariance inflation (the first five; then how many more)."""
+    out = []
+    by: dict[str, list[dict]] = {}
+    for e in episodes:
+        by.setdefault(e["local"], []).append(e)
+    for local, es in by.items():
+        spans = "; ".join(f"{e['t_start_s']:.1f}..{e['t_s']:.1f} s (NIS/dof "
+                          f"{e['nis_per_dof']:.3g}, covariance x{e['inflation']:.3g})"
+                          for e in es[:5])
+        more = f" and {len(es) - 5} more" if len(es) > 5 else ""
+        out.append(f"fault detection isolated every position source and re-admitted the "
+                   f"'{local}' local filter {len(es)} time(s), its innovations having "
+                   f"drifted beyond the filter's covariance: {spans}{more} — the filter is "
+                   f"too confident of its IMU figures (fednav tune, filter.q_adaptation); "
+                   f"the solution drifted on the IMU alone in between")
+    return out

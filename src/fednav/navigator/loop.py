@@ -122,7 +122,17 @@ def build_federation(system, names: list[str], P0: np.ndarray, n: int) -> Federa
     if isinstance(alpha, dict):
         alpha = {k: v for k, v in alpha.items() if k in locals_}
     return FederatedFilter(locals_, master, sharing=f.sharing, fixed=f.fixed_factors,
-                           reset=f.reset, fdi_alpha=alpha, fdi_recovery=f.fdi_recovery)
+                           reset=f.reset, fdi_alpha=alpha, fdi_recovery=f.fdi_recovery,
+                           fdi_readmit_s=f.fdi_readmit_s, positions=position_sources(names))
+
+
+def position_sources(names) -> list[str]:
+    """The sensors among ``names`` that fix the position (the registry's
+    :attr:`~fednav.sensors.spec.SensorSpec.fixes_position`): those fault isolation may
+    not lock out all at once (``filter.fdi_readmit_s``)."""
+    from ..sensors.registry import SENSORS
+
+    return [a for a in names if a in SENSORS and SENSORS[a].fixes_position]
 
 
 # ----------------------------------------------------------------------------- cores
@@ -400,4 +410,4 @@ class PythonLoop:
         model = WindConstraint.of(z[i])
         d, R = model.residual(nav, z[i]), model.R(m.sigma[i], nav)
         for name in self.fed.locals:
-            self.fed.update(name, d, model, nav, R, t=tk)
+            self.fed.update(name, d, model, nav, R, t=tk, readmit=False)

@@ -48,6 +48,7 @@ from .loop import (
     PythonLoop,
     TotalStateCore,
     build_federation,
+    position_sources,
 )
 from .record import Growing
 from .system import System, imu_noise_model
@@ -124,7 +125,12 @@ class NavResult:
     local measurement (t, local, statistic, dof, threshold, isolated); ``innovations``:
     :class:`~fednav.navigator.loop.InnovationRecord` s; ``rows`` (with ``record_rows``):
     quaternion, ENU velocity, lla and body rate at every IMU sample (row ``k n`` holds
-    the state after epoch k's feedback); ``data_quality``: what the input checks did."""
+    the state after epoch k's feedback); ``data_quality``: what the input checks did;
+    ``readmissions``: one dict per time fault isolation had locked out every position
+    source for ``filter.fdi_readmit_s`` and re-admitted one (``local``, ``t_start_s``,
+    ``t_s``, ``duration_s``, ``nis_per_dof`` before and ``nis_per_dof_after``,
+    ``inflation`` of the covariance; :func:`fednav.navigator.health.
+    readmission_warnings` words them)."""
 
     t: np.ndarray
     states: np.ndarray
@@ -140,6 +146,7 @@ class NavResult:
     engine: str = "python"
     dt: float = float("nan")
     smooth: bool = False
+    readmissions: list = field(default_factory=list)
 
     @cached_property
     def _imu_rate(self):
@@ -169,10 +176,12 @@ class NavResult:
     def health(self) -> list[str]:
         """Warnings about the run from its fault-detection log
         (:mod:`fednav.navigator.health`): local filters whose innovations are far beyond
-        their sigma, and long isolations; empty when all is well."""
-        from .health import isolation_warnings, nis_check
+        their sigma, long isolations and re-admitted position sources; empty when all is
+        well."""
+        from .health import isolation_warnings, nis_check, readmission_warnings
 
-        return isolation_warnings(self.fdi) + nis_check(self.fdi, force=True)
+        return (isolation_warnings(self.fdi) + nis_check(self.fdi, force=True)
+                + readmission_warnings(self.readmissions))
 
     @property
     def sigma(self) -> np.ndarray:
@@ -287,7 +296,8 @@ class Navigator:
                  for a in self.aiding}, None,
                 sharing="equal" if f.sharing == "adaptive" else f.sharing,
                 fixed=f.fixed_factors, reset=True, fdi_alpha=f.fdi_alpha,
-                fdi_recovery=f.fdi_recovery)
+                fdi_recovery=f.fdi_recovery, fdi_readmit_s=f.fdi_readmit_s,
+                positions=position_sources(self.aiding))
         else:
             baro_q = 0.0
             if baro is not None and baro.damping_loop:
@@ -647,4 +657,5 @@ class Navigator:
                          list(self.loop.log), list(r.innovations or []),
                          r.Phi.view if cov else None, r.Qd.view if cov else None,
                          r.dx.view if cov else None, rows, dict(self.quality), self.engine,
-                         self.dt, self.system.smoother)
+                         self.dt, self.system.smoother,
+                         [dict(e) for e in self.loop.fed.readmissions])

@@ -91,8 +91,13 @@ class FilterConfig(_Model):
     sensor): equal, fixed (``fixed_factors``) or adaptive (paper 002, eq. 13).  ``reset``:
     fusion-reset every epoch.  ``fdi_alpha``: chi-square fault detection level, one for
     every local filter or by name; ``fdi_recovery``: passes in a row before an isolated
-    local filter returns.  ``period_s``: the filter epoch (default: every IMU sample
-    for a navigator, the GNSS period for ``fednav process``; scenarios state it).
+    local filter returns; ``fdi_readmit_s`` [s]: when every position source (GNSS, SAR
+    fix) has been isolated this long, the most consistent one is re-admitted with an
+    inflated covariance if its innovations drifted beyond what the filter's covariance
+    allows — a filter too confident of its IMU figures, not a sensor fault
+    (:func:`fednav.filters.federated._lockout`; None: never).  ``period_s``: the filter
+    epoch (default: every IMU sample for a navigator, the GNSS period for ``fednav
+    process``; scenarios state it).
     ``substeps`` of the nonlinear error propagation; ``alpha``, ``beta``, ``kappa`` of the
     unscented transform; ``grid_level`` of the sparse-grid filters.  ``accel_bias``: the
     filter's accelerometer-bias state —
@@ -118,6 +123,7 @@ class FilterConfig(_Model):
     substeps: int = Field(default=1, ge=1)
     fdi_alpha: float | dict[str, float] | None = None
     fdi_recovery: int = Field(default=1, ge=1)
+    fdi_readmit_s: float | None = Field(default=5.0, gt=0.0)
     grid_level: int = Field(default=3, ge=1, le=5)
     accel_bias: Literal["random_walk", "gauss_markov"] = "random_walk"
     q_adaptation: QAdaptationConfig | None = None

@@ -24,7 +24,7 @@ from ..ins import error_model as em
 from ..ins.alignment import UNKNOWN_HEADING_SIGMA, Alignment, align, coarse_level
 from ..io.data import DataError, GnssData, ImuData, Reference, VelocityData
 from ..io.sensorfile import SensorData
-from ..navigator.health import isolation_warnings, nis_check
+from ..navigator.health import isolation_warnings, nis_check, readmission_warnings
 from ..navigator.loop import InnovationRecord  # noqa: F401  (fednav.process's name)
 from ..navigator.navigator import InitialState, Navigator
 from ..navigator.solution import Solution, epoch_rate, imu_rate
@@ -726,6 +726,7 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
     res = solution(out, prep, smooth)
     res.warnings += isolation_warnings(res.forward.fdi) + nis_check(res.forward.fdi, force,
                                                                     list(res.warnings))
+    res.warnings += readmission_warnings(out.readmissions)
     if prep.system.filter.q_adaptation is not None and hasattr(nav.loop, "q_scales"):
         res.data_quality["q_scale_final"] = {k: round(v, 3)
                                              for k, v in nav.loop.q_scales().items()}

@@ -148,6 +148,13 @@ class SensorSpec:
     calibrate: object = None
 
     @property
+    def fixes_position(self) -> bool:
+        """Whether it fixes the horizontal position (its ``z`` holds latitude and
+        longitude): the sources fault isolation may not lock out all at once
+        (``filter.fdi_readmit_s``)."""
+        return self.latlon is not None
+
+    @property
     def compiled(self) -> bool:
         """Whether its model runs in the navigator's compiled engine."""
         return issubclass(self.model, RowModel)
