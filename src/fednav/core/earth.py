@@ -84,6 +84,56 @@ def llh_to_ecef(lat, lon, h):
 
 
 @register_jitable
+def wrap_lon(a):
+    """A longitude or longitude difference [rad] wrapped to (-pi, pi]: returned unchanged,
+    bit for bit, when it lies there already (scalar; plain Python, and callable from
+    compiled code; arrays: :func:`wrap_lon_array`)."""
+    if -np.pi < a <= np.pi:
+        return a
+    r = (a + np.pi) % (2.0 * np.pi) - np.pi
+    return r + 2.0 * np.pi if r <= -np.pi else r
+
+
+def wrap_lon_array(a) -> np.ndarray:
+    """:func:`wrap_lon` elementwise on an array [rad]."""
+    a = np.asarray(a, dtype=float)
+    r = (a + np.pi) % (2.0 * np.pi) - np.pi
+    r = np.where(r <= -np.pi, r + 2.0 * np.pi, r)
+    return np.where((a > -np.pi) & (a <= np.pi), a, r)
+
+
+def ecef_to_llh(r) -> np.ndarray:
+    """ECEF coordinates (..., 3) [m] -> geodetic latitude, longitude [rad] in (-pi, pi],
+    height [m] above the ellipsoid, shape (..., 3) (inverse of :func:`llh_to_ecef`).
+
+    Bowring's iteration on the reduced latitude (five steps: the round trip with
+    :func:`llh_to_ecef` at rounding level from below the surface to 30 km up, the poles
+    included, ``tests/test_polar.py``)."""
+    r = np.asarray(r, dtype=float)
+    x, y, z = r[..., 0], r[..., 1], r[..., 2]
+    p = np.hypot(x, y)
+    b = A * (1.0 - F)
+    ep2 = E2 / (1.0 - E2)
+    beta = np.arctan2(z, (1.0 - F) * p)
+    for _ in range(5):
+        lat = np.arctan2(z + ep2 * b * np.sin(beta) ** 3, p - E2 * A * np.cos(beta) ** 3)
+        beta = np.arctan2((1.0 - F) * np.sin(lat), np.cos(lat))
+    sl, cl = np.sin(lat), np.cos(lat)
+    rn = A / np.sqrt(1.0 - E2 * sl * sl)
+    h = p * cl + z * sl - rn * (1.0 - E2 * sl * sl)  # exact at any latitude
+    return np.stack([lat, np.arctan2(y, x), h], axis=-1)
+
+
+def enu_to_ecef(lat, lon) -> np.ndarray:
+    """C_n^e (..., 3, 3): the columns are the east, north and up unit vectors in ECEF."""
+    sl, cl, so, co = np.sin(lat), np.cos(lat), np.sin(lon), np.cos(lon)
+    z = np.zeros_like(sl)
+    return np.stack([np.stack([-so, -sl * co, cl * co], -1),
+                     np.stack([co, -sl * so, cl * so], -1),
+                     np.stack([z, cl, sl], -1)], -2)
+
+
+@register_jitable
 def moved(lat, lon, h, de, dn, du):
     """Latitude, longitude, height moved by ``de``, ``dn``, ``du`` metres east, north, up
     (radii of curvature at the start; scalars or arrays; compiled: :func:`moved_nb`)."""
@@ -120,8 +170,7 @@ def llh_difference_enu(lat, lon, h, lat_ref, lon_ref, h_ref):
     -180..180).
     """
     rm, rn = radii(lat_ref)
-    dlon = np.asarray(lon) - lon_ref
-    dlon = np.where(np.abs(dlon) > np.pi, (dlon + np.pi) % (2.0 * np.pi) - np.pi, dlon)
+    dlon = wrap_lon_array(np.asarray(lon) - lon_ref)
     de = dlon * (rn + h_ref) * np.cos(lat_ref)
     dn = (np.asarray(lat) - lat_ref) * (rm + h_ref)
     du = np.asarray(h) - h_ref
