@@ -74,7 +74,7 @@ def _boxplus(states, d, scale):
         lat, h = states[i, 7], states[i, 9]
         rm, rn = earth.radii_nb(lat)
         out[i, 7] = lat + dd[7] / (rm + h)
-        out[i, 8] = states[i, 8] + dd[6] / ((rn + h) * np.cos(lat))
+        out[i, 8] = earth.wrap_lon(states[i, 8] + dd[6] / ((rn + h) * np.cos(lat)))
         out[i, 9] = h + dd[8]
     return out
 
@@ -91,7 +91,7 @@ def _boxminus(states, ref, scale):
         out[i, 0:3] = phi
         for j in range(3):
             out[i, 3 + j] = states[i, 4 + j] - ref[4 + j]
-        out[i, 6] = (states[i, 8] - ref[8]) * (rn + ref[9]) * np.cos(ref[7])
+        out[i, 6] = earth.wrap_lon(states[i, 8] - ref[8]) * (rn + ref[9]) * np.cos(ref[7])
         out[i, 7] = (states[i, 7] - ref[7]) * (rm + ref[9])
         out[i, 8] = states[i, 9] - ref[9]
         for j in range(9):
@@ -268,7 +268,8 @@ class GnssTotal:
         rm, rn = earth.radii_nb(lat)
         v = state[STATE_VEL]
         return np.array([z[3] - v[0], z[4] - v[1], z[5] - v[2],
-                         (z[1] - lon) * (rn + h) * np.cos(lat), (z[0] - lat) * (rm + h),
+                         earth.wrap_lon(z[1] - lon) * (rn + h) * np.cos(lat),
+                         (z[0] - lat) * (rm + h),
                          z[2] - h]) / TSCALE[3:9]
 
     def R(self, sigma) -> np.ndarray:

@@ -230,7 +230,7 @@ def row_residual(kinds, zindex, lla, vel, C, omega, z, lever, out):
     for r in range(kinds.shape[0]):
         k, zi = kinds[r], zindex[r]
         if k == POS_E:
-            out[r] = (lon - z[zi]) * (rn + h) * np.cos(lat)
+            out[r] = earth.wrap_lon(lon - z[zi]) * (rn + h) * np.cos(lat)
         elif k == POS_N:
             out[r] = (lat - z[zi]) * (rm + h)
         elif k == POS_U:
