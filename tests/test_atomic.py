@@ -148,5 +148,53 @@ def test_json_outputs_never_hold_nan_or_infinity(tmp_path):
     def refuse(c):
         raise ValueError(c)
 
-    assert json.loads(p.read_text(), parse_constant=refuse) == {
-        "ci": None, "x": 1.5, "inf": [None, None], "a": [1, 2]}
+    s = json.loads(p.read_text(), parse_constant=refuse)
+    assert s.pop("null_values")                     # (why: test_json_nulls_say_why)
+    assert s == {"ci": None, "x": 1.5, "inf": [None, None], "a": [1, 2]}
+
+
+def test_json_nulls_say_why(tmp_path):
+    """Issue 27: a non-finite number is null *with the reason*: the file's key
+    ``null_values`` lists, per reason, the JSON Pointers of the numbers it replaced."""
+    from fednav.core.atomic import NULLS_KEY, write_json
+
+    p = write_json(tmp_path / "s.json", {"rows": {"a/b": {"ci95": float("nan"), "x": 1.0}},
+                                         "t": [float("inf"), float("nan")]},
+                   why={"ci95": "needs 2 runs"})
+    s = json.loads(p.read_text())
+    assert s["rows"]["a/b"] == {"ci95": None, "x": 1.0} and s["t"] == [None, None]
+    assert s[NULLS_KEY] == [
+        {"why": "needs 2 runs", "was": "NaN", "paths": ["/rows/a~1b/ci95"]},
+        {"why": "infinite: a division by zero or an overflow", "was": "Infinity",
+         "paths": ["/t/0"]},
+        {"why": "not a number: nothing to compute it from (no finite data)", "was": "NaN",
+         "paths": ["/t/1"]}]
+    write_json(p, {"x": 1.0})
+    assert NULLS_KEY not in json.loads(p.read_text())     # only when a number was replaced
+
+
+def _pointer_get(doc, pointer: str):
+    for part in pointer.split("/")[1:]:
+        part = part.replace("~1", "/").replace("~0", "~")
+        doc = doc[int(part)] if isinstance(doc, list) else doc[part]
+    return doc
+
+
+def test_a_one_run_campaign_says_why_its_intervals_are_null(tmp_path):
+    """`--runs 1`: every confidence interval is null, and summary.json says why (strict
+    JSON, each pointer of null_values is a null of the file); campaign.json is strict."""
+    out = tmp_path / "c"
+    r = CliRunner().invoke(app, ["reproduce", "000", "--runs", "1", "--max-time", "5",
+                                 "--jobs", "1", "--out", str(out)])
+    assert r.exit_code == 0, r.output
+
+    def refuse(c):
+        raise ValueError(c)
+
+    s = json.loads((out / "summary.json").read_text(), parse_constant=refuse)
+    json.loads((out / "campaign.json").read_text(), parse_constant=refuse)
+    (block,) = [b for b in s["null_values"] if b["paths"][0].endswith("/ci95")]
+    assert block["why"].startswith("a 95 % confidence interval needs at least 2 runs")
+    assert all(_pointer_get(s, p) is None for p in block["paths"])
+    cis = [v for row in s["tables"]["T1"]["rows"].values() for v in row.values()]
+    assert len(block["paths"]) >= len(cis) and all(c["ci95"] is None for c in cis)

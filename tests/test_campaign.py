@@ -342,3 +342,48 @@ def test_a_stored_run_of_another_campaign_is_refused_not_used(tmp_path):
     victim.write_bytes(runs_b[0].read_bytes())
     r = CliRunner().invoke(app, ["reproduce", "002", *ARGS, "--seed", "1", "--out", str(a)])
     assert r.exit_code == 2 and f"stored run {victim.name} is another run's" in r.output
+
+
+def test_dask_pointing_at_a_silent_server_fails_in_one_line_within_10_s(tmp_path):
+    """A TCP server that accepts and never sends (Dask would wait for its handshake
+    forever): one line, exit 2, within 10 s."""
+    import socket
+    import threading
+
+    srv = socket.create_server(("127.0.0.1", 0))
+    conns = []
+
+    def accept():
+        while True:
+            try:
+                conns.append(srv.accept()[0])     # accepted, never answered
+            except OSError:
+                return
+
+    threading.Thread(target=accept, daemon=True).start()
+    try:
+        t0 = time.monotonic()
+        r = CliRunner().invoke(app, ["reproduce", "002", "--runs", "1", "--max-time", "30",
+                                     "--dask", f"tcp://127.0.0.1:{srv.getsockname()[1]}",
+                                     "--out", str(tmp_path / "d")])
+        assert time.monotonic() - t0 < 10.0
+        assert r.exit_code == 2, r.output
+        (line,) = r.output.strip().splitlines()
+        assert line.startswith("error: Dask scheduler tcp://127.0.0.1:") and \
+            "is not a Dask scheduler (it sent nothing within 5 s" in line
+    finally:
+        srv.close()
+        for c in conns:
+            c.close()
+
+
+def test_fresh_removes_only_the_run_files(tmp_path):
+    """`--fresh` empties runs/ of run files (and temporary ones), not of a user's file."""
+    scn = paper000.load_scenario()
+    out = tmp_path / "c"
+    with Campaign(out, "000", scn, 1) as camp:
+        run_units(paper000.one_run, [(scn, 1, 5.0)], campaign=camp)
+    (out / "runs" / "notes.txt").write_text("mine")
+    (out / "runs" / ".x.nc.123.tmp").write_text("half")
+    Campaign(out, "000", scn, 1, fresh=True)
+    assert [f.name for f in (out / "runs").iterdir()] == ["notes.txt"]

@@ -1,6 +1,7 @@
 """The command line's own help: every command renders it, nothing in it is eaten as markup."""
 
 import re
+from pathlib import Path
 
 import pytest
 import typer
@@ -41,3 +42,53 @@ def test_bracketed_text_survives_in_the_help():
     assert "results/<paper>" in out
     out = CliRunner().invoke(app, ["--help"], env={"COLUMNS": "200"}).output
     assert "optional velocity aiding" in out
+
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.mark.parametrize("argv, name, source", [
+    # simulate: a dataset scenario where it writes its config, a paper-layout one where it
+    # writes the system description, a file named as a sensor's CSV
+    (["simulate", "{input}"], "process.yaml", "examples/car-drive.yaml"),
+    (["simulate", "{input}"], "system.yaml", "examples/uav-gnss-baro-star.yaml"),
+    (["simulate", "{input}", "--format", "navego"], "gnss.csv", "examples/car-drive.yaml"),
+    # campaigns: a scenario named as a table, a plot, or kept in runs/ (--fresh empties it)
+    (["reproduce", "002", "--scenario", "{input}"], "summary.json",
+     "src/fednav/scenarios/paper002.yaml"),
+    (["reproduce", "000", "--scenario", "{input}", "--fresh"], "runs/mine.yaml",
+     "src/fednav/scenarios/paper000.yaml"),
+    (["run", "{input}"], "tables.md", "examples/uav-gnss-baro-star.yaml"),
+    (["run", "{input}", "--fresh"], "runs/design.yaml", "examples/uav-gnss-baro-star.yaml"),
+    # allan: an IMU file named as one of its outputs
+    (["allan", "{input}"], "summary.json", "tests/data/bad/good/imu.csv"),
+])
+def test_an_output_folder_holding_an_input_it_would_overwrite_is_refused(tmp_path, argv,
+                                                                         name, source):
+    """Issue 27: an output that is (or would overwrite) one of the command's inputs is
+    refused in one line before anything is written (`fednav simulate scenario.yaml` with
+    the scenario saved as OUT/process.yaml replaced it with the written config)."""
+    out = tmp_path / "out"
+    path = out / name
+    path.parent.mkdir(parents=True)
+    text = (ROOT / source).read_text()
+    path.write_text(text)
+    args = [a.replace("{input}", str(path)) for a in argv]
+    r = CliRunner().invoke(app, [*args, "--out", str(out)])
+    assert r.exit_code == 2, r.output
+    assert r.output.strip() == (f"error: --out {out}: writing there would overwrite the "
+                                f"{'imu' if argv[0] == 'allan' else 'scenario'} file {path}, "
+                                f"an input; choose another output folder")
+    assert path.read_text() == text
+    assert sorted(p.relative_to(out).as_posix() for p in out.rglob("*")) == \
+        sorted({name, *[str(q.as_posix()) for q in Path(name).parents][:-1]})
+
+
+def test_inputs_beside_the_outputs_are_not_refused():
+    """A scenario kept in the output folder under a name no output has is fine."""
+    from fednav.cli import _campaign_writes, _simulate_writes
+
+    assert not _campaign_writes(Path("design.yaml")) and not _campaign_writes(Path("runs"))
+    assert _campaign_writes(Path("runs/a.nc")) and _campaign_writes(Path("errors.png"))
+    assert not _simulate_writes(Path("car-drive.yaml"))
+    assert not _simulate_writes(Path("processed/solution.csv"))

@@ -33,7 +33,9 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
 
 def _one_line_errors(command):
     """fednav's own errors end a command with their one-line message and exit status 2
-    (the traceback only with ``--debug``); warnings are one line each."""
+    (the traceback only with ``--debug``), and so does an :class:`OSError` naming a file
+    (a full disk, no permission) that no fednav error caught; warnings are one line
+    each."""
     @functools.wraps(command)
     def run(*args, **kwargs):
         import warnings
@@ -48,6 +50,11 @@ def _one_line_errors(command):
             if _state["debug"]:
                 raise
             typer.echo(f"error: {e}", err=True)
+            raise typer.Exit(2) from None
+        except OSError as e:
+            if _state["debug"] or e.filename is None:
+                raise
+            typer.echo(f"error: {e.filename}: {e.strerror or e}", err=True)
             raise typer.Exit(2) from None
     return run
 
@@ -133,7 +140,9 @@ def reproduce(
             typer.echo(f"error: {opt} must be at least {low}, got {value}", err=True)
             raise typer.Exit(2)
         extra[name] = value
-    out = _output_folder(out or Path("results") / exp.number)
+    out = out or Path("results") / exp.number
+    _refuse_writing_over(out, {"scenario": scenario}, _campaign_writes)
+    out = _output_folder(out)
     scn = exp.load_scenario(scenario)
     _campaign(exp, scn, exp.number, f"paper {exp.number}: {scn.name}", "units of work", out,
               runs, seed, jobs, max_time, fresh, dask, extra)
@@ -153,7 +162,7 @@ def _campaign(exp, scn, identity: str, label: str, unit: str, out: Path, runs: i
 
     from .campaign.html_report import write_report
     from .campaign.store import Campaign
-    from .core.atomic import clear_results
+    from .core.atomic import OutputError, clear_results
 
     camp = Campaign(out, identity, scn, seed, fresh, dask)
     clear_results(out)
@@ -163,6 +172,10 @@ def _campaign(exp, scn, identity: str, label: str, unit: str, out: Path, runs: i
                   MofNCompleteColumn(), TimeElapsedColumn(), TimeRemainingColumn(),
                   console=console, transient=False) as prog:
         task = prog.add_task(label, total=total)
+
+        def stored() -> str:
+            return (f"{camp.computed + camp.reused} of {total} {unit} are stored in {out}; "
+                    f"the same command computes the others")
         try:
             with camp:
                 rep = exp.reproduce(scn, runs, seed, jobs, max_time,
@@ -170,9 +183,14 @@ def _campaign(exp, scn, identity: str, label: str, unit: str, out: Path, runs: i
                                     **extra)
         except KeyboardInterrupt:
             prog.stop()
-            typer.echo(f"interrupted: {camp.computed + camp.reused} of {total} {unit} "
-                       f"are stored in {out}; the same command computes the others", err=True)
+            typer.echo(f"interrupted: {stored()}", err=True)
             raise typer.Exit(130) from None
+        except OutputError as e:  # a full disk: what is stored is kept
+            prog.stop()
+            if _state["debug"]:
+                raise
+            typer.echo(f"error: {e}; {stored()}", err=True)
+            raise typer.Exit(2) from None
     rep["summary"]["campaign"] = camp.summary()
     exp.print_summary(rep["summary"], console)
     c = camp.summary()
@@ -209,6 +227,35 @@ def _output_folder(out: Path) -> Path:
         typer.echo(f"error: output folder {out}: {e.strerror or e}", err=True)
         raise typer.Exit(2) from None
     return out
+
+
+def _refuse_writing_over(out: Path, inputs: dict, writes) -> None:
+    """End with a one-line error when writing a command's outputs into folder ``out``
+    would replace one of its ``inputs`` (``{what: path or None}``); ``writes(rel)``
+    says whether the command writes the path ``rel`` (relative to ``out``)."""
+    root = Path(out).resolve()
+    for what, p in inputs.items():
+        if p is None:
+            continue
+        path = Path(p).resolve()
+        if path.is_relative_to(root) and writes(path.relative_to(root)):
+            typer.echo(f"error: --out {out}: writing there would overwrite the {what} file "
+                       f"{p}, an input; choose another output folder", err=True)
+            raise typer.Exit(2)
+
+
+def _campaign_writes(rel: Path) -> bool:
+    """Whether a campaign (``reproduce``, ``run``) writes ``rel`` in its folder: run files
+    (and ``--fresh`` removes them), tables, plots, summaries."""
+    return (rel.parts[0] == "runs" and len(rel.parts) > 1) or rel.suffix in (".csv", ".png") \
+        or rel.name in ("summary.json", "report.html", "campaign.json", "tables.md")
+
+
+def _simulate_writes(rel: Path) -> bool:
+    """Whether ``simulate`` writes ``rel`` in its folder (a sensor CSV or .mat each, the
+    reference, the config it writes)."""
+    return len(rel.parts) == 1 and (rel.suffix in (".csv", ".mat")
+                                    or rel.name in ("process.yaml", "system.yaml"))
 
 
 def _run_process(read, imu, gnss, velocity, ref, smooth, out, config, output_rate,
@@ -643,7 +690,9 @@ def simulate(
     cfg = load_dataset_config(path)
     if seed is not None:
         cfg = cfg.model_copy(update={"seed": seed})
-    out = _output_folder(out or Path("results/dataset"))
+    out = out or Path("results/dataset")
+    _refuse_writing_over(out, {"scenario": path}, _simulate_writes)
+    out = _output_folder(out)
     ds = simulate_dataset(cfg)
     files = (write_csv_dataset if fmt == "csv" else write_navego_dataset)(ds, out)
     console.print(f"{cfg.name}: {ds.t[-1] - ds.t[0]:.0f} s, {len(ds.t)} IMU samples, "
@@ -687,7 +736,10 @@ def _simulate_run(mod, path: Path, out: Path | None, fmt: str, seed: int, mode: 
     except ValueError as e:
         typer.echo(f"error: --max-time {max_time:g}: {e}", err=True)
         raise typer.Exit(2) from None
-    out = _output_folder(out or Path("results") / f"{scn.name}-{seed}")
+    out = out or Path("results") / f"{scn.name}-{seed}"
+    _refuse_writing_over(out, {"scenario": None if mod is not None else path},
+                         _simulate_writes)
+    out = _output_folder(out)
     files = write_run(scn, seed, m, out, max_time)
     console.print(f"{scn.name}: run seed {seed}, mode {m.name}: {truth.t[-1] - truth.t[0]:.0f} "
                   f"s, {len(truth.t) - 1} IMU samples")
@@ -745,7 +797,9 @@ def run_design(
 
     scn = DESIGN.load_scenario(scenario)
     DESIGN.check(scn, scenario, max_time)
-    out = _output_folder(out or Path("results") / scn.name)
+    out = out or Path("results") / scn.name
+    _refuse_writing_over(out, {"scenario": scenario}, _campaign_writes)
+    out = _output_folder(out)
     _campaign(DESIGN, scn, DESIGN.identity(scn), f"design {scn.name}", "runs", out, runs,
               seed, jobs, max_time, fresh, dask, {})
 
@@ -764,8 +818,11 @@ def allan_command(
     from .io import read_imu_csv
     from .process.allan import allan, write
 
+    out = out or Path("results/allan")
+    _refuse_writing_over(out, {"imu": imu}, lambda rel: str(rel) in (
+        "allan.png", "summary.json", "imu-figures.yaml", "report.html"))
     res = allan(read_imu_csv(imu))
-    out = _output_folder(out or Path("results/allan"))
+    out = _output_folder(out)
     files = write(res, out)
     _print_allan(res)
     console.print(f"wrote {', '.join(str(f) for f in files)}")

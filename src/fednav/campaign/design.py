@@ -255,7 +255,9 @@ class Design(Paper):
             "statistics": "value: Monte Carlo mean over the runs of the per-run statistic "
                           "(rmse / mean / max of the absolute error over the epochs, or "
                           "the run's mean NIS/dof); ci95: half-width of its 95 % "
-                          "Student-t confidence interval (null with one run)",
+                          "Student-t confidence interval (null with one run); value null "
+                          "when no run has a finite value (a window outside the flight "
+                          "flown)",
             "tables": summarize_rows(rows, modes, windows, runs),
         }
         return {"rows": rows, "series": runs_series[0], "runs_series": runs_series,

@@ -23,6 +23,13 @@ def error_stats(err) -> dict[str, np.ndarray]:
     }
 
 
+#: Why a campaign table's number is null in summary.json (``write_json(why=...)``).
+NULL_REASONS = {
+    "ci95": "a 95 % confidence interval needs at least 2 runs with a finite value",
+    "ours": "no run gave a finite value (e.g. a window outside a truncated flight)",
+}
+
+
 def mean_ci95(values) -> tuple[float, float]:
     """Monte Carlo mean and half-width of its 95 % confidence interval (Student t)."""
     v = np.asarray(values, dtype=float)

@@ -20,6 +20,7 @@ from pathlib import Path
 import pandas as pd
 
 from ..core.atomic import write_frame, write_json
+from .evaluation import NULL_REASONS
 from .montecarlo import run_seeds
 
 
@@ -105,5 +106,5 @@ class Paper(ABC):
         out.mkdir(parents=True, exist_ok=True)
         written = [write_frame(pd.DataFrame(rep["rows"]), out / "runs.csv")]
         written += self.files(out, rep) + self.plots(out, rep)
-        summary = write_json(out / "summary.json", rep["summary"])
+        summary = write_json(out / "summary.json", rep["summary"], why=NULL_REASONS)
         return [summary, *written]

@@ -11,7 +11,7 @@ from rich.table import Table
 
 from ..core import units
 from ..core.atomic import save_figure, write_frame, write_json
-from .evaluation import mean_ci95
+from .evaluation import NULL_REASONS, mean_ci95
 
 
 def summarize(rows: list[dict], paper_tables: dict, paper: str, runs: int, seed: int) -> dict:
@@ -78,7 +78,7 @@ def write_outputs(out: Path, summary: dict, rows: list[dict], series: dict) -> l
     written = [write_frame(pd.DataFrame(rows), out / "runs.csv")]
     if series:
         written.append(plot_errors(series, out / "errors.png"))
-    written.insert(0, write_json(out / "summary.json", summary))
+    written.insert(0, write_json(out / "summary.json", summary, why=NULL_REASONS))
     return written
 
 

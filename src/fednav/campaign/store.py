@@ -43,7 +43,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.atomic import write_bytes, write_text
+from ..core.atomic import output_error, write_bytes, write_json
 from ..core.errors import FednavError
 
 
@@ -82,13 +82,19 @@ class Campaign:
         self.out = Path(out)
         if self.out.exists() and not self.out.is_dir():
             raise CampaignError(f"campaign folder {self.out}: exists and is not a folder")
+        if address is not None:
+            _check_listening(address)  # (before anything is written or shown)
         self.runs_dir = self.out / "runs"
         manifest = {"paper": paper, "scenario_hash": scenario_hash(scn), "seed": int(seed),
                     "fednav_version": __version__}
         path = self.out / "campaign.json"
         if fresh and self.runs_dir.exists():
-            for f in self.runs_dir.iterdir():
-                f.unlink()
+            # the run files (and temporary ones a kill left): nothing else put there
+            for f in [*self.runs_dir.glob("*.nc"), *self.runs_dir.glob(".*.tmp")]:
+                try:
+                    f.unlink()
+                except OSError as e:
+                    raise output_error(f, e, "remove") from e
         if path.exists() and not fresh:
             old = _read_manifest(self.out)
             for k in ("paper", "scenario_hash", "seed"):
@@ -99,8 +105,11 @@ class Campaign:
             manifest["created"] = old.get("created")
         else:
             manifest["created"] = datetime.now(UTC).isoformat(timespec="seconds")
-        self.runs_dir.mkdir(parents=True, exist_ok=True)
-        write_text(path, json.dumps(manifest, indent=2))
+        try:
+            self.runs_dir.mkdir(parents=True, exist_ok=True)
+        except OSError as e:
+            raise output_error(self.runs_dir, e, "create") from e
+        write_json(path, manifest)
         self.manifest = manifest
         self.address = address
         self.computed = 0
