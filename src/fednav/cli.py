@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import json
 import os
@@ -31,17 +32,66 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
     typer.echo(f"warning: {message}", err=True)
 
 
+class Interrupted(KeyboardInterrupt):
+    """SIGTERM or SIGHUP, raised in the main thread as Ctrl-C raises KeyboardInterrupt
+    (so every command stops the same way: files being written removed, Dask workers
+    stopped in order)."""
+
+    def __init__(self, signum: int):
+        super().__init__(signum)
+        self.signum = signum
+
+
+#: Signals that stop a command as Ctrl-C does (their exit status is 128 + the signal's
+#: number, as a shell reports a process the signal killed: 143, 129; Ctrl-C's 130).
+STOP_SIGNALS = ("SIGTERM", "SIGHUP")
+
+
+@contextlib.contextmanager
+def _stop_signals_interrupt():
+    """While the block runs (in the main thread), SIGTERM and SIGHUP raise
+    :class:`Interrupted`; after the first, both are ignored while the command stops."""
+    import signal
+    import threading
+
+    sigs = [getattr(signal, n) for n in STOP_SIGNALS if hasattr(signal, n)]
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def stop(signum, frame):
+        for s in sigs:
+            signal.signal(s, signal.SIG_IGN)  # stopping already: a second one must not
+        raise Interrupted(signum)             # break the stop of the workers
+
+    old = {s: signal.signal(s, stop) for s in sigs}
+    try:
+        yield
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)
+
+
+def _interruption(e: KeyboardInterrupt) -> tuple[str, int]:
+    """(what stopped the command: 'Ctrl-C', 'SIGTERM' ..., its exit status 128 + N)."""
+    import signal
+
+    signum = getattr(e, "signum", signal.SIGINT)
+    name = "Ctrl-C" if signum == signal.SIGINT else signal.Signals(signum).name
+    return name, 128 + int(signum)
+
+
 def _one_line_errors(command):
     """fednav's own errors end a command with their one-line message and exit status 2
     (the traceback only with ``--debug``), and so does an :class:`OSError` naming a file
-    (a full disk, no permission) that no fednav error caught; warnings are one line
-    each."""
+    (a full disk, no permission) that no fednav error caught; Ctrl-C, SIGTERM and SIGHUP
+    end it with one line and 128 + the signal's number; warnings are one line each."""
     @functools.wraps(command)
     def run(*args, **kwargs):
         import warnings
 
         try:
-            with warnings.catch_warnings():
+            with warnings.catch_warnings(), _stop_signals_interrupt():
                 warnings.simplefilter("default", FutureWarning)
                 if not _state["debug"]:
                     warnings.showwarning = _show_warning
@@ -56,6 +106,12 @@ def _one_line_errors(command):
                 raise
             typer.echo(f"error: {e.filename}: {e.strerror or e}", err=True)
             raise typer.Exit(2) from None
+        except KeyboardInterrupt as e:
+            if _state["debug"]:
+                raise
+            name, status = _interruption(e)
+            typer.echo(f"interrupted ({name})", err=True)
+            raise typer.Exit(status) from None
     return run
 
 
@@ -181,10 +237,14 @@ def _campaign(exp, scn, identity: str, label: str, unit: str, out: Path, runs: i
                 rep = exp.reproduce(scn, runs, seed, jobs, max_time,
                                     progress=lambda: prog.advance(task), campaign=camp,
                                     **extra)
-        except KeyboardInterrupt:
+        except KeyboardInterrupt as e:  # Ctrl-C, SIGTERM, SIGHUP (Interrupted)
             prog.stop()
-            typer.echo(f"interrupted: {stored()}", err=True)
-            raise typer.Exit(130) from None
+            if _state["debug"]:
+                raise
+            name, status = _interruption(e)
+            typer.echo(f"interrupted{'' if name == 'Ctrl-C' else f' ({name})'}: "
+                       f"{stored()}", err=True)
+            raise typer.Exit(status) from None
         except OutputError as e:  # a full disk: what is stored is kept
             prog.stop()
             if _state["debug"]:

@@ -222,22 +222,73 @@ def run_units(fn: Callable, args: list, jobs: int = 1, progress: Callable | None
     return out
 
 
+#: Signals a terminal, a job manager or ``kill`` sends to stop a campaign: the local
+#: workers leave them to this process, which stops the workers in order.
+_STOP_SIGNALS = ("SIGINT", "SIGTERM", "SIGHUP")
+
+
 @contextmanager
 def _no_sigint():
-    """Ignore Ctrl-C while the local workers start: they inherit that, so an interrupt
-    reaches only this process, which stops them in order (otherwise every worker prints
-    its own traceback)."""
+    """While the local workers start (forked), Ctrl-C, SIGTERM and SIGHUP reach only
+    this process: the workers inherit a handler that ignores them (otherwise a signal
+    sent to the process group kills each worker, or makes it print its own traceback,
+    and the nanny restarts it), and one that arrives for this process meanwhile is
+    delivered to it when the workers have started, not lost."""
+    import os
     import signal
     import threading
 
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    me = os.getpid()
+    pending: list[int] = []
+
+    def hold(signum, frame):
+        if os.getpid() == me:  # (a forked worker ignores it)
+            pending.append(signum)
+
+    sigs = [getattr(signal, n) for n in _STOP_SIGNALS if hasattr(signal, n)]
+    old = {s: signal.signal(s, hold) for s in sigs}
     try:
         yield
     finally:
-        signal.signal(signal.SIGINT, old)
+        for s, h in old.items():
+            signal.signal(s, h)
+        if pending:
+            signal.raise_signal(pending[0])
+
+
+class _ExitWithParent:
+    """Dask worker plugin: a local worker exits at once when the process that started
+    it is gone (killed with SIGKILL, say); Dask's own pipe for that is held open by the
+    worker forked after it, so the workers would outlive it."""
+
+    name = "fednav-exit-with-parent"
+
+    def __init__(self, parent: int, every_s: float = 0.5):
+        self.parent = parent
+        self.every_s = every_s
+
+    def setup(self, worker=None) -> None:
+        """Start the watch (a daemon thread) in the worker process."""
+        import os
+        import threading
+
+        if os.getppid() != self.parent:
+            return  # not a child of the campaign process: nothing to watch
+
+        def watch():
+            import time
+
+            while os.getppid() == self.parent:
+                time.sleep(self.every_s)
+            os._exit(1)
+
+        threading.Thread(target=watch, name="fednav exit with parent", daemon=True).start()
+
+    def teardown(self, worker=None) -> None:
+        """Nothing to release (the thread ends with the process)."""
 
 
 #: Seconds a Dask scheduler has to send its handshake after a connect.
@@ -324,10 +375,20 @@ def _start_client(address: str | None, jobs: int):
                               "distributed.worker.memory.monitor-interval": "1s"}), \
                 _no_sigint():
             # (workers log only CRITICAL: a task's error comes back through its future,
-            # and a Ctrl-C must not print their heartbeat tracebacks as the scheduler goes)
+            # and a Ctrl-C must not print their heartbeat tracebacks as the scheduler goes;
+            # the scheduler's HTTP routes, served without a dashboard too, on a free local
+            # port: on 8787 taken it warned "Port 8787 is already in use")
             cluster = LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True,
-                                   dashboard_address=None, silence_logs=50)
+                                   dashboard_address=None, silence_logs=50,
+                                   scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})
         client, engine = Client(cluster), f"dask local, {jobs} worker processes"
+        import os
+
+        from distributed.diagnostics.plugin import WorkerPlugin
+
+        # (a WorkerPlugin subclass made here: distributed is imported only when used)
+        plugin = type("ExitWithParent", (_ExitWithParent, WorkerPlugin), {})
+        client.register_plugin(plugin(os.getpid()))
     client.run(_single_threaded)
     return client, cluster, engine
 
