@@ -620,6 +620,7 @@ def _run_tune(read, inputs: list, config, out: Path, fix=None, tune_sensors=Fals
             typer.echo(f"error: --out {out} is one of the inputs ({p}); choose another file",
                        err=True)
             raise typer.Exit(2)
+    _output_folder(Path(out).parent)  # one it cannot write in: said before the filter runs
     if config is not None:
         from .core.config import read_mapping
 
@@ -662,10 +663,7 @@ def _run_tune(read, inputs: list, config, out: Path, fix=None, tune_sensors=Fals
               + (f" (base config {config})" if config else "")
               + f"\n{res.runs} filter runs in {res.run_time_s:.1f} s; see docs/tuning.md "
                 f"for the method")
-    try:
-        write_text(out, config_yaml(res, base, header))
-    except OSError as e:
-        raise typer.BadParameter(f"{out}: {e.strerror or e}", param_hint="--out") from None
+    write_text(out, config_yaml(res, base, header))  # (OutputError: one line, the file)
     console.print(f"{res.runs} filter runs in {res.run_time_s:.1f} s; wrote {out} "
                   f"(fednav process ... --config {out})")
 

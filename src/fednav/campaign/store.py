@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
 from collections.abc import Callable
 from contextlib import contextmanager
 from dataclasses import fields, is_dataclass
@@ -109,6 +110,12 @@ class Campaign:
             self.runs_dir.mkdir(parents=True, exist_ok=True)
         except OSError as e:
             raise output_error(self.runs_dir, e, "create") from e
+        probe = self.runs_dir / f".fednav-write-test.{os.getpid()}.tmp"
+        try:  # a folder it cannot write in: said now, not after the first run's work
+            probe.write_bytes(b"")
+            probe.unlink()
+        except OSError as e:
+            raise output_error(self.runs_dir, e, "write in") from e
         write_json(path, manifest)
         self.manifest = manifest
         self.address = address
@@ -234,7 +241,6 @@ def _no_sigint():
     sent to the process group kills each worker, or makes it print its own traceback,
     and the nanny restarts it), and one that arrives for this process meanwhile is
     delivered to it when the workers have started, not lost."""
-    import os
     import signal
     import threading
 
@@ -272,7 +278,6 @@ class _ExitWithParent:
 
     def setup(self, worker=None) -> None:
         """Start the watch (a daemon thread) in the worker process."""
-        import os
         import threading
 
         if os.getppid() != self.parent:
@@ -382,8 +387,6 @@ def _start_client(address: str | None, jobs: int):
                                    dashboard_address=None, silence_logs=50,
                                    scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})
         client, engine = Client(cluster), f"dask local, {jobs} worker processes"
-        import os
-
         from distributed.diagnostics.plugin import WorkerPlugin
 
         # (a WorkerPlugin subclass made here: distributed is imported only when used)
