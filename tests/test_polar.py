@@ -276,3 +276,26 @@ def test_process_near_the_pole_across_the_antimeridian_with_0_360_fixes(lat, lon
     assert np.all(np.abs(sol.lla[:, 1]) <= np.pi)  # the solution in (-180, 180] throughout
     assert units.to_arcmin(da.max()) < 20.0
     assert not any("innovations are" in w and "mean NIS" in w for w in res.warnings)
+
+
+@pytest.mark.xfail(strict=True, reason="fednav.process.run.errors_against interpolates the "
+                   "solution's longitude in time across the +-180 deg wrap (np.interp on "
+                   "the wrapped angle); fix there: interpolate np.unwrap(lon)")
+def test_errors_against_a_reference_between_samples_across_the_antimeridian():
+    """The solution (the truth itself) against a reference stamped between its samples
+    across +-180 deg: errors of millimetres, not 2 pi R cos(lat) at the crossing."""
+    from fednav.io.data import Reference
+    from fednav.navigator.solution import Solution
+    from fednav.process import errors_against
+
+    tr = great_circle(np.array([units.deg(60.0), np.pi, 100.0]), units.deg(90.0), 250.0,
+                      2.0, 0.01)
+    n = len(tr.t)
+    sol = Solution(tr.t, tr.lla, tr.vel, tr.euler, np.ones((n, 9)), np.ones((n, 3)),
+                   np.zeros((n, 3)))
+    tm = 0.5 * (tr.t[1:] + tr.t[:-1])
+    mid = great_circle(np.array([units.deg(60.0), np.pi, 100.0]), units.deg(90.0), 250.0,
+                       2.0, 0.005)  # the same track sampled twice as often: its odd rows
+    ref = Reference("ref", tm, mid.lla[1::2], mid.vel[1::2])
+    e = errors_against(sol, ref)
+    assert np.abs(e["east_m"]).max() < 0.01
