@@ -500,6 +500,23 @@ def main():
              "error: output folder a-file: a file of that name exists")
     cli_case("cli-out-unwritable", [*proc(), "--out", "/proc/fednav-cannot-write-here"], 2,
              "error: output folder /proc/fednav-cannot-write-here:")
+    # an output folder holding one of the command's inputs where it would write
+    (HERE / "sim-out").mkdir()
+    shutil.copy(HERE.parents[2] / "examples" / "car-drive.yaml", HERE / "sim-out" / "process.yaml")
+    cli_case("cli-simulate-out-holds-its-scenario",
+             ["simulate", "sim-out/process.yaml", "--out", "sim-out"], 2,
+             "error: --out sim-out: writing there would overwrite the scenario file "
+             "sim-out/process.yaml, an input; choose another output folder")
+    (HERE / "campaign-out").mkdir()
+    shutil.copy(HERE.parents[2] / "src" / "fednav" / "scenarios" / "paper002.yaml",
+                HERE / "campaign-out" / "summary.json")
+    cli_case("cli-reproduce-scenario-where-it-writes",
+             ["reproduce", "002", "--scenario", "campaign-out/summary.json", "--out",
+              "campaign-out"], 2,
+             "error: --out campaign-out: writing there would overwrite the scenario file "
+             "campaign-out/summary.json, an input")
+    cli_case("cli-simulate-seed-negative", ["simulate", "002", "--seed", "-1"], 2,
+             "error: --seed must be 0 .. 2^63-1, got -1")
     sp = HERE / "with space"
     sp.mkdir()
     shutil.copy(GOOD / "imu.csv", sp / "imu data.csv")
