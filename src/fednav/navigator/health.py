@@ -83,6 +83,81 @@ def isolation_warnings(fdi: list) -> list[str]:
     return out
 
 
+
+#: Sliding window [s] of the running NIS/dof, and the mean NIS/dof over one window above
+#: which a local filter is warned about (a fault for part of the run: the run's mean
+#: dilutes it).
+NIS_WINDOW_S = 10.0
+NIS_WINDOW_WARN = 10.0
+
+
+def window_nis(fdi: list) -> list[str]:
+    """Warnings for local filters whose NIS/dof over a sliding :data:`NIS_WINDOW_S`
+    window of accepted measurements exceeds :data:`NIS_WINDOW_WARN` somewhere (the
+    worst window named), unless the run's mean is itself beyond :data:`NIS_WARN` and
+    the window no worse than 3 times it (the run's warning says it all then)."""
+    import pandas as pd
+
+    out = []
+    kept = [e for e in fdi if not e[5]]
+    if not kept:
+        return out
+    log = pd.DataFrame(kept, columns=["t", "local", "nis", "dof", "thr", "isolated"])
+    log["r"] = log.nis / log.dof.clip(lower=1)
+    for local, g in log.groupby("local", sort=False):
+        mean = float(g.r.mean())
+        s = pd.Series(g.r.to_numpy(), index=pd.to_datetime(g.t.to_numpy(), unit="s"))
+        roll = s.rolling(f"{int(NIS_WINDOW_S * 1000)}ms").mean()
+        full = g.t.to_numpy() - g.t.to_numpy()[0] >= NIS_WINDOW_S  # whole windows only
+        if not full.any():
+            continue
+        vals = roll.to_numpy()[full]
+        k = int(np.argmax(vals))
+        if vals[k] > NIS_WINDOW_WARN and (mean <= NIS_WARN or vals[k] > 3.0 * mean):
+            tk = float(g.t.to_numpy()[full][k])
+            out.append(f"the '{local}' local filter's innovations are {vals[k]:.3g} times "
+                       f"their expected size over {tk - NIS_WINDOW_S:.1f}..{tk:.1f} s (NIS/dof "
+                       f"over {NIS_WINDOW_S:g} s): a sensor fault there, a jump, or a "
+                       f"manoeuvre the noise figures do not cover")
+    return out
+
+
+def run_health(fdi: list, imu=None, gnss=None, solution=None, figures: dict | None = None,
+               force: bool = True, seen: list | None = None) -> list[str]:
+    """Every check of the health monitor, as warnings: the run's and the sliding
+    windows' NIS/dof per local filter, long isolations (from the FDI log ``fdi``), and,
+    with the data, the plausibility checks of :mod:`fednav.navigator.plausibility` —
+    stuck axes, gravity and Earth rate at rest and the solution's levelling there (needs
+    ``imu`` (:class:`~fednav.io.data.ImuData`), ``gnss`` with velocities and the IMU's SI
+    ``figures``), the GNSS residuals' bias per axis and time offset (needs the forward
+    ``solution`` at the IMU rate).  ``force=False`` makes a run NIS/dof beyond
+    :data:`NIS_REFUSE` a :class:`DataError` (``seen``: the input checks' warnings, the
+    first named in it)."""
+    from . import plausibility as pl
+
+    out = isolation_warnings(fdi) + nis_check(fdi, force, seen) + window_nis(fdi)
+    if imu is None or gnss is None:
+        return out
+    t = imu.t
+    dt = float(np.median(np.diff(t))) if len(t) > 1 else 1.0
+    out += pl.gnss_scale_check(gnss)
+    if gnss.vel is not None:
+        speed = np.linalg.norm(gnss.vel, axis=1)
+        moving = np.interp(t, gnss.t, (speed > 1.0).astype(float)) > 0.5
+        moving &= (t >= gnss.t[0]) & (t <= gnss.t[-1])
+        out += pl.stuck_axes(t, imu.gyro, imu.accel, moving)
+        if figures:
+            spans = pl.rest_spans(t, imu.accel, dt, float(figures.get(
+                "accel_vrw_mps_sqrt_s") or 1e-3), gnss.t, gnss.vel, gnss.sigma_vel)
+            lla = gnss.lla[0] if gnss.lla is not None else np.zeros(3)
+            out += pl.at_rest(t, imu.gyro, imu.accel, spans, lla, figures, solution)
+    if solution is not None:
+        out += pl.residual_checks(pl.gnss_residuals(solution, gnss), gnss.source)
+        if not any("time offset" in w for w in (seen or [])):  # the course check's
+            out += pl.offset_check(solution, imu, gnss)
+    return out
+
+
 def readmission_warnings(episodes: list[dict]) -> list[str]:
     """One warning per local filter that fault detection had locked out with every other
     position source and that was re-admitted (``filter.fdi_readmit_s``; ``episodes``:

@@ -173,14 +173,21 @@ class NavResult:
 
         return consistency(self.fdi)
 
-    def health(self) -> list[str]:
-        """Warnings about the run from its fault-detection log
-        (:mod:`fednav.navigator.health`): local filters whose innovations are far beyond
-        their sigma, long isolations and re-admitted position sources; empty when all is
-        well."""
-        from .health import isolation_warnings, nis_check, readmission_warnings
+    def health(self, imu=None, gnss=None, figures: dict | None = None) -> list[str]:
+        """The health monitor's warnings about the run
+        (:func:`fednav.navigator.health.run_health`; never a refusal): from its
+        fault-detection log, the run's and sliding windows' NIS/dof per local filter and
+        long isolations; given the ``imu`` and ``gnss`` data fed
+        (:class:`~fednav.io.ImuData`, :class:`~fednav.io.GnssData`), also stuck axes, the
+        GNSS positions against their velocities and, with the IMU's SI ``figures``
+        (``imu:`` keys), gravity, Earth rate and levelling at rest; with IMU-rate rows
+        and covariances recorded, the GNSS residuals' bias per axis and the GNSS-IMU time
+        offset by correlation.  Empty when all is well."""
+        from .health import readmission_warnings, run_health
 
-        return (isolation_warnings(self.fdi) + nis_check(self.fdi, force=True)
+        sol = (self.forward if self.rows is not None and self.Phi is not None
+               and len(self.states) > 1 else None)
+        return (run_health(self.fdi, imu, gnss, sol, figures)
                 + readmission_warnings(self.readmissions))
 
     @property

@@ -24,7 +24,7 @@ from ..ins import error_model as em
 from ..ins.alignment import UNKNOWN_HEADING_SIGMA, Alignment, align, coarse_level
 from ..io.data import DataError, GnssData, ImuData, Reference, VelocityData
 from ..io.sensorfile import SensorData
-from ..navigator.health import isolation_warnings, nis_check, readmission_warnings
+from ..navigator.health import readmission_warnings, run_health
 from ..navigator.loop import InnovationRecord  # noqa: F401  (fednav.process's name)
 from ..navigator.navigator import InitialState, Navigator
 from ..navigator.solution import Solution, epoch_rate, imu_rate
@@ -478,6 +478,11 @@ def _check_figures(imu: ImuData, cfg: System) -> None:
     with_imu_figures(imu, cfg)
 
 
+#: IMU samples further apart than this [s] are refused (time stamps in milliseconds read as
+#: seconds put them 1000x too far apart; no strapdown IMU samples below 1 Hz).
+MAX_IMU_PERIOD_S = 1.0
+
+
 def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData | None = None,
             cfg: System | None = None, sensors: dict | None = None) -> Prepared:
     """The input checks, the sensor corrections, the initial state and P0 of
@@ -506,6 +511,10 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
                         "initial state in the system description (initial: lat_deg, "
                         "lon_deg, h_m, vel_mps, euler_deg, sigma)")
     dt = imu.period()
+    if dt > MAX_IMU_PERIOD_S:
+        raise DataError(f"{imu.source}: IMU samples {dt:g} s apart: time stamps in "
+                        f"milliseconds (fednav expects seconds)? A strapdown IMU samples at "
+                        f"{1 / MAX_IMU_PERIOD_S:g} Hz or faster")
     cfg, assumed = with_imu_figures(imu, cfg)
     gnss, velocity = adjust_sensors(gnss, velocity, cfg)
     warnings = assumed + check_units(imu, gnss)
@@ -554,6 +563,11 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
         what = "the GNSS data" if gnss is not None else "the initial time"
         raise DataError(f"{imu.source}: IMU data does not overlap {what} by one filter "
                         f"period ({T:g} s)")
+    if gnss is not None and not np.any((gnss.t >= imu.t[i0]) & (gnss.t <= imu.t[-1])):
+        raise DataError(f"{gnss.source}: no GNSS fix within the IMU data's time span "
+                        f"(GNSS {gnss.t[0]:.6g}..{gnss.t[-1]:.6g} s, IMU {imu.t[i0]:.6g}.."
+                        f"{imu.t[-1]:.6g} s): the two in different time bases (Unix time, "
+                        f"GPS seconds of the week, milliseconds)?")
     noise, gb, ab = imu_noise_model(cfg, dt, imu.errors)
     for name in cfg.sensors:  # constraints the vehicle always obeys, detected stops
         spec = registry.spec(name)
@@ -707,6 +721,19 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
                      if d is not None and d.t_arrival is not None})
 
 
+def flown_gnss(gnss: GnssData | None, system: System) -> GnssData | None:
+    """The GNSS data as the navigator flew them (``system``: a :class:`Prepared`'s): the
+    configured time offset and velocity latency applied, the effective lever arm and
+    sigmas."""
+    if gnss is None or "gnss" not in system.sensors:
+        return None
+    g = system.sensors.gnss
+    flown = adjust_sensors(gnss, None, system)[0]
+    return replace(flown, quality={}, lever=np.asarray(g.lever_m, dtype=float),
+                   sigma_pos=np.asarray(g.sigma_pos_m, dtype=float),
+                   sigma_vel=np.asarray(g.sigma_vel_mps, dtype=float))
+
+
 def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
             cfg: System | None = None, smooth: bool = False,
             innovations: list | None = None, sensors: dict | None = None,
@@ -724,8 +751,9 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
                                    innovations=innovations is not None))
     out = nav.result()
     res = solution(out, prep, smooth)
-    res.warnings += isolation_warnings(res.forward.fdi) + nis_check(res.forward.fdi, force,
-                                                                    list(res.warnings))
+    res.warnings += run_health(res.forward.fdi, imu, flown_gnss(gnss, prep.system),
+                               res.forward, imu_figures(imu, prep.system), force,
+                               list(res.warnings))
     res.warnings += readmission_warnings(out.readmissions)
     if prep.system.filter.q_adaptation is not None and hasattr(nav.loop, "q_scales"):
         res.data_quality["q_scale_final"] = {k: round(v, 3)

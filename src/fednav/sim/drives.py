@@ -59,14 +59,24 @@ class Drive:
 
 def car_drive(heading_deg: float = 30.0, speed_mps: float = 0.0, seed: int = 1,
               imu: dict | None = None, static_s: float = 0.0, accel_mps2: float = 1.0,
-              imu_period_s: float = 0.01, gnss: dict | None = None) -> Drive:
+              imu_period_s: float = 0.01, gnss: dict | None = None,
+              hill_deg: float = 0.0) -> Drive:
     """A ~100 s car drive starting at ``heading_deg`` and ``speed_mps`` (a moving start:
     the vehicle keeps rolling and pulls away at ``accel_mps2`` for 8 s, later brakes to a
     stop; ``static_s`` of steady motion at the start speed first when > 0 — standing
     still when that speed is 0), IMU figures ``imu`` (default :data:`ADIS16405`), GNSS receiver
     ``gnss`` (:class:`~fednav.sim.dataset.GnssSimConfig` keys; default 5 Hz, 1.5 m /
-    0.05 m/s, antenna 1.2 m above and 1 m behind the IMU)."""
-    segments = [dict(s) for s in SEGMENTS]
+    0.05 m/s, antenna 1.2 m above and 1 m behind the IMU); with ``hill_deg`` the streets
+    and the avenue climb at that slope (pitching up over 2 s, down over 2 s at the end)."""
+    segments = []
+    for s in SEGMENTS:
+        if hill_deg and s["name"] in ("street", "avenue"):
+            rate = hill_deg / 2.0
+            segments += [{**s, "duration_s": 2.0, "pitch_rate_deg_s": rate},
+                         {**s, "duration_s": s["duration_s"] - 4.0},
+                         {**s, "duration_s": 2.0, "pitch_rate_deg_s": -rate}]
+        else:
+            segments.append(dict(s))
     segments[0]["accel_mps2"] = accel_mps2
     # to a stop, not below zero by a rounding (the generator's arithmetic: a * n * dt)
     n8, n5 = round(8.0 / imu_period_s), round(5.0 / imu_period_s)
@@ -74,7 +84,7 @@ def car_drive(heading_deg: float = 30.0, speed_mps: float = 0.0, seed: int = 1,
     brake = -v / 5.0
     while v + brake * n5 * imu_period_s < 0.0 or v + brake * 5.0 < 0.0:
         brake = float(np.nextafter(brake, 0.0))
-    segments[4]["accel_mps2"] = brake
+    next(s for s in segments if s["name"] == "brake")["accel_mps2"] = brake
     if static_s > 0.0:
         segments.insert(0, {"name": "static", "duration_s": static_s})
     cfg = DatasetConfig(
