@@ -22,11 +22,8 @@ from fednav import System
 from fednav.core import attitude as att
 from fednav.core import earth, units
 from fednav.ins.strapdown import Strapdown
-from fednav.io.data import GnssData, ImuData, ImuErrors
 from fednav.process import process
-from fednav.sensors import ImuErrors as SimImuErrors
-from fednav.sensors import corrupt_imu
-from fednav.sim.great_circle import great_circle
+from fednav.sim.great_circle import great_circle, recorded
 
 #: name, midpoint latitude, longitude [deg], course [deg], GNSS longitudes in 0..360
 CASES = [("lat 45 (control)", 45.0, 10.0, 90.0, False),
@@ -69,26 +66,7 @@ def mechanization(tr) -> str:
 
 
 def ins_gnss(tr, lon360: bool, seed: int = 3) -> str:
-    rng = np.random.default_rng(seed)
-    sim = SimImuErrors(gyro_bias=units.deg_per_h(1.0), accel_bias=units.milli_g(0.1),
-                       gyro_arw=units.deg_per_sqrt_h(0.05), accel_vrw=2e-4)
-    dth, dv, _ = corrupt_imu(tr.dtheta, tr.dv, tr.dt, sim, rng)
-    errs = ImuErrors(*[np.full(3, v) for v in (units.deg_per_sqrt_h(0.05), 2e-4,
-                                               units.deg_per_h(1.0), units.milli_g(0.1), 1e-7,
-                                               1e-6, 1000.0, 1000.0)])
-    imu = ImuData("sim-imu", tr.t[1:], dth / tr.dt, dv / tr.dt, errs,
-                  tr.euler[1] + units.deg(np.array([0.05, -0.05, 0.2])),
-                  units.deg(np.array([0.1, 0.1, 0.5])))
-    tg = np.arange(1.0, tr.t[-1], 1.0)
-    g = tr.at(tg)
-    noise = rng.standard_normal((len(tg), 3))
-    r = earth.llh_to_ecef(*g["lla"].T) + np.einsum(
-        "kij,kj->ki", earth.enu_to_ecef(g["lla"][:, 0], g["lla"][:, 1]), noise)
-    lla = earth.ecef_to_llh(r)
-    if lon360:
-        lla[:, 1] %= 2 * np.pi
-    vel = g["vel"] + 0.05 * rng.standard_normal((len(tg), 3))
-    gnss = GnssData("sim-gnss", tg, lla, vel, np.ones(3), np.full(3, 0.05), np.zeros(3))
+    imu, gnss = recorded(tr, np.random.default_rng(seed), lon_0_360=lon360)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         res = process(imu, gnss, None, System(), force=True)

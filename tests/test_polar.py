@@ -18,10 +18,9 @@ from fednav.core import earth, units
 from fednav.ins import error_model as em
 from fednav.ins import total_state as ts
 from fednav.ins.strapdown import STATE_SIZE, Strapdown
-from fednav.io.data import GnssData, ImuData, ImuErrors
 from fednav.process import process
 from fednav.sensors import measurement as ms
-from fednav.sim.great_circle import great_circle
+from fednav.sim.great_circle import great_circle, recorded
 
 POLAR = [(89.9, 180.0, 90.0), (-89.9, 180.0, 270.0), (89.9, 0.0, 270.0), (-89.9, -179.0, 90.0)]
 
@@ -244,24 +243,10 @@ def test_process_near_the_pole_across_the_antimeridian_with_0_360_fixes(lat, lon
     within the GNSS noise (before: 25 km off, innovations 1e7 times their size)."""
     tr = great_circle(np.array([units.deg(lat), units.deg(lon), 1000.0]), units.deg(hdg),
                       250.0, 120.0, 0.01)
-    rng = np.random.default_rng(11)
-    errs = ImuErrors(*[np.full(3, v) for v in (units.deg_per_sqrt_h(0.05), 2e-4,
-                                               units.deg_per_h(1.0), units.milli_g(0.1), 1e-7,
-                                               1e-6, 1000.0, 1000.0)])
-    imu = ImuData("sim-imu", tr.t[1:], tr.dtheta / tr.dt, tr.dv / tr.dt, errs,
-                  tr.euler[1] + units.deg(np.array([0.05, -0.05, 0.2])),
-                  units.deg(np.array([0.1, 0.1, 0.5])))
-    tg = np.arange(1.0, tr.t[-1], 1.0)
-    g = tr.at(tg)
-    noise = rng.standard_normal((len(tg), 3))
-    r = earth.llh_to_ecef(*g["lla"].T) + np.einsum(
-        "kij,kj->ki", earth.enu_to_ecef(g["lla"][:, 0], g["lla"][:, 1]), noise)
-    lla = earth.ecef_to_llh(r)
-    lla[:, 1] %= 2 * np.pi
+    imu, gnss = recorded(tr, np.random.default_rng(11), imu_errors=False, lon_0_360=True)
     # the fixes run on past 180 deg, the INS's longitude wraps to -180 deg there
-    assert lla[:, 1].min() < np.pi < lla[:, 1].max()
-    vel = g["vel"] + 0.05 * rng.standard_normal((len(tg), 3))
-    gnss = GnssData("sim-gnss", tg, lla, vel, np.ones(3), np.full(3, 0.05), np.zeros(3))
+    lon = gnss.lla[:, 1]
+    assert lon.min() < np.pi < lon.max()
     # the initial attitude from the file: the alignment's course carry-back leaves out the
     # ENU frame's turn about the vertical (vE tan(lat) / R: 1.3 deg/s here), see
     # docs/reliability.md, "Near the poles and across +-180 deg"

@@ -99,3 +99,39 @@ def great_circle(lla_mid, heading_mid: float, speed: float, duration: float,
     return Trajectory(t=t, lla=lla, vel=vel, euler=euler, dtheta=(omega * wts).sum(axis=1),
                       dv=(f_b * wts).sum(axis=1), dt=dt,
                       segment_index=np.zeros(len(t), dtype=int))
+
+
+def recorded(tr: Trajectory, rng: np.random.Generator, imu_errors: bool = True,
+             lon_0_360: bool = False):
+    """A great-circle flight ``tr`` as recorded data for :func:`fednav.process.process`:
+    the IMU at ``tr``'s rate (navigation grade: 1 deg/h, 0.1 mg, 0.05 deg/sqrt(h),
+    2e-4 m/s/sqrt(s); drawn from ``rng`` when ``imu_errors``, else ideal, its figures
+    given either way; the initial attitude 0.05/-0.05/0.2 deg off with its sigma) and
+    1 Hz GNSS fixes with 1 m noise (drawn in ECEF along the local ENU axes) and 0.05 m/s,
+    the longitudes in 0..360 deg with ``lon_0_360``.  Returns ``(ImuData, GnssData)``."""
+    from ..core import units
+    from ..io.data import GnssData, ImuData, ImuErrors
+    from ..sensors import ImuErrors as SimImuErrors
+    from ..sensors import corrupt_imu
+
+    dth, dv = tr.dtheta, tr.dv
+    if imu_errors:
+        sim = SimImuErrors(gyro_bias=units.deg_per_h(1.0), accel_bias=units.milli_g(0.1),
+                           gyro_arw=units.deg_per_sqrt_h(0.05), accel_vrw=2e-4)
+        dth, dv, _ = corrupt_imu(tr.dtheta, tr.dv, tr.dt, sim, rng)
+    errs = ImuErrors(*[np.full(3, v) for v in (units.deg_per_sqrt_h(0.05), 2e-4,
+                                               units.deg_per_h(1.0), units.milli_g(0.1), 1e-7,
+                                               1e-6, 1000.0, 1000.0)])
+    imu = ImuData("sim-imu", tr.t[1:], dth / tr.dt, dv / tr.dt, errs,
+                  tr.euler[1] + units.deg(np.array([0.05, -0.05, 0.2])),
+                  units.deg(np.array([0.1, 0.1, 0.5])))
+    tg = np.arange(1.0, tr.t[-1], 1.0)
+    g = tr.at(tg)
+    noise = rng.standard_normal((len(tg), 3))
+    r = earth.llh_to_ecef(*g["lla"].T) + np.einsum(
+        "kij,kj->ki", earth.enu_to_ecef(g["lla"][:, 0], g["lla"][:, 1]), noise)
+    lla = earth.ecef_to_llh(r)
+    if lon_0_360:
+        lla[:, 1] %= 2 * np.pi
+    vel = g["vel"] + 0.05 * rng.standard_normal((len(tg), 3))
+    return imu, GnssData("sim-gnss", tg, lla, vel, np.ones(3), np.full(3, 0.05), np.zeros(3))
