@@ -65,14 +65,18 @@ def _runs_constant(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def stuck_axes(t, gyro, accel, moving) -> list[str]:
     """Warnings for IMU axes constant for more than :data:`STUCK_S` while ``moving``
-    (bool per sample: the GNSS speed says the vehicle moves)."""
+    (bool per sample: the GNSS speed says the vehicle moves) and another axis of the
+    same triad changes."""
     out = []
     for name, a in (("gyro", gyro), ("accel", accel)):
         for j in range(3):
             s, e = _runs_constant(a[:, j])
             long = (t[e] - t[s] > STUCK_S)
+            others = np.delete(a, j, axis=1)
             for k in np.flatnonzero(long):
-                if moving[s[k]:e[k] + 1].mean() > 0.5:
+                seg = others[s[k]:e[k] + 1]
+                # (an ideal simulated IMU on a steady path is constant on every axis)
+                if moving[s[k]:e[k] + 1].mean() > 0.5 and np.any(seg != seg[0]):
                     out.append(f"IMU {name} {'xyz'[j]} reads {a[s[k], j]:.6g} unchanged from "
                                f"{t[s[k]]:.1f} s to {t[e[k]]:.1f} s while the vehicle moves: "
                                f"a stuck axis (a sensor fault, or a column filled with a "
@@ -195,6 +199,7 @@ def gnss_residuals(solution, gnss) -> dict | None:
         g = gnss.lla[inside]
         d = earth.llh_difference_enu(g[:, 0], g[:, 1], g[:, 2], lla[:, 0], lla[:, 1],
                                      lla[:, 2])
+        d -= vel * (tg - t[k])[:, None]  # the row is one sample before the fix
         sr = (rows[:, [1, 0, 2]] if rows is not None
               else np.broadcast_to(np.asarray(gnss.sigma_pos)[[1, 0, 2]], d.shape))
         out["dp"] = d
@@ -305,8 +310,11 @@ def gnss_scale_check(gnss) -> list[str]:
     V = np.vstack([np.zeros(3), np.cumsum(0.5 * (gnss.vel[1:] + gnss.vel[:-1])
                                           * np.diff(t)[:, None], axis=0)])
     lla = gnss.lla
-    p = earth.llh_difference_enu(lla[:, 0], lla[:, 1], lla[:, 2], lla[0, 0], lla[0, 1],
-                                 lla[0, 2])
+    # the positions as their fix-to-fix displacements summed (each in its local ENU
+    # axes, as the velocity is: one origin far away bends east and north near a pole)
+    step = earth.llh_difference_enu(lla[1:, 0], lla[1:, 1], lla[1:, 2], lla[:-1, 0],
+                                    lla[:-1, 1], lla[:-1, 2])
+    p = np.vstack([np.zeros(3), np.cumsum(step, axis=0)])
     chunk = np.floor((t - t[0]) / SCALE_CHUNK_S).astype(int)
     n_chunks = int(chunk.max()) + 1
     count = np.bincount(chunk, minlength=n_chunks)[:, None]
