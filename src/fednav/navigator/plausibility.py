@@ -52,6 +52,10 @@ OFFSET_LIMIT_S = 0.05
 OFFSET_WINDOW_S = 1.0
 #: ... searched over +- this [s] (larger offsets: the GNSS course check of ``process``).
 OFFSET_SEARCH_S = 1.0
+#: The lag is only told where the IMU's velocity changes explain the GNSS's: the best
+#: misfit at most this share of the GNSS changes' own scatter (a slow, vibrating rover's
+#: IMU changes are noise beside its GNSS's, and any lag "fits").
+EXPLAINED = 0.5
 
 
 def _runs_constant(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -220,8 +224,9 @@ def imu_gnss_offset(solution, imu, gnss, window_s: float = OFFSET_WINDOW_S,
     gravity, integrated, and moved to the antenna (``C (w x lever)``), over the same
     ``window_s`` pairs of fixes; the lag of least
     misfit over +-``search_s`` (an intercept per axis absorbs a tilt's or a bias's
-    constant part).  None without GNSS velocities or with too little acceleration
-    change to see a lag (a constant-velocity run)."""
+    constant part).  None without GNSS velocities, with too little acceleration change
+    to see a lag (a constant-velocity run), or where the best lag's misfit is more than
+    :data:`EXPLAINED` of the GNSS changes' scatter."""
     if gnss.vel is None or len(solution.t) < 10:
         return None
     t = solution.t
@@ -261,6 +266,9 @@ def imu_gnss_offset(solution, imu, gnss, window_s: float = OFFSET_WINDOW_S,
     if i in (0, len(lags) - 1):
         return None  # at the edge: an offset beyond the search (the course check's)
     tau = float(lags[i])
+    signal = float(((dvg - dvg.mean(axis=0)) ** 2).sum())
+    if cost[i] > EXPLAINED * signal:
+        return None  # the IMU's changes do not explain the GNSS's (vibration, a crawl)
     # 1-sigma from the misfit's curvature (Gauss-Newton), widened for the overlapping
     # windows (each fix in m of them)
     h = 0.01
