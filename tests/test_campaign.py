@@ -344,6 +344,34 @@ def test_a_stored_run_of_another_campaign_is_refused_not_used(tmp_path):
     assert r.exit_code == 2 and f"stored run {victim.name} is another run's" in r.output
 
 
+def test_a_stored_run_of_another_fednav_version_is_refused_not_used(tmp_path):
+    """Issue 27: each stored run carries its scenario hash and fednav version, verified
+    when it is reused (a run made by another version is refused in one line naming the
+    file, and so is a campaign folder made by another version)."""
+    import json
+
+    import xarray as xr
+
+    out = tmp_path / "a"
+    r = CliRunner().invoke(app, ["reproduce", "002", *ARGS, "--out", str(out)])
+    assert r.exit_code == 0, r.output
+    victim = sorted((out / "runs").glob("*.nc"))[0]
+    with xr.open_dataset(victim, engine="scipy") as ds:
+        ds = ds.load()
+    assert {"fednav_work_key", "fednav_scenario_hash", "fednav_version"} <= set(ds.attrs)
+    ds.attrs["fednav_version"] = "0.0.1"
+    victim.write_bytes(bytes(ds.to_netcdf(engine="scipy")))
+    r = CliRunner().invoke(app, ["reproduce", "002", *ARGS, "--out", str(out)])
+    assert r.exit_code == 2, r.output
+    assert f"stored run {victim.name} was made with version 0.0.1" in r.output
+    assert "Traceback" not in r.output
+    victim.unlink()
+    manifest = json.loads((out / "campaign.json").read_text())
+    (out / "campaign.json").write_text(json.dumps({**manifest, "fednav_version": "0.0.1"}))
+    r = CliRunner().invoke(app, ["reproduce", "002", *ARGS, "--out", str(out)])
+    assert r.exit_code == 2 and "made with fednav_version 0.0.1" in r.output
+
+
 def test_dask_pointing_at_a_silent_server_fails_in_one_line_within_10_s(tmp_path):
     """A TCP server that accepts and never sends (Dask would wait for its handshake
     forever): one line, exit 2, within 10 s."""

@@ -263,9 +263,6 @@ def test_process_near_the_pole_across_the_antimeridian_with_0_360_fixes(lat, lon
     assert not any("innovations are" in w and "mean NIS" in w for w in res.warnings)
 
 
-@pytest.mark.xfail(strict=True, reason="fednav.process.run.errors_against interpolates the "
-                   "solution's longitude in time across the +-180 deg wrap (np.interp on "
-                   "the wrapped angle); fix there: interpolate np.unwrap(lon)")
 def test_errors_against_a_reference_between_samples_across_the_antimeridian():
     """The solution (the truth itself) against a reference stamped between its samples
     across +-180 deg: errors of millimetres, not 2 pi R cos(lat) at the crossing."""

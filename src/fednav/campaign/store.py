@@ -98,8 +98,8 @@ class Campaign:
                     raise output_error(f, e, "remove") from e
         if path.exists() and not fresh:
             old = _read_manifest(self.out)
-            for k in ("paper", "scenario_hash", "seed"):
-                if old.get(k) != manifest[k]:
+            for k in ("paper", "scenario_hash", "seed", "fednav_version"):
+                if old.get(k) != manifest[k] and (k != "fednav_version" or k in old):
                     raise CampaignError(
                         f"campaign folder {self.out}: made with {k} {old.get(k)}, not "
                         f"{manifest[k]} (use another --out, or --fresh to start over)")
@@ -149,7 +149,9 @@ class Campaign:
         return self.runs_dir / f"{key}.nc"
 
     def load(self, key: str):
-        return _read_unit(self.path(key), self.out, key)
+        return _read_unit(self.path(key), self.out, key,
+                          {"fednav_scenario_hash": self.manifest["scenario_hash"],
+                           "fednav_version": self.manifest["fednav_version"]})
 
     def save(self, key: str, result) -> None:
         # Encoded to bytes, not to a path: xarray would take a Dask-distributed write lock
@@ -573,10 +575,12 @@ def _read_manifest(folder: Path) -> dict:
     return old
 
 
-def _read_unit(path: Path, folder, key: str | None = None) -> object:
+def _read_unit(path: Path, folder, key: str | None = None,
+               expect: dict | None = None) -> object:
     """The unit of work stored in ``path`` (decoded), or a one-line :class:`CampaignError`
-    when the file is damaged or, its stored work key not ``key``, another run's (a file
-    written before the key was stored is read as it is)."""
+    when the file is damaged or, its stored work key not ``key``, another run's, or its
+    stored scenario hash or fednav version not those of ``expect`` (attribute -> value; a
+    file written before an attribute was stored is read as it is)."""
     import xarray as xr
 
     try:
@@ -592,6 +596,14 @@ def _read_unit(path: Path, folder, key: str | None = None) -> object:
             f"campaign folder {folder}: stored run {path.name} is another run's (made for "
             f"{stored}: another seed, scenario or campaign); delete it to compute that run "
             f"again")
+    for attr, want in (expect or {}).items():
+        got = ds.attrs.get(attr)
+        if got is not None and got != want:
+            what = attr.removeprefix("fednav_").replace("_", " ")
+            raise CampaignError(
+                f"campaign folder {folder}: stored run {path.name} was made with {what} "
+                f"{got}, this campaign's is {want}; delete it (or use --fresh) to compute "
+                f"that run again")
     try:
         return decode(ds)
     except Exception as e:

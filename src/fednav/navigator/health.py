@@ -79,7 +79,9 @@ def isolation_warnings(fdi: list) -> list[str]:
                    f"to {t[b]:.1f} s ({100 * iso.mean():.0f} % of its measurements; NIS/dof "
                    f"{nis:.1f} there): a sensor fault — or a filter too confident of its IMU "
                    f"figures (fednav tune), in which case the solution drifts on the IMU "
-                   f"alone; filter.fdi_recovery re-admits after passes in a row")
+                   f"alone; filter.fdi_recovery re-admits after passes in a row, and "
+                   f"filter.fdi_readmit_s (default 5 s) bounds how long every position "
+                   f"source may stay isolated")
     return out
 
 

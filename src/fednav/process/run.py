@@ -811,7 +811,9 @@ def errors_against(sol: Solution, ref: Reference) -> dict[str, np.ndarray]:
     if np.any(ref.lever):
         lla, vel = earth.lever_arm_point(lla, vel, att.euler_to_dcm(sol.euler), sol.omega,
                                          ref.lever)
-    lla = interp(lla)
+    # longitude unwrapped before interpolating: a span across +-180 deg is not 2 pi wide
+    lla = interp(np.column_stack([lla[:, 0], np.unwrap(lla[:, 1]), lla[:, 2]]))
+    lla[:, 1] = earth.wrap_lon_array(lla[:, 1])
     vel = interp(vel)
     rl = ref.lla[m]
     d = earth.llh_difference_enu(lla[:, 0], lla[:, 1], lla[:, 2], rl[:, 0], rl[:, 1], rl[:, 2])
