@@ -92,3 +92,28 @@ def test_inputs_beside_the_outputs_are_not_refused():
     assert _campaign_writes(Path("runs/a.nc")) and _campaign_writes(Path("errors.png"))
     assert not _simulate_writes(Path("car-drive.yaml"))
     assert not _simulate_writes(Path("processed/solution.csv"))
+
+
+def test_tables_are_full_width_when_the_output_is_not_a_terminal(monkeypatch):
+    """Issue 29: piped output keeps full column names (rich used the width of whichever
+    standard stream was a terminal, 80 columns, and cut them: ``north…``)."""
+    import io
+
+    from rich.table import Table
+
+    from fednav import cli
+    from fednav.core.console import PipeConsole
+
+    names = [f"degree_filter_units_{i}" for i in range(9)]
+    tab = Table()
+    for n in names:
+        tab.add_column(n)
+    tab.add_row(*("1.0" for _ in names))
+    monkeypatch.delenv("COLUMNS", raising=False)
+    out = io.StringIO()
+    PipeConsole(file=out).print(tab)
+    assert all(n in out.getvalue() for n in names) and "…" not in out.getvalue()
+    out = io.StringIO()
+    PipeConsole(file=out, width=80).print(tab)  # an explicit width is kept
+    assert "…" in out.getvalue() or not all(n in out.getvalue() for n in names)
+    assert isinstance(cli.console, PipeConsole)

@@ -10,14 +10,14 @@ import time
 from pathlib import Path
 
 import typer
-from rich.console import Console
 
 from . import __version__
+from .core.console import PipeConsole
 from .core.errors import FednavError
 
 app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="fednav — federated multi-sensor integrated navigation.")
-console = Console()
+console = PipeConsole()  # full-width tables when piped (fednav.core.console)
 _state = {"debug": False}
 
 
@@ -605,6 +605,7 @@ _TUNE_OUTAGES = typer.Option(3, "--outages", min=0,
 
 def _run_tune(read, inputs: list, config, out: Path, fix=None, tune_sensors=False,
               block_s=60.0, outages=3, sigma_from_file=()) -> None:
+    from rich.markup import escape
     from rich.table import Table
 
     from .core.atomic import write_text
@@ -634,25 +635,31 @@ def _run_tune(read, inputs: list, config, out: Path, fix=None, tune_sensors=Fals
                    outages=outages, sigma_from_file=sigma_from_file)
     tab = Table(title="noise figures (SI units); fitted on alternate "
                       f"{res.blocks.length_s:.0f} s blocks, scored on the others")
+    # The reasons are printed below the table, one line each: as a table column they
+    # were squeezed into a few characters and wrapped over five lines.
     tab.add_column("figure", no_wrap=True)
-    tab.add_column("start")
-    tab.add_column("tuned")
-    tab.add_column("floor")
-    tab.add_column("how / why")
+    for c in ("start", "tuned", "floor"):
+        tab.add_column(c)  # (a 3-list folds at its commas on a narrow terminal)
+    whys = []
     for f in res.figures:
         tab.add_row(f.key.removeprefix("imu."), format_value(f.start), format_value(f.value),
-                    format_value(f.floor), f.how)
+                    format_value(f.floor))
+        whys.append((f.key.removeprefix("imu."), escape(f.how)))
     gc = res.config.sensors.gnss
     lever = gc.lever_m if gc is not None and gc.lever_m is not None else res.lever_from_file
     if lever is None:
-        tab.add_row("sensors.gnss.lever_m", "-", "-", "-",
-                    "[bold red]WARNING: none set[/]")
+        tab.add_row("sensors.gnss.lever_m", "-", "-", "-")
+        whys.append(("sensors.gnss.lever_m", "[bold red]WARNING: none set[/]"))
     else:
         tab.add_row("sensors.gnss.lever_m", format_value(list(lever)),
-                    format_value(list(lever)), "-",
-                    "kept: from the " + ("base config" if res.lever_from_file is None
-                                         else "file (written into the config)"))
+                    format_value(list(lever)), "-")
+        whys.append(("sensors.gnss.lever_m", "kept: from the " + (
+            "base config" if res.lever_from_file is None
+            else "file (written into the config)")))
     console.print(tab)
+    console.print("how each figure was found:")
+    for key, why in whys:
+        console.print(f"  {key}: {why}", highlight=False)
     for n in res.notes:
         console.print(f"note: {n}")
     for line in res.summary():
