@@ -261,6 +261,24 @@ def test_process_near_the_pole_across_the_antimeridian_with_0_360_fixes(lat, lon
     assert np.all(np.abs(sol.lla[:, 1]) <= np.pi)  # the solution in (-180, 180] throughout
     assert units.to_arcmin(da.max()) < 20.0
     assert not any("innovations are" in w and "mean NIS" in w for w in res.warnings)
+    # the GNSS course turns with north (vE tan(lat) / R) while the gyro does not: no
+    # time offset may be read from that (it claimed 30 s before)
+    assert not any("time offset" in w for w in res.warnings), res.warnings
+
+
+@pytest.mark.parametrize("lat,lon,hdg", [(89.9, 0.0, 90.0), (-89.9, 180.0, 270.0),
+                                         (60.0, 180.0, 90.0)])
+def test_no_time_offset_is_read_from_the_turning_north(lat, lon, hdg):
+    """A great circle near the pole turns its course by degrees per second against north
+    while its gyro reads no turn: the course-vs-gyro time offset removes the navigation
+    frame's own turn first (before: +30 s, the search's edge)."""
+    from fednav.process.run import time_offset
+
+    tr = great_circle(np.array([units.deg(lat), units.deg(lon), 1000.0]), units.deg(hdg),
+                      250.0, 300.0, 0.01)
+    imu, gnss = recorded(tr, np.random.default_rng(3))
+    off = time_offset(imu, gnss)
+    assert off is None or abs(off) < 0.05
 
 
 def test_errors_against_a_reference_between_samples_across_the_antimeridian():
