@@ -415,3 +415,25 @@ def test_fresh_removes_only_the_run_files(tmp_path):
     (out / "runs" / ".x.nc.123.tmp").write_text("half")
     Campaign(out, "000", scn, 1, fresh=True)
     assert [f.name for f in (out / "runs").iterdir()] == ["notes.txt"]
+
+
+def test_a_folder_holding_more_runs_than_asked_says_so_and_reports_on_all(tmp_path):
+    """Issue 29: re-running into a 3-run folder with --runs 2 used to replace the 3-run
+    tables with 2-run tables without a word; it now says so and reports on all 3 stored
+    runs (reusing them), unless --fresh starts over."""
+    out = tmp_path / "c"
+    args = ["reproduce", "003", "--max-time", "30", "--jobs", "1", "--out", str(out)]
+    r = CliRunner().invoke(app, [*args, "--runs", "3"])
+    assert r.exit_code == 0, r.output
+    r = CliRunner().invoke(app, [*args, "--runs", "2"])
+    assert r.exit_code == 0, r.output
+    assert "holds 3 Monte Carlo runs, more than --runs 2" in r.output
+    s = json.loads((out / "summary.json").read_text())
+    assert s["runs"] == 3 and s["campaign"]["runs_reused"] == 3
+    assert s["campaign"]["runs_computed"] == 0
+    r = CliRunner().invoke(app, [*args, "--runs", "4"])  # more than stored: computes one
+    assert r.exit_code == 0 and "more than --runs" not in r.output
+    assert json.loads((out / "summary.json").read_text())["campaign"]["runs_computed"] == 1
+    r = CliRunner().invoke(app, [*args, "--runs", "2", "--fresh"])
+    assert r.exit_code == 0 and "more than --runs" not in r.output
+    assert json.loads((out / "summary.json").read_text())["runs"] == 2

@@ -217,10 +217,17 @@ def _campaign(exp, scn, identity: str, label: str, unit: str, out: Path, runs: i
     )
 
     from .campaign.html_report import write_report
-    from .campaign.store import Campaign
+    from .campaign.store import Campaign, stored_runs
     from .core.atomic import OutputError, clear_results
 
     camp = Campaign(out, identity, scn, seed, fresh, dask)
+    if not fresh:  # a folder holding more runs than asked reports on all of them
+        held = stored_runs(camp, lambda n: exp.units(scn, n, seed, max_time, **extra), runs)
+        if held > runs:
+            typer.echo(f"note: {out} holds {held} Monte Carlo runs, more than --runs {runs}: "
+                       f"the tables are of all {held} (to have {runs} only, start over with "
+                       f"--fresh --runs {runs})", err=True)
+            runs = held
     clear_results(out)
     t0 = time.perf_counter()
     total = len(exp.units(scn, runs, seed, max_time, **extra))

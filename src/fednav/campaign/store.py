@@ -612,6 +612,30 @@ def _read_unit(path: Path, folder, key: str | None = None,
             f"({type(e).__name__}); delete it to compute that run again") from None
 
 
+def stored_runs(campaign: Campaign, units_for: Callable[[int], list], asked: int) -> int:
+    """How many Monte Carlo runs ``campaign`` holds whole: the largest ``n >= asked`` for
+    which every unit of ``units_for(n)`` (a paper's ``units`` with ``n`` runs) is stored,
+    or ``asked`` when no more are.  A folder that holds 10 runs reports on 10 when asked
+    for 2 (``--fresh`` starts over).  The units of ``n`` runs are those of ``n - 1`` and
+    more, so a binary search finds ``n`` in a few key computations."""
+    stored = {p.stem for p in campaign.runs_dir.glob("*.nc")}
+
+    def whole(n: int) -> bool:
+        return all(work_key(u.fn, u.args) in stored for u in units_for(n))
+
+    lo, hi = asked, max(asked, len(stored))  # a run is at least one stored unit
+    if hi == lo or not whole(lo + 1):
+        return asked
+    lo += 1
+    while lo < hi:  # whole(lo) holds; the answer is in [lo, hi]
+        mid = (lo + hi + 1) // 2
+        if whole(mid):
+            lo = mid
+        else:
+            hi = mid - 1
+    return lo
+
+
 # ---------------------------------------------------------------------------- analysis
 def open_runs(path) -> xarray.Dataset:  # noqa: F821
     """The campaign in ``path`` as one :class:`xarray.Dataset`.
