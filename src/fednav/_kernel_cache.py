@@ -67,3 +67,79 @@ def _prune(root: Path) -> None:
         return
     for old in folders[KEEP:]:
         shutil.rmtree(old, ignore_errors=True)
+
+
+
+#: What a command says on stderr before numba compiles fednav's kernels (a cold cache: a
+#: fresh install, or sources that changed since the last run).
+NOTICE = "compiling fast kernels once (~20 s)"
+
+
+class _Watch:
+    """What the compile listener keeps: the seconds compiled and who to tell first."""
+
+    def __init__(self, announce):
+        self.announce = announce
+        self.seconds = 0.0
+        self.depth = 0
+        self.t0 = 0.0
+
+
+_watch: _Watch | None = None
+
+
+def watch_compiles(announce=None) -> None:
+    """Count numba's compile time from now on in this process (:func:`compile_seconds`)
+    and, with ``announce`` (a callable taking one line, e.g. a print on stderr), say
+    :data:`NOTICE` once, just before the first kernel is actually compiled.
+
+    Only the outermost compilations are timed (a kernel compiling the kernels it inlines
+    counts once); a kernel loaded from the on-disk cache fires no compile event, so a warm
+    cache says nothing and adds nothing.  Idempotent: a second call changes nothing."""
+    global _watch
+    if _watch is not None:
+        return
+    import time
+
+    from numba.core import event
+
+    watch = _Watch(announce)
+
+    class Listener(event.Listener):
+        def on_start(self, ev):
+            if watch.depth == 0:
+                if watch.announce is not None:
+                    say, watch.announce = watch.announce, None
+                    say(NOTICE)
+                watch.t0 = time.perf_counter()
+            watch.depth += 1
+
+        def on_end(self, ev):
+            watch.depth -= 1
+            if watch.depth == 0:
+                watch.seconds += time.perf_counter() - watch.t0
+
+    event.register("numba:compile", Listener())
+    _watch = watch
+
+
+def compile_seconds() -> float:
+    """Seconds spent compiling kernels in this process since :func:`watch_compiles`
+    (0.0 when it was not called)."""
+    return 0.0 if _watch is None else _watch.seconds
+
+
+def announced() -> None:
+    """Mark :data:`NOTICE` as said (by a caller that said it itself, e.g. before handing
+    the work to other processes), so that the watch does not say it again."""
+    if _watch is not None:
+        _watch.announce = None
+
+
+def cold() -> bool:
+    """Whether numba's cache folder for this source tree holds no compiled kernel yet (a
+    first run: the kernels will be compiled); False when the folder is not known."""
+    folder = os.environ.get("NUMBA_CACHE_DIR")
+    if not folder or not Path(folder).is_dir():
+        return False
+    return not any(Path(folder).rglob("*.nbi"))

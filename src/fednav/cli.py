@@ -11,7 +11,7 @@ from pathlib import Path
 
 import typer
 
-from . import __version__
+from . import __version__, _kernel_cache
 from .core.console import PipeConsole
 from .core.errors import FednavError
 
@@ -21,10 +21,28 @@ console = PipeConsole()  # full-width tables when piped (fednav.core.console)
 _state = {"debug": False}
 
 
+def _print_version(value: bool) -> None:
+    if value:
+        typer.echo(f"fednav {__version__}")
+        raise typer.Exit()
+
+
 @app.callback()
 def _options(debug: bool = typer.Option(False, "--debug",
-                                        help="show the traceback of an error")) -> None:
+                                        help="show the traceback of an error"),
+             version: bool = typer.Option(False, "--version", is_eager=True,
+                                          callback=_print_version,
+                                          help="print the version and exit")) -> None:
     _state["debug"] = debug
+
+
+def _say_on_stderr(line: str) -> None:
+    typer.echo(line, err=True)
+
+
+def _compiled_note(seconds: float) -> str:
+    """What a timing line adds when numba compiled kernels meanwhile (not counted in it)."""
+    return f" (+ {seconds:.1f} s compiling fast kernels, once)" if seconds >= 0.05 else ""
 
 
 def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
@@ -90,6 +108,9 @@ def _one_line_errors(command):
     def run(*args, **kwargs):
         import warnings
 
+        # "compiling fast kernels once" on stderr before numba's first actual compilation
+        # (a cold cache), and the compile time counted apart from the timing lines
+        _kernel_cache.watch_compiles(_say_on_stderr)
         try:
             with warnings.catch_warnings(), _stop_signals_interrupt():
                 warnings.simplefilter("default", FutureWarning)
@@ -229,6 +250,10 @@ def _campaign(exp, scn, identity: str, label: str, unit: str, out: Path, runs: i
                        f"--fresh --runs {runs})", err=True)
             runs = held
     clear_results(out)
+    cold = _kernel_cache.cold()  # (the workers compile: said here, once)
+    if cold:
+        _say_on_stderr(_kernel_cache.NOTICE)
+        _kernel_cache.announced()
     t0 = time.perf_counter()
     total = len(exp.units(scn, runs, seed, max_time, **extra))
     with Progress("[progress.description]{task.description}", BarColumn(),
@@ -266,7 +291,9 @@ def _campaign(exp, scn, identity: str, label: str, unit: str, out: Path, runs: i
     files = exp.write_outputs(out, rep)
     files.append(write_report(out, exp.titles))
     console.print(f"wrote {', '.join(str(f) for f in files)} "
-                  f"in {time.perf_counter() - t0:.1f} s")
+                  f"in {time.perf_counter() - t0:.1f} s"
+                  + (" (compiling fast kernels included: the next run is quicker)"
+                     if cold else ""))
 
 
 process_app = typer.Typer(no_args_is_help=True,
@@ -326,7 +353,7 @@ def _simulate_writes(rel: Path) -> bool:
 
 
 def _run_process(read, imu, gnss, velocity, ref, smooth, out, config, output_rate,
-                 files: dict | None = None, force: bool = False) -> None:
+                 files: dict | None = None, force: bool = False, fmt: str = "csv") -> None:
     from .core.atomic import clear_results
     from .core.config import load_model
     from .navigator.system import System
@@ -344,7 +371,11 @@ def _run_process(read, imu, gnss, velocity, ref, smooth, out, config, output_rat
     try:
         refuse_overwrite({"imu": imu, "gnss": gnss, "velocity": velocity, **(files or {}),
                           "reference": ref, "config": config})
+        fmt = process_output.check_format(fmt)  # (before the work: a missing extra)
+        rate = process_output.parse_rate(output_rate)
         cfg = System() if config is None else load_model(config, System, "processing config")
+        if rate is None and cfg.output_rate_hz is not None:
+            rate = cfg.output_rate_hz
         data = read(cfg)
         cfg = data.get("system", cfg)  # (a reader that completes the description)
         # the files read (the options', else those the description lists)
@@ -352,20 +383,24 @@ def _run_process(read, imu, gnss, velocity, ref, smooth, out, config, output_rat
                  "reference": ref, **data.get("paths", {})}
         refuse_overwrite(paths)  # (and the files the description lists)
         clear_results(out)
+        compiled = _kernel_cache.compile_seconds()
         res = process(data["imu"], data["gnss"], data["velocity"], cfg, smooth,
                       sensors=data.get("sensors"), force=force)
+        compiled = _kernel_cache.compile_seconds() - compiled
+        res.run_time_s = max(0.0, res.run_time_s - compiled)  # (the filter's own time)
         res.warnings[:0] = data.get("warnings", [])
         files = process_output.write(out, res, data["ref"], {
             **{n: None if f is None else str(f) for n, f in paths.items()},
             "config": None if config is None else str(config), "smooth": smooth,
-            "output_rate_hz": output_rate}, output_rate, data["gnss"], data.get("others"))
+            "output_rate_hz": process_output.DEFAULT_OUTPUT_RATE_HZ if rate is None else rate,
+            "format": fmt}, rate, data["gnss"], data.get("others"), fmt)
     except (FednavError, ValueError) as e:
         if _state["debug"]:
             raise
         typer.echo(f"error: {e}", err=True)
         raise typer.Exit(2) from None
     s = json.loads(files[-1].read_text())
-    _print_process(s)
+    _print_process(s, compiled)
     console.print(f"wrote {', '.join(str(f) for f in files)}")
 
 
@@ -397,10 +432,11 @@ def _ulog_reader(log: Path):
     return read
 
 
-def _print_process(s: dict) -> None:
+def _print_process(s: dict, compiled_s: float = 0.0) -> None:
     from rich.table import Table
 
-    console.print(f"{s['epochs']} filter epochs in {s['run_time_s']:.2f} s")
+    console.print(f"{s['epochs']} filter epochs in {s['run_time_s']:.2f} s"
+                  + _compiled_note(compiled_s))
     al = s.get("alignment") or {}
     if al:
         how = (f"levelling {al.get('levelling')}, heading {al.get('heading')}"
@@ -527,8 +563,11 @@ def _sensor_file_options(*exclude: str):
 _OUT = typer.Option(Path("results/process"), help="output folder")
 _SMOOTH = typer.Option(False, "--smooth", help="also run the RTS smoother")
 _CONFIG = typer.Option(None, help="processing config YAML (noise figures, options)")
-_RATE = typer.Option(None, "--output-rate", help="solution rows per second [Hz]; default: "
-                     "every IMU sample")
+_RATE = typer.Option(None, "--output-rate", help="solution rows per second [Hz], 'filter' "
+                     "(the filter epochs) or 'imu' (every IMU sample; also 0); default: the "
+                     "config's output_rate_hz, else 10 Hz (at most the IMU rate)")
+_FORMAT = typer.Option("csv", "--format", help="solution file format: csv or parquet "
+                       "(needs pyarrow: the extra 'parquet' of fednav)")
 _FORCE = typer.Option(False, "--force", help="write the solution even when its innovations "
                       "say the data are wrong (mean NIS/dof above 100)")
 
@@ -541,11 +580,11 @@ def process_navego(
     visual: Path = typer.Option(None, help="NaveGo visual-odometry .mat (velocity)"),
     ref: Path = typer.Option(None, help="NaveGo reference .mat (for RMSE)"),
     smooth: bool = _SMOOTH, out: Path = _OUT, config: Path = _CONFIG,
-    output_rate: float = _RATE, force: bool = _FORCE,
+    output_rate: str = _RATE, fmt: str = _FORMAT, force: bool = _FORCE,
 ) -> None:
     """Loosely coupled INS/GNSS (+ visual velocity) on NaveGo .mat files."""
     _run_process(_navego_reader(imu, gnss, visual, ref), imu, gnss, visual, ref, smooth, out,
-                 config, output_rate, force=force)
+                 config, output_rate, force=force, fmt=fmt)
 
 
 @process_app.command("csv")
@@ -557,7 +596,7 @@ def process_csv(
     velocity: Path = typer.Option(None, help="velocity-sensor CSV"),
     ref: Path = typer.Option(None, help="reference CSV (for RMSE and errors.csv)"),
     smooth: bool = _SMOOTH, out: Path = _OUT, config: Path = _CONFIG,
-    output_rate: float = _RATE, force: bool = _FORCE, **files: Path,
+    output_rate: str = _RATE, fmt: str = _FORMAT, force: bool = _FORCE, **files: Path,
 ) -> None:
     """The system described by --config (any registered sensors, local filters, fault
     detection, delay handling, smoother) on fednav CSV files: one option per sensor, or
@@ -565,7 +604,7 @@ def process_csv(
     come from --config (or each row's sigma columns)."""
     files = {n: f for n, f in files.items() if f is not None}
     _run_process(_csv_reader(imu, gnss, velocity, ref, files, config), imu, gnss, velocity,
-                 ref, smooth, out, config, output_rate, files, force=force)
+                 ref, smooth, out, config, output_rate, files, force=force, fmt=fmt)
 
 
 @process_app.command("ulog")
@@ -576,13 +615,13 @@ def process_ulog(
     config: Path = typer.Option(None, help="system description YAML: IMU figures, which "
                                            "sensors aid (aiding:), filters; what it leaves "
                                            "out comes from the log"),
-    output_rate: float = _RATE, force: bool = _FORCE,
+    output_rate: str = _RATE, fmt: str = _FORMAT, force: bool = _FORCE,
 ) -> None:
     """A PX4 autopilot log (ULog, read with pyulog): its IMU, GNSS, barometer and
     magnetometer through the navigator, compared with PX4's own estimate (and the log's
     ground truth when it has one)."""
     _run_process(_ulog_reader(log), log, None, None, None, smooth, out, config,
-                 output_rate, force=force)
+                 output_rate, force=force, fmt=fmt)
 
 
 tune_app = typer.Typer(no_args_is_help=True,
@@ -635,11 +674,14 @@ def _run_tune(read, inputs: list, config, out: Path, fix=None, tune_sensors=Fals
         cfg = load_model(config, System, "processing config")
         base = read_mapping(config, "processing config")
     data = read(cfg)
+    compiled = _kernel_cache.compile_seconds()
     with console.status("tuning") as status:
         res = tune(data["imu"], data["gnss"], data["velocity"], cfg,
                    progress=lambda what: status.update(f"filter run: {what}"),
                    fixed=fix or (), tune_sensors=tune_sensors, block_s=block_s,
                    outages=outages, sigma_from_file=sigma_from_file)
+    compiled = _kernel_cache.compile_seconds() - compiled
+    res.run_time_s = max(0.0, res.run_time_s - compiled)  # (the filter runs' own time)
     tab = Table(title="noise figures (SI units); fitted on alternate "
                       f"{res.blocks.length_s:.0f} s blocks, scored on the others")
     # The reasons are printed below the table, one line each: as a table column they
@@ -678,8 +720,8 @@ def _run_tune(read, inputs: list, config, out: Path, fix=None, tune_sensors=Fals
               + f"\n{res.runs} filter runs in {res.run_time_s:.1f} s; see docs/tuning.md "
                 f"for the method")
     write_text(out, config_yaml(res, base, header))  # (OutputError: one line, the file)
-    console.print(f"{res.runs} filter runs in {res.run_time_s:.1f} s; wrote {out} "
-                  f"(fednav process ... --config {out})")
+    console.print(f"{res.runs} filter runs in {res.run_time_s:.1f} s{_compiled_note(compiled)}; "
+                  f"wrote {out} (fednav process ... --config {out})")
 
 
 @tune_app.command("navego")
