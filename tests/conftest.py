@@ -43,7 +43,10 @@ def report_tables(html: str) -> dict:
 
 
 def assert_report_complete(folder: Path) -> None:
-    """report.html of a reproduce folder shows every table row of summary.json."""
+    """report.html of a reproduce folder shows every table row of summary.json (by its
+    human label: ``curve_fit`` -> "curve fit")."""
+    from fednav.campaign.explain import row_label
+
     s = json.loads((folder / "summary.json").read_text())
     html = (folder / "report.html").read_text()
     tables = report_tables(html)
@@ -52,7 +55,7 @@ def assert_report_complete(folder: Path) -> None:
             continue
         assert name in tables, f"table {name} missing from report.html"
         shown = {r[0] for r in tables[name] if r and r[0]}
-        assert shown == {str(r) for r in t["rows"]}, name
+        assert shown == {row_label(r) for r in t["rows"]}, name
     assert "<img" in html and "data:image/png;base64," in html
 
 
