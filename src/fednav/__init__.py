@@ -17,14 +17,50 @@ _compat.install()
 
 from .navigator.system import System, load_system  # noqa: E402
 
-__all__ = ["InitialState", "NavResult", "Navigator", "Snapshot", "Solution", "System",
-           "load_system"]
+#: The Python API's main names (``docs/api.md``), by the module that defines each; all but
+#: the system description are imported on first use (``fednav --help`` stays quick).
+_LAZY = {
+    # the navigator and its results
+    "Navigator": "fednav.navigator.navigator",
+    "NavResult": "fednav.navigator.navigator",
+    "InitialState": "fednav.navigator.navigator",
+    "Snapshot": "fednav.navigator.navigator",
+    "Solution": "fednav.navigator.solution",
+    # reading recorded data
+    "read_imu_csv": "fednav.io.csvdata",
+    "read_gnss_csv": "fednav.io.csvdata",
+    "read_reference_csv": "fednav.io.csvdata",
+    "read_sensor_csv": "fednav.io.sensorfile",
+    # processing it (``process_data`` is :func:`fednav.process.process`, what ``fednav
+    # process`` runs: ``fednav.process`` is the subpackage)
+    "process_data": "fednav.process.run",
+    "prepare": "fednav.process.run",
+    "ProcessResult": "fednav.process.run",
+    # evaluating a solution against a reference
+    "errors_against": "fednav.process.run",
+    "rmse": "fednav.process.run",
+    # plots
+    "plot_errors": "fednav.process.output",
+    "plot_track": "fednav.process.output",
+}
+
+#: exported names that differ from their name in the defining module
+_NAMES = {"process_data": "process"}
+
+__all__ = ["System", "load_system", *_LAZY]
 
 
 def __getattr__(name: str):
-    """The navigator's names, imported on first use (``fednav --help`` stays quick)."""
-    from . import navigator
+    """The API's names other than the system description, imported on first use."""
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'fednav' has no attribute '{name}'")
+    import importlib
 
-    if name in navigator.__all__:
-        return getattr(navigator, name)
-    raise AttributeError(f"module 'fednav' has no attribute '{name}'")
+    value = getattr(importlib.import_module(module), _NAMES.get(name, name))
+    globals()[name] = value  # (found directly next time)
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

@@ -103,12 +103,33 @@ def _arrival(df) -> np.ndarray | None:
 
 
 def read_imu_csv(path, max_bridge_s: float = 0.1) -> ImuData:
-    """IMU CSV, body right-forward-up: rates (``gyro_*_radps``, ``accel_*_mps2``: the
-    rate at ``t_s``, held until the next sample) or increments (``dtheta_*_rad``,
-    ``dv_*_mps``: over the interval that ends at ``t_s``), as the column names declare.
-    Jittered or missing time stamps are integrated over each sample's own interval onto
-    a uniform grid; faulty samples and gaps are bridged up to ``max_bridge_s``
-    (:class:`~fednav.io.data.ImuData`, :func:`~fednav.io.data.regular_imu`)."""
+    """Read an IMU CSV file (``docs/data-formats.md``).
+
+    Body right-forward-up axes: rates (``gyro_*_radps``, ``accel_*_mps2``: the rate at
+    ``t_s``, held until the next sample) or increments (``dtheta_*_rad``, ``dv_*_mps``:
+    over the interval that ends at ``t_s``), as the column names declare.  Jittered or
+    missing time stamps are integrated over each sample's own interval onto a uniform
+    grid; faulty samples and gaps are bridged up to ``max_bridge_s``
+    (:func:`~fednav.io.data.regular_imu`).
+
+    Parameters
+    ----------
+    path : str or Path
+        The CSV file.
+    max_bridge_s : float
+        Longest gap or run of faulty samples bridged [s]; a longer one is refused.
+
+    Returns
+    -------
+    ImuData
+        :class:`fednav.io.ImuData`: ``t`` [s], ``gyro`` [rad/s] and ``accel`` [m/s^2]
+        in body right-forward-up axes on a uniform grid.
+
+    Raises
+    ------
+    DataError
+        One line naming the file and what is wrong.
+    """
     src, df = _read(path, "IMU", ("t_s",), numeric=IMU_COLUMNS[1:] + INCREMENT_COLUMNS,
                     expected=IMU_COLUMNS)
     t = df["t_s"].to_numpy(float)
@@ -136,12 +157,36 @@ GNSS_SIGMA_COLUMNS = ("sigma_north_m", "sigma_east_m", "sigma_up_m") + VEL_SIGMA
 
 def read_gnss_csv(path, sigma_pos=(5.0, 5.0, 5.0), sigma_vel=(0.1, 0.1, 0.1),
                   lever=(0.0, 0.0, 0.0)) -> GnssData:
-    """GNSS CSV: positions ``lat_deg, lon_deg, h_m`` and/or ENU velocities ``vE_mps,
-    vN_mps, vU_mps`` (a position-only or velocity-only receiver), optionally each fix's
-    1-sigma (``sigma_north_m, sigma_east_m, sigma_up_m`` and/or ``sigma_vE_mps ...``,
-    for the components the file has).  The noise figures [north, east, up] m / [E, N,
-    U] m/s used where the file has none and the antenna lever arm (body
-    right-forward-up, m) come from the caller (the processing config)."""
+    """Read a GNSS CSV file (``docs/data-formats.md``).
+
+    Positions ``lat_deg, lon_deg, h_m`` and/or ENU velocities ``vE_mps, vN_mps, vU_mps``
+    (a position-only or velocity-only receiver), optionally each fix's 1-sigma
+    (``sigma_north_m, sigma_east_m, sigma_up_m`` and/or ``sigma_vE_mps ...``, for the
+    components the file has).  The figures used where the file has none and the antenna
+    lever arm come from the caller (the system description's ``sensors.gnss``).
+
+    Parameters
+    ----------
+    path : str or Path
+        The CSV file.
+    sigma_pos : sequence of float
+        Position 1-sigma [north, east, up] [m] where the file has none.
+    sigma_vel : sequence of float
+        Velocity 1-sigma [east, north, up] [m/s] where the file has none.
+    lever : sequence of float
+        Antenna position from the IMU, body right-forward-up [m].
+
+    Returns
+    -------
+    GnssData
+        :class:`fednav.io.GnssData`: ``t`` [s], ``lla`` lat/lon [rad], h [m] (or None),
+        ENU ``vel`` [m/s] (or None), the sigmas and the lever arm.
+
+    Raises
+    ------
+    DataError
+        One line naming the file and what is wrong.
+    """
     src, df = _read(path, "GNSS", ("t_s",),
                     numeric=POS_COLUMNS + GNSS_SIGMA_COLUMNS + ("t_arrival_s",),
                     expected=("t_s",) + POS_COLUMNS + VEL_COLUMNS)
@@ -188,7 +233,27 @@ def read_velocity_csv(path, lever=(0.0, 0.0, 0.0)) -> VelocityData:
 
 
 def read_reference_csv(path) -> Reference:
-    """Reference trajectory CSV (attitude columns optional)."""
+    """Read a reference (truth) trajectory CSV file (``docs/data-formats.md``).
+
+    Columns ``t_s, lat_deg, lon_deg, h_m, vE_mps, vN_mps, vU_mps`` and optionally
+    ``pitch_deg, roll_deg, heading_deg``.
+
+    Parameters
+    ----------
+    path : str or Path
+        The CSV file.
+
+    Returns
+    -------
+    Reference
+        :class:`fednav.io.Reference`: ``t`` [s], ``lla`` lat/lon [rad], h [m], ENU
+        ``vel`` [m/s], ``euler`` [pitch, roll, heading] [rad] or None.
+
+    Raises
+    ------
+    DataError
+        One line naming the file and what is wrong.
+    """
     src, df = _read(path, "reference", ("t_s",) + POS_COLUMNS + VEL_COLUMNS)
     euler = units.deg(_cols(df, EULER_COLUMNS)) if _has(df, EULER_COLUMNS) else None
     return Reference(src, df["t_s"].to_numpy(float), _lla(df), _cols(df, VEL_COLUMNS), euler)

@@ -56,11 +56,33 @@ def sigma_columns(name: str) -> tuple[str, ...]:
 
 
 def read_sensor_csv(name: str, path) -> SensorData:
-    """Sensor ``name``'s CSV file as :class:`SensorData` (one-line :class:`DataError` for
-    a file it cannot use).  Rows with an empty or non-finite value, or that the sensor
-    does not take for a measurement (its spec's ``valid``), are dropped and counted;
-    times must increase; 1-sigma columns (all of the sensor's or none) must be
-    positive."""
+    """Read any registered sensor's CSV file (``docs/data-formats.md``).
+
+    Columns ``t_s``, the sensor's own (each in the unit its name says), optional
+    ``t_arrival_s`` and optional 1-sigma columns (all of the sensor's or none; positive).
+    Rows with an empty or non-finite value, or that the sensor does not take for a
+    measurement, are dropped and counted; times must increase.
+
+    Parameters
+    ----------
+    name : str
+        The sensor's registered name (``star``, ``baro``, ``odometer`` ...;
+        :mod:`fednav.sensors.registry`).
+    path : str or Path
+        The CSV file.
+
+    Returns
+    -------
+    SensorData
+        :class:`fednav.io.SensorData`: times of validity and arrival [s], values ``z``
+        and 1-sigma in the sensor's SI layout [rad, m, m/s ...], for
+        ``process_data(..., sensors={name: data})``.
+
+    Raises
+    ------
+    DataError
+        One line naming the file and what is wrong.
+    """
     spec = registry.spec(name)
     if not spec.columns:
         raise DataError(f"sensor '{name}' declares no file columns")

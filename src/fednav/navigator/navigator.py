@@ -85,11 +85,27 @@ TOTAL_MODELS = {"gnss": GnssTotal(), "star": StarTotal()}
 
 @dataclass
 class InitialState:
-    """Where the navigator starts: the time of its first epoch ``t`` [s] (the time stamp
-    of its first IMU sample), position ``lla`` [rad, rad, m], ENU ``vel`` [m/s], attitude
-    ``euler`` [pitch, roll, heading] [rad], the filter covariance ``P0`` (18 x 18, filter
-    units of :mod:`fednav.ins.error_model`) and the IMU compensation to start from
-    (``gyro_bias`` [rad/s], ``accel_bias`` [m/s^2], body axes)."""
+    """Where the navigator starts.
+
+    Parameters
+    ----------
+    t : float
+        Time of the first epoch, the time stamp of the first IMU sample [s].
+    lla : ndarray, shape (3,)
+        Geodetic latitude, longitude [rad] and ellipsoidal height [m] (WGS-84).
+    vel : ndarray, shape (3,)
+        Velocity east, north, up [m/s] (local-level ENU frame).
+    euler : ndarray, shape (3,)
+        Attitude [pitch, roll, heading] [rad] of the body (right-forward-up) in ENU;
+        heading from north toward east.
+    P0 : ndarray, shape (18, 18)
+        Initial error covariance in the filter units of :mod:`fednav.ins.error_model`
+        [arcmin, m/s, m, deg/h, mg squared], ENU error states.
+    gyro_bias : ndarray, shape (3,), optional
+        Gyro bias to compensate from the start, body axes [rad/s]; None: zero.
+    accel_bias : ndarray, shape (3,), optional
+        Accelerometer bias to compensate from the start, body axes [m/s^2]; None: zero.
+    """
 
     t: float
     lla: np.ndarray
@@ -102,9 +118,22 @@ class InitialState:
 
 @dataclass
 class Snapshot:
-    """The navigation solution at time ``t``: ``lla``, ENU ``vel``, ``euler`` [pitch,
-    roll, heading] and the 1-sigma of the last epoch's fused estimate, ``sigma`` (9,) of
-    [phi (rad), dv ENU (m/s), dp ENU (m)]."""
+    """The navigation solution at one time (:meth:`Navigator.solution`).
+
+    Attributes
+    ----------
+    t : float
+        Time of the solution, the last IMU sample's [s].
+    lla : ndarray, shape (3,)
+        Latitude, longitude [rad] and ellipsoidal height [m] (WGS-84).
+    vel : ndarray, shape (3,)
+        Velocity east, north, up [m/s].
+    euler : ndarray, shape (3,)
+        Attitude [pitch, roll, heading] [rad], body right-forward-up in ENU.
+    sigma : ndarray, shape (9,)
+        1-sigma of the last epoch's fused estimate: attitude errors phi east, north, up
+        [rad], velocity errors east, north, up [m/s], position errors east, north, up [m].
+    """
 
     t: float
     lla: np.ndarray
@@ -115,22 +144,57 @@ class Snapshot:
 
 @dataclass
 class NavResult:
-    """What a run of the navigator produced.
+    """What a run of the navigator produced (:meth:`Navigator.result`).
 
-    Per epoch ``k = 0..K`` (0: the start): ``t`` [s], ``states`` (K+1, 22) the INS state
-    after the epoch's feedback (:mod:`fednav.ins.strapdown` layout), ``P`` (K+1, n, n) the
-    fused covariance (filter units); with ``record_covariance``: ``Phi``, ``Qd`` (the
-    interval ending at epoch k; entry 0 zero) and ``dx`` (the correction fed back).
-    ``beta``: sharing factor of each filter after each epoch (K,); ``fdi``: one entry per
-    local measurement (t, local, statistic, dof, threshold, isolated); ``innovations``:
-    :class:`~fednav.navigator.loop.InnovationRecord` s; ``rows`` (with ``record_rows``):
-    quaternion, ENU velocity, lla and body rate at every IMU sample (row ``k n`` holds
-    the state after epoch k's feedback); ``data_quality``: what the input checks did;
-    ``readmissions``: one dict per time fault isolation had locked out every position
-    source for ``filter.fdi_readmit_s`` and re-admitted one (``local``, ``t_start_s``,
-    ``t_s``, ``duration_s``, ``nis_per_dof`` before and ``nis_per_dof_after``,
-    ``inflation`` of the covariance; :func:`fednav.navigator.health.
-    readmission_warnings` words them)."""
+    Per filter epoch ``k = 0..K`` (0: the start).  The IMU-rate solution is
+    :attr:`forward` (and :attr:`smoothed`), the per-filter consistency
+    :attr:`consistency`, the health monitor's warnings :meth:`health`.
+
+    Attributes
+    ----------
+    t : ndarray, shape (K+1,)
+        Epoch times [s].
+    states : ndarray, shape (K+1, 22)
+        INS state after each epoch's feedback, :mod:`fednav.ins.strapdown` layout
+        (``STATE_Q`` quaternion body to ENU [-], ``STATE_VEL`` ENU velocity [m/s],
+        ``STATE_LLA`` latitude, longitude [rad], height [m]).
+    P : ndarray, shape (K+1, n, n)
+        Fused error covariance after each epoch, in filter units [arcmin, m/s, m, deg/h,
+        mg squared] (:mod:`fednav.ins.error_model`, ENU error states).
+    beta : dict of str to ndarray
+        Sharing factor of each local filter after each epoch, shape (K,) [-].
+    fdi : list of tuple
+        One entry per local measurement: (time [s], local filter, chi-square statistic,
+        degrees of freedom, threshold, isolated).
+    innovations : list of InnovationRecord
+        Every measurement's innovation, when the navigator was asked to keep them.
+    Phi : ndarray, shape (K+1, n, n), or None
+        Transition of the interval ending at each epoch (entry 0 zero) [-], with
+        ``record_covariance``.
+    Qd : ndarray, shape (K+1, n, n), or None
+        Process noise of the interval ending at each epoch, filter units squared
+        [arcmin, m/s, m, deg/h, mg squared], with ``record_covariance``.
+    dx : ndarray, shape (K+1, n), or None
+        Correction fed back at each epoch, filter units [arcmin, m/s, m, deg/h, mg], with
+        ``record_covariance``.
+    rows : dict of str to ndarray, or None
+        With ``record_rows``: at every IMU sample the quaternion ``q`` [-], ENU velocity
+        ``vel`` [m/s], ``lla`` [rad, rad, m] and body rate ``omega`` [rad/s] (row ``k n``
+        holds the state after epoch k's feedback).
+    data_quality : dict
+        What the input checks did (late measurements dropped, ...), counts [-].
+    engine : str
+        ``"compiled"`` or ``"python"``: which engine ran.
+    dt : float
+        IMU period [s].
+    smooth : bool
+        Whether :attr:`smoothed` is computed (the system's ``smoother``).
+    readmissions : list of dict
+        One per time fault isolation had locked out every position source for
+        ``filter.fdi_readmit_s`` and re-admitted one: ``local``, ``t_start_s``, ``t_s``,
+        ``duration_s`` [s], ``nis_per_dof`` before and ``nis_per_dof_after`` [-] and the
+        covariance's ``inflation`` [-].
+    """
 
     t: np.ndarray
     states: np.ndarray
@@ -174,15 +238,32 @@ class NavResult:
         return consistency(self.fdi)
 
     def health(self, imu=None, gnss=None, figures: dict | None = None) -> list[str]:
-        """The health monitor's warnings about the run
-        (:func:`fednav.navigator.health.run_health`; never a refusal): from its
-        fault-detection log, the run's and sliding windows' NIS/dof per local filter and
-        long isolations; given the ``imu`` and ``gnss`` data fed
-        (:class:`~fednav.io.ImuData`, :class:`~fednav.io.GnssData`), also stuck axes, the
-        GNSS positions against their velocities and, with the IMU's SI ``figures``
-        (``imu:`` keys), gravity, Earth rate and levelling at rest; with IMU-rate rows
-        and covariances recorded, the GNSS residuals' bias per axis and the GNSS-IMU time
-        offset by correlation.  Empty when all is well."""
+        """The health monitor's warnings about the run (never a refusal).
+
+        From its fault-detection log: the run's and sliding windows' NIS/dof per local
+        filter and long isolations (:func:`fednav.navigator.health.run_health`).  With
+        the data fed, also stuck axes and the GNSS positions against their velocities;
+        with the IMU's figures, gravity, Earth rate and levelling at rest; with IMU-rate
+        rows and covariances recorded, the GNSS residuals' bias per axis and the
+        GNSS-IMU time offset by correlation.
+
+        Parameters
+        ----------
+        imu : ImuData, optional
+            The IMU data fed (:class:`fednav.io.ImuData`: SI units, body
+            right-forward-up).
+        gnss : GnssData, optional
+            The GNSS data fed (:class:`fednav.io.GnssData`: lat/lon [rad], h [m], ENU
+            velocity [m/s]).
+        figures : dict, optional
+            The IMU's noise figures in SI units by ``imu:`` key (``gyro_arw_rad_sqrt_s``
+            ...), for the checks at rest.
+
+        Returns
+        -------
+        list of str
+            One line per warning; empty when all is well.
+        """
         from .health import readmission_warnings, run_health
 
         sol = (self.forward if self.rows is not None and self.Phi is not None
@@ -204,24 +285,45 @@ class NavResult:
 
 
 class Navigator:
-    """Runs ``system`` from ``initial`` on IMU samples of period ``imu_period`` [s].
+    """The closed loop of a navigation system: mechanize, predict, update, fuse, feed back.
 
-    ``imu_errors``: the IMU file's error figures (:class:`fednav.io.ImuErrors`), used where
-    the system leaves a figure out.  ``record_rows``: keep the solution at every IMU sample
-    (what ``fednav process`` writes); ``record_covariance``: keep each interval's
-    transition and noise and each epoch's correction (what the IMU-rate sigmas and the
-    smoother need); a Monte Carlo run that reads only the epochs turns both off.
-    ``innovations``: keep every measurement's innovation (what ``fednav tune`` reads).
-    ``hold_s``: how long after an epoch its measurements may still arrive.
-    ``mechanization``: a core of the caller's (:class:`~fednav.navigator.loop.
-    Mechanization`, e.g. paper 001's launch frame) flown instead of the ENU error-state
-    INS, with its federation and measurement models (``initial`` is then None; the loop is
-    Python).  The total-state and caller's cores record no IMU-rate rows or interval
-    covariances (``record_rows`` and ``record_covariance`` are off for them).  ``engine``:
-    ``auto`` (compiled when every part of the system has a compiled form, else Python;
-    the environment variable ``FEDNAV_ENGINE`` can set it for a whole program, e.g. to
-    compare the two), ``compiled`` or ``python`` (:attr:`engine` says which runs and
-    :attr:`why_python` why not the compiled one).
+    Fed online (:meth:`add_imu` and :meth:`add_measurement` as data arrive, with
+    :meth:`solution` at any time) or offline (whole arrays at once), it gives the same
+    result (:meth:`result`).  Frames: ENU navigation frame, body right-forward-up, SI
+    units and radians (``docs/conventions.md``).
+
+    Parameters
+    ----------
+    system : System
+        The system description (:func:`fednav.load_system`): IMU figures, aiding sensors,
+        filters, fault detection, delays, smoother.
+    initial : InitialState or None
+        Where it starts (position, velocity, attitude, P0); None with ``mechanization``.
+    imu_period : float
+        IMU sample period [s].
+    imu_errors : ImuErrors, optional
+        The IMU file's error figures (:class:`fednav.io.ImuErrors`, SI units), used
+        where the system leaves a figure out.
+    record_rows : bool
+        Keep the solution at every IMU sample (what ``fednav process`` writes).
+    record_covariance : bool
+        Keep each interval's transition and noise and each epoch's correction (what the
+        IMU-rate sigmas and the smoother need); a Monte Carlo run that reads only the
+        epochs turns both off.
+    innovations : bool
+        Keep every measurement's innovation (what ``fednav tune`` reads).
+    hold_s : float
+        How long after an epoch its measurements may still arrive [s].
+    engine : str
+        ``"auto"`` (compiled when every part of the system has a compiled form, else
+        Python; the environment variable ``FEDNAV_ENGINE`` can set it for a whole
+        program), ``"compiled"`` or ``"python"``.  :attr:`engine` says which runs,
+        :attr:`why_python` why not the compiled one.
+    mechanization : Mechanization, optional
+        A core of the caller's (:class:`fednav.navigator.loop.Mechanization`, e.g. paper
+        001's launch frame) flown instead of the ENU error-state INS, with its
+        federation and measurement models (the loop is then Python).  The total-state
+        and caller's cores record no IMU-rate rows or interval covariances.
     """
 
     def __init__(self, system: System, initial: InitialState | None, imu_period: float, *,
@@ -340,9 +442,21 @@ class Navigator:
 
     # ------------------------------------------------------------------------ input
     def add_imu(self, t, gyro=None, accel=None, *, dtheta=None, dv=None) -> None:
-        """IMU sample(s) stamped ``t`` [s]: rates ``gyro`` [rad/s] and specific force
-        ``accel`` [m/s^2], or increments ``dtheta`` [rad] and ``dv`` [m/s] over the
-        sample (body right-forward-up); one sample (3,) or a block (N, 3)."""
+        """Add IMU sample(s): rates, or increments over each sample's interval.
+
+        Parameters
+        ----------
+        t : float or ndarray, shape (N,)
+            Time stamp(s) [s], increasing by the IMU period.
+        gyro : ndarray, shape (3,) or (N, 3), optional
+            Angular rate, body right-forward-up [rad/s].
+        accel : ndarray, shape (3,) or (N, 3), optional
+            Specific force, body right-forward-up [m/s^2].
+        dtheta : ndarray, shape (3,) or (N, 3), optional
+            Angle increments over the sample, body axes [rad] (instead of ``gyro``).
+        dv : ndarray, shape (3,) or (N, 3), optional
+            Velocity increments over the sample, body axes [m/s] (instead of ``accel``).
+        """
         if np.ndim(t) == 0:  # one sample: no arrays made, no block checks
             t = float(t)
             prev = self.t0 - self.dt if self._t_last is None else self._t_last
@@ -397,9 +511,27 @@ class Navigator:
 
     def add_measurement(self, sensor: str, t: float, z, *, sigma=None, R=None,
                         t_arrival: float | None = None) -> None:
-        """One measurement of ``sensor`` valid at ``t`` [s] (arriving at ``t_arrival``):
-        ``z`` in the sensor's layout, its noise as 1-sigma ``sigma`` of each component of
-        ``z`` or as the residual covariance ``R``; neither: the system's figure."""
+        """Add one measurement of an aiding sensor.
+
+        Parameters
+        ----------
+        sensor : str
+            The sensor's registered name (``"gnss"``, ``"star"``, ``"baro"`` ...).
+        t : float
+            Time of validity [s].
+        z : ndarray
+            The measurement in the sensor's layout and units [rad, m, m/s ...]
+            (``docs/data-formats.md``; GNSS: lat, lon [rad], h [m], velocity east,
+            north, up [m/s]).
+        sigma : ndarray, optional
+            1-sigma of each component of ``z`` [units of z; latitude/longitude in north
+            and east metres].
+        R : ndarray, optional
+            The residual covariance instead of ``sigma`` [units of the sensor's residual,
+            squared]; neither: the system's figures.
+        t_arrival : float, optional
+            When the measurement reached the navigator [s]; default ``t``.
+        """
         m = self._meas.get(sensor)
         if R is not None and m is not None and m.how != "recompute" and len(m) \
                 and not self._total:
@@ -421,8 +553,24 @@ class Navigator:
 
     def add_measurements(self, sensor: str, t, z, *, sigma=None, R=None,
                          t_arrival=None) -> None:
-        """Several measurements of ``sensor`` (arrays along the first axis; see
-        :meth:`add_measurement`).  ``sigma`` may be one row for all."""
+        """Add several measurements of one sensor (see :meth:`add_measurement`).
+
+        Parameters
+        ----------
+        sensor : str
+            The sensor's registered name.
+        t : ndarray, shape (N,)
+            Times of validity [s].
+        z : ndarray, shape (N, m)
+            The measurements in the sensor's layout [rad, m, m/s ...].
+        sigma : ndarray, shape (m,) or (N, m), optional
+            1-sigma of each component, one row for all or one per measurement [units of
+            z].
+        R : ndarray, shape (N, r, r), optional
+            Residual covariances instead of ``sigma`` [residual units squared].
+        t_arrival : ndarray, shape (N,), optional
+            Arrival times [s]; default ``t``.
+        """
         t = np.asarray(t, dtype=float).ravel()
         if not len(t):
             return  # (a sensor that delivered nothing: a stop detector before any stop)
@@ -481,8 +629,14 @@ class Navigator:
         m.add(t, ta, z, R, sigma, epochs, capture)
 
     def add_series(self, series) -> None:
-        """A simulated :class:`~fednav.sensors.base.MeasurementSeries` (its sensor, times,
-        arrival times, values and sigma)."""
+        """Add a simulated measurement series.
+
+        Parameters
+        ----------
+        series : MeasurementSeries
+            A :class:`fednav.sensors.base.MeasurementSeries`: its sensor, times [s],
+            arrival times [s], values and 1-sigma in the sensor's units.
+        """
         self.add_measurements(series.kind, series.t, series.z, sigma=series.sigma,
                               t_arrival=series.t_avail)
 
@@ -611,8 +765,15 @@ class Navigator:
 
     # ------------------------------------------------------------------------ output
     def solution(self) -> Snapshot:
-        """The latest solution: the last epoch's state mechanized through the samples
-        added since (no filter update in between)."""
+        """The latest solution: the last epoch's state mechanized through the IMU samples
+        added since (no filter update in between).
+
+        Returns
+        -------
+        Snapshot
+            Time [s], lat/lon [rad], height [m], ENU velocity [m/s], Euler angles [rad]
+            and the last epoch's 1-sigma.
+        """
         if not isinstance(self.ins, Strapdown):
             raise ValueError(f"solution() gives the ENU solution; the navigator flies "
                              f"{self.why_python}: read result().states")
@@ -639,9 +800,17 @@ class Navigator:
                         att.quat_to_euler(s[STATE_Q]), sd)
 
     def result(self) -> NavResult:
-        """Every complete epoch processed, and what the run produced.  Its arrays are views
-        of the navigator's records, which only grow: they keep their values when more
-        data are added (a later ``result()`` has the later epochs too)."""
+        """Process every complete epoch and return what the run produced.
+
+        Its arrays are views of the navigator's records, which only grow: they keep their
+        values when more data are added (a later ``result()`` has the later epochs too).
+
+        Returns
+        -------
+        NavResult
+            Epoch states and covariances; the IMU-rate solution as ``forward`` (and
+            ``smoothed``), the consistency and the health checks.
+        """
         self._advance(final=True)
         if self.loop is None:
             st = self._free.view

@@ -24,15 +24,38 @@ from ..ins.strapdown import correct_rows
 
 @dataclass
 class Solution:
-    """Navigation solution at every IMU sample: ``t`` [s], ``lla`` (N, 3) [rad, rad, m],
-    ENU ``vel`` [m/s], Euler ``[pitch, roll, heading]`` [rad], 1-sigma ``sigma`` (N, 9) of
-    [phi (rad), dv ENU (m/s), dp ENU (m)] and ``sigma_euler`` (N, 3) of the Euler angles
-    [rad], body rate ``omega`` (N, 3) [rad/s] (compensated gyro).
+    """Navigation solution at every IMU sample, with its 1-sigma.
 
     Between filter epochs the rows are the corrected mechanization; the rows of the
     epochs (``epoch_rows``) hold the state after the filter's feedback.  The sigmas
     between epochs interpolate, linearly in time, from the corrected covariance of the
     interval's start to the predicted one of its end.
+
+    Attributes
+    ----------
+    t : ndarray, shape (N,)
+        Time of each row [s].
+    lla : ndarray, shape (N, 3)
+        Latitude, longitude [rad] and ellipsoidal height [m] (WGS-84) of the IMU.
+    vel : ndarray, shape (N, 3)
+        Velocity east, north, up [m/s].
+    euler : ndarray, shape (N, 3)
+        Attitude [pitch, roll, heading] [rad], body right-forward-up in ENU; heading from
+        north toward east.
+    sigma : ndarray, shape (N, 9)
+        1-sigma of the attitude errors phi east, north, up [rad], velocity errors east,
+        north, up [m/s] and position errors east, north, up [m].
+    sigma_euler : ndarray, shape (N, 3)
+        1-sigma of the Euler angles [pitch, roll, heading] [rad].
+    omega : ndarray, shape (N, 3)
+        Body angular rate, compensated gyro, body axes [rad/s].
+    label : str
+        ``"forward"`` or ``"smoothed"``.
+    fdi : list of tuple
+        The fault-detection log (time [s], local filter, statistic, dof, threshold,
+        isolated).
+    epoch_rows : ndarray, shape (K+1,), or None
+        Row index of each filter epoch [-].
     """
 
     t: np.ndarray
@@ -47,7 +70,18 @@ class Solution:
     epoch_rows: np.ndarray | None = None
 
     def rows(self, index) -> Solution:
-        """The solution at the rows ``index`` (a slice or index array)."""
+        """The solution at some of its rows.
+
+        Parameters
+        ----------
+        index : slice or ndarray
+            The rows: a slice, integer indices or a boolean mask [-].
+
+        Returns
+        -------
+        Solution
+            Those rows (its ``epoch_rows`` dropped).
+        """
         return Solution(self.t[index], self.lla[index], self.vel[index], self.euler[index],
                         self.sigma[index], self.sigma_euler[index], self.omega[index],
                         self.label, self.fdi)

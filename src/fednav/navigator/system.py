@@ -259,7 +259,41 @@ def _translate_legacy(data: dict) -> dict:
 
 
 class System(_Model):
-    """A navigation system: IMU, aiding sensors, estimator (see the module docstring)."""
+    """A navigation system: IMU, aiding sensors, estimator (see the module docstring).
+
+    Immutable (a pydantic model): ``system.model_copy(update={...})`` gives a changed
+    copy; :func:`load_system` makes one from YAML or a mapping.  Each key's unit is in its
+    name (``_deg``, ``_m``, ``_mps``, ``_s`` ...) and converted to SI here; vectors are
+    in the order their key documents (``docs/conventions.md``).
+
+    Parameters
+    ----------
+    imu : ImuConfig
+        The IMU's error figures (:class:`fednav.sensors.imu.ImuConfig`; each in the unit
+        its key names, e.g. ``gyro_arw_deg_sqrt_h`` [deg/sqrt(h)]) or a grade preset.
+    sensors : SensorSet
+        Each aiding sensor's section by registered name (``gnss``, ``star``, ``baro``
+        ...): noise, lever arm (body right-forward-up [m]), period [s], timing.
+    aiding : list of str, optional
+        The sensors that feed the filter; default: every configured one that can.
+    constraint : str, optional
+        ``"wind"``: the air-data wind constraint in every local filter (paper 000).
+    filter : FilterConfig
+        The estimator: local filter type(s), federated or centralized, sharing, reset,
+        fault detection (``fdi_alpha``), epoch ``period_s`` [s], the bias model.
+    alignment : AlignmentConfig
+        How recorded data find the initial attitude (levelling, GNSS course, or given).
+    initial : InitialConfig, optional
+        A known start (``lat_deg``, ``lon_deg`` [deg], ``h_m`` [m], ENU ``vel_mps``
+        [m/s], ``euler_deg`` [deg] with their 1-sigma); replaces the alignment.
+    smoother : bool
+        Also run the RTS smoother.
+    output_rate_hz : float, optional
+        Solution rows per second of ``fednav process`` [Hz].
+    files : dict of str to str
+        Recorded files of this system (``imu``, ``reference``, sensor names), relative
+        to the description's folder.
+    """
 
     imu: ImuConfig = ImuConfig()
     sensors: SensorSet = SensorSet()
@@ -306,8 +340,18 @@ class System(_Model):
         return self
 
     def aiding_sensors(self, available=None) -> list[str]:
-        """The sensors that feed the filter: ``aiding``, else every configured sensor that
-        can aid (of those in ``available``, when given)."""
+        """The sensors that feed the filter.
+
+        Parameters
+        ----------
+        available : collection of str, optional
+            Only those of these names (the sensors that have data).
+
+        Returns
+        -------
+        list of str
+            ``aiding``, else every configured sensor that can aid.
+        """
         if self.aiding is not None:
             names = list(self.aiding)
         else:
@@ -316,11 +360,29 @@ class System(_Model):
 
 
 def load_system(source) -> System:
-    """A validated :class:`System` from a YAML file path, a mapping or a System (errors:
-    :class:`~fednav.core.config.ConfigError`, one line naming the key and the file).
+    """A validated system description from YAML, a mapping or a System.
 
     A paper's scenario file is accepted too: its system description is returned (the
-    flight and the experiment are left out)."""
+    flight and the experiment are left out).  The flat keys of fednav 0.1 are read with a
+    ``FutureWarning`` naming their new places.
+
+    Parameters
+    ----------
+    source : str, Path, dict or System
+        A YAML file's path, the same content as a mapping, or a System (returned as it
+        is).  Units are in the key names (``sigma_pos_m`` [m], ``lever_m`` body
+        right-forward-up [m], ``period_s`` [s], ``gyro_arw_deg_sqrt_h`` ...).
+
+    Returns
+    -------
+    System
+        The validated description, in SI units inside.
+
+    Raises
+    ------
+    ConfigError
+        One line naming the key (and the file) that is wrong.
+    """
     if isinstance(source, System):
         return source
     if isinstance(source, dict):

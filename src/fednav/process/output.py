@@ -107,9 +107,28 @@ _PANELS = ((("north_m", 7), ("east_m", 6), ("down_m", 8)),
 
 
 def plot_errors(res: ProcessResult, ref: Reference, path: Path) -> Path:
-    """Position, velocity and (with a reference attitude) roll/pitch/yaw errors of the
-    forward (and smoothed) solution against the reference, with the forward filter's
-    +-3 sigma."""
+    """Plot the solution's errors against a reference (``errors.png`` of ``fednav
+    process``).
+
+    Position north, east, down [m], velocity [m/s] and, with a reference attitude, roll,
+    pitch, yaw [deg] errors of the forward (and smoothed) solution with the forward
+    filter's +-3 sigma.
+
+    Parameters
+    ----------
+    res : ProcessResult
+        What :func:`fednav.process_data` gave (its ``forward`` and ``smoothed``).
+    ref : Reference
+        The reference (:func:`fednav.read_reference_csv`; lat/lon [rad], h [m], ENU
+        velocity [m/s]).
+    path : str or Path
+        The image file to write (its suffix picks the format: ``.png``, ``.pdf``, ...).
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
     import matplotlib
 
     matplotlib.use("Agg")
@@ -167,9 +186,28 @@ def write_errors(res: ProcessResult, ref: Reference, path: Path) -> Path:
 
 
 def plot_track(res: ProcessResult, gnss, ref: Reference | None, path: Path) -> Path:
-    """East/north track [m] from the first GNSS fix: GNSS fixes, the forward and smoothed
-    solutions and the reference; GNSS outages (gaps over 3 median periods) drawn in red on
-    the forward track, epochs whose measurement fault detection isolated marked."""
+    """Plot the track (``track.png`` of ``fednav process``).
+
+    East and north [m] from the first GNSS fix: the GNSS fixes, the forward and smoothed
+    solutions and the reference; GNSS outages (gaps over 3 median periods) drawn in red
+    on the forward track, epochs whose measurement fault detection isolated marked.
+
+    Parameters
+    ----------
+    res : ProcessResult
+        What :func:`fednav.process_data` gave.
+    gnss : GnssData or None
+        The GNSS fixes (lat/lon [rad], h [m]).
+    ref : Reference or None
+        The reference trajectory (lat/lon [rad], h [m]).
+    path : str or Path
+        The image file to write.
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
     import matplotlib
 
     matplotlib.use("Agg")

@@ -48,6 +48,28 @@ def _velocity_cfg(cfg: System) -> VelocityConfig:
 
 @dataclass
 class ProcessResult:
+    """What :func:`process` gives: the solution at every IMU sample and the run's report.
+
+    Attributes
+    ----------
+    forward : Solution
+        The forward filter's solution with its 1-sigma (lat/lon [rad], h [m], ENU
+        velocity [m/s], Euler angles [rad]; :class:`fednav.Solution`).
+    smoothed : Solution or None
+        The RTS-smoothed solution, when asked for.
+    run_time_s : float
+        Wall time of the run [s].
+    epochs : int
+        Filter epochs processed [-].
+    data_quality : dict
+        What the input checks did (samples bridged, measurements skipped, counts [-]) and
+        what they measured (``*_seen_s`` [s]).
+    warnings : list of str
+        One line per warning about the data or the run.
+    alignment : dict
+        How the initial attitude was found (:mod:`fednav.ins.alignment`).
+    """
+
     forward: Solution
     smoothed: Solution | None
     run_time_s: float
@@ -493,16 +515,43 @@ MAX_IMU_PERIOD_S = 1.0
 
 def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData | None = None,
             cfg: System | None = None, sensors: dict | None = None) -> Prepared:
-    """The input checks, the sensor corrections, the initial state and P0 of
-    :func:`process` (one-line :class:`DataError` s for data it cannot use).
+    """Make recorded data ready for a :class:`~fednav.navigator.Navigator`: the input
+    checks, the sensor corrections, the initial state and P0 of :func:`process`.
 
-    ``gnss``: GNSS fixes (position and velocity, position only, or velocity only);
-    ``sensors``: other registered sensors' recordings by name
-    (:class:`~fednav.io.SensorData`, e.g. from :func:`~fednav.io.read_sensor_csv`) — their
-    noise is each row's 1-sigma when the file gives it, else the system description's.
     The initial state is the system description's ``initial:`` section when it has one,
     else the first GNSS fix with the alignment's attitude (``alignment:``); without GNSS
-    positions the section is needed."""
+    positions the section is needed.
+
+    Parameters
+    ----------
+    imu : ImuData
+        IMU samples (:class:`fednav.io.ImuData`: ``t`` [s], rates [rad/s] and specific
+        force [m/s^2], body right-forward-up).
+    gnss : GnssData, optional
+        GNSS fixes (:class:`fednav.io.GnssData`: lat/lon [rad], h [m] and/or ENU velocity
+        [m/s]; position and velocity, position only, or velocity only).
+    velocity : VelocityData, optional
+        A velocity sensor's ENU velocities [m/s] (:class:`fednav.io.VelocityData`).
+    cfg : System, optional
+        The system description (:func:`fednav.load_system`); default: ``System()``.
+    sensors : dict of str to SensorData, optional
+        Other registered sensors' recordings by name (:func:`fednav.read_sensor_csv`);
+        their noise is each row's 1-sigma when the file gives it [sensor units], else the
+        system description's.
+
+    Returns
+    -------
+    Prepared
+        :class:`fednav.process.run.Prepared`: the system flown, the initial state, the
+        IMU samples from the start (``t`` [s], ``gyro`` [rad/s], ``accel`` [m/s^2]),
+        each sensor's measurements ``(t, z, R)`` in ``measurements``; its
+        ``navigator()`` makes a Navigator for them, ``feed(nav)`` feeds them all.
+
+    Raises
+    ------
+    DataError
+        One line for data it cannot use.
+    """
     cfg = cfg or System()
     if cfg.filter.state == "total" and (cfg.smoother or cfg.output_rate_hz):
         raise DataError("filter.state: total — the total-state navigator's solution is at "
@@ -746,13 +795,50 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
             cfg: System | None = None, smooth: bool = False,
             innovations: list | None = None, sensors: dict | None = None,
             force: bool = False) -> ProcessResult:
-    """Loosely coupled INS/GNSS(/velocity, /any registered sensor) processing; see the
-    module docstring and :func:`prepare`.
+    """Process recorded data: loosely coupled INS/GNSS (/velocity, /any registered
+    sensor) through the navigator — what ``fednav process`` runs (``fednav.process_data``).
 
-    ``innovations``, when given a list, receives one :class:`InnovationRecord` per measurement
-    (what :mod:`fednav.process.tuning` estimates noise figures from).  A local filter whose
-    mean NIS/dof exceeds :data:`~fednav.navigator.health.NIS_REFUSE` ends the run with a
-    :class:`DataError` unless ``force`` (:func:`~fednav.navigator.health.nis_check`)."""
+    The input checks, alignment and initial state of :func:`prepare`, every measurement
+    and IMU sample through the system's :class:`~fednav.navigator.Navigator`, the
+    solution at every IMU sample with its 1-sigma (smoothed on request) and the health
+    monitor's warnings.
+
+    Parameters
+    ----------
+    imu : ImuData
+        IMU samples (:class:`fednav.io.ImuData`: ``t`` [s], rates [rad/s] and specific
+        force [m/s^2], body right-forward-up).
+    gnss : GnssData or None
+        GNSS fixes (:class:`fednav.io.GnssData`: lat/lon [rad], h [m] and/or ENU velocity
+        [m/s], antenna lever arm body right-forward-up [m]).
+    velocity : VelocityData, optional
+        A velocity sensor's ENU velocities [m/s] (:class:`fednav.io.VelocityData`).
+    cfg : System, optional
+        The system description (:func:`fednav.load_system`); default: ``System()``.
+    smooth : bool
+        Also run the RTS smoother (``ProcessResult.smoothed``).
+    innovations : list, optional
+        When given, receives one :class:`~fednav.navigator.loop.InnovationRecord` per
+        measurement (what :mod:`fednav.process.tuning` estimates noise figures from).
+    sensors : dict of str to SensorData, optional
+        Other registered sensors' recordings by name (:func:`fednav.read_sensor_csv`).
+    force : bool
+        Give the solution even when a local filter's mean NIS/dof exceeds
+        :data:`~fednav.navigator.health.NIS_REFUSE` (the data are then most likely wrong:
+        a unit, an axis order, a time base).
+
+    Returns
+    -------
+    ProcessResult
+        ``forward`` (and ``smoothed``) :class:`~fednav.navigator.solution.Solution` at
+        every IMU sample, ``epochs``, ``run_time_s`` [s], ``warnings``,
+        ``data_quality`` and ``alignment``.
+
+    Raises
+    ------
+    DataError
+        One line for data it cannot use or a run whose innovations refuse it.
+    """
     t_start = time.perf_counter()
     prep = prepare(imu, gnss, velocity, cfg, sensors)
     nav = prep.feed(prep.navigator(record_rows=True, record_covariance=True,
@@ -803,10 +889,35 @@ def gnss_z(gnss: GnssData, i: int) -> np.ndarray:
 
 
 def errors_against(sol: Solution, ref: Reference) -> dict[str, np.ndarray]:
-    """Solution minus reference at the reference times inside the solution's span:
-    north/east/down [m], vN/vE/vD [m/s] and, if the reference has attitude, roll, pitch,
-    yaw [rad] (``*_rad``; NED naming, as navigation users report them).  The solution is moved to
-    the point the reference describes (its lever arm) before differencing."""
+    """The solution's errors: solution minus reference at the reference's times inside
+    the solution's span.
+
+    The solution is moved to the point the reference describes (its lever arm) and
+    interpolated to the reference's times (attitude through quaternions, longitude
+    across +-180 deg unwrapped) before differencing.
+
+    Parameters
+    ----------
+    sol : Solution
+        A solution (``ProcessResult.forward``, ``NavResult.forward``; lat/lon [rad], h
+        [m], ENU velocity [m/s], Euler angles [rad]).
+    ref : Reference
+        The reference (:func:`fednav.read_reference_csv`; lat/lon [rad], h [m], ENU
+        velocity [m/s], optional Euler angles [rad]).
+
+    Returns
+    -------
+    dict of str to ndarray
+        ``t`` [s]; position errors ``north_m``, ``east_m``, ``down_m`` [m]; velocity
+        errors ``vn_mps``, ``ve_mps``, ``vd_mps`` [m/s] (north-east-down naming, as
+        navigation users report them); with a reference attitude ``pitch_rad``,
+        ``roll_rad``, ``yaw_rad`` [rad].
+
+    Raises
+    ------
+    DataError
+        When the reference does not overlap the solution or lies over 10 km away.
+    """
     # (the solution's time stamps t0 + k dt may end a few ulp before a reference stamp)
     tol = 1e-6 * float(sol.t[1] - sol.t[0]) if len(sol.t) > 1 else 0.0
     m = (ref.t >= sol.t[0] - tol) & (ref.t <= sol.t[-1] + tol)
@@ -846,7 +957,20 @@ def errors_against(sol: Solution, ref: Reference) -> dict[str, np.ndarray]:
 
 
 def rmse(err: dict[str, np.ndarray]) -> dict[str, float]:
-    """RMSE of each error series; angles (``*_rad``) are reported in degrees (``*_deg``)."""
+    """Root-mean-square of each error series.
+
+    Parameters
+    ----------
+    err : dict of str to ndarray
+        Error series by name (:func:`errors_against`'s), each in the unit its name says
+        [m, m/s, rad]; a ``t`` entry is left out.
+
+    Returns
+    -------
+    dict of str to float
+        The RMSE of each series in its unit [m, m/s]; angles (``*_rad``) in degrees under
+        ``*_deg`` [deg].
+    """
     out = {}
     for k, v in err.items():
         if k == "t":
