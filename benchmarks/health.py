@@ -30,6 +30,7 @@ import numpy as np
 from fednav.io.data import DataError
 from fednav.navigator.health import run_health
 from fednav.process import errors_against, process
+from fednav.process.run import flown_gnss, imu_figures, prepare
 from fednav.sim.corruptions import families
 from fednav.sim.drives import ADIS16405, ADIS16488, car_drive
 
@@ -90,9 +91,13 @@ def monitor_cost(d) -> tuple[float, float]:
     res = process(d.imu, d.gnss, None, d.system)
     run = time.perf_counter() - t0
     n = max(res.epochs, 1)
+    # the monitor exactly as process calls it: GNSS as flown, the forward solution and the
+    # IMU figures (the residual, time-offset and at-rest checks need them)
+    prep = prepare(d.imu, d.gnss, None, d.system)
+    gnss, figures = flown_gnss(d.gnss, prep.system), imu_figures(d.imu, prep.system)
     t0 = time.perf_counter()
     for _ in range(5):
-        run_health(res.forward.fdi, d.imu, d.gnss)
+        run_health(res.forward.fdi, d.imu, gnss, res.forward, figures, True, [])
     return run / n, (time.perf_counter() - t0) / 5 / n
 
 

@@ -92,7 +92,9 @@ def stationary(gyro: np.ndarray, accel: np.ndarray, dt: float, gyro_arw: float,
     sw2 = max(quiet_w if quiet_w < 0.5 * sw2 else sw2, 1e-4 * sw2, 1e-30)
     stat = scatter / sa2 + s_ww / sw2
     dof = 3 * (cnt - 1) + 3 * cnt
-    return stat <= chi2.ppf(1.0 - alpha, dof)
+    # (the quantile once per distinct window length: only the edges' windows are shorter)
+    dofs, which = np.unique(dof, return_inverse=True)
+    return stat <= chi2.ppf(1.0 - alpha, dofs)[which]
 
 
 def still_spans(t: np.ndarray, still: np.ndarray, min_s: float = 0.0) -> list[tuple[float,

@@ -52,19 +52,28 @@ def nis_check(fdi: list, force: bool = False, seen: list | None = None) -> list[
 ISOLATION_WARN_S = 30.0
 
 
+def _by_local(fdi: list) -> dict[str, tuple[np.ndarray, ...]]:
+    """The FDI log (t, local, NIS, dof, threshold, isolated) split per local filter, in
+    order of first appearance: local -> (t, nis, dof, isolated) arrays."""
+    if not fdi:
+        return {}
+    t, local, nis, dof, _, iso = zip(*fdi, strict=True)
+    t, nis, dof = (np.asarray(a, dtype=float) for a in (t, nis, dof))
+    iso, local = np.asarray(iso, dtype=bool), np.asarray(local)
+    names, first, which = np.unique(local, return_index=True, return_inverse=True)
+    out = {}
+    for g in np.argsort(first):
+        m = which == g
+        out[str(names[g])] = (t[m], nis[m], dof[m], iso[m])
+    return out
+
+
 def isolation_warnings(fdi: list) -> list[str]:
     """Warnings for local filters that fault detection isolated for more than
     :data:`ISOLATION_WARN_S` in one stretch, naming the span and the NIS/dof there (from the
     FDI log: t, local, statistic, dof, threshold, isolated)."""
-    import pandas as pd
-
     out = []
-    if not fdi:
-        return out
-    log = pd.DataFrame(fdi, columns=["t", "local", "nis", "dof", "thr", "isolated"])
-    for local, g in log.groupby("local", sort=False):
-        t = g.t.to_numpy()
-        iso = g.isolated.to_numpy(dtype=bool)
+    for local, (t, nis, dof, iso) in _by_local(fdi).items():
         if not iso.any():
             continue
         edges = np.flatnonzero(np.diff(np.r_[0, iso.astype(np.int8), 0]))
@@ -73,17 +82,15 @@ def isolation_warnings(fdi: list) -> list[str]:
         a, b = int(starts[k]), int(ends[k])
         if t[b] - t[a] <= ISOLATION_WARN_S:
             continue
-        nis = float(np.mean(g.nis.to_numpy()[a:b + 1] / np.maximum(g.dof.to_numpy()[a:b + 1],
-                                                                    1)))
+        r = float(np.mean(nis[a:b + 1] / np.maximum(dof[a:b + 1], 1)))
         out.append(f"fault detection isolated the '{local}' local filter from {t[a]:.1f} s "
                    f"to {t[b]:.1f} s ({100 * iso.mean():.0f} % of its measurements; NIS/dof "
-                   f"{nis:.1f} there): a sensor fault — or a filter too confident of its IMU "
+                   f"{r:.1f} there): a sensor fault — or a filter too confident of its IMU "
                    f"figures (fednav tune), in which case the solution drifts on the IMU "
                    f"alone; filter.fdi_recovery re-admits after passes in a row, and "
                    f"filter.fdi_readmit_s (default 5 s) bounds how long every position "
                    f"source may stay isolated")
     return out
-
 
 
 #: Sliding window [s] of the running NIS/dof, and the mean NIS/dof over one window above
@@ -98,25 +105,24 @@ def window_nis(fdi: list) -> list[str]:
     window of accepted measurements exceeds :data:`NIS_WINDOW_WARN` somewhere (the
     worst window named), unless the run's mean is itself beyond :data:`NIS_WARN` and
     the window no worse than 3 times it (the run's warning says it all then)."""
-    import pandas as pd
-
     out = []
-    kept = [e for e in fdi if not e[5]]
-    if not kept:
-        return out
-    log = pd.DataFrame(kept, columns=["t", "local", "nis", "dof", "thr", "isolated"])
-    log["r"] = log.nis / log.dof.clip(lower=1)
-    for local, g in log.groupby("local", sort=False):
-        mean = float(g.r.mean())
-        s = pd.Series(g.r.to_numpy(), index=pd.to_datetime(g.t.to_numpy(), unit="s"))
-        roll = s.rolling(f"{int(NIS_WINDOW_S * 1000)}ms").mean()
-        full = g.t.to_numpy() - g.t.to_numpy()[0] >= NIS_WINDOW_S  # whole windows only
+    for local, (t, nis, dof, iso) in _by_local(fdi).items():
+        t, r = t[~iso], nis[~iso] / np.maximum(dof[~iso], 1)
+        if len(t) == 0:
+            continue
+        mean = float(np.mean(r))
+        # mean over the window (t - W, t] of each measurement, by cumulative sums
+        c = np.r_[0.0, np.cumsum(r)]
+        i = np.arange(len(t))
+        lo = np.searchsorted(t, t - NIS_WINDOW_S, side="right")
+        roll = (c[i + 1] - c[lo]) / (i + 1 - lo)
+        full = t - t[0] >= NIS_WINDOW_S  # whole windows only
         if not full.any():
             continue
-        vals = roll.to_numpy()[full]
+        vals = roll[full]
         k = int(np.argmax(vals))
         if vals[k] > NIS_WINDOW_WARN and (mean <= NIS_WARN or vals[k] > 3.0 * mean):
-            tk = float(g.t.to_numpy()[full][k])
+            tk = float(t[full][k])
             out.append(f"the '{local}' local filter's innovations are {vals[k]:.3g} times "
                        f"their expected size over {tk - NIS_WINDOW_S:.1f}..{tk:.1f} s (NIS/dof "
                        f"over {NIS_WINDOW_S:g} s): a sensor fault there, a jump, or a "

@@ -252,19 +252,24 @@ def imu_gnss_offset(solution, imu, gnss, window_s: float = OFFSET_WINDOW_S,
     dvg = gnss.vel[k] - gnss.vel[j]
 
     def misfit(lags):
-        tk = tg[k][None, :] - lags[:, None]
-        tj = tg[j][None, :] - lags[:, None]
-        dV = np.stack([np.interp(tk, t, V[:, i]) - np.interp(tj, t, V[:, i])
-                       for i in range(3)], axis=-1)
-        r = dvg[None] - dV
+        # V at every fix's time minus each lag: one search for the three axes
+        x = tg[None, :] - lags[:, None]
+        i = np.clip(np.searchsorted(t, x, side="right") - 1, 0, len(t) - 2)
+        w = ((x - t[i]) / (t[i + 1] - t[i]))[..., None]
+        Vx = (1.0 - w) * V[i] + w * V[i + 1]
+        r = dvg[None] - (Vx[:, k] - Vx[:, j])
         r -= r.mean(axis=1, keepdims=True)
         return (r**2).sum(axis=(1, 2)), r
 
-    lags = np.arange(-search_s, search_s + 1e-9, 0.01)
+    # coarse (0.05 s) then fine (0.01 s): the misfit is smooth over the 1 s windows
+    lags = np.arange(-search_s, search_s + 1e-9, 0.05)
     cost, _ = misfit(lags)
     i = int(np.argmin(cost))
     if i in (0, len(lags) - 1):
         return None  # at the edge: an offset beyond the search (the course check's)
+    lags = lags[i] + np.arange(-0.04, 0.04 + 1e-9, 0.01)
+    cost, _ = misfit(lags)
+    i = int(np.argmin(cost))
     tau = float(lags[i])
     signal = float(((dvg - dvg.mean(axis=0)) ** 2).sum())
     if cost[i] > EXPLAINED * signal:

@@ -139,16 +139,18 @@ def consistency(fdi: list) -> dict[str, dict[str, float]]:
     """Per local filter: mean normalized innovation squared per degree of freedom (about 1
     for a consistent filter; well above 1: the noise figures are too optimistic) and the
     fraction of measurements isolated by fault detection."""
-    import pandas as pd
-
     if not fdi:
         return {}
-    log = pd.DataFrame(fdi, columns=["t", "local", "nis", "dof", "thr", "isolated"])
+    _, local, nis, dof, _, iso = zip(*fdi, strict=True)
+    r = np.asarray(nis, dtype=float) / np.asarray(dof, dtype=float)
+    iso = np.asarray(iso, dtype=float)
+    names, which = np.unique(np.asarray(local), return_inverse=True)
     out = {}
-    for name, g in log.groupby("local"):
-        out[str(name)] = {"nis_per_dof": float((g.nis / g.dof).mean()),
-                          "isolated_fraction": float(g.isolated.mean()),
-                          "measurements": int(len(g))}
+    for g, name in enumerate(names):  # (sorted by name)
+        m = which == g
+        out[str(name)] = {"nis_per_dof": float(r[m].mean()),
+                          "isolated_fraction": float(iso[m].mean()),
+                          "measurements": int(m.sum())}
     return out
 
 
