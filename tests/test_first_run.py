@@ -94,3 +94,27 @@ def test_no_compile_no_note():
 
     assert _compiled_note(0.0) == ""
     assert _compiled_note(21.04) == " (+ 21.0 s compiling fast kernels, once)"
+
+
+README = Path(__file__).parents[1] / "README.md"
+
+
+def test_the_readme_needs_nothing_but_a_clone():
+    """Every file the README names is in the repository, except the optional real-data
+    section's (NaveGo's LGPL files, not bundled), which says where they come from; its
+    first screen keeps the two commands for a fresh machine."""
+    import re
+
+    text = README.read_text()
+    root = README.parent
+    first = text[:text.index("## The navigator")].split("\n\n")[:6]
+    assert any('pip install -e . && fednav reproduce 002' in p for p in first)
+    assert any('pip install -e ".[test]" && python -m pytest -q' in p for p in first)
+    optional = text.index("*Optional: a real rover.*")
+    end = text.index("```\n", text.index("```bash", optional) + 7)
+    assert "NaveGo" in text[optional:end] and "LGPL" in text[optional:end]
+    assert "../shared" not in text[:optional] + text[end:]
+    named = set(re.findall(r"\b((?:examples|docs|benchmarks)/[\w./-]+\.(?:yaml|md|py))", text))
+    named |= {m for m in re.findall(r"\]\(([\w./-]+)\)", text) if not m.startswith("http")}
+    missing = sorted(n for n in named if not (root / n.split("#")[0]).exists())
+    assert not missing and len(named) > 10, missing
