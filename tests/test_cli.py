@@ -117,3 +117,38 @@ def test_tables_are_full_width_when_the_output_is_not_a_terminal(monkeypatch):
     PipeConsole(file=out, width=80).print(tab)  # an explicit width is kept
     assert "…" in out.getvalue() or not all(n in out.getvalue() for n in names)
     assert isinstance(cli.console, PipeConsole)
+
+
+def test_reproduction_tables_in_the_terminal_say_better_worse_and_why():
+    """Issue 29: the terminal tables judge each measure as the HTML report does (smaller
+    errors are better, timings not judged), name the docs section of each worse cell,
+    say a CI only where there is one, and print no '×-0.00'."""
+    import io
+
+    from fednav.campaign.report import print_tables
+    from fednav.core.console import PipeConsole
+
+    summary = {"paper": "002", "runs": 3, "seed": 1, "tables": {
+        "T2": {"rows": {"SINS": {"dVx_mps": {"ours": 0.68, "ci95": 0.1, "paper": 0.2},
+                                 "dlambda_m": {"ours": 20.0, "ci95": 3.0, "paper": 267.0}},
+                        "SINS/SAR": {"dVx_mps": {"ours": 0.02, "ci95": 0.01, "paper": 0.019},
+                                     "dlambda_m": {"ours": None, "ci95": None,
+                                                   "paper": 0.89}}}},
+        "T4": {"rows": {"UKF": {"ms_per_cycle": {"ours": 30.0, "ci95": 2.0, "paper": 2.1}}}},
+        "T1": {"rows": {"phiE": {"degree": {"ours": 3437.0, "ci95": None, "paper": 8.67},
+                                 "sigma_shrink": {"ours": 5.96, "ci95": None,
+                                                  "paper": None}}}},
+        "imp": {"rows": {"position": {"improvement_pct": {"ours": -0.001, "ci95": 0.1,
+                                                          "paper": 25.8}}}}}}
+    out = io.StringIO()
+    print_tables(summary, {"T2": "Table 2 — mean absolute error"}, PipeConsole(file=out))
+    text = out.getvalue()
+    assert "Table 2 — mean absolute error" in text and "Table T4" in text
+    assert "east velocity δVx [m/s]" in text and "east position δλ [m]" in text
+    assert "0.68 ± 0.1 | 0.2 ×3.40 worse [1]" in text
+    assert "20.0 ± 3.00 | 267 ×0.075 better" in text
+    assert "(timing: not compared)" in text and "-25.8 points worse" in text
+    assert "×-0.00" not in text
+    t1 = text.split("observability")[0] if "observability" in text else text
+    assert "one computation" in text and "3437 | 8.67 ×396 differs" in t1
+    assert "docs/paper002.md#beyond-x3" in text and "docs/paper002.md#observability" in text

@@ -856,8 +856,11 @@ def _simulate_run(mod, path: Path, out: Path | None, fmt: str, seed: int, mode: 
 
 @app.command()
 @_one_line_errors
-def report(folder: Path = typer.Argument(..., help="a fednav reproduce output folder")) -> None:
-    """Write FOLDER/report.html: tables beside the paper's, plots, run metadata."""
+def report(folder: Path = typer.Argument(..., help="a fednav reproduce, run or process "
+                                                   "output folder")) -> None:
+    """Write FOLDER/report.html: a reproduction's tables beside the paper's (each cell
+    outside ×3 says better, or why worse), or a process run's solution summary,
+    consistency, warnings and RMSE; the plots; the run metadata."""
     from .campaign.html_report import write_report
 
     console.print(f"wrote {write_report(folder, _report_titles(folder))}")

@@ -310,3 +310,82 @@ def doc_excerpt(r: Reason, max_lines: int = 40) -> str | None:
             break
         out.append(line)
     return "\n".join(out).strip() or None
+
+
+# ------------------------------------------------------------- a table as a grid
+_RANGE = re.compile(r"(.+)_(min|max)_([a-z0-9]+)")
+
+
+def present(v) -> bool:
+    """A finite number (not None, NaN or a bool)."""
+    return isinstance(v, int | float) and not isinstance(v, bool) and v == v
+
+
+def leaves(cell: dict, prefix: str = ""):
+    """(quantity, {ours, ci95, paper, ...}) for a table cell; nested cells (paper 003's
+    column -> statistic -> value) are flattened to ``column / statistic``."""
+    if "ours" in cell:
+        yield prefix, cell
+        return
+    for k, v in cell.items():
+        if isinstance(v, dict):
+            yield from leaves(v, f"{prefix} / {k}" if prefix else str(k))
+
+
+@dataclass
+class Grid:
+    """A summary table laid out as a person reads it: ``cells[(row, statistic)][measure]``
+    (statistic "" unless the table nests one, as paper 003's max/min/std, or names one in
+    its keys, as paper 004's ``lon_min_m``), the measures ``shown`` (with a value in some
+    row) and those ``left_out`` (none in any row)."""
+
+    cells: dict
+    shown: list
+    left_out: list
+    stats: list
+
+    def values(self) -> list[dict]:
+        return [v for r in self.cells.values() for v in r.values()]
+
+    @property
+    def has_paper(self) -> bool:
+        return any(v.get("paper") is not None for v in self.values())
+
+    @property
+    def has_ci(self) -> bool:
+        return any(present(v.get("ci95")) for v in self.values())
+
+
+def grid(table: dict) -> Grid:
+    """The :class:`Grid` of a summary table (``{"rows": row -> measure -> cell}``)."""
+    rows = table["rows"]
+    cells: dict[tuple[str, str], dict[str, dict]] = {}
+    columns: list[str] = []
+    stats: list[str] = []
+    keys = {q for cols in rows.values() for q, _ in leaves(cols)}
+    split = bool(keys) and all(_RANGE.fullmatch(q) for q in keys)  # lon_min_m: a statistic
+    for row, cols in rows.items():
+        for q, v in leaves(cols):
+            if split:
+                m = _RANGE.fullmatch(q)
+                q = f"{m.group(1)}_{m.group(3)} / {m.group(2)}"
+            col, _, stat = q.partition(" / ")
+            cells.setdefault((str(row), stat), {})[col] = v
+            columns += [col] if col not in columns else []
+            stats += [stat] if stat and stat not in stats else []
+    shown = [c for c in columns
+             if any(present(cells[k].get(c, {}).get("ours")) for k in cells)] or columns
+    return Grid(cells, shown, [c for c in columns if c not in shown], stats)
+
+
+def what(table: dict, runs, seed, g: Grid) -> str:
+    """What fednav's numbers in a table are (a CI is said only where there is one)."""
+    n = table.get("runs", runs)
+    if g.has_ci:
+        return (f"fednav: mean ± 95 % confidence interval over {n} Monte Carlo runs "
+                f"(seed {seed})")
+    if n == 1:
+        return (f"fednav: one Monte Carlo run (seed {seed}) — no confidence interval from a "
+                "single run")
+    return ("fednav: one computation (an analysis, not a Monte Carlo statistic) — no "
+            "confidence interval")

@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import base64
 import json
-import re
 from datetime import UTC, datetime
 from html import escape
 from pathlib import Path
@@ -75,19 +74,8 @@ def _num(x) -> str:
     return format_number(x)
 
 
-def _leaves(cell: dict, prefix: str = ""):
-    """(quantity, {ours, ci95, paper, ...}) for a table cell; nested cells (paper 003's
-    column -> statistic -> value) are flattened to ``column / statistic``."""
-    if "ours" in cell:
-        yield prefix, cell
-        return
-    for k, v in cell.items():
-        if isinstance(v, dict):
-            yield from _leaves(v, f"{prefix} / {k}" if prefix else str(k))
-
-
-def _present(v) -> bool:
-    return isinstance(v, int | float) and not isinstance(v, bool) and v == v
+_leaves = explain.leaves
+_present = explain.present
 
 
 class _Reasons:
@@ -130,19 +118,6 @@ class _Reasons:
         return "\n".join(out)
 
 
-def _what(table: dict, runs, seed, cells) -> str:
-    """The table's note on what fednav's numbers are (a CI is said only where one is)."""
-    n = table.get("runs", runs)
-    spread = any(_present(v.get("ci95")) for v in cells)
-    if spread:
-        return f"fednav: mean ± 95 % confidence interval over {n} Monte Carlo runs (seed {seed})"
-    if n == 1:
-        return (f"fednav: one Monte Carlo run (seed {seed}) — no confidence interval from a "
-                "single run")
-    return ("fednav: one computation (an analysis, not a Monte Carlo statistic) — no "
-            "confidence interval")
-
-
 _LEGEND = (f"<p class='note legend'>Each cell: fednav's value, under it the paper's and "
            f"the ratio fednav / paper. Outside ×{FAR:g}: "
            "<span class='better'>green</span> better than the paper, "
@@ -151,38 +126,17 @@ _LEGEND = (f"<p class='note legend'>Each cell: fednav's value, under it the pape
            "machine is another).</p>")
 
 
-_RANGE = re.compile(r"(.+)_(min|max)_([a-z0-9]+)")
-
-
 def table_html(name: str, table: dict, title: str, runs, seed,
                reasons: _Reasons | None = None) -> str:
     """One summary table as HTML: a row per table row (and statistic, for paper 003's
     nested cells), a column per measure; each cell fednav's value ± CI over the paper's
     and the verdict."""
     reasons = reasons or _Reasons("")
-    rows = table["rows"]
-    grid: dict[tuple[str, str], dict[str, dict]] = {}
-    columns: list[str] = []
-    stats: list[str] = []
-    keys = {q for cols in rows.values() for q, _ in _leaves(cols)}
-    split = all(_RANGE.fullmatch(q) for q in keys)  # lon_min_m, lon_max_m: a statistic
-    for row, cols in rows.items():
-        for q, v in _leaves(cols):
-            if split:
-                m = _RANGE.fullmatch(q)
-                q = f"{m.group(1)}_{m.group(3)} / {m.group(2)}"
-            col, _, stat = q.partition(" / ")
-            grid.setdefault((str(row), stat), {})[col] = v
-            columns += [col] if col not in columns else []
-            stats += [stat] if stat and stat not in stats else []
-    cells = [v for r in grid.values() for v in r.values()]
-    # the measures fednav computes: a column with no value in any row is left out
-    shown = [c for c in columns
-             if any(_present(grid[k].get(c, {}).get("ours")) for k in grid)] or columns
-    left_out = [c for c in columns if c not in shown]
-    paper_any = any(v.get("paper") is not None for v in cells)
+    g = explain.grid(table)
+    shown, left_out, stats = g.shown, g.left_out, g.stats
+    paper_any = g.has_paper
     head = [f"<h2 id='h-{escape(name)}'>{escape(title)}</h2>",
-            f"<p class='note'>{escape(_what(table, runs, seed, cells))}"
+            f"<p class='note'>{escape(explain.what(table, runs, seed, g))}"
             + ("" if paper_any else "; the paper gives no values for this table") + "</p>"]
     if left_out:
         head.append("<p class='note'>Not computed in this run (no value in any row): "
@@ -192,7 +146,7 @@ def table_html(name: str, table: dict, title: str, runs, seed,
            + ("<th class='l'>statistic</th>" if stats else "")
            + "".join(f"<th>{escape(explain.label(c))}</th>" for c in shown) + "</tr>"]
     last_row = None
-    for (row, stat), by_col in grid.items():
+    for (row, stat), by_col in g.cells.items():
         first = " class='first'" if row != last_row else ""
         tds = [f"<td class='l'>{escape(explain.row_label(row)) if row != last_row else ''}"
                "</td>"]

@@ -48,28 +48,73 @@ def format_number(x: float | None) -> str:
 
 
 def print_tables(summary: dict, titles: dict[str, str], console: Console | None = None) -> None:
-    """Print each table, one line per (row, column): our Monte Carlo mean, its 95 % CI,
-    the paper's value and the ratio ours / paper."""
+    """Print each table as the HTML report shows it: a row per filter (and statistic), a
+    column per measure with its label and unit; each cell fednav's value (± 95 % CI where
+    the Monte Carlo gives one), the paper's value and the ratio, and outside ×3 whether
+    that is better or worse than the paper (:mod:`fednav.campaign.explain`; timings are
+    not judged).  Under the tables, the reason of each worse cell and the docs section
+    that explains it."""
+    from rich.markup import escape
+
+    from . import explain
+
     console = console or Console()
+    paper = str(summary.get("paper", ""))
+    reasons: list = []
     for tname, t in summary["tables"].items():
-        rows = t["rows"]
-        if not rows:
+        if not t.get("rows"):
             continue
-        tab = Table(title=f"{titles.get(tname, tname)}\nfednav: mean ± 95% CI over "
-                          f"{t.get('runs', summary['runs'])} Monte Carlo runs (seed "
-                          f"{summary['seed']})")
-        for c, j in (("row", "left"), ("quantity", "left"), ("fednav", "right"),
-                     ("± 95% CI", "right"), ("paper", "right"), ("fednav/paper", "right")):
-            tab.add_column(c, justify=j)
-        for r, vals in rows.items():
-            for i, (c, v) in enumerate(vals.items()):
-                pv = v.get("paper")
-                q = v["ours"] / pv if pv else None
-                ratio = "–" if q is None else f"×{q:.2f}" if abs(q) < 100 else f"×{q:.3g}"
-                tab.add_row(r if i == 0 else "", c, format_number(v["ours"]),
-                            format_number(v.get("ci95")), format_number(pv), ratio,
-                            end_section=(i == len(vals) - 1))
+        g = explain.grid(t)
+        head = f"{titles.get(tname) or t.get('title') or f'Table {tname}'}\n" + explain.what(
+            t, summary.get("runs"), summary.get("seed"), g)
+        if g.has_paper:
+            head += " | paper | fednav / paper"
+        tab = Table(title=escape(head))
+        tab.add_column("")
+        if g.stats:
+            tab.add_column("statistic")
+        for c in g.shown:
+            tab.add_column(escape(explain.label(c)), justify="right")
+        last = None
+        keys = list(g.cells)
+        for k, ((row, stat), by_col) in enumerate(g.cells.items()):
+            cells = []
+            for c in g.shown:
+                v = by_col.get(c)
+                if v is None:
+                    cells.append("–")
+                    continue
+                text = format_number(v.get("ours"))
+                if explain.present(v.get("ci95")):
+                    text += f" ± {format_number(v['ci95'])}"
+                if v.get("paper") is not None:
+                    q = f"{c} / {stat}" if stat else c
+                    verdict = explain.compare(v.get("ours"), v["paper"], q)
+                    text += f" | {format_number(v['paper'])} {verdict.text}"
+                    if verdict.kind == "better":
+                        text += " [green]better[/]"
+                    elif verdict.kind == "timing":
+                        text += " (timing: not compared)"
+                    elif verdict.flagged:
+                        r = explain.reason(paper, tname, row, q)
+                        if r is not None and r not in reasons:
+                            reasons.append(r)
+                        text += f" [red]{verdict.kind}[/]" + (
+                            "" if r is None else f" \\[{reasons.index(r) + 1}]")
+                cells.append(text)
+            first = [escape(explain.row_label(row)) if row != last else ""]
+            last = row
+            nxt = keys[k + 1][0] if k + 1 < len(keys) else None
+            tab.add_row(*first, *([escape(stat)] if g.stats else []), *cells,
+                        end_section=nxt != row)
         console.print(tab)
+        if g.left_out:
+            console.print("not computed in this run (no value in any row): "
+                          + ", ".join(explain.label(c) for c in g.left_out), highlight=False)
+    if reasons:
+        console.print(f"Why cells are worse than the paper (outside ×{explain.FAR:g}):")
+        for i, r in enumerate(reasons, 1):
+            console.print(f"  \\[{i}] {escape(r.text)} — {r.doc}#{r.anchor}", highlight=False)
 
 
 def write_outputs(out: Path, summary: dict, rows: list[dict], series: dict) -> list[Path]:
