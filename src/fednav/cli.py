@@ -253,7 +253,7 @@ def _campaign(exp, scn, identity: str, label: str, unit: str, out: Path, runs: i
     cold = _kernel_cache.cold()  # (the workers compile: said here, once)
     if cold:
         _say_on_stderr(_kernel_cache.NOTICE)
-        _kernel_cache.announced()
+    _kernel_cache.announced()  # (not again by each forked worker)
     t0 = time.perf_counter()
     total = len(exp.units(scn, runs, seed, max_time, **extra))
     with Progress("[progress.description]{task.description}", BarColumn(),
