@@ -23,6 +23,7 @@ Units SI; ENU navigation frame; body right-forward-up.
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 
 from ..core import attitude as att
@@ -216,6 +217,38 @@ def gnss_residuals(solution, gnss) -> dict | None:
     return out
 
 
+@numba.njit(cache=True)
+def _offset_misfit(t, V, tg, k, j, dvg, lags):
+    """Per lag ``lags[l]`` [s]: the sum of squares of the GNSS velocity changes ``dvg``
+    (K, 3) over fix pairs (``j``, ``k``) minus the IMU velocity ``V`` (N, 3, at times
+    ``t``) linearly interpolated at the fixes' times ``tg`` minus the lag, each axis's
+    mean misfit removed (a tilt's or a bias's constant part)."""
+    n, G, K = len(t), len(tg), len(k)
+    cost = np.empty(len(lags))
+    Vx = np.empty((G, 3))
+    r = np.empty((K, 3))
+    for li in range(len(lags)):
+        p = 0
+        for g in range(G):  # (fix times increase: the bracket only moves forward)
+            x = tg[g] - lags[li]
+            while p < n - 2 and t[p + 1] <= x:
+                p += 1
+            w = (x - t[p]) / (t[p + 1] - t[p])
+            for a in range(3):
+                Vx[g, a] = (1.0 - w) * V[p, a] + w * V[p + 1, a]
+        c = 0.0
+        for a in range(3):
+            mean = 0.0
+            for q in range(K):
+                r[q, a] = dvg[q, a] - (Vx[k[q], a] - Vx[j[q], a])
+                mean += r[q, a]
+            mean /= K
+            for q in range(K):
+                c += (r[q, a] - mean) ** 2
+        cost[li] = c
+    return cost
+
+
 def imu_gnss_offset(solution, imu, gnss, window_s: float = OFFSET_WINDOW_S,
                     search_s: float = OFFSET_SEARCH_S) -> tuple[float, float] | None:
     """The GNSS-IMU time offset [s] (how much later than their time of validity the GNSS
@@ -252,14 +285,7 @@ def imu_gnss_offset(solution, imu, gnss, window_s: float = OFFSET_WINDOW_S,
     dvg = gnss.vel[k] - gnss.vel[j]
 
     def misfit(lags):
-        # V at every fix's time minus each lag: one search for the three axes
-        x = tg[None, :] - lags[:, None]
-        i = np.clip(np.searchsorted(t, x, side="right") - 1, 0, len(t) - 2)
-        w = ((x - t[i]) / (t[i + 1] - t[i]))[..., None]
-        Vx = (1.0 - w) * V[i] + w * V[i + 1]
-        r = dvg[None] - (Vx[:, k] - Vx[:, j])
-        r -= r.mean(axis=1, keepdims=True)
-        return (r**2).sum(axis=(1, 2)), r
+        return _offset_misfit(t, V, tg, k, j, dvg, np.asarray(lags, dtype=float)), dvg
 
     # coarse (0.05 s) then fine (0.01 s): the misfit is smooth over the 1 s windows
     lags = np.arange(-search_s, search_s + 1e-9, 0.05)
