@@ -28,7 +28,8 @@ SUMMARY = {
                         "roll_deg": {"max": {"ours": 0.03, "paper": 0.35},
                                      "std": {"ours": 0.01, "paper": 0.09}}}}},
         "improvement": {"rows": {"position": {"improvement_pct": {
-            "ours": -0.001, "ci95": 3.0, "paper": 25.8}}}},             # worse, not ×-0.00
+            "ours": -0.001, "ci95": 3.0, "paper": 25.8,                 # worse, not ×-0.00
+            "paper_table_same_rule": 37.1}}}},
         "timing": {"rows": {"UKF": {"ms_per_cycle": {"ours": 30.0, "paper": 2.1},
                                     "pos_m": {"ours": 0.7, "paper": 0.85}}}},
         "empty": {"rows": {}},
@@ -104,6 +105,7 @@ def test_red_only_for_worse_with_a_reason_green_for_better_timings_not_judged(tm
     # an improvement of -0.001 % against 25.8 %: worse, as a difference in points
     assert "×-0.00" not in html and "-25.8 points" in html
     assert re.search(r"<td class='worse'[^>]*>-0\.001", html)
+    assert "own Table 1, same rule: 37.1" in html  # a cell's further figure is shown
     # a timing on another machine is shown, not judged
     timing = report_tables(html)["timing"][1]  # UKF: time per filter cycle, position
     assert "timing: not compared" in timing[1] and "×14.29" in timing[1]

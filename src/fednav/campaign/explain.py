@@ -63,6 +63,7 @@ _LABELS = {
     "attitude_std": "attitude std [°]",
     "lost_pf": "runs that lost track, PF", "lost_ekf": "runs that lost track, EKF",
     "max": "max", "min": "min", "std": "std", "mean": "mean", "rms": "RMS",
+    "paper_table_same_rule": "the paper's own Table 1, same rule",
     "runs_total": "units of work", "runs_computed": "computed", "runs_reused": "reused",
     "engine": "engine",
 }
@@ -376,6 +377,13 @@ def grid(table: dict) -> Grid:
     shown = [c for c in columns
              if any(present(cells[k].get(c, {}).get("ours")) for k in cells)] or columns
     return Grid(cells, shown, [c for c in columns if c not in shown], stats)
+
+
+def extras(cell: dict) -> list[tuple[str, float]]:
+    """A cell's further figures beside fednav's and the paper's (paper 003's improvement
+    as its own Table 1 gives it), as (label, value)."""
+    return [(label(k), v) for k, v in cell.items()
+            if k not in ("ours", "ci95", "paper") and present(v)]
 
 
 def what(table: dict, runs, seed, g: Grid) -> str:

@@ -192,6 +192,8 @@ def _cell(table: str, row: str, quantity: str, v: dict, reasons: _Reasons) -> st
         tip = "a timing on this machine: the paper's machine is another, so it is not judged"
     title = f" title='{escape(tip)}'" if tip else ""
     line = f"<span class='p'>{verdict_line}</span>" if verdict_line else ""
+    line += "".join(f"<span class='p'>{escape(k)}: {_num(x)}</span>"
+                    for k, x in explain.extras(v))
     return (f"<td class='{verdict.kind}'{title}>{value}<span class='p'>paper {_num(paper)}"
             f" · {escape(verdict.text)}</span>{line}</td>")
 

@@ -69,7 +69,8 @@ def print_tables(summary: dict, titles: dict[str, str], console: Console | None 
             t, summary.get("runs"), summary.get("seed"), g)
         if g.has_paper:
             head += " | paper | fednav / paper"
-        tab = Table(title=escape(head))
+        console.print(f"[bold]{escape(head)}[/]", highlight=False)  # (a title would wrap)
+        tab = Table()
         tab.add_column("")
         if g.stats:
             tab.add_column("statistic")
@@ -101,6 +102,8 @@ def print_tables(summary: dict, titles: dict[str, str], console: Console | None 
                             reasons.append(r)
                         text += f" [red]{verdict.kind}[/]" + (
                             "" if r is None else f" \\[{reasons.index(r) + 1}]")
+                text += "".join(f" ({escape(k)}: {format_number(x)})"
+                                for k, x in explain.extras(v))
                 cells.append(text)
             first = [escape(explain.row_label(row)) if row != last else ""]
             last = row
@@ -110,7 +113,8 @@ def print_tables(summary: dict, titles: dict[str, str], console: Console | None 
         console.print(tab)
         if g.left_out:
             console.print("not computed in this run (no value in any row): "
-                          + ", ".join(explain.label(c) for c in g.left_out), highlight=False)
+                          + escape(", ".join(explain.label(c) for c in g.left_out)),
+                          highlight=False)
     if reasons:
         console.print(f"Why cells are worse than the paper (outside ×{explain.FAR:g}):")
         for i, r in enumerate(reasons, 1):

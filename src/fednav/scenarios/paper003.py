@@ -157,56 +157,6 @@ def summarize(rows: list[dict], fault_rows: list[dict], runs: int, seed: int) ->
     return {"paper": PAPER, "runs": runs, "seed": seed, "tables": tables}
 
 
-def _fmt(x) -> str:
-    if x is None or not np.isfinite(x):
-        return "–"
-    a = abs(x)
-    return f"{x:.0f}" if a >= 100 else f"{x:.2f}" if a >= 1 else f"{x:.3g}"
-
-
-def _print_summary(summary: dict, console) -> None:
-    from rich.table import Table
-
-    t = summary["tables"]
-    tab = Table(title=f"Table 1 — error max / min / std over the flight\nfednav: mean over "
-                      f"{summary['runs']} Monte Carlo runs (seed {summary['seed']}) | paper")
-    tab.add_column("filter")
-    tab.add_column("stat")
-    for c in COLS:
-        tab.add_column(c, justify="right")
-    for mode, cols in t["T1"]["rows"].items():
-        for j, s in enumerate(STATS):
-            tab.add_row(mode if j == 0 else "", s,
-                        *[f"{_fmt(cols[c][s]['ours'])} | {_fmt(cols[c][s]['paper'])}"
-                          for c in COLS], end_section=(j == 2))
-    console.print(tab)
-    tab = Table(title="Improvement of FUKF over FKF (1 - mean std FUKF / mean std FKF)")
-    for c in ("group", "fednav %", "± 95% CI", "paper (stated) %", "paper (its Table 1) %"):
-        tab.add_column(c, justify="right")
-    for g, v in t["improvement"]["rows"].items():
-        v = v["improvement_pct"]
-        tab.add_row(g, _fmt(v["ours"]), _fmt(v["ci95"]), _fmt(v["paper"]),
-                    _fmt(v["paper_table_same_rule"]))
-    console.print(tab)
-    tab = Table(title="Mean std per group for every mode")
-    for c in ("mode", "position m", "velocity m/s", "attitude deg"):
-        tab.add_column(c, justify="right")
-    for mode, v in t["analysis"]["rows"].items():
-        tab.add_row(mode, *[f"{_fmt(v[k]['ours'])} ± {_fmt(v[k]['ci95'])}"
-                            for k in ("position_std", "velocity_std", "attitude_std")])
-    console.print(tab)
-    if "fault" in t:
-        tab = Table(title="Fault experiment — 5-sigma GNSS step fault (FUKF)")
-        cols = ("detect_delay_s", "detected_fraction", "isolated_fraction",
-                "false_alarm_rate", "pos_err_rms_fault_window_m")
-        tab.add_column("case")
-        for c in cols:
-            tab.add_column(c, justify="right")
-        for case, v in t["fault"]["rows"].items():
-            tab.add_row(case, *[f"{_fmt(v[c]['ours'])} ± {_fmt(v[c]['ci95'])}" for c in cols])
-        console.print(tab)
-
-
 class Paper003(Paper):
     """Paper 003 as a campaign: one unit per Monte Carlo run (every mode, and the fault
     experiment with and without isolation, on the run's data)."""
@@ -229,9 +179,6 @@ class Paper003(Paper):
         return {"rows": rows, "fault_rows": fault_rows, "series": results[0][1],
                 "fault_series": results[0][3],
                 "summary": summarize(rows, fault_rows, runs, seed)}
-
-    def print_summary(self, summary, console) -> None:
-        _print_summary(summary, console)
 
     def files(self, out, rep) -> list:
         import pandas as pd
