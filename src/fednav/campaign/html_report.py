@@ -50,6 +50,7 @@ td.l{white-space:normal}
 td.worse,td.differs{background:#fbd5d0}td.worse .p,td.differs .p{color:#8a1c10}
 td.better{background:#d9f0dc}td.better .p{color:#1d6b2f}
 td.timing .p{color:#888;font-style:italic}
+span.worse{background:#fbd5d0;color:#8a1c10;padding:0 .2em}
 td a.why{font-weight:600;color:#8a1c10;text-decoration:none}
 td.better a.why{color:#1d6b2f}
 dl{display:grid;grid-template-columns:max-content auto;gap:.2em 1.2em}dt{font-weight:600}
@@ -557,7 +558,7 @@ def render_process(folder: Path, s: dict) -> str:
         body.append("<h2 id='h-data-quality'>Data quality</h2><p class='note'>"
                     "docs/reliability.md</p>")
         body.append(_simple_table("data-quality", ["", "value"], [
-            [escape(k.replace("_", " ")), _val(v)] for k, v in q.items()]))
+            [escape(explain.label(k)), _val(v)] for k, v in q.items()]))
     blocks = [("rmse", "RMSE against the reference", s.get("rmse")),
               ("rmse-smoothed", "RMSE of the smoothed solution against the reference",
                s.get("rmse_smoothed"))]
@@ -571,7 +572,7 @@ def render_process(folder: Path, s: dict) -> str:
             continue
         body.append(f"<h2 id='h-{escape(tid)}'>{escape(title)}</h2>")
         body.append(_simple_table(tid, [explain.label(k) for k in block],
-                                  [[_val(v) for v in block.values()]]))
+                                  [[_val(v) for v in block.values()]], text=()))
     known = {"inputs", "warnings", "epochs", "run_time_s", "alignment", "consistency",
              "data_quality", "rmse", "rmse_smoothed", "against"}
     rest = {k: v for k, v in s.items() if k not in known}
