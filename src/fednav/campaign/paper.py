@@ -71,8 +71,9 @@ class Paper(ABC):
                   **options) -> dict:
         """The report from the units' results (in :meth:`units` order): ``rows`` (one
         dict per run and mode, ``runs.csv``), ``series`` (the first run's error series,
-        by mode), ``summary`` (the tables, ``summary.json``) and whatever the paper's
-        plots and files read."""
+        by mode), ``runs_series`` (the error series of every Monte Carlo run, for the
+        plots), ``summary`` (the tables, ``summary.json``) and whatever the paper's plots
+        and files read."""
 
     def reproduce(self, scn, runs: int, seed: int, jobs: int = 1,
                   max_time: float | None = None, progress=None, campaign=None,
@@ -91,10 +92,12 @@ class Paper(ABC):
         print_tables(summary, self.titles, console)
 
     def plots(self, out: Path, rep: dict) -> list[Path]:
-        """The paper's figures (default: the first run's errors of every mode)."""
+        """The paper's figures (default: every mode's errors over the Monte Carlo runs,
+        ``rep["runs_series"]``, else the first run's, ``rep["series"]``)."""
         from .report import plot_errors
 
-        return [plot_errors(rep["series"], out / "errors.png")] if rep.get("series") else []
+        runs = rep.get("runs_series") or ([rep["series"]] if rep.get("series") else [])
+        return [plot_errors(runs, out / "errors.png", f"Paper {self.number}")] if runs else []
 
     def files(self, out: Path, rep: dict) -> list[Path]:
         """Data files beyond ``runs.csv`` (a sweep's runs, say)."""

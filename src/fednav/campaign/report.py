@@ -9,7 +9,7 @@ import pandas as pd
 from rich.console import Console
 from rich.table import Table
 
-from ..core import units
+from ..core import plots, units
 from ..core.atomic import save_figure, write_frame, write_json
 from .evaluation import NULL_REASONS, mean_ci95
 
@@ -131,37 +131,119 @@ def write_outputs(out: Path, summary: dict, rows: list[dict], series: dict) -> l
     return written
 
 
-def plot_errors(series: dict, path: Path) -> Path:
-    """Position, velocity and misalignment errors versus time for each mode (one run)."""
-    import matplotlib
+#: errors.png of a reproduction, a row per quantity: (RunResult attribute, first column of
+#: RunResult.sigma, factor from SI, the three components' names, what, unit)
+_QUANTITIES = (("pos", 6, 1.0, ("east", "north", "up"), "position error", "m"),
+               ("vel", 3, 1.0, ("east", "north", "up"), "velocity error", "m/s"),
+               ("att", 0, 1.0 / units.ARCSEC, ("φE (east)", "φN (north)", "φU (azimuth)"),
+                "misalignment", "arcsec"))
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(3, 3, figsize=(14, 9), sharex=True)
-    labels = [("east pos. [m]", "north pos. [m]", "up pos. [m]"),
-              ("vE [m/s]", "vN [m/s]", "vU [m/s]"),
-              ('phiE ["]', 'phiN ["]', 'phiU ["]')]
-    for mode, r in series.items():
-        data = (r.pos, r.vel, units.to_arcsec(r.att))
-        for i in range(3):
-            for j in range(3):
-                axes[i, j].plot(r.t, data[i][:, j], lw=0.8, label=mode)
-                axes[i, j].set_ylabel(labels[i][j])
-    for ax in axes.ravel():
-        ax.grid(alpha=0.3)
-    for j in range(3):
-        axes[2, j].set_xlabel("time [s]")
-    axes[0, 0].legend(fontsize=8)
-    axes[0, 0].set_yscale("symlog", linthresh=1.0)
-    axes[0, 1].set_yscale("symlog", linthresh=1.0)
-    fig.suptitle("Navigation errors (computed − true), first Monte Carlo run")
+def error_statistics(runs_series, mode: str) -> dict:
+    """One mode's errors over the Monte Carlo runs: ``t`` (K,) and ``panels``, row-major
+    over :data:`_QUANTITIES` x (east, north, up), each the :func:`fednav.core.plots.
+    monte_carlo` statistics (``rms``, ``lo``, ``hi`` and, where the runs carry the
+    filter's 1-sigma, ``sigma``) in the panel's unit."""
+    res = [rs[mode] for rs in runs_series if mode in rs]
+    n = min(len(r.t) for r in res)
+    panels = []
+    for attr, s0, k, _, _, _ in _QUANTITIES:
+        for j in range(3):
+            e = np.stack([getattr(r, attr)[:n, j] for r in res]) * k
+            sig = None
+            if all(r.sigma is not None and r.sigma.shape[0] >= n for r in res):
+                sig = np.stack([r.sigma[:n, s0 + j] for r in res]) * k
+            panels.append(plots.monte_carlo(e, sig))
+    return {"t": res[0].t[:n], "runs": len(res), "panels": panels}
+
+
+def errors_figure(runs_series, title: str = ""):
+    """The reproduction's ``errors.png`` as a :class:`~matplotlib.figure.Figure`: east,
+    north, up position [m], velocity [m/s] and misalignment [arcsec] errors versus time,
+    per mode the RMS over the Monte Carlo runs (line), the 5-95 % band of the runs' signed
+    errors (shaded) and the filter's +-3 sigma averaged over the runs (dotted, where the
+    runs carry it).  ``runs_series``: one dict mode -> RunResult per run (or one such
+    dict).  Modes are drawn from wide to narrow lines; modes whose curves coincide in
+    every panel are drawn dashed over solid and named in a note, those that coincide in
+    one panel named in its title; a mode far off the others' scale (a free INS) runs off
+    the linear axes, also noted."""
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    if isinstance(runs_series, dict):
+        runs_series = [runs_series]
+    modes = list(runs_series[0])
+    stats = {m: error_statistics(runs_series, m) for m in modes}
+    curves = {m: [a for p in s["panels"] for a in (p["rms"], p["lo"], p["hi"])]
+              for m, s in stats.items()}
+    groups = plots.coinciding_groups(curves)
+    styles = plots.mode_styles(modes, groups)
+    fig, axes = plots.new_figure(3, 3, figsize=(15, 9.8), sharex=True)
+    off: dict[str, list[str]] = {}
+    for i, (_, _, _, comps, what, unit) in enumerate(_QUANTITIES):
+        for j in range(3):
+            ax = axes[i, j]
+            scales = {}
+            for m in modes:
+                s, st = stats[m], styles[m]
+                p = s["panels"][3 * i + j]
+                ax.fill_between(s["t"], p["lo"], p["hi"], color=st["color"], alpha=0.1,
+                                lw=0)
+                ax.plot(s["t"], p["rms"], color=st["color"], ls=st["ls"], lw=st["lw"])
+                arrays = [p["rms"], p["lo"], p["hi"]]
+                sig = p.get("sigma")
+                if sig is not None and np.isfinite(sig).any():
+                    for sgn in (1, -1):
+                        ax.plot(s["t"], sgn * 3 * sig, color=st["color"], ls=":", lw=0.9,
+                                alpha=0.9, gid="sigma")
+                    arrays.append(3 * sig)
+                scales[m] = max(plots.robust_scale(a) for a in arrays)
+            here = plots.coinciding_groups(
+                {m: [stats[m]["panels"][3 * i + j][k] for k in ("rms", "lo", "hi")]
+                 for m in modes})
+            here = [g for g in here if not any(set(g) <= set(h) for h in groups)]
+            lim, gone = plots.shared_limit(scales)
+            ax.set_ylim(-lim, lim)
+            for m in gone:
+                peak = max(np.nanmax(np.abs(stats[m]["panels"][3 * i + k]["rms"]))
+                           for k in range(3))
+                off.setdefault(m, [])
+                if not any(x.startswith(what) for x in off[m]):
+                    off[m].append(f"{what} up to {format_number(peak)} {unit}")
+            head = f"{comps[j]} {what.split()[0]}"
+            if here and len(here) == 1 and len(here[0]) == len(modes):
+                head += f" (all {len(modes)} modes coincide)"
+            elif here:
+                head += " (coincide: " + "; ".join(" ≈ ".join(g) for g in here) + ")"
+            ax.set_title(head, fontsize=9.5)
+            ax.set_ylabel(f"{what} [{unit}]")
+            ax.axhline(0.0, color="0.6", lw=0.6, zorder=0)
+            ax.grid(alpha=0.3)
+    for ax in axes[-1]:
+        ax.set_xlabel("time [s]")
+    runs = max(s["runs"] for s in stats.values())
+    handles = [Line2D([], [], color=styles[m]["color"], ls=styles[m]["ls"],
+                      lw=styles[m]["lw"], label=m) for m in modes]
+    handles += [Line2D([], [], color="k", lw=1.3, label=f"RMS over {runs} run"
+                                                         f"{'s' if runs != 1 else ''}"),
+                Patch(facecolor="0.4", alpha=0.3, lw=0, label="5–95 % of the runs"),
+                Line2D([], [], color="k", ls=":", lw=0.9,
+                       label="filter ±3σ (mean over runs)")]
+    plots.legend_outside(fig, handles, x=0.815, y=0.93)
+    notes = [plots.identical_note(groups, curves)]
+    notes += [f"off the axes: {m} ({', '.join(v)})" for m, v in off.items()]
+    plots.note(fig, "\n".join(n for n in notes if n))
+    fig.suptitle(f"{title + ': ' if title else ''}navigation errors (computed − true), "
+                 f"{runs} Monte Carlo run{'s' if runs != 1 else ''}")
     # A fixed layout: tight_layout would draw every axis twice (half the plotting time).
-    fig.subplots_adjust(left=0.06, right=0.99, bottom=0.06, top=0.94, wspace=0.22,
-                        hspace=0.08)
-    save_figure(fig, path)
-    plt.close(fig)
-    return path
+    fig.subplots_adjust(left=0.055, right=0.8, bottom=0.085, top=0.93, wspace=0.3,
+                        hspace=0.22)
+    return fig
+
+
+def plot_errors(runs_series, path: Path, title: str = "") -> Path:
+    """Write :func:`errors_figure` to ``path``."""
+    return plots.save(errors_figure(runs_series, title), path)
 
 
 def plot_fdi(fdi: pd.DataFrame, path: Path, title: str = "") -> Path:

@@ -132,14 +132,14 @@ class Paper000(Paper):
         tables = dict(PAPER_TABLES)
         tables["limitation"] = {k: dict.fromkeys(COLS) for k in LIMITATION}
         tables["limitation"]["CUKF/wind"] = dict(PAPER_TABLES["T1"]["CUKF/wind"])
-        return {"rows": rows, "series": results[0][1],
+        return {"rows": rows, "series": results[0][1], "runs_series": [o[1] for o in results],
                 "summary": summarize(rows, tables, PAPER, runs, seed)}
 
     def plots(self, out, rep) -> list:
         from ..campaign.report import plot_errors
 
-        series = {k: v for k, v in rep["series"].items() if "," not in k}
-        return [plot_errors(series, out / "errors.png"),
+        runs = [{k: v for k, v in s.items() if "," not in k} for s in rep["runs_series"]]
+        return [plot_errors(runs, out / "errors.png", "Paper 000"),
                 plot_window(rep["series"], out / "wind_window.png")]
 
 

@@ -20,7 +20,7 @@ import numpy as np
 
 from ..campaign.evaluation import mean_ci95
 from ..campaign.paper import Paper, Unit
-from ..core import units
+from ..core import plots, units
 from ..core.atomic import save_figure
 from ..filters import FilterError
 from ..launch.navigate import make_data, run
@@ -198,42 +198,65 @@ def plot_errors(series: dict, path):
     return path
 
 
-def plot_ascent(scn: LaunchScenario, path, max_time=None):
-    """The ascent: trajectory in the launch plane, altitude, speed, programme, thrust."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+def ascent_figure(scn: LaunchScenario, max_time=None):
+    """The ascent as a :class:`~matplotlib.figure.Figure`: trajectory in the launch
+    plane; height [km] and speed [km/s] on two y axes; pitch and yaw programmes [deg] on
+    two y axes; thrust acceleration [m/s²]."""
+    from matplotlib.lines import Line2D
 
     tr = scn.trajectory(max_time)
     prof = scn.profile(max_time)
     lla = tr.lla()
     phi, psi, _, _ = prof.angles(tr.t)
-    fig, ax = plt.subplots(2, 2, figsize=(12, 8))
-    ax[0, 0].plot(tr.r[:, 0] / 1e3, tr.r[:, 1] / 1e3, label="x-y (launch plane)")
-    ax[0, 0].plot(tr.r[:, 0] / 1e3, tr.r[:, 2] / 1e3, label="x-z (out of plane)")
-    ax[0, 0].set_xlabel("LI x (downrange) [km]")
-    ax[0, 0].set_ylabel("LI y / z [km]")
-    ax[0, 0].legend()
-    ax[0, 1].plot(tr.t, lla[:, 2] / 1e3, label="height [km]")
-    ax[0, 1].plot(tr.t, np.linalg.norm(tr.v, axis=1) / 1e3, label="LI speed [km/s]")
-    ax[0, 1].set_xlabel("time [s]")
-    ax[0, 1].legend()
-    ax[1, 0].plot(tr.t, units.to_deg(phi), label="pitch programme φ [deg]")
-    ax[1, 0].plot(tr.t, 10 * units.to_deg(psi), label="yaw programme ψ ×10 [deg]")
-    ax[1, 0].set_xlabel("time [s]")
-    ax[1, 0].legend()
-    ax[1, 1].plot(tr.t, prof.thrust(tr.t), label="thrust acceleration [m/s²]")
-    ax[1, 1].set_xlabel("time [s]")
-    ax[1, 1].legend()
+    fig, ax = plots.new_figure(2, 2, figsize=(13, 8.5))
+    c = plots.colors()
+
+    def twin(a, x, y1, y2, label1, label2):
+        """``y1`` on ``a``'s axis, ``y2`` on a second y axis; labels coloured as lines."""
+        a2 = a.twinx()
+        a.plot(x, y1, color=c[0], lw=1.5)
+        a2.plot(x, y2, color=c[1], lw=1.5, ls="--")
+        a.set_ylabel(label1, color=c[0])
+        a2.set_ylabel(label2, color=c[1])
+        a.tick_params(axis="y", colors=c[0])
+        a2.tick_params(axis="y", colors=c[1])
+        a.legend(handles=[Line2D([], [], color=c[0], lw=1.5, label=label1),
+                          Line2D([], [], color=c[1], lw=1.5, ls="--", label=label2)],
+                 loc="upper left", fontsize=8.5, framealpha=0.9)
+        a.set_xlabel("time since launch [s]")
+        return a2
+
+    a = ax[0, 0]
+    a.plot(tr.r[:, 0] / 1e3, tr.r[:, 1] / 1e3, color=c[0], label="y (up, launch plane)")
+    a.plot(tr.r[:, 0] / 1e3, tr.r[:, 2] / 1e3, color=c[2], ls="--",
+           label="z (out of plane)")
+    a.set_xlabel("LI x, downrange [km]")
+    a.set_ylabel("LI y / z [km]")
+    a.set_title("trajectory in the launch inertial frame", fontsize=10)
+    a.legend(loc="upper left", fontsize=8.5)
+    twin(ax[0, 1], tr.t, lla[:, 2] / 1e3, np.linalg.norm(tr.v, axis=1) / 1e3,
+         "height [km]", "LI speed [km/s]")
+    ax[0, 1].set_title("height and speed", fontsize=10)
+    twin(ax[1, 0], tr.t, units.to_deg(phi), units.to_deg(psi), "pitch programme φ [deg]",
+         "yaw programme ψ [deg]")
+    ax[1, 0].set_title("attitude programme", fontsize=10)
+    a = ax[1, 1]
+    a.plot(tr.t, prof.thrust(tr.t), color=c[3])
+    a.set_xlabel("time since launch [s]")
+    a.set_ylabel("thrust acceleration [m/s²]")
+    a.set_title("thrust", fontsize=10)
     for a in ax.ravel():
         a.grid(alpha=0.3)
     fig.suptitle(f"Paper 001 ascent: {scn.launch.lat_deg}°N {scn.launch.lon_deg}°E, "
                  f"azimuth {scn.launch.azimuth_deg}°, LI frame x downrange, y up, z = x × y")
-    fig.tight_layout()
-    save_figure(fig, path)
-    plt.close(fig)
-    return path
+    fig.subplots_adjust(left=0.07, right=0.93, bottom=0.07, top=0.91, wspace=0.38,
+                        hspace=0.32)
+    return fig
+
+
+def plot_ascent(scn: LaunchScenario, path, max_time=None):
+    """Write :func:`ascent_figure` to ``path``."""
+    return plots.save(ascent_figure(scn, max_time), path)
 
 
 class Paper001(Paper):

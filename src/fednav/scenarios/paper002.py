@@ -279,7 +279,8 @@ class Paper002(Paper):
                              "T4": {"runs": n4, **t4["tables"]["T4"]}}
         summary["observability_phases"] = obs["phases"]
         return {"rows": rows + [{**r, "table": "T4"} for r in rows4],
-                "series": results[n4 + 1][1], "summary": summary}
+                "series": results[n4 + 1][1],
+                "runs_series": [o[1] for o in results[n4 + 1:]], "summary": summary}
 
 
 EXPERIMENT = Paper002()

@@ -177,7 +177,8 @@ class Paper003(Paper):
         rows = [r for o in results for r in o[0]]
         fault_rows = [r for o in results for r in o[2]]
         return {"rows": rows, "fault_rows": fault_rows, "series": results[0][1],
-                "fault_series": results[0][3],
+                "runs_series": [o[1] for o in results], "fault_series": results[0][3],
+                "fault_runs_series": [o[3] for o in results],
                 "summary": summarize(rows, fault_rows, runs, seed)}
 
     def files(self, out, rep) -> list:
@@ -190,12 +191,13 @@ class Paper003(Paper):
     def plots(self, out, rep) -> list:
         from ..campaign.report import plot_errors, plot_fdi
 
-        files = [plot_errors(rep["series"], out / "errors.png")]
+        files = [plot_errors(rep["runs_series"], out / "errors.png", "Paper 003")]
         if rep["fault_rows"]:
             files.append(plot_fdi(rep["fault_series"]["isolated"].fdi, out / "fdi.png",
                                   "Fault experiment: chi-square statistics, 5-sigma GNSS "
                                   "fault"))
-            files.append(plot_errors(rep["fault_series"], out / "fault_errors.png"))
+            files.append(plot_errors(rep["fault_runs_series"], out / "fault_errors.png",
+                                     "Paper 003, 5-sigma GNSS step fault (FUKF)"))
         return files
 
 

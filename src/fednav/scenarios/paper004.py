@@ -184,7 +184,8 @@ class Paper004(Paper):
         summary["tables"]["cost"] = {"rows": _cost(rows)}
         sweep_rows = [r for o in results[runs:] for r in o]
         summary["tables"]["sweep"] = {"rows": _sweep(sweep_rows), "runs": min(runs, 4)}
-        return {"rows": rows, "series": results[0][1], "sweep_rows": sweep_rows,
+        return {"rows": rows, "series": results[0][1],
+                "runs_series": [o[1] for o in results[:runs]], "sweep_rows": sweep_rows,
                 "summary": summary}
 
     def files(self, out, rep) -> list:

@@ -1,0 +1,151 @@
+"""The figures' structure (issue 29): every axis labelled with its unit, one legend beside
+the data, linear axes, the Monte Carlo spread and the filter's 3-sigma on the
+reproductions' plots, coinciding modes told apart, the ascent's two y axes.
+
+The plotting functions return :class:`matplotlib.figure.Figure` objects; these tests read
+them (no PNG decoding)."""
+
+import re
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+from fednav.campaign.report import errors_figure
+from fednav.core import plots, units
+from fednav.sim.runs import RunResult
+
+UNIT = re.compile(r"\[[^\]]+\]")
+
+
+def _drawn(fig):
+    FigureCanvasAgg(fig)
+    fig.canvas.draw()
+    return fig
+
+
+def _data_axes(fig):
+    return [a for a in fig.axes if a.get_visible()]
+
+
+def _assert_report_figure(fig, n_axes):
+    """Every axis: a y label with a unit, linear; the bottom row an x label with a unit;
+    one figure legend, no legend inside any axes, right of every axes."""
+    _drawn(fig)
+    axes = _data_axes(fig)
+    assert len(axes) == n_axes
+    for ax in axes:
+        assert UNIT.search(ax.get_ylabel()), ax.get_ylabel()
+        assert ax.get_yscale() == "linear" and ax.get_xscale() == "linear"
+        assert ax.get_legend() is None
+    bottom = [ax for ax in axes if ax.get_subplotspec().is_last_row()]
+    assert bottom and all(UNIT.search(ax.get_xlabel()) for ax in bottom)
+    assert len(fig.legends) == 1
+    r = fig.canvas.get_renderer()
+    leg = fig.legends[0].get_window_extent(r)
+    assert all(leg.x0 >= ax.get_window_extent(r).x1 for ax in axes)
+
+
+# ------------------------------------------------------------------ reproductions
+def _run(mode, t, err, sigma):
+    z = np.zeros_like(err)
+    return RunResult(mode, t, err, z + 0.1 * err, z + units.arcsec(1.0) * err / 5.0,
+                     sigma)
+
+
+def _runs_series(n_runs=5, K=200):
+    """Modes A and B identical, C smaller, SINS a thousand times larger (a free INS)."""
+    rng = np.random.default_rng(0)
+    t = np.arange(1, K + 1, dtype=float)
+    out = []
+    for _ in range(n_runs):
+        e = np.cumsum(rng.standard_normal((K, 3)), axis=0) * 0.2
+        sig = np.full((K, 18), 2.0)
+        free = np.full((K, 18), np.nan)
+        out.append({"A": _run("A", t, e, sig), "B": _run("B", t, e.copy(), sig),
+                    "C": _run("C", t, 0.3 * e + 0.05, sig),
+                    "SINS": _run("SINS", t, 1000 * e + 5e3, free)})
+    return out
+
+
+def test_reproduction_errors_show_rms_spread_and_sigma_over_the_runs():
+    runs = _runs_series()
+    fig = errors_figure(runs, "Paper X")
+    _assert_report_figure(fig, 9)
+    assert fig._suptitle.get_text().startswith("Paper X: navigation errors")
+    assert fig.axes[0].get_title() == "east position"
+    assert fig.axes[6].get_title() == "φE (east) misalignment"
+    labels = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert labels[:4] == ["A", "B", "C", "SINS"]
+    assert "RMS over 5 runs" in labels and "5–95 % of the runs" in labels
+    assert any("±3σ" in lab for lab in labels)
+    ax = fig.axes[0]  # east position
+    assert ax.get_ylabel() == "position error [m]"
+    assert len(ax.collections) == 4  # a 5-95 % band per mode
+    e = np.stack([r["C"].pos[:, 0] for r in runs])
+    rms = [ln for ln in ax.lines if ln.get_gid() != "sigma" and len(ln.get_xdata()) > 2]
+    np.testing.assert_allclose(rms[2].get_ydata(), np.sqrt((e**2).mean(axis=0)))
+    band = ax.collections[2].get_paths()[0].vertices[:, 1]
+    lo, hi = np.percentile(e, [5, 95], axis=0)
+    assert np.isclose(band.min(), lo.min()) and np.isclose(band.max(), hi.max())
+    # the filter's 3 sigma of the modes that have one (not the free INS)
+    sig = [ln for ln in ax.lines if ln.get_gid() == "sigma"]
+    assert len(sig) == 6 and np.allclose(np.abs(sig[0].get_ydata()), 6.0)
+    # A and B coincide: two line styles, a wide solid one under a dashed one; the note says
+    st = {ln.get_label(): (ln.get_linestyle(), ln.get_linewidth())
+          for ln in fig.legends[0].get_lines()}
+    assert st["A"][0] == "-" and st["B"][0] != "-" and st["A"][1] > st["B"][1]
+    text = " ".join(t.get_text() for t in fig.texts)
+    assert "A = B (identical to plotting precision)" in text
+    # the free INS runs off the linear axes, said in the note; the others set the scale
+    assert "off the axes: SINS" in text
+    assert ax.get_ylim()[1] < 100
+
+
+def test_reproduction_errors_of_one_dict_are_one_run():
+    fig = errors_figure(_runs_series(1)[0])
+    assert "1 Monte Carlo run" in fig._suptitle.get_text()
+    _assert_report_figure(fig, 9)
+
+
+def test_coinciding_groups_and_their_note():
+    a = [np.linspace(0, 1, 50)]
+    c = a[0] * 1.02
+    c[0] = 0.3  # (a start-up transient does not keep curves apart)
+    curves = {"a": a, "b": [a[0] * (1 + 1e-4)], "c": [c], "d": [a[0] + 1]}
+    groups = plots.coinciding_groups(curves)
+    assert groups == [["a", "b", "c"]]
+    note = plots.identical_note(groups, curves)
+    assert "a ≈ b ≈ c (95 % of the epochs within 1.9 % of the scale)" in note
+    assert plots.identical_note([["a", "b"]], curves).endswith(
+        "a = b (identical to plotting precision)")
+    assert plots.shared_limit({"x": 1.0, "y": 2.0, "free": 500.0}) == (2.2, ["free"])
+
+
+def test_paper000_errors_figure_from_real_runs(tmp_path):
+    """Two short Monte Carlo runs of paper 000: every panel has the filter's 3 sigma."""
+    from fednav.scenarios import paper000
+
+    scn = paper000.load_scenario()
+    runs = [paper000.one_run((scn, seed, 20.0))[1] for seed in (1, 2)]
+    runs = [{k: v for k, v in r.items() if "," not in k} for r in runs]
+    fig = errors_figure(runs, "Paper 000")
+    _assert_report_figure(fig, 9)
+    for ax in fig.axes[:9]:
+        sig = [ln for ln in ax.lines if ln.get_gid() == "sigma"]
+        assert sig and all(np.isfinite(ln.get_ydata()).all() for ln in sig)
+    assert "AEKF/none = AEKF/wind" in " ".join(t.get_text() for t in fig.texts)
+    p = plots.save(fig, tmp_path / "errors.png")
+    assert p.read_bytes()[:4] == b"\x89PNG"
+
+
+def test_ascent_puts_height_and_speed_on_two_axes():
+    from fednav.scenarios import paper001
+
+    fig = _drawn(paper001.ascent_figure(paper001.load_scenario(), 200.0))
+    ylabels = [a.get_ylabel() for a in fig.axes]
+    assert "height [km]" in ylabels and "LI speed [km/s]" in ylabels
+    h = next(a for a in fig.axes if a.get_ylabel() == "height [km]")
+    v = next(a for a in fig.axes if a.get_ylabel() == "LI speed [km/s]")
+    assert h is not v and h.get_position().bounds == v.get_position().bounds
+    assert all(UNIT.search(a.get_ylabel()) for a in fig.axes)
+    assert all(a.get_yscale() == "linear" for a in fig.axes)
