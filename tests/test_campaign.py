@@ -422,7 +422,7 @@ def test_a_folder_holding_more_runs_than_asked_says_so_and_reports_on_all(tmp_pa
     tables with 2-run tables without a word; it now says so and reports on all 3 stored
     runs (reusing them), unless --fresh starts over."""
     out = tmp_path / "c"
-    args = ["reproduce", "003", "--max-time", "30", "--jobs", "1", "--out", str(out)]
+    args = ["reproduce", "003", "--max-time", "10", "--jobs", "1", "--out", str(out)]
     r = CliRunner().invoke(app, [*args, "--runs", "3"])
     assert r.exit_code == 0, r.output
     r = CliRunner().invoke(app, [*args, "--runs", "2"])
