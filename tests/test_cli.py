@@ -152,3 +152,41 @@ def test_reproduction_tables_in_the_terminal_say_better_worse_and_why():
     t1 = text.split("observability")[0] if "observability" in text else text
     assert "one computation" in text and "3437 | 8.67 ×396 differs" in t1
     assert "docs/paper002.md#beyond-x3" in text and "docs/paper002.md#observability" in text
+
+
+def test_tune_table_keeps_each_why_on_one_line(tmp_path, monkeypatch):
+    """Issue 29: fednav tune's "how / why" column wrapped each reason over 5 lines; the
+    table now holds the figures and each reason is one line under it (whole when piped;
+    a narrow terminal keeps the figure names whole too)."""
+    from types import SimpleNamespace
+
+    from fednav import cli
+    from fednav.navigator.system import System
+    from fednav.process import tuning
+
+    why = ("kept (sample scatter): x1.8 gains +3.4 on the fitted blocks but -6.1 on the "
+           "held-back ones")
+    figs = [tuning.Figure("imu.gyro_arw_rad_sqrt_s", 0.0029, 0.00059, why, 0.000576),
+            tuning.Figure("sensors.gnss.sigma_vel_mps", [0.1, 0.1, 0.1],
+                          [0.0512, 0.0658, 0.0969], "innovation covariance matching on "
+                          "the fitted blocks, floored at the scatter of the data",
+                          [0.0477, 0.0517, 0.0969])]
+    res = SimpleNamespace(blocks=SimpleNamespace(length_s=25.0), figures=figs,
+                          config=System(), lever_from_file=(0.1, 0.2, 0.3), notes=[],
+                          warnings=[], runs=20, run_time_s=1.0, summary=lambda: [])
+    monkeypatch.setattr(cli, "_csv_reader", lambda *a: (
+        lambda cfg: {"imu": None, "gnss": None, "velocity": None}))
+    monkeypatch.setattr(tuning, "tune", lambda *a, **k: res)
+    monkeypatch.setattr(tuning, "config_yaml", lambda *a, **k: "imu: {}\n")
+    args = ["tune", "csv", "--imu", str(tmp_path / "i.csv"), "--gnss",
+            str(tmp_path / "g.csv"), "--out", str(tmp_path / "t.yaml")]
+    monkeypatch.delenv("COLUMNS", raising=False)
+    r = CliRunner().invoke(app, args)
+    assert r.exit_code == 0, r.output
+    lines = r.output.splitlines()
+    assert f"  gyro_arw_rad_sqrt_s: {why}" in lines
+    assert "  sensors.gnss.lever_m: kept: from the file (written into the config)" in lines
+    r = CliRunner().invoke(app, args, env={"COLUMNS": "80"})  # a narrow terminal
+    assert r.exit_code == 0, r.output
+    assert "sensors.gnss.sigma_vel_mps │" in r.output and "…" not in r.output
+    assert max(len(line) for line in r.output.splitlines() if "│" in line) <= 80
