@@ -50,7 +50,7 @@ import numpy as np
 from ..core.kernels import cholesky_lower
 from .base import Innovation
 from .kf import KalmanFilter
-from .ukf import UnscentedKalmanFilter, _sigma_points
+from .ukf import UnscentedKalmanFilter
 
 
 def igg3_weights(v, k0: float = 1.5, k1: float = 4.5) -> np.ndarray:
@@ -161,7 +161,7 @@ class SageHusaEKF(QAdaptation, KalmanFilter):
         H = np.asarray(model.H(nav), dtype=float)
         r = np.asarray(y, dtype=float) - model.h(self.x[None], nav)[0]
         key = getattr(model, "kind", type(model).__name__)
-        Ra = self.sh.adapt(key, R, r, H @ self.P @ H.T) if self.adapt_r else R
+        Ra = self.sh.adapt(key, R, r, self._hph(H)) if self.adapt_r else R
         inn = super().update(y, model, nav, Ra, gate)
         if inn.accepted:
             self._adapt_q_after_update()
@@ -181,9 +181,7 @@ class RobustAdaptiveUKF(QAdaptation, UnscentedKalmanFilter):
         self._init_q(adapt_q, fading)
 
     def update(self, y, model, nav=None, R=None, gate: float | None = None) -> Innovation:
-        X = _sigma_points(self.x, self.P, self.c)
-        if X.shape[0] == 0:
-            X = self.sigma_points(phase="update")  # raises the not-PD error
+        X = self.sigma_points(phase="update")  # raises the not-PD error
         Z = np.asarray(model.h(X, nav), dtype=float)
         z_hat = self.Wm @ Z
         dZ = Z - z_hat

@@ -99,6 +99,10 @@ def chol(P: np.ndarray, who: str) -> np.ndarray:
 class Filter(ABC):
     """Common state, bookkeeping and checks of all estimators."""
 
+    #: ``standard`` (the covariance ``P`` itself) or ``square_root`` (a Cholesky factor,
+    #: :mod:`fednav.filters.square_root`)
+    form = "standard"
+
     def __init__(self, x0, P0, name: str = "filter"):
         self.x = np.array(x0, dtype=float)
         self.P = np.array(P0, dtype=float)

@@ -8,7 +8,12 @@ Cycle (Carlson's federated filter, paper 002 eq. 13–15, paper 003 eq. 16–22)
 3. global fusion ``P_g = (sum P_i^-1)^-1``, ``x_g = P_g sum P_i^-1 x_i`` over the filters
    that are not isolated (when a local filter's covariance is a sample estimate — a
    particle filter — the fused covariance is corrected for the bias that fusing noisy
-   covariances introduces, :func:`_sampling_bias_correction`);
+   covariances introduces, :func:`_sampling_bias_correction`).  When every filter that
+   takes part keeps a Cholesky factor (``form: square_root``), the fusion is the
+   square-root information form (:func:`fednav.filters.sr_kernels.sr_fuse`: the
+   information factors ``S_i^-1`` and vectors ``S_i^-1 x_i`` stacked and triangularized;
+   no covariance is formed or inverted) and the reset hands each filter the factor
+   ``S_g / sqrt(beta_i)``;
 4. ``reset`` mode: ``x_i = x_g``, ``P_i = P_g / beta_i``.  ``no_reset`` mode: locals keep
    their own estimates (the fused result is output only).
 
@@ -58,6 +63,7 @@ import numpy as np
 
 from ..core.kernels import spd_inverse
 from .base import Filter, FilterError
+from .sr_kernels import factor_product, sr_fuse
 
 
 def sharing_factors(covs: dict[str, np.ndarray], rule: str = "equal",
@@ -483,15 +489,23 @@ class FederatedFilter:
             raise FilterError("federated fusion: every filter is isolated")
         names = list(use)
         xs = np.array([use[k].x for k in names])
-        Ps = np.array([use[k].P for k in names])
-        xg, Pg, traces, bad = _fuse(xs, Ps)
+        # every filter factored: square-root information fusion (no covariance inverted)
+        factored = all(f.form == "square_root" for f in use.values())
+        if factored:
+            xg, Sg, traces, bad = sr_fuse(xs, np.array([use[k].S for k in names]))
+        else:
+            Ps = np.array([use[k].P for k in names])
+            xg, Pg, traces, bad = _fuse(xs, Ps)
         if bad >= 0:
             who = names[bad] if bad < len(names) else "fused information"
             raise FilterError(f"federated fusion: covariance of '{who}' is not positive "
                               f"definite")
-        dofs = [getattr(use[k], "covariance_dof", None) for k in names]
-        if any(d is not None for d in dofs):
-            Pg = _sampling_bias_correction(Pg, Ps, dofs, names)
+        if factored:
+            Pg = factor_product(Sg)
+        else:
+            dofs = [getattr(use[k], "covariance_dof", None) for k in names]
+            if any(d is not None for d in dofs):
+                Pg = _sampling_bias_correction(Pg, Ps, dofs, names)
         self.x, self.P = xg, Pg
         if self.reset:
             if self.sharing == "adaptive":
@@ -502,7 +516,10 @@ class FederatedFilter:
                 self.beta.update({k: budget * t / s for k, t in zip(names, traces, strict=True)})
             for k, f in use.items():
                 f.x = self.x.copy()
-                f.P = self.P / self.beta[k]
+                if factored:
+                    f.S = Sg / math.sqrt(self.beta[k])
+                else:
+                    f.P = self.P / self.beta[k]
         return self.x, self.P
 
     def snapshot(self) -> tuple:

@@ -49,6 +49,10 @@ class KalmanFilter(Filter):
         if not ok or not np.all(np.isfinite(self.x)):
             raise FilterError(f"{self._who('predict')}: state or covariance became NaN/inf")
 
+    def _hph(self, H) -> np.ndarray:
+        """``H P H'`` (the square-root form computes it from its factor)."""
+        return H @ self.P @ H.T
+
     def update(self, y, model, nav=None, R=None, gate: float | None = None) -> Innovation:
         H = np.ascontiguousarray(model.H(nav), dtype=float)
         # a linear model (h(x) = H x) needs no second evaluation of its Jacobian

@@ -33,7 +33,7 @@ import numpy as np
 from .adaptive import QAdaptation, _SageHusa
 from .base import Filter, Innovation, chol
 from .sparse_grid import sparse_grid
-from .ukf import UnscentedKalmanFilter, _update
+from .ukf import UnscentedKalmanFilter
 
 
 class SparseGridFilter(UnscentedKalmanFilter):
@@ -89,7 +89,7 @@ class AdaptiveSparseGridFilter(QAdaptation, SparseGridFilter):
         key = getattr(model, "kind", type(model).__name__)
         Ra = self.sh.adapt(key, R, y - z_hat, Pzz0)
         # The UKF update with the points and predicted measurements already at hand.
-        inn = self._accept(*_update(X, Z, self.Wm, self.Wc, self.x, self.P, y, Ra), gate)
+        inn = self._sigma_update(X, Z, y, Ra, gate)
         if inn.accepted:
             self._adapt_q_after_update()
         return inn

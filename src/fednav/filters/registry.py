@@ -16,6 +16,7 @@ from .constrained import ConstrainedEKF, ConstrainedUKF
 from .kf import KalmanFilter
 from .particle import ParticleFilter
 from .quadrature import AdaptiveSparseGridFilter, SparseGridFilter
+from .square_root import SQUARE_ROOT
 from .ukf import SimplifiedUKF, UnscentedKalmanFilter
 
 #: name -> filter class.
@@ -25,6 +26,9 @@ FILTERS: dict[str, type[Filter]] = {
     "aekf": SageHusaEKF, "raukf": RobustAdaptiveUKF, "pf": ParticleFilter,
     "sghqf": SparseGridFilter, "aasghqf": AdaptiveSparseGridFilter,
 }
+
+#: The covariance forms a filter can take: the covariance itself or its Cholesky factor.
+FORMS = ("standard", "square_root")
 
 
 def register(name: str, cls: type[Filter]) -> None:
@@ -44,24 +48,35 @@ def names() -> list[str]:
     return sorted(FILTERS)
 
 
-def filter_class(name: str) -> type[Filter]:
-    """The class registered as ``name`` (case-insensitive); a one-line error naming the
-    registered ones."""
+def filter_class(name: str, form: str = "standard") -> type[Filter]:
+    """The class registered as ``name`` (case-insensitive) in ``form`` (``standard`` or
+    ``square_root``, :data:`FORMS`); a one-line error naming the registered ones."""
     try:
-        return FILTERS[name.lower()]
+        cls = FILTERS[name.lower()]
     except KeyError:
         raise ValueError(f"unknown filter '{name}'; registered: {', '.join(names())}"
                          ) from None
+    if form == "standard":
+        return cls
+    if form != "square_root":
+        raise ValueError(f"unknown filter form '{form}'; choose {' or '.join(FORMS)}")
+    sr = SQUARE_ROOT.get(name.lower())
+    if sr is None:
+        raise ValueError(f"filter '{name}' has no square-root form (the Gaussian filters "
+                         f"have one: {', '.join(sorted(SQUARE_ROOT))})")
+    return sr
 
 
-def make_filter(name: str, x0, P0, common: dict | None = None, **options) -> Filter:
+def make_filter(name: str, x0, P0, common: dict | None = None, form: str = "standard",
+                **options) -> Filter:
     """A filter by its registered name, from the state ``x0`` and covariance ``P0``.
 
     ``options`` go to the filter's constructor as they are (an option it does not take is
     an error); ``common`` are settings a system gives every filter (the sigma-point
     ``alpha``, ``beta``, ``kappa``, the sparse grid's ``level`` ...): each goes to the
-    filters whose constructor takes it."""
-    cls = filter_class(name)
+    filters whose constructor takes it.  ``form``: ``standard`` (the covariance) or
+    ``square_root`` (its Cholesky factor, :mod:`fednav.filters.square_root`)."""
+    cls = filter_class(name, form)
     if common:
         takes = inspect.signature(cls.__init__).parameters
         options = {**{k: v for k, v in common.items() if k in takes}, **options}

@@ -105,6 +105,11 @@ class UnscentedKalmanFilter(Filter):
     def update(self, y, model, nav=None, R=None, gate: float | None = None) -> Innovation:
         X = self.sigma_points(phase="update")
         Z = np.ascontiguousarray(model.h(X, nav), dtype=float)
+        return self._sigma_update(X, Z, y, R, gate)
+
+    def _sigma_update(self, X, Z, y, R, gate) -> Innovation:
+        """The measurement update from the points ``X`` and their predicted measurements
+        ``Z`` (the square-root form has its own)."""
         return self._accept(*_update(X, Z, self.Wm, self.Wc, self.x, self.P,
                                      np.asarray(y, dtype=float), np.asarray(R, dtype=float)),
                             gate)
