@@ -64,6 +64,8 @@ def why_not_compiled(system, sensors: list, specs: dict) -> str | None:
         return "federation without reset"
     if system.constraint is not None:
         return f"the {system.constraint} constraint"
+    if any(f.form_of(a) != "standard" for a in [*sensors, None]):
+        return "square-root filters (form: square_root)"
     types = {f.type_of(a) for a in sensors} | ({f.type} if f.master else set())
     for t in sorted(types):
         if t not in FAMILIES:

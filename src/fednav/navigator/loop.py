@@ -111,13 +111,14 @@ def build_federation(system, names: list[str], P0: np.ndarray, n: int) -> Federa
 
     common = {"alpha": f.alpha, "beta": f.beta, "kappa": f.kappa, "level": f.grid_level}
 
-    def one(ftype, what):
-        flt = make_filter(ftype, np.zeros(n), P0, common)
+    def one(ftype, what, form):
+        flt = make_filter(ftype, np.zeros(n), P0, common, form=form)
         flt.name = f"{ftype} {what}"
         return flt
 
-    locals_ = {a: one(f.type_of(a), f"local '{a}'") for a in names}
-    master = one(f.type, "master") if f.master and len(locals_) > 1 else None
+    locals_ = {a: one(f.type_of(a), f"local '{a}'", f.form_of(a)) for a in names}
+    master = (one(f.type, "master", f.form_of(None)) if f.master and len(locals_) > 1
+              else None)
     alpha = f.fdi_alpha
     if isinstance(alpha, dict):
         alpha = {k: v for k, v in alpha.items() if k in locals_}

@@ -53,14 +53,16 @@ def _check_locals(names) -> None:
 
 
 class LocalFilterConfig(_Model):
-    """Settings of one local filter that differ from ``filter``'s."""
+    """Settings of one local filter that differ from ``filter``'s: its ``type`` and its
+    covariance ``form`` (``standard`` or ``square_root``); either may be left out."""
 
-    type: str
+    type: str | None = None
+    form: Literal["standard", "square_root"] | None = None
 
     @field_validator("type")
     @classmethod
     def _type(cls, v):
-        return _check_filter(v)
+        return None if v is None else _check_filter(v)
 
 
 class QAdaptationConfig(_Model):
@@ -98,6 +100,12 @@ class FilterConfig(_Model):
     (:func:`fednav.filters.federated._lockout`; None: never).  ``period_s``: the filter
     epoch (default: every IMU sample for a navigator, the GNSS period for ``fednav
     process``; scenarios state it).
+    ``form``: how every filter keeps its covariance — ``standard`` (the covariance
+    itself, the default) or ``square_root`` (its Cholesky factor: every Gaussian filter
+    has that form, :mod:`fednav.filters.square_root`; a fusion of factored filters is the
+    square-root information form); per local filter in ``locals`` (``{star: {form:
+    square_root}}``).  Square-root local filters run the Python loop, not the compiled
+    engine.
     ``substeps`` of the nonlinear error propagation; ``alpha``, ``beta``, ``kappa`` of the
     unscented transform; ``grid_level`` of the sparse-grid filters.  ``accel_bias``: the
     filter's accelerometer-bias state —
@@ -110,6 +118,7 @@ class FilterConfig(_Model):
 
     type: str = "kf"
     locals: dict[str, LocalFilterConfig] = {}
+    form: Literal["standard", "square_root"] = "standard"
     state: Literal["error", "total"] = "error"
     architecture: Literal["federated", "centralized"] = "federated"
     period_s: float | None = Field(default=None, gt=0.0)
@@ -155,10 +164,28 @@ class FilterConfig(_Model):
                              "(filter.state: error); the total-state UKF has its own")
         return self
 
+    @model_validator(mode="after")
+    def _forms(self):
+        from ..filters.square_root import SQUARE_ROOT
+
+        for name in [*self.locals, None]:
+            t = self.type if name is None else self.type_of(name)
+            if self.form_of(name) == "square_root" and t not in SQUARE_ROOT:
+                where = "filter" if name is None else f"filter.locals.{name}"
+                raise ValueError(f"{where}: '{t}' has no square-root form (the Gaussian "
+                                 f"filters have one: {', '.join(sorted(SQUARE_ROOT))})")
+        return self
+
     def type_of(self, local: str) -> str:
         """The estimator of local filter ``local``."""
         c = self.locals.get(local)
-        return self.type if c is None else c.type
+        return self.type if c is None or c.type is None else c.type
+
+    def form_of(self, local: str | None) -> str:
+        """The covariance form (``standard`` / ``square_root``) of local filter ``local``
+        (None: the master's, ``filter.form``)."""
+        c = self.locals.get(local) if local is not None else None
+        return self.form if c is None or c.form is None else c.form
 
 
 class AlignmentConfig(_Model):
