@@ -8,12 +8,19 @@ Conditions (all at once, filter units of :mod:`fednav.ins.error_model`):
 * a 6-row measurement (attitude and position errors) whose noise covariance has one
   variance ``small_r`` (1e-12) and the others 1 (condition number 1e12);
 * every ``outlier_every`` cycles a measurement 1e6 sigma off;
-* constrained filters get a constraint every 10 cycles (velocity error = 0).
+* constrained filters get a constraint every 10 cycles (velocity error = 0);
+* optionally (``gate_alpha``) chi-square gating of the measurement, which is how a
+  navigation filter meets the outliers (the federated filter's ``fdi_alpha``).
 
 After every cycle: the state is finite, the covariance symmetric (to 1e-9 relative) and
-positive definite (Cholesky). A filter may stop with a :class:`FilterError` — a
-divergence reported with the filter, the step and the reason is the accepted way to
-fail; a NaN or a silently indefinite covariance is not.
+positive definite (Cholesky).  For a factored filter (``form="square_root"``) the
+covariance ``P = S S'`` is positive definite exactly when its lower-triangular factor ``S``
+has a positive diagonal — that is what is checked, and its eigenvalues are the squared
+singular values of ``S`` (resolved far below ``eps * max eig``, where the eigenvalues or
+the Cholesky factorization of the formed ``S S'`` stop meaning anything: a covariance
+with a 1e6 and a 1e-12 variance has a condition number of 1e18).  A filter may stop with
+a :class:`FilterError` — a divergence reported with the filter, the step and the reason
+is the accepted way to fail; a NaN or a silently indefinite covariance is not.
 """
 
 from __future__ import annotations
@@ -31,7 +38,8 @@ from .base import FilterError, LinearModel
 class SoakResult:
     """``cycles`` completed; ``error`` the FilterError text if one stopped the run;
     ``max_asymmetry`` max |P - P'| / max|P|; ``min_eig``/``max_cond`` over the checks
-    (eigenvalues every ``eig_every`` cycles); ``seconds``."""
+    (eigenvalues every ``eig_every`` cycles); ``seconds``; ``readmissions`` after
+    rejections in a row (with a gate)."""
 
     name: str
     cycles: int
@@ -40,13 +48,17 @@ class SoakResult:
     min_eig: float
     max_cond: float
     seconds: float
+    readmissions: int = 0
 
 
 class _ConstantProcess:
-    def __init__(self, proc, q_scale):
+    def __init__(self, proc, q_scale, linear: bool = False):
         self._p, self.Phi, self.Qd = proc, proc.Phi, proc.Qd * q_scale
+        self.linear = linear
 
     def transition(self, X):
+        if self.linear:
+            return np.atleast_2d(X) @ self.Phi.T
         return self._p.transition(X)
 
 
@@ -73,12 +85,27 @@ def cruise_process():
 
 def soak(name: str, cycles: int, seed: int = 0, huge_p: float = 1e6, tiny_q: float = 1e-12,
          small_r: float = 1e-12, outlier_every: int = 97, eig_every: int = 100,
-         **options) -> SoakResult:
-    """Soak the registry filter ``name`` for ``cycles`` cycles (see the module docstring)."""
+         form: str = "standard", gate_alpha: float | None = None, readmit_after: int = 3,
+         linear: bool = False, **options) -> SoakResult:
+    """Soak the registry filter ``name`` for ``cycles`` cycles (see the module docstring).
+
+    ``form``: the filter's covariance form (``standard`` or ``square_root``);
+    ``gate_alpha``: chi-square gating of the 6-row measurement at this level (None: every
+    measurement, outliers included, is applied), with re-admission as the federated
+    filter does it (:func:`fednav.filters.federated._inflation`): after ``readmit_after``
+    rejections in a row the filter, not the sensor, is wrong (an isolated outlier is one
+    rejection) — its covariance is inflated by the factor that gives the residual its
+    expected statistic and the measurement applied.  ``linear``: the state propagates
+    by ``Phi x`` instead of the nonlinear error model (the model the Kalman filter's
+    covariance assumes; with the nonlinear mean and errors of the 1e3 the huge P0 allows,
+    an EKF's covariance does not describe its error, whatever its numerics)."""
+    from scipy.stats import chi2
+
     from . import make_filter
+    from .federated import _inflation
 
     rng = np.random.default_rng(seed)
-    proc = _ConstantProcess(cruise_process(), tiny_q)
+    proc = _ConstantProcess(cruise_process(), tiny_q, linear)
     n = proc.Phi.shape[0]
     H = np.zeros((6, n))
     H[[0, 1, 2], [0, 1, 2]] = 1.0   # attitude errors
@@ -89,17 +116,29 @@ def soak(name: str, cycles: int, seed: int = 0, huge_p: float = 1e6, tiny_q: flo
     D = np.zeros((3, n))
     D[[0, 1, 2], [3, 4, 5]] = 1.0
     cons = _Constraint(D)
-    f = make_filter(name, np.zeros(n), huge_p * np.eye(n), **options)
+    f = make_filter(name, np.zeros(n), huge_p * np.eye(n), form=form, **options)
+    gate = None if gate_alpha is None else float(chi2.ppf(1.0 - gate_alpha, 6))
+    factored = f.form == "square_root"
     asym, min_eig, max_cond = 0.0, np.inf, 0.0
     t0 = time.perf_counter()
-    done, error = 0, None
+    done, error, rejected, readmitted = 0, None, 0, 0
     try:
         for k in range(cycles):
             f.predict(proc)
             y = sd * rng.standard_normal(6)
             if outlier_every and k % outlier_every == outlier_every - 1:
                 y = y + 1e6 * sd
-            f.update(y, meas, None, R)
+            inn = f.update(y, meas, None, R, gate)
+            rejected = 0 if inn.accepted else rejected + 1
+            if rejected >= readmit_after:
+                s = _inflation(inn.r, inn.S, R, inn.nis)
+                if factored:
+                    f.S = f.S * np.sqrt(s)
+                else:
+                    f.P = f.P * s
+                f.update(y, meas, None, R)
+                rejected = 0
+                readmitted += 1
             if name in ("cukf", "cekf") and k % 10 == 9:
                 f.update(np.zeros(3), cons, None, 1e-6 * np.eye(3))
             x, P = f.x, f.P
@@ -107,14 +146,24 @@ def soak(name: str, cycles: int, seed: int = 0, huge_p: float = 1e6, tiny_q: flo
                 raise AssertionError(f"{name}: NaN/inf at cycle {k} without a FilterError")
             scale = float(np.max(np.abs(P)))
             asym = max(asym, float(np.max(np.abs(P - P.T))) / scale)
-            if not cholesky_lower(np.ascontiguousarray(P))[1]:
+            if factored:
+                S = f.S
+                if not (np.all(np.isfinite(S)) and np.min(np.diagonal(S)) > 0.0
+                        and not np.any(np.triu(S, 1))):
+                    raise AssertionError(f"{name}: covariance factor singular or not lower "
+                                         f"triangular at cycle {k} without a FilterError")
+            elif not cholesky_lower(np.ascontiguousarray(P))[1]:
                 raise AssertionError(f"{name}: covariance not positive definite at cycle {k} "
                                      f"without a FilterError")
             if k % eig_every == 0 or k == cycles - 1:
-                ev = np.linalg.eigvalsh(0.5 * (P + P.T))
+                if factored:  # eigenvalues of S S': the squared singular values of S
+                    ev = np.linalg.svd(f.S, compute_uv=False)[::-1] ** 2
+                else:
+                    ev = np.linalg.eigvalsh(0.5 * (P + P.T))
                 min_eig = min(min_eig, float(ev[0]))
                 max_cond = max(max_cond, float(ev[-1] / ev[0]))
             done = k + 1
     except FilterError as e:
         error = str(e)
-    return SoakResult(name, done, error, asym, min_eig, max_cond, time.perf_counter() - t0)
+    return SoakResult(name, done, error, asym, min_eig, max_cond, time.perf_counter() - t0,
+                      readmitted)
