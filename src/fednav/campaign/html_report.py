@@ -205,6 +205,10 @@ def _image(path: Path) -> str:
             f"<figcaption class='note'>{escape(path.name)}</figcaption></figure>")
 
 
+_DESIGN_STATS = {"rmse": "RMSE", "mean": "mean |error|", "max": "max |error|",
+                 "nis_per_dof": "NIS / dof"}
+
+
 def design_table_html(name: str, table: dict, title: str, seed,
                       labels: dict | None = None) -> str:
     """One table of a design (``fednav run``): mode, quantity (its label in ``labels``),
@@ -221,7 +225,8 @@ def design_table_html(name: str, table: dict, title: str, seed,
            f"{escape(str(seed))})</p>",
            f"<table id='table-{escape(name)}'><tr><th class='l'>mode</th>"
            "<th class='l'>quantity</th>"
-           + "".join(f"<th>{escape(c)}</th>" for c in cols) + "</tr>"]
+           + "".join(f"<th>{escape(_DESIGN_STATS.get(c, explain.label(c)))}</th>"
+                     for c in cols) + "</tr>"]
     for row, qs in table["rows"].items():
         for i, (q, stats) in enumerate(qs.items()):
             cells = []
