@@ -1,12 +1,16 @@
-"""examples/api_tour.py, the Python API's tour (docs/api.md), runs as documented: on data
-it simulates itself, into a folder it is given, never over a user's files."""
+"""examples/api_tour.py, the Python API's tour, and the snippets of docs/api.md run as
+documented: on data the tour simulates itself, into a folder it is given, never over a
+user's files."""
 
 import importlib.util
+import re
 from pathlib import Path
 
 import pytest
 
-TOUR = Path(__file__).parents[1] / "examples" / "api_tour.py"
+ROOT = Path(__file__).parents[1]
+TOUR = ROOT / "examples" / "api_tour.py"
+API_MD = ROOT / "docs" / "api.md"
 
 
 def _tour():
@@ -16,10 +20,15 @@ def _tour():
     return mod
 
 
-def test_the_tour_runs_and_its_figures_hold(tmp_path, capsys):
+@pytest.fixture(scope="module")
+def toured(tmp_path_factory):
     tour = _tour()
-    out = tmp_path / "tour"
-    r = tour.main(["--out", str(out)])
+    out = tmp_path_factory.mktemp("tour") / "out"
+    return tour, out, tour.main(["--out", str(out)])
+
+
+def test_the_tour_runs_and_its_figures_hold(toured, capsys):
+    tour, out, r = toured
     assert r["out"] == out
     for name in tour.WRITES:
         assert (out / name).stat().st_size > 0, name
@@ -27,10 +36,10 @@ def test_the_tour_runs_and_its_figures_hold(tmp_path, capsys):
     assert r["rmse"]["north_m"] < 0.5 and r["rmse"]["east_m"] < 0.5
     assert r["rmse_smoothed"]["east_m"] <= r["rmse"]["east_m"] * 1.05
     assert r["stream_equals_batch"] and r["health"] == []
-    text = capsys.readouterr().out
-    assert "equal to the batch run's" in text and "RMSE north_m" in text
 
-    # the same folder again: the tour refuses to overwrite what is there
+
+def test_the_tour_never_overwrites(toured):
+    tour, out, _ = toured
     before = {p.name: p.read_bytes() for p in out.iterdir()}
     with pytest.raises(SystemExit, match="does not overwrite"):
         tour.main(["--out", str(out)])
@@ -39,9 +48,25 @@ def test_the_tour_runs_and_its_figures_hold(tmp_path, capsys):
 
 def test_the_tour_uses_the_top_level_api():
     """Every name the tour calls on ``fednav`` is exported (``fednav.__all__``)."""
-    import re
-
     import fednav
 
     used = set(re.findall(r"\bfednav\.([A-Za-z_]\w*)\(", TOUR.read_text()))
     assert used and used <= set(fednav.__all__), used - set(fednav.__all__)
+
+
+def test_the_api_page_snippets_run(toured, tmp_path):
+    """docs/api.md's code, in the order of its sections, on the tour's drive (the page's
+    configuration example on its own: it changes the system the others use)."""
+    _, out, _ = toured
+    blocks = re.findall(r"```python\n(.*?)```", API_MD.read_text(), re.S)
+    data, configure, batch, stream, evaluate, plot = blocks[1:7]
+    assert "load_system({" in configure and "prepare(" in stream
+    exec(compile(configure, "docs/api.md (configure)", "exec"), {"fednav": __import__("fednav")})
+    code = "\n".join((data, batch, stream, evaluate, plot))
+    code = code.replace('Path("results/car-drive")', f"Path({str(out)!r})")
+    code = code.replace('"errors.png"', repr(str(tmp_path / "errors.png")))
+    code = code.replace('"track.png"', repr(str(tmp_path / "track.png")))
+    scope: dict = {}
+    exec(compile(code, "docs/api.md", "exec"), scope)
+    assert scope["result"].forward.t[-1] == scope["res"].forward.t[-1]
+    assert (tmp_path / "errors.png").exists() and (tmp_path / "track.png").exists()
