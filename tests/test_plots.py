@@ -1,6 +1,7 @@
 """The figures' structure (issue 29): every axis labelled with its unit, one legend beside
 the data, linear axes, the Monte Carlo spread and the filter's 3-sigma on the
-reproductions' plots, coinciding modes told apart, the ascent's two y axes.
+reproductions' plots, sigma at the filter epochs on the ``process`` plots, coinciding
+modes told apart, the track's start/end markers and zoom, the ascent's two y axes.
 
 The plotting functions return :class:`matplotlib.figure.Figure` objects; these tests read
 them (no PNG decoding)."""
@@ -8,11 +9,18 @@ them (no PNG decoding)."""
 import re
 
 import numpy as np
+import pytest
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 
+from fednav import System
 from fednav.campaign.report import errors_figure
 from fednav.core import plots, units
+from fednav.io.data import GnssData, ImuData, ImuErrors, Reference
+from fednav.process import output, process
+from fednav.sensors import ImuErrors as SimImuErrors
+from fednav.sensors import corrupt_imu
 from fednav.sim.runs import RunResult
+from fednav.sim.trajectory import Segment, generate
 
 UNIT = re.compile(r"\[[^\]]+\]")
 
@@ -107,6 +115,15 @@ def test_reproduction_errors_of_one_dict_are_one_run():
     _assert_report_figure(fig, 9)
 
 
+def test_sigma_envelope_keeps_the_largest_of_each_run_of_epochs():
+    t = np.arange(1000) * 0.05
+    y = np.where(np.arange(1000) % 3 == 0, 1.0, 2.0)  # a zigzag between updates
+    ts, ys = plots.envelope(t, y, most=500)
+    assert len(ts) == 500 and np.isin(ts, t).all() and (ys == 2.0).all()
+    assert plots.envelope(t[:400], y[:400], most=500)[0] is not None
+    np.testing.assert_array_equal(plots.envelope(t[:400], y[:400])[1], y[:400])
+
+
 def test_coinciding_groups_and_their_note():
     a = [np.linspace(0, 1, 50)]
     c = a[0] * 1.02
@@ -136,6 +153,88 @@ def test_paper000_errors_figure_from_real_runs(tmp_path):
     assert "AEKF/none = AEKF/wind" in " ".join(t.get_text() for t in fig.texts)
     p = plots.save(fig, tmp_path / "errors.png")
     assert p.read_bytes()[:4] == b"\x89PNG"
+
+
+# ------------------------------------------------------------------ process
+def _flight(T=120.0):
+    """A drive with turns, 100 Hz IMU, 5 Hz GNSS with a 20 s outage."""
+    segs = [Segment(15.0), Segment(10.0, accel=1.0), Segment(30.0, heading_rate=units.deg(3)),
+            Segment(T - 55.0)]
+    truth = generate(np.array([units.deg(45.0), units.deg(-75.0), 50.0]), 0.0,
+                     [0.0, 0.0, units.deg(45.0)], segs, 0.01)
+    rng = np.random.default_rng(3)
+    sim = SimImuErrors(gyro_bias=units.deg_per_h(50.0), accel_bias=units.milli_g(2.0),
+                       gyro_arw=units.deg_per_sqrt_h(0.2), accel_vrw=1e-3)
+    dth, dv, _ = corrupt_imu(truth.dtheta, truth.dv, truth.dt, sim, rng)
+    errs = ImuErrors(*[np.full(3, v) for v in (units.deg_per_sqrt_h(0.2), 1e-3,
+                                               units.deg_per_h(50.0), units.milli_g(2.0),
+                                               1e-6, 1e-5, 1000.0, 1000.0)])
+    imu = ImuData("sim-imu", truth.t[1:], dth / truth.dt, dv / truth.dt, errs)
+    tg = np.arange(0.2, truth.t[-1], 0.2)
+    tg = tg[(tg < 70.0) | (tg > 90.0)]
+    tr = truth.at(tg)
+    lla = tr["lla"] + np.column_stack([rng.standard_normal((len(tg), 2)) * 1e-7,
+                                       rng.standard_normal(len(tg)) * 0.5])
+    gnss = GnssData("sim-gnss", tg, lla, tr["vel"] + rng.standard_normal((len(tg), 3)) * 0.05,
+                    np.full(3, 0.5), np.full(3, 0.05), np.zeros(3))
+    ref = Reference("truth", truth.t, truth.lla, truth.vel, truth.euler)
+    return imu, gnss, ref
+
+
+@pytest.fixture(scope="module")
+def processed():
+    imu, gnss, ref = _flight()
+    return process(imu, gnss, None, System(), smooth=True), gnss, ref
+
+
+def test_process_errors_have_human_titles_units_and_sigma_at_the_filter_epochs(processed):
+    res, gnss, ref = processed
+    fig = output.errors_figure(res, ref, gnss)
+    _assert_report_figure(fig, 9)
+    f = res.forward
+    te = f.t[f.epoch_rows]
+    assert len(te) < len(f.t) / 10  # (epochs, not IMU rows)
+    for ax in fig.axes[:9]:
+        assert "_" not in ax.get_title() and "_" not in ax.get_ylabel()
+        assert "\nRMSE forward" in ax.get_title() and "smoothed" in ax.get_title()
+        sig = [ln for ln in ax.lines if ln.get_gid() == "sigma"]
+        assert len(sig) == 4  # forward and smoothed, +-
+        for ln in sig:  # at epochs (their upper envelope over 500 of them: 600 here)
+            assert np.isin(ln.get_xdata(), te).all() and len(ln.get_xdata()) == 300
+    ax = fig.axes[0]
+    assert ax.get_title().startswith("north position") and ax.get_ylabel() == (
+        "north position error [m]")
+    assert fig.axes[3].get_ylabel() == "north velocity error [m/s]"
+    assert fig.axes[8].get_ylabel() == "yaw error [deg]"
+    # the forward north sigma at the epochs; the smoothed one is smaller
+    s = [ln for ln in ax.lines if ln.get_gid() == "sigma"]
+    ts, sd = plots.envelope(te, f.sigma[f.epoch_rows, 7])
+    np.testing.assert_array_equal(s[0].get_xdata(), ts)
+    np.testing.assert_allclose(s[0].get_ydata(), 3 * sd)
+    assert np.mean(s[2].get_ydata()) < np.mean(s[0].get_ydata())
+    labels = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert "smoothed ±3σ (at filter epochs)" in labels and "GNSS outage" in labels
+    assert any(abs(p.get_x() - 70.0) < 0.5 for p in ax.patches)  # the outage, shaded
+
+
+def test_track_has_start_end_outage_and_a_zoom(processed):
+    res, gnss, ref = processed
+    fig = _drawn(output.track_figure(res, gnss, ref))
+    main, zoom = fig.axes
+    for ax in (main, zoom):
+        assert ax.get_xlabel() == "east [m]" and ax.get_ylabel() == "north [m]"
+        assert ax.get_legend() is None
+    labels = [t.get_text() for t in fig.legends[0].get_texts()]
+    for want in ("start", "end", "forward in GNSS outage", "reference", "GNSS fixes",
+                 "forward", "smoothed"):
+        assert want in labels, labels
+    assert zoom.get_title().startswith("zoom: longest GNSS outage, 69.8–90.0 s")
+    # the zoom's frame drawn on the overview, smaller than it
+    frame = [p for p in main.patches if p.get_edgecolor()[:3] != (1, 1, 1)][-1]
+    x0, x1 = main.get_xlim()
+    assert frame.get_width() < 0.5 * (x1 - x0)
+    np.testing.assert_allclose(zoom.get_xlim(), (frame.get_x(), frame.get_x()
+                                                 + frame.get_width()))
 
 
 def test_ascent_puts_height_and_speed_on_two_axes():

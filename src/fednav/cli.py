@@ -353,7 +353,7 @@ def _simulate_writes(rel: Path) -> bool:
 
 
 def _run_process(read, imu, gnss, velocity, ref, smooth, out, config, output_rate,
-                 files: dict | None = None, force: bool = False) -> None:
+                 files: dict | None = None, force: bool = False, fmt: str = "csv") -> None:
     from .core.atomic import clear_results
     from .core.config import load_model
     from .navigator.system import System
@@ -371,7 +371,11 @@ def _run_process(read, imu, gnss, velocity, ref, smooth, out, config, output_rat
     try:
         refuse_overwrite({"imu": imu, "gnss": gnss, "velocity": velocity, **(files or {}),
                           "reference": ref, "config": config})
+        fmt = process_output.check_format(fmt)  # (before the work: a missing extra)
+        rate = process_output.parse_rate(output_rate)
         cfg = System() if config is None else load_model(config, System, "processing config")
+        if rate is None and cfg.output_rate_hz is not None:
+            rate = cfg.output_rate_hz
         data = read(cfg)
         cfg = data.get("system", cfg)  # (a reader that completes the description)
         # the files read (the options', else those the description lists)
@@ -388,7 +392,8 @@ def _run_process(read, imu, gnss, velocity, ref, smooth, out, config, output_rat
         files = process_output.write(out, res, data["ref"], {
             **{n: None if f is None else str(f) for n, f in paths.items()},
             "config": None if config is None else str(config), "smooth": smooth,
-            "output_rate_hz": output_rate}, output_rate, data["gnss"], data.get("others"))
+            "output_rate_hz": process_output.DEFAULT_OUTPUT_RATE_HZ if rate is None else rate,
+            "format": fmt}, rate, data["gnss"], data.get("others"), fmt)
     except (FednavError, ValueError) as e:
         if _state["debug"]:
             raise
@@ -558,8 +563,11 @@ def _sensor_file_options(*exclude: str):
 _OUT = typer.Option(Path("results/process"), help="output folder")
 _SMOOTH = typer.Option(False, "--smooth", help="also run the RTS smoother")
 _CONFIG = typer.Option(None, help="processing config YAML (noise figures, options)")
-_RATE = typer.Option(None, "--output-rate", help="solution rows per second [Hz]; default: "
-                     "every IMU sample")
+_RATE = typer.Option(None, "--output-rate", help="solution rows per second [Hz], 'filter' "
+                     "(the filter epochs) or 'imu' (every IMU sample; also 0); default: the "
+                     "config's output_rate_hz, else 10 Hz (at most the IMU rate)")
+_FORMAT = typer.Option("csv", "--format", help="solution file format: csv or parquet "
+                       "(needs pyarrow: the extra 'parquet' of fednav)")
 _FORCE = typer.Option(False, "--force", help="write the solution even when its innovations "
                       "say the data are wrong (mean NIS/dof above 100)")
 
@@ -572,11 +580,11 @@ def process_navego(
     visual: Path = typer.Option(None, help="NaveGo visual-odometry .mat (velocity)"),
     ref: Path = typer.Option(None, help="NaveGo reference .mat (for RMSE)"),
     smooth: bool = _SMOOTH, out: Path = _OUT, config: Path = _CONFIG,
-    output_rate: float = _RATE, force: bool = _FORCE,
+    output_rate: str = _RATE, fmt: str = _FORMAT, force: bool = _FORCE,
 ) -> None:
     """Loosely coupled INS/GNSS (+ visual velocity) on NaveGo .mat files."""
     _run_process(_navego_reader(imu, gnss, visual, ref), imu, gnss, visual, ref, smooth, out,
-                 config, output_rate, force=force)
+                 config, output_rate, force=force, fmt=fmt)
 
 
 @process_app.command("csv")
@@ -588,7 +596,7 @@ def process_csv(
     velocity: Path = typer.Option(None, help="velocity-sensor CSV"),
     ref: Path = typer.Option(None, help="reference CSV (for RMSE and errors.csv)"),
     smooth: bool = _SMOOTH, out: Path = _OUT, config: Path = _CONFIG,
-    output_rate: float = _RATE, force: bool = _FORCE, **files: Path,
+    output_rate: str = _RATE, fmt: str = _FORMAT, force: bool = _FORCE, **files: Path,
 ) -> None:
     """The system described by --config (any registered sensors, local filters, fault
     detection, delay handling, smoother) on fednav CSV files: one option per sensor, or
@@ -596,7 +604,7 @@ def process_csv(
     come from --config (or each row's sigma columns)."""
     files = {n: f for n, f in files.items() if f is not None}
     _run_process(_csv_reader(imu, gnss, velocity, ref, files, config), imu, gnss, velocity,
-                 ref, smooth, out, config, output_rate, files, force=force)
+                 ref, smooth, out, config, output_rate, files, force=force, fmt=fmt)
 
 
 @process_app.command("ulog")
@@ -607,13 +615,13 @@ def process_ulog(
     config: Path = typer.Option(None, help="system description YAML: IMU figures, which "
                                            "sensors aid (aiding:), filters; what it leaves "
                                            "out comes from the log"),
-    output_rate: float = _RATE, force: bool = _FORCE,
+    output_rate: str = _RATE, fmt: str = _FORMAT, force: bool = _FORCE,
 ) -> None:
     """A PX4 autopilot log (ULog, read with pyulog): its IMU, GNSS, barometer and
     magnetometer through the navigator, compared with PX4's own estimate (and the log's
     ground truth when it has one)."""
     _run_process(_ulog_reader(log), log, None, None, None, smooth, out, config,
-                 output_rate, force=force)
+                 output_rate, force=force, fmt=fmt)
 
 
 tune_app = typer.Typer(no_args_is_help=True,

@@ -13,7 +13,7 @@ is made of::
                 period, the filter's IMU bias model
     alignment:  how recorded data find the initial attitude
     smoother:   also run the RTS smoother
-    output_rate_hz: solution rows per second (default: every IMU sample)
+    output_rate_hz: solution rows per second of fednav process's files (default: 10 Hz)
 
 The papers' scenario files are a system description plus the flight and the experiment
 (:class:`fednav.sim.scenario.Scenario` extends :class:`System`); the processing config of
@@ -316,7 +316,8 @@ class System(_Model):
     smoother : bool
         Also run the RTS smoother.
     output_rate_hz : float, optional
-        Solution rows per second of ``fednav process`` [Hz].
+        Solution rows per second of ``fednav process``'s files [Hz] when its
+        ``--output-rate`` is not given (None: 10 Hz, at most the IMU rate).
     files : dict of str to str
         Recorded files of this system (``imu``, ``reference``, sensor names), relative
         to the description's folder.

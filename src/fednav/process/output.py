@@ -7,8 +7,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..core import units
-from ..core.atomic import save_figure, write_json
+from ..core import plots, units
+from ..core.atomic import replacing, write_json
 from ..io.csvdata import write_csv
 from ..io.data import Reference
 from ..navigator.solution import consistency as _consistency
@@ -49,16 +49,85 @@ def solution_decimals(names) -> dict[str, int]:
     return {k: d(k) for k in names}
 
 
-def decimate(sol: Solution, rate_hz: float | None) -> Solution:
-    """Every ``round(1 / (rate_hz dt))``-th row of an IMU-rate solution, starting with the
-    first (None: every row).  A rate above the IMU's is a ValueError."""
-    if rate_hz is None:
+#: Rows per second of the solution files when neither ``--output-rate`` nor the system's
+#: ``output_rate_hz`` says (at most the IMU's rate): what a 10-minute drive needs for a
+#: plot or a comparison, 1/20 of a 200 Hz IMU's rows.  ``imu`` (or 0) keeps every sample.
+DEFAULT_OUTPUT_RATE_HZ = 10.0
+#: Solution file formats (``--format``; Parquet needs the ``parquet`` extra: pyarrow).
+FORMATS = ("csv", "parquet")
+
+
+def parse_rate(value) -> float | str | None:
+    """An ``--output-rate``: None (not given: :data:`DEFAULT_OUTPUT_RATE_HZ`, or fewer
+    rows when the IMU has them), ``"imu"`` (every IMU sample; also ``0``), ``"filter"``
+    (the filter epochs) or a rate [Hz] > 0.  A ValueError names anything else."""
+    if value is None or isinstance(value, float | int) and not isinstance(value, bool):
+        v = value
+    else:
+        word = str(value).strip().lower()
+        if word in ("imu", "filter"):
+            return word
+        try:
+            v = float(word)
+        except ValueError:
+            raise ValueError(f"--output-rate {value}: a rate in Hz, 'imu' (every IMU "
+                             f"sample) or 'filter' (the filter epochs)") from None
+    if v is None:
+        return None
+    if v == 0:
+        return "imu"
+    if not np.isfinite(v) or v < 0:
+        raise ValueError(f"--output-rate {value}: must be positive (0 or 'imu': every IMU "
+                         f"sample)")
+    return float(v)
+
+
+def decimate(sol: Solution, rate_hz: float | str | None) -> Solution:
+    """The solution rows to write at ``rate_hz`` (:func:`parse_rate`'s values): None —
+    :data:`DEFAULT_OUTPUT_RATE_HZ`, every row where the solution has fewer; ``"imu"`` —
+    every row; ``"filter"`` — the filter epochs' rows; a rate — every
+    ``round(1 / (rate_hz dt))``-th row, starting with the first (a rate above the IMU's
+    is a ValueError)."""
+    rate = parse_rate(rate_hz)
+    if rate == "imu":
         return sol
+    if rate == "filter":
+        return sol if sol.epoch_rows is None else sol.rows(sol.epoch_rows)
     dt = float(sol.t[1] - sol.t[0]) if len(sol.t) > 1 else 1.0
-    if not rate_hz > 0 or rate_hz > 1.0 / dt * (1 + 1e-9):
-        raise ValueError(f"--output-rate {rate_hz:g} Hz: must be positive and at most the IMU "
+    if rate is None:
+        rate = min(DEFAULT_OUTPUT_RATE_HZ, 1.0 / dt)
+    elif rate > 1.0 / dt * (1 + 1e-9):
+        raise ValueError(f"--output-rate {rate:g} Hz: must be positive and at most the IMU "
                          f"rate ({1.0 / dt:g} Hz)")
-    return sol.rows(slice(None, None, max(1, int(round(1.0 / (rate_hz * dt))))))
+    return sol.rows(slice(None, None, max(1, int(round(1.0 / (rate * dt))))))
+
+
+def check_format(fmt: str | None) -> str:
+    """The solution file format (``csv`` when None); a ValueError names an unknown one,
+    or the missing extra for ``parquet``."""
+    fmt = (fmt or "csv").lower()
+    if fmt not in FORMATS:
+        raise ValueError(f"--format {fmt}: must be csv or parquet")
+    if fmt == "parquet":
+        try:
+            import pyarrow  # noqa: F401
+        except ImportError:
+            raise ValueError("--format parquet needs pyarrow: pip install 'fednav[parquet]'"
+                             ) from None
+    return fmt
+
+
+def write_solution(path: Path, sol: Solution) -> Path:
+    """One solution file: CSV (fixed decimals, :func:`solution_decimals`) or, for a
+    ``.parquet`` path, Parquet (the same columns in float64, unrounded; zstd)."""
+    cols = solution_columns(sol)
+    path = Path(path)
+    if path.suffix == ".parquet":
+        check_format("parquet")
+        with replacing(path) as tmp:
+            pd.DataFrame(cols).to_parquet(tmp, index=False, compression="zstd")
+        return path
+    return write_csv(path, cols, solution_decimals(cols))
 
 
 def consistency(sol: Solution) -> dict[str, dict[str, float]]:
@@ -99,20 +168,91 @@ def _thin(n: int, most: int = 20_000) -> slice:
     return slice(None, None, max(1, -(-n // most)))
 
 
-#: errors.png panels, a row per quantity: (error key, sigma column) — columns of
+#: errors.png panels, a row per quantity: (error key, sigma column, title) — columns of
 #: Solution.sigma for position and velocity, of Solution.sigma_euler for the angles
-_PANELS = ((("north_m", 7), ("east_m", 6), ("down_m", 8)),
-           (("vn_mps", 4), ("ve_mps", 3), ("vd_mps", 5)),
-           (("roll_deg", 1), ("pitch_deg", 0), ("yaw_deg", 2)))
+_PANELS = ((("north_m", 7, "north position"), ("east_m", 6, "east position"),
+            ("down_m", 8, "down position")),
+           (("vn_mps", 4, "north velocity"), ("ve_mps", 3, "east velocity"),
+            ("vd_mps", 5, "down velocity")),
+           (("roll_deg", 1, "roll"), ("pitch_deg", 0, "pitch"), ("yaw_deg", 2, "yaw")))
+_UNITS = ("m", "m/s", "deg")
+_WHAT = ("position error", "velocity error", "attitude error")
 
 
-def plot_errors(res: ProcessResult, ref: Reference, path: Path) -> Path:
+def epoch_sigma(sol: Solution) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The solution's 1-sigma at its filter epochs (the state after each update; between
+    epochs the IMU-rate sigmas rise towards the next prediction, a sawtooth): ``t`` (K,),
+    ``sigma`` (K, 9) and ``sigma_euler`` (K, 3) — every row where the epochs are not
+    known."""
+    k = slice(None) if sol.epoch_rows is None else sol.epoch_rows
+    return sol.t[k], sol.sigma[k], sol.sigma_euler[k]
+
+
+def errors_figure(res: ProcessResult, ref: Reference, gnss=None, title: str = ""):
+    """``errors.png`` as a :class:`~matplotlib.figure.Figure`: north, east, down position
+    [m], velocity [m/s] and (with a reference attitude) roll, pitch, yaw [deg] errors of
+    the forward (and smoothed) solution against ``ref``, each with its filter's +-3 sigma
+    at the filter epochs (the smoothed one's from the RTS covariance; over more than 500
+    epochs their upper envelope, :func:`fednav.core.plots.envelope`), GNSS outages
+    (``gnss``'s gaps) shaded, one legend beside the axes."""
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    sols = [s for s in (res.forward, res.smoothed) if s is not None]
+    errs = [errors_against(s, ref) for s in sols]
+    rmses = [rmse(e) for e in errs]
+    rows = 3 if "yaw_rad" in errs[0] else 2
+    fig, axes = plots.new_figure(rows, 3, figsize=(15, 3.0 * rows + 0.9), sharex=True)
+    styles = plots.mode_styles([s.label for s in sols])
+    outages = plots.gaps(gnss.t) if gnss is not None and gnss.t is not None else []
+    sigmas = [epoch_sigma(s) for s in sols]
+    for i, panels in enumerate(_PANELS[:rows]):
+        unit = _UNITS[i]
+        for ax, (key, j, name) in zip(axes[i], panels, strict=True):
+            angle = i == 2
+            ek = key[:-4] + "_rad" if angle else key
+            arrays = []
+            for e, (te, sg, sge), st in zip(errs, sigmas, styles.values(), strict=True):
+                k = _thin(len(e["t"]))
+                v = units.to_deg(e[ek][k]) if angle else e[ek][k]
+                ax.plot(e["t"][k], v, color=st["color"], lw=0.8)
+                ts, sd = plots.envelope(te, units.to_deg(sge[:, j]) if angle else sg[:, j])
+                for sgn in (1, -1):
+                    ax.plot(ts, sgn * 3 * sd, color=st["color"], ls=":", lw=1.0, gid="sigma")
+                arrays += [v, 3 * sd]
+            plots.shade_spans(ax, outages, facecolor="tab:red", alpha=0.12)
+            # the start-up transient (alignment, heading not yet known) would set the scale
+            lim = 1.1 * max(plots.robust_scale(a) for a in arrays)
+            ax.set_ylim(-lim, lim)
+            rms = ", ".join(f"{s.label} {r[key]:.3g}" for s, r in zip(sols, rmses, strict=True))
+            ax.set_title(f"{name}\nRMSE {rms} {unit}", fontsize=9.5)
+            ax.set_ylabel(f"{name} error [{unit}]")
+            ax.axhline(0.0, color="0.6", lw=0.6, zorder=0)
+            ax.grid(alpha=0.3)
+    for ax in axes[-1]:
+        ax.set_xlabel("time [s]")
+    handles = []
+    for s, st in zip(sols, styles.values(), strict=True):
+        handles += [Line2D([], [], color=st["color"], lw=1.3, label=f"{s.label} error"),
+                    Line2D([], [], color=st["color"], ls=":", lw=1.0,
+                           label=f"{s.label} ±3σ (at filter epochs)")]
+    if outages:
+        handles.append(Patch(facecolor="tab:red", alpha=0.2, label="GNSS outage"))
+    plots.legend_outside(fig, handles, x=0.84, y=0.92)
+    fig.suptitle(f"Navigation errors (solution − reference){' ' + title if title else ''}"
+                 f", reference {Path(str(ref.source)).name}", fontsize=11)
+    fig.subplots_adjust(left=0.05, right=0.83, bottom=0.07 if rows == 3 else 0.1,
+                        top=0.89 if rows == 3 else 0.84, wspace=0.28, hspace=0.42)
+    return fig
+
+
+def plot_errors(res: ProcessResult, ref: Reference, path: Path, gnss=None,
+                title: str = "") -> Path:
     """Plot the solution's errors against a reference (``errors.png`` of ``fednav
-    process``).
+    process``; :func:`errors_figure`).
 
     Position north, east, down [m], velocity [m/s] and, with a reference attitude, roll,
-    pitch, yaw [deg] errors of the forward (and smoothed) solution with the forward
-    filter's +-3 sigma.
+    pitch, yaw [deg] errors of the forward (and smoothed) solution with their +-3 sigma.
 
     Parameters
     ----------
@@ -123,53 +263,27 @@ def plot_errors(res: ProcessResult, ref: Reference, path: Path) -> Path:
         velocity [m/s]).
     path : str or Path
         The image file to write (its suffix picks the format: ``.png``, ``.pdf``, ...).
+    gnss : GnssData, optional
+        The GNSS data, to shade its outages (gaps in its time stamps [s]).
+    title : str
+        The figure's title.
 
     Returns
     -------
     Path
         The file written.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    sols = [s for s in (res.forward, res.smoothed) if s is not None]
-    errs = [errors_against(s, ref) for s in sols]
-    rows = 3 if "yaw_rad" in errs[0] else 2
-    fig, axes = plt.subplots(rows, 3, figsize=(14, 3.0 * rows + 0.5), sharex=True)
-    f = res.forward
-    r = rmse(errs[0])
-    th = _thin(len(f.t))
-    for i, panels in enumerate(_PANELS[:rows]):
-        for ax, (key, j) in zip(axes[i], panels, strict=True):
-            angle = i == 2
-            ek = key[:-4] + "_rad" if angle else key
-            for s, e in zip(sols, errs, strict=True):
-                k = _thin(len(e["t"]))
-                v = units.to_deg(e[ek][k]) if angle else e[ek][k]
-                ax.plot(e["t"][k], v, lw=0.7, label=s.label)
-            sd = units.to_deg(f.sigma_euler[th, j]) if angle else f.sigma[th, j]
-            ax.plot(f.t[th], 3 * sd, "k:", lw=0.7, label="forward ±3σ")
-            ax.plot(f.t[th], -3 * sd, "k:", lw=0.7)
-            lim = 8 * r[key]  # the start-up transient would otherwise set the scale
-            ax.set_ylim(-lim, lim)
-            ax.set_title(f"{key} (forward RMSE {r[key]:.3g})", fontsize=9)
-            ax.grid(alpha=0.3)
-    axes[0, 0].legend(fontsize=7)
-    for ax in axes[-1]:
-        ax.set_xlabel("t [s]")
-    fig.tight_layout()
-    save_figure(fig, path)
-    plt.close(fig)
-    return path
+    return plots.save(errors_figure(res, ref, gnss, title), path)
 
 
-def write_errors(res: ProcessResult, ref: Reference, path: Path) -> Path:
+def write_errors(res: ProcessResult, ref: Reference, path: Path,
+                 output_rate: float | str | None = "imu") -> Path:
     """``errors.csv``: the forward (and smoothed, ``*_smoothed``) solution minus the
     reference at the reference's time stamps: ``north_m, east_m, down_m, vn_mps, ve_mps,
     vd_mps`` and, with a reference attitude, ``pitch_deg, roll_deg, yaw_deg``
-    (:func:`~fednav.process.run.errors_against`; 10 significant digits)."""
+    (:func:`~fednav.process.run.errors_against`; 10 significant digits), thinned like
+    the solution to ``output_rate`` (:func:`decimate`; ``"imu"``: every reference
+    stamp)."""
     cols = {}
     for sol, tag in ((res.forward, ""), (res.smoothed, "_smoothed")):
         if sol is None:
@@ -182,15 +296,137 @@ def write_errors(res: ProcessResult, ref: Reference, path: Path) -> Path:
                 cols[k[:-4] + "_deg" + tag] = units.to_deg(v)
             elif k != "t":
                 cols[k + tag] = v
-    return write_csv(path, cols)
+    k = _thin_stamps(cols["t_s"], res.forward, output_rate)
+    return write_csv(path, {c: v[k] for c, v in cols.items()})
+
+
+def _thin_stamps(t: np.ndarray, sol: Solution, output_rate) -> slice:
+    """Every k-th of the time stamps ``t`` so that they come at most at ``output_rate``
+    (:func:`decimate`'s values; ``"filter"``: the filter period of ``sol``)."""
+    rate = parse_rate(output_rate)
+    if rate == "imu" or len(t) < 2:
+        return slice(None)
+    if rate == "filter":
+        e = sol.t if sol.epoch_rows is None else sol.t[sol.epoch_rows]
+        step = float(np.median(np.diff(e))) if len(e) > 1 else 0.0
+    else:
+        step = 1.0 / (DEFAULT_OUTPUT_RATE_HZ if rate is None else rate)
+    return slice(None, None, max(1, int(round(step / float(np.median(np.diff(t)))))))
+
+
+def _zoom_window(res: ProcessResult, ref: Reference | None, outages):
+    """What the track's zoom panel shows: ``(what, rows of the forward solution to frame,
+    smallest half-width [m])`` — the longest GNSS outage, else the largest horizontal
+    error against the reference past the start-up (framed 8 times as wide as the error),
+    else the first 30 s."""
+    f = res.forward
+    if outages:
+        a, b = max(outages, key=lambda o: o[1] - o[0])
+        m = (f.t >= a - 0.25 * (b - a)) & (f.t <= b + 0.25 * (b - a))
+        return f"longest GNSS outage, {a:.1f}–{b:.1f} s", m, 5.0
+    if ref is not None:
+        # (past the start-up: the first tenth of the run, a minute at most)
+        e = errors_against(f, ref)
+        h = np.hypot(e["north_m"], e["east_m"])
+        h[e["t"] < e["t"][0] + min(60.0, 0.1 * np.ptp(e["t"]))] = np.nan
+        if np.isfinite(h).any():
+            i = int(np.nanargmax(h))
+            tc = float(e["t"][i])
+            m = np.zeros(len(f.t), dtype=bool)
+            m[min(int(np.searchsorted(f.t, tc)), len(f.t) - 1)] = True
+            return (f"largest horizontal error ({h[i]:.2g} m), t = {tc:.1f} s", m,
+                    max(1.0, 8.0 * float(h[i])))
+    return "first 30 s", f.t <= f.t[0] + 30.0, 5.0
+
+
+def track_figure(res: ProcessResult, gnss, ref: Reference | None):
+    """``track.png`` as a :class:`~matplotlib.figure.Figure`: east/north [m] from the
+    first GNSS fix — GNSS fixes, the forward and smoothed solutions and the reference,
+    start and end marked, GNSS outages (gaps over 3 median periods) in red on the forward
+    track, epochs whose measurement fault detection isolated marked — and a zoom panel
+    (the longest outage, else the largest error against the reference, else the start)
+    framed on the overview."""
+    from matplotlib.patches import Rectangle
+
+    from ..core import earth
+
+    fixes = gnss is not None and gnss.lla is not None
+    o = gnss.lla[0] if fixes else res.forward.lla[0]
+
+    def en(lla):
+        d = earth.llh_difference_enu(lla[:, 0], lla[:, 1], lla[:, 2], o[0], o[1], o[2])
+        return d[:, 0], d[:, 1]
+
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(15, 7.5))
+    ax = fig.add_axes((0.06, 0.08, 0.5, 0.84))
+    zax = fig.add_axes((0.63, 0.4, 0.34, 0.52))
+    f = res.forward
+    outages = plots.gaps(gnss.t) if gnss is not None and len(gnss.t) > 1 else []
+    what, zoom, least = _zoom_window(res, ref, outages)
+    styles = plots.mode_styles([s.label for s in (res.forward, res.smoothed) if s is not None])
+    for a in (ax, zax):
+        if fixes:
+            a.plot(*en(gnss.lla), ".", ms=2.5, color="0.55", alpha=0.6, label="GNSS fixes")
+        if ref is not None:
+            k = _thin(len(ref.t))
+            a.plot(*en(ref.lla[k]), "k-", lw=2.2, alpha=0.3, label="reference")
+        for s, ls, lw in ((res.forward, "-", 1.5), (res.smoothed, (0, (4, 2)), 1.2)):
+            if s is not None:
+                # the zoom panel draws every row (its window is a few metres wide)
+                k = _thin(len(s.t)) if a is ax else slice(None)
+                a.plot(*en(s.lla[k]), ls=ls, lw=lw, color=styles[s.label]["color"],
+                       label=s.label)
+        for i, (t0, t1) in enumerate(outages):
+            m = (f.t > t0) & (f.t < t1)
+            a.plot(*en(f.lla[m]), "r-", lw=2.4, label="forward in GNSS outage" if i == 0 else None)
+        if f.fdi:
+            log = pd.DataFrame(f.fdi, columns=["t", "local", "nis", "dof", "thr", "isolated"])
+            for name, marker in zip(log.local.unique(), "x+*^vo<>sd", strict=False):
+                t_iso = log.t[(log.local == name) & log.isolated].to_numpy(dtype=float)
+                if len(t_iso):
+                    i = np.clip(np.searchsorted(f.t, t_iso), 0, len(f.t) - 1)
+                    a.plot(*en(f.lla[i]), marker, ms=5, color="m",
+                           label=f"{name} isolated ({len(t_iso)})")
+        e, n = en(f.lla[[0, -1]])
+        a.plot(e[0], n[0], "^", ms=11, mfc="tab:green", mec="k", zorder=5, label="start")
+        a.plot(e[1], n[1], "s", ms=9, mfc="tab:red", mec="k", zorder=5, label="end")
+        a.set_aspect("equal", adjustable="datalim")
+        a.set_xlabel("east [m]")
+        a.set_ylabel("north [m]")
+        a.grid(alpha=0.3)
+    # the zoom: the window's forward (and reference) rows, framed with a margin
+    ze, zn = en(f.lla[zoom])
+    if ref is not None:
+        mr = (ref.t >= f.t[zoom][0]) & (ref.t <= f.t[zoom][-1])
+        re, rn = en(ref.lla[mr])
+        ze, zn = np.concatenate([ze, re]), np.concatenate([zn, rn])
+    half = max(0.6 * max(np.ptp(ze), np.ptp(zn)), least)
+    ce, cn = 0.5 * (ze.min() + ze.max()), 0.5 * (zn.min() + zn.max())
+    zax.set_xlim(ce - half, ce + half)
+    zax.set_ylim(cn - half, cn + half)
+    zax.set_aspect("equal", adjustable="box")
+    zax.set_title(f"zoom: {what}", fontsize=10)
+    ax.add_patch(Rectangle((ce - half, cn - half), 2 * half, 2 * half, fill=False,
+                           ec="tab:purple", lw=1.2, zorder=6))
+    ax.plot(ce, cn, "o", ms=16, mfc="none", mec="tab:purple", mew=1.2, zorder=6)
+    ax.annotate("zoom", (ce, cn), color="tab:purple", fontsize=9, xytext=(10, -14),
+                textcoords="offset points")
+    ax.set_title(f"Track from the first {'GNSS fix' if fixes else 'solution row'} "
+                 f"({(f.t[-1] - f.t[0]):.0f} s)", fontsize=11)
+    h, lab = ax.get_legend_handles_labels()
+    fig.legend(h, lab, loc="upper left", bbox_to_anchor=(0.63, 0.31), ncol=2, fontsize=9,
+               frameon=False)
+    return fig
 
 
 def plot_track(res: ProcessResult, gnss, ref: Reference | None, path: Path) -> Path:
-    """Plot the track (``track.png`` of ``fednav process``).
+    """Plot the track (``track.png`` of ``fednav process``; :func:`track_figure`).
 
     East and north [m] from the first GNSS fix: the GNSS fixes, the forward and smoothed
-    solutions and the reference; GNSS outages (gaps over 3 median periods) drawn in red
-    on the forward track, epochs whose measurement fault detection isolated marked.
+    solutions and the reference, start and end marked, GNSS outages and isolated
+    measurements shown, with a zoom panel.
 
     Parameters
     ----------
@@ -208,60 +444,13 @@ def plot_track(res: ProcessResult, gnss, ref: Reference | None, path: Path) -> P
     Path
         The file written.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from ..core import earth
-
-    fixes = gnss is not None and gnss.lla is not None
-    o = gnss.lla[0] if fixes else res.forward.lla[0]
-
-    def en(lla):
-        d = earth.llh_difference_enu(lla[:, 0], lla[:, 1], lla[:, 2], o[0], o[1], o[2])
-        return d[:, 0], d[:, 1]
-
-    fig, ax = plt.subplots(figsize=(8, 7))
-    if fixes:
-        ax.plot(*en(gnss.lla), ".", ms=2, color="0.6", label="GNSS")
-    if ref is not None:
-        k = _thin(len(ref.t))
-        ax.plot(*en(ref.lla[k]), "k-", lw=1.5, alpha=0.35, label="reference")
-    for s in (res.forward, res.smoothed):
-        if s is not None:
-            k = _thin(len(s.t))
-            ax.plot(*en(s.lla[k]), lw=0.9, label=s.label)
-    f = res.forward
-    outages = []
-    if gnss is not None and len(gnss.t) > 1:
-        gap = 3.0 * float(np.median(np.diff(gnss.t)))
-        outages = [(a, b) for a, b in zip(gnss.t[:-1], gnss.t[1:], strict=True) if b - a > gap]
-    for i, (a, b) in enumerate(outages):
-        m = (f.t > a) & (f.t < b)
-        ax.plot(*en(f.lla[m]), "r-", lw=2.0, label="GNSS outage" if i == 0 else None)
-    if f.fdi:
-        log = pd.DataFrame(f.fdi, columns=["t", "local", "nis", "dof", "thr", "isolated"])
-        for name, marker in zip(log.local.unique(), "x+*^vo<>sd", strict=False):
-            t_iso = log.t[(log.local == name) & log.isolated].to_numpy(dtype=float)
-            if len(t_iso):
-                i = np.clip(np.searchsorted(f.t, t_iso), 0, len(f.t) - 1)
-                ax.plot(*en(f.lla[i]), marker, ms=5, color="m",
-                        label=f"{name} isolated ({len(t_iso)})")
-    ax.set_aspect("equal", adjustable="datalim")
-    ax.set_xlabel("east [m]")
-    ax.set_ylabel("north [m]")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    save_figure(fig, path)
-    plt.close(fig)
-    return path
+    return plots.save(track_figure(res, gnss, ref), path)
 
 
 #: the files :func:`write` may write into its folder (``errors_NAME.*`` besides)
-OUTPUT_NAMES = ("solution.csv", "solution_smoothed.csv", "errors.csv", "errors.png",
-                "track.png", "summary.json", "report.html")
+OUTPUT_NAMES = ("solution.csv", "solution_smoothed.csv", "solution.parquet",
+                "solution_smoothed.parquet", "errors.csv", "errors.png", "track.png",
+                "summary.json", "report.html")
 
 
 def would_overwrite(out: Path, path: Path) -> bool:
@@ -273,26 +462,30 @@ def would_overwrite(out: Path, path: Path) -> bool:
 
 
 def write(out: Path, res: ProcessResult, ref: Reference | None, inputs: dict,
-          output_rate: float | None = None, gnss=None,
-          others: dict | None = None) -> list[Path]:
-    """Write solution CSV(s) (every IMU sample, or decimated to ``output_rate`` Hz), the
-    plots and summary.json into ``out``; returns the files.  ``others``: further
-    references by name (``errors_NAME.csv``, ``errors_NAME.png``, ``against`` in the
-    summary)."""
+          output_rate: float | str | None = None, gnss=None,
+          others: dict | None = None, fmt: str = "csv") -> list[Path]:
+    """Write the solution file(s) at ``output_rate`` (:func:`decimate`: by default
+    :data:`DEFAULT_OUTPUT_RATE_HZ`; ``"imu"`` every IMU sample), in ``fmt`` (``csv`` or
+    ``parquet``), errors.csv (thinned alike), the plots and summary.json into ``out``;
+    returns the files.  The
+    figures of summary.json and the plots come from the full-rate solution whatever the
+    output rate.  ``others``: further references by name (``errors_NAME.csv``,
+    ``errors_NAME.png``, ``against`` in the summary)."""
+    fmt = check_format(fmt)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     files = []
-    for name, sol in (("solution.csv", res.forward), ("solution_smoothed.csv", res.smoothed)):
+    for name, sol in (("solution", res.forward), ("solution_smoothed", res.smoothed)):
         if sol is not None:
-            cols = solution_columns(decimate(sol, output_rate))
-            files.append(write_csv(out / name, cols, solution_decimals(cols)))
+            files.append(write_solution(out / f"{name}.{fmt}", decimate(sol, output_rate)))
     files.append(plot_track(res, gnss, ref, out / "track.png"))
     if ref is not None:
-        files.append(write_errors(res, ref, out / "errors.csv"))
-        files.append(plot_errors(res, ref, out / "errors.png"))
+        files.append(write_errors(res, ref, out / "errors.csv", output_rate))
+        files.append(plot_errors(res, ref, out / "errors.png", gnss))
     for name, other in (others or {}).items():
-        files.append(write_errors(res, other, out / f"errors_{name}.csv"))
-        files.append(plot_errors(res, other, out / f"errors_{name}.png"))
+        files.append(write_errors(res, other, out / f"errors_{name}.csv", output_rate))
+        files.append(plot_errors(res, other, out / f"errors_{name}.png", gnss,
+                                 f"against {other.source}"))
     s = summary(res, ref, inputs, others)
     p = out / "summary.json"
     write_json(p, s)
