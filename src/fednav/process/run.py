@@ -58,7 +58,8 @@ class ProcessResult:
     smoothed : Solution or None
         The RTS-smoothed solution, when asked for.
     run_time_s : float
-        Wall time of the run [s].
+        Wall time of the run [s]; on a first run it includes numba's compilation of the
+        kernels (``fednav process`` leaves that out and says it apart).
     epochs : int
         Filter epochs processed [-].
     data_quality : dict
