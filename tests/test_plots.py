@@ -153,6 +153,40 @@ def test_paper000_errors_figure_from_real_runs(tmp_path):
     assert "AEKF/none = AEKF/wind" in " ".join(t.get_text() for t in fig.texts)
     p = plots.save(fig, tmp_path / "errors.png")
     assert p.read_bytes()[:4] == b"\x89PNG"
+    # the wind window over the runs: RMS and band per mode, one legend beside, noted
+    fig = _drawn(paper000.window_figure(runs, window=(0.0, 20.0)))
+    for ax in fig.axes:
+        assert UNIT.search(ax.get_ylabel()) and ax.get_yscale() == "linear"
+        assert ax.get_legend() is None and len(ax.collections) == 6
+    assert fig.axes[-1].get_xlabel() == "time [s]" and len(fig.legends) == 1
+    assert "3 Monte Carlo runs" not in fig._suptitle.get_text()  # (2 here)
+    assert "2 Monte Carlo runs" in fig._suptitle.get_text()
+
+
+def test_paper001_errors_over_runs_in_the_launch_frame():
+    from types import SimpleNamespace
+
+    from fednav.scenarios import paper001
+
+    rng = np.random.default_rng(1)
+    t = np.arange(1.0, 101.0)
+
+    def res():
+        e = np.cumsum(rng.standard_normal((100, 3)), axis=0)
+        return SimpleNamespace(t=t, att=units.arcsec(e), pos=e, vel=0.01 * e,
+                               sigma=np.tile(np.r_[units.arcsec([5.0] * 3), [3.0] * 3,
+                                                   [0.1] * 3], (100, 1)))
+
+    fig = paper001.errors_figure([{"pf": res(), "ekf": res()} for _ in range(3)])
+    _assert_report_figure(fig, 9)
+    assert [a.get_ylabel() for a in fig.axes[::3]] == [
+        "attitude error [arcsec]", "position error [m]", "velocity error [m/s]"]
+    assert fig.axes[0].get_title() == "LI x attitude"
+    assert fig.axes[-1].get_xlabel() == "time since launch [s]"
+    labels = [x.get_text() for x in fig.legends[0].get_texts()]
+    assert labels[:2] == ["PF", "EKF"] and "RMS over 3 runs" in labels
+    sig = [ln for ln in fig.axes[3].lines if ln.get_gid() == "sigma"]
+    assert np.allclose(np.abs(sig[0].get_ydata()), 9.0)  # 3 x the position sigma
 
 
 # ------------------------------------------------------------------ process

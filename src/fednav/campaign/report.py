@@ -139,15 +139,15 @@ _QUANTITIES = (("pos", 6, 1.0, ("east", "north", "up"), "position error", "m"),
                 "misalignment", "arcsec"))
 
 
-def error_statistics(runs_series, mode: str) -> dict:
+def error_statistics(runs_series, mode: str, quantities=_QUANTITIES) -> dict:
     """One mode's errors over the Monte Carlo runs: ``t`` (K,) and ``panels``, row-major
-    over :data:`_QUANTITIES` x (east, north, up), each the :func:`fednav.core.plots.
-    monte_carlo` statistics (``rms``, ``lo``, ``hi`` and, where the runs carry the
-    filter's 1-sigma, ``sigma``) in the panel's unit."""
+    over ``quantities`` (:data:`_QUANTITIES`) x their three components, each the
+    :func:`fednav.core.plots.monte_carlo` statistics (``rms``, ``lo``, ``hi`` and, where
+    the runs carry the filter's 1-sigma, ``sigma``) in the panel's unit."""
     res = [rs[mode] for rs in runs_series if mode in rs]
     n = min(len(r.t) for r in res)
     panels = []
-    for attr, s0, k, _, _, _ in _QUANTITIES:
+    for attr, s0, k, _, _, _ in quantities:
         for j in range(3):
             e = np.stack([getattr(r, attr)[:n, j] for r in res]) * k
             sig = None
@@ -157,30 +157,32 @@ def error_statistics(runs_series, mode: str) -> dict:
     return {"t": res[0].t[:n], "runs": len(res), "panels": panels}
 
 
-def errors_figure(runs_series, title: str = ""):
+def errors_figure(runs_series, title: str = "", quantities=_QUANTITIES,
+                  time_label: str = "time [s]"):
     """The reproduction's ``errors.png`` as a :class:`~matplotlib.figure.Figure`: east,
     north, up position [m], velocity [m/s] and misalignment [arcsec] errors versus time,
     per mode the RMS over the Monte Carlo runs (line), the 5-95 % band of the runs' signed
     errors (shaded) and the filter's +-3 sigma averaged over the runs (dotted, where the
     runs carry it).  ``runs_series``: one dict mode -> RunResult per run (or one such
-    dict).  Modes are drawn from wide to narrow lines; modes whose curves coincide in
-    every panel are drawn dashed over solid and named in a note, those that coincide in
-    one panel named in its title; a mode far off the others' scale (a free INS) runs off
-    the linear axes, also noted."""
+    dict); ``quantities``: the rows (:data:`_QUANTITIES`: RunResult's; paper 001 gives
+    its launch-frame ones).  Modes are drawn from wide to narrow lines; modes whose
+    curves coincide in every panel are drawn dashed over solid and named in a note,
+    those that coincide in one panel named in its title; a mode far off the others'
+    scale (a free INS) runs off the linear axes, also noted."""
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
     if isinstance(runs_series, dict):
         runs_series = [runs_series]
     modes = list(runs_series[0])
-    stats = {m: error_statistics(runs_series, m) for m in modes}
+    stats = {m: error_statistics(runs_series, m, quantities) for m in modes}
     curves = {m: [a for p in s["panels"] for a in (p["rms"], p["lo"], p["hi"])]
               for m, s in stats.items()}
     groups = plots.coinciding_groups(curves)
     styles = plots.mode_styles(modes, groups)
     fig, axes = plots.new_figure(3, 3, figsize=(15, 9.8), sharex=True)
     off: dict[str, list[str]] = {}
-    for i, (_, _, _, comps, what, unit) in enumerate(_QUANTITIES):
+    for i, (_, _, _, comps, what, unit) in enumerate(quantities):
         for j in range(3):
             ax = axes[i, j]
             scales = {}
@@ -220,7 +222,7 @@ def errors_figure(runs_series, title: str = ""):
             ax.axhline(0.0, color="0.6", lw=0.6, zorder=0)
             ax.grid(alpha=0.3)
     for ax in axes[-1]:
-        ax.set_xlabel("time [s]")
+        ax.set_xlabel(time_label)
     runs = max(s["runs"] for s in stats.values())
     handles = [Line2D([], [], color=styles[m]["color"], ls=styles[m]["ls"],
                       lw=styles[m]["lw"], label=m) for m in modes]

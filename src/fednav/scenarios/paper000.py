@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..campaign.paper import Paper, Unit
-from ..core.atomic import save_figure
+from ..core import plots
 from ..sim.runs import make_run_data, run_configured_mode
 from ..sim.scenario import Scenario
 from ..sim.scenario import load_scenario as _load
@@ -82,33 +82,60 @@ def one_run(args):
     return rows, series
 
 
-def plot_window(series: dict, path, window=WINDOW):
+def window_figure(runs_series, window=WINDOW):
     """Horizontal position and velocity error norms over the wind window, every filter
-    without and with wind (first Monte Carlo run)."""
-    import matplotlib
+    without and with wind, as a :class:`~matplotlib.figure.Figure`: per mode the RMS over
+    the Monte Carlo runs (line) and the 5-95 % band of the runs (shaded); modes that
+    coincide drawn dashed over a wide solid line and named in a note."""
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(2, 1, figsize=(11, 7), sharex=True)
-    for name, r in series.items():
-        if name.count("/") != 1 or "," in name:
-            continue
-        m = (r.t >= window[0]) & (r.t <= window[1])
-        ls = "-" if name.endswith("wind") else ":"
-        axes[0].plot(r.t[m], np.hypot(r.pos[m, 0], r.pos[m, 1]), ls, lw=0.9, label=name)
-        axes[1].plot(r.t[m], np.hypot(r.vel[m, 0], r.vel[m, 1]), ls, lw=0.9, label=name)
-    axes[0].set_ylabel("horizontal position error [m]")
-    axes[1].set_ylabel("horizontal velocity error [m/s]")
-    axes[1].set_xlabel("time [s]")
-    for ax in axes:
+    if isinstance(runs_series, dict):
+        runs_series = [runs_series]
+    modes = [k for k in runs_series[0] if k.count("/") == 1 and "," not in k]
+    stats = {}
+    for name in modes:
+        res = [rs[name] for rs in runs_series if name in rs]
+        n = min(len(r.t) for r in res)
+        t = res[0].t[:n]
+        m = (t >= window[0]) & (t <= window[1])
+        stats[name] = (t[m], [plots.monte_carlo(np.stack([np.hypot(getattr(r, q)[:n, 0],
+                                                                   getattr(r, q)[:n, 1])[m]
+                                                          for r in res]))
+                              for q in ("pos", "vel")], len(res))
+    curves = {k: [a for p in v[1] for a in (p["rms"], p["lo"], p["hi"])]
+              for k, v in stats.items()}
+    groups = plots.coinciding_groups(curves)
+    styles = plots.mode_styles(modes, groups)
+    fig, axes = plots.new_figure(2, 1, figsize=(12, 7.5), sharex=True)
+    for name, (t, panels, _) in stats.items():
+        st = styles[name]
+        for ax, p in zip(axes[:, 0], panels, strict=True):
+            ax.fill_between(t, p["lo"], p["hi"], color=st["color"], alpha=0.1, lw=0)
+            ax.plot(t, p["rms"], color=st["color"], ls=st["ls"], lw=st["lw"])
+    axes[0, 0].set_ylabel("horizontal position error [m]")
+    axes[1, 0].set_ylabel("horizontal velocity error [m/s]")
+    axes[1, 0].set_xlabel("time [s]")
+    for ax in axes[:, 0]:
+        ax.set_ylim(bottom=0.0)
         ax.grid(alpha=0.3)
-    axes[0].legend(fontsize=8, ncol=3)
-    fig.suptitle(f"Errors during the wind window {window[0]:g}–{window[1]:g} s (first run)")
-    fig.tight_layout()
-    save_figure(fig, path)
-    plt.close(fig)
-    return path
+    runs = max(v[2] for v in stats.values()) if stats else 0
+    handles = [Line2D([], [], color=styles[m]["color"], ls=styles[m]["ls"],
+                      lw=styles[m]["lw"], label=m) for m in modes]
+    handles += [Line2D([], [], color="k", lw=1.3,
+                       label=f"RMS over {runs} run{'s' if runs != 1 else ''}"),
+                Patch(facecolor="0.4", alpha=0.3, lw=0, label="5–95 % of the runs")]
+    plots.legend_outside(fig, handles, x=0.8, y=0.9)
+    plots.note(fig, plots.identical_note(groups, curves))
+    fig.suptitle(f"Paper 000: horizontal errors during the wind window {window[0]:g}–"
+                 f"{window[1]:g} s, {runs} Monte Carlo run{'s' if runs != 1 else ''}")
+    fig.subplots_adjust(left=0.08, right=0.78, bottom=0.1, top=0.91, hspace=0.12)
+    return fig
+
+
+def plot_window(runs_series, path, window=WINDOW):
+    """Write :func:`window_figure` to ``path``."""
+    return plots.save(window_figure(runs_series, window), path)
 
 
 class Paper000(Paper):
@@ -140,7 +167,7 @@ class Paper000(Paper):
 
         runs = [{k: v for k, v in s.items() if "," not in k} for s in rep["runs_series"]]
         return [plot_errors(runs, out / "errors.png", "Paper 000"),
-                plot_window(rep["series"], out / "wind_window.png")]
+                plot_window(rep["runs_series"], out / "wind_window.png")]
 
 
 EXPERIMENT = Paper000()

@@ -21,7 +21,6 @@ import numpy as np
 from ..campaign.evaluation import mean_ci95
 from ..campaign.paper import Paper, Unit
 from ..core import plots, units
-from ..core.atomic import save_figure
 from ..filters import FilterError
 from ..launch.navigate import make_data, run
 from ..launch.scenario import LaunchScenario, load_launch_scenario
@@ -148,7 +147,7 @@ def _summarize(scn, runs, seed, max_time, results, particles=None) -> dict:
     summary["failures"] = [{"table": r["table"], "row": r["mode"], "seed": r["seed"],
                             "error": r["failure"]} for r in rows if r["failure"]]
     return {"rows": rows, "series": results[0][1], "summary": summary, "scenario": scn,
-            "max_time": max_time}
+            "max_time": max_time, "runs_series": [o[1] for o in results[:runs] if o[1]]}
 
 
 def _print_summary(summary: dict, console) -> None:
@@ -164,38 +163,30 @@ def _print_summary(summary: dict, console) -> None:
                   f"federated EKF {s['EKF']:.2f}")
 
 
-def plot_errors(series: dict, path):
-    """PF and EKF errors (first run) with the fused filters' 3-sigma."""
-    import matplotlib
+#: errors.png rows: LaunchResult attribute, first column of its sigma, factor from SI,
+#: components (launch inertial frame), what, unit
+_QUANTITIES = (("att", 0, 1.0 / units.ARCSEC, ("LI x", "LI y", "LI z"), "attitude error",
+                "arcsec"),
+               ("pos", 3, 1.0, ("LI x", "LI y", "LI z"), "position error", "m"),
+               ("vel", 6, 1.0, ("LI x", "LI y", "LI z"), "velocity error", "m/s"))
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(3, 3, figsize=(14, 9), sharex=True)
-    rows = (("att", 1.0 / units.ARCSEC, '["]', 0), ("pos", 1.0, "[m]", 3),
-            ("vel", 1.0, "[m/s]", 6))
-    colors = {"pf": "C0", "ekf": "C3"}
-    for i, (key, k, unit, s0) in enumerate(rows):
-        for j, ax_name in enumerate("xyz"):
-            ax = axes[i, j]
-            for name, r in series.items():
-                ax.plot(r.t, getattr(r, key)[:, j] * k, lw=0.8, color=colors[name],
-                        label=f"{name.upper()} error")
-                ax.plot(r.t, 3 * r.sigma[:, s0 + j] * k, lw=0.6, ls="--", color=colors[name],
-                        label=f"{name.upper()} ±3σ")
-                ax.plot(r.t, -3 * r.sigma[:, s0 + j] * k, lw=0.6, ls="--", color=colors[name])
-            ax.set_ylabel(f"{key} {ax_name} {unit}")
-            ax.grid(alpha=0.3)
-    for j in range(3):
-        axes[2, j].set_xlabel("time since launch [s]")
-    axes[0, 0].legend(fontsize=7, ncol=2)
-    for ax in axes[0]:
-        ax.set_ylim(-40, 40)
-    fig.suptitle("Launch-frame navigation errors (computed − true), first Monte Carlo run")
-    fig.tight_layout()
-    save_figure(fig, path)
-    plt.close(fig)
-    return path
+def errors_figure(runs_series):
+    """PF and EKF errors in the launch inertial frame over the Monte Carlo runs (Table 1's
+    runs) as a :class:`~matplotlib.figure.Figure`: RMS over the runs, 5-95 % band, the
+    fused filters' mean +-3 sigma (:func:`fednav.campaign.report.errors_figure`)."""
+    from ..campaign.report import errors_figure as mc_errors
+
+    if isinstance(runs_series, dict):
+        runs_series = [runs_series]
+    runs = [{k.upper(): v for k, v in rs.items()} for rs in runs_series if rs]
+    return mc_errors(runs, "Paper 001, launch inertial frame", _QUANTITIES,
+                     "time since launch [s]")
+
+
+def plot_errors(runs_series, path):
+    """Write :func:`errors_figure` to ``path``."""
+    return plots.save(errors_figure(runs_series), path)
 
 
 def ascent_figure(scn: LaunchScenario, max_time=None):
@@ -281,7 +272,7 @@ class Paper001(Paper):
         _print_summary(summary, console)
 
     def plots(self, out, rep) -> list:
-        return [plot_errors(rep["series"], out / "errors.png"),
+        return [plot_errors(rep.get("runs_series") or [rep["series"]], out / "errors.png"),
                 plot_ascent(rep["scenario"], out / "ascent.png", rep["max_time"])]
 
 
