@@ -2,8 +2,8 @@
 docstring: a summary, ``Parameters`` naming exactly the signature's parameters (a class:
 its constructor's, under ``Parameters`` or, for a result a caller receives, ``Attributes``)
 and ``Returns`` for a function that returns something; every entry has a type and a
-description, and every number or array says its unit in brackets (``[m]``, ``[rad]``,
-``[s]``, ``[-]`` for none) — the frame with it.  A class's public methods are held to the
+description (``*args``/``**kwargs`` need no type), and every number or array says its
+unit in brackets (``[m]``, ``[rad]``, ``[s]``, ``[-]`` for none) — the frame with it.  A class's public methods are held to the
 same rules; its properties need a docstring.
 
 A small parser of numpydoc's layout (section title, dashes, ``name : type`` entries with
@@ -96,7 +96,7 @@ def problems(obj, where: str, *, is_class: bool = False) -> list[str]:
                 out.append(f"{where}: an empty Returns section")
     for kind, items in ((title, documented), ("Returns", returned)):
         for name, typ, desc in items:
-            if not typ and kind != "Returns":
+            if not typ and kind != "Returns" and not name.startswith("*"):
                 out.append(f"{where}: {kind} entry '{name}' has no type")
             if not desc:
                 out.append(f"{where}: {kind} entry '{name}' has no description")
@@ -164,8 +164,7 @@ def test_the_parser_reads_numpydoc():
         """
 
     assert problems(f, "f") == ["f: Parameters entry 'y' (float) names no unit in brackets "
-                                "([m], [rad], [s], [-] ...)",
-                                "f: Parameters entry '**kw' has no type"]
+                                "([m], [rad], [s], [-] ...)"]  # (**kw: no type, as usual)
     summary, secs = sections(f.__doc__)
     assert summary == "Sum." and set(secs) == {"Parameters", "Returns"}
     assert entries(secs["Parameters"])[0] == ("x", "float", "A length [m], on two lines.")

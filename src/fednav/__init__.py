@@ -35,6 +35,7 @@ _LAZY = {
     # process`` runs: ``fednav.process`` is the subpackage)
     "process_data": "fednav.process.run",
     "prepare": "fednav.process.run",
+    "Prepared": "fednav.process.run",
     "ProcessResult": "fednav.process.run",
     # evaluating a solution against a reference
     "errors_against": "fednav.process.run",

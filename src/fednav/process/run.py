@@ -370,11 +370,48 @@ def check_units(imu: ImuData, gnss: GnssData | None) -> list[str]:
 
 @dataclass
 class Prepared:
-    """Recorded data made ready for the navigator (:func:`prepare`): the system it flies
-    (the config with the epoch period and the sensors' effective settings), where it
-    starts, the IMU samples from that start (``t``, ``gyro``, ``accel``; whole epochs
-    only), each sensor's measurements ``(t, z, R)``, the IMU file's error figures, and
-    what the checks and the alignment found."""
+    """Recorded data made ready for the navigator (:func:`prepare`).
+
+    Attributes
+    ----------
+    system : System
+        The system it flies: the description with the filter epoch period and the
+        sensors' effective settings.
+    initial : InitialState
+        Where it starts (time [s], lat/lon [rad], h [m], ENU velocity [m/s], Euler
+        angles [rad], P0).
+    dt : float
+        IMU period [s].
+    t : ndarray, shape (N,)
+        IMU time stamps from the start, whole epochs only [s].
+    gyro : ndarray, shape (N, 3)
+        Angular rates, body right-forward-up [rad/s].
+    accel : ndarray, shape (N, 3)
+        Specific force, body right-forward-up [m/s^2].
+    measurements : dict of str to tuple
+        Each sensor's ``(t, z, R)``: times of validity [s], measurements in the sensor's
+        layout (GNSS: lat, lon [rad], h [m], ENU velocity [m/s]) and their residual
+        covariances [residual units squared].
+    imu_errors : ImuErrors or None
+        The IMU file's error figures (SI units).
+    n_per : int
+        IMU samples per filter epoch [-].
+    warnings : list of str
+        What the checks found, one line each.
+    alignment : Alignment
+        How the initial attitude was found (:mod:`fednav.ins.alignment`).
+    quality : dict
+        What the input checks did (counts [-]) and measured (``*_seen_s`` [s]).
+    others : dict of str to SensorData
+        Other registered sensors' recordings by name.
+    sigmas : dict of str to ndarray
+        Each measurement stream's 1-sigma by sensor [sensor units].
+    increments : tuple of ndarray or None
+        The IMU file's own increments (dtheta [rad], dv [m/s]) of these samples, when it
+        held them.
+    arrivals : dict of str to ndarray
+        When each measurement of ``measurements`` reached the navigator, by sensor [s].
+    """
 
     system: System
     initial: InitialState
@@ -397,12 +434,36 @@ class Prepared:
     arrivals: dict = field(default_factory=dict)
 
     def navigator(self, **options) -> Navigator:
-        """A :class:`~fednav.navigator.Navigator` for this data (nothing fed yet)."""
+        """A navigator for these data, nothing fed yet.
+
+        Parameters
+        ----------
+        **options
+            :class:`~fednav.navigator.Navigator` options (``record_rows``,
+            ``record_covariance``, ``innovations``, ``hold_s``, ``engine``).
+
+        Returns
+        -------
+        Navigator
+            Built from :attr:`system`, :attr:`initial`, :attr:`dt` [s] and
+            :attr:`imu_errors`.
+        """
         return Navigator(self.system, self.initial, self.dt, imu_errors=self.imu_errors,
                          **options)
 
     def feed(self, nav: Navigator) -> Navigator:
-        """Every measurement, then every IMU sample, in one block each."""
+        """Feed every measurement, then every IMU sample, in one block each.
+
+        Parameters
+        ----------
+        nav : Navigator
+            A navigator from :meth:`navigator`.
+
+        Returns
+        -------
+        Navigator
+            ``nav``, fed (its :meth:`~fednav.navigator.Navigator.result` is the run's).
+        """
         total = self.system.filter.state == "total"
         for name, (t, z, R) in self.measurements.items():
             ta = self.arrivals.get(name)
