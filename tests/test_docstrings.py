@@ -3,8 +3,8 @@ docstring: a summary, ``Parameters`` naming exactly the signature's parameters (
 its constructor's, under ``Parameters`` or, for a result a caller receives, ``Attributes``)
 and ``Returns`` for a function that returns something; every entry has a type and a
 description (``*args``/``**kwargs`` need no type), and every number or array says its
-unit in brackets (``[m]``, ``[rad]``, ``[s]``, ``[-]`` for none) — the frame with it.  A class's public methods are held to the
-same rules; its properties need a docstring.
+unit in brackets (``[m]``, ``[rad]``, ``[s]``, ``[-]`` for none) — the frame with it.
+A class's public methods are held to the same rules; its properties need a docstring.
 
 A small parser of numpydoc's layout (section title, dashes, ``name : type`` entries with
 indented descriptions) — no dependency beyond the standard library."""
