@@ -65,7 +65,9 @@ class _ConstraintMixin:
         Sinv, ok = spd_inverse(np.ascontiguousarray(0.5 * (S + S.T)))
         nis = float(r @ Sinv @ r) if ok else float("nan")
         self.x, self.P = project(self.x, self.P, D, y, R)
-        self._finish("constraint", symmetrize=False)
+        # with a noise R_d the projected covariance must be positive definite (an exact
+        # constraint, R_d None, leaves it singular along D: theorem 2)
+        self._finish("constraint", symmetrize=False, check_pd=R is not None)
         return Innovation(r, S, nis)
 
 

@@ -276,6 +276,19 @@ class Lockout:
         del self.episodes[n:]
 
 
+def _cov(f: Filter) -> np.ndarray:
+    """What a filter keeps of its covariance: ``P``, or the factor ``S`` of a factored one
+    (restored as it was, with no factorization of ``S S'``)."""
+    return f.S if f.form == "square_root" else f.P
+
+
+def _set_cov(f: Filter, C: np.ndarray) -> None:
+    if f.form == "square_root":
+        f.S = C
+    else:
+        f.P = C
+
+
 def _sampling_bias_correction(Pg, Ps, dofs, names) -> np.ndarray:
     """Remove the second-order bias of ``P_g = (sum P_i^-1)^-1`` when some ``P_i`` are sample
     covariances with ``dof_i`` degrees of freedom (particle filters).
@@ -466,16 +479,20 @@ class FederatedFilter:
         s, t_start = lk.track(i, t, inn.accepted, inn.nis, inn.r, inn.S, R, thr_drift)
         if not s > 0.0:
             return inn
-        saved = [(g, g.x, g.P) for g in self.filters.values()]
+        saved = [(g, g.x, _cov(g)) for g in self.filters.values()]
         for g in self.filters.values():
-            g.P = g.P * s
+            if g.form == "square_root":
+                g.S = g.S * math.sqrt(s)
+            else:
+                g.P = g.P * s
         try:
             new = f.update(y, model, nav, R, gate=thr)
         except FilterError:
             new = None
         if new is None or not new.accepted:
             for g, x, P in saved:
-                g.x, g.P = x, P
+                g.x = x
+                _set_cov(g, P)
             return inn
         self._passes[local] = self.fdi_recovery
         lk.track(i, t, True, new.nis, new.r, new.S, R, thr_drift)
@@ -525,7 +542,7 @@ class FederatedFilter:
     def snapshot(self) -> tuple:
         """Everything the filter carries from epoch to epoch (for re-running from the past,
         :meth:`restore`); the log keeps its entries up to this point."""
-        return ([(f.x.copy(), f.P.copy(), f.step) for f in self.filters.values()],
+        return ([(f.x.copy(), _cov(f).copy(), f.step) for f in self.filters.values()],
                 self.x.copy(), self.P.copy(), dict(self.beta), set(self.isolated),
                 dict(self._passes), len(self.log), dict(self.qlog), self.lockout.snapshot())
 
@@ -535,7 +552,8 @@ class FederatedFilter:
         self.qlog = dict(qlog)
         self.lockout.restore(lockout)
         for f, (x, P, step) in zip(self.filters.values(), filters, strict=True):
-            f.x, f.P, f.step = x.copy(), P.copy(), step
+            f.x, f.step = x.copy(), step
+            _set_cov(f, P.copy())
         self.x, self.P = self.x.copy(), self.P.copy()
         self.beta, self.isolated, self._passes = dict(beta), set(isolated), dict(passes)
         del self.log[n_log:]

@@ -255,7 +255,7 @@ class _ConstraintOnFactor:
                    else REASONS[code])
             raise FilterError(f"{self._who('constraint')}: {why}")
         self.x, self.S = x, S
-        self._finish("constraint")
+        self._finish("constraint", check_pd=R is not None)
         return Innovation(r, Pzz, float(nis))
 
 
