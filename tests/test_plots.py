@@ -163,6 +163,32 @@ def test_paper000_errors_figure_from_real_runs(tmp_path):
     assert "2 Monte Carlo runs" in fig._suptitle.get_text()
 
 
+def test_latency_sweep_and_fdi_figures():
+    import pandas as pd
+
+    from fednav.campaign.report import fdi_figure
+    from fednav.scenarios import paper004
+
+    rows = [{"mode": m, "max_latency_s": lat, "lon_std_m": v * lat, "lat_std_m": v * lat}
+            for lat in (1.5, 3.0, 6.0) for m, v in (("none", 100.0), ("a", 1.0),
+                                                     ("b", 1.01))]
+    fig = _drawn(paper004.sweep_figure(rows))
+    (ax,) = fig.axes
+    assert UNIT.search(ax.get_xlabel()) and UNIT.search(ax.get_ylabel())
+    assert ax.get_legend() is None and len(fig.legends) == 1
+    assert [ln.get_linestyle() for ln in ax.lines][1:] != ["-", "-"]
+    assert "a ≈ b (95 % of the latencies within 0.94 % of the scale)" in fig.texts[0].get_text()
+    fdi = pd.DataFrame({"t": np.r_[1.0:11.0, 1.0:11.0], "local": ["gnss"] * 10 + ["star"] * 10,
+                        "statistic": np.r_[np.ones(9), 50.0, np.ones(10)], "dof": 3,
+                        "threshold": 11.3, "isolated": np.r_[[False] * 9, True,
+                                                             [False] * 10]})
+    fig = _drawn(fdi_figure(fdi, "t"))
+    assert [a.get_title() for a in fig.axes] == ["local filter 'gnss' (1 of 10 isolated)",
+                                                  "local filter 'star' (0 of 10 isolated)"]
+    assert all(UNIT.search(a.get_ylabel()) for a in fig.axes)
+    assert all(a.get_legend() is None for a in fig.axes) and len(fig.legends) == 1
+
+
 def test_paper001_errors_over_runs_in_the_launch_frame():
     from types import SimpleNamespace
 

@@ -10,7 +10,7 @@ from rich.console import Console
 from rich.table import Table
 
 from ..core import plots, units
-from ..core.atomic import save_figure, write_frame, write_json
+from ..core.atomic import write_frame, write_json
 from .evaluation import NULL_REASONS, mean_ci95
 
 
@@ -248,29 +248,36 @@ def plot_errors(runs_series, path: Path, title: str = "") -> Path:
     return plots.save(errors_figure(runs_series, title), path)
 
 
-def plot_fdi(fdi: pd.DataFrame, path: Path, title: str = "") -> Path:
-    """Chi-square statistic of every local filter against its threshold, isolations marked."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+def fdi_figure(fdi: pd.DataFrame, title: str = ""):
+    """Chi-square statistic of every local filter against its threshold, isolations
+    marked, as a :class:`~matplotlib.figure.Figure`: a panel per local filter (log axis:
+    the statistic spans decades), one legend beside the panels."""
+    from matplotlib.lines import Line2D
 
     locals_ = list(dict.fromkeys(fdi["local"]))
-    fig, axes = plt.subplots(len(locals_), 1, figsize=(11, 2.6 * len(locals_)), sharex=True,
-                             squeeze=False)
+    fig, axes = plots.new_figure(len(locals_), 1, figsize=(12, 2.6 * len(locals_) + 0.8),
+                                 sharex=True)
     for ax, name in zip(axes[:, 0], locals_, strict=True):
         d = fdi[fdi["local"] == name]
-        ax.semilogy(d["t"], d["statistic"], lw=0.8, label=f"{name}: T = r' S^-1 r")
+        ax.semilogy(d["t"], d["statistic"], lw=0.8, color="C0")
         if d["threshold"].notna().any():
-            ax.plot(d["t"], d["threshold"], "k--", lw=1, label="threshold")
+            ax.plot(d["t"], d["threshold"], "k--", lw=1)
         iso = d[d["isolated"]]
-        ax.plot(iso["t"], iso["statistic"], "r.", ms=3, label="isolated")
-        ax.set_ylabel("statistic")
+        ax.plot(iso["t"], iso["statistic"], "r.", ms=4)
+        ax.set_title(f"local filter '{name}' ({len(iso)} of {len(d)} isolated)", fontsize=9.5)
+        ax.set_ylabel("T = r' S⁻¹ r [-]")
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8, loc="upper right")
     axes[-1, 0].set_xlabel("time [s]")
+    handles = [Line2D([], [], color="C0", lw=0.8, label="statistic T"),
+               Line2D([], [], color="k", ls="--", lw=1, label="threshold"),
+               Line2D([], [], color="r", marker=".", ls="", label="isolated")]
+    plots.legend_outside(fig, handles, x=0.86, y=0.9)
     fig.suptitle(title or "Chi-square fault detection")
-    fig.tight_layout()
-    save_figure(fig, path)
-    plt.close(fig)
-    return path
+    fig.subplots_adjust(left=0.08, right=0.85, bottom=0.12 if len(locals_) < 3 else 0.07,
+                        top=0.86 if len(locals_) < 3 else 0.91, hspace=0.35)
+    return fig
+
+
+def plot_fdi(fdi: pd.DataFrame, path: Path, title: str = "") -> Path:
+    """Write :func:`fdi_figure` to ``path``."""
+    return plots.save(fdi_figure(fdi, title), path)

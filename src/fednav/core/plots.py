@@ -108,17 +108,18 @@ def mode_styles(names, groups: list[list[str]] | None = None) -> dict[str, dict]
     return styles
 
 
-def identical_note(groups: list[list[str]], curves: dict[str, list[np.ndarray]]) -> str:
+def identical_note(groups: list[list[str]], curves: dict[str, list[np.ndarray]],
+                   samples: str = "epochs") -> str:
     """The figure note on groups of coinciding curves ("" without any): "A = B" where they
     are identical to plotting precision (:data:`IDENTICAL_RTOL` at every sample), "A ≈ B"
-    with how close 95 % of the samples are otherwise."""
+    with how close 95 % of the samples (named ``samples``) are otherwise."""
     parts = []
     for g in groups:
         d = max(relative_difference(curves[g[0]], curves[b]) for b in g[1:])
         d95 = max(relative_difference(curves[g[0]], curves[b], 95.0) for b in g[1:])
         parts.append(" = ".join(g) + " (identical to plotting precision)" if d <= IDENTICAL_RTOL
-                     else " ≈ ".join(g) + f" (95 % of the epochs within {100 * d95:.2g} % of"
-                     f" the scale)")
+                     else " ≈ ".join(g) + f" (95 % of the {samples} within {100 * d95:.2g} %"
+                     f" of the scale)")
     if not parts:
         return ""
     return "coinciding curves, drawn dashed over a wide solid line: " + "; ".join(parts)

@@ -365,6 +365,8 @@ def track_figure(res: ProcessResult, gnss, ref: Reference | None):
     f = res.forward
     outages = plots.gaps(gnss.t) if gnss is not None and len(gnss.t) > 1 else []
     what, zoom, least = _zoom_window(res, ref, outages)
+    if not zoom.any():  # (an outage outside the solution's span)
+        what, zoom, least = "first 30 s", f.t <= f.t[0] + 30.0, 5.0
     styles = plots.mode_styles([s.label for s in (res.forward, res.smoothed) if s is not None])
     for a in (ax, zax):
         if fixes:

@@ -17,8 +17,8 @@ import numpy as np
 
 from ..campaign.evaluation import mean_ci95
 from ..campaign.paper import Paper, Unit
-from ..core import units
-from ..core.atomic import save_figure, write_frame
+from ..core import plots, units
+from ..core.atomic import write_frame
 from ..sim.runs import make_run_data, run_configured_mode
 from ..sim.scenario import Scenario
 from ..sim.scenario import load_scenario as _load
@@ -137,27 +137,41 @@ def _sweep(rows) -> dict:
     return out
 
 
-def plot_sweep(rows, path):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+def sweep_figure(rows):
+    """Horizontal position error std [m] against the SAR fix latency [s], per delay
+    strategy (mean over the sweep's runs), as a :class:`~matplotlib.figure.Figure`: a
+    log axis (the uncompensated filter is 100 times off), strategies that coincide drawn
+    dashed over a wide solid line and named in a note, the legend beside the axes."""
     import pandas as pd
+    from matplotlib.lines import Line2D
 
     df = pd.DataFrame(rows)
     df["pos_std_m"] = np.hypot(df["lon_std_m"], df["lat_std_m"])
-    fig, ax = plt.subplots(figsize=(6, 4))
-    for m, g in df.groupby("mode", sort=False):
-        s = g.groupby("max_latency_s")["pos_std_m"].mean()
-        ax.semilogy(s.index, s.to_numpy(), "o-", label=m)
+    curves = {m: g.groupby("max_latency_s")["pos_std_m"].mean()
+              for m, g in df.groupby("mode", sort=False)}
+    values = {m: [c.to_numpy()] for m, c in curves.items()}
+    groups = plots.coinciding_groups(values)
+    styles = plots.mode_styles(list(curves), groups)
+    fig, axes = plots.new_figure(1, 1, figsize=(8.5, 4.6))
+    ax = axes[0, 0]
+    for m, c in curves.items():
+        st = styles[m]
+        ax.semilogy(c.index, c.to_numpy(), marker="o", color=st["color"], ls=st["ls"],
+                    lw=st["lw"], ms=7 - 2 * (st["ls"] != "-"))
     ax.set_xlabel("maximum SAR fix latency [s] (velocity: 2/3 of it)")
     ax.set_ylabel("horizontal position error std [m]")
     ax.grid(alpha=0.3, which="both")
-    ax.legend()
-    fig.tight_layout()
-    save_figure(fig, path)
-    plt.close(fig)
-    return path
+    plots.legend_outside(fig, [Line2D([], [], marker="o", label=m, **styles[m])
+                               for m in curves], x=0.74, y=0.9)
+    plots.note(fig, plots.identical_note(groups, values, "latencies"))
+    fig.suptitle("Paper 004: latency sweep", fontsize=11)
+    fig.subplots_adjust(left=0.1, right=0.72, bottom=0.2, top=0.9)
+    return fig
+
+
+def plot_sweep(rows, path):
+    """Write :func:`sweep_figure` to ``path``."""
+    return plots.save(sweep_figure(rows), path)
 
 
 class Paper004(Paper):
