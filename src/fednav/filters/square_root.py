@@ -164,7 +164,7 @@ class SquareRootSigma(SquareRootForm):
                 self.Wm = W
                 self.Wc = W
             else:
-                sc = math.sqrt(self.c)
+                sc = self._sc = math.sqrt(self.c)
                 G = np.vstack([np.zeros((1, n)), sc * np.eye(n), -sc * np.eye(n)])
             if not np.array_equal(self.Wm[1:], self.Wc[1:]):
                 raise ValueError(f"{self.name}: the square-root form needs equal mean and "
@@ -175,8 +175,12 @@ class SquareRootSigma(SquareRootForm):
     def sigma_points(self, x=None, P=None, phase: str = "sigma points") -> np.ndarray:
         x = self.x if x is None else np.asarray(x, dtype=float)
         S = self.S if P is None else chol(np.asarray(P, dtype=float), self._who(phase))
-        dX = self._unit_points() @ S.T
-        X = x + dX
+        G = self._unit_points()
+        if isinstance(self, SparseGridFilter):
+            dX = G @ S.T
+            X = x + dX
+        else:
+            X, dX = srk.ukf_points(x, S, self._sc)
         self._last = (X, dX)
         return X
 

@@ -545,3 +545,20 @@ def sr_grid_update(Z, G, w, S, x, y, Rs):
             return x, S, np.zeros((m, m)), np.nan, DOWNDATE, r
     xn, Sn, Pzz, nis, code = _finish_update(L, x, r, m)
     return xn, Sn, Pzz, nis, code, r
+
+
+@numba.njit(cache=True)
+def ukf_points(x, S, sc):
+    """The UKF's points ``x``, ``x +- sc S_i`` (rows) and their offsets from ``x``."""
+    n = x.shape[0]
+    dX = np.zeros((2 * n + 1, n))
+    for i in range(n):
+        for j in range(i, n):  # S lower: column i is zero above row i
+            v = sc * S[j, i]
+            dX[1 + i, j] = v
+            dX[1 + n + i, j] = -v
+    X = np.empty_like(dX)
+    for k in range(2 * n + 1):
+        for j in range(n):
+            X[k, j] = x[j] + dX[k, j]
+    return X, dX
