@@ -196,9 +196,20 @@ def sr_propagate(Phi, S, Lq, sq):
     (S, ok) with ok False when it is not finite."""
     n = S.shape[0]
     q = Lq.shape[1]
-    A = np.empty((n, n + q))
+    keep = np.zeros(q, dtype=np.bool_)  # the non-zero columns of Lq (singular Q)
+    for j in range(q):
+        for r in range(n):
+            if Lq[r, j] != 0.0:
+                keep[j] = True
+                break
+    A = np.empty((n, n + keep.sum()))
     A[:, :n] = Phi @ S
-    A[:, n:] = sq * Lq
+    col = n
+    for j in range(q):
+        if keep[j]:
+            for r in range(n):
+                A[r, col] = sq * Lq[r, j]
+            col += 1
     L = tria(A)
     return L, np.isfinite(L.sum())
 
