@@ -423,9 +423,17 @@ def run_fednav(folder, out, src=None):
         env["PYTHONPATH"] = os.pathsep.join(filter(None, (str(src), env.get("PYTHONPATH"))))
     cmd = ["fednav", "process", "csv", "--imu", str(folder / "imu.csv"),
            "--gnss", str(folder / "gnss.csv"), "--ref", str(folder / "ref.csv"),
-           "--config", str(folder / "config.yaml"), "--smooth", "--out", str(out)]
+           "--config", str(folder / "config.yaml"), "--smooth", "--out", str(out),
+           # every IMU sample, as the peer writes: the reference is scored between
+           # samples, and a 10 Hz file (the default) adds its interpolation error (UAV
+           # roll 0.038 -> 0.122 deg in turns)
+           "--output-rate", "imu"]
     t0 = time.perf_counter()
     p = subprocess.run(cmd, capture_output=True, text=True, env=env)
+    if p.returncode != 0 and "output-rate" in p.stderr + p.stdout:  # an older fednav
+        cmd = cmd[:-2]  # (wrote every IMU sample by default)
+        t0 = time.perf_counter()
+        p = subprocess.run(cmd, capture_output=True, text=True, env=env)
     wall = time.perf_counter() - t0
     if p.returncode != 0:
         raise RuntimeError(f"{' '.join(cmd)}\n{p.stdout}\n{p.stderr}")
