@@ -83,8 +83,11 @@ def test_report_shows_every_row_ratio_flags_and_metadata(tmp_path):
 
 def test_human_titles_and_labels_not_raw_keys(tmp_path):
     """Issue 29: paper 003's headings were the raw keys "T1", "improvement", "fault";
-    without titles given, the paper's own are used, and every measure has a label."""
-    html = render(_folder(tmp_path))
+    the paper's own titles are used (as ``fednav report`` passes them: the campaign layer
+    does not import the scenarios), and every measure has a label."""
+    from fednav.scenarios import paper_module
+
+    html = render(_folder(tmp_path), paper_module("003").EXPERIMENT.titles)
     heads = re.findall(r"<h2[^>]*>(.*?)</h2>", html)
     assert "Table 1 — error max / min / std over the flight" in heads
     assert "Improvement of FUKF over FKF" in heads

@@ -375,20 +375,11 @@ def _dl(meta: dict) -> str:
                             for k, v in meta.items()) + "</dl>"
 
 
-def _paper_titles(paper: str) -> dict:
-    try:
-        from ..scenarios import paper_module
-
-        mod = paper_module(paper)
-    except Exception:  # noqa: BLE001 - a report without titles rather than none
-        return {}
-    return dict(mod.EXPERIMENT.titles) if mod is not None else {}
-
-
 def render(folder: Path, titles: dict[str, str] | None = None) -> str:
     """The HTML text of the report on ``folder`` (a reproduction's or a ``process``
-    run's); ``titles``: the heading of each table by its key (default: the paper
-    module's ``TABLE_TITLES``)."""
+    run's); ``titles``: the heading of each table by its key (``fednav report`` passes
+    the paper module's; without them a table is headed by the paper's own title where
+    the summary holds one, else "Table KEY")."""
     folder = Path(folder)
     summary, sfile = _load(folder)
     if is_process_summary(summary):
@@ -406,7 +397,7 @@ def render(folder: Path, titles: dict[str, str] | None = None) -> str:
             manifest = {}
     paper = str(summary.get("paper", "?"))
     design = summary.get("design")
-    titles = titles or (_paper_titles(paper) if design is None else {})
+    titles = titles or {}
     runs, seed = summary.get("runs"), summary.get("seed")
     camp = summary.get("campaign", {})
     seeds = (f"{seed} … {seed + runs - 1} (run i uses seed + i)"
