@@ -268,8 +268,9 @@ def test_tune_says_when_no_lever_arm_is_set(gm_drive, tmp_path):
     assert r.exit_code == 0, r.output
     err = getattr(r, "stderr", r.output)
     assert "warning: no GNSS antenna lever arm is set" in err
-    row = next(line for line in r.output.splitlines() if "sensors.gnss.lever_m" in line)
-    assert "WARNING" in row  # in the table too
+    # in the table's output too (each row's "why" is one line under the table)
+    assert any("sensors.gnss.lever_m" in line and "WARNING" in line
+               for line in r.output.splitlines()), r.output
     assert "# WARNING: no GNSS antenna lever arm" in out.read_text()
 
 
