@@ -156,6 +156,10 @@ def test_cli_process_csv_end_to_end(tmp_path, flight):
     assert s["rmse"]["north_m"] < 1.0 and s["run_time_s"] > 0
     assert (out / "solution.csv").is_file() and (out / "solution_smoothed.csv").is_file()
     assert (out / "errors.png").is_file()
+    # the terminal's RMSE tables name each column with its unit (issue 29), not by key
+    assert "north position [m]" in res.output and "heading [°]" in res.output
+    assert "RMSE smoothed against the reference" in res.output
+    assert "north_m" not in res.output
 
 
 @pytest.mark.parametrize(("cfg", "message"), [

@@ -452,15 +452,20 @@ def _print_process(s: dict, compiled_s: float = 0.0) -> None:
     for name, c in s["consistency"].items():
         console.print(f"  local '{name}': mean NIS/dof {c['nis_per_dof']:.2f}, isolated "
                       f"{100 * c['isolated_fraction']:.1f} % of {c['measurements']}")
-    blocks = [(f"{key.replace('_', ' ')} against the reference", s[key])
+    from rich.markup import escape
+
+    from .campaign.explain import label
+
+    what = {"rmse": "RMSE of the forward solution", "rmse_smoothed": "RMSE smoothed"}
+    blocks = [(f"{what[key]} against the reference", s[key])
               for key in ("rmse", "rmse_smoothed") if key in s]
     for name, other in s.get("against", {}).items():
-        blocks += [(f"{key.replace('_', ' ')} against {name}", other[key])
+        blocks += [(f"{what[key]} against {name}", other[key])
                    for key in ("rmse", "rmse_smoothed") if key in other]
     for title, block in blocks:
         tab = Table(title=title)
         for k in block:
-            tab.add_column(k, justify="right")
+            tab.add_column(escape(label(k)), justify="right")  # ([m] is not markup)
         tab.add_row(*(f"{v:.3f}" for v in block.values()))
         console.print(tab)
 
