@@ -66,7 +66,18 @@ REASONS = {srk.NOT_FINITE: "state or covariance became NaN/inf",
 
 
 class SquareRootForm:
-    """Mixin: the covariance kept as its lower Cholesky factor ``S`` (``P = S S'``)."""
+    """Mixin: the covariance kept as its lower Cholesky factor ``S`` (``P = S S'``).
+
+    Attributes
+    ----------
+    S : ndarray, shape (n, n)
+        Lower triangular, positive diagonal, in the filter's units (the state's).
+    P : ndarray, shape (n, n)
+        Property: ``S S'`` (a new, exactly symmetric array; setting it factors it, a
+        :class:`~fednav.filters.base.FilterError` when it is not positive definite).
+    form : str
+        ``"square_root"``.
+    """
 
     form = "square_root"
 

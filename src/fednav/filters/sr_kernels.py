@@ -38,9 +38,19 @@ OK, NOT_FINITE, DOWNDATE, INNOVATION, NOT_PD = 0, 1, 2, 3, 4
 
 @numba.njit(cache=True, fastmath=True)
 def tria(A):
-    """Lower-triangular ``L`` (p, p) with ``L L' = A A'`` for ``A`` (p, q), non-negative
-    diagonal (Householder reflections of the rows; ``q < p`` leaves trailing zero
-    columns)."""
+    """Lower-triangular ``L`` with ``L L' = A A'`` (Householder reflections of the rows).
+
+    Parameters
+    ----------
+    A : ndarray, shape (p, q)
+        Any real matrix (a pre-array of weighted deviations and noise factors; units of
+        the covariance's square root).
+
+    Returns
+    -------
+    L : ndarray, shape (p, p)
+        Lower triangular, non-negative diagonal; ``q < p`` leaves trailing zero columns.
+    """
     p, q = A.shape
     W = A.copy()
     for i in range(min(p, q)):
@@ -77,8 +87,20 @@ def tria(A):
 
 @numba.njit(cache=True)
 def chol_downdate(L, v):
-    """In place: ``L`` (lower, positive diagonal) becomes the factor of ``L L' - v v'``;
-    False (``L`` then partly changed) when that is not positive definite."""
+    """Rank-1 Cholesky downdate, in place: ``L`` becomes the factor of ``L L' - v v'``.
+
+    Parameters
+    ----------
+    L : ndarray, shape (n, n)
+        Lower triangular with a positive diagonal (changed in place).
+    v : ndarray, shape (n,)
+        The vector to remove (same units as ``L``).
+
+    Returns
+    -------
+    ok : bool
+        False when ``L L' - v v'`` is not positive definite (``L`` then partly changed).
+    """
     n = v.shape[0]
     w = v.copy()
     for k in range(n):
@@ -327,9 +349,26 @@ def sr_fuse(xs, Ss):
     factors ``U_i = S_i^-1`` stacked, with their state columns reversed, and the
     information vectors ``U_i x_i`` as a last column, lower-triangularized in one
     :func:`tria`; the fused factor is ``J L^-T J`` (``J`` the reversal: lower again) and the
-    fused state a back-substitution.  No covariance is inverted or formed.  Returns (x_g,
-    S_g, tr(P_i^-1) (k,), index of failure: -1 none, i a singular factor, k the fused
-    information)."""
+    fused state a back-substitution.  No covariance is inverted or formed.
+
+    Parameters
+    ----------
+    xs : ndarray, shape (k, n)
+        The estimates (filter units).
+    Ss : ndarray, shape (k, n, n)
+        Their lower Cholesky factors (``P_i = S_i S_i'``, filter units).
+
+    Returns
+    -------
+    x_g : ndarray, shape (n,)
+        The fused estimate ``P_g sum P_i^-1 x_i``.
+    S_g : ndarray, shape (n, n)
+        Lower factor of ``P_g = (sum P_i^-1)^-1``.
+    traces : ndarray, shape (k,)
+        ``tr(P_i^-1)`` (adaptive sharing; units^-2).
+    bad : int
+        -1 on success, ``i`` when ``S_i`` is singular, ``k`` when the fused information is.
+    """
     k, n = xs.shape
     if k == 1:
         return xs[0].copy(), Ss[0].copy(), np.ones(1), -1
