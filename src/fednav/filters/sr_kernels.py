@@ -376,16 +376,10 @@ def sr_fuse(xs, Ss):
     tr = np.empty(k)
     for f in range(k):
         S = Ss[f]
-        U = np.zeros((n, n))  # S^-1, lower
         for i in range(n):
             if not S[i, i] > 0.0:
                 return xs[0].copy(), Ss[0].copy(), tr, f
-            U[i, i] = 1.0 / S[i, i]
-            for j in range(i):
-                s = 0.0
-                for t in range(j, i):
-                    s -= S[i, t] * U[t, j]
-                U[i, j] = s / S[i, i]
+        U = _lower_inverse(S)  # S^-1, lower
         t2 = 0.0
         for i in range(n):
             for j in range(i + 1):
@@ -399,16 +393,10 @@ def sr_fuse(xs, Ss):
     L = tria(A)
     Lt = L[:n, :n]
     ell = L[n, :n]
-    T = np.zeros((n, n))  # Lt^-1, lower
     for i in range(n):
         if not Lt[i, i] > 0.0:
             return xs[0].copy(), Ss[0].copy(), tr, k
-        T[i, i] = 1.0 / Lt[i, i]
-        for j in range(i):
-            s = 0.0
-            for t in range(j, i):
-                s -= Lt[i, t] * T[t, j]
-            T[i, j] = s / Lt[i, i]
+    T = _lower_inverse(Lt)  # Lt^-1, lower
     yv = T.T @ ell        # Lt' y = ell
     xg = yv[::-1].copy()
     Sg = np.zeros((n, n))
