@@ -72,6 +72,14 @@ _UNITS = {"m": "m", "mps": "m/s", "deg": "°", "arcsec": "″", "arcmin": "′",
 _STATS = ("mean", "std", "min", "max", "rms", "abs")
 
 
+#: Reasons that several cells share.
+_SWAPPED = ("SINS δVx/δVy and φE/φN look swapped in the paper: an east accelerometer "
+            "error gives a large east velocity error and north tilt")
+_STAR_AVERAGED = ("with a 1°/h-class gyro and a star fix every second the filter averages "
+                  "the star noise strongly; the paper's attitude errors are close to the "
+                  "star noise itself")
+
+
 #: Error-state names (paper 002's observability tables) -> symbols.
 STATES = {"phiE": "φE", "phiN": "φN", "phiU": "φU", "dVE": "δVE", "dVN": "δVN",
           "dVU": "δVU", "dlambda": "δλ (east)", "dL": "δL (north)", "dh": "δh",
@@ -214,14 +222,11 @@ EXPLAINED: dict[str, list[tuple[str, str, str, str, str]]] = {
          "the SVD degree depends on the state units as much as on the system (SI here; "
          "the paper does not state its units); compare the covariance measure"),
         ("T2", "SINS", "dV*", "beyond-x3",
-         "SINS δVx/δVy and φE/φN look swapped in the paper: an east accelerometer error "
-         "gives a large east velocity error and north tilt"),
+         _SWAPPED),
         ("T3", "SINS", "phiE_*", "beyond-x3",
-         "SINS δVx/δVy and φE/φN look swapped in the paper: an east accelerometer error "
-         "gives a large east velocity error and north tilt"),
+         _SWAPPED),
         ("T3", "SINS", "phiN_*", "beyond-x3",
-         "SINS δVx/δVy and φE/φN look swapped in the paper: an east accelerometer error "
-         "gives a large east velocity error and north tilt"),
+         _SWAPPED),
         ("T3", "SINS", "phiU_*", "beyond-x3",
          "a constant 0.01°/h z-gyro drift integrates to 12″ in 1200 s; the paper's value "
          "needs a smaller effective drift"),
@@ -236,14 +241,11 @@ EXPLAINED: dict[str, list[tuple[str, str, str, str, str]]] = {
     ],
     "003": [
         ("T1", "*", "roll_deg*", "attitude-smaller",
-         "with a 1°/h-class gyro and a star fix every second the filter averages the star "
-         "noise strongly; the paper's attitude errors are close to the star noise itself"),
+         _STAR_AVERAGED),
         ("T1", "*", "pitch_deg*", "attitude-smaller",
-         "with a 1°/h-class gyro and a star fix every second the filter averages the star "
-         "noise strongly; the paper's attitude errors are close to the star noise itself"),
+         _STAR_AVERAGED),
         ("T1", "*", "yaw_deg*", "attitude-smaller",
-         "with a 1°/h-class gyro and a star fix every second the filter averages the star "
-         "noise strongly; the paper's attitude errors are close to the star noise itself"),
+         _STAR_AVERAGED),
         ("*", "*", "*", "ukf-advantage-absent",
          "with the same states and sensors the UKF and the linear KF agree to 4 digits: "
          "the errors are small enough for the error dynamics to be linear"),
