@@ -24,3 +24,15 @@ def test_well_posed_soak_runs_clean():
                  "aasghqf"):
         r = soak(name, 200, huge_p=1.0, tiny_q=1.0, small_r=1.0, outlier_every=0)
         assert r.error is None and r.min_eig > 0, (name, r.error)
+
+
+def test_a_gated_standard_cekf_says_when_its_prediction_goes_indefinite():
+    """Issue 28's soak found the gated standard CEKF carrying an indefinite covariance
+    from cycle 583 on, silently (a rejected update checks nothing and the Kalman predict
+    only looked for NaN): the predict now checks positive definiteness and stops with a
+    FilterError naming the filter, the phase and the step."""
+    from fednav.filters.soak import soak
+
+    r = soak("cekf", 700, gate_alpha=1e-9)
+    assert r.error is not None and "cekf predict at step" in r.error
+    assert "not positive definite" in r.error
