@@ -12,7 +12,15 @@ import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
-from fednav.campaign.store import Campaign, CampaignError, decode, encode, open_runs, run_units
+from fednav.campaign.store import (
+    Campaign,
+    CampaignError,
+    _read_unit,
+    decode,
+    encode,
+    open_runs,
+    run_units,
+)
 from fednav.cli import app
 from fednav.scenarios import paper000, paper003
 
@@ -222,8 +230,8 @@ def test_kill_9_at_random_moments_then_resume_gives_identical_tables(tmp_path):
             kills += 1
         p.wait()
         for f in out.glob("runs/*.nc"):       # whatever is there opens as a whole run
-            open_runs(out)
-            assert f.stat().st_size > 0
+            _read_unit(f, out)                # (open_runs needs one with error series:
+            assert f.stat().st_size > 0       # which are stored depends on the moment)
     assert kills >= 1
     s = _reproduce(out)
     assert s["campaign"]["runs_computed"] + s["campaign"]["runs_reused"] == 5
