@@ -38,3 +38,17 @@ def test_llh_difference_matches_ecef_distance():
     dist = np.linalg.norm(earth.llh_to_ecef(lat + 1e-6, lon + 2e-6, h + 3)
                           - earth.llh_to_ecef(lat, lon, h))
     assert np.linalg.norm(d) == pytest.approx(dist, rel=1e-5)
+
+
+def test_north_turn_is_earth_rate_at_rest_and_transport_rate_moving_east():
+    """North's turn about up: W sin(lat) t at rest; plus vE tan(lat) / (RN + h) t moving
+    east along a parallel (its sign with the hemisphere's)."""
+    t = np.linspace(0.0, 100.0, 101)
+    for lat in (np.radians(45.0), np.radians(-60.0)):
+        lla = np.column_stack([np.full_like(t, lat), np.zeros_like(t), np.full_like(t, 100.0)])
+        rest = earth.north_turn(t, lla, np.zeros((len(t), 3)))
+        assert rest[-1] == pytest.approx(earth.OMEGA_IE * np.sin(lat) * 100.0, rel=1e-12)
+        east = earth.north_turn(t, lla, np.tile([250.0, 0.0, 0.0], (len(t), 1)))
+        _, rn = earth.radii(lat)
+        assert east[-1] - rest[-1] == pytest.approx(250.0 * np.tan(lat) / (rn + 100.0) * 100.0,
+                                                    rel=1e-12)

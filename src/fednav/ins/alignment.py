@@ -187,7 +187,7 @@ def heading_from_course(t_imu, gyro, up_b, gyro_bias, t_gnss, vel_gnss, t0: floa
                         sigma_v=0.05, lever=(0.0, 0.0, 0.0), gyro_bias_sigma: float = 0.0,
                         gyro_arw: float = 0.0, floor: float = units.deg(1.0),
                         decorrelation_s: float = COURSE_DECORRELATION_S,
-                        n_fix: int = 10, w_up=None) -> CourseHeading | None:
+                        n_fix: int = 10, turned=None) -> CourseHeading | None:
     """Heading [rad] at ``t0`` from the GNSS course, carried back to ``t0`` by the gyro
     rotation about the body up axis ``up_b``, with an honest 1-sigma.
 
@@ -197,11 +197,10 @@ def heading_from_course(t_imu, gyro, up_b, gyro_bias, t_gnss, vel_gnss, t0: floa
     ``sigma_v,i / speed_i`` (``sigma_v`` [m/s]: one value or one per epoch) — used when
     at most :data:`MAX_COURSE_SIGMA` — and the carry-back's ``gyro_bias_sigma |dt| +
     gyro_arw sqrt|dt|``.  One epoch per ``decorrelation_s`` is kept (the best), so that
-    the kept epochs' errors are independent.  ``w_up`` [rad/s], one per GNSS epoch: the
-    navigation frame's own turn about up (Earth rate ``W sin(lat)`` plus transport rate
-    ``vE tan(lat) / (RN + h)``), which turns the course (measured from north) and not
-    the gyro: its integral is taken from each course before it is carried back (1.3
-    deg/s at 89.9 deg and 250 m/s; None: not taken).
+    the kept epochs' errors are independent.  ``turned`` [rad], one per GNSS epoch: how
+    far north has turned about up (:func:`fednav.core.earth.north_turn`: Earth rate and
+    transport rate), which turns the course and not the gyro: taken from each course
+    before it is carried back (1.3 deg/s at 89.9 deg and 250 m/s; None: not taken).
 
     **Consistency.**  Over the first :data:`TEST_SPAN_S` of kept epochs, the carried-back
     headings must agree with a straight line in time (its slope: the gyro's residual
@@ -236,9 +235,8 @@ def heading_from_course(t_imu, gyro, up_b, gyro_bias, t_gnss, vel_gnss, t0: floa
     slip = np.arcsin(np.clip(side / speed[ok], -1.0, 1.0))
     course = np.arctan2(vel_gnss[ok, 0], vel_gnss[ok, 1]) - slip
     back = course - (np.interp(t_gnss[ok], t_imu, dpsi) - np.interp(t0, t_imu, dpsi))
-    if w_up is not None:  # north's own turn from t0 to each epoch
-        w_up = np.asarray(w_up, dtype=float)
-        turned = np.r_[0.0, np.cumsum(0.5 * (w_up[1:] + w_up[:-1]) * np.diff(t_gnss))]
+    if turned is not None:  # north's own turn from t0 to each epoch
+        turned = np.asarray(turned, dtype=float)
         back = back - (turned[ok] - np.interp(t0, t_gnss, turned))
 
     # Consistency: a straight line in time through the first TEST_SPAN_S of epochs.
@@ -299,8 +297,7 @@ def align(imu, gnss, t0: float, i0: int, dt: float, gyro_arw: float, accel_noise
     n_static = max(1, int(round(T_static / dt)))
     w_mean = imu.gyro[i0:i0 + n_static].mean(axis=0)
     carry_sigma = gyro_arw / np.sqrt(T_static) if static else gyro_bias_sigma
-    w_up = (None if gnss.vel is None else earth.earth_rate(gnss.lla[:, 0])[:, 2]
-            + earth.transport_rate(gnss.lla[:, 0], gnss.lla[:, 2], gnss.vel)[:, 2])
+    turned = None if gnss.vel is None else earth.north_turn(gnss.t, gnss.lla, gnss.vel)
 
     def course(euler):
         """The heading from the GNSS course, the gyro integrated about the up axis of
@@ -312,7 +309,7 @@ def align(imu, gnss, t0: float, i0: int, dt: float, gyro_arw: float, accel_noise
         return heading_from_course(imu.t, imu.gyro, up_b, w_bias, gnss.t, gnss.vel, t0,
                                    _horizontal_sigma(gnss, np.arange(len(gnss.t))),
                                    gnss.lever, carry_sigma, gyro_arw, heading_floor,
-                                   velocity_decorrelation_s, w_up=w_up)
+                                   velocity_decorrelation_s, turned=turned)
 
     # The course first, on a provisional tilt: whether it follows the gyro decides if
     # it may orient the acceleration of an in-motion levelling.
@@ -326,8 +323,8 @@ def align(imu, gnss, t0: float, i0: int, dt: float, gyro_arw: float, accel_noise
         a, s_a, heading_at_T = mean_acceleration(gnss.t, gnss.vel, sv, t0, t0 + T)
         # the specific force also holds the Coriolis and transport terms of the ENU
         # velocity's rate, (2 w_ie + w_en) x v (0.036 m/s^2, 0.2 deg of roll, at 250 m/s
-        # and 45 deg; 0.6 m/s^2 near the pole)
-        # (its mean over the window, from each fix's: near a pole v turns by degrees there)
+        # and 45 deg; 0.6 m/s^2 near the pole): their mean over the window, from each
+        # fix's (near a pole v turns by degrees within it)
         cor = np.cross(2.0 * earth.earth_rate(gnss.lla[:, 0])
                        + earth.transport_rate(gnss.lla[:, 0], gnss.lla[:, 2], gnss.vel),
                        gnss.vel)

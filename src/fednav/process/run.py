@@ -235,13 +235,9 @@ def time_offset(imu: ImuData, gnss: GnssData, step: float = 0.01) -> float | Non
     tg = gnss.t[moving]
     course = np.unwrap(np.arctan2(gnss.vel[moving, 0], gnss.vel[moving, 1]))
     if gnss.lla is not None:
-        # The course is measured from north, which turns about up at the navigation
-        # frame's rate w_in,U = W sin(lat) + vE tan(lat) / (RN + h) while the gyro sees
-        # none of it (1.3 deg/s at 89.9 deg and 250 m/s: a false offset of 30 s there).
-        w_up = (earth.earth_rate(gnss.lla[:, 0])[:, 2]
-                + earth.transport_rate(gnss.lla[:, 0], gnss.lla[:, 2], gnss.vel)[:, 2])
-        turned = np.r_[0.0, np.cumsum(0.5 * (w_up[1:] + w_up[:-1]) * np.diff(gnss.t))]
-        course = course - turned[moving]
+        # the course is measured from north, which turns while the gyro sees none of it
+        # (near the pole a false offset of 30 s)
+        course = course - earth.north_turn(gnss.t, gnss.lla, gnss.vel)[moving]
     if np.ptp(course) < np.radians(30.0):
         return None
     up = np.mean(imu.accel, axis=0)
