@@ -309,6 +309,13 @@ def test_cli_output_rate_defaults_to_10_hz_keeps_the_figures_and_refuses_a_rate_
     err = np.loadtxt(tmp_path / "default" / "errors.csv", delimiter=",", skiprows=1)
     np.testing.assert_allclose(err, err_full[::10], rtol=1e-9)
     assert (tmp_path / "ten" / "track.png").is_file()
+    # the config's output_rate_hz may say 'imu' or 'filter' too (the option wins)
+    cfg = tmp_path / "cfg.yaml"
+    cfg.write_text(cfg.read_text() + "output_rate_hz: imu\n")
+    by_config, s_config = run("by-config")
+    np.testing.assert_allclose(by_config, full, rtol=1e-9)
+    assert s_config["inputs"]["output_rate_hz"] == "imu"
+    np.testing.assert_allclose(run("option-wins", "--output-rate", "10")[0], default, rtol=1e-9)
     r = CliRunner().invoke(app, [*args, str(tmp_path / "bad"), "--output-rate", "500"])
     assert r.exit_code == 2
     assert "--output-rate 500 Hz: must be positive and at most the IMU rate (100 Hz)" in r.output

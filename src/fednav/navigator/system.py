@@ -315,9 +315,10 @@ class System(_Model):
         [m/s], ``euler_deg`` [deg] with their 1-sigma); replaces the alignment.
     smoother : bool
         Also run the RTS smoother.
-    output_rate_hz : float, optional
+    output_rate_hz : float or {"imu", "filter"}, optional
         Solution rows per second of ``fednav process``'s files [Hz] when its
-        ``--output-rate`` is not given (None: 10 Hz, at most the IMU rate).
+        ``--output-rate`` is not given (None: 10 Hz, at most the IMU rate); ``imu``:
+        every IMU sample, ``filter``: the filter epochs.
     files : dict of str to str
         Recorded files of this system (``imu``, ``reference``, sensor names), relative
         to the description's folder.
@@ -331,7 +332,23 @@ class System(_Model):
     alignment: AlignmentConfig = AlignmentConfig()
     initial: InitialConfig | None = None
     smoother: bool = False
-    output_rate_hz: float | None = Field(default=None, gt=0.0)
+    output_rate_hz: float | Literal["imu", "filter"] | None = None
+
+    @field_validator("output_rate_hz", mode="before")
+    @classmethod
+    def _output_rate(cls, v):
+        """A rate [Hz] > 0, ``imu`` or ``filter`` (one line naming the value otherwise)."""
+        if v is None or v in ("imu", "filter"):
+            return v
+        try:
+            rate = float(v)
+        except (TypeError, ValueError):
+            rate = float("nan")
+        if not rate > 0.0 or rate == float("inf") or isinstance(v, bool):
+            raise ValueError("a rate in Hz > 0, 'imu' (every IMU sample) or 'filter' (the "
+                             "filter epochs)")
+        return rate
+
     #: recorded data of this system: ``imu``, ``reference`` and sensor name -> CSV file
     #: (relative to the description's folder; what ``fednav process csv`` reads when its
     #: options do not name a file)
