@@ -255,14 +255,7 @@ def _finish_update(L, x, r, m):
         nis += e[i] * e[i]
     xn = x + np.ascontiguousarray(L[m:, :m]) @ e
     Sn = np.ascontiguousarray(L[m:, m:])
-    Pzz = np.empty((m, m))
-    for i in range(m):
-        for j in range(i + 1):
-            s = 0.0
-            for k in range(j + 1):
-                s += Se[i, k] * Se[j, k]
-            Pzz[i, j] = s
-            Pzz[j, i] = s
+    Pzz = factor_product(Se)
     code = OK if math.isfinite(nis + xn.sum() + Sn.sum()) else NOT_FINITE
     for i in range(Sn.shape[0]):
         if code == OK and not Sn[i, i] > 0.0:
