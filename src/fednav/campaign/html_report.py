@@ -32,6 +32,7 @@ from datetime import UTC, datetime
 from html import escape
 from pathlib import Path
 
+from ..core import units
 from ..core.errors import FednavError
 from . import explain
 from .explain import FAR, Reason
@@ -75,7 +76,6 @@ def _num(x) -> str:
     return format_number(x)
 
 
-_leaves = explain.leaves
 _present = explain.present
 
 
@@ -473,8 +473,7 @@ def _solution_summary(folder: Path) -> tuple[str, list[list[str]]] | None:
         if {"lat_deg", "lon_deg"} <= set(df) and len(df):
             from ..core.earth import A as WGS84_A
 
-            lat, lon = np.radians(df["lat_deg"].to_numpy()), np.radians(df["lon_deg"]
-                                                                         .to_numpy())
+            lat, lon = units.deg(df["lat_deg"].to_numpy()), units.deg(df["lon_deg"].to_numpy())
             dn = np.diff(lat) * WGS84_A
             de = np.diff(lon) * WGS84_A * np.cos(lat[:-1])
             rows.append(["start (lat, lon, h)", escape(
