@@ -368,32 +368,42 @@ def track_figure(res: ProcessResult, gnss, ref: Reference | None):
     if not zoom.any():  # (an outage outside the solution's span)
         what, zoom, least = "first 30 s", f.t <= f.t[0] + 30.0, 5.0
     styles = plots.mode_styles([s.label for s in (res.forward, res.smoothed) if s is not None])
+    # what both panels draw, in east/north once: (x, y, format, keywords)
+    under, over = [], []
+    if fixes:
+        under.append((*en(gnss.lla), ".", dict(ms=2.5, color="0.55", alpha=0.6,
+                                               label="GNSS fixes")))
+    if ref is not None:
+        under.append((*en(ref.lla[_thin(len(ref.t))]), "k-", dict(lw=2.2, alpha=0.3,
+                                                                  label="reference")))
+    for i, (t0, t1) in enumerate(outages):
+        m = (f.t > t0) & (f.t < t1)
+        over.append((*en(f.lla[m]), "r-", dict(lw=2.4, label="forward in GNSS outage"
+                                                if i == 0 else None)))
+    if f.fdi:
+        log = pd.DataFrame(f.fdi, columns=["t", "local", "nis", "dof", "thr", "isolated"])
+        for name, marker in zip(log.local.unique(), "x+*^vo<>sd", strict=False):
+            t_iso = log.t[(log.local == name) & log.isolated].to_numpy(dtype=float)
+            if len(t_iso):
+                i = np.clip(np.searchsorted(f.t, t_iso), 0, len(f.t) - 1)
+                over.append((*en(f.lla[i]), marker, dict(ms=5, color="m",
+                                                          label=f"{name} isolated "
+                                                                f"({len(t_iso)})")))
+    e, n = en(f.lla[[0, -1]])
+    over.append((e[0], n[0], "^", dict(ms=11, mfc="tab:green", mec="k", zorder=5,
+                                       label="start")))
+    over.append((e[1], n[1], "s", dict(ms=9, mfc="tab:red", mec="k", zorder=5, label="end")))
     for a in (ax, zax):
-        if fixes:
-            a.plot(*en(gnss.lla), ".", ms=2.5, color="0.55", alpha=0.6, label="GNSS fixes")
-        if ref is not None:
-            k = _thin(len(ref.t))
-            a.plot(*en(ref.lla[k]), "k-", lw=2.2, alpha=0.3, label="reference")
+        for x, y, fmt, kw in under:
+            a.plot(x, y, fmt, **kw)
         for s, ls, lw in ((res.forward, "-", 1.5), (res.smoothed, (0, (4, 2)), 1.2)):
             if s is not None:
                 # the zoom panel draws every row (its window is a few metres wide)
                 k = _thin(len(s.t)) if a is ax else slice(None)
                 a.plot(*en(s.lla[k]), ls=ls, lw=lw, color=styles[s.label]["color"],
                        label=s.label)
-        for i, (t0, t1) in enumerate(outages):
-            m = (f.t > t0) & (f.t < t1)
-            a.plot(*en(f.lla[m]), "r-", lw=2.4, label="forward in GNSS outage" if i == 0 else None)
-        if f.fdi:
-            log = pd.DataFrame(f.fdi, columns=["t", "local", "nis", "dof", "thr", "isolated"])
-            for name, marker in zip(log.local.unique(), "x+*^vo<>sd", strict=False):
-                t_iso = log.t[(log.local == name) & log.isolated].to_numpy(dtype=float)
-                if len(t_iso):
-                    i = np.clip(np.searchsorted(f.t, t_iso), 0, len(f.t) - 1)
-                    a.plot(*en(f.lla[i]), marker, ms=5, color="m",
-                           label=f"{name} isolated ({len(t_iso)})")
-        e, n = en(f.lla[[0, -1]])
-        a.plot(e[0], n[0], "^", ms=11, mfc="tab:green", mec="k", zorder=5, label="start")
-        a.plot(e[1], n[1], "s", ms=9, mfc="tab:red", mec="k", zorder=5, label="end")
+        for x, y, fmt, kw in over:
+            a.plot(x, y, fmt, **kw)
         a.set_aspect("equal", adjustable="datalim")
         a.set_xlabel("east [m]")
         a.set_ylabel("north [m]")
