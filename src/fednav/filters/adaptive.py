@@ -195,7 +195,9 @@ class RobustAdaptiveUKF(QAdaptation, UnscentedKalmanFilter):
         # would bias R low, then down-weight ever more: the two must not feed each other).
         Ra = self.sh.adapt(key, R, r, Pzz0) if v.max() <= self.k1 else Rc
         s = 1.0 / np.sqrt(w)
-        inn = super().update(y, model, nav, Ra * np.outer(s, s), gate)
+        # (the points and their predicted measurements drawn above: not drawn again)
+        inn = self._sigma_update(X, np.ascontiguousarray(Z, dtype=float), y,
+                                 Ra * np.outer(s, s), gate)
         if inn.accepted:
             self._adapt_q_after_update()
         return inn

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from ..core.kernels import cholesky_lower, spd_inverse
-from .base import Filter, FilterError, Innovation, not_pd_error
+from ..core.kernels import spd_inverse
+from .base import Filter, FilterError, Innovation, chol
 
 
 @numba.njit(cache=True)
@@ -48,8 +48,8 @@ class KalmanFilter(Filter):
                                 np.ascontiguousarray(process.Qd, dtype=float), q_scale)
         if not ok or not np.all(np.isfinite(self.x)):
             raise FilterError(f"{self._who('predict')}: state or covariance became NaN/inf")
-        if not cholesky_lower(self.P)[1]:  # (a gated update that is not applied checks
-            raise not_pd_error(self.P, self._who("predict"))  # nothing: said here)
+        chol(self.P, self._who("predict"))  # (a gated update that is not applied checks
+        # nothing: an indefinite prediction is said here)
 
     def _hph(self, H) -> np.ndarray:
         """``H P H'`` (the square-root form computes it from its factor)."""

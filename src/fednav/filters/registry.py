@@ -16,7 +16,7 @@ from .constrained import ConstrainedEKF, ConstrainedUKF
 from .kf import KalmanFilter
 from .particle import ParticleFilter
 from .quadrature import AdaptiveSparseGridFilter, SparseGridFilter
-from .square_root import SQUARE_ROOT
+from .square_root import FACTORED
 from .ukf import SimplifiedUKF, UnscentedKalmanFilter
 
 #: name -> filter class.
@@ -60,11 +60,16 @@ def filter_class(name: str, form: str = "standard") -> type[Filter]:
         return cls
     if form != "square_root":
         raise ValueError(f"unknown filter form '{form}'; choose {' or '.join(FORMS)}")
-    sr = SQUARE_ROOT.get(name.lower())
+    sr = FACTORED.get(cls)
     if sr is None:
         raise ValueError(f"filter '{name}' has no square-root form (the Gaussian filters "
-                         f"have one: {', '.join(sorted(SQUARE_ROOT))})")
+                         f"have one: {', '.join(square_root_names())})")
     return sr
+
+
+def square_root_names() -> list[str]:
+    """Registered names with a square-root form, sorted."""
+    return sorted(k for k, c in FILTERS.items() if c in FACTORED)
 
 
 def make_filter(name: str, x0, P0, common: dict | None = None, form: str = "standard",

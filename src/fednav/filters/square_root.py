@@ -51,9 +51,10 @@ from ..core.kernels import cholesky_lower
 from . import sr_kernels as srk
 from .adaptive import RobustAdaptiveUKF, SageHusaEKF
 from .base import FilterError, Innovation, chol, not_pd_error
+from .constrained import ConstrainedEKF, ConstrainedUKF
 from .kf import KalmanFilter
 from .quadrature import AdaptiveSparseGridFilter, SparseGridFilter
-from .ukf import UnscentedKalmanFilter
+from .ukf import SimplifiedUKF, UnscentedKalmanFilter
 
 #: Why a kernel failed, by its code (:mod:`fednav.filters.sr_kernels`).
 REASONS = {srk.NOT_FINITE: "state or covariance became NaN/inf",
@@ -290,11 +291,22 @@ class SquareRootRobustAdaptiveUKF(RobustAdaptiveUKF, SquareRootUKF):
     """RAUKF on the factor."""
 
 
-#: registry name -> factored class (every Gaussian filter; the particle filter has none).
-SQUARE_ROOT = {
-    "kf": SquareRootKalmanFilter, "ekf": SquareRootKalmanFilter, "ukf": SquareRootUKF,
-    "sukf": SquareRootSimplifiedUKF, "cukf": SquareRootConstrainedUKF,
-    "cekf": SquareRootConstrainedEKF, "aekf": SquareRootSageHusaEKF,
-    "raukf": SquareRootRobustAdaptiveUKF, "sghqf": SquareRootSparseGridFilter,
-    "aasghqf": SquareRootAdaptiveSparseGridFilter,
+#: standard class -> its factored class (every Gaussian filter; the particle filter has
+#: none).  By class, not by name: the registry (:data:`fednav.filters.registry.FILTERS`)
+#: holds the names.
+FACTORED = {
+    KalmanFilter: SquareRootKalmanFilter, UnscentedKalmanFilter: SquareRootUKF,
+    SimplifiedUKF: SquareRootSimplifiedUKF, ConstrainedUKF: SquareRootConstrainedUKF,
+    ConstrainedEKF: SquareRootConstrainedEKF, SageHusaEKF: SquareRootSageHusaEKF,
+    RobustAdaptiveUKF: SquareRootRobustAdaptiveUKF, SparseGridFilter: SquareRootSparseGridFilter,
+    AdaptiveSparseGridFilter: SquareRootAdaptiveSparseGridFilter,
 }
+
+
+def __getattr__(name: str):
+    """``SQUARE_ROOT``: registry name -> factored class, from the registry as it is now."""
+    if name == "SQUARE_ROOT":
+        from .registry import FILTERS
+
+        return {k: FACTORED[c] for k, c in FILTERS.items() if c in FACTORED}
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -166,14 +166,14 @@ class FilterConfig(_Model):
 
     @model_validator(mode="after")
     def _forms(self):
-        from ..filters.square_root import SQUARE_ROOT
+        from ..filters.registry import square_root_names
 
         for name in [*self.locals, None]:
             t = self.type if name is None else self.type_of(name)
-            if self.form_of(name) == "square_root" and t not in SQUARE_ROOT:
+            if self.form_of(name) == "square_root" and t not in square_root_names():
                 where = "filter" if name is None else f"filter.locals.{name}"
                 raise ValueError(f"{where}: '{t}' has no square-root form (the Gaussian "
-                                 f"filters have one: {', '.join(sorted(SQUARE_ROOT))})")
+                                 f"filters have one: {', '.join(square_root_names())})")
         return self
 
     def type_of(self, local: str) -> str:
