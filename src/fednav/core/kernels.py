@@ -87,14 +87,10 @@ def matmul_sparse(A, B):
 
 
 @numba.njit(cache=True)
-def spd_inverse(P):
-    """Inverse of an SPD matrix via its Cholesky factor (explicit loops: no LAPACK call
-    overhead at these sizes); returns (inverse, ok)."""
-    n = P.shape[0]
-    L, ok = cholesky_lower(P)
-    if not ok:
-        return P, False
-    # W = L^-1 (lower triangular), then P^-1 = W' W.
+def lower_inverse(L):
+    """Inverse of a lower-triangular matrix with a positive diagonal (lower triangular;
+    forward substitution, explicit loops)."""
+    n = L.shape[0]
     W = np.zeros((n, n))
     for i in range(n):
         W[i, i] = 1.0 / L[i, i]
@@ -103,6 +99,18 @@ def spd_inverse(P):
             for k in range(j, i):
                 s -= L[i, k] * W[k, j]
             W[i, j] = s / L[i, i]
+    return W
+
+
+@numba.njit(cache=True)
+def spd_inverse(P):
+    """Inverse of an SPD matrix via its Cholesky factor (explicit loops: no LAPACK call
+    overhead at these sizes); returns (inverse, ok)."""
+    n = P.shape[0]
+    L, ok = cholesky_lower(P)
+    if not ok:
+        return P, False
+    W = lower_inverse(L)  # then P^-1 = W' W
     out = np.zeros((n, n))
     for i in range(n):
         for j in range(i + 1):

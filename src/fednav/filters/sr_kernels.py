@@ -32,6 +32,8 @@ import math
 import numba
 import numpy as np
 
+from ..core.kernels import lower_inverse
+
 #: Failure codes of the kernels (0: success), turned into FilterError texts by the filters.
 OK, NOT_FINITE, DOWNDATE, INNOVATION, NOT_PD = 0, 1, 2, 3, 4
 
@@ -372,7 +374,7 @@ def sr_fuse(xs, Ss):
         for i in range(n):
             if not S[i, i] > 0.0:
                 return xs[0].copy(), Ss[0].copy(), tr, f
-        U = _lower_inverse(S)  # S^-1, lower
+        U = lower_inverse(S)  # S^-1, lower
         t2 = 0.0
         for i in range(n):
             for j in range(i + 1):
@@ -389,7 +391,7 @@ def sr_fuse(xs, Ss):
     for i in range(n):
         if not Lt[i, i] > 0.0:
             return xs[0].copy(), Ss[0].copy(), tr, k
-    T = _lower_inverse(Lt)  # Lt^-1, lower
+    T = lower_inverse(Lt)  # Lt^-1, lower
     yv = T.T @ ell        # Lt' y = ell
     xg = yv[::-1].copy()
     Sg = np.zeros((n, n))
@@ -397,21 +399,6 @@ def sr_fuse(xs, Ss):
         for j in range(i + 1):
             Sg[i, j] = T[n - 1 - j, n - 1 - i]
     return xg, Sg, tr, -1
-
-
-@numba.njit(cache=True)
-def _lower_inverse(L):
-    """Inverse of a lower-triangular matrix with a positive diagonal."""
-    n = L.shape[0]
-    T = np.zeros((n, n))
-    for i in range(n):
-        T[i, i] = 1.0 / L[i, i]
-        for j in range(i):
-            s = 0.0
-            for t in range(j, i):
-                s -= L[i, t] * T[t, j]
-            T[i, j] = s / L[i, i]
-    return T
 
 
 @numba.njit(cache=True)
@@ -431,7 +418,7 @@ def sr_project(x, S, D, r, Rs):
     for i in range(m):
         if not Se[i, i] > 0.0:
             return x, S, Se @ Se.T, np.nan, INNOVATION
-    Ti = _lower_inverse(Se)
+    Ti = lower_inverse(Se)
     Kb = np.ascontiguousarray(L[m:, :m])
     xn = x + Kb @ (Ti @ r)
     K = Kb @ Ti
@@ -448,7 +435,7 @@ def sr_project(x, S, D, r, Rs):
             if not Lz[i, i] > 0.0:
                 good = False
         if good:
-            e = _lower_inverse(Lz) @ r
+            e = lower_inverse(Lz) @ r
             nis = e @ e
     code = OK if math.isfinite(xn.sum() + Sn.sum()) else NOT_FINITE
     return xn, Sn, Pzz, nis, code
