@@ -383,11 +383,10 @@ def _run_process(read, imu, gnss, velocity, ref, smooth, out, config, output_rat
                  "reference": ref, **data.get("paths", {})}
         refuse_overwrite(paths)  # (and the files the description lists)
         clear_results(out)
-        compiled = _kernel_cache.compile_seconds()
+        since = _kernel_cache.compile_seconds()
         res = process(data["imu"], data["gnss"], data["velocity"], cfg, smooth,
                       sensors=data.get("sensors"), force=force)
-        compiled = _kernel_cache.compile_seconds() - compiled
-        res.run_time_s = max(0.0, res.run_time_s - compiled)  # (the filter's own time)
+        compiled = _less_compile(res, since)
         res.warnings[:0] = data.get("warnings", [])
         files = process_output.write(out, res, data["ref"], {
             **{n: None if f is None else str(f) for n, f in paths.items()},
@@ -430,6 +429,14 @@ def _ulog_reader(log: Path):
                 "others": {} if rec.px4 is None else {"px4": rec.px4},
                 "paths": {"ulog": log}}
     return read
+
+
+def _less_compile(res, since: float) -> float:
+    """The kernels' compile time [s] since ``since`` (:func:`_kernel_cache.compile_seconds`),
+    taken out of ``res.run_time_s`` (what is left: the filter's own time)."""
+    compiled = _kernel_cache.compile_seconds() - since
+    res.run_time_s = max(0.0, res.run_time_s - compiled)
+    return compiled
 
 
 def _print_process(s: dict, compiled_s: float = 0.0) -> None:
@@ -679,14 +686,13 @@ def _run_tune(read, inputs: list, config, out: Path, fix=None, tune_sensors=Fals
         cfg = load_model(config, System, "processing config")
         base = read_mapping(config, "processing config")
     data = read(cfg)
-    compiled = _kernel_cache.compile_seconds()
+    since = _kernel_cache.compile_seconds()
     with console.status("tuning") as status:
         res = tune(data["imu"], data["gnss"], data["velocity"], cfg,
                    progress=lambda what: status.update(f"filter run: {what}"),
                    fixed=fix or (), tune_sensors=tune_sensors, block_s=block_s,
                    outages=outages, sigma_from_file=sigma_from_file)
-    compiled = _kernel_cache.compile_seconds() - compiled
-    res.run_time_s = max(0.0, res.run_time_s - compiled)  # (the filter runs' own time)
+    compiled = _less_compile(res, since)
     tab = Table(title="noise figures (SI units); fitted on alternate "
                       f"{res.blocks.length_s:.0f} s blocks, scored on the others")
     # The reasons are printed below the table, one line each: as a table column they
