@@ -123,6 +123,10 @@ class Filter(ABC):
     def _who(self, phase: str) -> str:
         return f"{self.name} {phase} at step {self.step}"
 
+    def inflate(self, s: float) -> None:
+        """Scale the covariance by ``s`` > 0 (re-admission after a lockout)."""
+        self.P = self.P * s
+
     def _finish(self, phase: str, symmetrize: bool = True, check_pd: bool = False) -> None:
         if symmetrize:
             self.P = 0.5 * (self.P + self.P.T)

@@ -481,10 +481,7 @@ class FederatedFilter:
             return inn
         saved = [(g, g.x, _cov(g)) for g in self.filters.values()]
         for g in self.filters.values():
-            if g.form == "square_root":
-                g.S = g.S * math.sqrt(s)
-            else:
-                g.P = g.P * s
+            g.inflate(s)
         try:
             new = f.update(y, model, nav, R, gate=thr)
         except FilterError:

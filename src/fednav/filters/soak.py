@@ -132,10 +132,7 @@ def soak(name: str, cycles: int, seed: int = 0, huge_p: float = 1e6, tiny_q: flo
             rejected = 0 if inn.accepted else rejected + 1
             if rejected >= readmit_after:
                 s = _inflation(inn.r, inn.S, R, inn.nis)
-                if factored:
-                    f.S = f.S * np.sqrt(s)
-                else:
-                    f.P = f.P * s
+                f.inflate(s)
                 f.update(y, meas, None, R)
                 rejected = 0
                 readmitted += 1

@@ -99,6 +99,10 @@ class SquareRootForm:
             raise not_pd_error(P, f"{name} covariance set at step {getattr(self, 'step', 0)}")
         self.S = L
 
+    def inflate(self, s: float) -> None:
+        """Scale the covariance by ``s`` > 0: the factor by ``sqrt(s)``."""
+        self.S = self.S * math.sqrt(s)
+
     def _finish(self, phase: str, symmetrize: bool = True, check_pd: bool = False) -> None:
         if not math.isfinite(self.x.sum() + self.S.sum()):
             raise FilterError(f"{self._who(phase)}: state or covariance became NaN/inf")
