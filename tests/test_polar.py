@@ -186,18 +186,10 @@ def twin_position_miss(lat, lon, hdg):
 @pytest.mark.parametrize("lat,lon,hdg", POLAR)
 def test_error_model_predicts_the_twin_mechanization_near_the_pole(lat, lon, hdg):
     """The error model near the pole: attitude within 0.02 arcmin and velocity within
-    5 mm/s over 40 s; position within 2.5 m (a sign slip in a tan(lat) term of F misses by
-    tens of metres; the 1.6 m are the missing term of the next test)."""
-    assert twin_position_miss(lat, lon, hdg) < 2.5
-
-
-@pytest.mark.xfail(strict=True, reason="F lacks dE' = -vN tan(lat) / (RM + h) dE, the rate "
-                   "of the metres-per-radian scale of the east error at the INS's latitude "
-                   "(and _rates with it); adding it changes the goldens by 1e-4 relative "
-                   "(paper 000), so it waits for a decision to regenerate them")
-def test_error_model_east_scale_rate_near_the_pole():
-    """With that term the twin's position miss falls from 1.6 m to below 0.2 m."""
-    assert twin_position_miss(89.9, 180.0, 90.0) < 0.2
+    5 mm/s over 40 s; position within 5 cm (a sign slip in a tan(lat) term of F misses by
+    tens of metres; without the rate of the east error's metres-per-radian scale,
+    ``-vN tan(lat) / (RM + h) dE``, by 1.6 m)."""
+    assert twin_position_miss(lat, lon, hdg) < 0.05
 
 
 # ---------------------------------------------------------------------- measurements

@@ -24,13 +24,15 @@ Two propagation models share the same physics:
 * :meth:`ErrorProcess.transition` — the exact nonlinear model for large errors:
   ``dE/dt = [(C_hat eps - w_in_hat) x] E + E [w_in x]`` for the error rotation
   ``E = C_n^n'``, velocity error ``(I - E^T) f_hat + E^T C_hat nabla`` + Coriolis and gravity
-  differences, position from the latitude/longitude-rate differences.  This is paper
+  differences, position from the latitude/longitude-rate differences and the rates of the
+  metres-per-radian scales at the INS's position.  This is paper
   000's eq. 40 written with a rotation matrix instead of Euler platform angles (no
   singularity).  The test suite checks that F is its Jacobian at zero error.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numba
@@ -217,6 +219,8 @@ def _rates(x, E, p, C0, k0, cs, out):
     w0, w1, w2, k3, k4, k5 = k0[0], k0[1], k0[2], k0[3], k0[4], k0[5]
     # True rates (the computed ones are in k0); true latitude lat0 - dN / (rm + h0).
     _true_lat_cos_sin(x, k0, cs)
+    se = v0u / (rn + h0) - v0n * math.tan(p[0]) / (rm + h0)
+    sn = v0u / (rm + h0)
     for i in range(P):
         h = h0 - x[8, i]
         ve, vn, vu = v0e - x[3, i], v0n - x[4, i], v0u - x[5, i]
@@ -249,8 +253,12 @@ def _rates(x, E, p, C0, k0, cs, out):
         out[4, i] = fn_ - (E[1, i] * a0 + E[4, i] * a1 + E[7, i] * a2) - cor1
         out[5, i] = (fu - (E[2, i] * a0 + E[5, i] * a1 + E[8, i] * a2) - cor2
                      - g0 + _gravity_of_sin2(s1 * s1, h) - k2 * x[8, i])
-        out[6, i] = v0e - ve * ((rn + h0) * c0) * irn * ic1
-        out[7, i] = v0n - vn * (rm + h0) * irm
+        # Position error in metres at the INS's (computed) position: dE = (RN + h0) cos(lat0)
+        # dlon and dN = (RM + h0) dlat, so their rates also carry the rates of those
+        # metres-per-radian scales (vU0 / (RN + h0) - vN0 tan(lat0) / (RM + h0)) dE and
+        # vU0 / (RM + h0) dN.
+        out[6, i] = v0e - ve * ((rn + h0) * c0) * irn * ic1 + se * x[6, i]
+        out[7, i] = v0n - vn * (rm + h0) * irm + sn * x[7, i]
         out[8, i] = x[5, i] - k1 * x[8, i]
         for j in range(3):
             out[9 + j, i] = 0.0
@@ -355,9 +363,11 @@ def _F(p, C):
     F[3:6, 15:18] = C
     # Position (metres).
     F[6, 3] = 1.0
+    F[6, 6] = vu / Rn - vn * tl / Rm  # the rate of dE's metres per radian of longitude
     F[6, 7] = ve * tl / Rm
     F[6, 8] = -ve / Rn
     F[7, 4] = 1.0
+    F[7, 7] = vu / Rm  # the rate of dN's metres per radian of latitude
     F[7, 8] = -vn / Rm
     F[8, 5] = 1.0
     F[8, 8] = -k1
