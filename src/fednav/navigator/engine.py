@@ -27,8 +27,10 @@ import numpy as np
 from ..core import earth
 from ..core.kernels import cholesky_lower
 from ..core.kernels import quat_to_dcm as _q2dcm
-from ..filters.federated import _fuse, _lockout, drift_threshold
+from ..filters import sr_kernels as srk
+from ..filters.federated import _cov, _fuse, _lockout, drift_threshold
 from ..filters.kf import _joseph_update, _propagate
+from ..filters.square_root import REASONS
 from ..filters.ukf import _predict_moments, _sigma_points, _update
 from ..ins import error_model as em
 from ..ins.error_model import _interval, _transition, white_qd
@@ -48,7 +50,14 @@ FAILURES = {1: ("", "navigation state became non-finite"),
             5: ("update", "covariance is not positive definite"),
             6: ("", "covariance is not positive definite"),
             7: ("update", "covariance is not positive definite (sigma points)"),
-            8: ("update", "state or covariance became NaN/inf")}
+            8: ("update", "state or covariance became NaN/inf"),
+            # the square-root form's (:mod:`fednav.filters.square_root`)
+            9: ("predict", REASONS[srk.DOWNDATE]),
+            10: ("update", REASONS[srk.DOWNDATE]),
+            11: ("update", REASONS[srk.NOT_PD]),
+            12: ("predict", "process noise Q is not positive semi-definite"),
+            13: ("update", "measurement noise R is not positive semi-definite"),
+            14: ("", "covariance is not positive definite")}
 #: How a measurement's residual meets the INS (``TimingConfig.delay_compensation``).
 HOWS = {"none": 0, "interpolate": 1}
 
@@ -64,8 +73,6 @@ def why_not_compiled(system, sensors: list, specs: dict) -> str | None:
         return "federation without reset"
     if system.constraint is not None:
         return f"the {system.constraint} constraint"
-    if any(f.form_of(a) != "standard" for a in [*sensors, None]):
-        return "square-root filters (form: square_root)"
     types = {f.type_of(a) for a in sensors} | ({f.type} if f.master else set())
     for t in sorted(types):
         if t not in FAMILIES:
@@ -90,10 +97,34 @@ def _nav_buffers(lla, vel, src_p, src_v):
 
 
 @numba.njit(cache=True)
-def _local_update(fam_u, x, P, c, Wm, Wc, kinds, lla, vel, C, omega, lever, linear, y, R):
+def _sr_code(code, nis):
+    """A square-root update kernel's code (:mod:`fednav.filters.sr_kernels`) and NIS ->
+    the engine's failure code (:data:`FAILURES`; 0: success), as
+    :meth:`fednav.filters.square_root.SquareRootForm._sr_accept` reads them."""
+    if code == srk.OK:
+        return 0 if math.isfinite(nis) else 4
+    if code == srk.NOT_FINITE:
+        return 8
+    if code == srk.DOWNDATE:
+        return 10
+    if code == srk.NOT_PD:
+        return 11
+    return 4
+
+
+@numba.njit(cache=True)
+def _local_update(fam_u, sr, x, P, c, Wm, Wc, cm, kinds, lla, vel, C, omega, lever, linear,
+                  y, R):
     """Measurement update of one local filter (``fam_u`` 0 Kalman, Joseph form; 1
-    unscented): (x, P, residual, its covariance, NIS, failure code 0 / 4 / 7)."""
+    unscented; ``sr``: ``P`` is the lower factor ``S`` and the square-root kernels update
+    it, :mod:`fednav.filters.square_root`): (x, P or S, residual, its covariance, NIS,
+    failure code 0 / 4 / 7 / 8 / 10 / 11 / 13)."""
     d, n = y.shape[0], x.shape[0]
+    Rs = R
+    if sr:
+        Rs, ok = srk.psd_sqrt(R)
+        if not ok:
+            return x, P, y, R, np.nan, 13
     if fam_u == 0:
         H = np.zeros((d, n))
         row_jacobian(kinds, lla, vel, C, omega, lever, H)
@@ -104,8 +135,17 @@ def _local_update(fam_u, x, P, c, Wm, Wc, kinds, lla, vel, C, omega, lever, line
             row_predict(kinds, lla, vel, C, omega, lever, x.copy().reshape(1, n), Z)
             yhat = Z[0]
         r = y - yhat
+        if sr:
+            x1, Sn, Sm, ni, code = srk.sr_kf_update(x, P, H, r, Rs)
+            return x1, Sn, r, Sm, ni, _sr_code(code, ni)
         x1, Pn, Sm, ni, ok = _joseph_update(x, P, H, r, R)
         return x1, Pn, r, Sm, ni, 0 if ok else 4
+    if sr:
+        Sg, _ = srk.ukf_points(x, P, math.sqrt(c))
+        Z = np.empty((Sg.shape[0], d))
+        row_predict(kinds, lla, vel, C, omega, lever, Sg, Z)
+        x1, Sn, Sm, ni, code, r = srk.sr_ukf_update(Z, P, Wm[1], cm, x, y, Rs)
+        return x1, Sn, r, Sm, ni, _sr_code(code, ni)
     Sg = _sigma_points(x, P, c)
     if Sg.shape[0] == 0:
         return x, P, y, R, np.nan, 7
@@ -117,20 +157,23 @@ def _local_update(fam_u, x, P, c, Wm, Wc, kinds, lla, vel, C, omega, lever, line
 
 @numba.njit(cache=True)
 def run_epochs(k0, n_ep, state, comp, dtheta, dv, h_ref, gains, cst, noise, nsub, n_per,
-               X, P, beta, qlog, passes, fam, c, Wm, Wc, thr, recovery, sharing,
+               X, P, beta, qlog, passes, fam, sr, c, Wm, Wc, cm, thr, recovery, sharing,
                thr_drift, lk_pos, lk_hold, lk_state, lk_r0, lk_S0, lk_tpos,
                m_epoch, m_sens, m_t, m_z, m_R, s_filter, s_how, s_dim, s_kinds, s_zi,
                s_lever, s_linear, out_states, out_P, out_beta, out_Phi, out_Qd, out_dx, out_rows,
                out_nis, out_acc, out_r, out_S, out_bm, out_thr, out_tlog, out_re):
     """Fly epochs ``k0 + 1 .. k0 + n_ep`` (1-based) in place on ``state`` (the INS),
     ``comp`` (gyro and accelerometer compensation) and the filters ``X``, ``P``, ``beta``,
-    ``passes`` (locals, then the master).
+    ``passes`` (locals, then the master); ``P[f]`` is the lower factor ``S`` (``P = S
+    S'``) of a filter ``sr[f]`` in the square-root form, flown with the kernels of
+    :mod:`fednav.filters.sr_kernels` as :mod:`fednav.filters.square_root` flies them.
 
     ``cst`` = [dt, T, t0, k1, k2, 1/tau_g, 1/tau_a, q_step, ln max q scale]; ``qlog``
     each filter's ln process-noise scale (adapted in place when ``q_step`` > 0, as
     :meth:`fednav.filters.federated.FederatedFilter.adapt_q`); ``dtheta``, ``dv``, ``h_ref``: the
     epochs' IMU increments and baro heights; ``fam`` (nf, 2) each filter's time/
-    measurement-update family; ``c``, ``Wm``, ``Wc`` its unscented constants; ``thr``
+    measurement-update family; ``c``, ``Wm``, ``Wc``, ``cm`` (``sum Wc - 2``) its
+    unscented constants; ``thr``
     (nf, 7) its chi-square threshold by dof (NaN: no detection); ``sharing`` 0 equal,
     1 fixed, 2 adaptive.  ``thr_drift`` (nf, 7), ``lk_*``: the lockout guard's drift
     test thresholds, position sources, hold time and state
@@ -159,6 +202,8 @@ def run_epochs(k0, n_ep, state, comp, dtheta, dv, h_ref, gains, cst, noise, nsub
     row_q = np.empty(4)
     m = 0
     n_meas = m_epoch.shape[0]
+    all_sr = sr.all()
+    any_sr = sr.any()
     for e in range(n_ep):
         k = k0 + 1 + e
         b = e * n_per
@@ -182,13 +227,38 @@ def run_epochs(k0, n_ep, state, comp, dtheta, dv, h_ref, gains, cst, noise, nsub
                 inv += beta[f] / math.exp(qlog[f])
             if inv > 0.0:  # the fused prior's scale (FederatedFilter.q_scale_fused)
                 Qrec = Qd0 + (1.0 / inv - 1.0) * Qw
+        Lq0 = np.empty((0, 0))  # the factor of Qd0 (square-root filters; once)
         for f in range(nf):
             q_scale = 1.0 / beta[f]
-            if q_step > 0.0 and qlog[f] > 0.0:  # the adapted white noise (adapt_q)
+            adapted = q_step > 0.0 and qlog[f] > 0.0
+            if adapted:  # the adapted white noise (adapt_q)
                 Qd = Qd0 + (math.exp(qlog[f]) - 1.0) * Qw
             else:
                 Qd = Qd0
-            if fam[f, 0] == 0:  # Kalman: the mean through the nonlinear model
+            if sr[f]:  # the factor (SquareRootKalmanFilter / SquareRootSigma.predict)
+                if adapted or Lq0.shape[0] == 0:
+                    Lq, ok = srk.psd_sqrt(Qd)
+                    if not ok:
+                        return 12, k, f
+                    if not adapted:
+                        Lq0 = Lq
+                else:
+                    Lq = Lq0
+                sq = math.sqrt(q_scale)
+                if fam[f, 0] == 0:
+                    x1 = _transition(X[f].copy().reshape(1, n), T, nsub, params, Cm, scale)[0]
+                    Sn, ok = srk.sr_propagate(Phi, P[f], Lq, sq)
+                    if not ok or not math.isfinite(x1.sum()):
+                        return 3, k, f
+                else:
+                    Xs, _ = srk.ukf_points(X[f], P[f], math.sqrt(c[f]))
+                    x1, Sn, code = srk.sr_sigma_predict(
+                        _transition(Xs, T, nsub, params, Cm, scale), Wm[f], Wc[f], Lq, sq)
+                    if code != srk.OK:
+                        return 9 if code == srk.DOWNDATE else 3, k, f
+                X[f] = x1
+                P[f] = Sn
+            elif fam[f, 0] == 0:  # Kalman: the mean through the nonlinear model
                 x1 = _transition(X[f].copy().reshape(1, n), T, nsub, params, Cm, scale)[0]
                 Pn, ok = _propagate(Phi, P[f], Qd, q_scale)
                 if not ok or not math.isfinite(x1.sum()):
@@ -238,9 +308,9 @@ def run_epochs(k0, n_ep, state, comp, dtheta, dv, h_ref, gains, cst, noise, nsub
             y = np.empty(d)
             row_residual(kinds, zi, lla, vel, C, omega, m_z[m], lever, y)
             R = m_R[m, :d, :d].copy()
-            x1, Pn, r, Sm, ni, code = _local_update(fam[f, 1], X[f], P[f], c[f], Wm[f], Wc[f],
-                                                    kinds, lla, vel, C, omega, lever,
-                                                    s_linear[sn], y, R)
+            x1, Pn, r, Sm, ni, code = _local_update(fam[f, 1], sr[f], X[f], P[f], c[f], Wm[f],
+                                                    Wc[f], cm[f], kinds, lla, vel, C, omega,
+                                                    lever, s_linear[sn], y, R)
             if code:
                 return code, k, f
             # chi-square fault detection (FederatedFilter.update)
@@ -261,13 +331,13 @@ def run_epochs(k0, n_ep, state, comp, dtheta, dv, h_ref, gains, cst, noise, nsub
                                          lk_hold, lk_pos, lk_state, lk_r0, lk_S0, lk_tpos)
                 if s_in > 0.0:
                     P_saved = P.copy()
-                    for g in range(nf):
-                        P[g] = P[g] * s_in
+                    for g in range(nf):  # (Filter.inflate: a factor by sqrt(s))
+                        P[g] = P[g] * (math.sqrt(s_in) if sr[g] else s_in)
                     x2, P2, r2, S2, n2, code = _local_update(
-                        fam[f, 1], X[f], P[f], c[f], Wm[f], Wc[f], kinds, lla, vel, C, omega,
-                        lever, s_linear[sn], y, R)
-                    if (code == 0 and not n2 > th and math.isfinite(x2.sum() + P2.sum())
-                            and cholesky_lower(P2)[1]):
+                        fam[f, 1], sr[f], X[f], P[f], c[f], Wm[f], Wc[f], cm[f], kinds, lla,
+                        vel, C, omega, lever, s_linear[sn], y, R)
+                    if code == 0 and not n2 > th and (sr[f] or (
+                            math.isfinite(x2.sum() + P2.sum()) and cholesky_lower(P2)[1])):
                         out_re[m, 0], out_re[m, 1], out_re[m, 2] = t_start, ni, s_in
                         x1, Pn, r, Sm, ni, accepted = x2, P2, r2, S2, n2, True
                         passes[f] = recovery
@@ -275,10 +345,10 @@ def run_epochs(k0, n_ep, state, comp, dtheta, dv, h_ref, gains, cst, noise, nsub
                                  lk_pos, lk_state, lk_r0, lk_S0, lk_tpos)
                     else:
                         P[:] = P_saved
-            if accepted:
-                if not math.isfinite(x1.sum() + Pn.sum()):
+            if accepted:  # (a factor's kernel checked it already)
+                if not sr[f] and not math.isfinite(x1.sum() + Pn.sum()):
                     return 8, k, f
-                if not cholesky_lower(Pn)[1]:
+                if not sr[f] and not cholesky_lower(Pn)[1]:
                     return 5, k, f
                 X[f] = x1
                 P[f] = Pn
@@ -293,16 +363,38 @@ def run_epochs(k0, n_ep, state, comp, dtheta, dv, h_ref, gains, cst, noise, nsub
                 out_S[m, :d, :d] = Sm
                 out_bm[m] = beta[f]
             m += 1
-        xg, Pg, traces, bad = _fuse(X, P)
+        # every filter factored: the square-root information fusion; else the
+        # covariances (S S' of the factored ones) fused (FederatedFilter.fuse)
+        if all_sr:
+            xg, Sg, traces, bad = srk.sr_fuse(X, P)
+            Pg = srk.factor_product(Sg)
+        else:
+            Ps = P
+            if any_sr:
+                Ps = P.copy()
+                for f in range(nf):
+                    if sr[f]:
+                        Ps[f] = srk.factor_product(P[f])
+            Sg = Ps[0]
+            xg, Pg, traces, bad = _fuse(X, Ps)
         if bad >= 0:
             return 6, k, bad
+        out_P[e] = Pg
         if sharing == 2:
             s_tr = traces.sum()
             for f in range(nf):
                 beta[f] = 1.0 * traces[f] / s_tr
         for f in range(nf):
             X[f] = xg - xg  # reset to the fused estimate, then its feedback (zero)
-            P[f] = Pg / beta[f]
+            if all_sr:
+                P[f] = Sg / math.sqrt(beta[f])
+            elif sr[f]:  # the factor of P_g / beta (SquareRootForm.P's setter)
+                L, ok = cholesky_lower(Pg / beta[f])
+                if not ok:
+                    return 14, k, f
+                P[f] = L
+            else:
+                P[f] = Pg / beta[f]
             out_beta[e, f] = beta[f]
         dx = xg * scale
         _correct(state, dx[0:3], dx[3:6], dx[6:9])
@@ -310,7 +402,6 @@ def run_epochs(k0, n_ep, state, comp, dtheta, dv, h_ref, gains, cst, noise, nsub
             comp[j] += dx[9 + j] + dx[12 + j]
             comp[3 + j] += dx[15 + j]
         out_states[e] = state
-        out_P[e] = Pg
         if out_Phi.shape[0] > 0:
             out_Phi[e] = Phi
             out_Qd[e] = Qrec
@@ -349,7 +440,9 @@ class CompiledLoop:
         filters = list(fed.filters.values())
         nf, n = len(filters), core.n
         self.X = np.array([f.x for f in filters])
-        self.P = np.array([f.P for f in filters])
+        #: per filter its covariance, or its lower factor S when ``sr``
+        self.sr = np.array([f.form == "square_root" for f in filters], dtype=np.bool_)
+        self.P = np.array([_cov(f) for f in filters])
         self.beta = np.array([fed.beta[k] for k in self.names])
         self.passes = np.array([fed._passes.get(k, 0) for k in self.names], dtype=np.int64)
         self.fam = np.array([FAMILIES[type_name(f)] for f in filters], dtype=np.int64)
@@ -357,9 +450,11 @@ class CompiledLoop:
         self.c = np.ones(nf)
         self.Wm = np.zeros((nf, n_sig))
         self.Wc = np.zeros((nf, n_sig))
+        self.cm = np.zeros(nf)
         for i, f in enumerate(filters):
             if hasattr(f, "Wm"):
                 self.c[i], self.Wm[i], self.Wc[i] = f.c, f.Wm, f.Wc
+                self.cm[i] = f.Wc.sum() - 2.0
         self.thr = np.full((nf, 7), np.nan)
         self.thr_drift = np.full((nf, 7), np.nan)  # (the lockout guard's, drift_threshold)
         for i, k in enumerate(self.names):
@@ -482,7 +577,8 @@ class CompiledLoop:
         code, k, f = run_epochs(
             k0, n_ep, self.core.state, self.comp, dtheta, dv, h_ref, self.gains,
             self.cst, self.noise_vec, self.core.nsub, self.n_per, self.X, self.P, self.beta,
-            self.qlog, self.passes, self.fam, self.c, self.Wm, self.Wc, self.thr, self.recovery,
+            self.qlog, self.passes, self.fam, self.sr, self.c, self.Wm, self.Wc, self.cm,
+            self.thr, self.recovery,
             self.sharing, self.thr_drift, lk.pos, lk.hold, lk.state, lk.r0, lk.S0, lk.t_pos,
             m_epoch, m_sens, m_t, m_z, m_R, self.s_filter, self.s_how,
             self.s_dim, self.s_kinds, self.s_zi, self.s_lever, self.s_linear,
@@ -495,8 +591,15 @@ class CompiledLoop:
             if code == 1:
                 raise FilterError(f"strapdown INS at step {k}: {why}")
             if code == 6:
-                raise FilterError(f"federated fusion: covariance of '{self.names[f]}' is "
+                who = self.names[f] if f < len(self.names) else "fused information"
+                raise FilterError(f"federated fusion: covariance of '{who}' is "
                                   f"not positive definite (epoch {k})")
+            if code == 14:  # the reset's factor of P_g / beta (SquareRootForm.P's setter)
+                from ..filters.base import not_pd_error
+
+                raise not_pd_error(rec.P.a[e0 + k - k0 - 1] / self.beta[f],
+                                   f"{self.fed.filters[self.names[f]].name} covariance set "
+                                   f"at step {k}")
             raise FilterError(f"{self.fed.filters[self.names[f]].name} {phase} at step {k}: "
                               f"{why}")
         for g in self._outs:
