@@ -380,9 +380,11 @@ def align(imu, gnss, t0: float, i0: int, dt: float, gyro_arw: float, accel_noise
                     f"{TEST_SPAN_S:g} s of motion): the vehicle slides sideways, the IMU is "
                     f"not aligned with the direction of travel, or the gyro's axes are "
                     f"wrong; the initial heading is "
-                    + ("the file's" if file_euler is not None else
-                       "unknown (+-180 deg, and so is the solution's)")
-                    + " — give alignment.coarse_heading_deg or the initial attitude")
+                    + ("the file's (for a sliding or skid-steered vehicle with the IMU's "
+                       "axes right, nothing to change)"
+                       if file_euler is not None else
+                       "unknown (+-180 deg, and so is the solution's) — give "
+                       "alignment.coarse_heading_deg or the initial attitude"))
         if hc is not None and hc.follows:
             euler[2] = hc.heading
             sig[2] = np.hypot(hc.sigma, heading_floor)
