@@ -11,7 +11,11 @@ are run as they become ready, with the same operations as in one batch.
 
 A system runs here when every part has a compiled form (:func:`why_not_compiled` says
 which does not): local filters of the Kalman (``kf``, ``ekf``), unscented (``ukf``) or
-simplified unscented (``sukf``) family, fusion-reset federation, sensors with row models,
+simplified unscented (``sukf``) family in either form, per filter (``form:
+square_root``: the filter's lower Cholesky factor ``S`` is what is carried, flown with
+the kernels of :mod:`fednav.filters.sr_kernels` that :mod:`fednav.filters.square_root`
+calls, fused in the square-root information form when every filter is factored; the
+record holds ``S S'``), fusion-reset federation, sensors with row models,
 measurements used at their time of validity (``interpolate``) or at the epoch
 (``none``), no constraint.  Every other system runs the Python loop; the test suite flies
 both on the same data and finds them equal.
