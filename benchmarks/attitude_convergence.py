@@ -45,7 +45,7 @@ def one(imu_class: str, seed: int, folder: Path) -> dict[str, dict[str, float]]:
     write_csv_dataset(simulate_dataset(cfg), d)
     pc = load_system(d / "process.yaml")
     gc = pc.sensors.gnss
-    g = read_gnss_csv(d / "gnss.csv", gc.sigma_pos_m, gc.sigma_vel_mps, gc.lever_m)
+    g = read_gnss_csv(d / "gnss.csv", gc.sigma_pos_enu_m, gc.sigma_vel_mps, gc.lever_m)
     imu = read_imu_csv(d / "imu.csv")
     ref = read_reference_csv(d / "reference.csv")
     rng = np.random.default_rng(seed + 1000)

@@ -57,7 +57,7 @@ def drive(folder: Path, seconds: float, velocity: bool):
         left -= s.duration_s
     cfg = cfg.model_copy(update={"segments": segs})
     write_csv_dataset(simulate_dataset(cfg), folder)
-    g = read_gnss_csv(folder / "gnss.csv", cfg.gnss.sigma_pos_m, cfg.gnss.sigma_vel_mps,
+    g = read_gnss_csv(folder / "gnss.csv", cfg.gnss.sigma_pos_enu_m, cfg.gnss.sigma_vel_mps,
                       cfg.gnss.lever_m)
     v = read_velocity_csv(folder / "velocity.csv") if velocity else None
     return read_imu_csv(folder / "imu.csv"), g, v

@@ -64,8 +64,9 @@ IMUS = {
                   "accel_markov_tau_s": 100.0, "accel_vrw_ug_sqrt_hz": 49.0},
 }
 
-#: 5 Hz GNSS: white noise of these sigmas [north, east, up] m, [east, north, up] m/s
-GNSS = {"period_s": 0.2, "sigma_pos_m": [1.5, 1.5, 3.0], "sigma_vel_mps": [0.05, 0.05, 0.1]}
+#: 5 Hz GNSS: white noise of these sigmas [east, north, up] m, [east, north, up] m/s
+GNSS = {"period_s": 0.2, "sigma_pos_enu_m": [1.5, 1.5, 3.0],
+        "sigma_vel_mps": [0.05, 0.05, 0.1]}
 
 DATASETS = {
     "car-adis16405": {"trajectory": "car", "imu": "adis16405", "seed": 26081,
@@ -320,7 +321,7 @@ def build_dataset(name, folder):
     ant = _ned_offset_llh(llh, cbn @ lever_frd)
     vant = vne + np.gradient(cbn @ lever_frd, 1.0 / FS, axis=0)
     g = np.arange(int(round(GNSS["period_s"] * FS)), n - 10, int(round(GNSS["period_s"] * FS)))
-    sp, sv = np.array(GNSS["sigma_pos_m"]), np.array(GNSS["sigma_vel_mps"])
+    sp, sv = np.array(GNSS["sigma_pos_enu_m"])[[1, 0, 2]], np.array(GNSS["sigma_vel_mps"])
     npos = rng.normal(0.0, 1.0, (len(g), 3)) * sp  # north, east, up
     nvel = rng.normal(0.0, 1.0, (len(g), 3)) * sv  # east, north, up
     gl = _ned_offset_llh(ant[g], np.column_stack((npos[:, 0], npos[:, 1], -npos[:, 2])))
@@ -338,7 +339,7 @@ def build_dataset(name, folder):
     cfg = ["# only what a user must give: the IMU datasheet figures, the GNSS receiver's",
            "# sigmas and the antenna lever arm (body right-forward-up)", "imu:"]
     cfg += [f"  {k}: {v}" for k, v in fig.items()]
-    cfg += ["sensors:", "  gnss:", f"    sigma_pos_m: {GNSS['sigma_pos_m']}",
+    cfg += ["sensors:", "  gnss:", f"    sigma_pos_enu_m: {GNSS['sigma_pos_enu_m']}",
             f"    sigma_vel_mps: {GNSS['sigma_vel_mps']}", f"    lever_m: {spec['lever_m']}"]
     (folder / "config.yaml").write_text("\n".join(cfg) + "\n")
     speed = np.hypot(vne[:, 0], vne[:, 1])
@@ -455,7 +456,8 @@ def run_dataset(name, rebuild, label, src=None):
     # the peer: same files, the same figures
     t0 = time.perf_counter()
     peer = peer_lc.run(folder / "imu.csv", folder / "gnss.csv", meta["imu_figures"],
-                       GNSS["sigma_pos_m"], GNSS["sigma_vel_mps"], meta["lever_m"],
+                       np.array(GNSS["sigma_pos_enu_m"])[[1, 0, 2]],  # (the peer: N, E, U)
+                       GNSS["sigma_vel_mps"], meta["lever_m"],
                        smooth=True)
     peer_wall = time.perf_counter() - t0
     tp = float(peer["start_t_s"])

@@ -44,7 +44,7 @@ def drive(folder: Path):
     write_csv_dataset(ds, folder)
     lever = tuple(cfg.gnss.lever_m)
     return (read_imu_csv(folder / "imu.csv"),
-            read_gnss_csv(folder / "gnss.csv", cfg.gnss.sigma_pos_m, cfg.gnss.sigma_vel_mps,
+            read_gnss_csv(folder / "gnss.csv", cfg.gnss.sigma_pos_enu_m, cfg.gnss.sigma_vel_mps,
                           lever), lever)
 
 

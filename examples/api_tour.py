@@ -74,11 +74,12 @@ system = fednav.load_system(out / "process.yaml")
 system = system.model_copy(update={"smoother": True})      # also run the RTS smoother
 g = system.sensors.gnss
 print(f"IMU gyro ARW {system.imu.gyro_arw_rad_sqrt_s:.2e} rad/sqrt(s); GNSS 1-sigma "
-      f"{g.sigma_pos_m} m, lever arm {g.lever_m} m")
+      f"{g.sigma_pos_enu_m} m, lever arm {g.lever_m} m")
 
 # %% 3. Read the files (SI units and fednav's frames from here on)
 imu = fednav.read_imu_csv(out / "imu.csv")           # rates or increments, body RFU
-gnss = fednav.read_gnss_csv(out / "gnss.csv", g.sigma_pos_m, g.sigma_vel_mps, g.lever_m)
+gnss = fednav.read_gnss_csv(out / "gnss.csv", g.sigma_pos_enu_m, g.sigma_vel_mps,
+                            g.lever_m)
 truth = fednav.read_reference_csv(out / "reference.csv")
 print(f"IMU {len(imu.t)} samples at {1 / np.median(np.diff(imu.t)):.0f} Hz, "
       f"GNSS {len(gnss.t)} fixes, reference {len(truth.t)} rows")
@@ -128,11 +129,11 @@ print("health:", result.health(imu, gnss) or "no warning")
 
 # %% 6. Evaluate against the truth
 # errors_against moves the solution to the reference's point and time and returns
-# north/east/down [m], velocity [m/s] and attitude [rad] errors; rmse sums them up
-# (attitude in degrees).
+# east/north/up [m], velocity [m/s] and attitude [rad] errors (ENU, as the solution);
+# rmse sums them up (attitude in degrees).
 rms = fednav.rmse(fednav.errors_against(fwd, truth))
 rms_smoothed = fednav.rmse(fednav.errors_against(res.smoothed, truth))
-for key in ("north_m", "east_m", "down_m", "yaw_deg"):
+for key in ("east_m", "north_m", "up_m", "yaw_deg"):
     print(f"RMSE {key:8s} forward {rms[key]:.3f}  smoothed {rms_smoothed[key]:.3f}")
 
 # %% 7. Plot

@@ -113,8 +113,8 @@ def test_the_toy_sensor_runs_from_its_file(radalt, tmp_path):
     c = consistency(res.forward.fdi)
     assert set(c) == {"gnss", "radalt"} and 0.5 < c["radalt"]["nis_per_dof"] < 2.0
     r0, r1 = rmse(errors_against(base.forward, ref)), rmse(errors_against(res.forward, ref))
-    assert r1["down_m"] < 0.5 * r0["down_m"]
-    assert r1["vd_mps"] < r0["vd_mps"]
+    assert r1["up_m"] < 0.5 * r0["up_m"]
+    assert r1["vu_mps"] < r0["vu_mps"]
 
 
 def test_the_cli_has_a_file_option_per_registered_sensor(tmp_path):
@@ -150,7 +150,7 @@ def test_the_cli_has_a_file_option_per_registered_sensor(tmp_path):
         f"{e.accel_vrw[0]}, gyro_bias_radps: {e.gyro_bias[0]}, accel_bias_mps2: "
         f"{e.accel_bias[0]}, gyro_markov_radps: 1.0e-6, accel_markov_mps2: 1.0e-5, "
         f"gyro_tau_s: 1000, accel_tau_s: 1000}}\n"
-        f"sensors: {{gnss: {{sigma_pos_m: 1, sigma_vel_mps: 0.05, lever_m: "
+        f"sensors: {{gnss: {{sigma_pos_enu_m: 1, sigma_vel_mps: 0.05, lever_m: "
         f"[{LEVER[0]}, {LEVER[1]}, {LEVER[2]}]}}, baro: {{sigma_m: 0.3, "
         f"damping_loop: false}}}}\n")
     out = tmp_path / "out"

@@ -115,7 +115,7 @@ def test_coarse_levelling_signs():
 
 def test_a_vehicle_that_never_moves_gets_a_warning():
     imu, gnss = _static_then_drive()
-    still = GnssData("still", gnss.t, gnss.lla, gnss.vel * 0.0, gnss.sigma_pos,
+    still = GnssData("still", gnss.t, gnss.lla, gnss.vel * 0.0, gnss.sigma_pos_enu,
                      gnss.sigma_vel, gnss.lever)
     a = align(imu, still, 0.0, 0, 0.01, 1e-4, 1e-3, 0.02)
     assert a.euler[2] == 0.0 and any("never moves" in w for w in a.warnings)

@@ -75,6 +75,7 @@ def test_a_key_given_twice_in_a_yaml_is_refused_naming_it(tmp_path):
     from fednav.core.config import ConfigError, read_mapping
 
     p = tmp_path / "c.yaml"
-    p.write_text("sensors:\n  gnss:\n    sigma_pos_m: 1.0\n    sigma_pos_m: 5.0\n")
-    with pytest.raises(ConfigError, match=r"key 'sigma_pos_m' given twice \(lines 3 and 4\)"):
+    p.write_text("sensors:\n  gnss:\n    sigma_pos_enu_m: 1.0\n    sigma_pos_enu_m: 5.0\n")
+    with pytest.raises(ConfigError,
+                       match=r"key 'sigma_pos_enu_m' given twice \(lines 3 and 4\)"):
         read_mapping(p, "processing config")

@@ -64,7 +64,7 @@ def test_navego_layout_reads_back_in_fednav_frames(short, tmp_path):
     g = read_navego_gnss(tmp_path / "gnss.mat")
     np.testing.assert_allclose(g.vel, short.gnss_vel, atol=1e-12)
     np.testing.assert_allclose(g.lever, [0.3, -1.0, 1.2], atol=1e-15)
-    np.testing.assert_allclose(g.sigma_pos, [1.5, 1.5, 3.0])
+    np.testing.assert_allclose(g.sigma_pos_enu, [1.5, 1.5, 3.0])
     np.testing.assert_allclose(g.sigma_vel, [0.05, 0.05, 0.1])
     r = read_navego_reference(tmp_path / "ref.mat")
     np.testing.assert_allclose(r.vel, short.ref_vel, atol=1e-12)
@@ -85,7 +85,7 @@ def drive(tmp_path_factory):
     assert r.exit_code == 0, r.output
     cfg = load_system(d / "process.yaml")
     gc = cfg.sensors.gnss
-    g = read_gnss_csv(d / "gnss.csv", gc.sigma_pos_m, gc.sigma_vel_mps, gc.lever_m)
+    g = read_gnss_csv(d / "gnss.csv", gc.sigma_pos_enu_m, gc.sigma_vel_mps, gc.lever_m)
     imu = read_imu_csv(d / "imu.csv")
     ref = read_reference_csv(d / "reference.csv")
     out = {}
@@ -106,8 +106,8 @@ def test_simulated_drive_processed_inside_its_3_sigma(drive):
     the IMU-rate solution's rows (the reference holds every IMU time)."""
     sol, e = drive[0]["gnss+velocity"]
     s = _sigma_at(sol, e["t"])
-    pos = np.abs(np.column_stack([e["east_m"], e["north_m"], -e["down_m"]])) <= 3 * s[:, 6:9]
-    vel = np.abs(np.column_stack([e["ve_mps"], e["vn_mps"], -e["vd_mps"]])) <= 3 * s[:, 3:6]
+    pos = np.abs(np.column_stack([e["east_m"], e["north_m"], e["up_m"]])) <= 3 * s[:, 6:9]
+    vel = np.abs(np.column_stack([e["ve_mps"], e["vn_mps"], e["vu_mps"]])) <= 3 * s[:, 3:6]
     assert pos.all(axis=1).mean() >= 0.95 and vel.all(axis=1).mean() >= 0.95
     assert len(e["t"]) > 0.99 * len(sol.t)
 
@@ -134,7 +134,7 @@ def test_no_velocity_spike_at_turn_entries(drive):
     for t in edges:
         near |= np.abs(e["t"] - t) <= 1.0
     s = _sigma_at(sol, e["t"])[near]
-    v = np.abs(np.column_stack([e["ve_mps"], e["vn_mps"], -e["vd_mps"]]))[near]
+    v = np.abs(np.column_stack([e["ve_mps"], e["vn_mps"], e["vu_mps"]]))[near]
     assert np.all(v <= 3 * s[:, 3:6])
     r = rmse(e)
     assert r["roll_deg"] <= 0.12 and r["pitch_deg"] <= 0.10 and r["yaw_deg"] <= 0.5, r

@@ -150,7 +150,7 @@ def test_gnss_with_latency_gets_the_same_treatment(short):
     from fednav.sensors import GnssConfig
 
     scn, _ = short
-    g = GnssConfig.model_validate({"sigma_pos_m": 5.0, "sigma_vel_mps": 0.1, "period_s": 1.0,
+    g = GnssConfig.model_validate({"sigma_pos_enu_m": 5.0, "sigma_vel_mps": 0.1, "period_s": 1.0,
                                    "timing": {"latency_s": 2.0}})
     scn_g = scn.model_copy(update={"sensors": scn.sensors.replace(gnss=g)})
     data = make_run_data(scn_g, 4, max_time=300.0)

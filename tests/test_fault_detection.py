@@ -16,7 +16,7 @@ T_END = 400.0
 
 def scenario(tmp_path, fdi_alpha, faults):
     d = yaml.safe_load(scenario_path("paper002").read_text())
-    d["sensors"]["gnss"] = {"sigma_pos_m": 8.0, "sigma_vel_mps": 0.2, "period_s": 1.0}
+    d["sensors"]["gnss"] = {"sigma_pos_enu_m": 8.0, "sigma_vel_mps": 0.2, "period_s": 1.0}
     d["filter"]["fdi_alpha"] = fdi_alpha
     d["faults"] = faults
     d["modes"] = [{"name": "GNSS+CNS", "aiding": ["gnss", "star"]}]

@@ -109,6 +109,7 @@ def test_reproduction_errors_show_rms_spread_and_sigma_over_the_runs():
     assert ax.get_ylim()[1] < 100
 
 
+
 def test_reproduction_errors_of_one_dict_are_one_run():
     fig = errors_figure(_runs_series(1)[0])
     assert "1 Monte Carlo run" in fig._suptitle.get_text()
@@ -262,13 +263,17 @@ def test_process_errors_have_human_titles_units_and_sigma_at_the_filter_epochs(p
         for ln in sig:  # at epochs (their upper envelope over 500 of them: 600 here)
             assert np.isin(ln.get_xdata(), te).all() and len(ln.get_xdata()) == 300
     ax = fig.axes[0]
-    assert ax.get_title().startswith("north position") and ax.get_ylabel() == (
-        "north position error [m]")
-    assert fig.axes[3].get_ylabel() == "north velocity error [m/s]"
+    assert ax.get_title().startswith("east position") and ax.get_ylabel() == (
+        "east position error [m]")
+    assert fig.axes[1].get_ylabel() == "north position error [m]"
+    assert fig.axes[2].get_ylabel() == "up position error [m]"
+    assert fig.axes[3].get_ylabel() == "east velocity error [m/s]"
+    assert fig.axes[6].get_ylabel() == "pitch error [deg]"
     assert fig.axes[8].get_ylabel() == "yaw error [deg]"
-    # the forward north sigma at the epochs; the smoothed one is smaller
+    # the forward east sigma (column 6 of the ENU sigmas) at the epochs; the smoothed
+    # one is smaller
     s = [ln for ln in ax.lines if ln.get_gid() == "sigma"]
-    ts, sd = plots.envelope(te, f.sigma[f.epoch_rows, 7])
+    ts, sd = plots.envelope(te, f.sigma[f.epoch_rows, 6])
     np.testing.assert_array_equal(s[0].get_xdata(), ts)
     np.testing.assert_allclose(s[0].get_ydata(), 3 * sd)
     assert np.mean(s[2].get_ydata()) < np.mean(s[0].get_ydata())

@@ -76,8 +76,8 @@ def result(flight):
 def test_forward_filter_tracks_the_truth(flight, result):
     e = errors_against(result.forward, flight[2])
     r = rmse(e)
-    assert max(r["north_m"], r["east_m"], r["down_m"]) < 0.3
-    assert max(r["vn_mps"], r["ve_mps"], r["vd_mps"]) < 0.03
+    assert max(r["east_m"], r["north_m"], r["up_m"]) < 0.3
+    assert max(r["ve_mps"], r["vn_mps"], r["vu_mps"]) < 0.03
     assert r["roll_deg"] < 0.15 and r["pitch_deg"] < 0.15
     # heading starts 2 deg off and converges once the vehicle accelerates and turns
     late = rmse({k: v[e["t"] > 60] for k, v in e.items()})
@@ -87,7 +87,7 @@ def test_forward_filter_tracks_the_truth(flight, result):
 def test_smoother_improves_position_velocity_and_attitude(flight, result):
     f = rmse(errors_against(result.forward, flight[2]))
     s = rmse(errors_against(result.smoothed, flight[2]))
-    for k in ("north_m", "east_m", "down_m", "vn_mps", "ve_mps", "roll_deg", "pitch_deg"):
+    for k in ("east_m", "north_m", "up_m", "ve_mps", "vn_mps", "pitch_deg", "roll_deg"):
         assert s[k] < f[k], k
 
 
@@ -112,7 +112,7 @@ def test_coarse_heading_from_the_gnss_course(flight):
 
     _, gnss, ref = flight
     assert units.to_deg(gnss_course(gnss, 1.0)) == pytest.approx(45.0, abs=2.0)
-    still = GnssData("still", gnss.t, gnss.lla, gnss.vel * 0.0, gnss.sigma_pos,
+    still = GnssData("still", gnss.t, gnss.lla, gnss.vel * 0.0, gnss.sigma_pos_enu,
                      gnss.sigma_vel, gnss.lever)
     assert gnss_course(still, 1.0) is None
 
@@ -141,7 +141,7 @@ def test_cli_process_csv_end_to_end(tmp_path, flight):
         f"{e.accel_vrw[0]}, gyro_bias_radps: {e.gyro_bias[0]}, accel_bias_mps2: "
         f"{e.accel_bias[0]}, gyro_markov_radps: 1.0e-6, accel_markov_mps2: 1.0e-5, "
         f"gyro_tau_s: 1000, accel_tau_s: 1000}}\n"
-        f"sensors: {{gnss: {{sigma_pos_m: [1, 1, 1], sigma_vel_mps: [0.05, 0.05, 0.05], "
+        f"sensors: {{gnss: {{sigma_pos_enu_m: [1, 1, 1], sigma_vel_mps: [0.05, 0.05, 0.05], "
         f"lever_m: [{LEVER[0]}, {LEVER[1]}, {LEVER[2]}]}}}}\n"
         f"alignment: {{initial_attitude: coarse}}\n")
     out = tmp_path / "out"
@@ -151,13 +151,17 @@ def test_cli_process_csv_end_to_end(tmp_path, flight):
                                    "--config", str(tmp_path / "cfg.yaml")])
     assert res.exit_code == 0, res.output
     s = json.loads((out / "summary.json").read_text())
-    assert set(s["rmse"]) == {"north_m", "east_m", "down_m", "vn_mps", "ve_mps", "vd_mps",
-                              "roll_deg", "pitch_deg", "yaw_deg"}
+    # in the solution's order: ENU, then [pitch, roll, heading] (docs/conventions.md)
+    assert list(s["rmse"]) == ["east_m", "north_m", "up_m", "ve_mps", "vn_mps", "vu_mps",
+                               "pitch_deg", "roll_deg", "yaw_deg"]
     assert s["rmse"]["north_m"] < 1.0 and s["run_time_s"] > 0
     assert (out / "solution.csv").is_file() and (out / "solution_smoothed.csv").is_file()
     assert (out / "errors.png").is_file()
     # the terminal's RMSE tables name each column with its unit (issue 29), not by key
     assert "north position [m]" in res.output and "heading [°]" in res.output
+    head = next(ln for ln in res.output.splitlines() if "position [m]" in ln)
+    assert head.index("east position") < head.index("north position") < head.index(
+        "up position")
     assert "RMSE smoothed against the reference" in res.output
     assert "north_m" not in res.output
 

@@ -18,7 +18,7 @@ ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT.parent / "shared" / "data" / "canada-planetary"
 pytestmark = pytest.mark.skipif(not DATA.is_dir(), reason="../shared/data not available")
 
-KEYS = ("north_m", "east_m", "down_m", "vn_mps", "ve_mps", "vd_mps")
+KEYS = ("north_m", "east_m", "up_m", "vn_mps", "ve_mps", "vu_mps")  # (the order)
 #: NaveGo's VISUAL/INS/GNSS example on these files (the issue's figures).
 NAVEGO_GNSS = dict(zip(KEYS, (0.45, 0.41, 5.27, 0.64, 0.59, 0.39), strict=True))
 NAVEGO_VISUAL = dict(zip(KEYS, (1.52, 1.30, 1.00, 0.057, 0.055, 0.042), strict=True))

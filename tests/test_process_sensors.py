@@ -46,7 +46,7 @@ def test_position_only_gnss(flight):
 
 def test_velocity_only_gnss_needs_and_uses_the_initial_state(flight):
     imu, gnss, ref = flight
-    vel = GnssData("vel-only", gnss.t, None, gnss.vel, gnss.sigma_pos, gnss.sigma_vel,
+    vel = GnssData("vel-only", gnss.t, None, gnss.vel, gnss.sigma_pos_enu, gnss.sigma_vel,
                    gnss.lever)
     from fednav.io.data import DataError
 
@@ -156,7 +156,7 @@ def test_gnss_arriving_late_is_used_when_it_arrives(flight, tmp_path):
     f = tmp_path / "gnss.csv"
     f.write_text("t_s,lat_deg,lon_deg,h_m,vE_mps,vN_mps,vU_mps,t_arrival_s\n"
                  + "\n".join(rows) + "\n")
-    late = read_gnss_csv(f, gnss.sigma_pos, gnss.sigma_vel, gnss.lever)
+    late = read_gnss_csv(f, gnss.sigma_pos_enu, gnss.sigma_vel, gnss.lever)
     np.testing.assert_allclose(late.t_arrival - late.t, 0.35)
     on_time = rmse(errors_against(process(imu, gnss, None, System()).forward, ref))
     res = process(imu, late, None, System())
@@ -346,7 +346,7 @@ def test_a_gnss_velocity_latency_is_seen_said_and_corrected():
     from fednav.process.run import velocity_latency
     from fednav.sim.drives import car_drive
 
-    d = car_drive(40.0, 0.0, seed=3, gnss={"sigma_pos_m": (0.02, 0.02, 0.04),
+    d = car_drive(40.0, 0.0, seed=3, gnss={"sigma_pos_enu_m": (0.02, 0.02, 0.04),
                                            "sigma_vel_mps": (0.02, 0.02, 0.04),
                                            "lever_m": (0.3, -1.0, 1.2)})
     g = d.gnss

@@ -40,7 +40,7 @@ def understated():
     from fednav.io.data import ImuData
 
     d = car_drive(40.0, 0.0, seed=2, static_s=5.0,
-                  gnss={"sigma_pos_m": (0.05, 0.05, 0.1), "sigma_vel_mps": (0.005, 0.005, 0.01),
+                  gnss={"sigma_pos_enu_m": (0.05, 0.05, 0.1), "sigma_vel_mps": (0.005, 0.005, 0.01),
                         "lever_m": (0.3, -1.0, 1.2)})
     rng = np.random.default_rng(21)
     shake = (np.linalg.norm(d.reference.vel, axis=1) > 0.05)[:, None]

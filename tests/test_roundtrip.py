@@ -48,8 +48,8 @@ def test_process_on_simulated_files_equals_the_reproduced_run(tmp_path, paper, m
     rows = np.searchsorted(t, run.t - 1e-9)
     assert np.allclose(err.t_s.to_numpy()[rows], run.t, atol=1e-9, rtol=0)
     e = err.iloc[rows]
-    pos = np.column_stack([e.east_m, e.north_m, -e.down_m])
-    vel = np.column_stack([e.ve_mps, e.vn_mps, -e.vd_mps])
+    pos = np.column_stack([e.east_m, e.north_m, e.up_m])
+    vel = np.column_stack([e.ve_mps, e.vn_mps, e.vu_mps])
     eul = np.radians(np.column_stack([e.pitch_deg, e.roll_deg, e.yaw_deg]))
     assert np.abs(pos - run.pos).max() < tol_m
     assert np.abs(vel - run.vel).max() < tol_m

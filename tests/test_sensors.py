@@ -66,10 +66,10 @@ def test_gnss_and_sar_noise_statistics():
 
     tr = generate([0.6, 2.0, 100.0], 50.0, [0, 0, 0.5], [Segment(2000.0)], 0.1)
     rng = np.random.default_rng(4)
-    g = Gnss((8.0, 5.0, 10.0), 0.2, 1.0).simulate(tr, rng)
+    g = Gnss((5.0, 8.0, 10.0), 0.2, 1.0).simulate(tr, rng)  # east, north, up
     truth = tr.at(g.t)
     d = earth.llh_difference_enu(g.z[:, 0], g.z[:, 1], g.z[:, 2], *truth["lla"].T)
-    # sigma follows z: north, east, up.
+    # the series' sigma follows z (lat, lon, h): north, east, up.
     np.testing.assert_allclose(d.std(axis=0), [5.0, 8.0, 10.0], rtol=0.06)
     np.testing.assert_allclose((g.z[:, 3:] - truth["vel"]).std(axis=0), 0.2, rtol=0.06)
     np.testing.assert_allclose(g.sigma, [8.0, 5.0, 10.0, 0.2, 0.2, 0.2])

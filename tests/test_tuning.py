@@ -61,7 +61,7 @@ def test_tune_recovers_the_figures_of_a_simulated_drive(drive):
     base = load_system({"sensors": {"gnss": {"lever_m": truth["sensors"]["gnss"]["lever_m"]}}})
     res = tune(imu, g, None, base)
     fig = {f.key: f for f in res.figures}
-    for key in ("sigma_pos_m", "sigma_vel_mps"):
+    for key in ("sigma_pos_enu_m", "sigma_vel_mps"):
         f, true = fig[f"sensors.gnss.{key}"], truth["sensors"]["gnss"][key]
         assert within(f.value, true, 1.1), (key, f.value, true)
     for key in ("gyro_arw_rad_sqrt_s", "accel_vrw_mps_sqrt_s"):
@@ -110,7 +110,7 @@ def test_cli_tune_writes_a_config_that_process_accepts(short, tmp_path):
     assert cfg.imu.gyro_arw_rad_sqrt_s == 1.0e-3  # marked fixed: kept
     assert "# imu.gyro_arw_rad_sqrt_s: 0.001 -> 0.001 (kept: marked fixed)" in text
     assert cfg.sensors.velocity is None  # the file gives the velocity sigma: kept there
-    assert cfg.sensors.gnss.sigma_pos_m is not None  # nobody gave it: estimated
+    assert cfg.sensors.gnss.sigma_pos_enu_m is not None  # nobody gave it: estimated
     assert cfg.imu.accel_vrw_mps_sqrt_s is not None
     assert "# held-back NIS/dof" in text
     r = CliRunner().invoke(app, ["process", "csv", "--imu", str(short / "imu.csv"), "--gnss",
@@ -161,15 +161,16 @@ def gm_drive(tmp_path_factory):
         "velocity": None, "segments": cfg.segments[:20],
         "imu": cfg.imu.model_copy(update={"gyro_arw_deg_sqrt_h": 10.0,
                                           "accel_vrw_ug_sqrt_hz": 2000.0}),
-        "gnss": cfg.gnss.model_copy(update={"sigma_pos_m": (0.5, 0.5, 1.0),
-                                            "markov_sigma_m": (1.0, 1.0, 2.0),
+        "gnss": cfg.gnss.model_copy(update={"sigma_pos_enu_m": (0.5, 0.5, 1.0),
+                                            "markov_sigma_enu_m": (1.0, 1.0, 2.0),
                                             "markov_tau_s": 60.0})})
     d = tmp_path_factory.mktemp("gm")
     ds = simulate_dataset(cfg)
     write_csv_dataset(ds, d)
     truth = process_config(ds)
     g = truth["sensors"]["gnss"]
-    gnss = read_gnss_csv(d / "gnss.csv", g["sigma_pos_m"], g["sigma_vel_mps"], g["lever_m"])
+    gnss = read_gnss_csv(d / "gnss.csv", g["sigma_pos_enu_m"], g["sigma_vel_mps"],
+                         g["lever_m"])
     return read_imu_csv(d / "imu.csv"), gnss, truth, d
 
 
@@ -188,7 +189,7 @@ def test_tune_keeps_held_back_nis_in_band_with_correlated_gnss_errors(gm_drive):
     assert not res.warnings
     # the receiver's sigma and the lever arm are kept
     c = res.config.sensors.gnss
-    assert c.sigma_pos_m == tuple(g["sigma_pos_m"])
+    assert c.sigma_pos_enu_m == tuple(g["sigma_pos_enu_m"])
     assert c.sigma_vel_mps == tuple(g["sigma_vel_mps"])
     assert c.lever_m == tuple(g["lever_m"])
     # the base's figures were the start, not a constraint: the white noise is raised to
@@ -225,7 +226,7 @@ def test_tuned_sensor_sigma_never_falls_below_the_data_scatter(gm_drive):
     base = load_system({"imu": datasheet(truth), "sensors": {"gnss": truth["sensors"]["gnss"]}})
     res = tune(imu, gnss, None, base, tune_sensors=True, outages=0)
     fig = {f.key: f for f in res.figures}
-    pos, vel = fig["sensors.gnss.sigma_pos_m"], fig["sensors.gnss.sigma_vel_mps"]
+    pos, vel = fig["sensors.gnss.sigma_pos_enu_m"], fig["sensors.gnss.sigma_vel_mps"]
     # the floors: the white parts (0.5, 0.5, 1.0 m; 0.05, 0.05, 0.1 m/s)
     assert within(pos.floor, [0.5, 0.5, 1.0], 1.15) and within(vel.floor, [0.05, 0.05, 0.1],
                                                                  1.15)
@@ -290,7 +291,7 @@ def test_gauss_markov_gnss_errors_are_off_by_default():
     cfg = cfg.model_copy(update={"segments": cfg.segments[:3]})
     a = simulate_dataset(cfg)
     on = cfg.model_copy(update={"gnss": cfg.gnss.model_copy(
-        update={"markov_sigma_m": (1.0, 2.0, 0.0), "markov_tau_s": 30.0})})
+        update={"markov_sigma_enu_m": (2.0, 1.0, 0.0), "markov_tau_s": 30.0})})
     b = simulate_dataset(on)
     # its own random stream: every other draw is the same with it
     np.testing.assert_array_equal(a.gyro, b.gyro)
@@ -298,9 +299,9 @@ def test_gauss_markov_gnss_errors_are_off_by_default():
     np.testing.assert_array_equal(a.vel, b.vel)
     assert np.any(a.gnss_lla[:, :2] != b.gnss_lla[:, :2])
     np.testing.assert_array_equal(a.gnss_lla[:, 2], b.gnss_lla[:, 2])  # (up: sigma 0)
-    assert process_config(a)["sensors"]["gnss"]["sigma_pos_m"] == [1.5, 1.5, 3.0]
-    assert process_config(b)["sensors"]["gnss"]["sigma_pos_m"] == pytest.approx(
-        [np.hypot(1.5, 1.0), np.hypot(1.5, 2.0), 3.0])
+    assert process_config(a)["sensors"]["gnss"]["sigma_pos_enu_m"] == [1.5, 1.5, 3.0]
+    assert process_config(b)["sensors"]["gnss"]["sigma_pos_enu_m"] == pytest.approx(
+        [np.hypot(1.5, 2.0), np.hypot(1.5, 1.0), 3.0])  # east, north, up
     x = gauss_markov(100_000, 0.2, [1.0, 2.0], 10.0, np.random.default_rng(1))
     np.testing.assert_allclose(x.std(axis=0), [1.0, 2.0], rtol=0.05)
     lag = 50  # 10 s: correlation exp(-1)

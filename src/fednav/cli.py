@@ -529,7 +529,7 @@ def _csv_reader(imu: Path | None, gnss: Path | None, velocity: Path | None,
 
         g = None
         if paths["gnss"] is not None:
-            g = read_gnss_csv(paths["gnss"], given(gc and gc.sigma_pos_m, (5.0, 5.0, 5.0)),
+            g = read_gnss_csv(paths["gnss"], given(gc and gc.sigma_pos_enu_m, (5.0, 5.0, 5.0)),
                               given(gc and gc.sigma_vel_mps, (0.1, 0.1, 0.1)),
                               given(gc and gc.lever_m, (0.0, 0.0, 0.0)))
         return {"imu": read_imu_csv(paths["imu"], cfg.imu.max_bridge_s), "gnss": g,
@@ -647,8 +647,9 @@ _TUNE_CONFIG = typer.Option(None, help="base processing config: its figures are 
                                        "sigmas are kept")
 _TUNE_FIX = typer.Option(None, "--fix", help="a figure to keep as the base config gives it "
                                              "(an imu: key such as gyro_arw_deg_sqrt_h, "
-                                             "'imu' for all; sensors.gnss.sigma_pos_m ...); "
-                                             "repeat for more")
+                                             "'imu' for all; "
+                                             "sensors.gnss.sigma_pos_enu_m ...); repeat for "
+                                             "more")
 _TUNE_SENSORS = typer.Option(False, "--tune-sensors",
                              help="also estimate the sensor sigmas the files or the base "
                                   "config give (by covariance matching, never below the "

@@ -224,7 +224,7 @@ def _read_csv(folder: Path, cfg, velocity: bool = True):
 
     gc = cfg.sensors.gnss
     g = read_gnss_csv(folder / "gnss.csv",
-                      gc.sigma_pos_m if gc and gc.sigma_pos_m else (5.0, 5.0, 5.0),
+                      gc.sigma_pos_enu_m if gc and gc.sigma_pos_enu_m else (5.0, 5.0, 5.0),
                       gc.sigma_vel_mps if gc and gc.sigma_vel_mps else (0.1, 0.1, 0.1),
                       gc.lever_m if gc and gc.lever_m else (0.0, 0.0, 0.0))
     return (read_imu_csv(folder / "imu.csv", cfg.imu.max_bridge_s), g,
@@ -247,12 +247,14 @@ def _process_case(out: dict, prefix: str, imu, gnss, vel, ref, cfg, smooth: bool
     res = process(imu, gnss, vel, cfg, smooth)
     _solution(out, f"{prefix}/forward", res.forward, 200)
     _put(out, f"{prefix}/epochs", res.epochs)
+    # the goldens' keys are the 0.1 names (down, not up: the same RMSE)
+    old = {"up_m": "down_m", "vu_mps": "vd_mps"}
     for k, v in rmse(errors_against(res.forward, ref)).items():
-        _put(out, f"{prefix}/rmse/{k}", v)
+        _put(out, f"{prefix}/rmse/{old.get(k, k)}", v)
     if smooth:
         _solution(out, f"{prefix}/smoothed", res.smoothed, 200)
         for k, v in rmse(errors_against(res.smoothed, ref)).items():
-            _put(out, f"{prefix}/rmse_smoothed/{k}", v)
+            _put(out, f"{prefix}/rmse_smoothed/{old.get(k, k)}", v)
 
 
 def process_cases(tmp: Path) -> dict:
@@ -305,11 +307,13 @@ def tune_case(tmp: Path) -> dict:
     imu.gyro = _ulp(imu.gyro)
     res = tune(imu, gnss, vel, pcfg)
     out: dict = {}
-    legacy = {"sensors.gnss.sigma_pos_m": "gnss_sigma_pos_m",
+    legacy = {"sensors.gnss.sigma_pos_enu_m": "gnss_sigma_pos_m",
               "sensors.gnss.sigma_vel_mps": "gnss_sigma_vel_mps",
               "sensors.velocity.sigma_mps": "velocity_sigma_mps"}  # their 0.1 names
     for f in res.figures:
-        _put(out, f"figure/{legacy.get(f.key, f.key)}", f.value)
+        # (gnss_sigma_pos_m in its 0.1 order, [north, east, up])
+        v = f.value if f.key != "sensors.gnss.sigma_pos_enu_m" else np.asarray(f.value)[[1, 0, 2]]
+        _put(out, f"figure/{legacy.get(f.key, f.key)}", v)
     _put(out, "before/loglik", res.before.loglik)
     _put(out, "after/loglik", res.after.loglik)
     for k, v in res.after.nis_per_dof.items():

@@ -78,7 +78,7 @@ def test_read_gnss_visual_reference(tmp_path):
                                vel=np.tile([1.0, 2.0, 0.5], (n, 1)), stdm=[5, 6, 7],
                                stdv=[0.1, 0.2, 0.3], larm=[1.0, 0.5, -0.2]))
     np.testing.assert_allclose(g.vel[0], [2.0, 1.0, -0.5])  # NED -> ENU
-    np.testing.assert_allclose(g.sigma_pos, [5, 6, 7])  # north, east, up
+    np.testing.assert_allclose(g.sigma_pos_enu, [6, 5, 7])  # east, north, up (stdm N, E, D)
     np.testing.assert_allclose(g.sigma_vel, [0.2, 0.1, 0.3])  # east, north, up
     np.testing.assert_allclose(g.lever, [0.5, 1.0, 0.2])  # right, forward, up
     cov = np.diag([1.0, 4.0, 9.0]).ravel()

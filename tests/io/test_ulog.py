@@ -117,12 +117,12 @@ def test_gnss_degrees_or_1e7_integers_ellipsoid_height_and_ned_to_enu(which, req
          else d["alt_ellipsoid"] * 1e-3)[fix][i]
     assert g.lla[i, 2] == pytest.approx(float(h), abs=1e-9)
     np.testing.assert_array_equal(g.lever, 0.0)
-    assert np.all(g.sigma_pos >= 0.5) and np.all(g.sigma_vel >= 0.3)  # PX4's floors
+    assert np.all(g.sigma_pos_enu >= 0.5) and np.all(g.sigma_vel >= 0.3)  # PX4's floors
 
 
 def test_gnss_sigma_is_the_median_over_the_fixes(events, sim):
-    assert events.quality["gnss_sigma_pos_m"] == [0.5, 0.5, 0.5]  # eph 0.32 m: floored
-    np.testing.assert_allclose(sim.gnss.sigma_pos, [2.225, 2.225, 2.325], atol=1e-5)
+    assert events.quality["gnss_sigma_pos_enu_m"] == [0.5, 0.5, 0.5]  # eph 0.32 m: floored
+    np.testing.assert_allclose(sim.gnss.sigma_pos_enu, [2.225, 2.225, 2.325], atol=1e-5)
     np.testing.assert_allclose(events.gnss.sigma_vel, 0.3)
     assert events.gnss.vel[:, 2].max() > 0.7  # the take-off (climb 1 m/s) is in it
 
@@ -232,13 +232,14 @@ def test_the_log_runs_through_process_and_agrees_with_px4(events):
            "accel_bias_mps2": 0.2, "gyro_markov_radps": 1e-4, "gyro_tau_s": 100,
            "accel_markov_mps2": 1e-3, "accel_tau_s": 100}
     g = events.gnss
-    sec = {"gnss": {"sigma_pos_m": g.sigma_pos.tolist(), "sigma_vel_mps": g.sigma_vel.tolist()},
+    sec = {"gnss": {"sigma_pos_enu_m": g.sigma_pos_enu.tolist(),
+                    "sigma_vel_mps": g.sigma_vel.tolist()},
            "mag": {"sigma_heading_deg": 2.0, "inclination_deg": 64.0,
                    "declination_deg": events.quality["mag_declination_deg"]},
            "baro": {"sigma_m": 0.5, "damping_loop": False}}
     res = process(events.imu, g, None, load_system({"imu": imu, "sensors": sec}),
                   sensors=events.sensors)
     r = rmse(errors_against(res.forward, events.px4))
-    assert max(r["north_m"], r["east_m"], r["down_m"]) < 0.5
-    assert max(r["vn_mps"], r["ve_mps"], r["vd_mps"]) < 0.2
+    assert max(r["east_m"], r["north_m"], r["up_m"]) < 0.5
+    assert max(r["ve_mps"], r["vn_mps"], r["vu_mps"]) < 0.2
     assert max(r["roll_deg"], r["pitch_deg"]) < 0.5 and r["yaw_deg"] < 1.0

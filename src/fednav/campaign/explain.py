@@ -42,7 +42,8 @@ _WORDS = {
     "vel_x": "velocity x", "vel_y": "velocity y", "vel_z": "velocity z",
     "pf": "PF", "ekf": "EKF",
     "north": "north position", "east": "east position", "down": "down position",
-    "vn": "north velocity", "ve": "east velocity", "vd": "down velocity",
+    "up": "up position", "vn": "north velocity", "ve": "east velocity",
+    "vd": "down velocity", "vu": "up velocity",
 }
 #: Whole keys whose label is not made of the words above.
 _LABELS = {

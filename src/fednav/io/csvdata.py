@@ -155,8 +155,8 @@ def _lla(df) -> np.ndarray:
 GNSS_SIGMA_COLUMNS = ("sigma_north_m", "sigma_east_m", "sigma_up_m") + VEL_SIGMA_COLUMNS
 
 
-def read_gnss_csv(path, sigma_pos=(5.0, 5.0, 5.0), sigma_vel=(0.1, 0.1, 0.1),
-                  lever=(0.0, 0.0, 0.0)) -> GnssData:
+def read_gnss_csv(path, sigma_pos_enu=None, sigma_vel=(0.1, 0.1, 0.1),
+                  lever=(0.0, 0.0, 0.0), *, sigma_pos=None) -> GnssData:
     """Read a GNSS CSV file (``docs/data-formats.md``).
 
     Positions ``lat_deg, lon_deg, h_m`` and/or ENU velocities ``vE_mps, vN_mps, vU_mps``
@@ -169,12 +169,17 @@ def read_gnss_csv(path, sigma_pos=(5.0, 5.0, 5.0), sigma_vel=(0.1, 0.1, 0.1),
     ----------
     path : str or Path
         The CSV file.
-    sigma_pos : sequence of float
-        Position 1-sigma [north, east, up] [m] where the file has none.
+    sigma_pos_enu : sequence of float, optional
+        Position 1-sigma [east, north, up] [m] where the file has none (default 5 m
+        each).
     sigma_vel : sequence of float
         Velocity 1-sigma [east, north, up] [m/s] where the file has none.
     lever : sequence of float
         Antenna position from the IMU, body right-forward-up [m].
+    sigma_pos : sequence of float, optional
+        Deprecated: the position 1-sigma in the old order [north, east, up] [m], read
+        and reordered with a ``FutureWarning`` for one more release (not with
+        ``sigma_pos_enu``).
 
     Returns
     -------
@@ -186,7 +191,13 @@ def read_gnss_csv(path, sigma_pos=(5.0, 5.0, 5.0), sigma_vel=(0.1, 0.1, 0.1),
     ------
     DataError
         One line naming the file and what is wrong.
+    TypeError
+        When both ``sigma_pos`` and ``sigma_pos_enu`` are given.
     """
+    if sigma_pos is not None and sigma_pos_enu is not None:
+        raise TypeError("read_gnss_csv: sigma_pos ([north, east, up]) and sigma_pos_enu "
+                        "([east, north, up]) are the same setting; give sigma_pos_enu "
+                        "only")
     src, df = _read(path, "GNSS", ("t_s",),
                     numeric=POS_COLUMNS + GNSS_SIGMA_COLUMNS + ("t_arrival_s",),
                     expected=("t_s",) + POS_COLUMNS + VEL_COLUMNS)
@@ -216,9 +227,13 @@ def read_gnss_csv(path, sigma_pos=(5.0, 5.0, 5.0), sigma_vel=(0.1, 0.1, 0.1),
         for j, c in enumerate(GNSS_SIGMA_COLUMNS):
             if c in df.columns and c in want:
                 sig[:, j] = df[c].to_numpy(float)
-    return GnssData(src, df["t_s"].to_numpy(float), lla, vel, np.asarray(sigma_pos),
-                    np.asarray(sigma_vel), np.asarray(lever), sigma_rows=sig,
-                    t_arrival=_arrival(df))
+    if sigma_pos is not None:  # the old keyword: GnssData reorders it, with a warning
+        pos = {"sigma_pos": np.asarray(sigma_pos)}
+    else:
+        pos = {"sigma_pos_enu": np.asarray((5.0,) * 3 if sigma_pos_enu is None
+                                           else sigma_pos_enu)}
+    return GnssData(src, df["t_s"].to_numpy(float), lla, vel, sigma_vel=np.asarray(sigma_vel),
+                    lever=np.asarray(lever), sigma_rows=sig, t_arrival=_arrival(df), **pos)
 
 
 def read_velocity_csv(path, lever=(0.0, 0.0, 0.0)) -> VelocityData:

@@ -6,6 +6,8 @@ Frames: body right-forward-up, navigation ENU; positions geodetic ``[lat, lon, h
 
 from __future__ import annotations
 
+import functools
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -312,16 +314,21 @@ class ImuData:
 @dataclass
 class GnssData:
     """GNSS fixes: ``t`` (N,) [s], ``lla`` (N, 3) (or None for velocity-only data), ENU
-    ``vel`` (N, 3) [m/s] (or None for position-only receivers), 1-sigma ``sigma_pos``
-    (3,) [north, east, up] [m] and ``sigma_vel`` (3,) [east, north, up] [m/s], antenna
-    ``lever`` arm (3,) from the IMU, body right-forward-up [m]; optionally each fix's
-    own 1-sigma ``sigma_rows`` (N, 6) [north, east, up m, vE, vN, vU m/s] (the file's)."""
+    ``vel`` (N, 3) [m/s] (or None for position-only receivers), 1-sigma
+    ``sigma_pos_enu`` (3,) [east, north, up] [m] and ``sigma_vel`` (3,) [east, north, up]
+    [m/s], antenna ``lever`` arm (3,) from the IMU, body right-forward-up [m]; optionally
+    each fix's own 1-sigma ``sigma_rows`` (N, 6) in the order of the fix's values
+    ``[lat, lon, h, vE, vN, vU]``: [north, east, up m, vE, vN, vU m/s] (the file's).
+
+    The old keyword ``sigma_pos`` ([north, east, up]) is read, reordered, with a
+    ``FutureWarning`` for one more release; the attribute ``sigma_pos`` gives that
+    order until then."""
 
     source: str
     t: np.ndarray
     lla: np.ndarray | None
     vel: np.ndarray | None
-    sigma_pos: np.ndarray
+    sigma_pos_enu: np.ndarray
     sigma_vel: np.ndarray
     lever: np.ndarray
     #: what the checks did: {"gnss_epochs_skipped": n}
@@ -365,10 +372,11 @@ class GnssData:
                 raise DataError(f"{self.source}: a 1-sigma of fix {i} (at {self.t[i]:.6f} s) "
                                 f"is not positive")
         self.sigma_rows = sig
-        self.sigma_pos = check_array(self.source, "sigma_pos", self.sigma_pos, (3,))
+        self.sigma_pos_enu = check_array(self.source, "sigma_pos_enu", self.sigma_pos_enu,
+                                         (3,))
         self.sigma_vel = check_array(self.source, "sigma_vel", self.sigma_vel, (3,))
         self.lever = check_array(self.source, "lever", self.lever, (3,))
-        if (self.lla is not None and np.any(self.sigma_pos <= 0)) or (
+        if (self.lla is not None and np.any(self.sigma_pos_enu <= 0)) or (
                 self.vel is not None and np.any(self.sigma_vel <= 0)):
             raise DataError(f"{self.source}: GNSS standard deviations must be positive")
 
@@ -388,12 +396,42 @@ class GnssData:
         vel = np.zeros((len(t), 3))
         ok = span > 0
         vel[ok] = (d[hi[ok]] - d[lo[ok]]) / span[ok, None]
-        sp = (np.broadcast_to(self.sigma_pos, (len(t), 3)) if self.sigma_rows is None
+        sp = (np.broadcast_to(self.sigma_pos_enu, (len(t), 3)) if self.sigma_rows is None
               else self.sigma_rows[:, :3])
-        s = np.max(sp[:, :2], axis=1)  # (horizontal: the course's)
+        s = np.max(sp[:, :2], axis=1)  # (horizontal, east and north: the course's)
         sigma = np.full(len(t), np.inf)
         sigma[ok] = np.hypot(s[hi[ok]], s[lo[ok]]) / span[ok]
         return vel, sigma
+
+    @property
+    def sigma_pos(self) -> np.ndarray:
+        """Deprecated (removed in 0.3): :attr:`sigma_pos_enu` in the old order [north,
+        east, up] [m]."""
+        return self.sigma_pos_enu[[1, 0, 2]]
+
+
+_SIGMA_POS_RENAMED = ("GnssData.sigma_pos [north, east, up] is now GnssData.sigma_pos_enu "
+                      "[east, north, up]: read and reordered for one more release")
+
+
+def _old_sigma_pos(init):
+    """``GnssData(..., sigma_pos=[north, east, up])`` (the old keyword) read as
+    ``sigma_pos_enu``, reordered, with a FutureWarning; both: a TypeError."""
+    @functools.wraps(init)
+    def __init__(self, *args, sigma_pos=None, **kwargs):
+        if sigma_pos is not None:
+            if len(args) > 4 or "sigma_pos_enu" in kwargs:
+                raise TypeError("GnssData: sigma_pos ([north, east, up]) and sigma_pos_enu "
+                                "([east, north, up]) are the same setting; give "
+                                "sigma_pos_enu only")
+            warnings.warn(_SIGMA_POS_RENAMED, FutureWarning, stacklevel=2)
+            old = np.asarray(sigma_pos)
+            kwargs["sigma_pos_enu"] = old[[1, 0, 2]] if old.shape == (3,) else old
+        init(self, *args, **kwargs)
+    return __init__
+
+
+GnssData.__init__ = _old_sigma_pos(GnssData.__init__)
 
 
 @dataclass

@@ -178,7 +178,7 @@ def read_navego_gnss(path) -> GnssData:
     stdv = _vec3(src, s, "stdv")
     larm = _vec3(src, s, "larm", required=False, default=np.zeros(3))
     return GnssData(src, _field(src, s, "t"), _lla(src, s), _ned(src, s, required=False),
-                    stdm, stdv[[1, 0, 2]], FRD_TO_RFU @ larm)
+                    stdm[[1, 0, 2]], stdv[[1, 0, 2]], FRD_TO_RFU @ larm)  # -> ENU
 
 
 def read_navego_visual(path) -> VelocityData:

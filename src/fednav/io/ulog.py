@@ -262,7 +262,7 @@ def _gnss(log: _Log, quality: dict, notes: list) -> GnssData | None:
     fl_v = _param(log, "EKF2_GPS_V_NOISE", GNSS_SIGMA_VEL_FLOOR_MPS)
     eph, epv = (max(_f(np.median(d[k][fix])), fl_p) for k in ("eph", "epv"))
     sv = max(_f(np.median(d["s_variance_m_s"][fix])), fl_v)
-    quality.update(gnss_sigma_pos_m=[eph, eph, epv], gnss_sigma_vel_mps=sv)
+    quality.update(gnss_sigma_pos_enu_m=[eph, eph, epv], gnss_sigma_vel_mps=sv)
     g = GnssData(f"{log.src}:{topic}", t[fix], lla[fix], (ned @ FRD_TO_RFU.T)[fix],
                  np.array([eph, eph, epv]), np.full(3, sv), np.zeros(3))
     quality.update(g.quality)
@@ -413,7 +413,7 @@ def read_ulog(path, max_bridge_s: float = 0.1) -> UlogRecording:
     ``ekf2_gyr_noise`` / ``ekf2_acc_noise`` (PX4's own filter tuning: the log has no
     IMU noise figures);
     ``gnss_topic``, ``gnss_epochs_no_fix`` (``fix_type`` < 3), ``gnss_epochs_skipped``,
-    ``gnss_height`` ('ellipsoid' or 'amsl'), ``gnss_sigma_pos_m``, ``gnss_sigma_vel_mps``;
+    ``gnss_height`` ('ellipsoid' or 'amsl'), ``gnss_sigma_pos_enu_m``, ``gnss_sigma_vel_mps``;
     ``baro_offset_m``; ``mag_topic``, ``mag_declination_deg`` (PX4's EKF2_MAG_DECL, for
     ``sensors.mag.declination_deg``); ``px4_height`` / ``truth_height`` ('ellipsoid',
     'amsl' or 'unset': 0 in every row) and ``px4_rows_skipped`` / ``truth_rows_skipped``

@@ -212,7 +212,8 @@ def launch_system(scn: LaunchScenario, kind: str) -> System:
     """The system description of a launch-frame run: its two sensors (used at the filter
     epoch), the filter type and period."""
     return System.model_validate({
-        "sensors": {"gnss": {"sigma_pos_m": scn.gnss.sigma_m, "period_s": scn.gnss.period_s,
+        "sensors": {"gnss": {"sigma_pos_enu_m": scn.gnss.sigma_m,
+                             "period_s": scn.gnss.period_s,
                              "timing": {"delay_compensation": "none"}},
                     "star": {"sigma_arcsec": scn.star.sigma_arcsec,
                              "period_s": scn.star.period_s,

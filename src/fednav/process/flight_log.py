@@ -79,7 +79,7 @@ def ulog_system(rec, cfg: System) -> tuple[System, list[str]]:
     g = rec.gnss
     if g is not None:
         sec = sensors.setdefault("gnss", {})
-        sec.setdefault("sigma_pos_m", [float(v) for v in g.sigma_pos])
+        sec.setdefault("sigma_pos_enu_m", [float(v) for v in g.sigma_pos_enu])
         sec.setdefault("sigma_vel_mps", [float(v) for v in g.sigma_vel])
     if "mag" in rec.sensors:
         sec = sensors.setdefault("mag", {})

@@ -14,9 +14,10 @@ from ..io.data import Reference
 from ..navigator.solution import consistency as _consistency
 from .run import ProcessResult, Solution, errors_against, rmse
 
-#: Columns of the RMSE block of summary.json (attitude ones only with a reference attitude).
-RMSE_KEYS = ("north_m", "east_m", "down_m", "vn_mps", "ve_mps", "vd_mps", "roll_deg",
-             "pitch_deg", "yaw_deg")
+#: Columns of the RMSE block of summary.json, in the solution's order: ENU position and
+#: velocity, then the Euler angles [pitch, roll, heading] (only with a reference attitude).
+RMSE_KEYS = ("east_m", "north_m", "up_m", "ve_mps", "vn_mps", "vu_mps", "pitch_deg",
+             "roll_deg", "yaw_deg")
 
 
 def solution_columns(sol: Solution) -> dict[str, np.ndarray]:
@@ -170,11 +171,11 @@ def _thin(n: int, most: int = 20_000) -> slice:
 
 #: errors.png panels, a row per quantity: (error key, sigma column, title) — columns of
 #: Solution.sigma for position and velocity, of Solution.sigma_euler for the angles
-_PANELS = ((("north_m", 7, "north position"), ("east_m", 6, "east position"),
-            ("down_m", 8, "down position")),
-           (("vn_mps", 4, "north velocity"), ("ve_mps", 3, "east velocity"),
-            ("vd_mps", 5, "down velocity")),
-           (("roll_deg", 1, "roll"), ("pitch_deg", 0, "pitch"), ("yaw_deg", 2, "yaw")))
+_PANELS = ((("east_m", 6, "east position"), ("north_m", 7, "north position"),
+            ("up_m", 8, "up position")),
+           (("ve_mps", 3, "east velocity"), ("vn_mps", 4, "north velocity"),
+            ("vu_mps", 5, "up velocity")),
+           (("pitch_deg", 0, "pitch"), ("roll_deg", 1, "roll"), ("yaw_deg", 2, "yaw")))
 _UNITS = ("m", "m/s", "deg")
 _WHAT = ("position error", "velocity error", "attitude error")
 
@@ -189,8 +190,8 @@ def epoch_sigma(sol: Solution) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def errors_figure(res: ProcessResult, ref: Reference, gnss=None, title: str = ""):
-    """``errors.png`` as a :class:`~matplotlib.figure.Figure`: north, east, down position
-    [m], velocity [m/s] and (with a reference attitude) roll, pitch, yaw [deg] errors of
+    """``errors.png`` as a :class:`~matplotlib.figure.Figure`: east, north, up position
+    [m], velocity [m/s] and (with a reference attitude) pitch, roll, yaw [deg] errors of
     the forward (and smoothed) solution against ``ref``, each with its filter's +-3 sigma
     at the filter epochs (the smoothed one's from the RTS covariance; over more than 500
     epochs their upper envelope, :func:`fednav.core.plots.envelope`), GNSS outages
@@ -251,8 +252,8 @@ def plot_errors(res: ProcessResult, ref: Reference, path: Path, gnss=None,
     """Plot the solution's errors against a reference (``errors.png`` of ``fednav
     process``; :func:`errors_figure`).
 
-    Position north, east, down [m], velocity [m/s] and, with a reference attitude, roll,
-    pitch, yaw [deg] errors of the forward (and smoothed) solution with their +-3 sigma.
+    Position east, north, up [m], velocity [m/s] and, with a reference attitude, pitch,
+    roll, yaw [deg] errors of the forward (and smoothed) solution with their +-3 sigma.
 
     Parameters
     ----------
@@ -279,8 +280,8 @@ def plot_errors(res: ProcessResult, ref: Reference, path: Path, gnss=None,
 def write_errors(res: ProcessResult, ref: Reference, path: Path,
                  output_rate: float | str | None = "imu") -> Path:
     """``errors.csv``: the forward (and smoothed, ``*_smoothed``) solution minus the
-    reference at the reference's time stamps: ``north_m, east_m, down_m, vn_mps, ve_mps,
-    vd_mps`` and, with a reference attitude, ``pitch_deg, roll_deg, yaw_deg``
+    reference at the reference's time stamps: ``east_m, north_m, up_m, ve_mps, vn_mps,
+    vu_mps`` and, with a reference attitude, ``pitch_deg, roll_deg, yaw_deg``
     (:func:`~fednav.process.run.errors_against`; 10 significant digits), thinned like
     the solution to ``output_rate`` (:func:`decimate`; ``"imu"``: every reference
     stamp)."""

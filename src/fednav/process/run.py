@@ -13,6 +13,7 @@ validity — and the solution at every IMU sample with its sigmas, smoothed on r
 from __future__ import annotations
 
 import time
+import warnings as _warnings
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -192,12 +193,12 @@ def _initial_attitude(imu: ImuData, gnss: GnssData, system: System, t0: float, i
                      report={"levelling": how, "heading": how})
 
 
-def _initial_covariance(al: Alignment, sig_vel, sig_pos, gb: float, ab: float,
+def _initial_covariance(al: Alignment, sig_vel, sig_pos_enu, gb: float, ab: float,
                         noise: em.ImuNoiseModel) -> np.ndarray:
     """P0 (filter units): diagonal from the figures, with the alignment's tilt/bias
     coupling and gyro-bias accuracy where it has them (:mod:`fednav.ins.alignment`)."""
     eps_c = gb if al.gyro_bias_sigma is None else min(gb, al.gyro_bias_sigma)
-    sd0 = np.r_[al.sigma, sig_vel, sig_pos[[1, 0, 2]], np.full(3, eps_c),
+    sd0 = np.r_[al.sigma, sig_vel, sig_pos_enu, np.full(3, eps_c),
                 np.full(3, noise.gyro_markov_sigma), np.full(3, ab)]
     P0 = np.diag(np.maximum(sd0, 1e-6 * em.SCALE) ** 2)
     if al.tilt_bias is not None:
@@ -715,8 +716,10 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
     sensors, meas, sigmas = {}, {}, {}
     if gnss is not None:
         gc = _gnss_cfg(cfg)
-        sig_pos = np.broadcast_to(np.asarray(gc.sigma_pos_m if gc.sigma_pos_m is not None
-                                             else gnss.sigma_pos, dtype=float), (3,))
+        sig_pos_enu = np.broadcast_to(np.asarray(
+            gc.sigma_pos_enu_m if gc.sigma_pos_enu_m is not None else gnss.sigma_pos_enu,
+            dtype=float), (3,))
+        sig_pos = sig_pos_enu[[1, 0, 2]]  # in the order of z (lat, lon, h): north, east, up
         sig_vel = np.broadcast_to(np.asarray(gc.sigma_vel_mps if gc.sigma_vel_mps is not None
                                              else gnss.sigma_vel, dtype=float), (3,))
         lever = np.asarray(gc.lever_m or gnss.lever, dtype=float)
@@ -731,7 +734,8 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
                             f"navigator's GNSS model needs positions and velocities; the "
                             f"file has {has.replace('_', ' and ')} only")
         sensors["gnss"] = gc.model_copy(update={
-            "lever_m": tuple(map(float, lever)), "sigma_pos_m": tuple(map(float, sig_pos)),
+            "lever_m": tuple(map(float, lever)),
+            "sigma_pos_enu_m": tuple(map(float, sig_pos_enu)),
             "sigma_vel_mps": tuple(map(float, sig_vel)), "measures": has})
         n = len(gnss.t)
         z = np.column_stack([np.full((n, 3), np.nan) if gnss.lla is None else gnss.lla,
@@ -772,7 +776,7 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
         C0 = att.euler_to_dcm(al.euler)
         lla0 = earth.move_enu(gnss.lla[0], -(C0 @ lever))
         vel0 = gnss_v.vel[0]
-        P0 = _initial_covariance(al, sig_vel0, sig_pos, gb, ab, noise)
+        P0 = _initial_covariance(al, sig_vel0, sig_pos_enu, gb, ab, noise)
         euler0, gyro_bias = al.euler, al.gyro_bias
     warnings += al.warnings
 
@@ -845,7 +849,7 @@ def flown_gnss(gnss: GnssData | None, system: System) -> GnssData | None:
     g = system.sensors.gnss
     flown = adjust_sensors(gnss, None, system)[0]
     return replace(flown, quality={}, lever=np.asarray(g.lever_m, dtype=float),
-                   sigma_pos=np.asarray(g.sigma_pos_m, dtype=float),
+                   sigma_pos_enu=np.asarray(g.sigma_pos_enu_m, dtype=float),
                    sigma_vel=np.asarray(g.sigma_vel_mps, dtype=float))
 
 
@@ -946,6 +950,29 @@ def gnss_z(gnss: GnssData, i: int) -> np.ndarray:
     return np.concatenate((gnss.lla[i], gnss.vel[i]))
 
 
+#: Error keys of earlier releases (north, east, down) -> their key now (east, north, up).
+RENAMED_ERRORS = {"down_m": "up_m", "vd_mps": "vu_mps"}
+
+
+class _Errors(dict):
+    """Error series (``signed``) or their RMSE by key; the keys of
+    :data:`RENAMED_ERRORS` are read, as minus the new series (or the same RMSE), with a
+    ``FutureWarning`` for one more release."""
+
+    def __init__(self, *args, signed: bool = True):
+        super().__init__(*args)
+        self.signed = signed
+
+    def __missing__(self, key):
+        new = RENAMED_ERRORS.get(key)
+        if new is None or new not in self:
+            raise KeyError(key)
+        _warnings.warn(f"error key '{key}' is now '{new}' (errors are east, north, up, as the "
+                       f"solution): read as {'-' if self.signed else ''}{new} for one more "
+                       f"release", FutureWarning, stacklevel=2)
+        return -self[new] if self.signed else self[new]
+
+
 def errors_against(sol: Solution, ref: Reference) -> dict[str, np.ndarray]:
     """The solution's errors: solution minus reference at the reference's times inside
     the solution's span.
@@ -966,10 +993,11 @@ def errors_against(sol: Solution, ref: Reference) -> dict[str, np.ndarray]:
     Returns
     -------
     dict of str to ndarray
-        ``t`` [s]; position errors ``north_m``, ``east_m``, ``down_m`` [m]; velocity
-        errors ``vn_mps``, ``ve_mps``, ``vd_mps`` [m/s] (north-east-down naming, as
-        navigation users report them); with a reference attitude ``pitch_rad``,
-        ``roll_rad``, ``yaw_rad`` [rad].
+        ``t`` [s]; position errors ``east_m``, ``north_m``, ``up_m`` [m]; velocity
+        errors ``ve_mps``, ``vn_mps``, ``vu_mps`` [m/s] (ENU, as the solution); with a
+        reference attitude ``pitch_rad``, ``roll_rad``, ``yaw_rad`` [rad] (the Euler
+        angles' order).  The old keys ``down_m`` and ``vd_mps`` are read (as minus
+        ``up_m``, ``vu_mps``) with a ``FutureWarning`` for one more release.
 
     Raises
     ------
@@ -1000,8 +1028,8 @@ def errors_against(sol: Solution, ref: Reference) -> dict[str, np.ndarray]:
         raise DataError(f"{ref.source}: the solution and the reference are {far / 1000:.0f} "
                         f"km apart (median): reference or GNSS positions in another unit "
                         f"(radians vs degrees) or datum?")
-    out = {"t": tr, "north_m": d[:, 1], "east_m": d[:, 0], "down_m": -d[:, 2],
-           "vn_mps": dv[:, 1], "ve_mps": dv[:, 0], "vd_mps": -dv[:, 2]}
+    out = _Errors({"t": tr, "east_m": d[:, 0], "north_m": d[:, 1], "up_m": d[:, 2],
+                   "ve_mps": dv[:, 0], "vn_mps": dv[:, 1], "vu_mps": dv[:, 2]})
     if ref.euler is not None:
         # Interpolate attitude through unit quaternions (no heading wrap problems).
         q = att.euler_to_quat(sol.euler)
@@ -1027,9 +1055,10 @@ def rmse(err: dict[str, np.ndarray]) -> dict[str, float]:
     -------
     dict of str to float
         The RMSE of each series in its unit [m, m/s]; angles (``*_rad``) in degrees under
-        ``*_deg`` [deg].
+        ``*_deg`` [deg].  The old keys ``down_m`` and ``vd_mps`` are read (the same as
+        ``up_m``, ``vu_mps``) with a ``FutureWarning`` for one more release.
     """
-    out = {}
+    out = _Errors(signed=False)
     for k, v in err.items():
         if k == "t":
             continue

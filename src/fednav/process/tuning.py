@@ -68,6 +68,7 @@ from ..core.config import ConfigError
 from ..io.data import DataError, GnssData, ImuData, VelocityData
 from ..navigator.system import System, _translate_legacy
 from ..sensors import GnssConfig, VelocityConfig
+from ..sensors.gnss import renamed_neu_keys
 from ..sensors.imu import FIGURES
 from .run import InnovationRecord, adjust_sensors, imu_figures, process, with_imu_figures
 
@@ -85,8 +86,10 @@ WHITE_KEYS = {"gyro_arw_rad_sqrt_s": "gyro_white_deg_h",
 #: IMU figures tune never changes (one data set holds one draw of a turn-on bias).
 KEPT_KEYS = ("gyro_bias_radps", "accel_bias_mps2", "gyro_tau_s", "accel_tau_s")
 #: Sensor sigmas tune may estimate, by their config key.
-SENSOR_KEYS = ("sensors.gnss.sigma_pos_m", "sensors.gnss.sigma_vel_mps",
+SENSOR_KEYS = ("sensors.gnss.sigma_pos_enu_m", "sensors.gnss.sigma_vel_mps",
                "sensors.velocity.sigma_mps")
+#: Old spellings of sensor keys (read with a FutureWarning for one more release).
+OLD_SENSOR_KEYS = {"sensors.gnss.sigma_pos_m": "sensors.gnss.sigma_pos_enu_m"}
 #: The band of NIS/dof a consistent filter's held-back innovations fall in.
 NIS_BAND = (0.5, 2.0)
 #: ln of the likelihood-search step (a factor 3).
@@ -339,9 +342,11 @@ def _starting_imu(imu: ImuData, base: System, notes: list) -> dict[str, float]:
 def fixed_keys(names) -> set[str]:
     """The figures ``names`` marks as fixed, by their SI key (``imu:`` keys, in any of
     their spellings, with or without ``imu.``; ``imu`` for all of them) or sensor key
-    (``sensors.gnss.sigma_pos_m``, ``gnss.sigma_vel_mps``, ``velocity.sigma_mps``;
-    ``gnss``, ``velocity`` for a sensor's every sigma).  A :class:`ConfigError` names
-    one that is none of these."""
+    (``sensors.gnss.sigma_pos_enu_m``, ``gnss.sigma_vel_mps``, ``velocity.sigma_mps``;
+    ``gnss``, ``velocity`` for a sensor's every sigma; the old ``sigma_pos_m`` with a
+    ``FutureWarning``).  A :class:`ConfigError` names one that is none of these."""
+    import warnings
+
     alias = {}
     for fig, (eng, _, si) in FIGURES.items():
         for a in (fig, eng, si):
@@ -352,6 +357,8 @@ def fixed_keys(names) -> set[str]:
     for key in SENSOR_KEYS:
         alias[key] = {key}
         alias[key.removeprefix("sensors.")] = {key}
+    for old, new in OLD_SENSOR_KEYS.items():
+        alias[old] = alias[old.removeprefix("sensors.")] = {new}
     alias["gnss"] = set(SENSOR_KEYS[:2])
     alias["velocity"] = {SENSOR_KEYS[2]}
     out: set[str] = set()
@@ -361,8 +368,12 @@ def fixed_keys(names) -> set[str]:
         if k not in alias:
             raise ConfigError(f"--fix {n}: not a figure tune estimates; give an imu: key "
                               f"(e.g. gyro_arw_deg_sqrt_h, accel_markov_mps2; 'imu' for all), "
-                              f"sensors.gnss.sigma_pos_m, sensors.gnss.sigma_vel_mps, "
+                              f"sensors.gnss.sigma_pos_enu_m, sensors.gnss.sigma_vel_mps, "
                               f"sensors.velocity.sigma_mps, 'gnss' or 'velocity'")
+        old = "sensors." + k.removeprefix("sensors.")
+        if old in OLD_SENSOR_KEYS:
+            warnings.warn(f"--fix {n}: the key is now {OLD_SENSOR_KEYS[old]} (read for one "
+                          f"more release)", FutureWarning, stacklevel=2)
         out |= alias[k]
     return out
 
@@ -444,27 +455,27 @@ def tune(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
     # -- the sensor sigmas: which are given (kept unless tune_sensors), which are free
     from_file = set(sigma_from_file or ())
     rows = gnss.sigma_rows is not None
-    given = {"sensors.gnss.sigma_pos_m": gc.sigma_pos_m is not None or rows
+    given = {"sensors.gnss.sigma_pos_enu_m": gc.sigma_pos_enu_m is not None or rows
              or "gnss" in from_file,
              "sensors.gnss.sigma_vel_mps": gc.sigma_vel_mps is not None or rows
              or "gnss" in from_file,
              "sensors.velocity.sigma_mps": velocity is not None}
     free = {k: k not in fixed and (tune_sensors or not given[k]) for k in SENSOR_KEYS}
     if rows and tune_sensors:
-        free["sensors.gnss.sigma_pos_m"] = free["sensors.gnss.sigma_vel_mps"] = False
+        free["sensors.gnss.sigma_pos_enu_m"] = free["sensors.gnss.sigma_vel_mps"] = False
         notes.append(f"{gnss.source} gives each fix's 1-sigma, which processing uses over "
                      f"the config's: the GNSS sigmas are kept")
     # Sensor noise variances in the order of the residuals: GNSS [E, N, U] m, [E, N, U]
     # m/s (the components the file has); velocity sensor [E, N, U] m/s.
     _, v_adj = adjust_sensors(gnss, velocity, base)
-    pos0 = np.broadcast_to(np.asarray(gnss.sigma_pos if gc.sigma_pos_m is None
-                                      else gc.sigma_pos_m, dtype=float), (3,))  # N, E, U
+    pos0 = np.broadcast_to(np.asarray(gnss.sigma_pos_enu if gc.sigma_pos_enu_m is None
+                                      else gc.sigma_pos_enu_m, dtype=float), (3,))
     vel0 = np.broadcast_to(np.asarray(gnss.sigma_vel if gc.sigma_vel_mps is None
-                                      else gc.sigma_vel_mps, dtype=float), (3,))  # E, N, U
-    r_gnss = np.r_[pos0[[1, 0, 2]], vel0] ** 2
+                                      else gc.sigma_vel_mps, dtype=float), (3,))
+    r_gnss = np.r_[pos0, vel0] ** 2
     has = np.r_[np.full(3, gnss.lla is not None and gc.measures != "velocity"),
                 np.full(3, gnss.vel is not None and gc.measures != "position")]
-    free_g = np.r_[np.full(3, free["sensors.gnss.sigma_pos_m"]),
+    free_g = np.r_[np.full(3, free["sensors.gnss.sigma_pos_enu_m"]),
                    np.full(3, free["sensors.gnss.sigma_vel_mps"])] & has
     r_vel = None
     if velocity is not None:
@@ -504,8 +515,8 @@ def tune(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
         if base.sensors.gnss is not None or np.any(free_g):
             sd = np.sqrt(rg)
             up = {}
-            if free["sensors.gnss.sigma_pos_m"] and has[0]:
-                up["sigma_pos_m"] = tuple(map(float, sd[[1, 0, 2]]))
+            if free["sensors.gnss.sigma_pos_enu_m"] and has[0]:
+                up["sigma_pos_enu_m"] = tuple(map(float, sd[:3]))
             if free["sensors.gnss.sigma_vel_mps"] and has[3]:
                 up["sigma_vel_mps"] = tuple(map(float, sd[3:]))
             sensors["gnss"] = gc.model_copy(update=up)
@@ -584,8 +595,7 @@ def tune(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
     fl = floor_g
     sensors = []
     if has[0]:
-        sensors.append(("sensors.gnss.sigma_pos_m", sd0[[1, 0, 2]], sd[[1, 0, 2]],
-                        fl[[1, 0, 2]]))
+        sensors.append(("sensors.gnss.sigma_pos_enu_m", sd0[:3], sd[:3], fl[:3]))
     if has[3]:
         sensors.append(("sensors.gnss.sigma_vel_mps", sd0[3:], sd[3:], fl[3:]))
     if r_vel is not None:
@@ -724,9 +734,12 @@ def config_yaml(res: TuneResult, base: dict | None = None, header: str = "") -> 
 
     import yaml
 
-    with warnings.catch_warnings():  # the user's 0.1 keys are written in today's places
+    with warnings.catch_warnings():  # the user's old keys are written in today's places
         warnings.simplefilter("ignore", FutureWarning)
         data = _translate_legacy(dict(base or {}))
+        old = data.get("sensors")
+        if isinstance(old, dict) and isinstance(old.get("gnss"), dict):
+            data["sensors"] = {**old, "gnss": renamed_neu_keys(old["gnss"], "sensors.gnss")}
     c = res.config
     imu = dict(data.get("imu") or {})
     changed = {f.key.removeprefix("imu.") for f in res.figures

@@ -1,8 +1,10 @@
 """GNSS receiver: position (latitude, longitude, height) and ENU velocity fixes.
 
-Section ``sensors.gnss``: ``sigma_pos_m`` (one value or [north, east, up]),
+Section ``sensors.gnss``: ``sigma_pos_enu_m`` (one value or [east, north, up]),
 ``sigma_vel_mps`` (one value or [east, north, up]), ``lever_m`` (antenna from the IMU,
 body right-forward-up), ``time_offset_s`` (added to the file's time stamps), ``period_s``.
+The old key ``sigma_pos_m`` ([north, east, up]) is read, reordered, with a
+``FutureWarning`` for one more release (:func:`renamed_neu_keys`).
 File columns: ``t_s, lat_deg, lon_deg, h_m, vE_mps, vN_mps, vU_mps``
 (:func:`fednav.io.read_gnss_csv`).  Residual: INS-derived antenna - GNSS,
 ``[dE, dN, dU] m, [dvE, dvN, dvU] m/s`` (linear in the error state).
@@ -10,11 +12,12 @@ File columns: ``t_s, lat_deg, lon_deg, h_m, vE_mps, vN_mps, vU_mps``
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
-from pydantic import Field
+from pydantic import Field, model_validator
 
 from .base import MeasurementSeries, flight_times, position_noise_to_llh
 from .measurement import POS_E, POS_N, POS_U, VEL_E, VEL_N, VEL_U, RowModel
@@ -22,17 +25,57 @@ from .spec import Column, SensorConfig, SensorSpec
 
 _V3 = tuple[float, float, float]
 
+#: Old keys holding a [north, east, up] vector -> their new [east, north, up] key.
+NEU_KEYS = {"sigma_pos_m": "sigma_pos_enu_m"}
+
+
+def neu_to_enu(v):
+    """A [north, east, up] vector (list, tuple or array of 3) as [east, north, up]; a
+    single value (or anything else, left for validation to report) unchanged."""
+    if isinstance(v, np.ndarray) and v.shape == (3,):
+        return v[[1, 0, 2]]
+    if isinstance(v, list | tuple) and len(v) == 3:
+        return [v[1], v[0], v[2]]
+    return v
+
+
+def renamed_neu_keys(data, where: str, renamed: dict[str, str] = NEU_KEYS):
+    """``data`` (a section's mapping) with the old [north, east, up] keys
+    (``renamed``: old -> new) moved to their [east, north, up] keys, the values
+    reordered (:func:`neu_to_enu`), with one ``FutureWarning`` naming the old key, the
+    new key and the order change; ``where``: the section's place (``sensors.gnss``).
+
+    Raises
+    ------
+    ValueError
+        When the old and the new key are both given.
+    """
+    if not isinstance(data, dict) or not any(k in data for k in renamed):
+        return data
+    out = dict(data)
+    for old, new in renamed.items():
+        if old not in out:
+            continue
+        if new in out:
+            raise ValueError(f"'{old}' ([north, east, up]) and '{new}' ([east, north, up]) "
+                             f"are the same setting; give {new} only")
+        warnings.warn(f"{where}.{old} [north, east, up] is now {where}.{new} [east, north, "
+                      f"up]: read and reordered for one more release", FutureWarning,
+                      stacklevel=2)
+        out[new] = neu_to_enu(out.pop(old))
+    return out
+
 
 @dataclass(frozen=True)
 class Gnss:
     """Fix ``[lat, lon, h, vE, vN, vU]`` every ``period`` [s] with white noise.
 
-    ``sigma_pos`` [m]: scalar, or ``(north, east, up)``; ``sigma_vel`` [m/s]: scalar or
-    ``(east, north, up)``.  The series' ``sigma`` follows ``z``:
-    ``[north m, east m, up m, vE, vN, vU]``.
+    ``sigma_pos_enu`` [m]: scalar, or ``(east, north, up)``; ``sigma_vel`` [m/s]: scalar
+    or ``(east, north, up)``.  The series' ``sigma`` follows ``z`` (``[lat, lon, h, vE,
+    vN, vU]``): ``[north m, east m, up m, vE, vN, vU]``.
     """
 
-    sigma_pos: float | tuple
+    sigma_pos_enu: float | tuple
     sigma_vel: float | tuple
     period: float
 
@@ -40,9 +83,9 @@ class Gnss:
                  t_avail=None) -> MeasurementSeries:
         t = flight_times(truth, self.period, t)
         tr = truth.at(t)
-        sp = np.broadcast_to(np.asarray(self.sigma_pos, dtype=float), (3,))
+        sp = np.broadcast_to(np.asarray(self.sigma_pos_enu, dtype=float), (3,))[[1, 0, 2]]
         sv = np.broadcast_to(np.asarray(self.sigma_vel, dtype=float), (3,))
-        npos = rng.standard_normal((len(t), 3)) * sp
+        npos = rng.standard_normal((len(t), 3)) * sp  # north, east, up
         z = np.column_stack([position_noise_to_llh(tr["lla"], npos),
                              tr["vel"] + rng.standard_normal((len(t), 3)) * sv])
         return MeasurementSeries("gnss", t, z, np.r_[sp, sv], t_avail)
@@ -73,15 +116,17 @@ class GnssPosVel(RowModel):
 
 
 class GnssConfig(SensorConfig):
-    """GNSS receiver: 1-sigma position noise (one value or [north, east, up] m) and
-    velocity noise (one value or [east, north, up] m/s) — the data file's when left out —
+    """GNSS receiver: 1-sigma position noise ``sigma_pos_enu_m`` (one value or [east,
+    north, up] m) and velocity noise ``sigma_vel_mps`` (one value or [east, north, up]
+    m/s) — the data file's when left out —
     antenna ``lever_m`` from the IMU (body right-forward-up; the file's when left out),
     ``time_offset_s`` added to the file's time stamps, and ``velocity_latency_s``: how
     much older than its stamp each velocity is (a receiver's Doppler velocity lagging its
     position; ``fednav process`` reports the latency it sees as
-    ``gnss_velocity_latency_seen_s``)."""
+    ``gnss_velocity_latency_seen_s``).  The old key ``sigma_pos_m`` ([north, east, up])
+    is read as ``sigma_pos_enu_m``, reordered, with a ``FutureWarning``."""
 
-    sigma_pos_m: float | _V3 | None = None
+    sigma_pos_enu_m: float | _V3 | None = None
     sigma_vel_mps: float | _V3 | None = None
     lever_m: _V3 | None = None
     time_offset_s: float = 0.0
@@ -89,25 +134,32 @@ class GnssConfig(SensorConfig):
     #: what the local filter uses (None: what the data hold; both in a simulation)
     measures: Literal["position_velocity", "position", "velocity"] | None = None
 
+    @model_validator(mode="before")
+    @classmethod
+    def _renamed(cls, data):
+        return renamed_neu_keys(data, "sensors.gnss")
+
     def sensor(self) -> Gnss:
         from ..core.config import ConfigError
 
-        if self.sigma_pos_m is None or self.sigma_vel_mps is None:
-            raise ConfigError("sensors.gnss: sigma_pos_m and sigma_vel_mps are needed to "
-                              "simulate the receiver")
-        return Gnss(self.sigma_pos_m, self.sigma_vel_mps, self.period_s)
+        if self.sigma_pos_enu_m is None or self.sigma_vel_mps is None:
+            raise ConfigError("sensors.gnss: sigma_pos_enu_m and sigma_vel_mps are needed "
+                              "to simulate the receiver")
+        return Gnss(self.sigma_pos_enu_m, self.sigma_vel_mps, self.period_s)
 
     def model(self) -> GnssPosVel:
         return GnssPosVel(self.lever_m or (0.0, 0.0, 0.0),
                           self.measures or "position_velocity")
 
     def sigma(self) -> np.ndarray | None:
+        """1-sigma of ``z``: ``[north m, east m, up m, vE, vN, vU m/s]`` (None when the
+        data's are to be used)."""
         m = self.measures or "position_velocity"
-        pos = self.sigma_pos_m if m != "velocity" else 1.0
+        pos = self.sigma_pos_enu_m if m != "velocity" else 1.0
         vel = self.sigma_vel_mps if m != "position" else 1.0
         if pos is None or vel is None:
             return None
-        return np.r_[np.broadcast_to(np.asarray(pos, dtype=float), (3,)),
+        return np.r_[np.broadcast_to(np.asarray(pos, dtype=float), (3,))[[1, 0, 2]],
                      np.broadcast_to(np.asarray(vel, dtype=float), (3,))]
 
 

@@ -20,10 +20,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from pydantic import Field, field_validator
+from pydantic import Field, field_validator, model_validator
 
 from ..core import attitude, earth, units
 from ..core.config import _Model, load_model
+from ..sensors.gnss import renamed_neu_keys
 from ..sensors.imu import ImuConfig
 from .scenario import SegmentConfig, StartConfig
 
@@ -31,37 +32,47 @@ _V3 = tuple[float, float, float]
 
 
 class GnssSimConfig(_Model):
-    """GNSS receiver: fix period [s], 1-sigma position noise [north, east, up] m and
-    velocity noise [east, north, up] m/s (white), antenna lever arm from the IMU (body
-    right-forward-up, m).
+    """GNSS receiver: fix period [s], 1-sigma position noise ``sigma_pos_enu_m`` [east,
+    north, up] m and velocity noise ``sigma_vel_mps`` [east, north, up] m/s (white),
+    antenna lever arm from the IMU (body right-forward-up, m).
 
     Optionally a time-correlated position error on top of the white one (multipath,
     atmosphere, orbit errors: what makes a real receiver's positions wander): a
-    first-order Gauss–Markov process per axis of stationary 1-sigma ``markov_sigma_m``
-    [north, east, up] m and correlation time ``markov_tau_s`` [s], drawn from its own
-    random stream (``seed``, 2) so that the other draws are the same with it or without.
+    first-order Gauss–Markov process per axis of stationary 1-sigma
+    ``markov_sigma_enu_m`` [east, north, up] m and correlation time ``markov_tau_s`` [s],
+    drawn from its own random stream (``seed``, 2) so that the other draws are the same
+    with it or without.
     Off by default (zeros).  The sigma written for the filter (``process.yaml``, NaveGo's
-    ``stdm``) is then the whole error's, ``hypot(sigma_pos_m, markov_sigma_m)``: what a
-    receiver's accuracy estimate reports."""
+    ``stdm``) is then the whole error's, ``hypot(sigma_pos_enu_m, markov_sigma_enu_m)``:
+    what a receiver's accuracy estimate reports.  The old keys ``sigma_pos_m`` and
+    ``markov_sigma_m`` ([north, east, up]) are read, reordered, with a ``FutureWarning``
+    for one more release."""
 
     period_s: float = Field(0.2, gt=0.0)
-    sigma_pos_m: _V3 = (1.5, 1.5, 3.0)
+    sigma_pos_enu_m: _V3 = (1.5, 1.5, 3.0)
     sigma_vel_mps: _V3 = (0.05, 0.05, 0.1)
     lever_m: _V3 = (0.0, 0.0, 0.0)
-    markov_sigma_m: _V3 = (0.0, 0.0, 0.0)
+    markov_sigma_enu_m: _V3 = (0.0, 0.0, 0.0)
     markov_tau_s: float = Field(100.0, gt=0.0)
 
-    @field_validator("markov_sigma_m")
+    @model_validator(mode="before")
+    @classmethod
+    def _renamed(cls, data):
+        return renamed_neu_keys(data, "gnss", {"sigma_pos_m": "sigma_pos_enu_m",
+                                               "markov_sigma_m": "markov_sigma_enu_m"})
+
+    @field_validator("markov_sigma_enu_m")
     @classmethod
     def _nonnegative(cls, v):
         if min(v) < 0:
             raise ValueError("a Gauss-Markov sigma is not negative")
         return v
 
-    def reported_sigma_pos_m(self) -> _V3:
-        """The position 1-sigma [north, east, up] m of the whole error (white and
+    def reported_sigma_pos_enu_m(self) -> _V3:
+        """The position 1-sigma [east, north, up] m of the whole error (white and
         Gauss–Markov)."""
-        return tuple(float(x) for x in np.hypot(self.sigma_pos_m, self.markov_sigma_m))
+        return tuple(float(x) for x in np.hypot(self.sigma_pos_enu_m,
+                                                self.markov_sigma_enu_m))
 
 
 def gauss_markov(n: int, dt: float, sigma, tau: float, rng) -> np.ndarray:
@@ -98,7 +109,8 @@ class DatasetConfig(_Model):
     imu: ImuConfig
     gnss: GnssSimConfig = GnssSimConfig()
     velocity: VelocitySimConfig | None = None
-    initial_attitude_error_deg: _V3 = (1.0, 1.0, 2.0)   # written as the file's 1-sigma
+    #: 1-sigma [pitch, roll, heading] deg of NaveGo's ini_align (written roll first)
+    initial_attitude_error_deg: _V3 = (1.0, 1.0, 2.0)
 
 
 @dataclass
@@ -151,11 +163,13 @@ def simulate_dataset(cfg: DatasetConfig) -> Dataset:
     step = max(1, int(round(g.period_s / dt)))
     gi = np.arange(step, len(tr.t), step)
     lla, vel = _lever_point(tr, gi, g.lever_m)
-    sp, sv = np.asarray(g.sigma_pos_m), np.asarray(g.sigma_vel_mps)
+    # drawn north, east, up (the draws of earlier releases: seeded datasets stay the same)
+    sp, sv = np.asarray(g.sigma_pos_enu_m)[[1, 0, 2]], np.asarray(g.sigma_vel_mps)
     n_pos = rng.standard_normal((len(gi), 3)) * sp               # north, east, up
-    if any(g.markov_sigma_m):  # (its own stream: the draws below are the same without it)
-        n_pos = n_pos + gauss_markov(len(gi), step * dt, g.markov_sigma_m, g.markov_tau_s,
-                                     np.random.default_rng((cfg.seed, 2)))
+    if any(g.markov_sigma_enu_m):  # (its own stream: the draws below are the same without it)
+        n_pos = n_pos + gauss_markov(len(gi), step * dt,
+                                     np.asarray(g.markov_sigma_enu_m)[[1, 0, 2]],
+                                     g.markov_tau_s, np.random.default_rng((cfg.seed, 2)))
     lla = earth.move_enu(lla, n_pos[:, [1, 0, 2]])
     vel = vel + rng.standard_normal((len(gi), 3)) * sv
     vt = vv = None
@@ -182,7 +196,7 @@ def process_config(ds: Dataset) -> dict:
     for key, tau in (("gyro_tau_s", e.gyro_markov_tau), ("accel_tau_s", e.accel_markov_tau)):
         if np.isfinite(tau):
             imu[key] = float(tau)
-    sensors = {"gnss": {"sigma_pos_m": list(cfg.gnss.reported_sigma_pos_m()),
+    sensors = {"gnss": {"sigma_pos_enu_m": list(cfg.gnss.reported_sigma_pos_enu_m()),
                         "sigma_vel_mps": list(map(float, cfg.gnss.sigma_vel_mps)),
                         "lever_m": list(map(float, cfg.gnss.lever_m))}}
     return {"imu": {k: float(v) for k, v in imu.items()}, "sensors": sensors}
@@ -242,7 +256,7 @@ def write_navego_dataset(ds: Dataset, out) -> list[Path]:
     M = FRD_TO_RFU  # RFU -> FRD and ENU -> NED (its own inverse)
     one = np.ones(3)
     r0, p0, y0 = fednav_euler_to_navego(ds.ref_euler[0])
-    err = units.deg(np.asarray(cfg.initial_attitude_error_deg))
+    err = units.deg(np.asarray(cfg.initial_attitude_error_deg))[[1, 0, 2]]  # roll, pitch, yaw
     rng = np.random.default_rng(cfg.seed + 7919)
     ini = np.array([r0, p0, y0]) + err * rng.standard_normal(3)
     structs = {
@@ -255,7 +269,7 @@ def write_navego_dataset(ds: Dataset, out) -> list[Path]:
                 "ini_align": ini, "ini_align_err": err},
         "gnss": {"t": ds.gnss_t, "lat": ds.gnss_lla[:, 0], "lon": ds.gnss_lla[:, 1],
                  "h": ds.gnss_lla[:, 2], "vel": ds.gnss_vel @ M.T,
-                 "stdm": np.asarray(cfg.gnss.reported_sigma_pos_m()),
+                 "stdm": np.asarray(cfg.gnss.reported_sigma_pos_enu_m())[[1, 0, 2]],  # NED
                  "stdv": np.asarray(cfg.gnss.sigma_vel_mps)[[1, 0, 2]],
                  "larm": M @ np.asarray(cfg.gnss.lever_m)},
     }

@@ -106,8 +106,8 @@ def car_drive(heading_deg: float = 30.0, speed_mps: float = 0.0, seed: int = 1,
     return Drive(
         ImuData("car-drive imu", ds.t, ds.gyro, ds.accel, errors),
         GnssData("car-drive gnss", ds.gnss_t, ds.gnss_lla, ds.gnss_vel,
-                 np.asarray(g.sigma_pos_m, dtype=float), np.asarray(g.sigma_vel_mps,
-                                                                     dtype=float),
+                 np.asarray(g.sigma_pos_enu_m, dtype=float),
+                 np.asarray(g.sigma_vel_mps, dtype=float),
                  np.asarray(g.lever_m, dtype=float)),
         Reference("car-drive truth", ds.t, ds.ref_lla, ds.ref_vel, ds.ref_euler),
         load_system(figures))

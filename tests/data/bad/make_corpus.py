@@ -74,7 +74,7 @@ def make_good():
                    "accel_bias_mps2": float(units.milli_g(1.0)),
                    "gyro_markov_radps": 1e-6, "accel_markov_mps2": 1e-5,
                    "gyro_tau_s": 1000.0, "accel_tau_s": 1000.0},
-           "sensors": {"gnss": {"sigma_pos_m": [0.5, 0.5, 0.5],
+           "sensors": {"gnss": {"sigma_pos_enu_m": [0.5, 0.5, 0.5],
                                 "sigma_vel_mps": [0.05, 0.05, 0.05]}},
            "alignment": {"initial_attitude": "coarse"}}
     (GOOD / "cfg.yaml").write_text(yaml.safe_dump(cfg, sort_keys=False))
@@ -373,7 +373,7 @@ def main():
 
     for cid, text, msg in (
         ("unknown-key", good_cfg + "gnss_sigma: [1, 1, 1]\n", "key 'gnss_sigma': unknown key"),
-        ("unknown-sensor", with_keys(sensors={"gps": {"sigma_pos_m": 1.0}}),
+        ("unknown-sensor", with_keys(sensors={"gps": {"sigma_pos_enu_m": 1.0}}),
          "key 'sensors.gps': unknown sensor (registered: airdata, baro, "),
         ("unknown-sensor-key", with_keys(sensors={"gnss": {"sigma_pos": 1.0}}),
          "key 'sensors.gnss.sigma_pos': unknown key"),
