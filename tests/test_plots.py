@@ -110,6 +110,31 @@ def test_reproduction_errors_show_rms_spread_and_sigma_over_the_runs():
 
 
 
+def test_design_errors_are_linear_from_zero_with_units_and_one_legend_outside():
+    """``fednav run``'s errors.png (it had log axes): linear axes from zero with units,
+    one legend beside them; the free INS runs off the axes and the note says how far."""
+    from dataclasses import replace
+
+    from fednav.campaign.design import spread_figure
+
+    runs = [{m: replace(r, euler=r.att) for m, r in rs.items()} for rs in _runs_series()]
+    windows = [{"start_s": 50.0, "end_s": 80.0, "sensors": ["gnss"]}]
+    fig = spread_figure(runs, windows, "my design")
+    _assert_report_figure(fig, 3)
+    assert [ax.get_ylabel() for ax in fig.axes] == [
+        "horizontal position error [m]", "height error [m]", "heading error [deg]"]
+    assert fig.axes[-1].get_xlabel() == "time [s]"
+    assert all(ax.get_ylim()[0] == 0.0 for ax in fig.axes)
+    assert fig.axes[0].get_ylim()[1] < 100 and fig.axes[1].get_ylim()[1] < 100  # (not SINS)
+    text = " ".join(t.get_text() for t in fig.texts)
+    assert "off the axes: SINS (median horizontal position up to" in text
+    labels = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert labels[:4] == ["A", "B", "C", "SINS"] and "outage: gnss" in labels
+    # the median of mode C's horizontal error over the runs, as drawn
+    h = np.stack([np.hypot(r["C"].pos[:, 0], r["C"].pos[:, 1]) for r in runs])
+    med = [ln for ln in fig.axes[0].lines if ln.get_gid() != "sigma"][2]
+    np.testing.assert_allclose(med.get_ydata(), np.median(h, axis=0))
+
 def test_reproduction_errors_of_one_dict_are_one_run():
     fig = errors_figure(_runs_series(1)[0])
     assert "1 Monte Carlo run" in fig._suptitle.get_text()

@@ -155,3 +155,21 @@ def test_tables_with_missing_statistics_hold_null_not_nan():
     assert t["consistency"]["rows"]["A"]["gnss"]["nis_per_dof"]["value"] == 0.9
     json.dumps(json_safe({"x": [np.float64("nan"), np.inf, 1.0]}), allow_nan=False)
     assert json_safe({"x": [np.float64("nan"), np.inf, 1.0]}) == {"x": [None, None, 1.0]}
+
+
+def test_table_titles_do_not_wrap_when_piped():
+    """A title is its own lines above the table (a rich title wraps to the table's
+    width, ~46 columns, piped or not)."""
+    import io
+
+    from fednav.campaign.design import print_design_tables
+    from fednav.core.console import PipeConsole
+
+    title = ("Navigation errors over the whole flight, every mode of the design compared "
+             "side by side")
+    summary = {"seed": 3, "tables": {"errors": {"title": title, "runs": 12, "rows": {
+        "INS/GNSS": {"horizontal_position_m": {"rmse": {"value": 1.23, "ci95": 0.1}}}}}}}
+    out = io.StringIO()
+    print_design_tables(summary, PipeConsole(file=out))
+    lines = out.getvalue().splitlines()
+    assert lines[:2] == [title, "Monte Carlo mean ±95% CI over 12 runs (seed 3)"]

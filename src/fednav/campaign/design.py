@@ -366,15 +366,18 @@ def _short_pm(cell: dict) -> str:
 
 def print_design_tables(summary: dict, console) -> None:
     """Each table on the console: a line per mode, then a line per quantity (or local
-    filter) with value ± 95 % CI per statistic (fits 80 columns)."""
+    filter) with value ± 95 % CI per statistic (fits 80 columns).  Each title is printed
+    as its own lines above its table, as the paper campaigns' (a rich table title wraps
+    to the table's width: at 46 columns, piped or not)."""
     from rich.markup import escape
     from rich.table import Table
 
     for t in summary["tables"].values():
         cols = _columns(t)
         nis = cols == ["nis_per_dof"]
-        tab = Table(title=f"{escape(t['title'])}\nMonte Carlo mean ±95% CI over {t['runs']} "
-                          f"runs (seed {summary['seed']})")
+        console.print(f"[bold]{escape(t['title'])}[/]\nMonte Carlo mean ±95% CI over "
+                      f"{t['runs']} runs (seed {summary['seed']})", highlight=False)
+        tab = Table()
         tab.add_column("mode / local filter" if nis else "mode / quantity", no_wrap=True)
         for c in cols:
             tab.add_column("NIS/dof" if nis else c.upper() if c == "rmse" else c,
@@ -412,50 +415,53 @@ def spread_arrays(runs_series: list[dict], mode: str) -> dict:
             "heading_deg": (np.stack([e["heading_deg"][:n] for e in err]), sig_psi)}
 
 
-def plot_spread(runs_series: list[dict], windows: list[dict], path: Path,
-                name: str = "") -> Path:
-    """Horizontal position, height and heading errors versus time: per mode the median
-    over the Monte Carlo runs of the absolute error (line), its 5-95 % band (shaded) and
-    the mean filter 1-sigma (dashed); outage windows shaded grey; one legend beside the
-    axes."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+def spread_figure(runs_series: list[dict], windows: list[dict], name: str = ""):
+    """``errors.png`` of a design as a :class:`~matplotlib.figure.Figure`: horizontal
+    position [m], height [m] and heading [deg] errors versus time [s] on linear axes from
+    zero — per mode the median over the Monte Carlo runs of the absolute error (line), its
+    5-95 % band (shaded) and the mean filter 1-sigma (dashed); outage windows shaded grey;
+    one legend beside the axes.  The scale is set by the modes' robust scales (a start-up
+    transient does not set it); a mode over 30 times the others' (a free INS) runs off
+    the axes and a note under the figure says how far."""
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
+    from ..core import plots
+    from .report import format_number
+
     modes = list(runs_series[0])
-    panels = (("horizontal_position_m", "horizontal position error [m]"),
-              ("height_m", "height error [m]"), ("heading_deg", "heading error [deg]"))
-    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
-    fig, axes = plt.subplots(3, 1, figsize=(13, 9.5), sharex=True)
-    medians: list[list[np.ndarray]] = [[], [], []]
+    panels = (("horizontal_position_m", "horizontal position error", "m"),
+              ("height_m", "height error", "m"), ("heading_deg", "heading error", "deg"))
+    colors = plots.colors()
+    fig, axes = plots.new_figure(3, 1, figsize=(13, 9.5), sharex=True)
+    axes = axes[:, 0]
+    scales: list[dict[str, float]] = [{}, {}, {}]
+    peaks: list[dict[str, float]] = [{}, {}, {}]
     for i, m in enumerate(modes):
         a = spread_arrays(runs_series, m)
         c = colors[i % len(colors)]
-        for j, (ax, (key, _)) in enumerate(zip(axes, panels, strict=True)):
+        for j, (ax, (key, _, _)) in enumerate(zip(axes, panels, strict=True)):
             x, sig = a[key]
             lo, med, hi = np.percentile(x, [5, 50, 95], axis=0)
-            medians[j].append(med)
             ax.fill_between(a["t"], lo, hi, color=c, alpha=0.18, lw=0)
             ax.plot(a["t"], med, color=c, lw=1.1)
+            arrays = [med, hi]
             if np.isfinite(sig).any():
-                ax.plot(a["t"], sig, color=c, lw=1.0, ls="--")
-    for ax, (_, label), med in zip(axes, panels, medians, strict=True):
+                ax.plot(a["t"], sig, color=c, lw=1.0, ls="--", gid="sigma")
+                arrays.append(sig)
+            scales[j][m] = max(plots.robust_scale(v) for v in arrays)
+            peaks[j][m] = float(np.nanmax(med))
+    off: dict[str, list[str]] = {}
+    for ax, (_, label, unit), sc, pk in zip(axes, panels, scales, peaks, strict=True):
         for w in windows:
             ax.axvspan(w["start_s"], w["end_s"], facecolor="0.5", alpha=0.15, lw=0)
-        ax.set_yscale("log")
-        # The lower edge a little below the medians: the 5 % quantile of an absolute
-        # error dips towards zero wherever the error crosses it (the band goes on below)
-        m = np.concatenate(med)
-        m = m[np.isfinite(m) & (m > 0)]
-        lo, hi = ax.get_ylim()
-        if m.size:
-            lo = max(lo, 0.2 * float(np.percentile(m, 1)))
-        ax.set_ylim(lo, hi)
-        ax.set_ylabel(label)
-        ax.grid(alpha=0.3, which="both", lw=0.5)
+        lim, gone = plots.shared_limit(sc)
+        ax.set_ylim(0.0, lim)
+        for m in gone:
+            off.setdefault(m, []).append(f"{label.split(' error')[0]} up to "
+                                         f"{format_number(pk[m])} {unit}")
+        ax.set_ylabel(f"{label} [{unit}]")
+        ax.grid(alpha=0.3, lw=0.5)
     axes[-1].set_xlabel("time [s]")
     runs = len(runs_series)
     handles = [Patch(facecolor=colors[i % len(colors)], alpha=0.6, label=m)
@@ -467,11 +473,17 @@ def plot_spread(runs_series: list[dict], windows: list[dict], path: Path,
         out = sorted({s for w in windows for s in w["sensors"]})
         handles.append(Patch(facecolor="0.92", edgecolor="0.6", lw=0.8,
                              label=f"outage: {', '.join(out)}"))
-    fig.legend(handles=handles, loc="upper left", bbox_to_anchor=(0.79, 0.93),
-               fontsize=9, frameon=False)
+    plots.legend_outside(fig, handles, x=0.79, y=0.93, fontsize=9)
+    plots.note(fig, "; ".join(f"off the axes: {m} (median {', '.join(v)})"
+                              for m, v in off.items()))
     fig.suptitle(f"{name}: absolute errors over {runs} Monte Carlo run"
                  f"{'s' if runs != 1 else ''}")
-    fig.subplots_adjust(left=0.07, right=0.78, bottom=0.06, top=0.94, hspace=0.08)
-    save_figure(fig, path)
-    plt.close(fig)
+    fig.subplots_adjust(left=0.07, right=0.78, bottom=0.07, top=0.94, hspace=0.08)
+    return fig
+
+
+def plot_spread(runs_series: list[dict], windows: list[dict], path: Path,
+                name: str = "") -> Path:
+    """Write :func:`spread_figure` to ``path`` (``errors.png`` of ``fednav run``)."""
+    save_figure(spread_figure(runs_series, windows, name), path)
     return Path(path)
