@@ -338,3 +338,30 @@ def test_ascent_puts_height_and_speed_on_two_axes():
     assert h is not v and h.get_position().bounds == v.get_position().bounds
     assert all(UNIT.search(a.get_ylabel()) for a in fig.axes)
     assert all(a.get_yscale() == "linear" for a in fig.axes)
+
+
+def test_allan_is_log_log_with_units_and_one_legend_outside():
+    """``fednav allan``'s plot: log–log (right for an Allan deviation), units on every
+    axis, one legend beside the panels naming the IMU axes, nothing inside the axes but
+    the curves and the figures' note."""
+    from fednav.process.allan import allan, allan_figure
+
+    rng = np.random.default_rng(1)
+    n, dt = 60_000, 0.01
+    t = np.arange(n) * dt
+    errors = SimImuErrors(gyro_arw=units.deg_per_sqrt_h(0.2), accel_vrw=units.micro_g(80.0))
+    dth, dv, _ = corrupt_imu(np.zeros((n, 3)), np.tile([0.0, 0.0, 9.81 * dt], (n, 1)), dt,
+                             errors, rng)
+    fig = _drawn(allan_figure(allan(ImuData("static", t, dth / dt, dv / dt))))
+    axes = _data_axes(fig)
+    assert len(axes) == 2
+    assert [ax.get_ylabel() for ax in axes] == ["σ(τ) [deg/h]", "σ(τ) [µg]"]
+    for ax in axes:
+        assert ax.get_xscale() == "log" and ax.get_yscale() == "log"
+        assert ax.get_xlabel() == "averaging time τ [s]" and ax.get_legend() is None
+    assert len(fig.legends) == 1
+    r = fig.canvas.get_renderer()
+    leg = fig.legends[0].get_window_extent(r)
+    assert all(leg.x0 >= ax.get_window_extent(r).x1 for ax in axes)
+    labels = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert labels[:3] == ["x axis (right)", "y axis (forward)", "z axis (up)"]

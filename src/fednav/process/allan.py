@@ -569,17 +569,18 @@ def display_rows(res: AllanResult, sensor: str) -> list[tuple[str, ...]]:
     return rows
 
 
-def plot(res: AllanResult, path) -> Path:
-    """Two log–log panels (gyro [deg/h], accelerometer [µg]): a curve per axis, the
-    fitted −1/2, flat and +1/2 lines dashed over the stretch they were fitted on (and
-    an octave beyond), the figures annotated, the legend outside the data."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+def allan_figure(res: AllanResult):
+    """``allan.png`` as a :class:`~matplotlib.figure.Figure`: two log–log panels (gyro
+    [deg/h], accelerometer [µg] against the averaging time [s]; log–log is how an Allan
+    deviation is read: its slopes name the noises), a curve per IMU axis (body
+    right-forward-up), the fitted −1/2, flat and +1/2 lines dashed over the stretch they
+    were fitted on (and an octave beyond), the figures annotated, one legend beside the
+    panels."""
+    from matplotlib.figure import Figure
     from matplotlib.lines import Line2D
 
-    fig, axes = plt.subplots(1, 2, figsize=(13.5, 5.6), layout="constrained")
+    fig = Figure(figsize=(13.5, 5.6), layout="constrained")
+    axes = fig.subplots(1, 2)
     tau = res.taus_s
     for ax, sensor, dev, title in ((axes[0], "gyro", res.gyro_adev, "gyro"),
                                    (axes[1], "accel", res.accel_adev, "accelerometer")):
@@ -611,18 +612,21 @@ def plot(res: AllanResult, path) -> Path:
                 bbox={"boxstyle": "round", "fc": "white", "ec": "0.7", "alpha": 0.85})
         lo, hi = ax.get_ylim()
         ax.set_ylim(lo / 10 ** (0.45 * math.log10(hi / lo)), hi)  # room for the figures
-    handles = [Line2D([], [], color=c, marker="o", ms=3.5, label=f"{a} axis")
-               for a, c in zip("xyz", _COLOURS, strict=True)]
+    handles = [Line2D([], [], color=c, marker="o", ms=3.5, label=f"{a} axis ({name})")
+               for a, name, c in zip("xyz", ("right", "forward", "up"), _COLOURS,
+                                     strict=True)]
     handles += [Line2D([], [], color="0.3", ls="--",
                        label="fitted lines:\n−1/2 (white noise N),\nflat (B × 0.664),\n"
                              "+1/2 (rate random walk K)")]
     fig.legend(handles=handles, loc="outside right center", fontsize=9)
     fig.suptitle(f"{Path(res.source).name}: {res.duration_s:.0f} s at {res.rate_hz:.4g} Hz"
                  + (f" — {len(res.warnings)} warning(s)" if res.warnings else ""))
-    try:
-        return save_figure(fig, path)
-    finally:
-        plt.close(fig)
+    return fig
+
+
+def plot(res: AllanResult, path) -> Path:
+    """Write :func:`allan_figure` to ``path`` (``allan.png`` of ``fednav allan``)."""
+    return save_figure(allan_figure(res), path)
 
 
 def write(res: AllanResult, out) -> list[Path]:
