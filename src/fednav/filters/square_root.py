@@ -38,7 +38,8 @@ Noise covariances may be singular (states without process noise): they are facto
 Cholesky factorization that takes pivots at or below 1e-13 of their diagonal entry as
 zero.  Build a factored filter with :func:`fednav.filters.make_filter` (``form=
 "square_root"``) or from a system description (``filter.form`` / ``filter.locals.<sensor>.
-form``).
+form``).  The navigator's compiled engine (:mod:`fednav.navigator.engine`) flies the
+factored ``kf``, ``ekf``, ``ukf`` and ``sukf`` with the same kernels, in the same order.
 """
 
 from __future__ import annotations
