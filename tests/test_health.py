@@ -184,3 +184,70 @@ def test_no_time_offset_is_claimed_where_the_imu_does_not_explain_the_gnss():
                   read_navego_visual(ROVER / "visual_planetary.mat"),
                   load_system(ROOT / "examples" / "canada-planetary.yaml"))
     assert not any("time offset" in w for w in res.warnings), res.warnings
+
+
+def test_the_imu_pass_gives_the_runs_and_rest_spans_numpy_gives(drive):
+    """The compiled pass against the numpy forms it replaced: the runs of a constant value
+    (np.diff) and the rest spans of the SHOE detector's accelerometer term
+    (fednav.ins.stops.stationary with the gyros left out), at several noise figures."""
+    from fednav.ins.stops import WINDOW_S, stationary, still_spans
+
+    imu, gnss = cr.stuck_axis("accel", 1).apply(drive.imu, drive.gnss)
+    t = imu.t
+    dt = float(np.median(np.diff(t)))
+    runs, scatter = pl.imu_pass(t, imu.gyro, imu.accel, max(2, int(round(WINDOW_S / dt))),
+                                pl.STUCK_S)
+    want = []
+    for j, x in enumerate(np.hstack([imu.gyro, imu.accel]).T):
+        change = np.flatnonzero(np.diff(x) != 0)
+        s, e = np.r_[0, change + 1], np.r_[change, len(x) - 1]
+        want += [(j, a, b) for a, b in zip(s, e, strict=True) if t[b] - t[a] > pl.STUCK_S]
+    assert [tuple(r) for r in runs] == want and any(r[0] == 4 for r in want)
+    speed = np.linalg.norm(gnss.vel, axis=1)
+    slow = np.interp(t, gnss.t, (speed < max(pl.REST_SPEED, 3 * np.max(gnss.sigma_vel)))
+                     .astype(float)) > 0.999
+    inside = (t >= gnss.t[0]) & (t <= gnss.t[-1])
+    for vrw in (1e-2, 1e-3, 1e-5):
+        still = stationary(np.zeros_like(imu.accel), imu.accel, dt, 1.0, vrw)
+        assert pl.rest_spans(t, scatter, dt, vrw, gnss.t, gnss.vel, gnss.sigma_vel) == \
+            still_spans(t, slow & inside & still, pl.REST_S)
+
+
+def test_the_compiled_helpers_match_numpy():
+    rng = np.random.default_rng(4)
+    x = rng.normal(size=(500, 3)) * [1.0, 1e-3, 1e3] + 7.0
+    y = rng.normal(size=(500, 3))
+    m = pl._moments(x, y)
+    assert np.array_equal(m, np.array([x.mean(axis=0), x.std(axis=0), y.mean(axis=0),
+                                       y.std(axis=0)]))
+    for n in (1, 2, 51, 1000):
+        z = rng.random(n)
+        for p in (0.0, 2.0, 50.0, 100.0):
+            assert pl._percentile(z, 3.0, p) == np.percentile(z / 3.0, p)
+
+
+def test_the_antenna_velocity_matches_its_numpy_form():
+    """The compiled integral (sines and cosines turned row to row) against the numpy
+    formula it replaced, heading wrapping through north and a lever arm."""
+    from fednav.core import attitude as att
+    from fednav.core import earth
+
+    rng = np.random.default_rng(3)
+    n = 3000
+    t = 0.01 * np.arange(n) + 0.003
+    ti = 0.01 * np.arange(n + 10) - 0.05
+    acc = rng.normal(size=(n + 10, 3)) + [0.0, 0.0, 9.8]
+    euler = np.column_stack([0.1 * np.sin(t), 0.05 * np.cos(2 * t),
+                             att.wrap_2pi(6.0 + 0.3 * t)])
+    lla = np.column_stack([0.7 + 1e-6 * t, 0.1 + 1e-6 * t, 100.0 + t])
+    omega = rng.normal(size=(n, 3)) * 0.1
+    for lever in (np.zeros(3), np.array([0.3, -1.0, 1.2])):
+        f = np.column_stack([np.interp(t, ti, acc[:, j]) for j in range(3)])
+        C = att.euler_to_dcm(euler)
+        a = np.einsum("kij,kj->ki", C, f)
+        a[:, 2] -= earth.gravity(lla[:, 0], lla[:, 2])
+        want = np.vstack([np.zeros(3), np.cumsum(0.5 * (a[1:] + a[:-1]) * np.diff(t)[:, None],
+                                                 axis=0)])
+        want += np.einsum("kij,kj->ki", C, np.cross(omega, lever))
+        got = pl._antenna_velocity(t, ti, acc, lla, euler, omega, lever)
+        assert np.abs(got - want).max() < 1e-11

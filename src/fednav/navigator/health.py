@@ -141,6 +141,7 @@ def run_health(fdi: list, imu=None, gnss=None, solution=None, figures: dict | No
     ``solution`` at the IMU rate).  ``force=False`` makes a run NIS/dof beyond
     :data:`NIS_REFUSE` a :class:`DataError` (``seen``: the input checks' warnings, the
     first named in it)."""
+    from ..ins import stops
     from . import plausibility as pl
 
     out = isolation_warnings(fdi) + nis_check(fdi, force, seen) + window_nis(fdi)
@@ -150,12 +151,11 @@ def run_health(fdi: list, imu=None, gnss=None, solution=None, figures: dict | No
     dt = float(np.median(np.diff(t))) if len(t) > 1 else 1.0
     out += pl.gnss_scale_check(gnss)
     if gnss.vel is not None:
-        speed = np.linalg.norm(gnss.vel, axis=1)
-        moving = np.interp(t, gnss.t, (speed > 1.0).astype(float)) > 0.5
-        moving &= (t >= gnss.t[0]) & (t <= gnss.t[-1])
-        out += pl.stuck_axes(t, imu.gyro, imu.accel, moving)
+        runs, scatter = pl.imu_pass(t, imu.gyro, imu.accel, max(2, int(round(
+            stops.WINDOW_S / dt))), pl.STUCK_S)
+        out += pl.stuck_axes(t, imu.gyro, imu.accel, runs, gnss.t, gnss.vel)
         if figures:
-            spans = pl.rest_spans(t, imu.accel, dt, float(figures.get(
+            spans = pl.rest_spans(t, scatter, dt, float(figures.get(
                 "accel_vrw_mps_sqrt_s") or 1e-3), gnss.t, gnss.vel, gnss.sigma_vel)
             lla = gnss.lla[0] if gnss.lla is not None else np.zeros(3)
             out += pl.at_rest(t, imu.gyro, imu.accel, spans, lla, figures, solution)

@@ -26,13 +26,15 @@ Units SI; ENU navigation frame; body right-forward-up.
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numba
 import numpy as np
 
 from ..core import attitude as att
 from ..core import earth, units
+from ..ins import stops
 from ..ins.alignment import coarse_level
-from ..ins.stops import stationary, still_spans
 
 #: An IMU axis unchanged for this long [s] while the vehicle moves is stuck.
 STUCK_S = 2.0
@@ -62,50 +64,189 @@ OFFSET_SEARCH_S = 1.0
 EXPLAINED = 0.5
 
 
-def _runs_constant(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Start and end indices (inclusive) of the runs of equal consecutive values of
-    ``x`` (N,)."""
-    change = np.flatnonzero(np.diff(x) != 0)
-    starts = np.r_[0, change + 1]
-    ends = np.r_[change, len(x) - 1]
-    return starts, ends
+@numba.njit(cache=True)
+def imu_pass(t, gyro, accel, W, stuck_s):
+    """The per-sample statistics of the IMU checks, in one pass over the samples.
+
+    Parameters
+    ----------
+    t : ndarray, shape (N,)
+        Sample times [s], increasing.
+    gyro, accel : ndarray, shape (N, 3)
+        Angular rate [rad/s] and specific force [m/s^2], body axes.
+    W : int
+        Samples of the stillness detector's window (:func:`fednav.ins.stops.stationary`'s,
+        shifted inside the data at the ends).
+    stuck_s : float
+        Duration [s] beyond which a run of one constant value is reported.
+
+    Returns
+    -------
+    runs : ndarray of int64, shape (M, 3)
+        The runs of equal consecutive values (a zero difference) lasting more than
+        ``stuck_s``: axis (0..2 gyro x, y, z; 3..5 accel x, y, z), first and last sample,
+        by axis, then time.
+    scatter : ndarray, shape (N,)
+        Each sample's window sum of ``||a_i - mean(a)||^2`` of the specific force
+        [m^2/s^4] (the accelerometer term of the SHOE detector), from running sums as
+        :func:`fednav.ins.stops.stationary` forms them.
+    """
+    n = len(t)
+    c_a = np.zeros((n + 1, 3))  # running sums of a and of ||a||^2
+    c_aa = np.zeros(n + 1)
+    start = np.zeros(6, dtype=np.int64)
+    found = []
+    d = 0.0
+    for i in range(n):
+        q = 0.0
+        for a in range(3):
+            c_a[i + 1, a] = c_a[i, a] + accel[i, a]
+            q += accel[i, a] ** 2
+        c_aa[i + 1] = c_aa[i] + q
+        for a in range(6):
+            if i < n - 1:
+                d = (gyro[i + 1, a] - gyro[i, a] if a < 3
+                     else accel[i + 1, a - 3] - accel[i, a - 3])
+            if i == n - 1 or d != 0:  # (as np.diff: NaN and inf end a run)
+                if t[i] - t[start[a]] > stuck_s:
+                    found.append((a, start[a], i))
+                start[a] = i + 1
+    runs = np.empty((len(found), 3), dtype=np.int64)
+    for r in range(len(found)):
+        runs[r, 0], runs[r, 1], runs[r, 2] = found[r]
+    runs = runs[np.argsort(runs[:, 0], kind="mergesort")]
+    scatter = np.empty(n)
+    for i in range(n):
+        lo = min(max(i - W // 2, 0), n)
+        hi = min(lo + W, n)
+        lo = max(hi - W, 0)
+        s2 = 0.0
+        for a in range(3):
+            s2 += (c_a[hi, a] - c_a[lo, a]) ** 2
+        v = (c_aa[hi] - c_aa[lo]) - s2 / (hi - lo)
+        scatter[i] = 0.0 if v < 0.0 else v
+    return runs, scatter
 
 
-def stuck_axes(t, gyro, accel, moving) -> list[str]:
-    """Warnings for IMU axes constant for more than :data:`STUCK_S` while ``moving``
-    (bool per sample: the GNSS speed says the vehicle moves) and another axis of the
-    same triad changes."""
+def stuck_axes(t, gyro, accel, runs, t_gnss, vel_gnss) -> list[str]:
+    """Warnings for IMU axes constant for more than :data:`STUCK_S` while the GNSS speed
+    (``vel_gnss`` [m/s] at ``t_gnss`` [s]) says the vehicle moves (above 1 m/s over most
+    of the run) and another axis of the same triad changes; ``runs`` the long constant
+    runs of :func:`imu_pass`."""
     out = []
-    for name, a in (("gyro", gyro), ("accel", accel)):
-        for j in range(3):
-            s, e = _runs_constant(a[:, j])
-            long = (t[e] - t[s] > STUCK_S)
-            others = np.delete(a, j, axis=1)
-            for k in np.flatnonzero(long):
-                seg = others[s[k]:e[k] + 1]
-                # (an ideal simulated IMU on a steady path is constant on every axis)
-                if moving[s[k]:e[k] + 1].mean() > 0.5 and np.any(seg != seg[0]):
-                    out.append(f"IMU {name} {'xyz'[j]} reads {a[s[k], j]:.6g} unchanged from "
-                               f"{t[s[k]]:.1f} s to {t[e[k]]:.1f} s while the vehicle moves: "
-                               f"a stuck axis (a sensor fault, or a column filled with a "
-                               f"constant)")
-                    break
+    for j in range(6):
+        name, a = ("gyro", gyro) if j < 3 else ("accel", accel)
+        for s, e in runs[runs[:, 0] == j, 1:]:
+            seg = np.delete(a[s:e + 1], j % 3, axis=1)
+            speed = np.linalg.norm(vel_gnss, axis=1)
+            tt = t[s:e + 1]
+            moving = np.interp(tt, t_gnss, (speed > 1.0).astype(float)) > 0.5
+            moving &= (tt >= t_gnss[0]) & (tt <= t_gnss[-1])
+            # (an ideal simulated IMU on a steady path is constant on every axis)
+            if moving.mean() > 0.5 and np.any(seg != seg[0]):
+                out.append(f"IMU {name} {'xyz'[j % 3]} reads {a[s, j % 3]:.6g} unchanged from "
+                           f"{t[s]:.1f} s to {t[e]:.1f} s while the vehicle moves: a stuck "
+                           f"axis (a sensor fault, or a column filled with a constant)")
+                break
     return out
 
 
-def rest_spans(t, accel, dt, accel_vrw, t_gnss, vel_gnss, sigma_v) -> list[tuple[float,
-                                                                              float]]:
+@numba.njit(cache=True)
+def _percentile(x, d, p):
+    """The ``p``-th percentile of ``x / d`` as ``np.percentile`` (linear) gives it."""
+    y = x / d
+    n = len(y)
+    if np.isnan(y).any():
+        return np.nan
+    v = (n - 1) * (p / 100.0)
+    k = int(np.floor(v))
+    if v >= n - 1:
+        return y.max()
+    if v < 0:
+        return y.min()
+    part = np.partition(y, k)
+    lo, hi = part[k], part[k + 1:].min()
+    g = v - k
+    return hi - (hi - lo) * (1.0 - g) if g >= 0.5 else lo + (hi - lo) * g
+
+
+@lru_cache(maxsize=64)
+def _chi2_ppf(p: float, dof: int) -> float:
+    from scipy.stats import chi2
+
+    return float(chi2.ppf(p, dof))
+
+
+@numba.njit(cache=True)
+def _rest_runs(t, scatter, sa2, thr, t_gnss, slow_g, min_s):
+    """Spans (K, 2) [s] of consecutive samples still (``scatter / sa2 <= thr``), slow
+    (``slow_g`` 1.0 or 0.0 at ``t_gnss``, interpolated, above 0.999) and within the GNSS
+    times, lasting at least ``min_s``."""
+    slow = np.interp(t, t_gnss, slow_g)
+    n = len(t)
+    out = []
+    a = -1
+    for i in range(n + 1):
+        ok = (i < n and slow[i] > 0.999 and t[i] >= t_gnss[0] and t[i] <= t_gnss[-1]
+              and scatter[i] / sa2 <= thr)
+        if ok and a < 0:
+            a = i
+        elif not ok and a >= 0:
+            if t[i - 1] - t[a] >= min_s:
+                out.append((t[a], t[i - 1]))
+            a = -1
+    spans = np.empty((len(out), 2))
+    for k in range(len(out)):
+        spans[k, 0], spans[k, 1] = out[k]
+    return spans
+
+
+def rest_spans(t, scatter, dt, accel_vrw, t_gnss, vel_gnss, sigma_v) -> list[tuple[float,
+                                                                                float]]:
     """Spans ``(start, end)`` [s] at rest: the GNSS speed below :data:`REST_SPEED` (and 3
-    sigma of its velocity) and the accelerometers still (the SHOE detector's
-    accelerometer term alone: a corrupted gyro must not hide a stop) for :data:`REST_S`."""
-    if vel_gnss is None or len(t_gnss) < 3:
+    sigma of its velocity) and the accelerometers still for :data:`REST_S`: the SHOE
+    detector's accelerometer term alone (:func:`fednav.ins.stops.stationary` with the
+    gyros left out: a corrupted gyro must not hide a stop) on ``scatter``
+    (:func:`imu_pass`, period ``dt`` [s], white noise ``accel_vrw`` [m/s/sqrt(s)])."""
+    n = len(t)
+    if vel_gnss is None or len(t_gnss) < 3 or n == 0:
         return []
     speed = np.linalg.norm(vel_gnss, axis=1)
     slow_g = speed < max(REST_SPEED, 3.0 * float(np.max(sigma_v)))
-    slow = np.interp(t, t_gnss, slow_g.astype(float)) > 0.999
-    inside = (t >= t_gnss[0]) & (t <= t_gnss[-1])
-    still = stationary(np.zeros_like(accel), accel, dt, 1.0, accel_vrw)
-    return still_spans(t, slow & inside & still, REST_S)
+    # stationary's noise floor at rest: the figure's, unless the recording's quietest
+    # windows are less than half as noisy
+    W = max(2, int(round(stops.WINDOW_S / dt)))
+    cnt = min(W, n)
+    p = stops.QUIET_PERCENTILE
+    quiet = (_percentile(scatter, 3.0 * max(cnt - 1, 1), p)
+             / (_chi2_ppf(p / 100.0, 3 * (W - 1)) / (3 * (W - 1))))
+    sa2 = accel_vrw**2 / dt
+    sa2 = max(quiet if quiet < 0.5 * sa2 else sa2, 1e-4 * sa2, 1e-24)
+    thr = _chi2_ppf(1.0 - stops.ALPHA, 3 * (cnt - 1) + 3 * cnt)
+    spans = _rest_runs(t, scatter, sa2, thr, t_gnss, slow_g.astype(float), REST_S)
+    return [(float(a), float(b)) for a, b in spans]
+
+
+@numba.njit(cache=True)
+def _moments(gyro, accel):
+    """Means and standard deviations per axis of ``gyro`` and ``accel`` (n, 3): rows mean,
+    sd, mean, sd; summed in order, as numpy's ``mean(axis=0)`` and ``std(axis=0)`` do."""
+    n = len(gyro)
+    out = np.zeros((4, 3))
+    for r in range(2):
+        x = gyro if r == 0 else accel
+        for i in range(n):
+            for a in range(3):
+                out[2 * r, a] += x[i, a]
+        for a in range(3):
+            out[2 * r, a] /= n
+        for i in range(n):
+            for a in range(3):
+                d = x[i, a] - out[2 * r, a]
+                out[2 * r + 1, a] += d * d
+        for a in range(3):
+            out[2 * r + 1, a] = np.sqrt(out[2 * r + 1, a] / n)
+    return out
 
 
 def at_rest(t, gyro, accel, spans, lla, figures, solution=None) -> list[str]:
@@ -123,10 +264,10 @@ def at_rest(t, gyro, accel, spans, lla, figures, solution=None) -> list[str]:
     g = float(earth.gravity(lla[0], lla[2]))
     said = set()
     for a, b in spans:
-        m = (t >= a) & (t <= b)
+        m = slice(np.searchsorted(t, a), np.searchsorted(t, b, side="right"))  # (t increases)
         T = b - a
-        f = accel[m].mean(axis=0)
-        w = gyro[m].mean(axis=0)
+        moments = _moments(gyro[m], accel[m])
+        w, f = moments[0], moments[2]
         mag = float(np.linalg.norm(f))
         tol = max(REST_SIGMAS * (np.sqrt(3.0) * ab + vrw / np.sqrt(T)), GRAVITY_FLOOR)
         if "gravity" not in said and abs(mag - g) > tol:
@@ -151,8 +292,7 @@ def at_rest(t, gyro, accel, spans, lla, figures, solution=None) -> list[str]:
                        f"{units.to_deg_per_h(rate):.3g} deg/h, less than the Earth's 15.04 "
                        f"deg/h that gyros of this grade see: a gyro unit, or an axis stuck "
                        f"at zero")
-        for name, x in (("gyro", gyro[m]), ("accel", accel[m])):
-            sd = x.std(axis=0)
+        for name, sd in (("gyro", moments[1]), ("accel", moments[3])):
             ref = np.median(sd)
             j = int(np.argmax(np.abs(np.log(np.maximum(sd, 1e-300) / max(ref, 1e-300)))))
             if (name not in said and ref > 0 and sd[j] > 0
@@ -163,8 +303,8 @@ def at_rest(t, gyro, accel, spans, lla, figures, solution=None) -> list[str]:
                            f"that axis in another unit or scale (deg vs rad, g vs m/s^2)")
         if solution is None or "level" in said:
             continue
-        ms = (solution.t >= a) & (solution.t <= b)
-        if not ms.any():
+        ms = slice(np.searchsorted(solution.t, a), np.searchsorted(solution.t, b, side="right"))
+        if ms.stop <= ms.start:
             continue
         lev = coarse_level(f)[:2]
         q = att.euler_to_quat(solution.euler[ms])
@@ -217,22 +357,111 @@ def gnss_residuals(solution, gnss) -> dict | None:
     return out
 
 
+#: Rows between exact sines and cosines in :func:`_antenna_velocity` (in between: the
+#: angle-addition formulas over each row's small change).
+RESEED_ROWS = 32
+#: An angle changing more than this [rad] from one row to the next gets exact ones.
+RESEED_STEP = 0.02
+
+
+@numba.njit(cache=True, inline="always")
+def _turned(s, c, d):
+    """sin and cos of ``x + d`` from those of ``x`` (``|d| <= RESEED_STEP``: the series of
+    ``sin d`` and ``cos d`` to ``d^7`` and ``d^8`` are exact to far below 1e-16)."""
+    d2 = d * d  # (Horner, multiplications only: divisions made this the kernel's cost)
+    sd = d * (1.0 + d2 * (-1.0 / 6.0 + d2 * (1.0 / 120.0 + d2 * (-1.0 / 5040.0))))
+    cd = 1.0 + d2 * (-0.5 + d2 * (1.0 / 24.0 + d2 * (-1.0 / 720.0 + d2 * (1.0 / 40320.0))))
+    return s * cd + c * sd, c * cd - s * sd
+
+
+@numba.njit(cache=True)
+def _antenna_velocity(t, t_imu, accel, lla, euler, omega, lever):
+    """The IMU's velocity change since ``t[0]`` [m/s] (N, 3), ENU, at the solution's
+    rows (times ``t``, position ``lla``, attitude ``euler``, body rate ``omega``): the
+    specific force ``accel`` (at ``t_imu``, linearly interpolated) rotated to ENU by
+    C_b^n (the elements of :func:`fednav.core.kernels.euler_to_dcm_s`) plus gravity
+    (:func:`fednav.core.earth.gravity_of_sin2`), integrated by trapezoids, moved to the
+    antenna at ``lever`` (body, m) by ``C (omega x lever)``.
+
+    The sines and cosines of pitch, roll, heading and latitude are exact every
+    :data:`RESEED_ROWS` rows and after a step beyond :data:`RESEED_STEP`, and turned by
+    each row's change in between (:func:`_turned`): six libm calls a row were most of
+    the cost; the difference is at round-off."""
+    n, m = len(t), len(t_imu)
+    V = np.zeros((n, 3))
+    x = np.zeros(4)  # pitch, roll, heading, latitude of the previous row
+    sn = np.zeros(4)
+    cs = np.zeros(4)
+    prev = np.zeros(3)
+    cur = np.zeros(3)
+    f = np.zeros(3)
+    u = np.zeros(3)
+    integral = np.zeros(3)
+    arm = lever[0] != 0.0 or lever[1] != 0.0 or lever[2] != 0.0
+    p = 0
+    for i in range(n):
+        ti = t[i]  # np.interp's bracket (times increase: it only moves on)
+        while p < m - 1 and t_imu[p + 1] <= ti:
+            p += 1
+        if ti < t_imu[0] or p >= m - 1:
+            for a in range(3):
+                f[a] = accel[p, a]
+        else:
+            w = (ti - t_imu[p]) / (t_imu[p + 1] - t_imu[p])
+            for a in range(3):
+                f[a] = accel[p, a] + w * (accel[p + 1, a] - accel[p, a])
+        for a in range(4):
+            y = euler[i, a] if a < 3 else lla[i, 0]
+            d = y - x[a]
+            if i % RESEED_ROWS == 0 or abs(d) > RESEED_STEP:
+                sn[a], cs[a] = np.sin(y), np.cos(y)
+            else:
+                sn[a], cs[a] = _turned(sn[a], cs[a], d)
+            x[a] = y
+        st, sg, sp = sn[0], sn[1], sn[2]
+        ct, cg, cp = cs[0], cs[1], cs[2]
+        # C = Rz(-heading) Rx(pitch) Ry(roll), row by row (kernels.euler_to_dcm_s)
+        c = (cg * cp + st * sg * sp, sp * ct, sg * cp - st * cg * sp,
+             -cg * sp + st * sg * cp, cp * ct, -sg * sp - st * cg * cp,
+             -ct * sg, st, ct * cg)
+        if arm:  # the antenna's velocity relative to the IMU: C (omega x lever)
+            u[0] = omega[i, 1] * lever[2] - omega[i, 2] * lever[1]
+            u[1] = omega[i, 2] * lever[0] - omega[i, 0] * lever[2]
+            u[2] = omega[i, 0] * lever[1] - omega[i, 1] * lever[0]
+        for a in range(3):
+            cur[a] = c[3 * a] * f[0] + c[3 * a + 1] * f[1] + c[3 * a + 2] * f[2]
+        cur[2] -= earth.gravity_of_sin2_nb(sn[3] * sn[3], lla[i, 2])
+        for a in range(3):
+            if i > 0:
+                integral[a] += 0.5 * (cur[a] + prev[a]) * (t[i] - t[i - 1])
+            prev[a] = cur[a]
+            V[i, a] = integral[a]
+            if arm:
+                V[i, a] += c[3 * a] * u[0] + c[3 * a + 1] * u[1] + c[3 * a + 2] * u[2]
+    return V
+
+
 @numba.njit(cache=True)
 def _offset_misfit(t, V, tg, k, j, dvg, lags):
     """Per lag ``lags[l]`` [s]: the sum of squares of the GNSS velocity changes ``dvg``
     (K, 3) over fix pairs (``j``, ``k``) minus the IMU velocity ``V`` (N, 3, at times
-    ``t``) linearly interpolated at the fixes' times ``tg`` minus the lag, each axis's
-    mean misfit removed (a tilt's or a bias's constant part)."""
+    ``t``) linearly interpolated at the fixes' times ``tg`` minus the lag (from the
+    bracket ``t[p] <= x < t[p + 1]``, p in 0..N-2), each axis's mean misfit removed (a
+    tilt's or a bias's constant part)."""
     n, G, K = len(t), len(tg), len(k)
     cost = np.empty(len(lags))
     Vx = np.empty((G, 3))
     r = np.empty((K, 3))
+    at = np.zeros(G, dtype=np.int64)  # each fix's bracket at the previous lag
     for li in range(len(lags)):
-        p = 0
-        for g in range(G):  # (fix times increase: the bracket only moves forward)
+        for g in range(G):
             x = tg[g] - lags[li]
+            p = at[g] if li > 0 else (at[g - 1] if g > 0 else 0)
+            while p > 0 and t[p] > x:
+                p -= 1
             while p < n - 2 and t[p + 1] <= x:
                 p += 1
+            at[g] = p
             w = (x - t[p]) / (t[p + 1] - t[p])
             for a in range(3):
                 Vx[g, a] = (1.0 - w) * V[p, a] + w * V[p + 1, a]
@@ -263,15 +492,8 @@ def imu_gnss_offset(solution, imu, gnss, window_s: float = OFFSET_WINDOW_S,
     if gnss.vel is None or len(solution.t) < 10:
         return None
     t = solution.t
-    f = np.column_stack([np.interp(t, imu.t, imu.accel[:, j]) for j in range(3)])
-    g = earth.gravity(solution.lla[:, 0], solution.lla[:, 2])
-    C = att.euler_to_dcm(solution.euler)
-    a = np.einsum("kij,kj->ki", C, f)
-    a[:, 2] -= g
-    dt = np.diff(t)
-    V = np.vstack([np.zeros(3), np.cumsum(0.5 * (a[1:] + a[:-1]) * dt[:, None], axis=0)])
-    if np.any(gnss.lever):  # the antenna's velocity: + C (w x lever)
-        V += np.einsum("kij,kj->ki", C, np.cross(solution.omega, gnss.lever))
+    V = _antenna_velocity(t, imu.t, imu.accel, solution.lla, solution.euler,
+                          solution.omega, np.asarray(gnss.lever, dtype=float))
     tg = gnss.t
     period = float(np.median(np.diff(tg))) if len(tg) > 1 else np.inf
     m = max(1, int(round(window_s / period)))
@@ -285,16 +507,16 @@ def imu_gnss_offset(solution, imu, gnss, window_s: float = OFFSET_WINDOW_S,
     dvg = gnss.vel[k] - gnss.vel[j]
 
     def misfit(lags):
-        return _offset_misfit(t, V, tg, k, j, dvg, np.asarray(lags, dtype=float)), dvg
+        return _offset_misfit(t, V, tg, k, j, dvg, np.asarray(lags, dtype=float))
 
     # coarse (0.05 s) then fine (0.01 s): the misfit is smooth over the 1 s windows
     lags = np.arange(-search_s, search_s + 1e-9, 0.05)
-    cost, _ = misfit(lags)
+    cost = misfit(lags)
     i = int(np.argmin(cost))
     if i in (0, len(lags) - 1):
         return None  # at the edge: an offset beyond the search (the course check's)
     lags = lags[i] + np.arange(-0.04, 0.04 + 1e-9, 0.01)
-    cost, _ = misfit(lags)
+    cost = misfit(lags)
     i = int(np.argmin(cost))
     tau = float(lags[i])
     signal = float(((dvg - dvg.mean(axis=0)) ** 2).sum())
@@ -303,12 +525,11 @@ def imu_gnss_offset(solution, imu, gnss, window_s: float = OFFSET_WINDOW_S,
     # 1-sigma from the misfit's curvature (Gauss-Newton), widened for the overlapping
     # windows (each fix in m of them)
     h = 0.01
-    c0, r0 = misfit(np.array([tau]))
-    cm, cp = misfit(np.array([tau - h]))[0], misfit(np.array([tau + h]))[0]
-    curv = float((cp + cm - 2 * c0)[0]) / h**2
+    c0, cm, cp = misfit(np.array([tau, tau - h, tau + h]))
+    curv = float(cp + cm - 2 * c0) / h**2
     if curv <= 0:
         return None
-    s2 = float(c0[0]) / max(r0.size - 3, 1)
+    s2 = float(c0) / max(dvg.size - 3, 1)
     return tau, float(np.sqrt(2.0 * s2 / curv * m))
 
 
@@ -418,5 +639,5 @@ def residual_checks(res: dict | None, source: str) -> list[str]:
     return out
 
 
-__all__ = ["at_rest", "gnss_residuals", "gnss_scale_check", "imu_gnss_offset", "offset_check",
-           "residual_checks", "rest_spans", "stuck_axes"]
+__all__ = ["at_rest", "gnss_residuals", "gnss_scale_check", "imu_gnss_offset", "imu_pass",
+           "offset_check", "residual_checks", "rest_spans", "stuck_axes"]
