@@ -259,3 +259,14 @@ def test_the_conventions_table_names_every_vector_key():
     keys = {k for k in keys if k != "outages_s" and "_range_" not in k}  # [from, to]
     missing = sorted(k for k in keys if not re.search(rf"\b{k}\b", table))
     assert not missing, f"vector keys not in docs/conventions.md's table: {missing}"
+
+
+def test_gnss_simulator_old_keyword_is_reordered_with_a_warning():
+    from fednav.sensors import Gnss
+
+    with pytest.warns(FutureWarning, match=r"Gnss\.sigma_pos \[north, east, up\] is now "
+                                           r"Gnss\.sigma_pos_enu"):
+        old = Gnss(sigma_pos=(1.0, 2.0, 3.0), sigma_vel=0.1, period=1.0)
+    assert old == Gnss((2.0, 1.0, 3.0), 0.1, 1.0) and old.sigma_pos == (1.0, 2.0, 3.0)
+    with pytest.raises(TypeError, match="same setting"):
+        Gnss(1.0, 0.1, 1.0, sigma_pos=1.0)

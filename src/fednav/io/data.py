@@ -6,14 +6,13 @@ Frames: body right-forward-up, navigation ENU; positions geodetic ``[lat, lon, h
 
 from __future__ import annotations
 
-import functools
-import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from ..core.errors import FednavError
+from ..sensors.gnss import reads_old_sigma_pos
 
 
 class DataError(FednavError, ValueError):
@@ -311,6 +310,7 @@ class ImuData:
         return float((self.t[-1] - self.t[0]) / (len(self.t) - 1))
 
 
+@reads_old_sigma_pos
 @dataclass
 class GnssData:
     """GNSS fixes: ``t`` (N,) [s], ``lla`` (N, 3) (or None for velocity-only data), ENU
@@ -322,7 +322,7 @@ class GnssData:
 
     The old keyword ``sigma_pos`` ([north, east, up]) is read, reordered, with a
     ``FutureWarning`` for one more release; the attribute ``sigma_pos`` gives that
-    order until then."""
+    order until then (:func:`fednav.sensors.gnss.reads_old_sigma_pos`)."""
 
     source: str
     t: np.ndarray
@@ -402,36 +402,6 @@ class GnssData:
         sigma = np.full(len(t), np.inf)
         sigma[ok] = np.hypot(s[hi[ok]], s[lo[ok]]) / span[ok]
         return vel, sigma
-
-    @property
-    def sigma_pos(self) -> np.ndarray:
-        """Deprecated (removed in 0.3): :attr:`sigma_pos_enu` in the old order [north,
-        east, up] [m]."""
-        return self.sigma_pos_enu[[1, 0, 2]]
-
-
-_SIGMA_POS_RENAMED = ("GnssData.sigma_pos [north, east, up] is now GnssData.sigma_pos_enu "
-                      "[east, north, up]: read and reordered for one more release")
-
-
-def _old_sigma_pos(init):
-    """``GnssData(..., sigma_pos=[north, east, up])`` (the old keyword) read as
-    ``sigma_pos_enu``, reordered, with a FutureWarning; both: a TypeError."""
-    @functools.wraps(init)
-    def __init__(self, *args, sigma_pos=None, **kwargs):
-        if sigma_pos is not None:
-            if len(args) > 4 or "sigma_pos_enu" in kwargs:
-                raise TypeError("GnssData: sigma_pos ([north, east, up]) and sigma_pos_enu "
-                                "([east, north, up]) are the same setting; give "
-                                "sigma_pos_enu only")
-            warnings.warn(_SIGMA_POS_RENAMED, FutureWarning, stacklevel=2)
-            old = np.asarray(sigma_pos)
-            kwargs["sigma_pos_enu"] = old[[1, 0, 2]] if old.shape == (3,) else old
-        init(self, *args, **kwargs)
-    return __init__
-
-
-GnssData.__init__ = _old_sigma_pos(GnssData.__init__)
 
 
 @dataclass

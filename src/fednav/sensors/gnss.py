@@ -12,6 +12,8 @@ File columns: ``t_s, lat_deg, lon_deg, h_m, vE_mps, vN_mps, vU_mps``
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import warnings
 from dataclasses import dataclass
 from typing import Literal
@@ -35,7 +37,7 @@ def neu_to_enu(v):
     if isinstance(v, np.ndarray) and v.shape == (3,):
         return v[[1, 0, 2]]
     if isinstance(v, list | tuple) and len(v) == 3:
-        return [v[1], v[0], v[2]]
+        return type(v)((v[1], v[0], v[2]))
     return v
 
 
@@ -66,13 +68,48 @@ def renamed_neu_keys(data, where: str, renamed: dict[str, str] = NEU_KEYS):
     return out
 
 
+def reads_old_sigma_pos(cls):
+    """Class decorator of a dataclass with a ``sigma_pos_enu`` field ([east, north, up]):
+    its constructor also takes the old keyword ``sigma_pos`` ([north, east, up]), read
+    reordered (:func:`neu_to_enu`) with a ``FutureWarning`` naming both and the order
+    change (both at once: a TypeError), and its attribute ``sigma_pos`` gives the old
+    order — for one more release."""
+    name = cls.__name__
+    at = [f.name for f in dataclasses.fields(cls)].index("sigma_pos_enu")
+    message = (f"{name}.sigma_pos [north, east, up] is now {name}.sigma_pos_enu [east, "
+               f"north, up]: read and reordered for one more release")
+    init = cls.__init__
+
+    @functools.wraps(init)
+    def __init__(self, *args, sigma_pos=None, **kwargs):
+        if sigma_pos is not None:
+            if len(args) > at or "sigma_pos_enu" in kwargs:
+                raise TypeError(f"{name}: sigma_pos ([north, east, up]) and sigma_pos_enu "
+                                f"([east, north, up]) are the same setting; give "
+                                f"sigma_pos_enu only")
+            warnings.warn(message, FutureWarning, stacklevel=2)
+            kwargs["sigma_pos_enu"] = neu_to_enu(sigma_pos)
+        init(self, *args, **kwargs)
+
+    def sigma_pos(self):
+        """Deprecated (removed in 0.3): ``sigma_pos_enu`` in the old order [north, east,
+        up] [m]."""
+        return neu_to_enu(self.sigma_pos_enu)  # (the same swap both ways)
+
+    cls.__init__ = __init__
+    cls.sigma_pos = property(sigma_pos)
+    return cls
+
+
+@reads_old_sigma_pos
 @dataclass(frozen=True)
 class Gnss:
     """Fix ``[lat, lon, h, vE, vN, vU]`` every ``period`` [s] with white noise.
 
     ``sigma_pos_enu`` [m]: scalar, or ``(east, north, up)``; ``sigma_vel`` [m/s]: scalar
     or ``(east, north, up)``.  The series' ``sigma`` follows ``z`` (``[lat, lon, h, vE,
-    vN, vU]``): ``[north m, east m, up m, vE, vN, vU]``.
+    vN, vU]``): ``[north m, east m, up m, vE, vN, vU]``.  The old keyword ``sigma_pos``
+    ([north, east, up]) is read with a ``FutureWarning`` (:func:`reads_old_sigma_pos`).
     """
 
     sigma_pos_enu: float | tuple
