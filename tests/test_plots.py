@@ -128,6 +128,7 @@ def test_design_errors_are_linear_from_zero_with_units_and_one_legend_outside():
     assert fig.axes[0].get_ylim()[1] < 100 and fig.axes[1].get_ylim()[1] < 100  # (not SINS)
     text = " ".join(t.get_text() for t in fig.texts)
     assert "off the axes: SINS (median horizontal position up to" in text
+    assert "A = B (identical to plotting precision)" in text  # B dashed over a wide A
     labels = [t.get_text() for t in fig.legends[0].get_texts()]
     assert labels[:4] == ["A", "B", "C", "SINS"] and "outage: gnss" in labels
     # the median of mode C's horizontal error over the runs, as drawn

@@ -419,10 +419,12 @@ def spread_figure(runs_series: list[dict], windows: list[dict], name: str = ""):
     """``errors.png`` of a design as a :class:`~matplotlib.figure.Figure`: horizontal
     position [m], height [m] and heading [deg] errors versus time [s] on linear axes from
     zero — per mode the median over the Monte Carlo runs of the absolute error (line), its
-    5-95 % band (shaded) and the mean filter 1-sigma (dashed); outage windows shaded grey;
-    one legend beside the axes.  The scale is set by the modes' robust scales (a start-up
-    transient does not set it); a mode over 30 times the others' (a free INS) runs off
-    the axes and a note under the figure says how far."""
+    5-95 % band (shaded) and the mean filter 1-sigma (dotted); outage windows shaded grey;
+    one legend beside the axes; modes whose medians coincide drawn distinguishably
+    (:func:`fednav.core.plots.mode_styles`) and named in a note.  The scale is set by
+    the modes' robust scales (a start-up transient does not set it); a mode over 30 times
+    the others' (a free INS) runs off the axes and a note under the figure says how
+    far."""
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
@@ -432,22 +434,27 @@ def spread_figure(runs_series: list[dict], windows: list[dict], name: str = ""):
     modes = list(runs_series[0])
     panels = (("horizontal_position_m", "horizontal position error", "m"),
               ("height_m", "height error", "m"), ("heading_deg", "heading error", "deg"))
-    colors = plots.colors()
+    spread = {m: spread_arrays(runs_series, m) for m in modes}
+    q = {m: {key: np.percentile(a[key][0], [5, 50, 95], axis=0) for key, _, _ in panels}
+         for m, a in spread.items()}
+    # modes whose medians coincide in every panel are drawn distinguishably and named
+    curves = {m: [q[m][key][1] for key, _, _ in panels] for m in modes}
+    groups = plots.coinciding_groups(curves)
+    styles = plots.mode_styles(modes, groups)
     fig, axes = plots.new_figure(3, 1, figsize=(13, 9.5), sharex=True)
     axes = axes[:, 0]
     scales: list[dict[str, float]] = [{}, {}, {}]
     peaks: list[dict[str, float]] = [{}, {}, {}]
-    for i, m in enumerate(modes):
-        a = spread_arrays(runs_series, m)
-        c = colors[i % len(colors)]
+    for m in modes:
+        a, st = spread[m], styles[m]
         for j, (ax, (key, _, _)) in enumerate(zip(axes, panels, strict=True)):
-            x, sig = a[key]
-            lo, med, hi = np.percentile(x, [5, 50, 95], axis=0)
-            ax.fill_between(a["t"], lo, hi, color=c, alpha=0.18, lw=0)
-            ax.plot(a["t"], med, color=c, lw=1.1)
+            sig = a[key][1]
+            lo, med, hi = q[m][key]
+            ax.fill_between(a["t"], lo, hi, color=st["color"], alpha=0.18, lw=0)
+            ax.plot(a["t"], med, color=st["color"], ls=st["ls"], lw=st["lw"])
             arrays = [med, hi]
             if np.isfinite(sig).any():
-                ax.plot(a["t"], sig, color=c, lw=1.0, ls="--", gid="sigma")
+                ax.plot(a["t"], sig, color=st["color"], lw=1.0, ls=(0, (2, 2)), gid="sigma")
                 arrays.append(sig)
             scales[j][m] = max(plots.robust_scale(v) for v in arrays)
             peaks[j][m] = float(np.nanmax(med))
@@ -464,18 +471,20 @@ def spread_figure(runs_series: list[dict], windows: list[dict], name: str = ""):
         ax.grid(alpha=0.3, lw=0.5)
     axes[-1].set_xlabel("time [s]")
     runs = len(runs_series)
-    handles = [Patch(facecolor=colors[i % len(colors)], alpha=0.6, label=m)
-               for i, m in enumerate(modes)]
+    handles = [Line2D([], [], color=styles[m]["color"], ls=styles[m]["ls"],
+                      lw=styles[m]["lw"], label=m) for m in modes]
     handles += [Line2D([], [], color="k", lw=1.1, label="median over runs"),
                 Patch(facecolor="0.35", alpha=0.45, label="5-95 % of runs"),
-                Line2D([], [], color="k", lw=1.0, ls="--", label="filter 1-σ\n(mean over runs)")]
+                Line2D([], [], color="k", lw=1.0, ls=(0, (2, 2)),
+                       label="filter 1-σ\n(mean over runs)")]
     if windows:
         out = sorted({s for w in windows for s in w["sensors"]})
         handles.append(Patch(facecolor="0.92", edgecolor="0.6", lw=0.8,
                              label=f"outage: {', '.join(out)}"))
     plots.legend_outside(fig, handles, x=0.79, y=0.93, fontsize=9)
-    plots.note(fig, "; ".join(f"off the axes: {m} (median {', '.join(v)})"
-                              for m, v in off.items()))
+    notes = [plots.identical_note(groups, curves, "samples")]
+    notes += [f"off the axes: {m} (median {', '.join(v)})" for m, v in off.items()]
+    plots.note(fig, "\n".join(n for n in notes if n))
     fig.suptitle(f"{name}: absolute errors over {runs} Monte Carlo run"
                  f"{'s' if runs != 1 else ''}")
     fig.subplots_adjust(left=0.07, right=0.78, bottom=0.07, top=0.94, hspace=0.08)
