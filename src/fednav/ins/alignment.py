@@ -373,18 +373,15 @@ def align(imu, gnss, t0: float, i0: int, dt: float, gyro_arw: float, accel_noise
     else:
         if hc is not None:
             report["course_scatter"] = round(float(hc.scatter), 2)
-            if not hc.follows:
+            if not hc.follows and file_euler is None:
                 warnings.append(
                     f"the GNSS course does not follow the gyro's heading (scatter "
                     f"{np.sqrt(hc.scatter):.1f} x its sigma over the first "
                     f"{TEST_SPAN_S:g} s of motion): the vehicle slides sideways, the IMU is "
                     f"not aligned with the direction of travel, or the gyro's axes are "
-                    f"wrong; the initial heading is "
-                    + ("the file's (for a sliding or skid-steered vehicle with the IMU's "
-                       "axes right, nothing to change)"
-                       if file_euler is not None else
-                       "unknown (+-180 deg, and so is the solution's) — give "
-                       "alignment.coarse_heading_deg or the initial attitude"))
+                    f"wrong; the initial heading is unknown (+-180 deg, and so is the "
+                    f"solution's) — give alignment.coarse_heading_deg or the initial "
+                    f"attitude")
         if hc is not None and hc.follows:
             euler[2] = hc.heading
             sig[2] = np.hypot(hc.sigma, heading_floor)
@@ -395,7 +392,12 @@ def align(imu, gnss, t0: float, i0: int, dt: float, gyro_arw: float, accel_noise
         elif file_euler is not None:
             euler[2] = file_euler[2]
             sig[2] = file_sigma[2] if file_sigma is not None else units.deg(10.0)
-            report["heading"] = "file"
+            # The course not taken: a note, not a warning (nothing to change for a sliding
+            # or skid-steered vehicle; wrong gyro axes show in the health monitor's NIS).
+            report["heading"] = "file" if hc is None else (
+                f"file (the GNSS course does not follow the gyro's heading: scatter "
+                f"{np.sqrt(hc.scatter):.1f} x its sigma — a sliding or skid-steered "
+                f"vehicle, or the IMU's axes not along the travel)")
         else:
             euler[2], sig[2] = 0.0, UNKNOWN_HEADING_SIGMA
             report["heading"] = "unknown (0)"
