@@ -242,7 +242,7 @@ def errors_figure(res: ProcessResult, ref: Reference, gnss=None, title: str = ""
     plots.legend_outside(fig, handles, x=0.84, y=0.92)
     fig.suptitle(f"Navigation errors (solution − reference){' ' + title if title else ''}"
                  f", reference {Path(str(ref.source)).name}", fontsize=11)
-    fig.subplots_adjust(left=0.05, right=0.83, bottom=0.07 if rows == 3 else 0.1,
+    fig.subplots_adjust(left=0.06, right=0.83, bottom=0.07 if rows == 3 else 0.1,
                         top=0.89 if rows == 3 else 0.84, wspace=0.28, hspace=0.42)
     return fig
 
