@@ -104,8 +104,9 @@ class FilterConfig(_Model):
     itself, the default) or ``square_root`` (its Cholesky factor: every Gaussian filter
     has that form, :mod:`fednav.filters.square_root`; a fusion of factored filters is the
     square-root information form); per local filter in ``locals`` (``{star: {form:
-    square_root}}``).  Square-root local filters run the Python loop, not the compiled
-    engine.
+    square_root}}``).  The compiled engine runs the square-root ``kf``, ``ekf``, ``ukf``
+    and ``sukf``, alone or beside standard ones; other square-root filters run the
+    Python loop.
     ``substeps`` of the nonlinear error propagation; ``alpha``, ``beta``, ``kappa`` of the
     unscented transform; ``grid_level`` of the sparse-grid filters.  ``accel_bias``: the
     filter's accelerometer-bias state —
@@ -415,8 +416,9 @@ def load_system(source) -> System:
     ----------
     source : str, Path, dict or System
         A YAML file's path, the same content as a mapping, or a System (returned as it
-        is).  Units are in the key names (``sigma_pos_m`` [m], ``lever_m`` body
-        right-forward-up [m], ``period_s`` [s], ``gyro_arw_deg_sqrt_h`` ...).
+        is).  Units are in the key names (``sigma_pos_enu_m`` [m] east, north, up,
+        ``lever_m`` body right-forward-up [m], ``period_s`` [s], ``gyro_arw_deg_sqrt_h``
+        ...).
 
     Returns
     -------
