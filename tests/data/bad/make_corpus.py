@@ -403,6 +403,10 @@ def main():
                                         "accel_vrw_mps_sqrt_s: 0.0005\n  "
                                         "accel_vrw_ug_sqrt_hz: 50"),
          "key 'imu': give accel_vrw_ug_sqrt_hz or accel_vrw_mps_sqrt_s, not both"),
+        ("old-and-new-gnss-key", with_keys(sensors={"gnss": {
+            **good["sensors"]["gnss"], "sigma_pos_m": [0.5, 0.5, 0.5]}}),
+         "key 'sensors.gnss': 'sigma_pos_m' ([north, east, up]) and 'sigma_pos_enu_m' "
+         "([east, north, up]) are the same setting; give sigma_pos_enu_m only"),
         ("not-yaml", "imu: [1, 2\n", "not valid YAML (while parsing a flow sequence)"),
         ("zero-bridge", with_keys(imu={"max_bridge_s": 0}),
          "key 'imu.max_bridge_s': Input should be greater than 0 (got 0)"),
@@ -414,6 +418,14 @@ def main():
     yaml_case("yaml-config-empty", proc(cfg_p="cfg-empty.yaml"), 0,
               "warning: good/imu.csv: no IMU error figures in the file or the config: the "
               "'consumer' MEMS preset is assumed")
+    # the old key (issue 29: [north, east, up], now sigma_pos_enu_m) still runs, warned
+    gnss = good["sensors"]["gnss"]
+    (HERE / "cfg-old-gnss-key.yaml").write_text(with_keys(sensors={"gnss": {
+        "sigma_pos_m": gnss["sigma_pos_enu_m"], "sigma_vel_mps": gnss["sigma_vel_mps"]}}))
+    yaml_case("yaml-config-old-gnss-key", proc(cfg_p="cfg-old-gnss-key.yaml"), 0,
+              "warning: sensors.gnss.sigma_pos_m [north, east, up] is now "
+              "sensors.gnss.sigma_pos_enu_m [east, north, up]: read and reordered for one "
+              "more release")
     yaml_case("yaml-config-missing", proc(cfg_p="no-such.yaml"), 2,
               "error: processing config file no-such.yaml: not found")
     yaml_case("yaml-config-is-a-folder", proc(cfg_p=G), 2,
