@@ -184,9 +184,14 @@ def test_overconfident_filter_recovers_and_a_true_fault_stays_isolated():
     assert late and all(e[5] for e in late)  # isolated to the end
 
 
+@pytest.mark.parametrize("form", ["standard", "square_root"])
 @pytest.mark.parametrize("ftype", ["kf", "ukf"])
-def test_both_engines_readmit_alike(ftype):
+def test_both_engines_readmit_alike(ftype, form):
+    """The same episodes and solution from both engines, in either covariance form (the
+    square-root re-admission inflates every factor by sqrt(s))."""
     imu, gnss, ref, system = _drive("overconfident", seed=2)
+    system = system.model_copy(update={"filter": system.filter.model_copy(
+        update={"form": form})})
     fast, sf = _fly(imu, gnss, system, 5.0, "compiled", ftype)
     slow, ss = _fly(imu, gnss, system, 5.0, "python", ftype)
     assert fast.engine == "compiled" and slow.engine == "python"

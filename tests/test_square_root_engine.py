@@ -95,24 +95,3 @@ def test_square_root_failure_names_the_filter_step_and_why(drive, name):  # noqa
                                           r"measurement noise R is not positive "
                                           r"semi-definite"):
         _run(prep, name)
-
-
-@pytest.mark.parametrize("ftype", ["kf", "ukf"])
-def test_both_engines_readmit_factored_filters_alike(ftype):
-    """The lockout guard's re-admission (every factor inflated by sqrt(s), the update
-    tried again) on factored filters: the same episodes and solution from both engines
-    (tests/test_readmission.py's overconfident drive)."""
-    from test_readmission import _drive, _fly
-
-    imu, gnss, _, system = _drive("overconfident", seed=2)
-    system = system.model_copy(update={"filter": system.filter.model_copy(
-        update={"form": "square_root"})})
-    fast, sf = _fly(imu, gnss, system, 5.0, "compiled", ftype)
-    slow, ss = _fly(imu, gnss, system, 5.0, "python", ftype)
-    assert fast.engine == "compiled" and slow.engine == "python"
-    assert len(fast.readmissions) == len(slow.readmissions) > 0
-    for a, b in zip(fast.readmissions, slow.readmissions, strict=True):
-        assert a["local"] == b["local"] and a["t_s"] == b["t_s"]
-        assert a["inflation"] == pytest.approx(b["inflation"], rel=1e-9)
-    np.testing.assert_allclose(sf.lla, ss.lla, rtol=0, atol=1e-12)
-    assert [e[5] for e in fast.fdi] == [e[5] for e in slow.fdi]
