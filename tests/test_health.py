@@ -251,3 +251,54 @@ def test_the_antenna_velocity_matches_its_numpy_form():
         want += np.einsum("kij,kj->ki", C, np.cross(omega, lever))
         got = pl._antenna_velocity(t, ti, acc, lla, euler, omega, lever)
         assert np.abs(got - want).max() < 1e-11
+
+
+def test_the_mean_quaternion_matches_its_numpy_form():
+    """The compiled mean of the sign-aligned quaternions (the levelling check's) against
+    att.euler_to_quat's, heading wrapping through north (the same mean up to its sign)."""
+    from fednav.core import attitude as att
+
+    t = np.linspace(0.0, 8.0, 800)
+    euler = np.column_stack([0.02 * np.sin(t), -0.03 + 0.01 * np.cos(3 * t),
+                             att.wrap_2pi(-0.05 + 0.02 * t)])
+    q = att.euler_to_quat(euler)
+    want = np.mean(q * np.sign(q @ q[0])[:, None], axis=0)
+    got = pl._mean_quaternion(euler)
+    assert np.abs(got * np.sign(got @ want) - want).max() < 1e-14
+    assert np.abs(att.wrap_pi(att.quat_to_euler(got) - att.quat_to_euler(want))).max() < 1e-14
+
+
+def test_the_residual_and_scale_statistics_match_their_numpy_forms(hills):
+    rng = np.random.default_rng(8)
+    z = rng.normal(size=(400, 3)).cumsum(axis=0) * 0.1 + 0.3
+    zc = z - z.mean(axis=0)
+    rho = np.clip(np.sum(zc[1:] * zc[:-1], axis=0) / np.sum(zc**2, axis=0), 0.0, 0.99)
+    mean, se = pl._mean_and_sigma(z)
+    assert np.array_equal(mean, z.mean(axis=0))
+    assert np.array_equal(se, z.std(axis=0) * np.sqrt((1 + rho) / (1 - rho) / len(z)))
+    g = hills.gnss
+    t, lla = g.t, g.lla
+    step = pl.earth.llh_difference_enu(lla[1:, 0], lla[1:, 1], lla[1:, 2], lla[:-1, 0],
+                                       lla[:-1, 1], lla[:-1, 2]) * [1.0, 1.0, 0.1]
+    told, slopes, sigmas = pl._scale_fit(t, g.vel, step, pl.SCALE_CHUNK_S, g.sigma_vel)
+    V = np.vstack([np.zeros(3), np.cumsum(0.5 * (g.vel[1:] + g.vel[:-1])
+                                          * np.diff(t)[:, None], axis=0)])
+    p = np.vstack([np.zeros(3), np.cumsum(step, axis=0)])
+    chunk = np.floor((t - t[0]) / pl.SCALE_CHUNK_S).astype(int)
+    count = np.bincount(chunk)[:, None]
+
+    def centred(x):
+        sums = np.stack([np.bincount(chunk, x[:, a]) for a in range(3)], axis=1)
+        return x - (sums / count)[chunk]
+
+    x, y = centred(V), centred(p)
+    assert told.all()
+    for a in range(3):
+        slope = x[:, a] @ y[:, a] / (x[:, a] @ x[:, a])
+        r = y[:, a] - slope * x[:, a]
+        rho = np.clip(r[1:] @ r[:-1] / (r @ r), 0.0, 0.99)
+        sig = np.sqrt(r @ r / (len(t) - count.size - 1) / (x[:, a] @ x[:, a])
+                      * (1 + rho) / (1 - rho))
+        assert slopes[a] == pytest.approx(slope, rel=1e-9)
+        assert sigmas[a] == pytest.approx(sig, rel=1e-9)
+    assert slopes[2] == pytest.approx(0.1, abs=0.01)

@@ -20,17 +20,20 @@ NIS_WARN = 3.0
 NIS_REFUSE = 100.0
 
 
-def nis_check(fdi: list, force: bool = False, seen: list | None = None) -> list[str]:
+def nis_check(fdi: list | dict, force: bool = False, seen: list | None = None) -> list[str]:
     """Warnings for local filters whose mean NIS/dof over the run's accepted measurements
     exceeds :data:`NIS_WARN`, naming the likely causes; a one-line :class:`DataError`
     beyond :data:`NIS_REFUSE` unless ``force`` (with the first of the input checks'
     warnings ``seen``, the likeliest cause, in it).  Measurements fault detection isolated
-    did not touch the solution (a long isolation has its own warning)."""
-    from .solution import consistency
-
+    did not touch the solution (a long isolation has its own warning).  ``fdi``: the FDI
+    log, or it split per local filter (:func:`by_local`)."""
     out = []
-    for local, c in consistency([e for e in fdi if not e[5]]).items():
-        n = c["nis_per_dof"]
+    log = by_local(fdi) if isinstance(fdi, list) else fdi
+    for local in sorted(log):  # (by name, as solution.consistency lists them)
+        _, nis, dof, iso = log[local]
+        if iso.all():
+            continue
+        n = float((nis[~iso] / dof[~iso]).mean())  # (consistency()'s nis_per_dof)
         if not n > NIS_WARN:
             continue
         why = (f"the '{local}' local filter's innovations are {n:.3g} times their expected "
@@ -52,28 +55,34 @@ def nis_check(fdi: list, force: bool = False, seen: list | None = None) -> list[
 ISOLATION_WARN_S = 30.0
 
 
-def _by_local(fdi: list) -> dict[str, tuple[np.ndarray, ...]]:
+def by_local(fdi: list) -> dict[str, tuple[np.ndarray, ...]]:
     """The FDI log (t, local, NIS, dof, threshold, isolated) split per local filter, in
-    order of first appearance: local -> (t, nis, dof, isolated) arrays."""
+    order of first appearance: local -> (t [s], NIS, dof, isolated) arrays (what the
+    checks below take; parsed once per run)."""
     if not fdi:
         return {}
     t, local, nis, dof, _, iso = zip(*fdi, strict=True)
-    t, nis, dof = (np.asarray(a, dtype=float) for a in (t, nis, dof))
-    iso, local = np.asarray(iso, dtype=bool), np.asarray(local)
-    names, first, which = np.unique(local, return_index=True, return_inverse=True)
+    t, nis, dof = (np.array(a, dtype=float) for a in (t, nis, dof))
+    iso = np.array(iso, dtype=bool)
+    names = dict.fromkeys(local)
+    if len(names) == 1:
+        return {str(next(iter(names))): (t, nis, dof, iso)}
+    local = np.asarray(local)
     out = {}
-    for g in np.argsort(first):
-        m = which == g
-        out[str(names[g])] = (t[m], nis[m], dof[m], iso[m])
+    for name in names:
+        m = local == name
+        out[str(name)] = (t[m], nis[m], dof[m], iso[m])
     return out
 
 
-def isolation_warnings(fdi: list) -> list[str]:
+def isolation_warnings(fdi: list | dict) -> list[str]:
     """Warnings for local filters that fault detection isolated for more than
     :data:`ISOLATION_WARN_S` in one stretch, naming the span and the NIS/dof there (from the
-    FDI log: t, local, statistic, dof, threshold, isolated)."""
+    FDI log: t, local, statistic, dof, threshold, isolated; or it split by
+    :func:`by_local`)."""
     out = []
-    for local, (t, nis, dof, iso) in _by_local(fdi).items():
+    for local, (t, nis, dof, iso) in (by_local(fdi) if isinstance(fdi, list)
+                                      else fdi).items():
         if not iso.any():
             continue
         edges = np.flatnonzero(np.diff(np.r_[0, iso.astype(np.int8), 0]))
@@ -100,13 +109,15 @@ NIS_WINDOW_S = 10.0
 NIS_WINDOW_WARN = 10.0
 
 
-def window_nis(fdi: list) -> list[str]:
+def window_nis(fdi: list | dict) -> list[str]:
     """Warnings for local filters whose NIS/dof over a sliding :data:`NIS_WINDOW_S`
     window of accepted measurements exceeds :data:`NIS_WINDOW_WARN` somewhere (the
     worst window named), unless the run's mean is itself beyond :data:`NIS_WARN` and
-    the window no worse than 3 times it (the run's warning says it all then)."""
+    the window no worse than 3 times it (the run's warning says it all then).  ``fdi``:
+    the FDI log, or it split by :func:`by_local`."""
     out = []
-    for local, (t, nis, dof, iso) in _by_local(fdi).items():
+    for local, (t, nis, dof, iso) in (by_local(fdi) if isinstance(fdi, list)
+                                      else fdi).items():
         t, r = t[~iso], nis[~iso] / np.maximum(dof[~iso], 1)
         if len(t) == 0:
             continue
@@ -144,7 +155,8 @@ def run_health(fdi: list, imu=None, gnss=None, solution=None, figures: dict | No
     from ..ins import stops
     from . import plausibility as pl
 
-    out = isolation_warnings(fdi) + nis_check(fdi, force, seen) + window_nis(fdi)
+    log = by_local(fdi)
+    out = isolation_warnings(log) + nis_check(log, force, seen) + window_nis(log)
     if imu is None or gnss is None:
         return out
     t = imu.t

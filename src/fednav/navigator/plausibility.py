@@ -32,7 +32,7 @@ import numba
 import numpy as np
 
 from ..core import attitude as att
-from ..core import earth, units
+from ..core import earth, kernels, units
 from ..ins import stops
 from ..ins.alignment import coarse_level
 
@@ -182,13 +182,21 @@ def _rest_runs(t, scatter, sa2, thr, t_gnss, slow_g, min_s):
     """Spans (K, 2) [s] of consecutive samples still (``scatter / sa2 <= thr``), slow
     (``slow_g`` 1.0 or 0.0 at ``t_gnss``, interpolated, above 0.999) and within the GNSS
     times, lasting at least ``min_s``."""
-    slow = np.interp(t, t_gnss, slow_g)
-    n = len(t)
+    n, m = len(t), len(t_gnss)
     out = []
     a = -1
+    j = 0
     for i in range(n + 1):
-        ok = (i < n and slow[i] > 0.999 and t[i] >= t_gnss[0] and t[i] <= t_gnss[-1]
+        ok = (i < n and t[i] >= t_gnss[0] and t[i] <= t_gnss[-1]
               and scatter[i] / sa2 <= thr)
+        if ok:  # slow: np.interp's value there (bracket t_gnss[j] <= t < t_gnss[j + 1])
+            while j < m - 1 and t_gnss[j + 1] <= t[i]:
+                j += 1
+            if j == m - 1 or t_gnss[j] == t[i]:
+                ok = slow_g[j] > 0.999
+            else:
+                slope = (slow_g[j + 1] - slow_g[j]) / (t_gnss[j + 1] - t_gnss[j])
+                ok = slope * (t[i] - t_gnss[j]) + slow_g[j] > 0.999
         if ok and a < 0:
             a = i
         elif not ok and a >= 0:
@@ -307,8 +315,7 @@ def at_rest(t, gyro, accel, spans, lla, figures, solution=None) -> list[str]:
         if ms.stop <= ms.start:
             continue
         lev = coarse_level(f)[:2]
-        q = att.euler_to_quat(solution.euler[ms])
-        sol = att.quat_to_euler(np.mean(q * np.sign(q @ q[0])[:, None], axis=0))[:2]
+        sol = att.quat_to_euler(_mean_quaternion(solution.euler[ms]))[:2]
         d = att.wrap_pi(sol - lev)
         s = np.hypot(solution.sigma_euler[ms, :2].mean(axis=0), ab / g)
         k = int(np.argmax(np.abs(d) / s))
@@ -320,6 +327,57 @@ def at_rest(t, gyro, accel, spans, lla, figures, solution=None) -> list[str]:
                        f"axis in another unit or scale, or stuck, or the IMU's axes in "
                        f"another order")
     return out
+
+
+@numba.njit(cache=True)
+def _antenna_rows(k, lla, vel, euler, omega, lever):
+    """Position [rad, rad, m] and ENU velocity [m/s] (K, 3) of the antenna at ``lever``
+    (body, m) at the solution's rows ``k``: :func:`fednav.core.earth.lever_arm_point`
+    (``moved(lla, C l)`` and ``vel + C (omega x l)``, C from
+    :func:`fednav.core.kernels.euler_to_dcm_s`); the IMU's rows without a lever arm."""
+    out_p = np.empty((len(k), 3))
+    out_v = np.empty((len(k), 3))
+    arm = lever[0] != 0.0 or lever[1] != 0.0 or lever[2] != 0.0
+    for q in range(len(k)):
+        i = k[q]
+        for a in range(3):
+            out_p[q, a], out_v[q, a] = lla[i, a], vel[i, a]
+        if not arm:
+            continue
+        c = kernels.euler_to_dcm_s(euler[i, 0], euler[i, 1], euler[i, 2])
+        u0 = omega[i, 1] * lever[2] - omega[i, 2] * lever[1]
+        u1 = omega[i, 2] * lever[0] - omega[i, 0] * lever[2]
+        u2 = omega[i, 0] * lever[1] - omega[i, 1] * lever[0]
+        d = np.empty(3)
+        for a in range(3):
+            d[a] = c[3 * a] * lever[0] + c[3 * a + 1] * lever[1] + c[3 * a + 2] * lever[2]
+            out_v[q, a] += c[3 * a] * u0 + c[3 * a + 1] * u1 + c[3 * a + 2] * u2
+        out_p[q, 0], out_p[q, 1], out_p[q, 2] = earth.moved_nb(
+            lla[i, 0], lla[i, 1], lla[i, 2], d[0], d[1], d[2])
+    return out_p, out_v
+
+
+@numba.njit(cache=True)
+def _mean_and_sigma(z):
+    """Per column of ``z`` (n, 3): the mean and its sigma, the scatter widened for the
+    serial correlation (the lag-1 autocorrelation, clipped to 0..0.99: a filter lags the
+    fixes); sums in order, as numpy's ``axis=0`` reductions form them."""
+    n = len(z)
+    mean = np.zeros(3)
+    se = np.zeros(3)
+    for a in range(3):
+        for i in range(n):
+            mean[a] += z[i, a]
+        mean[a] /= n
+        lag1, ss = 0.0, 0.0
+        for i in range(n):
+            d = z[i, a] - mean[a]
+            ss += d * d
+            if i > 0:
+                lag1 += d * (z[i - 1, a] - mean[a])
+        rho = min(max(lag1 / max(ss, 1e-300), 0.0), 0.99)
+        se[a] = np.sqrt(ss / n) * np.sqrt((1 + rho) / (1 - rho) / n)
+    return mean, se
 
 
 def gnss_residuals(solution, gnss) -> dict | None:
@@ -334,10 +392,8 @@ def gnss_residuals(solution, gnss) -> dict | None:
         return None
     tg = gnss.t[inside]
     k = np.clip(np.searchsorted(t, tg, side="left") - 1, 0, len(t) - 1)
-    lla, vel = solution.lla[k], solution.vel[k]
-    if np.any(gnss.lever):
-        lla, vel = earth.lever_arm_point(lla, vel, att.euler_to_dcm(solution.euler[k]),
-                                         solution.omega[k], gnss.lever)
+    lla, vel = _antenna_rows(k, solution.lla, solution.vel, solution.euler, solution.omega,
+                             np.asarray(gnss.lever, dtype=float))
     out = {"t": tg}
     rows = gnss.sigma_rows[inside] if gnss.sigma_rows is not None else None
     if gnss.lla is not None:
@@ -348,30 +404,46 @@ def gnss_residuals(solution, gnss) -> dict | None:
         sr = (rows[:, [1, 0, 2]] if rows is not None
               else np.broadcast_to(np.asarray(gnss.sigma_pos)[[1, 0, 2]], d.shape))
         out["dp"] = d
-        out["sp"] = np.hypot(sr, solution.sigma[k][:, 6:9])
+        out["sp"] = np.hypot(sr, solution.sigma[k, 6:9])
     if gnss.vel is not None:
         sr = (rows[:, 3:6] if rows is not None
               else np.broadcast_to(np.asarray(gnss.sigma_vel), (len(tg), 3)))
         out["dv"] = gnss.vel[inside] - vel
-        out["sv"] = np.hypot(sr, solution.sigma[k][:, 3:6])
+        out["sv"] = np.hypot(sr, solution.sigma[k, 3:6])
     return out
 
 
-#: Rows between exact sines and cosines in :func:`_antenna_velocity` (in between: the
-#: angle-addition formulas over each row's small change).
+#: Rows between exact sines and cosines in :func:`_sincos` (in between: the
+#: angle-addition formulas over each row's small change) ...
 RESEED_ROWS = 32
-#: An angle changing more than this [rad] from one row to the next gets exact ones.
+#: ... and the step [rad] from one row to the next beyond which they are exact too.
 RESEED_STEP = 0.02
 
 
-@numba.njit(cache=True, inline="always")
-def _turned(s, c, d):
-    """sin and cos of ``x + d`` from those of ``x`` (``|d| <= RESEED_STEP``: the series of
-    ``sin d`` and ``cos d`` to ``d^7`` and ``d^8`` are exact to far below 1e-16)."""
-    d2 = d * d  # (Horner, multiplications only: divisions made this the kernel's cost)
-    sd = d * (1.0 + d2 * (-1.0 / 6.0 + d2 * (1.0 / 120.0 + d2 * (-1.0 / 5040.0))))
-    cd = 1.0 + d2 * (-0.5 + d2 * (1.0 / 24.0 + d2 * (-1.0 / 720.0 + d2 * (1.0 / 40320.0))))
-    return s * cd + c * sd, c * cd - s * sd
+@numba.njit(cache=True)
+def _sincos(x):
+    """Sines and cosines (n, k) of angles ``x`` (n, k) [rad] that change little from row
+    to row (an attitude, a latitude at the IMU rate): exact every :data:`RESEED_ROWS`
+    rows and after a step beyond :data:`RESEED_STEP`, turned by each row's change in
+    between with the series of ``sin d`` and ``cos d`` to ``d^7`` and ``d^8`` (exact to
+    far below 1e-16 for such steps; the error of the chain stays at round-off).  Two libm
+    calls per angle and row were most of the cost of the kernels that use it."""
+    n, k = x.shape
+    s = np.empty((n, k))
+    c = np.empty((n, k))
+    for i in range(n):
+        for a in range(k):
+            d = x[i, a] - x[i - 1, a] if i > 0 else 0.0
+            if i % RESEED_ROWS == 0 or abs(d) > RESEED_STEP:
+                s[i, a], c[i, a] = np.sin(x[i, a]), np.cos(x[i, a])
+            else:
+                d2 = d * d  # (Horner on multiplications: divisions cost as much as libm)
+                sd = d * (1.0 + d2 * (-1.0 / 6.0 + d2 * (1.0 / 120.0 - d2 / 5040.0)))
+                cd = 1.0 + d2 * (-0.5 + d2 * (1.0 / 24.0 + d2 * (-1.0 / 720.0
+                                                                 + d2 / 40320.0)))
+                s[i, a] = s[i - 1, a] * cd + c[i - 1, a] * sd
+                c[i, a] = c[i - 1, a] * cd - s[i - 1, a] * sd
+    return s, c
 
 
 @numba.njit(cache=True)
@@ -379,66 +451,78 @@ def _antenna_velocity(t, t_imu, accel, lla, euler, omega, lever):
     """The IMU's velocity change since ``t[0]`` [m/s] (N, 3), ENU, at the solution's
     rows (times ``t``, position ``lla``, attitude ``euler``, body rate ``omega``): the
     specific force ``accel`` (at ``t_imu``, linearly interpolated) rotated to ENU by
-    C_b^n (the elements of :func:`fednav.core.kernels.euler_to_dcm_s`) plus gravity
-    (:func:`fednav.core.earth.gravity_of_sin2`), integrated by trapezoids, moved to the
-    antenna at ``lever`` (body, m) by ``C (omega x lever)``.
-
-    The sines and cosines of pitch, roll, heading and latitude are exact every
-    :data:`RESEED_ROWS` rows and after a step beyond :data:`RESEED_STEP`, and turned by
-    each row's change in between (:func:`_turned`): six libm calls a row were most of
-    the cost; the difference is at round-off."""
+    C_b^n (the elements of :func:`fednav.core.kernels.euler_to_dcm_s`, from the sines and
+    cosines of :func:`_sincos`) plus gravity (:func:`fednav.core.earth.gravity_of_sin2`),
+    integrated by trapezoids, moved to the antenna at ``lever`` (body, m) by
+    ``C (omega x lever)``."""
     n, m = len(t), len(t_imu)
-    V = np.zeros((n, 3))
-    x = np.zeros(4)  # pitch, roll, heading, latitude of the previous row
-    sn = np.zeros(4)
-    cs = np.zeros(4)
-    prev = np.zeros(3)
-    cur = np.zeros(3)
-    f = np.zeros(3)
-    u = np.zeros(3)
-    integral = np.zeros(3)
+    ang = np.empty((n, 4))  # pitch, roll, heading, latitude
+    ang[:, :3] = euler
+    ang[:, 3] = lla[:, 0]
+    sn, cs = _sincos(ang)
+    V = np.empty((n, 3))
     arm = lever[0] != 0.0 or lever[1] != 0.0 or lever[2] != 0.0
+    v0 = v1 = v2 = 0.0  # the integral
+    a0 = a1 = a2 = 0.0  # the previous row's acceleration
     p = 0
     for i in range(n):
         ti = t[i]  # np.interp's bracket (times increase: it only moves on)
         while p < m - 1 and t_imu[p + 1] <= ti:
             p += 1
-        if ti < t_imu[0] or p >= m - 1:
-            for a in range(3):
-                f[a] = accel[p, a]
-        else:
+        f0, f1, f2 = accel[p, 0], accel[p, 1], accel[p, 2]
+        if ti >= t_imu[0] and p < m - 1:
             w = (ti - t_imu[p]) / (t_imu[p + 1] - t_imu[p])
-            for a in range(3):
-                f[a] = accel[p, a] + w * (accel[p + 1, a] - accel[p, a])
-        for a in range(4):
-            y = euler[i, a] if a < 3 else lla[i, 0]
-            d = y - x[a]
-            if i % RESEED_ROWS == 0 or abs(d) > RESEED_STEP:
-                sn[a], cs[a] = np.sin(y), np.cos(y)
-            else:
-                sn[a], cs[a] = _turned(sn[a], cs[a], d)
-            x[a] = y
-        st, sg, sp = sn[0], sn[1], sn[2]
-        ct, cg, cp = cs[0], cs[1], cs[2]
-        # C = Rz(-heading) Rx(pitch) Ry(roll), row by row (kernels.euler_to_dcm_s)
-        c = (cg * cp + st * sg * sp, sp * ct, sg * cp - st * cg * sp,
-             -cg * sp + st * sg * cp, cp * ct, -sg * sp - st * cg * cp,
-             -ct * sg, st, ct * cg)
+            f0 += w * (accel[p + 1, 0] - f0)
+            f1 += w * (accel[p + 1, 1] - f1)
+            f2 += w * (accel[p + 1, 2] - f2)
+        st, sg, sp = sn[i, 0], sn[i, 1], sn[i, 2]
+        ct, cg, cp = cs[i, 0], cs[i, 1], cs[i, 2]
+        # C = Rz(-heading) Rx(pitch) Ry(roll) (the elements of kernels.euler_to_dcm_s)
+        c00, c01, c02 = cg * cp + st * sg * sp, sp * ct, sg * cp - st * cg * sp
+        c10, c11, c12 = -cg * sp + st * sg * cp, cp * ct, -sg * sp - st * cg * cp
+        c20, c21, c22 = -ct * sg, st, ct * cg
+        e0 = c00 * f0 + c01 * f1 + c02 * f2
+        e1 = c10 * f0 + c11 * f1 + c12 * f2
+        e2 = c20 * f0 + c21 * f1 + c22 * f2 - earth.gravity_of_sin2_nb(sn[i, 3] * sn[i, 3],
+                                                                      lla[i, 2])
+        if i > 0:
+            h = 0.5 * (t[i] - t[i - 1])
+            v0 += (e0 + a0) * h
+            v1 += (e1 + a1) * h
+            v2 += (e2 + a2) * h
+        a0, a1, a2 = e0, e1, e2
+        V[i, 0], V[i, 1], V[i, 2] = v0, v1, v2
         if arm:  # the antenna's velocity relative to the IMU: C (omega x lever)
-            u[0] = omega[i, 1] * lever[2] - omega[i, 2] * lever[1]
-            u[1] = omega[i, 2] * lever[0] - omega[i, 0] * lever[2]
-            u[2] = omega[i, 0] * lever[1] - omega[i, 1] * lever[0]
-        for a in range(3):
-            cur[a] = c[3 * a] * f[0] + c[3 * a + 1] * f[1] + c[3 * a + 2] * f[2]
-        cur[2] -= earth.gravity_of_sin2_nb(sn[3] * sn[3], lla[i, 2])
-        for a in range(3):
-            if i > 0:
-                integral[a] += 0.5 * (cur[a] + prev[a]) * (t[i] - t[i - 1])
-            prev[a] = cur[a]
-            V[i, a] = integral[a]
-            if arm:
-                V[i, a] += c[3 * a] * u[0] + c[3 * a + 1] * u[1] + c[3 * a + 2] * u[2]
+            u0 = omega[i, 1] * lever[2] - omega[i, 2] * lever[1]
+            u1 = omega[i, 2] * lever[0] - omega[i, 0] * lever[2]
+            u2 = omega[i, 0] * lever[1] - omega[i, 1] * lever[0]
+            V[i, 0] += c00 * u0 + c01 * u1 + c02 * u2
+            V[i, 1] += c10 * u0 + c11 * u1 + c12 * u2
+            V[i, 2] += c20 * u0 + c21 * u1 + c22 * u2
     return V
+
+
+@numba.njit(cache=True)
+def _mean_quaternion(euler):
+    """The mean of the unit quaternions q_b^n of the attitudes ``euler`` (n, 3) [pitch,
+    roll, heading] [rad], each signed as the first (the mean of
+    ``att.euler_to_quat(euler)`` so aligned; ``C = Rz(-heading) Rx(pitch) Ry(roll)`` as
+    the product of the three rotations' quaternions, :func:`_sincos` of the half
+    angles)."""
+    sn, cs = _sincos(0.5 * euler)
+    out = np.zeros(4)
+    q0 = np.zeros(4)
+    for i in range(len(euler)):
+        a = kernels.quat_mul_s(cs[i, 0], sn[i, 0], 0.0, 0.0, cs[i, 1], 0.0, sn[i, 1], 0.0)
+        q = kernels.quat_mul_s(cs[i, 2], 0.0, 0.0, -sn[i, 2], a[0], a[1], a[2], a[3])
+        if i == 0:
+            for r in range(4):
+                q0[r] = q[r]
+        dot = q[0] * q0[0] + q[1] * q0[1] + q[2] * q0[2] + q[3] * q0[3]
+        sign = 1.0 if dot > 0 else (-1.0 if dot < 0 else 0.0)
+        for r in range(4):
+            out[r] += sign * q[r]
+    return out / len(euler)
 
 
 @numba.njit(cache=True)
@@ -566,48 +650,85 @@ def gnss_scale_check(gnss) -> list[str]:
     own noise's) nothing is said."""
     if gnss.lla is None or gnss.vel is None or len(gnss.t) < 10:
         return []
-    t = gnss.t
-    V = np.vstack([np.zeros(3), np.cumsum(0.5 * (gnss.vel[1:] + gnss.vel[:-1])
-                                          * np.diff(t)[:, None], axis=0)])
     lla = gnss.lla
     # the positions as their fix-to-fix displacements summed (each in its local ENU
     # axes, as the velocity is: one origin far away bends east and north near a pole)
     step = earth.llh_difference_enu(lla[1:, 0], lla[1:, 1], lla[1:, 2], lla[:-1, 0],
                                     lla[:-1, 1], lla[:-1, 2])
-    p = np.vstack([np.zeros(3), np.cumsum(step, axis=0)])
-    chunk = np.floor((t - t[0]) / SCALE_CHUNK_S).astype(int)
-    n_chunks = int(chunk.max()) + 1
-    count = np.bincount(chunk, minlength=n_chunks)[:, None]
-
-    def centred(x):
-        sums = np.stack([np.bincount(chunk, x[:, a], n_chunks) for a in range(3)], axis=1)
-        return x - (sums / np.maximum(count, 1))[chunk]
-
-    x, y = centred(V), centred(p)
-    # The integral's own noise (a random walk of the velocity noise: over n fixes its
-    # scatter about the mean is q n^2 / 6, q = (sigma_v period)^2) must be small beside its
-    # travel, else the slope is attenuated towards 0 (errors in the regressor): a level
-    # drive tells nothing about the height's unit.
-    period = float(np.median(np.diff(t)))
-    q = (np.asarray(gnss.sigma_vel, dtype=float) * period) ** 2
-    noise_xx = q * float(np.sum(count.astype(float) ** 2)) / 6.0
+    told, slopes, sigmas = _scale_fit(gnss.t, gnss.vel, step, SCALE_CHUNK_S,
+                                      np.asarray(gnss.sigma_vel, dtype=float))
     out = []
     names = ("east", "north", "height")
-    dof = max(len(t) - n_chunks - 1, 1)
     for a in range(3):
-        sxx = float(x[:, a] @ x[:, a])
-        if sxx <= 100.0 * noise_xx[a]:
-            continue
-        slope = float(x[:, a] @ y[:, a]) / sxx
-        r = y[:, a] - slope * x[:, a]
-        rho = float(np.clip(r[1:] @ r[:-1] / max(r @ r, 1e-300), 0.0, 0.99))
-        sig = np.sqrt(float(r @ r) / dof / sxx * (1 + rho) / (1 - rho))
-        if abs(slope - 1.0) > SCALE_LIMIT and abs(slope - 1.0) > 5.0 * sig:
+        slope, sig = float(slopes[a]), float(sigmas[a])
+        if told[a] and abs(slope - 1.0) > SCALE_LIMIT and abs(slope - 1.0) > 5.0 * sig:
             out.append(f"{gnss.source}: the GNSS {names[a]} changes {slope:.3g} times as "
                        f"much as its velocity's integral says (+-{sig:.2g}): a {names[a]} "
                        f"in another unit (km, feet, radians), or that velocity axis in "
                        f"another unit or sign")
     return out
+
+
+@numba.njit(cache=True)
+def _scale_fit(t, vel, step, chunk_s, sigma_vel):
+    """:func:`gnss_scale_check`'s fit per ENU axis: the GNSS velocity's integral (by
+    trapezoids, ``vel`` at ``t``) and the summed position ``step`` s (K-1, 3) [m], each
+    centred on its mean per ``chunk_s`` stretch; returns whether the integral's travel
+    tells (its scatter beyond 100 times its own noise's), the slope of the positions on
+    the integral and its sigma (from the fit's scatter, widened for the lag-1
+    autocorrelation)."""
+    n = len(t)
+    x = np.zeros((n, 3))
+    y = np.zeros((n, 3))
+    for i in range(1, n):
+        for a in range(3):
+            x[i, a] = x[i - 1, a] + 0.5 * (vel[i, a] + vel[i - 1, a]) * (t[i] - t[i - 1])
+            y[i, a] = y[i - 1, a] + step[i - 1, a]
+    chunk = np.floor((t - t[0]) / chunk_s).astype(np.int64)
+    n_chunks = chunk.max() + 1
+    count = np.zeros(n_chunks)
+    sums = np.zeros((n_chunks, 6))
+    for i in range(n):
+        count[chunk[i]] += 1.0
+        for a in range(3):
+            sums[chunk[i], a] += x[i, a]
+            sums[chunk[i], 3 + a] += y[i, a]
+    for i in range(n):
+        c = max(count[chunk[i]], 1.0)
+        for a in range(3):
+            x[i, a] -= sums[chunk[i], a] / c
+            y[i, a] -= sums[chunk[i], 3 + a] / c
+    # The integral's own noise (a random walk of the velocity noise: over n fixes its
+    # scatter about the mean is q n^2 / 6, q = (sigma_v period)^2) must be small beside its
+    # travel, else the slope is attenuated towards 0 (errors in the regressor): a level
+    # drive tells nothing about the height's unit.
+    period = np.median(t[1:] - t[:-1])
+    n2 = 0.0
+    for c in range(n_chunks):
+        n2 += count[c] ** 2
+    dof = max(n - n_chunks - 1, 1)
+    told = np.zeros(3, dtype=np.bool_)
+    slopes = np.zeros(3)
+    sigmas = np.zeros(3)
+    for a in range(3):
+        sxx, sxy = 0.0, 0.0
+        for i in range(n):
+            sxx += x[i, a] * x[i, a]
+            sxy += x[i, a] * y[i, a]
+        if sxx <= 100.0 * ((sigma_vel[a] * period) ** 2 * n2 / 6.0):
+            continue
+        slope = sxy / sxx
+        rr, r1 = 0.0, 0.0
+        for i in range(n):
+            r = y[i, a] - slope * x[i, a]
+            rr += r * r
+            if i > 0:
+                r1 += r * (y[i - 1, a] - slope * x[i - 1, a])
+        rho = min(max(r1 / max(rr, 1e-300), 0.0), 0.99)
+        told[a] = True
+        slopes[a] = slope
+        sigmas[a] = np.sqrt(rr / dof / sxx * (1 + rho) / (1 - rho))
+    return told, slopes, sigmas
 
 
 def residual_checks(res: dict | None, source: str) -> list[str]:
@@ -621,13 +742,7 @@ def residual_checks(res: dict | None, source: str) -> list[str]:
             continue
         z = res[key] / res["s" + key[1]]
         n = len(z)
-        # the serial correlation of the residuals (a filter lags the fixes): the mean's
-        # sigma from the lag-1 autocorrelation
-        zc = z - z.mean(axis=0)
-        rho = np.clip(np.sum(zc[1:] * zc[:-1], axis=0) / np.maximum(np.sum(zc**2, axis=0),
-                                                                     1e-300), 0.0, 0.99)
-        se = z.std(axis=0) * np.sqrt((1 + rho) / (1 - rho) / n)
-        mean = z.mean(axis=0)
+        mean, se = _mean_and_sigma(z)
         for j in range(3):
             if abs(mean[j]) > BIAS_LIMIT and abs(mean[j]) > 4.0 * se[j]:
                 b = float(np.mean(res[key][:, j]))
