@@ -23,7 +23,7 @@ import numpy as np
 from fednav.process import errors_against, process, rmse
 from fednav.sim.drives import ADIS16405, ADIS16488, car_drive, heading_containment
 
-KEYS = ("north_m", "east_m", "down_m", "vn_mps", "ve_mps", "roll_deg", "pitch_deg", "yaw_deg")
+KEYS = ("north_m", "east_m", "up_m", "vn_mps", "ve_mps", "roll_deg", "pitch_deg", "yaw_deg")
 
 
 def main() -> None:

@@ -32,7 +32,7 @@ from fednav.process.run import errors_against, process, rmse
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT.parent / "shared" / "data" / "canada-planetary"
 EXAMPLE = ROOT / "examples" / "canada-planetary.yaml"
-KEYS = ("north_m", "east_m", "down_m", "vn_mps", "ve_mps", "vd_mps")
+KEYS = ("north_m", "east_m", "up_m", "vn_mps", "ve_mps", "vu_mps")  # (RMSE: up = down)
 
 
 def load():
@@ -47,7 +47,7 @@ def cases():
     imu, g, gs, vis, ref = load()
     example = load_system(EXAMPLE)
     process(imu, g, None, System())  # warm the compiled kernels
-    print("RMSE against gnss_planetary_r (N/E/D m, vN/vE/vD m/s); time = forward + smoother")
+    print("RMSE against gnss_planetary_r (N/E/U m, vN/vE/vU m/s); time = forward + smoother")
     print(f"{'case':58s} " + " ".join(f"{k:>8s}" for k in KEYS) + "   time s  NIS/dof")
     for cname, cfg in (("file figures", System()), ("examples/canada-planetary", example)):
         for gname, gd in (("GNSS", g), ("sparse GNSS", gs)):
@@ -124,7 +124,7 @@ def corrections():
     raw = ex.model_copy(update={"sensors": ex.sensors.replace(
         velocity=ex.sensors.velocity.model_copy(
             update={"time_offset_s": 0.0, "axes": ("E", "N", "U"), "sigma_mps": None}))})
-    print("forward RMSE N/E/D m, vN/vE/vD m/s [smoothed]; max horizontal error 100-200 s")
+    print("forward RMSE N/E/U m, vN/vE/vU m/s [smoothed]; max horizontal error 100-200 s")
     for gname, gd in (("GNSS", g), ("sparse GNSS", gs)):
         for cname, cfg, v in (("no visual", ex, None), ("visual as filed", raw, vis),
                               ("visual corrected", ex, vis)):
@@ -156,7 +156,7 @@ def tune():
         "imu": ex.imu.model_copy(update=dict.fromkeys(keys)),
         "sensors": ex.sensors.replace(
             velocity=ex.sensors.velocity.model_copy(update={"sigma_mps": None}))})
-    print("forward RMSE N/E/D m, vN/vE/vD m/s [smoothed]; NIS/dof; max horizontal error "
+    print("forward RMSE N/E/U m, vN/vE/vU m/s [smoothed]; NIS/dof; max horizontal error "
           "100-200 s with the sparse GNSS file")
     # the example's gyro ARW is the sample scatter; set in the base and marked fixed
     # (--fix), tune keeps it
