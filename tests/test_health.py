@@ -223,7 +223,13 @@ def test_the_compiled_helpers_match_numpy():
     for n in (1, 2, 51, 1000):
         z = rng.random(n)
         for p in (0.0, 2.0, 50.0, 100.0):
-            assert pl._percentile(z, 3.0, p) == np.percentile(z / 3.0, p)
+            want = np.percentile(z / 3.0, p)
+            assert pl._percentile(z, 3.0, p) == want
+            for floor in (0.0, 0.5 * want, want, 2 * want + 1e-3, 1.0):
+                got = pl._percentile(z, 3.0, p, floor)
+                assert got == want or (got == np.inf and want >= floor * (1 - 1e-15))
+        t = np.cumsum(rng.random(n + 1))
+        assert pl.median_step(t) == np.median(np.diff(t))
 
 
 def test_the_antenna_velocity_matches_its_numpy_form():

@@ -160,7 +160,7 @@ def run_health(fdi: list, imu=None, gnss=None, solution=None, figures: dict | No
     if imu is None or gnss is None:
         return out
     t = imu.t
-    dt = float(np.median(np.diff(t))) if len(t) > 1 else 1.0
+    dt = float(pl.median_step(t)) if len(t) > 1 else 1.0
     out += pl.gnss_scale_check(gnss)
     if gnss.vel is not None:
         runs, scatter = pl.imu_pass(t, imu.gyro, imu.accel, max(2, int(round(

@@ -65,6 +65,12 @@ EXPLAINED = 0.5
 
 
 @numba.njit(cache=True)
+def median_step(t):
+    """The median of the steps of ``t`` (N >= 2,) [s] (``np.median(np.diff(t))``)."""
+    return np.median(t[1:] - t[:-1])
+
+
+@numba.njit(cache=True)
 def imu_pass(t, gyro, accel, W, stuck_s):
     """The per-sample statistics of the IMU checks, in one pass over the samples.
 
@@ -152,14 +158,24 @@ def stuck_axes(t, gyro, accel, runs, t_gnss, vel_gnss) -> list[str]:
 
 
 @numba.njit(cache=True)
-def _percentile(x, d, p):
-    """The ``p``-th percentile of ``x / d`` as ``np.percentile`` (linear) gives it."""
-    y = x / d
-    n = len(y)
-    if np.isnan(y).any():
-        return np.nan
+def _percentile(x, d, p, floor=np.inf):
+    """The ``p``-th percentile of ``x / d`` (``d`` > 0) as ``np.percentile`` (linear)
+    gives it; inf where it is at least ``floor`` (to within 1e-15: no more samples below
+    it than the percentile's rank, counted without the selection)."""
+    n = len(x)
     v = (n - 1) * (p / 100.0)
     k = int(np.floor(v))
+    if 0 <= v < n - 1 and floor < np.inf:
+        lim = floor * d
+        below = 0
+        for i in range(n):
+            if x[i] < lim:
+                below += 1
+        if below <= k:
+            return np.inf
+    y = x / d
+    if np.isnan(y).any():
+        return np.nan
     if v >= n - 1:
         return y.max()
     if v < 0:
@@ -226,9 +242,10 @@ def rest_spans(t, scatter, dt, accel_vrw, t_gnss, vel_gnss, sigma_v) -> list[tup
     W = max(2, int(round(stops.WINDOW_S / dt)))
     cnt = min(W, n)
     p = stops.QUIET_PERCENTILE
-    quiet = (_percentile(scatter, 3.0 * max(cnt - 1, 1), p)
-             / (_chi2_ppf(p / 100.0, 3 * (W - 1)) / (3 * (W - 1))))
+    ratio = _chi2_ppf(p / 100.0, 3 * (W - 1)) / (3 * (W - 1))
     sa2 = accel_vrw**2 / dt
+    quiet = _percentile(scatter, 3.0 * max(cnt - 1, 1), p,
+                        0.5 * sa2 * ratio * (1.0 + 1e-9)) / ratio
     sa2 = max(quiet if quiet < 0.5 * sa2 else sa2, 1e-4 * sa2, 1e-24)
     thr = _chi2_ppf(1.0 - stops.ALPHA, 3 * (cnt - 1) + 3 * cnt)
     spans = _rest_runs(t, scatter, sa2, thr, t_gnss, slow_g.astype(float), REST_S)
@@ -301,7 +318,7 @@ def at_rest(t, gyro, accel, spans, lla, figures, solution=None) -> list[str]:
                        f"deg/h that gyros of this grade see: a gyro unit, or an axis stuck "
                        f"at zero")
         for name, sd in (("gyro", moments[1]), ("accel", moments[3])):
-            ref = np.median(sd)
+            ref = sorted(sd)[1]  # (the median of three)
             j = int(np.argmax(np.abs(np.log(np.maximum(sd, 1e-300) / max(ref, 1e-300)))))
             if (name not in said and ref > 0 and sd[j] > 0
                     and not 1 / NOISE_RATIO < sd[j] / ref < NOISE_RATIO):
@@ -414,35 +431,39 @@ def gnss_residuals(solution, gnss) -> dict | None:
 
 
 #: Rows between exact sines and cosines in :func:`_sincos` (in between: the
-#: angle-addition formulas over each row's small change) ...
-RESEED_ROWS = 32
-#: ... and the step [rad] from one row to the next beyond which they are exact too.
-RESEED_STEP = 0.02
+#: angle-addition formulas over the change since) ...
+RESEED_ROWS = 128
+#: ... and the change [rad] beyond which they are exact too.
+RESEED_ANGLE = 0.3
 
 
 @numba.njit(cache=True)
 def _sincos(x):
     """Sines and cosines (n, k) of angles ``x`` (n, k) [rad] that change little from row
-    to row (an attitude, a latitude at the IMU rate): exact every :data:`RESEED_ROWS`
-    rows and after a step beyond :data:`RESEED_STEP`, turned by each row's change in
-    between with the series of ``sin d`` and ``cos d`` to ``d^7`` and ``d^8`` (exact to
-    far below 1e-16 for such steps; the error of the chain stays at round-off).  Two libm
-    calls per angle and row were most of the cost of the kernels that use it."""
+    to row (an attitude, a latitude at the IMU rate): exact at a row every
+    :data:`RESEED_ROWS` rows and after a change beyond :data:`RESEED_ANGLE` from it; in
+    between, that row's turned by the change ``d`` since, with the series of ``sin d``
+    and ``cos d`` to ``d^11`` and ``d^12`` (the next terms below 3e-17 for
+    ``|d| <= 0.3``; no error carried from row to row).  Two libm calls per angle and row
+    were most of the cost of the kernels that use it."""
     n, k = x.shape
     s = np.empty((n, k))
     c = np.empty((n, k))
-    for i in range(n):
-        for a in range(k):
-            d = x[i, a] - x[i - 1, a] if i > 0 else 0.0
-            if i % RESEED_ROWS == 0 or abs(d) > RESEED_STEP:
+    for a in range(k):
+        r = 0
+        for i in range(n):
+            d = x[i, a] - x[r, a]
+            if i == 0 or i - r >= RESEED_ROWS or abs(d) > RESEED_ANGLE:
+                r = i
                 s[i, a], c[i, a] = np.sin(x[i, a]), np.cos(x[i, a])
-            else:
-                d2 = d * d  # (Horner on multiplications: divisions cost as much as libm)
-                sd = d * (1.0 + d2 * (-1.0 / 6.0 + d2 * (1.0 / 120.0 - d2 / 5040.0)))
-                cd = 1.0 + d2 * (-0.5 + d2 * (1.0 / 24.0 + d2 * (-1.0 / 720.0
-                                                                 + d2 / 40320.0)))
-                s[i, a] = s[i - 1, a] * cd + c[i - 1, a] * sd
-                c[i, a] = c[i - 1, a] * cd - s[i - 1, a] * sd
+                continue
+            d2 = d * d  # (Horner on multiplications: divisions cost as much as libm)
+            sd = d * (1.0 + d2 * (-1.0 / 6 + d2 * (1.0 / 120 + d2 * (-1.0 / 5040 + d2 * (
+                1.0 / 362880 + d2 * (-1.0 / 39916800))))))
+            cd = 1.0 + d2 * (-0.5 + d2 * (1.0 / 24 + d2 * (-1.0 / 720 + d2 * (
+                1.0 / 40320 + d2 * (-1.0 / 3628800 + d2 * (1.0 / 479001600))))))
+            s[i, a] = s[r, a] * cd + c[r, a] * sd
+            c[i, a] = c[r, a] * cd - s[r, a] * sd
     return s, c
 
 
@@ -549,16 +570,21 @@ def _offset_misfit(t, V, tg, k, j, dvg, lags):
             w = (x - t[p]) / (t[p + 1] - t[p])
             for a in range(3):
                 Vx[g, a] = (1.0 - w) * V[p, a] + w * V[p + 1, a]
-        c = 0.0
-        for a in range(3):
-            mean = 0.0
-            for q in range(K):
-                r[q, a] = dvg[q, a] - (Vx[k[q], a] - Vx[j[q], a])
-                mean += r[q, a]
-            mean /= K
-            for q in range(K):
-                c += (r[q, a] - mean) ** 2
-        cost[li] = c
+        s0 = s1 = s2 = 0.0  # (the three axes' sums side by side: in order along each)
+        for q in range(K):
+            r[q, 0] = dvg[q, 0] - (Vx[k[q], 0] - Vx[j[q], 0])
+            r[q, 1] = dvg[q, 1] - (Vx[k[q], 1] - Vx[j[q], 1])
+            r[q, 2] = dvg[q, 2] - (Vx[k[q], 2] - Vx[j[q], 2])
+            s0 += r[q, 0]
+            s1 += r[q, 1]
+            s2 += r[q, 2]
+        m0, m1, m2 = s0 / K, s1 / K, s2 / K
+        c0 = c1 = c2 = 0.0
+        for q in range(K):
+            c0 += (r[q, 0] - m0) ** 2
+            c1 += (r[q, 1] - m1) ** 2
+            c2 += (r[q, 2] - m2) ** 2
+        cost[li] = c0 + c1 + c2
     return cost
 
 
@@ -579,7 +605,7 @@ def imu_gnss_offset(solution, imu, gnss, window_s: float = OFFSET_WINDOW_S,
     V = _antenna_velocity(t, imu.t, imu.accel, solution.lla, solution.euler,
                           solution.omega, np.asarray(gnss.lever, dtype=float))
     tg = gnss.t
-    period = float(np.median(np.diff(tg))) if len(tg) > 1 else np.inf
+    period = median_step(tg) if len(tg) > 1 else np.inf
     m = max(1, int(round(window_s / period)))
     k = np.arange(m, len(tg))
     j = k - m
@@ -755,4 +781,4 @@ def residual_checks(res: dict | None, source: str) -> list[str]:
 
 
 __all__ = ["at_rest", "gnss_residuals", "gnss_scale_check", "imu_gnss_offset", "imu_pass",
-           "offset_check", "residual_checks", "rest_spans", "stuck_axes"]
+           "median_step", "offset_check", "residual_checks", "rest_spans", "stuck_axes"]
