@@ -84,7 +84,7 @@ def imu_pass(t, gyro, accel, W, stuck_s):
         Samples of the stillness detector's window (:func:`fednav.ins.stops.stationary`'s,
         shifted inside the data at the ends).
     stuck_s : float
-        Duration [s] beyond which a run of one constant value is reported.
+        Duration [s] (>= 0) beyond which a run of one constant value is reported.
 
     Returns
     -------
@@ -98,38 +98,37 @@ def imu_pass(t, gyro, accel, W, stuck_s):
         :func:`fednav.ins.stops.stationary` forms them.
     """
     n = len(t)
-    c_a = np.zeros((n + 1, 3))  # running sums of a and of ||a||^2
-    c_aa = np.zeros(n + 1)
-    start = np.zeros(6, dtype=np.int64)
     found = []
-    d = 0.0
-    for i in range(n):
-        q = 0.0
-        for a in range(3):
-            c_a[i + 1, a] = c_a[i, a] + accel[i, a]
-            q += accel[i, a] ** 2
-        c_aa[i + 1] = c_aa[i] + q
-        for a in range(6):
-            if i < n - 1:
-                d = (gyro[i + 1, a] - gyro[i, a] if a < 3
-                     else accel[i + 1, a - 3] - accel[i, a - 3])
-            if i == n - 1 or d != 0:  # (as np.diff: NaN and inf end a run)
-                if t[i] - t[start[a]] > stuck_s:
-                    found.append((a, start[a], i))
-                start[a] = i + 1
+    for a in range(6):  # (by axis, then time)
+        x = gyro[:, a] if a < 3 else accel[:, a - 3]
+        equal = 0
+        for i in range(n - 1):
+            equal += x[i + 1] - x[i] == 0.0
+        if equal == 0:
+            continue  # (every run one sample long)
+        start = 0
+        for i in range(n):
+            if i == n - 1 or x[i + 1] - x[i] != 0.0:  # (as np.diff: NaN and inf end a run)
+                if t[i] - t[start] > stuck_s:
+                    found.append((a, start, i))
+                start = i + 1
     runs = np.empty((len(found), 3), dtype=np.int64)
     for r in range(len(found)):
         runs[r, 0], runs[r, 1], runs[r, 2] = found[r]
-    runs = runs[np.argsort(runs[:, 0], kind="mergesort")]
-    scatter = np.empty(n)
+    c0, c1, c2 = np.zeros(n + 1), np.zeros(n + 1), np.zeros(n + 1)  # running sums of a
+    cq = np.zeros(n + 1)  # ... and of ||a||^2
     for i in range(n):
-        lo = min(max(i - W // 2, 0), n)
-        hi = min(lo + W, n)
-        lo = max(hi - W, 0)
-        s2 = 0.0
-        for a in range(3):
-            s2 += (c_a[hi, a] - c_a[lo, a]) ** 2
-        v = (c_aa[hi] - c_aa[lo]) - s2 / (hi - lo)
+        c0[i + 1] = c0[i] + accel[i, 0]
+        c1[i + 1] = c1[i] + accel[i, 1]
+        c2[i + 1] = c2[i] + accel[i, 2]
+        cq[i + 1] = cq[i] + (accel[i, 0] ** 2 + accel[i, 1] ** 2 + accel[i, 2] ** 2)
+    scatter = np.empty(n)
+    W = min(W, n)  # (a window shifted inside the data at the ends)
+    lo = np.minimum(np.maximum(np.arange(n) - W // 2, 0), n - W)
+    for i in range(n):
+        a, b = lo[i], lo[i] + W
+        s2 = (c0[b] - c0[a]) ** 2 + (c1[b] - c1[a]) ** 2 + (c2[b] - c2[a]) ** 2
+        v = (cq[b] - cq[a]) - s2 / W
         scatter[i] = 0.0 if v < 0.0 else v
     return runs, scatter
 
@@ -350,18 +349,23 @@ def at_rest(t, gyro, accel, spans, lla, figures, solution=None) -> list[str]:
 def _antenna_rows(k, lla, vel, euler, omega, lever):
     """Position [rad, rad, m] and ENU velocity [m/s] (K, 3) of the antenna at ``lever``
     (body, m) at the solution's rows ``k``: :func:`fednav.core.earth.lever_arm_point`
-    (``moved(lla, C l)`` and ``vel + C (omega x l)``, C from
-    :func:`fednav.core.kernels.euler_to_dcm_s`); the IMU's rows without a lever arm."""
+    (``moved(lla, C l)`` and ``vel + C (omega x l)``, C from :func:`_dcm`); the IMU's
+    rows without a lever arm."""
     out_p = np.empty((len(k), 3))
     out_v = np.empty((len(k), 3))
     arm = lever[0] != 0.0 or lever[1] != 0.0 or lever[2] != 0.0
+    ang = np.empty((len(k), 3))
+    for q in range(len(k)):
+        for a in range(3):
+            ang[q, a] = euler[k[q], a]
+    sn, cs = _sincos(ang)
     for q in range(len(k)):
         i = k[q]
         for a in range(3):
             out_p[q, a], out_v[q, a] = lla[i, a], vel[i, a]
         if not arm:
             continue
-        c = kernels.euler_to_dcm_s(euler[i, 0], euler[i, 1], euler[i, 2])
+        c = _dcm(sn[0, q], cs[0, q], sn[1, q], cs[1, q], sn[2, q], cs[2, q])
         u0 = omega[i, 1] * lever[2] - omega[i, 2] * lever[1]
         u1 = omega[i, 2] * lever[0] - omega[i, 0] * lever[2]
         u2 = omega[i, 0] * lever[1] - omega[i, 1] * lever[0]
@@ -439,32 +443,48 @@ RESEED_ANGLE = 0.3
 
 @numba.njit(cache=True)
 def _sincos(x):
-    """Sines and cosines (n, k) of angles ``x`` (n, k) [rad] that change little from row
+    """Sines and cosines (k, n) of angles ``x`` (n, k) [rad] that change little from row
     to row (an attitude, a latitude at the IMU rate): exact at a row every
     :data:`RESEED_ROWS` rows and after a change beyond :data:`RESEED_ANGLE` from it; in
     between, that row's turned by the change ``d`` since, with the series of ``sin d``
     and ``cos d`` to ``d^11`` and ``d^12`` (the next terms below 3e-17 for
     ``|d| <= 0.3``; no error carried from row to row).  Two libm calls per angle and row
-    were most of the cost of the kernels that use it."""
+    were most of the cost of the kernels that use it; the series runs as one branch-free
+    (vectorised) loop."""
     n, k = x.shape
-    s = np.empty((n, k))
-    c = np.empty((n, k))
+    xt = x.T.copy()  # (each angle's rows contiguous)
+    s = np.empty((k, n))
+    c = np.empty((k, n))
     for a in range(k):
+        xa, sa, ca = xt[a], s[a], c[a]
         r = 0
-        for i in range(n):
-            d = x[i, a] - x[r, a]
-            if i == 0 or i - r >= RESEED_ROWS or abs(d) > RESEED_ANGLE:
-                r = i
-                s[i, a], c[i, a] = np.sin(x[i, a]), np.cos(x[i, a])
-                continue
-            d2 = d * d  # (Horner on multiplications: divisions cost as much as libm)
-            sd = d * (1.0 + d2 * (-1.0 / 6 + d2 * (1.0 / 120 + d2 * (-1.0 / 5040 + d2 * (
-                1.0 / 362880 + d2 * (-1.0 / 39916800))))))
-            cd = 1.0 + d2 * (-0.5 + d2 * (1.0 / 24 + d2 * (-1.0 / 720 + d2 * (
-                1.0 / 40320 + d2 * (-1.0 / 3628800 + d2 * (1.0 / 479001600))))))
-            s[i, a] = s[r, a] * cd + c[r, a] * sd
-            c[i, a] = c[r, a] * cd - s[r, a] * sd
+        while r < n:  # a block from an exact row to the next
+            xr = xa[r]
+            sr, cr = np.sin(xr), np.cos(xr)
+            e = r + 1
+            while e < min(r + RESEED_ROWS, n) and abs(xa[e] - xr) <= RESEED_ANGLE:
+                e += 1
+            for i in range(r, e):
+                d = xa[i] - xr
+                d2 = d * d  # (Horner on multiplications: a division costs as much as libm)
+                sd = d * (1.0 + d2 * (-1.0 / 6 + d2 * (1.0 / 120 + d2 * (-1.0 / 5040 + d2 * (
+                    1.0 / 362880 + d2 * (-1.0 / 39916800))))))
+                cd = 1.0 + d2 * (-0.5 + d2 * (1.0 / 24 + d2 * (-1.0 / 720 + d2 * (
+                    1.0 / 40320 + d2 * (-1.0 / 3628800 + d2 * (1.0 / 479001600))))))
+                sa[i] = sr * cd + cr * sd
+                ca[i] = cr * cd - sr * sd
+            r = e
     return s, c
+
+
+@numba.njit(cache=True, inline="always")
+def _dcm(st, ct, sg, cg, sp, cp):
+    """The 9 elements of C_b^n, row by row, from the sines and cosines of pitch, roll and
+    heading: :func:`fednav.core.kernels.euler_to_dcm_s`'s ``Rz(-heading) Rx(pitch)
+    Ry(roll)`` for sines and cosines at hand (:func:`_sincos`)."""
+    return (cg * cp + st * sg * sp, sp * ct, sg * cp - st * cg * sp,
+            -cg * sp + st * sg * cp, cp * ct, -sg * sp - st * cg * cp,
+            -ct * sg, st, ct * cg)
 
 
 @numba.njit(cache=True)
@@ -475,51 +495,59 @@ def _antenna_velocity(t, t_imu, accel, lla, euler, omega, lever):
     C_b^n (the elements of :func:`fednav.core.kernels.euler_to_dcm_s`, from the sines and
     cosines of :func:`_sincos`) plus gravity (:func:`fednav.core.earth.gravity_of_sin2`),
     integrated by trapezoids, moved to the antenna at ``lever`` (body, m) by
-    ``C (omega x lever)``."""
+    ``C (omega x lever)``.  Row by row only where a row needs the one before (the
+    interpolation's bracket, the integral); the rest in branch-free loops."""
     n, m = len(t), len(t_imu)
     ang = np.empty((n, 4))  # pitch, roll, heading, latitude
     ang[:, :3] = euler
     ang[:, 3] = lla[:, 0]
     sn, cs = _sincos(ang)
-    V = np.empty((n, 3))
-    arm = lever[0] != 0.0 or lever[1] != 0.0 or lever[2] != 0.0
-    v0 = v1 = v2 = 0.0  # the integral
-    a0 = a1 = a2 = 0.0  # the previous row's acceleration
+    f = np.empty((3, n))
     p = 0
     for i in range(n):
         ti = t[i]  # np.interp's bracket (times increase: it only moves on)
         while p < m - 1 and t_imu[p + 1] <= ti:
             p += 1
-        f0, f1, f2 = accel[p, 0], accel[p, 1], accel[p, 2]
+        w = 0.0
         if ti >= t_imu[0] and p < m - 1:
             w = (ti - t_imu[p]) / (t_imu[p + 1] - t_imu[p])
-            f0 += w * (accel[p + 1, 0] - f0)
-            f1 += w * (accel[p + 1, 1] - f1)
-            f2 += w * (accel[p + 1, 2] - f2)
-        st, sg, sp = sn[i, 0], sn[i, 1], sn[i, 2]
-        ct, cg, cp = cs[i, 0], cs[i, 1], cs[i, 2]
-        # C = Rz(-heading) Rx(pitch) Ry(roll) (the elements of kernels.euler_to_dcm_s)
-        c00, c01, c02 = cg * cp + st * sg * sp, sp * ct, sg * cp - st * cg * sp
-        c10, c11, c12 = -cg * sp + st * sg * cp, cp * ct, -sg * sp - st * cg * cp
-        c20, c21, c22 = -ct * sg, st, ct * cg
-        e0 = c00 * f0 + c01 * f1 + c02 * f2
-        e1 = c10 * f0 + c11 * f1 + c12 * f2
-        e2 = c20 * f0 + c21 * f1 + c22 * f2 - earth.gravity_of_sin2_nb(sn[i, 3] * sn[i, 3],
-                                                                      lla[i, 2])
+        q = min(p + 1, m - 1)
+        for a in range(3):
+            f[a, i] = accel[p, a] + w * (accel[q, a] - accel[p, a])
+    st, sg, sp, sl = sn[0], sn[1], sn[2], sn[3]
+    ct, cg, cp = cs[0], cs[1], cs[2]
+    h = lla[:, 2].copy()
+    g = np.empty(n)
+    for i in range(n):
+        g[i] = earth.gravity_of_sin2_nb(sl[i] * sl[i], h[i])
+    e = np.empty((3, n))
+    la = np.empty((3, n))
+    arm = lever[0] != 0.0 or lever[1] != 0.0 or lever[2] != 0.0
+    u = np.zeros((3, n))
+    if arm:
+        for i in range(n):
+            u[0, i] = omega[i, 1] * lever[2] - omega[i, 2] * lever[1]
+            u[1, i] = omega[i, 2] * lever[0] - omega[i, 0] * lever[2]
+            u[2, i] = omega[i, 0] * lever[1] - omega[i, 1] * lever[0]
+    for i in range(n):
+        c00, c01, c02, c10, c11, c12, c20, c21, c22 = _dcm(st[i], ct[i], sg[i], cg[i],
+                                                           sp[i], cp[i])
+        e[0, i] = c00 * f[0, i] + c01 * f[1, i] + c02 * f[2, i]
+        e[1, i] = c10 * f[0, i] + c11 * f[1, i] + c12 * f[2, i]
+        e[2, i] = c20 * f[0, i] + c21 * f[1, i] + c22 * f[2, i] - g[i]
+        # the antenna's velocity relative to the IMU: C (omega x lever) (zero without)
+        la[0, i] = c00 * u[0, i] + c01 * u[1, i] + c02 * u[2, i]
+        la[1, i] = c10 * u[0, i] + c11 * u[1, i] + c12 * u[2, i]
+        la[2, i] = c20 * u[0, i] + c21 * u[1, i] + c22 * u[2, i]
+    V = np.empty((n, 3))
+    v0 = v1 = v2 = 0.0
+    for i in range(n):
         if i > 0:
-            h = 0.5 * (t[i] - t[i - 1])
-            v0 += (e0 + a0) * h
-            v1 += (e1 + a1) * h
-            v2 += (e2 + a2) * h
-        a0, a1, a2 = e0, e1, e2
-        V[i, 0], V[i, 1], V[i, 2] = v0, v1, v2
-        if arm:  # the antenna's velocity relative to the IMU: C (omega x lever)
-            u0 = omega[i, 1] * lever[2] - omega[i, 2] * lever[1]
-            u1 = omega[i, 2] * lever[0] - omega[i, 0] * lever[2]
-            u2 = omega[i, 0] * lever[1] - omega[i, 1] * lever[0]
-            V[i, 0] += c00 * u0 + c01 * u1 + c02 * u2
-            V[i, 1] += c10 * u0 + c11 * u1 + c12 * u2
-            V[i, 2] += c20 * u0 + c21 * u1 + c22 * u2
+            dt2 = 0.5 * (t[i] - t[i - 1])
+            v0 += (e[0, i] + e[0, i - 1]) * dt2
+            v1 += (e[1, i] + e[1, i - 1]) * dt2
+            v2 += (e[2, i] + e[2, i - 1]) * dt2
+        V[i, 0], V[i, 1], V[i, 2] = v0 + la[0, i], v1 + la[1, i], v2 + la[2, i]
     return V
 
 
@@ -534,8 +562,8 @@ def _mean_quaternion(euler):
     out = np.zeros(4)
     q0 = np.zeros(4)
     for i in range(len(euler)):
-        a = kernels.quat_mul_s(cs[i, 0], sn[i, 0], 0.0, 0.0, cs[i, 1], 0.0, sn[i, 1], 0.0)
-        q = kernels.quat_mul_s(cs[i, 2], 0.0, 0.0, -sn[i, 2], a[0], a[1], a[2], a[3])
+        a = kernels.quat_mul_s(cs[0, i], sn[0, i], 0.0, 0.0, cs[1, i], 0.0, sn[1, i], 0.0)
+        q = kernels.quat_mul_s(cs[2, i], 0.0, 0.0, -sn[2, i], a[0], a[1], a[2], a[3])
         if i == 0:
             for r in range(4):
                 q0[r] = q[r]
