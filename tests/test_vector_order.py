@@ -39,10 +39,15 @@ def test_old_gnss_key_is_read_reordered_with_a_warning():
     with pytest.warns(FutureWarning):  # one value: the same, but the name is the old one
         assert load_system({"sensors": {"gnss": {"sigma_pos_m": 4.0}}}).sensors.gnss \
             .sigma_pos_enu_m == 4.0
-    # fednav 0.1's flat key goes the same way
-    with pytest.warns(FutureWarning):
+    # fednav 0.1's flat key goes the same way, in one warning that says the order
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
         flat = load_system({"gnss_sigma_pos_m": [1.0, 2.0, 3.0]})
     assert flat.sensors.gnss.sigma_pos_enu_m == (2.0, 1.0, 3.0)
+    assert [str(w.message) for w in seen] == [
+        "processing-config keys of fednav 0.1 (gnss_sigma_pos_m -> "
+        "sensors.gnss.sigma_pos_enu_m, reordered [north, east, up] -> [east, north, up]) "
+        "are read for one more release"]
 
 
 def test_old_and_new_gnss_key_together_is_one_error_naming_both():

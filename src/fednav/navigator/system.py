@@ -32,6 +32,7 @@ from pydantic import Field, field_validator, model_validator
 from ..core.config import _Model, nested_error, read_mapping, validate
 from ..filters.registry import FILTERS
 from ..ins.error_model import ImuNoiseModel
+from ..sensors.gnss import neu_to_enu
 from ..sensors.imu import ImuConfig
 from ..sensors.registry import SENSORS, SensorSet, check_names
 
@@ -246,7 +247,7 @@ FILE_KEYS = ("imu", "reference")
 LEGACY_KEYS = {
     "period_s": ("filter", "period_s"), "substeps": ("filter", "substeps"),
     "fdi_alpha": ("filter", "fdi_alpha"), "fdi_recovery": ("filter", "fdi_recovery"),
-    "gnss_sigma_pos_m": ("sensors", "gnss", "sigma_pos_m"),
+    "gnss_sigma_pos_m": ("sensors", "gnss", "sigma_pos_enu_m"),
     "gnss_sigma_vel_mps": ("sensors", "gnss", "sigma_vel_mps"),
     "gnss_lever_m": ("sensors", "gnss", "lever_m"),
     "gnss_time_offset_s": ("sensors", "gnss", "time_offset_s"),
@@ -259,6 +260,8 @@ LEGACY_KEYS = {
     "coarse_heading_deg": ("alignment", "coarse_heading_deg"),
     "coarse_seconds": ("alignment", "coarse_seconds"),
 }
+#: Legacy keys whose vector order changed: the conversion and what the warning says.
+LEGACY_ORDER = {"gnss_sigma_pos_m": (neu_to_enu, "[north, east, up] -> [east, north, up]")}
 
 
 def _translate_legacy(data: dict) -> dict:
@@ -279,10 +282,12 @@ def _translate_legacy(data: dict) -> dict:
             if leaf in d:
                 raise ValueError(f"'{k}' and '{'.'.join(LEGACY_KEYS[k])}' are the same "
                                  f"setting; give it once")
-            d[leaf] = out.pop(k)
+            v = out.pop(k)
+            d[leaf] = LEGACY_ORDER[k][0](v) if k in LEGACY_ORDER else v
     warnings.warn("processing-config keys of fednav 0.1 (" + ", ".join(
-        f"{k} -> {'.'.join(LEGACY_KEYS[k])}" for k in old) + ") are read for one more "
-        "release", FutureWarning, stacklevel=2)
+        f"{k} -> {'.'.join(LEGACY_KEYS[k])}"
+        + (f", reordered {LEGACY_ORDER[k][1]}" if k in LEGACY_ORDER else "")
+        for k in old) + ") are read for one more release", FutureWarning, stacklevel=2)
     return out
 
 
