@@ -275,7 +275,9 @@ def test_the_mean_quaternion_matches_its_numpy_form():
                              att.wrap_2pi(-0.05 + 0.02 * t)])
     q = att.euler_to_quat(euler)
     want = np.mean(q * np.sign(q @ q[0])[:, None], axis=0)
-    got = pl._mean_quaternion(euler)
+    sigma = np.abs(euler) * 0.1 + 1e-3
+    got, mean_sigma = pl._mean_quaternion(euler, sigma)
+    assert np.array_equal(mean_sigma, sigma[:, :2].mean(axis=0))
     assert np.abs(got * np.sign(got @ want) - want).max() < 1e-14
     assert np.abs(att.wrap_pi(att.quat_to_euler(got) - att.quat_to_euler(want))).max() < 1e-14
 

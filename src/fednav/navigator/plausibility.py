@@ -331,9 +331,10 @@ def at_rest(t, gyro, accel, spans, lla, figures, solution=None) -> list[str]:
         if ms.stop <= ms.start:
             continue
         lev = coarse_level(f)[:2]
-        sol = att.quat_to_euler(_mean_quaternion(solution.euler[ms]))[:2]
+        q, sigma = _mean_quaternion(solution.euler[ms], solution.sigma_euler[ms])
+        sol = att.dcm_to_euler(kernels.quat_to_dcm(q))[:2]  # (att.quat_to_euler's steps)
         d = att.wrap_pi(sol - lev)
-        s = np.hypot(solution.sigma_euler[ms, :2].mean(axis=0), ab / g)
+        s = np.hypot(sigma, ab / g)
         k = int(np.argmax(np.abs(d) / s))
         if abs(d[k]) > REST_SIGMAS * s[k] and abs(d[k]) > units.deg(0.05):
             said.add("level")
@@ -421,17 +422,32 @@ def gnss_residuals(solution, gnss) -> dict | None:
         g = gnss.lla[inside]
         d = earth.llh_difference_enu(g[:, 0], g[:, 1], g[:, 2], lla[:, 0], lla[:, 1],
                                      lla[:, 2])
-        d -= vel * (tg - t[k])[:, None]  # the row is one sample before the fix
         sr = (rows[:, [1, 0, 2]] if rows is not None
-              else np.broadcast_to(np.asarray(gnss.sigma_pos)[[1, 0, 2]], d.shape))
-        out["dp"] = d
-        out["sp"] = np.hypot(sr, solution.sigma[k, 6:9])
+              else np.asarray(gnss.sigma_pos, dtype=float)[[1, 0, 2]][None, :])
+        # (the row is one sample before the fix: its velocity carries it to the fix)
+        out["dp"], out["sp"] = _with_sigma(d, -vel, tg - t[k], sr, solution.sigma, k, 6)
     if gnss.vel is not None:
         sr = (rows[:, 3:6] if rows is not None
-              else np.broadcast_to(np.asarray(gnss.sigma_vel), (len(tg), 3)))
-        out["dv"] = gnss.vel[inside] - vel
-        out["sv"] = np.hypot(sr, solution.sigma[k, 3:6])
+              else np.asarray(gnss.sigma_vel, dtype=float)[None, :])
+        out["dv"], out["sv"] = _with_sigma(gnss.vel[inside], -vel, np.ones(len(tg)), sr,
+                                           solution.sigma, k, 3)
     return out
+
+
+@numba.njit(cache=True)
+def _with_sigma(x, y, w, sr, sigma, k, col):
+    """Residuals ``x + y w`` (K, 3) (``w`` (K,) per row) and their sigmas, the fix's
+    ``sr`` (K, 3, or one row for all) and the solution's ``sigma[k, col:col + 3]``
+    combined as independent (``np.hypot``)."""
+    n = len(x)
+    r = np.empty((n, 3))
+    s = np.empty((n, 3))
+    for q in range(n):
+        i = q if len(sr) > 1 else 0
+        for a in range(3):
+            r[q, a] = x[q, a] + y[q, a] * w[q]
+            s[q, a] = np.hypot(sr[i, a], sigma[k[q], col + a])
+    return r, s
 
 
 #: Rows between exact sines and cosines in :func:`_sincos` (in between: the
@@ -461,9 +477,14 @@ def _sincos(x):
         while r < n:  # a block from an exact row to the next
             xr = xa[r]
             sr, cr = np.sin(xr), np.cos(xr)
-            e = r + 1
-            while e < min(r + RESEED_ROWS, n) and abs(xa[e] - xr) <= RESEED_ANGLE:
-                e += 1
+            e = min(r + RESEED_ROWS, n)
+            far = False
+            for i in range(r + 1, e):  # (a branch-free look first: rarely any)
+                far |= not abs(xa[i] - xr) <= RESEED_ANGLE
+            if far:
+                e = r + 1
+                while e < min(r + RESEED_ROWS, n) and abs(xa[e] - xr) <= RESEED_ANGLE:
+                    e += 1
             for i in range(r, e):
                 d = xa[i] - xr
                 d2 = d * d  # (Horner on multiplications: a division costs as much as libm)
@@ -552,12 +573,18 @@ def _antenna_velocity(t, t_imu, accel, lla, euler, omega, lever):
 
 
 @numba.njit(cache=True)
-def _mean_quaternion(euler):
+def _mean_quaternion(euler, sigma_euler):
     """The mean of the unit quaternions q_b^n of the attitudes ``euler`` (n, 3) [pitch,
     roll, heading] [rad], each signed as the first (the mean of
     ``att.euler_to_quat(euler)`` so aligned; ``C = Rz(-heading) Rx(pitch) Ry(roll)`` as
     the product of the three rotations' quaternions, :func:`_sincos` of the half
-    angles)."""
+    angles); and the mean of the first two columns of their 1-sigma ``sigma_euler``
+    [rad] (summed in order, as numpy's ``mean(axis=0)``)."""
+    sigma = np.zeros(2)
+    for i in range(len(sigma_euler)):
+        sigma[0] += sigma_euler[i, 0]
+        sigma[1] += sigma_euler[i, 1]
+    sigma /= len(sigma_euler)
     sn, cs = _sincos(0.5 * euler)
     out = np.zeros(4)
     q0 = np.zeros(4)
@@ -571,7 +598,7 @@ def _mean_quaternion(euler):
         sign = 1.0 if dot > 0 else (-1.0 if dot < 0 else 0.0)
         for r in range(4):
             out[r] += sign * q[r]
-    return out / len(euler)
+    return out / len(euler), sigma
 
 
 @numba.njit(cache=True)
