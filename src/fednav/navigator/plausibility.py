@@ -423,7 +423,7 @@ def gnss_residuals(solution, gnss) -> dict | None:
         d = earth.llh_difference_enu(g[:, 0], g[:, 1], g[:, 2], lla[:, 0], lla[:, 1],
                                      lla[:, 2])
         sr = (rows[:, [1, 0, 2]] if rows is not None
-              else np.asarray(gnss.sigma_pos, dtype=float)[[1, 0, 2]][None, :])
+              else np.asarray(gnss.sigma_pos_enu, dtype=float)[None, :])
         # (the row is one sample before the fix: its velocity carries it to the fix)
         out["dp"], out["sp"] = _with_sigma(d, -vel, tg - t[k], sr, solution.sigma, k, 6)
     if gnss.vel is not None:
