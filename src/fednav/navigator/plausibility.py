@@ -99,13 +99,12 @@ def imu_pass(t, gyro, accel, W, stuck_s):
     """
     n = len(t)
     found = []
-    for a in range(6):  # (by axis, then time)
+    repeats = 0  # values equal to the axis' previous one, all axes (rows in memory order)
+    for x in (np.ravel(gyro), np.ravel(accel)):
+        for i in range(len(x) - 3):
+            repeats += x[i + 3] - x[i] == 0.0
+    for a in range(6 if repeats else 0):  # (by axis, then time; none: every run one long)
         x = gyro[:, a] if a < 3 else accel[:, a - 3]
-        equal = 0
-        for i in range(n - 1):
-            equal += x[i + 1] - x[i] == 0.0
-        if equal == 0:
-            continue  # (every run one sample long)
         start = 0
         for i in range(n):
             if i == n - 1 or x[i + 1] - x[i] != 0.0:  # (as np.diff: NaN and inf end a run)
@@ -355,10 +354,10 @@ def _antenna_rows(k, lla, vel, euler, omega, lever):
     out_p = np.empty((len(k), 3))
     out_v = np.empty((len(k), 3))
     arm = lever[0] != 0.0 or lever[1] != 0.0 or lever[2] != 0.0
-    ang = np.empty((len(k), 3))
+    ang = np.empty((3, len(k)))
     for q in range(len(k)):
         for a in range(3):
-            ang[q, a] = euler[k[q], a]
+            ang[a, q] = euler[k[q], a]
     sn, cs = _sincos(ang)
     for q in range(len(k)):
         i = k[q]
@@ -459,20 +458,19 @@ RESEED_ANGLE = 0.3
 
 @numba.njit(cache=True)
 def _sincos(x):
-    """Sines and cosines (k, n) of angles ``x`` (n, k) [rad] that change little from row
-    to row (an attitude, a latitude at the IMU rate): exact at a row every
+    """Sines and cosines (k, n) of angles ``x`` (k, n) [rad] that change little from one
+    of the n to the next (an attitude, a latitude at the IMU rate): exact at a row every
     :data:`RESEED_ROWS` rows and after a change beyond :data:`RESEED_ANGLE` from it; in
     between, that row's turned by the change ``d`` since, with the series of ``sin d``
     and ``cos d`` to ``d^11`` and ``d^12`` (the next terms below 3e-17 for
     ``|d| <= 0.3``; no error carried from row to row).  Two libm calls per angle and row
     were most of the cost of the kernels that use it; the series runs as one branch-free
     (vectorised) loop."""
-    n, k = x.shape
-    xt = x.T.copy()  # (each angle's rows contiguous)
+    k, n = x.shape
     s = np.empty((k, n))
     c = np.empty((k, n))
     for a in range(k):
-        xa, sa, ca = xt[a], s[a], c[a]
+        xa, sa, ca = x[a], s[a], c[a]
         r = 0
         while r < n:  # a block from an exact row to the next
             xr = xa[r]
@@ -519,9 +517,11 @@ def _antenna_velocity(t, t_imu, accel, lla, euler, omega, lever):
     ``C (omega x lever)``.  Row by row only where a row needs the one before (the
     interpolation's bracket, the integral); the rest in branch-free loops."""
     n, m = len(t), len(t_imu)
-    ang = np.empty((n, 4))  # pitch, roll, heading, latitude
-    ang[:, :3] = euler
-    ang[:, 3] = lla[:, 0]
+    ang = np.empty((4, n))  # pitch, roll, heading, latitude
+    for i in range(n):
+        for a in range(3):
+            ang[a, i] = euler[i, a]
+        ang[3, i] = lla[i, 0]
     sn, cs = _sincos(ang)
     f = np.empty((3, n))
     p = 0
@@ -585,7 +585,7 @@ def _mean_quaternion(euler, sigma_euler):
         sigma[0] += sigma_euler[i, 0]
         sigma[1] += sigma_euler[i, 1]
     sigma /= len(sigma_euler)
-    sn, cs = _sincos(0.5 * euler)
+    sn, cs = _sincos(0.5 * np.ascontiguousarray(euler.T))
     out = np.zeros(4)
     q0 = np.zeros(4)
     for i in range(len(euler)):
