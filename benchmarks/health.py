@@ -10,7 +10,7 @@
 - ``SILENT, OUTSIDE 3σ``: no new word and a solution outside the clean run's 3σ — what
   must never happen.
 
-"Outside" means: for some error (north/east/down, vN/vE/vD, pitch/roll/heading), the share
+"Outside" means: for some error (east/north/up, vE/vN/vU, pitch/roll/heading), the share
 of epochs beyond 3× the clean run's σ exceeds the clean run's own share by more than
 2 points.  Prints one line per corruption, the detection rate (corruptions outside 3σ that
 were refused or warned about) and the false-alarm count on the clean drives (target: 100 %
@@ -34,8 +34,8 @@ from fednav.process.run import flown_gnss, imu_figures, prepare
 from fednav.sim.corruptions import families
 from fednav.sim.drives import ADIS16405, ADIS16488, car_drive
 
-COMPONENTS = {"north_m": ("sigma", 7), "east_m": ("sigma", 6), "down_m": ("sigma", 8),
-              "vn_mps": ("sigma", 4), "ve_mps": ("sigma", 3), "vd_mps": ("sigma", 5),
+COMPONENTS = {"north_m": ("sigma", 7), "east_m": ("sigma", 6), "up_m": ("sigma", 8),
+              "vn_mps": ("sigma", 4), "ve_mps": ("sigma", 3), "vu_mps": ("sigma", 5),
               "pitch_rad": ("sigma_euler", 0), "roll_rad": ("sigma_euler", 1),
               "yaw_rad": ("sigma_euler", 2)}
 

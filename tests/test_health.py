@@ -120,8 +120,8 @@ def test_streaming_users_get_the_same_warnings(drive):
     assert nav.result().health() == []  # the FDI log alone has nothing to say here
 
 
-COMPONENTS = {"north_m": ("sigma", 7), "east_m": ("sigma", 6), "down_m": ("sigma", 8),
-              "vn_mps": ("sigma", 4), "ve_mps": ("sigma", 3), "vd_mps": ("sigma", 5),
+COMPONENTS = {"north_m": ("sigma", 7), "east_m": ("sigma", 6), "up_m": ("sigma", 8),
+              "vn_mps": ("sigma", 4), "ve_mps": ("sigma", 3), "vu_mps": ("sigma", 5),
               "pitch_rad": ("sigma_euler", 0), "roll_rad": ("sigma_euler", 1),
               "yaw_rad": ("sigma_euler", 2)}
 
