@@ -60,9 +60,14 @@ def test_old_and_new_gnss_key_together_is_one_error_naming_both():
 def test_dataset_old_keys_are_read_reordered_and_simulate_the_same(tmp_path):
     from fednav.sim.dataset import GnssSimConfig, load_dataset_config, simulate_dataset
 
-    with pytest.warns(FutureWarning, match=r"gnss\.markov_sigma_m .* gnss\.markov_sigma_enu_m"):
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
         old = GnssSimConfig.model_validate({"sigma_pos_m": [0.5, 1.0, 2.0],
                                             "markov_sigma_m": [0.3, 0.0, 0.1]})
+    said = sorted(str(w.message) for w in seen if w.category is FutureWarning)
+    assert len(said) == 2 and re.match(r"gnss\.markov_sigma_m .* gnss\.markov_sigma_enu_m",
+                                       said[0])
+    assert re.match(r"gnss\.sigma_pos_m .* gnss\.sigma_pos_enu_m", said[1])
     new = GnssSimConfig(sigma_pos_enu_m=(1.0, 0.5, 2.0), markov_sigma_enu_m=(0.0, 0.3, 0.1))
     assert old == new
     with pytest.raises(ValueError, match="'sigma_pos_m' .* and 'sigma_pos_enu_m' .* same"):
@@ -111,12 +116,15 @@ def test_read_gnss_csv_takes_enu_and_the_old_keyword_with_a_warning(tmp_path):
         new = read_gnss_csv(p, (2.0, 1.0, 3.0))
         assert read_gnss_csv(p, sigma_pos_enu=(2.0, 1.0, 3.0)).sigma_pos_enu.tolist() == \
             [2.0, 1.0, 3.0]
-    with pytest.warns(FutureWarning, match=r"GnssData\.sigma_pos \[north, east, up\] is now "
-                                           r"GnssData\.sigma_pos_enu \[east, north, up\]"):
+    with pytest.warns(FutureWarning, match=r"read_gnss_csv\(sigma_pos=\[north, east, up\]\) "
+                                           r"is now read_gnss_csv\(sigma_pos_enu=\[east, "
+                                           r"north, up\]\)") as seen:
         old = read_gnss_csv(p, sigma_pos=(1.0, 2.0, 3.0))
+    assert len(seen) == 1 and seen[0].filename == __file__  # one warning, at the call
     np.testing.assert_array_equal(old.sigma_pos_enu, new.sigma_pos_enu)
     np.testing.assert_array_equal(new.sigma_pos_enu, [2.0, 1.0, 3.0])
-    np.testing.assert_array_equal(new.sigma_pos, [1.0, 2.0, 3.0])  # the old attribute
+    with pytest.warns(FutureWarning, match=r"GnssData\.sigma_pos \[north, east, up\]"):
+        np.testing.assert_array_equal(new.sigma_pos, [1.0, 2.0, 3.0])  # the old attribute
     with pytest.raises(TypeError, match="sigma_pos .* and sigma_pos_enu .* same setting"):
         read_gnss_csv(p, (2.0, 1.0, 3.0), sigma_pos=(1.0, 2.0, 3.0))
 
@@ -272,6 +280,8 @@ def test_gnss_simulator_old_keyword_is_reordered_with_a_warning():
     with pytest.warns(FutureWarning, match=r"Gnss\.sigma_pos \[north, east, up\] is now "
                                            r"Gnss\.sigma_pos_enu"):
         old = Gnss(sigma_pos=(1.0, 2.0, 3.0), sigma_vel=0.1, period=1.0)
-    assert old == Gnss((2.0, 1.0, 3.0), 0.1, 1.0) and old.sigma_pos == (1.0, 2.0, 3.0)
+    assert old == Gnss((2.0, 1.0, 3.0), 0.1, 1.0)
+    with pytest.warns(FutureWarning, match=r"Gnss\.sigma_pos \[north, east, up\]"):
+        assert old.sigma_pos == (1.0, 2.0, 3.0)
     with pytest.raises(TypeError, match="same setting"):
         Gnss(1.0, 0.1, 1.0, sigma_pos=1.0)

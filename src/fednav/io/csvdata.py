@@ -14,6 +14,7 @@ The layouts are documented in ``docs/data-formats.md``:
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -21,6 +22,7 @@ import pandas as pd
 
 from ..core import units
 from ..core.atomic import write_bytes, write_text
+from ..sensors.gnss import neu_to_enu
 from .data import (
     DataError,
     GnssData,
@@ -227,13 +229,15 @@ def read_gnss_csv(path, sigma_pos_enu=None, sigma_vel=(0.1, 0.1, 0.1),
         for j, c in enumerate(GNSS_SIGMA_COLUMNS):
             if c in df.columns and c in want:
                 sig[:, j] = df[c].to_numpy(float)
-    if sigma_pos is not None:  # the old keyword: GnssData reorders it, with a warning
-        pos = {"sigma_pos": np.asarray(sigma_pos)}
-    else:
-        pos = {"sigma_pos_enu": np.asarray((5.0,) * 3 if sigma_pos_enu is None
-                                           else sigma_pos_enu)}
+    if sigma_pos is not None:  # the old keyword, reordered
+        warnings.warn("read_gnss_csv(sigma_pos=[north, east, up]) is now "
+                      "read_gnss_csv(sigma_pos_enu=[east, north, up]): read and reordered "
+                      "for one more release", FutureWarning, stacklevel=2)
+        sigma_pos_enu = neu_to_enu(np.asarray(sigma_pos, dtype=float))
+    pos = np.asarray((5.0,) * 3 if sigma_pos_enu is None else sigma_pos_enu)
     return GnssData(src, df["t_s"].to_numpy(float), lla, vel, sigma_vel=np.asarray(sigma_vel),
-                    lever=np.asarray(lever), sigma_rows=sig, t_arrival=_arrival(df), **pos)
+                    lever=np.asarray(lever), sigma_rows=sig, t_arrival=_arrival(df),
+                    sigma_pos_enu=pos)
 
 
 def read_velocity_csv(path, lever=(0.0, 0.0, 0.0)) -> VelocityData:

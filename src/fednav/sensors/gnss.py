@@ -93,7 +93,8 @@ def reads_old_sigma_pos(cls):
 
     def sigma_pos(self):
         """Deprecated (removed in 0.3): ``sigma_pos_enu`` in the old order [north, east,
-        up] [m]."""
+        up] [m], with a ``FutureWarning``."""
+        warnings.warn(message, FutureWarning, stacklevel=2)
         return neu_to_enu(self.sigma_pos_enu)  # (the same swap both ways)
 
     cls.__init__ = __init__
