@@ -163,6 +163,9 @@ def test_coinciding_groups_and_their_note():
     assert plots.identical_note([["a", "b"]], curves).endswith(
         "a = b (identical to plotting precision)")
     assert plots.shared_limit({"x": 1.0, "y": 2.0, "free": 500.0}) == (2.2, ["free"])
+    # two modes: the free INS still runs off (the median of both was half its scale)
+    assert plots.shared_limit({"aided": 1.0, "free": 500.0}) == (1.1, ["free"])
+    assert plots.shared_limit({"only": 500.0}) == (550.0, [])
 
 
 def test_paper000_errors_figure_from_real_runs(tmp_path):

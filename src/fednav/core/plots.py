@@ -150,13 +150,15 @@ def robust_scale(values, q: float = 99.0) -> float:
 
 def shared_limit(scales: dict[str, float], spread: float = 30.0) -> tuple[float, list[str]]:
     """A symmetric y-limit for curves of the given scales (name -> robust scale) and the
-    names left off it: a curve more than ``spread`` times the median scale (a free INS
-    beside aided modes) would flatten the others on a linear axis, so it runs off the
-    axis and the figure says so."""
+    names left off it: a curve more than ``spread`` times the median of the lower half
+    of the scales (a free INS beside aided modes; with two modes, the smaller one) would
+    flatten the others on a linear axis, so it runs off the axis and the figure says
+    so."""
     s = {k: v for k, v in scales.items() if np.isfinite(v) and v > 0}
     if not s:
         return 1.0, []
-    med = float(np.median(list(s.values())))
+    low = sorted(s.values())
+    med = float(np.median(low[:max(1, (len(low) + 1) // 2)]))
     kept = {k: v for k, v in s.items() if v <= spread * med}
     off = [k for k in s if k not in kept]
     return 1.1 * max(kept.values()), off
