@@ -230,12 +230,6 @@ def test_the_compiled_helpers_match_numpy():
                 assert got == want or (got == np.inf and want >= floor * (1 - 1e-15))
         t = np.cumsum(rng.random(n + 1))
         assert pl.median_step(t) == np.median(np.diff(t))
-    # the one copy of the Euler convention from sines and cosines, against core.kernels'
-    from fednav.core import kernels
-
-    for e in rng.uniform(-np.pi, np.pi, size=(20, 3)):
-        sc = [f(x) for x in e for f in (np.sin, np.cos)]
-        assert np.allclose(pl._dcm(*sc), kernels.euler_to_dcm_s(*e), rtol=0, atol=1e-15)
 
 
 def test_the_antenna_velocity_matches_its_numpy_form():

@@ -69,9 +69,11 @@ def skew(v):
 
 def euler_to_dcm(euler):
     """Euler ``[pitch, roll, heading]`` -> C_b^n, shape (..., 3, 3)
-    (:func:`fednav.core.kernels.euler_to_dcm_s`)."""
+    (:func:`fednav.core.kernels.dcm_of_sincos`)."""
     e = np.asarray(euler, dtype=float)
-    return _matrix(kernels.euler_to_dcm_s.py_func(e[..., 0], e[..., 1], e[..., 2]))
+    s, c = np.sin(e), np.cos(e)
+    return _matrix(kernels.dcm_of_sincos.py_func(s[..., 0], c[..., 0], s[..., 1], c[..., 1],
+                                                 s[..., 2], c[..., 2]))
 
 
 def dcm_to_euler(C):

@@ -170,17 +170,24 @@ def quat_to_dcm_s(w, x, y, z):
 
 
 @numba.njit(cache=True, inline="always")
-def euler_to_dcm_s(pitch, roll, heading):
-    """Euler ``[pitch, roll, heading]`` [rad] -> the 9 elements of C_b^n (ENU), row by row:
+def dcm_of_sincos(st, ct, sg, cg, sp, cp):
+    """The 9 elements of C_b^n (ENU), row by row, from the sines and cosines of pitch
+    (``st``, ``ct``), roll (``sg``, ``cg``) and heading (``sp``, ``cp``):
     ``C = Rz(-heading) Rx(pitch) Ry(roll)``, columns the body right, forward, up axes in
-    ENU.  One source: compiled here, and run by :func:`fednav.core.attitude.euler_to_dcm`
+    ENU.  One source: compiled here (:func:`euler_to_dcm_s`, the health monitor's
+    integrals with sines at hand), and run by :func:`fednav.core.attitude.euler_to_dcm`
     on whole arrays as plain Python (it has no branch)."""
-    st, ct = np.sin(pitch), np.cos(pitch)
-    sg, cg = np.sin(roll), np.cos(roll)
-    sp, cp = np.sin(heading), np.cos(heading)
     return (cg * cp + st * sg * sp, sp * ct, sg * cp - st * cg * sp,
             -cg * sp + st * sg * cp, cp * ct, -sg * sp - st * cg * cp,
             -ct * sg, st, ct * cg)
+
+
+@numba.njit(cache=True, inline="always")
+def euler_to_dcm_s(pitch, roll, heading):
+    """Euler ``[pitch, roll, heading]`` [rad] -> the 9 elements of C_b^n (ENU), row by row
+    (:func:`dcm_of_sincos`)."""
+    return dcm_of_sincos(np.sin(pitch), np.cos(pitch), np.sin(roll), np.cos(roll),
+                         np.sin(heading), np.cos(heading))
 
 
 @numba.njit(cache=True)

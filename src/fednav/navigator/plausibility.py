@@ -33,6 +33,7 @@ import numpy as np
 
 from ..core import attitude as att
 from ..core import earth, kernels, units
+from ..core.kernels import dcm_of_sincos
 from ..ins import stops
 from ..ins.alignment import coarse_level
 
@@ -349,7 +350,8 @@ def at_rest(t, gyro, accel, spans, lla, figures, solution=None) -> list[str]:
 def _antenna_rows(k, lla, vel, euler, omega, lever):
     """Position [rad, rad, m] and ENU velocity [m/s] (K, 3) of the antenna at ``lever``
     (body, m) at the solution's rows ``k``: :func:`fednav.core.earth.lever_arm_point`
-    (``moved(lla, C l)`` and ``vel + C (omega x l)``, C from :func:`_dcm`); the IMU's
+    (``moved(lla, C l)`` and ``vel + C (omega x l)``, C from
+    :func:`fednav.core.kernels.dcm_of_sincos`); the IMU's
     rows without a lever arm."""
     out_p = np.empty((len(k), 3))
     out_v = np.empty((len(k), 3))
@@ -365,7 +367,7 @@ def _antenna_rows(k, lla, vel, euler, omega, lever):
             out_p[q, a], out_v[q, a] = lla[i, a], vel[i, a]
         if not arm:
             continue
-        c = _dcm(sn[0, q], cs[0, q], sn[1, q], cs[1, q], sn[2, q], cs[2, q])
+        c = dcm_of_sincos(sn[0, q], cs[0, q], sn[1, q], cs[1, q], sn[2, q], cs[2, q])
         u0 = omega[i, 1] * lever[2] - omega[i, 2] * lever[1]
         u1 = omega[i, 2] * lever[0] - omega[i, 0] * lever[2]
         u2 = omega[i, 0] * lever[1] - omega[i, 1] * lever[0]
@@ -496,22 +498,12 @@ def _sincos(x):
     return s, c
 
 
-@numba.njit(cache=True, inline="always")
-def _dcm(st, ct, sg, cg, sp, cp):
-    """The 9 elements of C_b^n, row by row, from the sines and cosines of pitch, roll and
-    heading: :func:`fednav.core.kernels.euler_to_dcm_s`'s ``Rz(-heading) Rx(pitch)
-    Ry(roll)`` for sines and cosines at hand (:func:`_sincos`)."""
-    return (cg * cp + st * sg * sp, sp * ct, sg * cp - st * cg * sp,
-            -cg * sp + st * sg * cp, cp * ct, -sg * sp - st * cg * cp,
-            -ct * sg, st, ct * cg)
-
-
 @numba.njit(cache=True)
 def _antenna_velocity(t, t_imu, accel, lla, euler, omega, lever):
     """The IMU's velocity change since ``t[0]`` [m/s] (N, 3), ENU, at the solution's
     rows (times ``t``, position ``lla``, attitude ``euler``, body rate ``omega``): the
     specific force ``accel`` (at ``t_imu``, linearly interpolated) rotated to ENU by
-    C_b^n (the elements of :func:`fednav.core.kernels.euler_to_dcm_s`, from the sines and
+    C_b^n (:func:`fednav.core.kernels.dcm_of_sincos`, from the sines and
     cosines of :func:`_sincos`) plus gravity (:func:`fednav.core.earth.gravity_of_sin2`),
     integrated by trapezoids, moved to the antenna at ``lever`` (body, m) by
     ``C (omega x lever)``.  Row by row only where a row needs the one before (the
@@ -551,8 +543,8 @@ def _antenna_velocity(t, t_imu, accel, lla, euler, omega, lever):
             u[1, i] = omega[i, 2] * lever[0] - omega[i, 0] * lever[2]
             u[2, i] = omega[i, 0] * lever[1] - omega[i, 1] * lever[0]
     for i in range(n):
-        c00, c01, c02, c10, c11, c12, c20, c21, c22 = _dcm(st[i], ct[i], sg[i], cg[i],
-                                                           sp[i], cp[i])
+        c00, c01, c02, c10, c11, c12, c20, c21, c22 = dcm_of_sincos(
+            st[i], ct[i], sg[i], cg[i], sp[i], cp[i])
         e[0, i] = c00 * f[0, i] + c01 * f[1, i] + c02 * f[2, i]
         e[1, i] = c10 * f[0, i] + c11 * f[1, i] + c12 * f[2, i]
         e[2, i] = c20 * f[0, i] + c21 * f[1, i] + c22 * f[2, i] - g[i]
