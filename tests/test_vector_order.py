@@ -212,6 +212,10 @@ def test_errors_are_enu_like_the_solution():
         assert r["vd_mps"] == r["vu_mps"]
     with pytest.raises(KeyError):
         e["nonsense"]
+    assert "down_m" in e and "nonsense" not in e  # .get and `in` as [] does
+    with pytest.warns(FutureWarning, match="error key 'down_m' is now 'up_m'"):
+        np.testing.assert_allclose(e.get("down_m"), -3.0, atol=1e-6)
+    assert e.get("nonsense", 7) == 7
 
 
 def test_tune_figures_and_config_carry_the_new_key_in_enu(tmp_path):

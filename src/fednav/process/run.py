@@ -972,6 +972,17 @@ class _Errors(dict):
                        f"release", FutureWarning, stacklevel=2)
         return -self[new] if self.signed else self[new]
 
+    def get(self, key, default=None):
+        """``self[key]`` (an old key too, with its warning), else ``default``."""
+        try:
+            return self[key]
+        except KeyError:
+            return default
+
+    def __contains__(self, key):
+        return super().__contains__(key) or (key in RENAMED_ERRORS
+                                             and super().__contains__(RENAMED_ERRORS[key]))
+
 
 def errors_against(sol: Solution, ref: Reference) -> dict[str, np.ndarray]:
     """The solution's errors: solution minus reference at the reference's times inside
