@@ -22,6 +22,8 @@ SYSTEMS = {
     "kf": {"form": "square_root", "fdi_alpha": {"velocity": 0.05}, "fdi_recovery": 3},
     "ekf": {"type": "ekf", "form": "square_root", "sharing": "adaptive", "master": True},
     "ukf": {"type": "ukf", "alpha": 0.5, "form": "square_root", "fdi_alpha": 0.01},
+    # the adapted white noise factored each epoch (the Lq of the engine, not the cached one)
+    "kf-q": {"form": "square_root", "q_adaptation": {"time_constant_s": 5.0}},
     "sukf": {"type": "sukf", "alpha": 0.5, "form": "square_root", "master": True},
     # standard KF for the GNSS, factored UKF for the velocity sensor, a factored master
     "mixed": {"alpha": 0.5, "form": "square_root", "master": True, "sharing": "adaptive",
@@ -59,8 +61,11 @@ def test_square_root_engine_equals_python_loop_and_standard_form(drive, which): 
     filt = SYSTEMS[which]
     prep = _prep(drive, filt)
     nav, fast = _run(prep, "compiled")
-    _, slow = _run(prep, "python")
+    nav_slow, slow = _run(prep, "python")
     forms = [f.form for f in nav.loop.fed.filters.values()]
+    if "q_adaptation" in filt:  # adapted, alike
+        qa, qb = nav.loop.q_scales(), nav_slow.loop.q_scales()
+        assert max(qa.values()) > 1.0 and qa == pytest.approx(qb, rel=1e-10)
     assert fast.engine == "compiled" and slow.engine == "python"
     assert "square_root" in forms and (which != "mixed" or "standard" in forms)
     assert len(fast.t) == len(slow.t) > 500

@@ -58,6 +58,27 @@ from .quadrature import AdaptiveSparseGridFilter, SparseGridFilter
 from .ukf import SimplifiedUKF, UnscentedKalmanFilter
 
 #: Why a kernel failed, by its code (:mod:`fednav.filters.sr_kernels`).
+#: The noises a factored filter factors, and what it says when one is not positive
+#: semi-definite (:func:`not_psd`; the compiled engine says the same).
+NOISE_Q, NOISE_R, NOISE_RD = "process noise Q", "measurement noise R", "constraint covariance R_d"
+
+
+def not_psd(what: str) -> str:
+    """The reason a factored filter gives for a noise it cannot factor.
+
+    Parameters
+    ----------
+    what : str
+        The noise (:data:`NOISE_Q`, :data:`NOISE_R`, :data:`NOISE_RD`).
+
+    Returns
+    -------
+    str
+        ``"<what> is not positive semi-definite"``.
+    """
+    return f"{what} is not positive semi-definite"
+
+
 REASONS = {srk.NOT_FINITE: "state or covariance became NaN/inf",
            srk.DOWNDATE: "a rank-1 Cholesky downdate (negative weight) left the covariance not "
                      "positive definite",
@@ -121,7 +142,7 @@ class SquareRootForm:
             return hit[1]
         L, ok = srk.psd_sqrt(M)
         if not ok:
-            raise FilterError(f"{self._who(phase)}: {what} is not positive semi-definite")
+            raise FilterError(f"{self._who(phase)}: {not_psd(what)}")
         memo[what] = (M.copy(), L)
         return L
 
@@ -146,7 +167,7 @@ class SquareRootKalmanFilter(SquareRootForm, KalmanFilter):
     def predict(self, process, q_scale: float = 1.0) -> None:
         self.step += 1
         self.x = process.transition(self.x[None])[0]
-        Lq = self._noise_factor(process.Qd, "process noise Q", "predict")
+        Lq = self._noise_factor(process.Qd, NOISE_Q, "predict")
         S, ok = srk.sr_propagate(np.ascontiguousarray(process.Phi, dtype=float), self.S, Lq,
                              math.sqrt(q_scale))
         if not ok or not np.all(np.isfinite(self.x)):
@@ -157,7 +178,7 @@ class SquareRootKalmanFilter(SquareRootForm, KalmanFilter):
         H = np.ascontiguousarray(model.H(nav), dtype=float)
         yhat = H @ self.x if getattr(model, "linear", False) else model.h(self.x[None], nav)[0]
         r = np.asarray(y, dtype=float) - yhat
-        Rs = self._noise_factor(R, "measurement noise R", "update")
+        Rs = self._noise_factor(R, NOISE_R, "update")
         x, S, Pzz, nis, code = srk.sr_kf_update(self.x, self.S, H, r, Rs)
         return self._sr_accept(x, S, r, Pzz, nis, code, gate)
 
@@ -205,7 +226,7 @@ class SquareRootSigma(SquareRootForm):
         self.step += 1
         X = self.sigma_points(phase="predict")
         Y = np.ascontiguousarray(process.transition(X), dtype=float)
-        Lq = self._noise_factor(process.Qd, "process noise Q", "predict")
+        Lq = self._noise_factor(process.Qd, NOISE_Q, "predict")
         if isinstance(self, SparseGridFilter):
             x, S, code = srk.sr_grid_predict(Y, self._unit_points(), self.Wm, Lq,
                                              math.sqrt(q_scale))
@@ -223,7 +244,7 @@ class SquareRootSigma(SquareRootForm):
     def _sigma_update(self, X, Z, y, R, gate) -> Innovation:
         last = getattr(self, "_last", None)
         drawn = last is not None and last[0] is X   # X = x + G S' with this S
-        Rs = self._noise_factor(R, "measurement noise R", "update")
+        Rs = self._noise_factor(R, NOISE_R, "update")
         y = np.asarray(y, dtype=float)
         if drawn and isinstance(self, SparseGridFilter):
             x, S, Pzz, nis, code, r = srk.sr_grid_update(Z, self._unit_points(), self.Wm,
@@ -268,7 +289,7 @@ class _ConstraintOnFactor:
             raise ValueError(f"constraint: D must be ({y.shape[0]}, {self.n}), got {D.shape}")
         r = y - D @ self.x
         Rs = (np.zeros((len(y), len(y))) if R is None
-              else self._noise_factor(R, "constraint covariance R_d", "constraint"))
+              else self._noise_factor(R, NOISE_RD, "constraint"))
         x, S, Pzz, nis, code = srk.sr_project(self.x, self.S, D, r, Rs)
         if code != srk.OK:
             why = ("D P D' is not positive definite (the constraint is not informative "

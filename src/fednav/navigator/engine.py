@@ -34,7 +34,7 @@ from ..core.kernels import quat_to_dcm as _q2dcm
 from ..filters import sr_kernels as srk
 from ..filters.federated import _cov, _fuse, _lockout, drift_threshold
 from ..filters.kf import _joseph_update, _propagate
-from ..filters.square_root import REASONS
+from ..filters.square_root import NOISE_Q, NOISE_R, REASONS, not_psd
 from ..filters.ukf import _predict_moments, _sigma_points, _update
 from ..ins import error_model as em
 from ..ins.error_model import _interval, _transition, white_qd
@@ -59,8 +59,8 @@ FAILURES = {1: ("", "navigation state became non-finite"),
             9: ("predict", REASONS[srk.DOWNDATE]),
             10: ("update", REASONS[srk.DOWNDATE]),
             11: ("update", REASONS[srk.NOT_PD]),
-            12: ("predict", "process noise Q is not positive semi-definite"),
-            13: ("update", "measurement noise R is not positive semi-definite"),
+            12: ("predict", not_psd(NOISE_Q)),
+            13: ("update", not_psd(NOISE_R)),
             14: ("", "covariance is not positive definite")}
 #: How a measurement's residual meets the INS (``TimingConfig.delay_compensation``).
 HOWS = {"none": 0, "interpolate": 1}
