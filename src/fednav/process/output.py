@@ -159,8 +159,24 @@ def summary(res: ProcessResult, ref: Reference | None, inputs: dict,
     return out
 
 
+#: The error series ``write`` has computed, by (solution, reference) (while it runs).
+_MEMO: dict | None = None
+
+
+def _errors(sol: Solution, ref: Reference) -> dict:
+    """:func:`~fednav.process.run.errors_against`, once per solution and reference while
+    :func:`write` runs (its summary, errors file and plots each want them; 55 ms a pair
+    for a 10-minute drive).  The series are shared: read them, do not change them."""
+    if _MEMO is None:
+        return errors_against(sol, ref)
+    key = (id(sol), id(ref))
+    if key not in _MEMO:
+        _MEMO[key] = (sol, ref, errors_against(sol, ref))  # (holds them: ids stay theirs)
+    return _MEMO[key][2]
+
+
 def _rmse_block(sol: Solution, ref: Reference) -> dict[str, float]:
-    r = rmse(errors_against(sol, ref))
+    r = rmse(_errors(sol, ref))
     return {k: r[k] for k in RMSE_KEYS if k in r}
 
 
@@ -200,7 +216,7 @@ def errors_figure(res: ProcessResult, ref: Reference, gnss=None, title: str = ""
     from matplotlib.patches import Patch
 
     sols = [s for s in (res.forward, res.smoothed) if s is not None]
-    errs = [errors_against(s, ref) for s in sols]
+    errs = [_errors(s, ref) for s in sols]
     rmses = [rmse(e) for e in errs]
     rows = 3 if "yaw_rad" in errs[0] else 2
     fig, axes = plots.new_figure(rows, 3, figsize=(15, 3.0 * rows + 0.9), sharex=True)
@@ -289,7 +305,7 @@ def write_errors(res: ProcessResult, ref: Reference, path: Path,
     for sol, tag in ((res.forward, ""), (res.smoothed, "_smoothed")):
         if sol is None:
             continue
-        err = errors_against(sol, ref)
+        err = _errors(sol, ref)
         if not cols:
             cols["t_s"] = err["t"]
         for k, v in err.items():
@@ -327,7 +343,7 @@ def _zoom_window(res: ProcessResult, ref: Reference | None, outages):
         return f"longest GNSS outage, {a:.1f}–{b:.1f} s", m, 5.0
     if ref is not None:
         # (past the start-up: the first tenth of the run, a minute at most)
-        e = errors_against(f, ref)
+        e = _errors(f, ref)
         h = np.hypot(e["north_m"], e["east_m"])
         h[e["t"] < e["t"][0] + min(60.0, 0.1 * np.ptp(e["t"]))] = np.nan
         if np.isfinite(h).any():
@@ -484,9 +500,18 @@ def write(out: Path, res: ProcessResult, ref: Reference | None, inputs: dict,
     figures of summary.json and the plots come from the full-rate solution whatever the
     output rate.  ``others``: further references by name (``errors_NAME.csv``,
     ``errors_NAME.png``, ``against`` in the summary)."""
+    global _MEMO
     fmt = check_format(fmt)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
+    _MEMO = {}
+    try:
+        return _write(out, res, ref, inputs, output_rate, gnss, others, fmt)
+    finally:
+        _MEMO = None
+
+
+def _write(out, res, ref, inputs, output_rate, gnss, others, fmt) -> list[Path]:
     files = []
     for name, sol in (("solution", res.forward), ("solution_smoothed", res.smoothed)):
         if sol is not None:
