@@ -20,7 +20,9 @@ GOOD = Path(__file__).parent / "data" / "bad" / "good"
 def _campaign(out: Path) -> tuple[subprocess.Popen, list]:
     """A `fednav reproduce` on two local Dask workers, caught mid-run (its first run
     stored): the process and its descendants (the workers)."""
-    cmd = [FEDNAV, "reproduce", "002", "--runs", "16", "--max-time", "60", "--jobs", "2",
+    # (enough work that the campaign cannot end before the signal: a 60 s run of paper 002
+    # takes about 0.1 s on the compiled engine, and 16 of them ended within a second)
+    cmd = [FEDNAV, "reproduce", "002", "--runs", "64", "--max-time", "300", "--jobs", "2",
            "--out", str(out)]
     p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                          start_new_session=True)
