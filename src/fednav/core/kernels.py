@@ -49,25 +49,43 @@ def rotvec_to_dcm(r0, r1, r2, out):
 
 
 @numba.njit(cache=True)
-def cholesky_lower(S):
-    """Lower Cholesky factor of a symmetric matrix; (L, ok) with ok False when S is not
-    positive definite (no exception inside compiled code, explicit loops: no LAPACK call
-    overhead at navigation-filter sizes)."""
+def cholesky_columns(S, semi):
+    """Lower ``L`` with ``L L' = S`` (symmetric ``S``) column by column; (L, ok).
+
+    ``semi`` False: ``S`` must be positive definite (ok False at the first pivot that is
+    not positive, NaN included).  ``semi`` True: ``S`` positive semi-definite — a pivot at
+    or below 1e-13 of its diagonal entry (a singular direction, e.g. states without
+    process noise) leaves a zero column; ok False when a pivot is clearly negative
+    (below -1e-8 of its diagonal entry), a diagonal entry is negative or a pivot is not
+    finite."""
     n = S.shape[0]
     L = np.zeros((n, n))
     for j in range(n):
         d = S[j, j]
         for k in range(j):
             d -= L[j, k] * L[j, k]
-        if not d > 0.0:
+        if semi:
+            if not math.isfinite(d) or d < -1e-8 * abs(S[j, j]) or S[j, j] < 0.0:
+                return L, False
+            if d <= 1e-13 * abs(S[j, j]):
+                continue
+        elif not d > 0.0:
             return L, False
-        L[j, j] = np.sqrt(d)
+        L[j, j] = math.sqrt(d)
         for i in range(j + 1, n):
             s = S[i, j]
             for k in range(j):
                 s -= L[i, k] * L[j, k]
             L[i, j] = s / L[j, j]
     return L, True
+
+
+@numba.njit(cache=True)
+def cholesky_lower(S):
+    """Lower Cholesky factor of a symmetric matrix; (L, ok) with ok False when S is not
+    positive definite (no exception inside compiled code, explicit loops: no LAPACK call
+    overhead at navigation-filter sizes; :func:`cholesky_columns`)."""
+    return cholesky_columns(S, False)
 
 
 @numba.njit(cache=True)

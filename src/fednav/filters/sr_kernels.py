@@ -32,7 +32,7 @@ import math
 import numba
 import numpy as np
 
-from ..core.kernels import lower_inverse
+from ..core.kernels import cholesky_columns, lower_inverse
 
 #: Failure codes of the kernels (0: success), turned into FilterError texts by the filters.
 OK, NOT_FINITE, DOWNDATE, INNOVATION, NOT_PD = 0, 1, 2, 3, 4
@@ -125,25 +125,9 @@ def psd_sqrt(Q):
     """Lower ``L`` with ``L L' = Q`` for a symmetric positive semi-definite ``Q``: a
     Cholesky factorization whose pivots at or below 1e-13 of their diagonal entry (a
     singular direction, e.g. states without process noise) give a zero column; (L, ok)
-    with ok False when a pivot is clearly negative (Q indefinite) or not finite."""
-    n = Q.shape[0]
-    L = np.zeros((n, n))
-    for j in range(n):
-        d = Q[j, j]
-        for k in range(j):
-            d -= L[j, k] * L[j, k]
-        tol = 1e-13 * abs(Q[j, j])
-        if not math.isfinite(d) or d < -1e-8 * abs(Q[j, j]) or (Q[j, j] < 0.0):
-            return L, False
-        if d <= tol:
-            continue
-        L[j, j] = math.sqrt(d)
-        for i in range(j + 1, n):
-            s = Q[i, j]
-            for k in range(j):
-                s -= L[i, k] * L[j, k]
-            L[i, j] = s / L[j, j]
-    return L, True
+    with ok False when a pivot is clearly negative (Q indefinite) or not finite
+    (:func:`fednav.core.kernels.cholesky_columns`)."""
+    return cholesky_columns(Q, True)
 
 
 @numba.njit(cache=True)
