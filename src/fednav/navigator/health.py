@@ -28,7 +28,7 @@ def nis_check(fdi: list | dict, force: bool = False, seen: list | None = None) -
     did not touch the solution (a long isolation has its own warning).  ``fdi``: the FDI
     log, or it split per local filter (:func:`by_local`)."""
     out = []
-    log = by_local(fdi) if isinstance(fdi, list) else fdi
+    log = _split(fdi)
     for local in sorted(log):  # (by name, as solution.consistency lists them)
         _, nis, dof, iso = log[local]
         if iso.all():
@@ -75,14 +75,18 @@ def by_local(fdi: list) -> dict[str, tuple[np.ndarray, ...]]:
     return out
 
 
+def _split(fdi: list | dict) -> dict:
+    """The FDI log split per local filter (:func:`by_local`), or ``fdi`` when it is."""
+    return by_local(fdi) if isinstance(fdi, list) else fdi
+
+
 def isolation_warnings(fdi: list | dict) -> list[str]:
     """Warnings for local filters that fault detection isolated for more than
     :data:`ISOLATION_WARN_S` in one stretch, naming the span and the NIS/dof there (from the
     FDI log: t, local, statistic, dof, threshold, isolated; or it split by
     :func:`by_local`)."""
     out = []
-    for local, (t, nis, dof, iso) in (by_local(fdi) if isinstance(fdi, list)
-                                      else fdi).items():
+    for local, (t, nis, dof, iso) in _split(fdi).items():
         if not iso.any():
             continue
         edges = np.flatnonzero(np.diff(np.r_[0, iso.astype(np.int8), 0]))
@@ -116,8 +120,7 @@ def window_nis(fdi: list | dict) -> list[str]:
     the window no worse than 3 times it (the run's warning says it all then).  ``fdi``:
     the FDI log, or it split by :func:`by_local`."""
     out = []
-    for local, (t, nis, dof, iso) in (by_local(fdi) if isinstance(fdi, list)
-                                      else fdi).items():
+    for local, (t, nis, dof, iso) in _split(fdi).items():
         t, r = t[~iso], nis[~iso] / np.maximum(dof[~iso], 1)
         if len(t) == 0:
             continue

@@ -139,13 +139,13 @@ def stuck_axes(t, gyro, accel, runs, t_gnss, vel_gnss) -> list[str]:
     of the run) and another axis of the same triad changes; ``runs`` the long constant
     runs of :func:`imu_pass`."""
     out = []
+    fast = (np.linalg.norm(vel_gnss, axis=1) > 1.0).astype(float) if len(runs) else None
     for j in range(6):
         name, a = ("gyro", gyro) if j < 3 else ("accel", accel)
         for s, e in runs[runs[:, 0] == j, 1:]:
             seg = np.delete(a[s:e + 1], j % 3, axis=1)
-            speed = np.linalg.norm(vel_gnss, axis=1)
             tt = t[s:e + 1]
-            moving = np.interp(tt, t_gnss, (speed > 1.0).astype(float)) > 0.5
+            moving = np.interp(tt, t_gnss, fast) > 0.5
             moving &= (tt >= t_gnss[0]) & (tt <= t_gnss[-1])
             # (an ideal simulated IMU on a steady path is constant on every axis)
             if moving.mean() > 0.5 and np.any(seg != seg[0]):
