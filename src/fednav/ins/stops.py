@@ -29,6 +29,7 @@ Units: SI; body axes as in the data.
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 from scipy.stats import chi2
 
@@ -55,6 +56,40 @@ def _window_sums(x: np.ndarray, W: int) -> np.ndarray:
     return c[hi] - c[lo], (hi - lo)
 
 
+@numba.njit(cache=True)
+def window_scatter(accel, W):
+    """Each sample's sum of ``||a_i - mean(a)||^2`` [m^2/s^4] over its centred window of
+    ``W`` samples of the specific force ``accel`` (N, 3) (shifted inside the data at the
+    ends, ``min(W, N)`` long): the accelerometer term of the detector, from running sums
+    (negative round-off clipped to 0)."""
+    n = len(accel)
+    c0, c1, c2 = np.zeros(n + 1), np.zeros(n + 1), np.zeros(n + 1)  # running sums of a
+    cq = np.zeros(n + 1)  # ... and of ||a||^2
+    for i in range(n):
+        c0[i + 1] = c0[i] + accel[i, 0]
+        c1[i + 1] = c1[i] + accel[i, 1]
+        c2[i + 1] = c2[i] + accel[i, 2]
+        cq[i + 1] = cq[i] + (accel[i, 0] ** 2 + accel[i, 1] ** 2 + accel[i, 2] ** 2)
+    scatter = np.empty(n)
+    W = min(W, n)
+    for i in range(n):
+        a = min(max(i - W // 2, 0), n - W)
+        b = a + W
+        s2 = (c0[b] - c0[a]) ** 2 + (c1[b] - c1[a]) ** 2 + (c2[b] - c2[a]) ** 2
+        v = (cq[b] - cq[a]) - s2 / W
+        scatter[i] = 0.0 if v < 0.0 else v
+    return scatter
+
+
+def rest_variance(quiet: float, figure: float, floor: float) -> float:
+    """A per-sample noise variance at rest: the figures' (``figure``), unless the
+    recording's quietest windows (``quiet``) are less than half as noisy (figures that
+    hold vibration, as a tuned config's do, would call motion "still"); never below 1e-4
+    of the figures' (a noise-free simulation with round-off for its scatter) nor
+    ``floor``."""
+    return max(quiet if quiet < 0.5 * figure else figure, 1e-4 * figure, floor)
+
+
 def stationary(gyro: np.ndarray, accel: np.ndarray, dt: float, gyro_arw: float,
                accel_vrw: float, gyro_bias: float = 0.0, window_s: float = WINDOW_S,
                alpha: float = ALPHA) -> np.ndarray:
@@ -70,10 +105,8 @@ def stationary(gyro: np.ndarray, accel: np.ndarray, dt: float, gyro_arw: float,
     if n == 0:
         return np.zeros(0, dtype=bool)
     W = max(2, int(round(window_s / dt)))
-    s_a, cnt = _window_sums(accel, W)
-    s_aa, _ = _window_sums(np.sum(accel**2, axis=1), W)
-    s_ww, _ = _window_sums(np.sum(gyro**2, axis=1), W)
-    scatter = np.maximum(s_aa - np.sum(s_a**2, axis=1) / cnt, 0.0)  # sum ||a_i - mean||^2
+    scatter = window_scatter(accel, W)  # sum ||a_i - mean||^2
+    s_ww, cnt = _window_sums(np.sum(gyro**2, axis=1), W)
     # Per-sample variances at rest: the figures', unless the data's quietest windows are
     # less than half as noisy (figures that hold vibration, as a tuned config's do, would
     # call motion "still"): the QUIET_PERCENTILE-th percentile of the windows' own
@@ -86,10 +119,8 @@ def stationary(gyro: np.ndarray, accel: np.ndarray, dt: float, gyro_arw: float,
                                                                    / (3 * W))
     sa2 = accel_vrw**2 / dt
     sw2 = gyro_arw**2 / dt + earth.OMEGA_IE**2 + gyro_bias**2
-    # (never below 1e-4 of the figures': 100 times less noise, a noise-free simulation
-    # with round-off for its scatter)
-    sa2 = max(quiet_a if quiet_a < 0.5 * sa2 else sa2, 1e-4 * sa2, 1e-24)
-    sw2 = max(quiet_w if quiet_w < 0.5 * sw2 else sw2, 1e-4 * sw2, 1e-30)
+    sa2 = rest_variance(quiet_a, sa2, 1e-24)
+    sw2 = rest_variance(quiet_w, sw2, 1e-30)
     stat = scatter / sa2 + s_ww / sw2
     dof = 3 * (cnt - 1) + 3 * cnt
     # (the quantile once per distinct window length: only the edges' windows are shorter)

@@ -95,8 +95,9 @@ def imu_pass(t, gyro, accel, W, stuck_s):
         by axis, then time.
     scatter : ndarray, shape (N,)
         Each sample's window sum of ``||a_i - mean(a)||^2`` of the specific force
-        [m^2/s^4] (the accelerometer term of the SHOE detector), from running sums as
-        :func:`fednav.ins.stops.stationary` forms them.
+        [m^2/s^4] (the accelerometer term of the SHOE detector:
+        :func:`fednav.ins.stops.window_scatter`, as :func:`fednav.ins.stops.stationary`
+        takes it).
     """
     n = len(t)
     found = []
@@ -115,22 +116,7 @@ def imu_pass(t, gyro, accel, W, stuck_s):
     runs = np.empty((len(found), 3), dtype=np.int64)
     for r in range(len(found)):
         runs[r, 0], runs[r, 1], runs[r, 2] = found[r]
-    c0, c1, c2 = np.zeros(n + 1), np.zeros(n + 1), np.zeros(n + 1)  # running sums of a
-    cq = np.zeros(n + 1)  # ... and of ||a||^2
-    for i in range(n):
-        c0[i + 1] = c0[i] + accel[i, 0]
-        c1[i + 1] = c1[i] + accel[i, 1]
-        c2[i + 1] = c2[i] + accel[i, 2]
-        cq[i + 1] = cq[i] + (accel[i, 0] ** 2 + accel[i, 1] ** 2 + accel[i, 2] ** 2)
-    scatter = np.empty(n)
-    W = min(W, n)  # (a window shifted inside the data at the ends)
-    lo = np.minimum(np.maximum(np.arange(n) - W // 2, 0), n - W)
-    for i in range(n):
-        a, b = lo[i], lo[i] + W
-        s2 = (c0[b] - c0[a]) ** 2 + (c1[b] - c1[a]) ** 2 + (c2[b] - c2[a]) ** 2
-        v = (cq[b] - cq[a]) - s2 / W
-        scatter[i] = 0.0 if v < 0.0 else v
-    return runs, scatter
+    return runs, stops.window_scatter(accel, W)
 
 
 def stuck_axes(t, gyro, accel, runs, t_gnss, vel_gnss) -> list[str]:
@@ -245,7 +231,7 @@ def rest_spans(t, scatter, dt, accel_vrw, t_gnss, vel_gnss, sigma_v) -> list[tup
     sa2 = accel_vrw**2 / dt
     quiet = _percentile(scatter, 3.0 * max(cnt - 1, 1), p,
                         0.5 * sa2 * ratio * (1.0 + 1e-9)) / ratio
-    sa2 = max(quiet if quiet < 0.5 * sa2 else sa2, 1e-4 * sa2, 1e-24)
+    sa2 = stops.rest_variance(quiet, sa2, 1e-24)
     thr = _chi2_ppf(1.0 - stops.ALPHA, 3 * (cnt - 1) + 3 * cnt)
     spans = _rest_runs(t, scatter, sa2, thr, t_gnss, slow_g.astype(float), REST_S)
     return [(float(a), float(b)) for a, b in spans]
