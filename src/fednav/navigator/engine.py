@@ -379,7 +379,7 @@ def run_epochs(k0, n_ep, state, comp, dtheta, dv, h_ref, gains, cst, noise, nsub
                 for f in range(nf):
                     if sr[f]:
                         Ps[f] = srk.factor_product(P[f])
-            Sg = Ps[0]
+            Sg = Ps[0]  # (unused here: numba types Sg the same on both branches)
             xg, Pg, traces, bad = _fuse(X, Ps)
         if bad >= 0:
             return 6, k, bad
