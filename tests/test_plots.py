@@ -15,7 +15,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from fednav import System
 from fednav.campaign.report import errors_figure
 from fednav.core import plots, units
-from fednav.io.data import GnssData, ImuData, ImuErrors, Reference
+from fednav.io.data import GnssData, ImuData, Reference
 from fednav.process import output, process
 from fednav.sensors import ImuErrors as SimImuErrors
 from fednav.sensors import corrupt_imu
@@ -252,14 +252,10 @@ def _flight(T=120.0):
             Segment(T - 55.0)]
     truth = generate(np.array([units.deg(45.0), units.deg(-75.0), 50.0]), 0.0,
                      [0.0, 0.0, units.deg(45.0)], segs, 0.01)
+    from test_process import simulated_imu
+
     rng = np.random.default_rng(3)
-    sim = SimImuErrors(gyro_bias=units.deg_per_h(50.0), accel_bias=units.milli_g(2.0),
-                       gyro_arw=units.deg_per_sqrt_h(0.2), accel_vrw=1e-3)
-    dth, dv, _ = corrupt_imu(truth.dtheta, truth.dv, truth.dt, sim, rng)
-    errs = ImuErrors(*[np.full(3, v) for v in (units.deg_per_sqrt_h(0.2), 1e-3,
-                                               units.deg_per_h(50.0), units.milli_g(2.0),
-                                               1e-6, 1e-5, 1000.0, 1000.0)])
-    imu = ImuData("sim-imu", truth.t[1:], dth / truth.dt, dv / truth.dt, errs)
+    imu = simulated_imu(truth, rng)
     tg = np.arange(0.2, truth.t[-1], 0.2)
     tg = tg[(tg < 70.0) | (tg > 90.0)]
     tr = truth.at(tg)
