@@ -274,6 +274,15 @@ def sr_kf_update(x, S, H, r, Rs):
 
 
 @numba.njit(cache=True)
+def _predicted(xm, L, code):
+    """A time update's (mean, factor, code), the code NOT_FINITE where a factorization
+    that succeeded left a non-finite mean or factor."""
+    if code == OK and not math.isfinite(xm.sum() + L.sum()):
+        code = NOT_FINITE
+    return xm, L, code
+
+
+@numba.njit(cache=True)
 def sr_sigma_predict(Y, Wm, Wc, Lq, sq):
     """Sigma-point time update on the factor from the propagated points ``Y`` (K, n), point
     0 the image of the centre: with ``d_i = Y_i - Y_0`` and ``m = sum_{i>0} Wm_i d_i``,
@@ -287,10 +296,7 @@ def sr_sigma_predict(Y, Wm, Wc, Lq, sq):
     m = Wm[1:] @ D
     cm = Wc.sum() - 2.0
     L, code = weighted_factor(D, Wc[1:], m, cm, sq * Lq)
-    xm = Y[0] + m
-    if code == OK and not math.isfinite(xm.sum() + L.sum()):
-        code = NOT_FINITE
-    return xm, L, code
+    return _predicted(Y[0] + m, L, code)
 
 
 @numba.njit(cache=True)
@@ -502,10 +508,7 @@ def sr_grid_predict(Y, G, w, Lq, sq):
     X[:, :n] = J
     X[:, n:] = sq * Lq
     L, code = weighted_factor(E, wi, m, w.sum() - 2.0, X)
-    xm = Y[0] + m
-    if code == OK and not math.isfinite(xm.sum() + L.sum()):
-        code = NOT_FINITE
-    return xm, L, code
+    return _predicted(Y[0] + m, L, code)
 
 
 @numba.njit(cache=True)
