@@ -11,6 +11,9 @@ State, in SI inside this module::
 
 This is paper 002's state (phi, dVE, dVN, dL, dlambda, eps_c, eps_r, nabla_c) extended by
 the vertical channel (dvU, dh) and with position in metres, the paper-004 18-state layout.
+Optional blocks (IMU scale factors, a Gauss–Markov GNSS position error) follow state 17
+when a system selects them: :mod:`fednav.ins.states` (:class:`~fednav.ins.states.
+StateLayout`).
 With a barometric damping loop in the mechanization the loop terms appear in F, so the
 filter knows the vertical channel is held.
 
@@ -47,6 +50,7 @@ from ..core.kernels import (
     rodrigues_series,
 )
 from ..core.kernels import quat_to_dcm as _quat_to_dcm
+from .states import CORE, StateLayout
 
 N_STATES = 18
 PHI, DV, DP, EPS_C, EPS_R, NABLA = (slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12),
@@ -131,12 +135,12 @@ def _mul_cols(A, B, out):
 
 
 @numba.njit(**_VEC)
-def _rotate_cols(E, D, h, R, tmp):
+def _rotate_cols(E, D, row, h, R, tmp):
     """E <- exp(h [wl x]) E exp(h [wr x]) per column: E (9, P) row-major 3x3, wl and wr
-    in rows 18:21 and 21:24 of D; R, tmp (9, P) scratch."""
-    _rotvec_to_dcm_cols(D, 18, h, R)
+    in rows row:row + 3 and row + 3:row + 6 of D; R, tmp (9, P) scratch."""
+    _rotvec_to_dcm_cols(D, row, h, R)
     _mul_cols(R, E, tmp)
-    _rotvec_to_dcm_cols(D, 21, h, R)
+    _rotvec_to_dcm_cols(D, row + 3, h, R)
     _mul_cols(tmp, R, E)
 
 
@@ -201,12 +205,14 @@ def _true_lat_cos_sin(x, k0, cs):
 
 @numba.njit(**_VEC)
 def _rates(x, E, p, C0, k0, cs, out):
-    """Derivatives of every column of ``x`` (18, P; SI) with error rotations ``E`` (9, P):
-    the non-attitude states into rows 3:18 of ``out`` (24, P), the attitude rotation rates
-    into rows 18:21 (``wl``, left of E) and 21:24 (``wr``, right of E).  ``p`` = [lat0, h0,
-    vE0, vN0, vU0, fE, fN, fU, rm, rn, k1, k2, 1/tau_g, 1/tau_a, g0]; ``k0`` from
-    :func:`_nominal_terms`; ``cs`` (2, P) scratch."""
-    P = x.shape[1]
+    """Derivatives of every column of ``x`` (n, P; SI) with error rotations ``E`` (9, P):
+    the non-attitude states into rows 3:n of ``out`` (n + 6, P), the attitude rotation
+    rates into rows n:n + 3 (``wl``, left of E) and n + 3:n + 6 (``wr``, right of E).
+    ``p`` = [lat0, h0, vE0, vN0, vU0, fE, fN, fU, rm, rn, k1, k2, 1/tau_g, 1/tau_a, g0,
+    w_b (3), f_b (3), then :meth:`~fednav.ins.states.StateLayout.model_vector` without its
+    Qc part]; ``k0`` from :func:`_nominal_terms`; ``cs`` (2, P) scratch."""
+    P, n = x.shape[1], x.shape[0]
+    isg, isa = int(p[21]), int(p[22])
     h0 = p[1]
     fe, fn_, fu = p[5], p[6], p[7]
     rm, rn, k1, k2, itg, ita, g0 = p[8], p[9], p[10], p[11], p[12], p[13], p[14]
@@ -231,17 +237,26 @@ def _rates(x, E, p, C0, k0, cs, out):
         e0 = x[9, i] + x[12, i]
         e1 = x[10, i] + x[13, i]
         e2 = x[11, i] + x[14, i]
-        out[18, i] = q00 * e0 + q01 * e1 + q02 * e2 - w0
-        out[19, i] = q10 * e0 + q11 * e1 + q12 * e2 - w1
-        out[20, i] = q20 * e0 + q21 * e1 + q22 * e2 - w2
-        out[21, i] = 0.0 + wen0
-        out[22, i] = wie1 + wen1
-        out[23, i] = wie2 + wen2
+        if isg >= 0:  # the scale-factor error on the interval's body rate
+            e0 += p[15] * x[isg, i]
+            e1 += p[16] * x[isg + 1, i]
+            e2 += p[17] * x[isg + 2, i]
+        out[n, i] = q00 * e0 + q01 * e1 + q02 * e2 - w0
+        out[n + 1, i] = q10 * e0 + q11 * e1 + q12 * e2 - w1
+        out[n + 2, i] = q20 * e0 + q21 * e1 + q22 * e2 - w2
+        out[n + 3, i] = 0.0 + wen0
+        out[n + 4, i] = wie1 + wen1
+        out[n + 5, i] = wie2 + wen2
         # Velocity error: (I - E^T) f + E^T C0 nabla - Coriolis difference + gravity
         # difference.
-        cn0 = q00 * x[15, i] + q01 * x[16, i] + q02 * x[17, i]
-        cn1 = q10 * x[15, i] + q11 * x[16, i] + q12 * x[17, i]
-        cn2 = q20 * x[15, i] + q21 * x[16, i] + q22 * x[17, i]
+        b0, b1, b2 = x[15, i], x[16, i], x[17, i]
+        if isa >= 0:  # the scale-factor error on the interval's specific force
+            b0 += p[18] * x[isa, i]
+            b1 += p[19] * x[isa + 1, i]
+            b2 += p[20] * x[isa + 2, i]
+        cn0 = q00 * b0 + q01 * b1 + q02 * b2
+        cn1 = q10 * b0 + q11 * b1 + q12 * b2
+        cn2 = q20 * b0 + q21 * b1 + q22 * b2
         a0, a1, a2 = fe - cn0, fn_ - cn1, fu - cn2
         a1x = 2 * 0.0 + wen0
         a1y = 2 * wie1 + wen1
@@ -264,6 +279,8 @@ def _rates(x, E, p, C0, k0, cs, out):
             out[9 + j, i] = 0.0
             out[12 + j, i] = -itg * x[12 + j, i]
             out[15 + j, i] = -ita * x[15 + j, i]
+        for j in range(18, n):  # the optional states: Gauss-Markov or constant
+            out[j, i] = -p[23 + j - 18] * x[j, i]
 
 
 @numba.njit(cache=True)
@@ -274,7 +291,7 @@ def _transition(X, T, nsub, p, C0, scale):
     hs = T / nsub
     x = np.empty((n, P))
     xm = np.empty((n, P))
-    d = np.empty((24, P))
+    d = np.empty((n + 6, P))
     E = np.empty((9, P))
     Em = np.empty((9, P))
     tmp = np.empty((9, P))
@@ -291,12 +308,12 @@ def _transition(X, T, nsub, p, C0, scale):
             for i in range(P):
                 xm[j, i] = x[j, i] + 0.5 * hs * d[j, i]
         Em[:, :] = E
-        _rotate_cols(Em, d, 0.5 * hs, R, tmp)
+        _rotate_cols(Em, d, n, 0.5 * hs, R, tmp)
         _rates(xm, Em, p, C0, k0, cs, d)
         for j in range(3, n):
             for i in range(P):
                 x[j, i] += hs * d[j, i]
-        _rotate_cols(E, d, hs, R, tmp)
+        _rotate_cols(E, d, n, hs, R, tmp)
     out = np.empty_like(X)
     C = np.empty((3, 3))
     rv = np.empty(3)
@@ -314,6 +331,7 @@ def _transition(X, T, nsub, p, C0, scale):
 @numba.njit(cache=True)
 def _F(p, C):
     """Continuous linear error dynamics F (SI) at the nominal ``p`` (see ``_rates``)."""
+    m = p.shape[0] - 23  # optional states
     lat, h = p[0], p[1]
     ve, vn, vu = p[2], p[3], p[4]
     fe, fn, fu = p[5], p[6], p[7]
@@ -340,7 +358,7 @@ def _F(p, C):
     dwp[2, 1] = ve / (cl**2 * Rn * Rm)
     dwp[2, 2] = -ve * tl / Rn**2
     V = np.array([[0.0, -vu, vn], [vu, 0.0, -ve], [-vn, ve, 0.0]])
-    F = np.zeros((18, 18))
+    F = np.zeros((18 + m, 18 + m))
     # Attitude: phi' = -w_in x phi + dw_in - C eps.
     F[0, 1], F[0, 2], F[1, 0], F[1, 2], F[2, 0], F[2, 1] = (
         win[2], -win[1], -win[2], win[0], win[1], -win[0])
@@ -374,15 +392,26 @@ def _F(p, C):
     for i in range(3):
         F[12 + i, 12 + i] = -itg
         F[15 + i, 15 + i] = -ita
+    # Optional states: scale factors scale the body rate and specific force (ins.states).
+    isg, isa = int(p[21]), int(p[22])
+    for j in range(3):
+        if isg >= 0:
+            F[0:3, isg + j] = -C[:, j] * p[15 + j]
+        if isa >= 0:
+            F[3:6, isa + j] = C[:, j] * p[18 + j]
+    for k in range(m):
+        F[18 + k, 18 + k] = -p[23 + k]
     return F
 
 
 @numba.njit(cache=True)
 def _Qc(p, C, q):
     """Continuous process-noise density (SI); q = [arw, vrw, gyro GM sigma, accel GM sigma,
-    baro noise density, gyro bias random walk, accel bias random walk]."""
+    baro noise density, gyro bias random walk, accel bias random walk, then the layout's
+    :meth:`~fednav.ins.states.StateLayout.model_vector`]."""
     k1, k2, itg, ita = p[10], p[11], p[12], p[13]
-    Q = np.zeros((18, 18))
+    m = (q.shape[0] - 9) // 2
+    Q = np.zeros((18 + m, 18 + m))
     Q[0:3, 0:3] = q[0] ** 2 * (C @ C.T)
     Q[3:6, 3:6] = q[1] ** 2 * (C @ C.T)
     Q[5, 5] += k2**2 * q[4]
@@ -393,6 +422,8 @@ def _Qc(p, C, q):
         Q[9 + i, 9 + i] = q[5] ** 2
         Q[12 + i, 12 + i] = 2.0 * q[2] ** 2 * itg
         Q[15 + i, 15 + i] = 2.0 * q[3] ** 2 * ita + q[6] ** 2
+    for k in range(m):
+        Q[18 + k, 18 + k] = q[9 + m + k]
     return Q
 
 
@@ -401,13 +432,14 @@ def _discretize(p, C, q, T, scale):
     """Phi (4th-order Taylor over T/2, squared) and Qd (trapezoid), in filter units."""
     F = _F(p, C)
     Qc = _Qc(p, C, q)
+    n = F.shape[0]
     A = F * (0.5 * T)
     A2 = matmul_sparse(A, A)
-    half = np.eye(18) + A + matmul_sparse(A2, np.eye(18) / 2.0 + A / 6.0 + A2 / 24.0)
+    half = np.eye(n) + A + matmul_sparse(A2, np.eye(n) / 2.0 + A / 6.0 + A2 / 24.0)
     Phi = matmul_sparse(half, half)
     Qd = 0.5 * (matmul_sparse(Phi, matmul_sparse(Qc, Phi.T)) + Qc) * T
-    for i in range(18):
-        for j in range(18):
+    for i in range(n):
+        for j in range(n):
             Phi[i, j] *= scale[j] / scale[i]
             Qd[i, j] /= scale[i] * scale[j]
     return Phi, 0.5 * (Qd + Qd.T)
@@ -441,7 +473,8 @@ class Nominal:
     """INS (computed) navigation over one filter interval, at its midpoint.
 
     lat [rad], h [m], vel ENU [m/s], C = C_b^n (computed), fn = mean specific force in
-    the navigation frame [m/s^2].
+    the navigation frame [m/s^2], wb = mean body rate [rad/s] (what a gyro scale-factor
+    error scales; zero when not given).
     """
 
     lat: float
@@ -449,52 +482,65 @@ class Nominal:
     vel: np.ndarray
     C: np.ndarray
     fn: np.ndarray
+    wb: np.ndarray | None = None
 
 
-def model_constants(noise: ImuNoiseModel, baro_gains=(0.0, 0.0), baro_q: float = 0.0):
+def model_constants(noise: ImuNoiseModel, baro_gains=(0.0, 0.0), baro_q: float = 0.0,
+                    layout: StateLayout = CORE):
     """What the compiled model functions read besides the nominal point: baro loop gains
     k1, k2, inverse Markov times 1/tau_g, 1/tau_a [1/s] (0 for a constant bias) and the
-    noise vector of ``_Qc``."""
+    noise vector of ``_Qc`` (ending with the ``layout``'s
+    :meth:`~fednav.ins.states.StateLayout.model_vector`)."""
     itg = 0.0 if np.isinf(noise.gyro_markov_tau) else 1.0 / noise.gyro_markov_tau
     ita = 0.0 if np.isinf(noise.accel_markov_tau) else 1.0 / noise.accel_markov_tau
-    vec = np.array([noise.gyro_arw, noise.accel_vrw, noise.gyro_markov_sigma,
-                    noise.accel_markov_sigma, float(baro_q), noise.gyro_bias_rw,
-                    noise.accel_bias_rw])
+    vec = np.r_[noise.gyro_arw, noise.accel_vrw, noise.gyro_markov_sigma,
+                noise.accel_markov_sigma, float(baro_q), noise.gyro_bias_rw,
+                noise.accel_bias_rw, layout.model_vector()]
     return float(baro_gains[0]), float(baro_gains[1]), itg, ita, vec
 
 
 class ErrorProcess:
     """The error model over one interval ``T``: Phi, Qd and the nonlinear transition.
 
-    Everything returned is in filter units (see :data:`SCALE`).
+    Everything returned is in filter units (see :data:`SCALE`; ``layout``: the optional
+    states, :class:`~fednav.ins.states.StateLayout`, whose units :attr:`scale` holds).
     """
 
     def __init__(self, nom: Nominal, T: float, noise: ImuNoiseModel,
-                 baro_gains=(0.0, 0.0), baro_q: float = 0.0, nsub: int = 2):
-        self._set_model(T, noise, baro_gains, baro_q, nsub)
+                 baro_gains=(0.0, 0.0), baro_q: float = 0.0, nsub: int = 2,
+                 layout: StateLayout = CORE):
+        self._set_model(T, noise, baro_gains, baro_q, nsub, layout)
         v, f = np.asarray(nom.vel, float), np.asarray(nom.fn, float)
-        params = _nominal_params(float(nom.lat), float(nom.h), v[0], v[1], v[2], f[0], f[1],
-                                 f[2], self.k1, self.k2, self.itg, self.ita)
         C0 = np.ascontiguousarray(nom.C, dtype=float)
-        self._set_nominal(params, C0, *_discretize(params, C0, self._noise, self.T, SCALE), nom)
+        wb = np.zeros(3) if nom.wb is None else np.asarray(nom.wb, dtype=float)
+        params = _nominal_params(float(nom.lat), float(nom.h), v[0], v[1], v[2], f[0], f[1],
+                                 f[2], self.k1, self.k2, self.itg, self.ita, wb, C0.T @ f,
+                                 self._aug)
+        self._set_nominal(params, C0, *_discretize(params, C0, self._noise, self.T,
+                                                   self.scale), nom)
 
     @classmethod
     def of_interval(cls, s0, s1, dv_sum, T: float, noise: ImuNoiseModel,
-                    baro_gains=(0.0, 0.0), baro_q: float = 0.0, nsub: int = 2):
+                    baro_gains=(0.0, 0.0), baro_q: float = 0.0, nsub: int = 2,
+                    dtheta_sum=None, layout: StateLayout = CORE):
         """The model linearised at the middle of an INS interval (see
         :func:`interval_process`): nominal point, Phi and Qd in one compiled call."""
         self = cls.__new__(cls)
-        self._set_model(T, noise, baro_gains, baro_q, nsub)
+        self._set_model(T, noise, baro_gains, baro_q, nsub, layout)
+        dth = np.zeros(3) if dtheta_sum is None else np.asarray(dtheta_sum, dtype=float)
         self._set_nominal(*_interval(np.asarray(s0, dtype=float), np.asarray(s1, dtype=float),
-                                     np.asarray(dv_sum, dtype=float), self.T, self.k1,
-                                     self.k2, self.itg, self.ita, self._noise, SCALE))
+                                     np.asarray(dv_sum, dtype=float), dth, self.T, self.k1,
+                                     self.k2, self.itg, self.ita, self._noise, self.scale))
         return self
 
-    def _set_model(self, T, noise, baro_gains, baro_q, nsub) -> None:
+    def _set_model(self, T, noise, baro_gains, baro_q, nsub, layout) -> None:
         self.T, self.noise, self.nsub = float(T), noise, int(nsub)
         self.baro_q = float(baro_q)
-        self.k1, self.k2, self.itg, self.ita, self._noise = model_constants(noise, baro_gains,
-                                                                            baro_q)
+        self.layout = layout
+        self.scale = layout.scale(SCALE)
+        self.k1, self.k2, self.itg, self.ita, self._noise = model_constants(
+            noise, baro_gains, baro_q, layout)
+        self._aug = _layout_part(self._noise)
 
     def _set_nominal(self, params, C0, Phi, Qd, nom: Nominal | None = None) -> None:
         self._params, self._C0, self.Phi, self.Qd = params, C0, Phi, Qd
@@ -505,7 +551,7 @@ class ErrorProcess:
     @property
     def Qd_white(self) -> np.ndarray:
         """The part of ``Qd`` the IMU's white noise makes (:func:`white_qd`)."""
-        return white_qd(self.Phi, self._noise, self.T, SCALE)
+        return white_qd(self.Phi, self._noise, self.T, self.scale)
 
     # ------------------------------------------------------------------ SI models
     def F_si(self) -> np.ndarray:
@@ -518,9 +564,9 @@ class ErrorProcess:
 
     # ------------------------------------------------------------ filter interface
     def transition(self, X: np.ndarray) -> np.ndarray:
-        """Nonlinear propagation of state rows ``X`` (S, 18) in filter units over T."""
+        """Nonlinear propagation of state rows ``X`` (S, n) in filter units over T."""
         X = np.ascontiguousarray(np.atleast_2d(X), dtype=float)
-        return _transition(X, self.T, self.nsub, self._params, self._C0, SCALE)
+        return _transition(X, self.T, self.nsub, self._params, self._C0, self.scale)
 
     def linear_transition(self, X: np.ndarray) -> np.ndarray:
         """``Phi @ x`` for each row of X (filter units)."""
@@ -543,39 +589,61 @@ def from_si(x):
 
 
 def interval_process(s0, s1, dv_sum, T: float, noise: ImuNoiseModel, baro_gains=(0.0, 0.0),
-                     baro_q: float = 0.0, nsub: int = 2) -> ErrorProcess:
+                     baro_q: float = 0.0, nsub: int = 2, dtheta_sum=None,
+                     layout: StateLayout = CORE) -> ErrorProcess:
     """The error model over one filter interval of the strapdown INS, linearised at the
     interval's midpoint: ``s0``, ``s1`` the INS state (:mod:`fednav.ins.strapdown` layout)
-    at its start and end, ``dv_sum`` the compensated velocity increments summed over it
-    (body, m/s).  One compiled call builds the nominal point, Phi and Qd."""
-    return ErrorProcess.of_interval(s0, s1, dv_sum, T, noise, baro_gains, baro_q, nsub)
+    at its start and end, ``dv_sum`` and ``dtheta_sum`` the compensated velocity and angle
+    increments summed over it (body, m/s and rad; the angles matter to a gyro
+    scale-factor state only).  One compiled call builds the nominal point, Phi and Qd."""
+    return ErrorProcess.of_interval(s0, s1, dv_sum, T, noise, baro_gains, baro_q, nsub,
+                                    dtheta_sum, layout)
 
 
 @numba.njit(cache=True)
-def _nominal_params(lat, h, ve, vn, vu, fe, fn, fu, k1, k2, itg, ita):
-    """The nominal-point vector the compiled model functions read (see ErrorProcess)."""
+def _layout_part(noise):
+    """The part of the noise vector (:func:`model_constants`) the nominal point carries:
+    the optional scale-factor blocks' starts and every optional state's 1/tau."""
+    m = (noise.shape[0] - 9) // 2
+    return noise[7:9 + m].copy()
+
+
+@numba.njit(cache=True)
+def _nominal_params(lat, h, ve, vn, vu, fe, fn, fu, k1, k2, itg, ita, wb, fb, aug):
+    """The nominal-point vector the compiled model functions read (see ``_rates``)."""
     rm, rn = earth.radii_nb(lat)
-    return np.array([lat, h, ve, vn, vu, fe, fn, fu, rm, rn, k1, k2, itg, ita,
-                     earth.gravity_nb(lat, h)])
+    out = np.empty(23 + aug.shape[0] - 2)
+    out[0:15] = np.array([lat, h, ve, vn, vu, fe, fn, fu, rm, rn, k1, k2, itg, ita,
+                          earth.gravity_nb(lat, h)])
+    out[15:18] = wb
+    out[18:21] = fb
+    out[21:] = aug
+    return out
 
 
 @numba.njit(cache=True)
-def _interval(s0, s1, dv_sum, T, k1, k2, itg, ita, noise, scale):
+def _interval(s0, s1, dv_sum, dth_sum, T, k1, k2, itg, ita, noise, scale):
     """Nominal parameters, C_b^n, Phi and Qd of one INS interval (see interval_process)."""
     qm = s0[0:4] + s1[0:4]
     Cm = _quat_to_dcm(qm / np.sqrt(qm @ qm))
     lat = 0.5 * (s0[7] + s1[7])
     h = 0.5 * (s0[9] + s1[9])
+    fb = dv_sum / T
     f = Cm @ dv_sum / T
     params = _nominal_params(lat, h, 0.5 * (s0[4] + s1[4]), 0.5 * (s0[5] + s1[5]),
-                             0.5 * (s0[6] + s1[6]), f[0], f[1], f[2], k1, k2, itg, ita)
+                             0.5 * (s0[6] + s1[6]), f[0], f[1], f[2], k1, k2, itg, ita,
+                             dth_sum / T, fb, _layout_part(noise))
     Phi, Qd = _discretize(params, Cm, noise, T, scale)
     return params, Cm, Phi, Qd
 
 
-def apply_feedback(ins, dx) -> tuple[np.ndarray, np.ndarray]:
-    """Remove the estimated errors ``dx`` (filter units) from the INS ``ins``; returns the
-    gyro [rad/s] and accelerometer [m/s^2] corrections to add to the IMU compensation."""
-    d = to_si(dx)
+def apply_feedback(ins, dx, scale=SCALE) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Remove the estimated errors ``dx`` (filter units of ``scale``) from the INS ``ins``;
+    returns the gyro [rad/s] and accelerometer [m/s^2] corrections to add to the IMU
+    compensation and the optional states' (SI, zero for the 18; to add to their totals,
+    :mod:`fednav.ins.states`)."""
+    d = np.asarray(dx) * scale
     ins.correct(d[PHI], d[DV], d[DP])
-    return d[EPS_C] + d[EPS_R], d[NABLA]
+    opt = d.copy()
+    opt[:18] = 0.0
+    return d[EPS_C] + d[EPS_R], d[NABLA], opt

@@ -182,6 +182,24 @@ def _run_intervals(state, dtheta, dv, dt, h_ref, gains, n_per, out, no_q, no_3):
 
 
 @numba.njit(cache=True)
+def compensate(dtheta, dv, dt, comp, xa, isg, isa, out_th, out_v):
+    """The IMU increments ``dtheta``, ``dv`` (N, 3; rad, m/s) with the estimated errors
+    taken out, into ``out_th``, ``out_v``: ``(dtheta - b_g dt) / (1 + s_g)`` and ``(dv -
+    b_a dt) / (1 + s_a)``, ``comp`` = [b_g (3) rad/s, b_a (3) m/s^2], the scale factors
+    ``s`` (fractions) at ``xa[isg:isg + 3]`` and ``xa[isa:isa + 3]`` (the totals of the
+    optional error states, :mod:`fednav.ins.states`; ``isg``/``isa`` -1: no scale-factor
+    state)."""
+    for i in range(dtheta.shape[0]):
+        for j in range(3):
+            out_th[i, j] = dtheta[i, j] - comp[j] * dt
+            out_v[i, j] = dv[i, j] - comp[3 + j] * dt
+            if isg >= 0:
+                out_th[i, j] /= 1.0 + xa[isg + j]
+            if isa >= 0:
+                out_v[i, j] /= 1.0 + xa[isa + j]
+
+
+@numba.njit(cache=True)
 def _correct(state, phi, dvel, dpos):
     q = _qmul(_rv2q(phi), state[0:4])
     state[0:4] = q / np.sqrt(q[0] ** 2 + q[1] ** 2 + q[2] ** 2 + q[3] ** 2)

@@ -38,9 +38,9 @@ from ..filters.square_root import NOISE_Q, NOISE_R, REASONS, not_psd
 from ..filters.ukf import _predict_moments, _sigma_points, _update
 from ..ins import error_model as em
 from ..ins.error_model import _interval, _transition, white_qd
-from ..ins.strapdown import _correct
+from ..ins.strapdown import _correct, compensate
 from ..ins.strapdown import _run as _strapdown_run
-from ..sensors.measurement import RowModel, row_jacobian, row_predict, row_residual
+from ..sensors.measurement import RowModel, bias_columns, row_jacobian, row_predict, row_residual
 from .record import Growing, InnovationRecord, Record
 
 #: Filter families the engine runs: the filter registry's names -> (time update,
@@ -117,12 +117,23 @@ def _sr_code(code, nis):
 
 
 @numba.njit(cache=True)
+def _biased_rows(bias, X, Z):
+    """A row's additive sensor bias (its error-state column ``bias[r]``, -1: none) in the
+    predicted residuals ``Z`` of the points ``X``: ``-db`` (:mod:`fednav.ins.states`)."""
+    for r in range(bias.shape[0]):
+        if bias[r] >= 0:
+            for i in range(X.shape[0]):
+                Z[i, r] -= X[i, bias[r]]
+
+
+@numba.njit(cache=True)
 def _local_update(fam_u, sr, x, P, c, Wm, Wc, cm, kinds, lla, vel, C, omega, lever, linear,
-                  y, R):
+                  bias, y, R):
     """Measurement update of one local filter (``fam_u`` 0 Kalman, Joseph form; 1
     unscented; ``sr``: ``P`` is the lower factor ``S`` and the square-root kernels update
-    it, :mod:`fednav.filters.square_root`): (x, P or S, residual, its covariance, NIS,
-    failure code 0 / 4 / 7 / 8 / 10 / 11 / 13)."""
+    it, :mod:`fednav.filters.square_root`; ``bias``: the rows' sensor-bias columns,
+    :func:`_biased_rows`): (x, P or S, residual, its covariance, NIS, failure code 0 / 4 /
+    7 / 8 / 10 / 11 / 13)."""
     d, n = y.shape[0], x.shape[0]
     Rs = R
     if sr:
@@ -132,11 +143,16 @@ def _local_update(fam_u, sr, x, P, c, Wm, Wc, cm, kinds, lla, vel, C, omega, lev
     if fam_u == 0:
         H = np.zeros((d, n))
         row_jacobian(kinds, lla, vel, C, omega, lever, H)
+        for rb in range(d):
+            if bias[rb] >= 0:
+                H[rb, bias[rb]] = -1.0
         if linear:
             yhat = H @ x
         else:
             Z = np.empty((1, d))
-            row_predict(kinds, lla, vel, C, omega, lever, x.copy().reshape(1, n), Z)
+            xr = x.copy().reshape(1, n)
+            row_predict(kinds, lla, vel, C, omega, lever, xr, Z)
+            _biased_rows(bias, xr, Z)
             yhat = Z[0]
         r = y - yhat
         if sr:
@@ -148,6 +164,7 @@ def _local_update(fam_u, sr, x, P, c, Wm, Wc, cm, kinds, lla, vel, C, omega, lev
         Sg, _ = srk.ukf_points(x, P, math.sqrt(c))
         Z = np.empty((Sg.shape[0], d))
         row_predict(kinds, lla, vel, C, omega, lever, Sg, Z)
+        _biased_rows(bias, Sg, Z)
         x1, Sn, Sm, ni, code, r = srk.sr_ukf_update(Z, P, Wm[1], cm, x, y, Rs)
         return x1, Sn, r, Sm, ni, _sr_code(code, ni)
     Sg = _sigma_points(x, P, c)
@@ -155,19 +172,22 @@ def _local_update(fam_u, sr, x, P, c, Wm, Wc, cm, kinds, lla, vel, C, omega, lev
         return x, P, y, R, np.nan, 7
     Z = np.empty((Sg.shape[0], d))
     row_predict(kinds, lla, vel, C, omega, lever, Sg, Z)
+    _biased_rows(bias, Sg, Z)
     x1, Pn, r, Sm, ni, ok = _update(Sg, Z, Wm, Wc, x, P, y, R)
     return x1, Pn, r, Sm, ni, 0 if ok and math.isfinite(ni) else 4
 
 
 @numba.njit(cache=True)
-def run_epochs(k0, n_ep, state, comp, dtheta, dv, h_ref, gains, cst, noise, nsub, n_per,
-               X, P, beta, qlog, passes, fam, sr, c, Wm, Wc, cm, thr, recovery, sharing,
-               thr_drift, lk_pos, lk_hold, lk_state, lk_r0, lk_S0, lk_tpos,
+def run_epochs(k0, n_ep, state, comp, xa, decay, scale, dtheta, dv, h_ref, gains, cst, noise,
+               nsub, n_per, X, P, beta, qlog, passes, fam, sr, c, Wm, Wc, cm, thr, recovery,
+               sharing, thr_drift, lk_pos, lk_hold, lk_state, lk_r0, lk_S0, lk_tpos,
                m_epoch, m_sens, m_t, m_z, m_R, s_filter, s_how, s_dim, s_kinds, s_zi,
-               s_lever, s_linear, out_states, out_P, out_beta, out_Phi, out_Qd, out_dx, out_rows,
-               out_nis, out_acc, out_r, out_S, out_bm, out_thr, out_tlog, out_re):
+               s_lever, s_linear, s_bias, out_states, out_P, out_beta, out_Phi, out_Qd, out_dx,
+               out_rows, out_nis, out_acc, out_r, out_S, out_bm, out_thr, out_tlog, out_re):
     """Fly epochs ``k0 + 1 .. k0 + n_ep`` (1-based) in place on ``state`` (the INS),
-    ``comp`` (gyro and accelerometer compensation) and the filters ``X``, ``P``, ``beta``,
+    ``comp`` (gyro and accelerometer compensation), ``xa`` (the optional error states'
+    totals, SI, :mod:`fednav.ins.states`: their ``decay`` per epoch, the states' filter
+    units ``scale``) and the filters ``X``, ``P``, ``beta``,
     ``passes`` (locals, then the master); ``P[f]`` is the lower factor ``S`` (``P = S
     S'``) of a filter ``sr[f]`` in the square-root form, flown with the kernels of
     :mod:`fednav.filters.sr_kernels` as :mod:`fednav.filters.square_root` flies them.
@@ -183,8 +203,8 @@ def run_epochs(k0, n_ep, state, comp, dtheta, dv, h_ref, gains, cst, noise, nsub
     test thresholds, position sources, hold time and state
     (:class:`fednav.filters.federated.Lockout`).  ``m_*``: the epochs' measurements
     in the order they are applied (epoch index, sensor, time of validity, z, R); ``s_*``:
-    per sensor its local filter, how, dimension, the rows of its model, its lever arm and
-    whether it is linear.
+    per sensor its local filter, how, dimension, the rows of its model, its lever arm,
+    whether it is linear and its rows' bias columns (:func:`_biased_rows`).
     Outputs per epoch and per measurement (``out_rows`` of zero length:
     no IMU-rate rows; ``out_re`` (M, 3): lockout start, NIS before and inflation of a
     re-admission, inflation 0 where none).  Returns (failure code, epoch, filter); code 0
@@ -193,7 +213,7 @@ def run_epochs(k0, n_ep, state, comp, dtheta, dv, h_ref, gains, cst, noise, nsub
     k1g, k2g, itg, ita = cst[3], cst[4], cst[5], cst[6]
     q_step, q_logmax = cst[7], cst[8]
     nf, n = X.shape
-    scale = em.SCALE
+    isg, isa = int(noise[7]), int(noise[8])
     rows_on = out_rows.shape[0] > 0
     dth = np.empty((n_per, 3))
     dvc = np.empty((n_per, 3))
@@ -211,16 +231,15 @@ def run_epochs(k0, n_ep, state, comp, dtheta, dv, h_ref, gains, cst, noise, nsub
     for e in range(n_ep):
         k = k0 + 1 + e
         b = e * n_per
-        for i in range(n_per):
-            for j in range(3):
-                dth[i, j] = dtheta[b + i, j] - comp[j] * dt
-                dvc[i, j] = dv[b + i, j] - comp[3 + j] * dt
+        compensate(dtheta[b:b + n_per], dv[b:b + n_per], dt, comp, xa, isg, isa, dth, dvc)
         s0 = state.copy()
         _strapdown_run(state, dth, dvc, dt, h_ref[b:b + n_per], gains, rq, rv, rp)
         if not math.isfinite(state.sum()):
             return 1, k, -1
-        params, Cm, Phi, Qd0 = _interval(s0, state, dvc.sum(axis=0), T, k1g, k2g, itg, ita,
-                                         noise, scale)
+        params, Cm, Phi, Qd0 = _interval(s0, state, dvc.sum(axis=0), dth.sum(axis=0), T, k1g,
+                                         k2g, itg, ita, noise, scale)
+        for j in range(18, n):  # the optional totals follow their mean
+            xa[j] *= decay[j]
         Qd = Qd0
         Qw = Qd0
         Qrec = Qd0
@@ -309,12 +328,16 @@ def run_epochs(k0, n_ep, state, comp, dtheta, dv, h_ref, gains, cst, noise, nsub
                     lla[0], lla[1], lla[2], -lag * vel[0], -lag * vel[1], -lag * vel[2])
                 C = _q2dcm(row_q)
             kinds, zi, lever = s_kinds[sn, :d], s_zi[sn, :d], s_lever[sn]
+            bias = s_bias[sn, :d]
             y = np.empty(d)
             row_residual(kinds, zi, lla, vel, C, omega, m_z[m], lever, y)
+            for rb in range(d):  # the sensor's bias estimate taken out of its value
+                if bias[rb] >= 0:
+                    y[rb] += xa[bias[rb]]
             R = m_R[m, :d, :d].copy()
             x1, Pn, r, Sm, ni, code = _local_update(fam[f, 1], sr[f], X[f], P[f], c[f], Wm[f],
                                                     Wc[f], cm[f], kinds, lla, vel, C, omega,
-                                                    lever, s_linear[sn], y, R)
+                                                    lever, s_linear[sn], bias, y, R)
             if code:
                 return code, k, f
             # chi-square fault detection (FederatedFilter.update)
@@ -339,7 +362,7 @@ def run_epochs(k0, n_ep, state, comp, dtheta, dv, h_ref, gains, cst, noise, nsub
                         P[g] = P[g] * (math.sqrt(s_in) if sr[g] else s_in)
                     x2, P2, r2, S2, n2, code = _local_update(
                         fam[f, 1], sr[f], X[f], P[f], c[f], Wm[f], Wc[f], cm[f], kinds, lla,
-                        vel, C, omega, lever, s_linear[sn], y, R)
+                        vel, C, omega, lever, s_linear[sn], bias, y, R)
                     if code == 0 and not n2 > th and (sr[f] or (
                             math.isfinite(x2.sum() + P2.sum()) and cholesky_lower(P2)[1])):
                         out_re[m, 0], out_re[m, 1], out_re[m, 2] = t_start, ni, s_in
@@ -405,6 +428,8 @@ def run_epochs(k0, n_ep, state, comp, dtheta, dv, h_ref, gains, cst, noise, nsub
         for j in range(3):
             comp[j] += dx[9 + j] + dx[12 + j]
             comp[3 + j] += dx[15 + j]
+        for j in range(18, n):
+            xa[j] += dx[j]
         out_states[e] = state
         if out_Phi.shape[0] > 0:
             out_Phi[e] = Phi
@@ -486,9 +511,16 @@ class CompiledLoop:
             self.s_zi[j, :m.model.dim] = m.model.zindex
         self.s_lever = np.array([m.model.lever for m in meas]).reshape(S, 3)
         self.s_linear = np.array([m.model.linear for m in meas], dtype=np.bool_)
+        self.s_bias = np.full((S, 6), -1, dtype=np.int64)
+        for j, m in enumerate(meas):
+            self.s_bias[j, :m.model.dim] = bias_columns(core.layout, m.name, m.model.kinds)
         self.comp = np.r_[core.comp_g, core.comp_a]
+        self.xa = core.xa  # (flown in place)
+        self.decay = core.layout.decay(self.T)
+        self.scale = core.scale
         self.gains = core.ins.baro_gains
-        k1, k2, itg, ita, noise = em.model_constants(core.noise, core.baro_gains, core.baro_q)
+        k1, k2, itg, ita, noise = em.model_constants(core.noise, core.baro_gains, core.baro_q,
+                                                     core.layout)
         self.noise_vec = noise
         self.cst = np.array([self.dt, self.T, self.t0, k1, k2, itg, ita, fed.q_step,
                              fed.q_logmax])
@@ -579,13 +611,14 @@ class CompiledLoop:
         out_re = np.zeros((max(M, 1), 3))
         lk = self.lockout
         code, k, f = run_epochs(
-            k0, n_ep, self.core.state, self.comp, dtheta, dv, h_ref, self.gains,
+            k0, n_ep, self.core.state, self.comp, self.xa, self.decay, self.scale, dtheta, dv,
+            h_ref, self.gains,
             self.cst, self.noise_vec, self.core.nsub, self.n_per, self.X, self.P, self.beta,
             self.qlog, self.passes, self.fam, self.sr, self.c, self.Wm, self.Wc, self.cm,
             self.thr, self.recovery,
             self.sharing, self.thr_drift, lk.pos, lk.hold, lk.state, lk.r0, lk.S0, lk.t_pos,
             m_epoch, m_sens, m_t, m_z, m_R, self.s_filter, self.s_how,
-            self.s_dim, self.s_kinds, self.s_zi, self.s_lever, self.s_linear,
+            self.s_dim, self.s_kinds, self.s_zi, self.s_lever, self.s_linear, self.s_bias,
             rec.states.a[e0:e0 + n_ep],
             rec.P.a[e0:e0 + n_ep], rec.beta.a[e0 - 1:e0 - 1 + n_ep], out_Phi, out_Qd,
             out_dx, out_rows, lg[:, 2], lg[:, 5], out_r, out_S, out_bm, lg[:, 4], lg[:, 0],

@@ -38,9 +38,11 @@ import scipy.linalg
 from ..core import earth
 from ..filters import FederatedFilter, FilterError, LinearModel, make_filter
 from ..ins import error_model as em
-from ..ins.strapdown import STATE_LLA, STATE_Q, STATE_VEL, quat_to_dcm_nb
+from ..ins.states import CORE, StateLayout
+from ..ins.strapdown import STATE_LLA, STATE_Q, STATE_VEL, compensate, quat_to_dcm_nb
 from ..sensors import NavSnapshot, StackedModel, WindConstraint
 from ..sensors.delays import InsIncrements, curve_fit_value
+from ..sensors.measurement import BiasedModel, bias_columns
 from .record import Growing, InnovationRecord, Record
 
 
@@ -136,41 +138,62 @@ def position_sources(names) -> list[str]:
     return [a for a in names if a in SENSORS and SENSORS[a].fixes_position]
 
 
+def compensated(dtheta, dv, dt: float, comp_g, comp_a, xa, layout: StateLayout):
+    """The IMU increments (N, 3) with the estimated biases ``comp_g`` [rad/s], ``comp_a``
+    [m/s^2] and the scale factors among the optional states' totals ``xa`` taken out
+    (:func:`fednav.ins.strapdown.compensate`)."""
+    dtheta = np.ascontiguousarray(dtheta, dtype=float)
+    dv = np.ascontiguousarray(dv, dtype=float)
+    dth, dvc = np.empty_like(dtheta), np.empty_like(dv)
+    compensate(dtheta, dv, dt, np.r_[comp_g, comp_a], np.asarray(xa, dtype=float),
+               layout.start("gyro_scale"), layout.start("accel_scale"), dth, dvc)
+    return dth, dvc
+
+
 # ----------------------------------------------------------------------------- cores
 class ErrorStateCore:
-    """ENU strapdown + 18-state error model; the fused error estimate is fed back."""
+    """ENU strapdown + the error model (18 states and the optional ones of ``layout``,
+    :mod:`fednav.ins.states`); the fused error estimate is fed back: into the INS, the IMU
+    compensation (``comp_g``, ``comp_a``) and the optional states' totals ``xa`` (SI, one
+    entry per error state, zero for the 18)."""
 
-    n = em.N_STATES
-
-    def __init__(self, ins, noise, T: float, nsub: int, baro_q: float, comp_g, comp_a):
+    def __init__(self, ins, noise, T: float, nsub: int, baro_q: float, comp_g, comp_a,
+                 layout: StateLayout = CORE):
         self.ins, self.noise, self.T, self.nsub = ins, noise, float(T), int(nsub)
         self.baro_gains = ins.baro_gains[:2]
         self.baro_q = float(baro_q)
         self.comp_g = np.array(comp_g, dtype=float)
         self.comp_a = np.array(comp_a, dtype=float)
+        self.layout, self.n = layout, layout.n
+        self.scale = layout.scale(em.SCALE)
+        self.xa = np.zeros(self.n)
+        self._decay = layout.decay(self.T)
+        self._models = {}
 
     @property
     def state(self) -> np.ndarray:
         return self.ins.state
 
     def snapshot(self) -> tuple:
-        return self.ins.state.copy(), self.comp_g.copy(), self.comp_a.copy()
+        return self.ins.state.copy(), self.comp_g.copy(), self.comp_a.copy(), self.xa.copy()
 
     def restore(self, snap) -> None:
-        state, g, a = snap
+        state, g, a, xa = snap
         self.ins.state[:] = state
         self.comp_g, self.comp_a = g.copy(), a.copy()
+        self.xa[:] = xa
 
     def propagate(self, fed, dtheta, dv, h_ref, dt: float, record: bool):
         """Mechanize one interval and time-update the filters; returns (process model,
         the interval's rows when ``record``, mean body rate [rad/s], INS state at the
         interval's start)."""
-        dth = dtheta - self.comp_g * dt
-        dvc = dv - self.comp_a * dt
+        dth, dvc = compensated(dtheta, dv, dt, self.comp_g, self.comp_a, self.xa, self.layout)
         s0 = self.ins.state.copy()
         rec = self.ins.run(dth, dvc, h_ref, record=record)
         proc = em.interval_process(s0, self.ins.state, dvc.sum(axis=0), self.T, self.noise,
-                                   self.baro_gains, self.baro_q, self.nsub)
+                                   self.baro_gains, self.baro_q, self.nsub,
+                                   dth.sum(axis=0), self.layout)
+        self.xa *= self._decay
         fed.predict(proc)
         rows = None
         if record:
@@ -183,15 +206,28 @@ class ErrorStateCore:
         return NavSnapshot(ins.lla, ins.vel, ins.dcm, omega)
 
     def measure(self, m: Meas, i: int, nav: NavSnapshot | None):
-        """(residual, model, nav, R) of measurement ``i`` of sensor ``m`` against ``nav``."""
-        return m.model.residual(nav, m.z[i]), m.model, nav, m.R[i]
+        """(residual, model, nav, R) of measurement ``i`` of sensor ``m`` against ``nav``
+        (the model over every error state: :class:`~fednav.sensors.measurement.
+        BiasedModel` when the layout has optional states)."""
+        model = self._models.get(m.name)
+        if model is None:
+            model = self._models[m.name] = self.model_of(m.name, m.model)
+        return model.residual(nav, m.z[i]), model, nav, m.R[i]
+
+    def model_of(self, sensor: str, model):
+        """Sensor ``sensor``'s measurement ``model`` over this core's error states."""
+        if self.n == em.N_STATES:
+            return model
+        return BiasedModel(model, self.n, bias_columns(self.layout, sensor,
+                                                       getattr(model, "kinds", ())), self.xa)
 
     def feed_back(self, fed) -> np.ndarray:
         fed.fuse()
         dx = fed.feedback()
-        dg, da = em.apply_feedback(self.ins, dx)
+        dg, da, dopt = em.apply_feedback(self.ins, dx, self.scale)
         self.comp_g += dg
         self.comp_a += da
+        self.xa += dopt
         return dx
 
 
@@ -279,6 +315,11 @@ class PythonLoop:
     @property
     def comp_a(self) -> np.ndarray:
         return getattr(self.core, "comp_a", np.zeros(3))
+
+    @property
+    def xa(self) -> np.ndarray | None:
+        """The optional error states' totals (SI; None without an error-state core)."""
+        return getattr(self.core, "xa", None)
 
     # -- snapshots for re-running the filter from the past (recompute)
     def q_scales(self) -> dict[str, float]:
@@ -410,5 +451,7 @@ class PythonLoop:
         nav = self.core.nav()
         model = WindConstraint.of(z[i])
         d, R = model.residual(nav, z[i]), model.R(m.sigma[i], nav)
+        if hasattr(self.core, "model_of"):
+            model = self.core.model_of("wind", model)
         for name in self.fed.locals:
             self.fed.update(name, d, model, nav, R, t=tk, readmit=False)

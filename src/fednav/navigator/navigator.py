@@ -37,6 +37,7 @@ import numpy as np
 from ..core import attitude as att
 from ..filters import FederatedFilter, KalmanFilter
 from ..ins import error_model as em
+from ..ins.states import CORE, StateLayout, with_optional
 from ..ins.strapdown import STATE_LLA, STATE_Q, STATE_VEL, Strapdown
 from ..ins.total_state import GnssTotal, StarTotal
 from ..sensors.registry import SENSORS
@@ -48,10 +49,11 @@ from .loop import (
     PythonLoop,
     TotalStateCore,
     build_federation,
+    compensated,
     position_sources,
 )
 from .record import Growing
-from .system import System, imu_noise_model
+from .system import System, imu_noise_model, sensor_model, state_layout
 from .total import NAV_BIAS
 
 
@@ -194,6 +196,13 @@ class NavResult:
         ``filter.fdi_readmit_s`` and re-admitted one: ``local``, ``t_start_s``, ``t_s``,
         ``duration_s`` [s], ``nis_per_dof`` before and ``nis_per_dof_after`` [-] and the
         covariance's ``inflation`` [-].
+    layout : StateLayout
+        The optional error states after the 18 (:mod:`fednav.ins.states`; ``n`` = 18
+        without).
+    optional : dict of str to dict
+        Per optional block at the end of the run: its ``estimate`` (the total the
+        navigator applied, SI: a fraction for scale factors, metres for the GNSS error)
+        and ``sigma`` (the last fused covariance's 1-sigma, SI), each per axis.
     """
 
     t: np.ndarray
@@ -211,6 +220,8 @@ class NavResult:
     dt: float = float("nan")
     smooth: bool = False
     readmissions: list = field(default_factory=list)
+    layout: StateLayout = CORE
+    optional: dict = field(default_factory=dict)
 
     @cached_property
     def _imu_rate(self):
@@ -273,12 +284,12 @@ class NavResult:
 
     @property
     def sigma(self) -> np.ndarray:
-        """1-sigma of the fused estimate per epoch (K+1, 18), SI (NaN where the filter has
+        """1-sigma of the fused estimate per epoch (K+1, n), SI (NaN where the filter has
         no such state)."""
         n = self.P.shape[-1]
         var = np.diagonal(self.P, axis1=1, axis2=2)
-        if n == em.N_STATES:
-            return np.sqrt(var) * em.SCALE
+        if n == self.layout.n:
+            return np.sqrt(var) * self.layout.scale(em.SCALE)
         out = np.full((len(var), em.N_STATES), np.nan)
         out[:, NAV_BIAS] = var
         return np.sqrt(out) * em.SCALE
@@ -353,6 +364,8 @@ class Navigator:
             self.ins = mechanization.core.ins
         self._damping = getattr(self.ins, "baro", None) is not None
         total = self._total = mechanization is None and f.state == "total"
+        #: the error state's optional blocks (:mod:`fednav.ins.states`)
+        self.layout = state_layout(system) if mechanization is None and not total else CORE
         self._imu_dth = Growing((3,))
         self._imu_dv = Growing((3,))
         self._h_ref = Growing((), np.nan)
@@ -365,8 +378,8 @@ class Navigator:
             if total and a not in TOTAL_MODELS:
                 raise ValueError(f"the total-state navigator has no model of sensor '{a}' "
                                  f"(it has {', '.join(TOTAL_MODELS)})")
-            model = (TOTAL_MODELS[a] if total else cfg.model()) if mechanization is None \
-                else mechanization.models[a]
+            model = (TOTAL_MODELS[a] if total else sensor_model(system, a)) \
+                if mechanization is None else mechanization.models[a]
             self._meas[a] = Meas(a, model, cfg.timing.delay_compensation, cfg.timing,
                                  SENSORS[a].angles)
             self._bucket[a] = {}
@@ -414,10 +427,11 @@ class Navigator:
                     raise ValueError("sensors.baro.period_s: the damping loop's noise needs "
                                      "the barometer's period")
                 baro_q = baro.sigma_m**2 * baro.period_s
-            core = ErrorStateCore(self.ins, noise, self.T, f.substeps, baro_q, *comp0)
+            layout = self.layout
+            core = ErrorStateCore(self.ins, noise, self.T, f.substeps, baro_q, *comp0, layout)
             central = f.architecture == "centralized"
             names = ["central"] if central else self.aiding
-            fed = build_federation(system, names, P0, em.N_STATES)
+            fed = build_federation(system, names, with_optional(P0, layout), layout.n)
         if f.q_adaptation is not None:
             fed.adapt_q(self.T / f.q_adaptation.time_constant_s, f.q_adaptation.max_scale)
         meas = [self._meas[a] for a in self.aiding]
@@ -787,9 +801,11 @@ class Navigator:
         if n > k * self.n_per:
             loop = self.loop
             comp_g, comp_a = self._free_comp if loop is None else (loop.comp_g, loop.comp_a)
-            tmp.run(self._imu_dth.view[sl] - comp_g * self.dt,
-                    self._imu_dv.view[sl] - comp_a * self.dt, self._h_ref.view[sl],
-                    record=False)
+            xa = getattr(loop, "xa", None)
+            dth, dvc = compensated(self._imu_dth.view[sl], self._imu_dv.view[sl], self.dt,
+                                   comp_g, comp_a, np.zeros(18) if xa is None else xa,
+                                   self.layout)
+            tmp.run(dth, dvc, self._h_ref.view[sl], record=False)
         s = tmp.state
         if self.loop is not None:
             P = self.loop.fused_P()
@@ -834,4 +850,16 @@ class Navigator:
                          r.Phi.view if cov else None, r.Qd.view if cov else None,
                          r.dx.view if cov else None, rows, dict(self.quality), self.engine,
                          self.dt, self.system.smoother,
-                         [dict(e) for e in self.loop.fed.readmissions])
+                         [dict(e) for e in self.loop.fed.readmissions], self.layout,
+                         self._optional())
+
+    def _optional(self) -> dict:
+        """Each optional block's total and 1-sigma now (:attr:`NavResult.optional`)."""
+        lay = self.layout
+        if not lay.blocks:
+            return {}
+        P = self.loop.fused_P()
+        sd = np.sqrt(np.diagonal(P)) * lay.scale(em.SCALE)
+        xa = self.loop.xa
+        return {name: {"estimate": xa[i:i + 3].copy(), "sigma": sd[i:i + 3].copy()}
+                for name in lay.names for i in [lay.start(name)]}

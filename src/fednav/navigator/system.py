@@ -32,6 +32,7 @@ from pydantic import Field, field_validator, model_validator
 from ..core.config import _Model, nested_error, read_mapping, validate
 from ..filters.registry import FILTERS
 from ..ins.error_model import ImuNoiseModel
+from ..ins.states import CORE, StateLayout
 from ..sensors.gnss import neu_to_enu
 from ..sensors.imu import ImuConfig
 from ..sensors.registry import SENSORS, SensorSet, check_names
@@ -116,6 +117,12 @@ class FilterConfig(_Model):
     ``gauss_markov`` (the Gauss–Markov process with its correlation time; 1-sigma
     ``max(bias, markov)``).  ``q_adaptation``: online process-noise adaptation
     (:class:`QAdaptationConfig`; off when absent).
+    ``states``: optional error states after the 18 (:mod:`fednav.ins.states`) —
+    ``gyro_scale`` and ``accel_scale`` (scale-factor errors, 1-sigma from
+    ``imu.gyro_scale_ppm`` / ``imu.accel_scale_ppm`` or the IMU grade; with both, the
+    21-state model of KF-GINS plus fednav's Markov drift), ``gnss_markov`` (the GNSS
+    position's time-correlated error, from ``sensors.gnss.markov_sigma_enu_m`` and
+    ``markov_tau_s``).  None by default.
     """
 
     type: str = "kf"
@@ -138,6 +145,14 @@ class FilterConfig(_Model):
     grid_level: int = Field(default=3, ge=1, le=5)
     accel_bias: Literal["random_walk", "gauss_markov"] = "random_walk"
     q_adaptation: QAdaptationConfig | None = None
+    states: list[Literal["gyro_scale", "accel_scale", "gnss_markov"]] = []
+
+    @field_validator("states")
+    @classmethod
+    def _states(cls, v):
+        if len(set(v)) != len(v):
+            raise ValueError("each optional state once")
+        return v
 
     @field_validator("type")
     @classmethod
@@ -388,6 +403,8 @@ class System(_Model):
                                                f"sensors")
         if self.constraint == "wind" and self.sensors.airdata is None:
             raise nested_error(["constraint"], "the wind constraint needs sensors.airdata")
+        if self.filter.states:
+            state_layout(self)  # (one line naming the key a state lacks)
         return self
 
     def aiding_sensors(self, available=None) -> list[str]:
@@ -449,6 +466,53 @@ def load_system(source) -> System:
 
 #: Keys that make a file a scenario (a system description plus flight and experiment).
 _SCENARIO_KEYS = {"start", "segments", "modes", "imu_period_s"}
+
+
+def state_layout(system: System) -> StateLayout:
+    """The error state's optional blocks (``filter.states``, :mod:`fednav.ins.states`)
+    with their 1-sigma and correlation times from the IMU and GNSS sections.
+
+    Raises
+    ------
+    ValueError
+        Naming the key a selected state lacks (pydantic reports it as a config error).
+    """
+    states = system.filter.states
+    if not states:
+        return CORE
+    if system.filter.state == "total":
+        raise nested_error(["filter", "states"], "optional error states are states of the "
+                                                 "error-state filters (filter.state: error)")
+    blocks = {}
+    for which in ("gyro", "accel"):
+        if f"{which}_scale" in states:
+            s = system.imu.scale_sigma(which)
+            if s is None:
+                raise nested_error(["filter", "states"], f"{which}_scale needs its 1-sigma: "
+                                   f"imu.{which}_scale_ppm (or imu.grade)")
+            blocks[f"{which}_scale"] = (s, float("inf"))
+    if "gnss_markov" in states:
+        g = system.sensors.gnss
+        if g is None or g.markov_sigma_enu_m is None or g.markov_tau_s is None:
+            raise nested_error(["filter", "states"], "gnss_markov needs "
+                               "sensors.gnss.markov_sigma_enu_m and markov_tau_s")
+        s = np.broadcast_to(np.asarray(g.markov_sigma_enu_m, dtype=float), (3,))
+        if not (s > 0.0).all():
+            raise nested_error(["sensors", "gnss", "markov_sigma_enu_m"],
+                               "a Gauss-Markov sigma is positive")
+        blocks["gnss_markov"] = (s, float(g.markov_tau_s))
+    return StateLayout.of(blocks)
+
+
+def sensor_model(system: System, name: str, section=None):
+    """Sensor ``name``'s measurement model in ``system`` (its ``section``, default the
+    system's): the section's model, the GNSS one noise-split for the ``gnss_markov``
+    state when the system has it (:meth:`fednav.sensors.gnss.GnssPosVel.with_markov`)."""
+    section = system.sensors[name] if section is None else section
+    model = section.model()
+    if name == "gnss" and "gnss_markov" in system.filter.states:
+        model = model.with_markov(section.markov_sigma_enu_m)
+    return model
 
 
 # ---------------------------------------------------------------- the filter's IMU model

@@ -137,6 +137,23 @@ def consistency(sol: Solution) -> dict[str, dict[str, float]]:
     return _consistency(sol.fdi)
 
 
+#: The unit each optional error state is reported in (summary.json): key suffix, per SI.
+STATE_UNITS = {"gyro_scale": ("ppm", 1e6), "accel_scale": ("ppm", 1e6),
+               "gnss_markov": ("enu_m", 1.0)}
+
+
+def error_states(optional: dict) -> dict:
+    """The optional error states at the end of the run, as ``summary.json`` has them:
+    ``{"gyro_scale_ppm": {"estimate": [x, y, z], "sigma": [...]}, "gnss_markov_enu_m":
+    ...}`` (body axes for scale factors, east/north/up for the GNSS error)."""
+    out = {}
+    for name, v in optional.items():
+        unit, k = STATE_UNITS[name]
+        out[f"{name}_{unit}"] = {key: [round(float(x) * k, 6) for x in v[key]]
+                                 for key in ("estimate", "sigma")}
+    return out
+
+
 def summary(res: ProcessResult, ref: Reference | None, inputs: dict,
             others: dict | None = None) -> dict:
     """``summary.json`` content; ``others``: further references by name (an autopilot's
@@ -147,6 +164,8 @@ def summary(res: ProcessResult, ref: Reference | None, inputs: dict,
     out: dict = {"inputs": inputs, "run_time_s": res.run_time_s, "epochs": res.epochs,
                  "data_quality": quality, "warnings": list(res.warnings),
                  "consistency": consistency(res.forward), "alignment": res.alignment}
+    if res.optional_states:
+        out["error_states"] = error_states(res.optional_states)
     if ref is not None:
         out["rmse"] = _rmse_block(res.forward, ref)
         if res.smoothed is not None:

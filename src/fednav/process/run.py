@@ -29,7 +29,13 @@ from ..navigator.health import readmission_warnings, run_health
 from ..navigator.loop import InnovationRecord  # noqa: F401  (fednav.process's name)
 from ..navigator.navigator import InitialState, Navigator
 from ..navigator.solution import Solution, epoch_rate, imu_rate
-from ..navigator.system import System, imu_noise_model, initial_covariance, missing_figures
+from ..navigator.system import (
+    System,
+    imu_noise_model,
+    initial_covariance,
+    missing_figures,
+    sensor_model,
+)
 from ..navigator.system import imu_figures as _imu_figures
 from ..sensors import GnssConfig, VelocityConfig, registry
 from ..sensors.imu import FIGURES
@@ -70,6 +76,9 @@ class ProcessResult:
         One line per warning about the data or the run.
     alignment : dict
         How the initial attitude was found (:mod:`fednav.ins.alignment`).
+    optional_states : dict
+        The optional error states' (``filter.states``) ``estimate`` and ``sigma`` per axis
+        at the end of the run, SI (:attr:`fednav.navigator.NavResult.optional`).
     """
 
     forward: Solution
@@ -81,6 +90,7 @@ class ProcessResult:
     warnings: list = field(default_factory=list)
     #: how the initial attitude was found (:mod:`fednav.ins.alignment`)
     alignment: dict = field(default_factory=dict)
+    optional_states: dict = field(default_factory=dict)
 
 
 def adjust_sensors(gnss: GnssData, velocity: VelocityData | None, cfg: System):
@@ -740,7 +750,7 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
         n = len(gnss.t)
         z = np.column_stack([np.full((n, 3), np.nan) if gnss.lla is None else gnss.lla,
                              np.full((n, 3), np.nan) if gnss.vel is None else gnss.vel])
-        model = sensors["gnss"].model()
+        model = sensor_model(cfg, "gnss", sensors["gnss"])
         R = (np.broadcast_to(model.R(np.r_[sig_pos, sig_vel]), (n, model.dim, model.dim))
              if gnss.sigma_rows is None else np.array([model.R(s) for s in gnss.sigma_rows]))
         meas["gnss"] = (gnss.t, z, R)
@@ -914,6 +924,7 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
     if prep.system.filter.q_adaptation is not None and hasattr(nav.loop, "q_scales"):
         res.data_quality["q_scale_final"] = {k: round(v, 3)
                                              for k, v in nav.loop.q_scales().items()}
+    res.optional_states = out.optional
     res.run_time_s = time.perf_counter() - t_start
     if innovations is not None:
         innovations.extend(out.innovations)

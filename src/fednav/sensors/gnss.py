@@ -147,10 +147,27 @@ class GnssPosVel(RowModel):
                 "velocity": slice(3, 6)}[measures]
         self.rows = GnssPosVel.rows[keep]
         super().__init__(lever)
+        self.markov_var = np.zeros(6)
+
+    def with_markov(self, sigma_enu) -> GnssPosVel:
+        """This model for a filter with the Gauss–Markov position-error state
+        (``gnss_markov``, :mod:`fednav.ins.states`) of stationary 1-sigma ``sigma_enu``
+        [m]: a position sigma is then the whole error's (as a receiver reports it) and
+        :meth:`R` keeps its white part, ``sigma^2 - sigma_markov^2``, at least
+        :data:`WHITE_FLOOR` of ``sigma^2``."""
+        s = np.broadcast_to(np.asarray(sigma_enu, dtype=float), (3,))
+        self.markov_var = np.r_[s[[1, 0, 2]] ** 2, np.zeros(3)]  # as z: north, east, up
+        return self
 
     def R(self, sigma) -> np.ndarray:
         s = np.asarray(sigma, dtype=float)  # [north, east, up m, vE, vN, vU], as z
-        return np.diag(s[self.zindex] ** 2)
+        v = s[self.zindex] ** 2
+        return np.diag(np.maximum(v - self.markov_var[self.zindex], WHITE_FLOOR * v))
+
+
+#: The least part of a GNSS position variance :meth:`GnssPosVel.R` keeps as white noise
+#: when a Gauss–Markov state takes the rest.
+WHITE_FLOOR = 0.01
 
 
 class GnssConfig(SensorConfig):
@@ -162,13 +179,20 @@ class GnssConfig(SensorConfig):
     much older than its stamp each velocity is (a receiver's Doppler velocity lagging its
     position; ``fednav process`` reports the latency it sees as
     ``gnss_velocity_latency_seen_s``).  The old key ``sigma_pos_m`` ([north, east, up])
-    is read as ``sigma_pos_enu_m``, reordered, with a ``FutureWarning``."""
+    is read as ``sigma_pos_enu_m``, reordered, with a ``FutureWarning``.
+    ``markov_sigma_enu_m`` (one value or [east, north, up] m) and ``markov_tau_s`` [s]:
+    the time-correlated part of the position error (first-order Gauss–Markov: RTK / PPP
+    and multipath errors), which the optional ``gnss_markov`` error state
+    (``filter.states``) estimates; the position sigma is then the whole error's and the
+    filter's R its white part (:meth:`GnssPosVel.with_markov`)."""
 
     sigma_pos_enu_m: float | _V3 | None = None
     sigma_vel_mps: float | _V3 | None = None
     lever_m: _V3 | None = None
     time_offset_s: float = 0.0
     velocity_latency_s: float = Field(default=0.0, ge=0.0, le=2.0)
+    markov_sigma_enu_m: float | _V3 | None = None
+    markov_tau_s: float | None = Field(default=None, gt=0.0)
     #: what the local filter uses (None: what the data hold; both in a simulation)
     measures: Literal["position_velocity", "position", "velocity"] | None = None
 

@@ -26,6 +26,8 @@ class ImuErrors:
     ``gyro_arw`` [rad/sqrt(s)] and ``accel_vrw`` [m/s/sqrt(s)]: white noise on the rates.
     ``*_bias_rw``: bias random walk [unit/sqrt(s)].  ``*_markov_sigma`` and
     ``*_markov_tau``: first-order Gauss–Markov bias (steady-state sigma, correlation time).
+    ``gyro_scale``, ``accel_scale``: scale-factor error (a fraction; the sensor reads ``(1
+    + s) x``), with ``random_bias`` the 1-sigma of a per-run draw.
     """
 
     gyro_bias: float | tuple = 0.0
@@ -38,15 +40,20 @@ class ImuErrors:
     accel_bias_rw: float | tuple = 0.0
     accel_markov_sigma: float | tuple = 0.0
     accel_markov_tau: float | tuple = np.inf
+    gyro_scale: float | tuple = 0.0
+    accel_scale: float | tuple = 0.0
     random_bias: bool = False
 
 
 @dataclass
 class ImuErrorState:
-    """The realised error of one run: bias time series (N, 3) for gyro and accelerometer."""
+    """The realised error of one run: bias time series (N, 3) for gyro and accelerometer,
+    and the scale-factor errors (3,) (fractions)."""
 
     gyro_bias: np.ndarray
     accel_bias: np.ndarray
+    gyro_scale: np.ndarray | None = None
+    accel_scale: np.ndarray | None = None
 
 
 def _axes(v) -> np.ndarray:
@@ -89,7 +96,10 @@ def corrupt_imu(dtheta, dv, dt: float, errors: ImuErrors, rng: np.random.Generat
 
     Every parameter may be a scalar (all axes) or a per-axis triple.  Biases are
     integrated over each interval as constant; white noise adds ``arw * sqrt(dt)`` per
-    angle increment (``vrw * sqrt(dt)`` per velocity increment).
+    angle increment (``vrw * sqrt(dt)`` per velocity increment); a scale-factor error
+    ``s`` makes ``(1 + s) dtheta`` (drawn last, from the same generator, and only when
+    given: the other draws do not change).  The drawn scale factors are the state's
+    ``gyro_scale``, ``accel_scale``.
     """
     dtheta = np.asarray(dtheta, dtype=float)
     dv = np.asarray(dv, dtype=float)
@@ -114,7 +124,15 @@ def corrupt_imu(dtheta, dv, dt: float, errors: ImuErrors, rng: np.random.Generat
               errors.accel_markov_tau)
     dth = dtheta + gb * dt + rng.standard_normal((n, 3)) * _axes(errors.gyro_arw) * np.sqrt(dt)
     dvm = dv + ab * dt + rng.standard_normal((n, 3)) * _axes(errors.accel_vrw) * np.sqrt(dt)
-    return dth, dvm, ImuErrorState(gb, ab)
+    sg, sa = _axes(errors.gyro_scale), _axes(errors.accel_scale)
+    if errors.random_bias:
+        sg = sg * rng.standard_normal(3) if sg.any() else sg
+        sa = sa * rng.standard_normal(3) if sa.any() else sa
+    if sg.any():
+        dth = dth + sg * dtheta
+    if sa.any():
+        dvm = dvm + sa * dv
+    return dth, dvm, ImuErrorState(gb, ab, sg, sa)
 
 
 # ---------------------------------------------------------------- the ``imu:`` section
@@ -163,6 +181,14 @@ GRADES: dict[str, dict[str, float]] = {
         ("navigation", 0.01, 0.002, 50.0, 20.0, 3600.0))}
 
 
+#: Scale-factor error 1-sigma [ppm] of each grade (Groves 2013, table 4.1 and sec. 4.4:
+#: MEMS 1e3-1e4 ppm, tactical 100-1000, navigation 10-100), toward the class's larger end.
+GRADE_SCALE_PPM = {"consumer": {"gyro": 10_000.0, "accel": 10_000.0},
+                   "industrial": {"gyro": 3_000.0, "accel": 3_000.0},
+                   "tactical": {"gyro": 500.0, "accel": 500.0},
+                   "navigation": {"gyro": 50.0, "accel": 100.0}}
+
+
 class ImuConfig(_Model):
     """IMU error figures, per axis (isotropic); each in whichever unit its key names.
 
@@ -175,7 +201,10 @@ class ImuConfig(_Model):
     ``gyro_arw_rad_sqrt_s``, ``accel_vrw_ug_sqrt_hz`` / ``accel_vrw_mps_sqrt_s``; or per
     *sample* (``gyro_white_deg_h``, ``accel_white_ug``: converted with the IMU period).
     Bias random walk: ``gyro_bias_rw_deg_h_sqrt_h``, ``accel_bias_rw_ug_sqrt_h`` (the
-    bias grows by that much per square-root hour).
+    bias grows by that much per square-root hour).  Scale-factor error (1-sigma, or with
+    ``random_bias`` of a per-run draw; a simulation applies it as the error itself):
+    ``gyro_scale_ppm``, ``accel_scale_ppm`` [ppm] — what the optional scale-factor states
+    (``filter.states``) start from; a ``grade`` gives one when left out.
 
     A figure left out is unknown: recorded data take it from the data file (NaveGo's IMU
     struct), a simulation takes it as zero (infinite for correlation times).
@@ -203,6 +232,8 @@ class ImuConfig(_Model):
     accel_vrw_ug_sqrt_hz: float | None = _NONNEG
     accel_vrw_mps_sqrt_s: float | None = _NONNEG
     accel_bias_rw_ug_sqrt_h: float | None = _NONNEG
+    gyro_scale_ppm: float | None = _NONNEG
+    accel_scale_ppm: float | None = _NONNEG
     random_bias: bool = False
     max_bridge_s: float = Field(0.1, gt=0.0)
     #: a preset (:data:`GRADES`) for the figures neither this section nor the data file
@@ -263,4 +294,14 @@ class ImuConfig(_Model):
             gyro_markov_tau=self._or("gyro_tau", inf),
             accel_bias=self._or("accel_bias"), accel_vrw=self.vrw(dt),
             accel_markov_sigma=self._or("accel_markov"),
-            accel_markov_tau=self._or("accel_tau", inf), random_bias=self.random_bias)
+            accel_markov_tau=self._or("accel_tau", inf),
+            gyro_scale=(self.gyro_scale_ppm or 0.0) * 1e-6,
+            accel_scale=(self.accel_scale_ppm or 0.0) * 1e-6, random_bias=self.random_bias)
+
+    def scale_sigma(self, which: str) -> float | None:
+        """1-sigma of the ``gyro`` or ``accel`` scale-factor error (a fraction): the
+        section's ``*_scale_ppm``, else its grade's (:data:`GRADE_SCALE_PPM`), else None."""
+        v = getattr(self, f"{which}_scale_ppm")
+        if v is None and self.grade is not None:
+            v = GRADE_SCALE_PPM[self.grade][which]
+        return None if v is None else float(v) * 1e-6

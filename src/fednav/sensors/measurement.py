@@ -30,6 +30,7 @@ from ..core import earth
 from ..core.kernels import rotvec_to_dcm
 from ..core.units import ARCMIN
 from ..ins.error_model import N_STATES, SCALE
+from ..ins.states import StateLayout
 
 #: Row kinds: position east, north, up [m]; velocity east, north, up [m/s] (both of the
 #: sensor's point at its lever arm); pitch, roll, heading [arcmin; roll and heading
@@ -330,6 +331,54 @@ def row_predict(kinds, lla, vel, C, omega, lever, X, Z):
         else:
             for i in range(X.shape[0]):
                 Z[i, r] = X[i, _COLUMN[k]]
+
+
+def bias_columns(layout: StateLayout, sensor: str, kinds) -> np.ndarray:
+    """Per row of a sensor's row model (its row ``kinds``, :mod:`fednav.sensors.
+    measurement`), the error-state column of the additive bias its value carries (-1:
+    none): the GNSS position rows' Gauss–Markov error (``gnss_markov``)."""
+    out = np.full(len(kinds), -1, dtype=np.int64)
+    i = layout.start("gnss_markov")
+    if sensor == "gnss" and i >= 0:
+        for r, k in enumerate(kinds):
+            if POS_E <= k <= POS_U:
+                out[r] = i + k - POS_E
+    return out
+
+
+class BiasedModel:
+    """A measurement model over an error state with optional blocks
+    (:mod:`fednav.ins.states`): ``model``'s ``h`` and ``H`` on the first 18 states,
+    ``H`` widened to ``n`` columns, and the rows with a sensor bias (``bias[r]``: its
+    column, -1 none) take the bias estimate out of the value (``xa``: the totals the
+    navigator keeps, SI, read when called) and have ``-1`` on its error (the residual
+    ``INS - (z - b_hat) = dp - db``).  Everything else is ``model``'s."""
+
+    def __init__(self, model, n: int, bias, xa):
+        self.model, self.n, self.xa = model, int(n), xa
+        self.bias = np.asarray(bias, dtype=np.int64).reshape(-1)
+        self._rows = np.flatnonzero(self.bias >= 0)
+
+    def __getattr__(self, name):
+        return getattr(self.__dict__["model"], name)
+
+    def residual(self, nav: NavSnapshot, z) -> np.ndarray:
+        y = np.array(self.model.residual(nav, z), dtype=float)
+        y[self._rows] += self.xa[self.bias[self._rows]]
+        return y
+
+    def H(self, nav: NavSnapshot) -> np.ndarray:
+        H0 = np.asarray(self.model.H(nav), dtype=float)
+        H = np.zeros((H0.shape[0], self.n))
+        H[:, :H0.shape[1]] = H0
+        H[self._rows, self.bias[self._rows]] = -1.0
+        return H
+
+    def h(self, X, nav: NavSnapshot) -> np.ndarray:
+        X = np.atleast_2d(X)
+        Z = np.array(self.model.h(X, nav), dtype=float).reshape(X.shape[0], -1)
+        Z[:, self._rows] -= X[:, self.bias[self._rows]]
+        return Z
 
 
 class StackedModel:

@@ -132,6 +132,9 @@ class Dataset:
     ref_lla: np.ndarray
     ref_vel: np.ndarray
     ref_euler: np.ndarray
+    #: the IMU errors drawn (:class:`~fednav.sensors.imu.ImuErrorState`: bias series and
+    #: scale factors)
+    imu_state: object = None
 
 
 def load_dataset_config(path) -> DatasetConfig:
@@ -158,7 +161,7 @@ def simulate_dataset(cfg: DatasetConfig) -> Dataset:
                   [s.to_segment() for s in cfg.segments], cfg.imu_period_s)
     rng = np.random.default_rng(cfg.seed)
     dt = tr.dt
-    dth, dv, _ = corrupt_imu(tr.dtheta, tr.dv, dt, cfg.imu.errors(dt), rng)
+    dth, dv, imu_state = corrupt_imu(tr.dtheta, tr.dv, dt, cfg.imu.errors(dt), rng)
     g = cfg.gnss
     step = max(1, int(round(g.period_s / dt)))
     gi = np.arange(step, len(tr.t), step)
@@ -181,12 +184,13 @@ def simulate_dataset(cfg: DatasetConfig) -> Dataset:
         vv = vv + rng.standard_normal((len(vi), 3)) * np.asarray(vc.sigma_mps)
         vt = tr.t[vi]
     return Dataset(cfg, tr.t[1:], dth / dt, dv / dt, tr.t[gi], lla, vel, vt, vv,
-                   tr.lla[1:], tr.vel[1:], tr.euler[1:])
+                   tr.lla[1:], tr.vel[1:], tr.euler[1:], imu_state)
 
 
 def process_config(ds: Dataset) -> dict:
     """The system description (``fednav process --config``) with the dataset's true noise
-    figures."""
+    figures (the scale factors' and the GNSS error's Gauss–Markov part too, when drawn:
+    what the optional error states of ``filter.states`` start from; none is selected)."""
     cfg, dt = ds.cfg, ds.cfg.imu_period_s
     e = cfg.imu.errors(dt)
     imu = {"gyro_arw_rad_sqrt_s": e.gyro_arw, "accel_vrw_mps_sqrt_s": e.accel_vrw,
@@ -196,9 +200,15 @@ def process_config(ds: Dataset) -> dict:
     for key, tau in (("gyro_tau_s", e.gyro_markov_tau), ("accel_tau_s", e.accel_markov_tau)):
         if np.isfinite(tau):
             imu[key] = float(tau)
+    for key in ("gyro_scale_ppm", "accel_scale_ppm"):
+        if getattr(cfg.imu, key):
+            imu[key] = float(getattr(cfg.imu, key))
     sensors = {"gnss": {"sigma_pos_enu_m": list(cfg.gnss.reported_sigma_pos_enu_m()),
                         "sigma_vel_mps": list(map(float, cfg.gnss.sigma_vel_mps)),
                         "lever_m": list(map(float, cfg.gnss.lever_m))}}
+    if any(cfg.gnss.markov_sigma_enu_m):
+        sensors["gnss"]["markov_sigma_enu_m"] = list(map(float, cfg.gnss.markov_sigma_enu_m))
+        sensors["gnss"]["markov_tau_s"] = float(cfg.gnss.markov_tau_s)
     return {"imu": {k: float(v) for k, v in imu.items()}, "sensors": sensors}
 
 

@@ -55,6 +55,9 @@ class Drive:
     gnss: GnssData
     reference: Reference
     system: System
+    #: the IMU errors drawn (bias series, scale factors; :class:`~fednav.sensors.imu.
+    #: ImuErrorState`)
+    imu_state: object = None
 
 
 def car_drive(heading_deg: float = 30.0, speed_mps: float = 0.0, seed: int = 1,
@@ -110,7 +113,7 @@ def car_drive(heading_deg: float = 30.0, speed_mps: float = 0.0, seed: int = 1,
                  np.asarray(g.sigma_vel_mps, dtype=float),
                  np.asarray(g.lever_m, dtype=float)),
         Reference("car-drive truth", ds.t, ds.ref_lla, ds.ref_vel, ds.ref_euler),
-        load_system(figures))
+        load_system(figures), ds.imu_state)
 
 
 def heading_containment(sol, reference: Reference, rows=None) -> tuple[float, float]:

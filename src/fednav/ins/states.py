@@ -1,0 +1,136 @@
+"""Optional error states, appended after the 18 of :mod:`fednav.ins.error_model`.
+
+A system description selects them (``filter.states``); each is a block of three::
+
+    gyro_scale    sg_x sg_y sg_z   gyro scale-factor error, body axes   [ppm; SI: fraction]
+    accel_scale   sa_x sa_y sa_z   accelerometer scale-factor error     [ppm; SI: fraction]
+    gnss_markov   bE bN bU         GNSS position error correlated in    [m]
+                                   time (first-order Gauss–Markov), ENU
+
+in this order after state 17 when present (KF-GINS's 21-state model is the 18 with the
+two scale-factor blocks).  The bracket is the filter unit (see
+:data:`fednav.ins.error_model.SCALE`).
+
+A measured rate is ``(1 + s) w + b``: the INS compensates ``(w_meas - b_hat) / (1 +
+s_hat)``, so the compensated rate's error is ``eps + diag(w_b) ds`` (first order) and the
+attitude error rate gains ``-C diag(w_b) ds_g``, the velocity error rate ``C diag(f_b)
+ds_a`` (``w_b``, ``f_b``: the interval's mean compensated body rate and specific force).
+A GNSS fix is ``p + b + v`` with ``b`` Gauss–Markov: the residual of its position rows is
+``INS - (z - b_hat) = dp - db``, so those rows have ``-1`` on ``db``
+(:func:`fednav.sensors.measurement.bias_columns`).  The navigator keeps the totals
+(``s_hat``, ``b_hat``) beside the INS and feeds every estimated error back into them, as
+it does the biases; ``b_hat`` follows its mean dynamics (decays by ``exp(-T / tau)``)
+between epochs.
+
+Each block is a first-order Gauss–Markov process of stationary 1-sigma ``sigma`` (also
+its P0) and correlation time ``tau`` (``inf``: a random constant, no process noise).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+#: The optional blocks, in state order: name -> (state names, SI value of one filter unit).
+BLOCKS = {"gyro_scale": (("sg_x", "sg_y", "sg_z"), 1e-6),
+          "accel_scale": (("sa_x", "sa_y", "sa_z"), 1e-6),
+          "gnss_markov": (("gnss_bE", "gnss_bN", "gnss_bU"), 1.0)}
+#: The 18 core states.
+N_CORE = 18
+
+
+@dataclass(frozen=True)
+class StateLayout:
+    """The error state's optional blocks: ``blocks`` = ((name, sigma (3,) SI, tau [s]),
+    ...) in :data:`BLOCKS` order.  The empty layout is the 18-state model."""
+
+    blocks: tuple = ()
+
+    @classmethod
+    def of(cls, blocks: dict) -> StateLayout:
+        """From ``{name: (sigma, tau)}`` (sigma one value or per axis, SI; tau [s], inf
+        for a random constant), ordered as :data:`BLOCKS`."""
+        for k in blocks:
+            if k not in BLOCKS:
+                raise ValueError(f"unknown optional error state '{k}'; known: "
+                                 f"{', '.join(BLOCKS)}")
+        out = []
+        for k in BLOCKS:
+            if k in blocks:
+                sigma, tau = blocks[k]
+                sigma = tuple(float(s) for s in np.broadcast_to(np.asarray(sigma, float), 3))
+                if min(sigma) < 0.0 or not float(tau) > 0.0:
+                    raise ValueError(f"optional error state '{k}': sigma >= 0 and tau > 0")
+                out.append((k, sigma, float(tau)))
+        return cls(tuple(out))
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """The blocks present, in state order."""
+        return tuple(b[0] for b in self.blocks)
+
+    @property
+    def n(self) -> int:
+        """Number of error states."""
+        return N_CORE + 3 * len(self.blocks)
+
+    def start(self, name: str) -> int:
+        """Column of block ``name``'s first state; -1 when it is not in the layout."""
+        for i, b in enumerate(self.blocks):
+            if b[0] == name:
+                return N_CORE + 3 * i
+        return -1
+
+    def state_names(self, core: tuple) -> tuple[str, ...]:
+        """``core`` (the 18 names) and every optional state's."""
+        return tuple(core) + tuple(s for b in self.blocks for s in BLOCKS[b[0]][0])
+
+    def scale(self, core: np.ndarray) -> np.ndarray:
+        """SI value of one filter unit per state (``core``: the 18 states')."""
+        return np.r_[core, [BLOCKS[b[0]][1] for b in self.blocks for _ in range(3)]]
+
+    def _per_state(self, f) -> np.ndarray:
+        return np.array([f(s, b[2]) for b in self.blocks for s in b[1]], dtype=float)
+
+    def model_vector(self) -> np.ndarray:
+        """What the compiled model reads of the layout: ``[start of gyro_scale, start of
+        accel_scale, 1/tau per optional state..., Qc diagonal per optional state...]``
+        (starts -1 when absent; SI)."""
+        itau = self._per_state(lambda s, t: 0.0 if np.isinf(t) else 1.0 / t)
+        qc = self._per_state(lambda s, t: 0.0 if np.isinf(t) else 2.0 * s * s / t)
+        return np.r_[float(self.start("gyro_scale")), float(self.start("accel_scale")),
+                     itau, qc]
+
+    def sigma(self) -> np.ndarray:
+        """1-sigma of every optional state (SI): their P0."""
+        return self._per_state(lambda s, t: s)
+
+    def decay(self, T: float) -> np.ndarray:
+        """``exp(-T / tau)`` of every state over an interval ``T`` [s] (1 for the 18 and
+        for random constants): how the totals kept beside the INS follow their mean."""
+        itau = self._per_state(lambda s, t: 0.0 if np.isinf(t) else 1.0 / t)
+        return np.r_[np.ones(N_CORE), np.exp(-T * itau)]
+
+
+#: The 18-state model.
+CORE = StateLayout()
+
+
+def with_optional(P0, layout: StateLayout) -> np.ndarray:
+    """``P0`` (filter units) over every state of ``layout``: an 18-state P0 gains the
+    optional blocks' 1-sigma on its diagonal (at least 1e-6 filter units); a P0 of the
+    whole layout is returned as it is."""
+    P0 = np.asarray(P0, dtype=float)
+    n = layout.n
+    if P0.shape == (n, n):
+        return P0
+    if P0.shape != (N_CORE, N_CORE):
+        raise ValueError(f"P0 is {P0.shape[0]}x{P0.shape[1]}; the error state has {n} "
+                         f"states ({N_CORE} and {', '.join(layout.names) or 'no others'})")
+    units = np.array([BLOCKS[b[0]][1] for b in layout.blocks for _ in range(3)])
+    out = np.zeros((n, n))
+    out[:N_CORE, :N_CORE] = P0
+    sd = np.maximum(layout.sigma() / units, 1e-6)
+    out[N_CORE:, N_CORE:] = np.diag(sd**2)
+    return out
