@@ -459,6 +459,17 @@ def _print_process(s: dict, compiled_s: float = 0.0) -> None:
     for name, c in s["consistency"].items():
         console.print(f"  local '{name}': mean NIS/dof {c['nis_per_dof']:.2f}, isolated "
                       f"{100 * c['isolated_fraction']:.1f} % of {c['measurements']}")
+    from .process.output import STATE_UNITS
+
+    for name, (suffix, _) in STATE_UNITS.items():  # the optional states (filter.states)
+        v = s.get("error_states", {}).get(f"{name}_{suffix}")
+        if v is not None:
+            axes, unit = ("E/N/U", "m") if suffix == "enu_m" else ("x/y/z", suffix)
+            d = 3 if unit == "m" else 0
+            pm = "  ".join(f"{e:+.{d}f} ± {sd:.{d}f}"
+                           for e, sd in zip(v["estimate"], v["sigma"], strict=True))
+            console.print(f"  {name.replace('_', ' ')} {axes} \\[{unit}] at the end: {pm}",
+                          highlight=False)
     from rich.markup import escape
 
     from .campaign.explain import label
