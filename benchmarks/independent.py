@@ -3,6 +3,7 @@
     pip install -e '.[independent]'      # inu (Woodburn's Inertial Navigation Utilities)
     python benchmarks/independent.py [--datasets car-adis16405,car-adis16488,uav-adis16488]
                                      [--rebuild] [--label before] [--json /tmp/independent.json]
+                                     [--states gyro_scale,accel_scale]
 
 By hand, not in CI.  Each data set is built once (deterministic seeds) and cached in
 ``~/.cache/fednav/independent/NAME/`` (never in the repository):
@@ -25,6 +26,11 @@ Then ``fednav process csv --smooth`` runs with a config holding only what a user
 (a plain Groves-style loosely coupled 15-state EKF + RTS smoother, no fednav code) on the
 same files.  Both are scored by the same code against the reference (10 Hz, stamped
 between GNSS fixes) over the peer's span, and fednav also over its whole span.
+
+``--states gyro_scale,accel_scale`` runs fednav with those optional error states
+(``filter.states``) from a copy of the config, ``config-LABEL.yaml``, that adds them and
+their 1-sigma (:data:`SCALE_PPM`); the peer and the data are unchanged.  Without it
+fednav runs the config as built (the 18-state filter).
 """
 
 from __future__ import annotations
@@ -63,6 +69,16 @@ IMUS = {
                   "accel_bias_ug": 1000.0, "accel_markov_ug": 100.0,
                   "accel_markov_tau_s": 100.0, "accel_vrw_ug_sqrt_hz": 49.0},
 }
+
+#: Scale-factor error 1-sigma [ppm] the filter is told with ``--states`` (the data carry
+#: none: the IMU signal above is simulated without a scale-factor error).  One rule for
+#: every IMU: the class figure of Groves 2013 (sec. 4.4, table 4.1) as fednav's
+#: ``fednav.sensors.imu.GRADE_SCALE_PPM`` holds it, the class as fednav's ``GRADES`` places
+#: these units ("industrial": calibrated MEMS, ADIS16488 class) -- 3000 ppm gyro and
+#: accelerometer.
+SCALE_PPM = {"adis16405": {"gyro_scale_ppm": 3000.0, "accel_scale_ppm": 3000.0},
+             "adis16488": {"gyro_scale_ppm": 3000.0, "accel_scale_ppm": 3000.0}}
+OPTIONAL_STATES = ("gyro_scale", "accel_scale", "gnss_markov")
 
 #: 5 Hz GNSS: white noise of these sigmas [east, north, up] m, [east, north, up] m/s
 GNSS = {"period_s": 0.2, "sigma_pos_enu_m": [1.5, 1.5, 3.0],
@@ -416,15 +432,32 @@ def score(sol, ref, t0=None):
 
 # -------------------------------------------------------------------------- running
 
-def run_fednav(folder, out, src=None):
+def states_config(folder, imu, states, label):
+    """``config-LABEL.yaml``: the data set's config with ``filter.states`` = ``states``
+    and the scale-factor 1-sigma of :data:`SCALE_PPM` for the scale states selected."""
+    import yaml
+
+    cfg = yaml.safe_load((folder / "config.yaml").read_text())
+    for which in ("gyro", "accel"):
+        if f"{which}_scale" in states:
+            cfg.setdefault("imu", {})[f"{which}_scale_ppm"] = SCALE_PPM[imu][f"{which}_scale_ppm"]
+    cfg.setdefault("filter", {})["states"] = list(states)
+    path = folder / f"config-{label}.yaml"
+    path.write_text("# config.yaml with optional error states (independent.py --states)\n"
+                    + yaml.safe_dump(cfg, sort_keys=False))
+    return path
+
+
+def run_fednav(folder, out, src=None, config=None):
     """``fednav process csv --smooth`` on the data set; ``src``: a fednav source tree to
-    run instead of the installed one (e.g. ``git archive HEAD src | tar -x -C DIR``)."""
+    run instead of the installed one (e.g. ``git archive HEAD src | tar -x -C DIR``);
+    ``config``: a config file instead of the data set's ``config.yaml``."""
     env = dict(os.environ)
     if src:
         env["PYTHONPATH"] = os.pathsep.join(filter(None, (str(src), env.get("PYTHONPATH"))))
     cmd = ["fednav", "process", "csv", "--imu", str(folder / "imu.csv"),
            "--gnss", str(folder / "gnss.csv"), "--ref", str(folder / "ref.csv"),
-           "--config", str(folder / "config.yaml"), "--smooth", "--out", str(out),
+           "--config", str(config or folder / "config.yaml"), "--smooth", "--out", str(out),
            # every IMU sample, as the peer writes: the reference is scored between
            # samples, and a 10 Hz file (the default) adds its interpolation error (UAV
            # roll 0.038 -> 0.122 deg in turns)
@@ -441,7 +474,7 @@ def run_fednav(folder, out, src=None):
     return " ".join(cmd), wall
 
 
-def run_dataset(name, rebuild, label, src=None):
+def run_dataset(name, rebuild, label, src=None, states=()):
     folder = CACHE / name
     if rebuild or not (folder / "meta.json").exists():
         print(f"[{name}] building ...", flush=True)
@@ -449,7 +482,8 @@ def run_dataset(name, rebuild, label, src=None):
     meta = json.loads((folder / "meta.json").read_text())
     ref = _read_csv(folder / "ref.csv")
     out = folder / f"out-{label}"
-    cmd, wall = run_fednav(folder, out, src)
+    config = states_config(folder, DATASETS[name]["imu"], states, label) if states else None
+    cmd, wall = run_fednav(folder, out, src, config)
     summ = json.loads((out / "summary.json").read_text())
     fwd = _read_csv(out / "solution.csv")
     smo = _read_csv(out / "solution_smoothed.csv")
@@ -472,6 +506,7 @@ def run_dataset(name, rebuild, label, src=None):
     nis = {"fednav": {k: v["nis_per_dof"] for k, v in summ.get("consistency", {}).items()},
            "peer": {"gnss": peer["nis_per_dof"]}}
     return {"dataset": name, "meta": meta, "command": cmd, "fednav_wall_s": wall,
+            "states": list(states), "error_states": summ.get("error_states"),
             "peer_wall_s": peer_wall, "peer_start_t_s": tp, "rows": rows, "nis_per_dof": nis,
             "fednav_summary_rmse": summ.get("rmse"),
             "fednav_summary_rmse_smoothed": summ.get("rmse_smoothed"),
@@ -490,6 +525,9 @@ def print_table(r):
     nis = r["nis_per_dof"]
     print("NIS/dof: fednav " + ", ".join(f"{k} {v:.2f}" for k, v in nis["fednav"].items())
           + f"; peer gnss {nis['peer']['gnss']:.2f}")
+    for name, v in (r.get("error_states") or {}).items():  # (--states)
+        print(f"fednav {name} at the end: " + ", ".join(
+            f"{e:+.0f} ± {sd:.0f}" for e, sd in zip(v["estimate"], v["sigma"], strict=True)))
     f = r["rows"]["fednav forward, whole run"]
     print(f"fednav heading error at its first reference epoch {f['heading_err_t0_deg']:+.2f} "
           f"deg, sigma {f['heading_sigma_t0_deg']:.2f} deg")
@@ -504,7 +542,17 @@ def main(argv=None):
     ap.add_argument("--src", default=None,
                     help="fednav source folder to run (on PYTHONPATH) instead of the installed "
                          "package, e.g. a clean export of a commit's src/")
+    ap.add_argument("--states", default="",
+                    help="optional error states for fednav (filter.states), comma-separated, "
+                         f"of {', '.join(OPTIONAL_STATES)}; the scale-factor 1-sigma from "
+                         "SCALE_PPM (default: none, the config as built)")
     a = ap.parse_args(argv)
+    states = tuple(filter(None, a.states.split(",")))
+    for st in states:
+        if st not in OPTIONAL_STATES:
+            ap.error(f"unknown state {st!r}: {', '.join(OPTIONAL_STATES)}")
+        if st == "gnss_markov":
+            ap.error("gnss_markov: the data sets' GNSS error is white (nothing to estimate)")
     CACHE.mkdir(parents=True, exist_ok=True)
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
                             text=True, cwd=Path(__file__).resolve().parent).stdout.strip()
@@ -520,10 +568,11 @@ def main(argv=None):
     for name in a.datasets.split(","):
         if name not in DATASETS:
             ap.error(f"unknown data set {name!r}: {', '.join(DATASETS)}")
-        r = run_dataset(name, a.rebuild, a.label, a.src)
+        r = run_dataset(name, a.rebuild, a.label, a.src, states)
         print_table(r)
         results.append(r)
     Path(a.json).write_text(json.dumps({"label": a.label, "commit": commit, "src": a.src,
+                                        "states": list(states),
                                         "src_dirty": bool(dirty) and not a.src,
                                         "results": results}, indent=1))
     print(f"\nwrote {a.json} (label {a.label}, HEAD {commit})")
