@@ -6,6 +6,7 @@
     python benchmarks/planetary.py visual     # consistency of the visual velocity
     python benchmarks/planetary.py corrections  # the visual data as filed and corrected
     python benchmarks/planetary.py tune       # fednav tune against the hand-tuned config
+    python benchmarks/planetary.py markov     # the visual's drift as a Gauss-Markov state
 
 Nothing here uses the reference to choose a setting: the noise figures come from the IMU
 data and from the GNSS innovations; the reference only scores the result.
@@ -187,10 +188,56 @@ def tune():
                   f"{np.hypot(e['north_m'][m], e['east_m'][m]).max():.1f} m", flush=True)
 
 
+def markov():
+    """The corrected visual's error as white noise (the example) and with the
+    ``velocity_markov`` state, its figures from the data: the autocorrelation of the
+    visual-minus-GNSS velocity's 1 s means at 5 and 10 s lags, ``A exp(-lag / tau)``,
+    gives tau and the correlated variance ``A var`` per horizontal axis (the vertical shows
+    none: 0.005 m/s)."""
+    imu, g, gs, vis, ref = load()
+    ex = load_system(EXAMPLE)
+    vc = ex.sensors.velocity
+    t = vis.t + vc.time_offset_s
+    v = vis.vel[:, [1, 0, 2]]  # (the example's axes: N, E, U)
+    d = v - np.column_stack([np.interp(t, g.t, g.vel[:, j]) for j in range(3)])
+    edges = np.arange(t[0], t[-1], 1.0)
+    k = np.digitize(t, edges)
+    means = np.array([d[k == i].mean(0) for i in range(1, len(edges)) if (k == i).sum() > 2])
+    x = means - means.mean(0)
+
+    def acf(lag):
+        return (x[:-lag] * x[lag:]).mean(0) / (x * x).mean(0)
+
+    c5, c10 = acf(5)[:2], acf(10)[:2]
+    tau = float(np.mean(5.0 / np.log(c5 / c10)))
+    sig = np.sqrt(c5**2 / c10 * (x * x).mean(0)[:2])
+    sigma = [float(sig[0]), float(sig[1]), 0.005]
+    print(f"visual - GNSS velocity, 1 s means: acf(5 s) {np.round(c5, 2)}, acf(10 s) "
+          f"{np.round(c10, 2)} -> tau {tau:.0f} s, sigma {np.round(sigma, 3)} m/s")
+    dump = ex.model_dump(exclude_none=True)
+    dump["filter"]["states"] = ["velocity_markov"]
+    dump["sensors"]["velocity"].update(markov_sigma_mps=sigma, markov_tau_s=tau)
+    gm = load_system(dump)
+    print("forward RMSE N/E/U m, vN/vE/vU m/s [smoothed]; max horizontal error 100-200 s")
+    for gname, gd in (("GNSS", g), ("sparse GNSS", gs)):
+        for cname, cfg in (("visual white", ex), ("velocity_markov", gm)):
+            res = process(imu, gd, vis, cfg, smooth=True, force=True)
+            out = []
+            for sol in (res.forward, res.smoothed):
+                e = errors_against(sol, ref)
+                r = rmse(e)
+                m = (e["t"] > 100) & (e["t"] < 200)
+                out.append(" ".join(f"{r[k]:.3f}" for k in KEYS)
+                           + f" | {np.hypot(e['north_m'][m], e['east_m'][m]).max():.1f} m")
+            c = consistency(res.forward)
+            nis = " ".join(f"{k} {x['nis_per_dof']:.2f}" for k, x in c.items())
+            print(f"{gname:11s} {cname:16s} {out[0]}  [{out[1]}]  NIS/dof {nis}", flush=True)
+
+
 if __name__ == "__main__":
     if not DATA.is_dir():
         sys.exit(f"{DATA} not found")
     sections = sys.argv[1:] or ["noise", "visual", "cases", "corrections"]
     for s in sections:
         {"cases": cases, "noise": noise, "visual": visual, "corrections": corrections,
-         "tune": tune}[s]()
+         "tune": tune, "markov": markov}[s]()

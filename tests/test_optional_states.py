@@ -2,6 +2,8 @@
 Gauss–Markov error — the model against a twin INS, both engines alike, recovery of
 simulated scale factors within 3 sigma, consistency with time-correlated GNSS errors."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from scipy.linalg import expm
@@ -18,6 +20,7 @@ from fednav.process.run import errors_against, rmse
 from fednav.sim.drives import ADIS16488, car_drive
 from fednav.sim.trajectory import Segment, generate
 
+EXAMPLE = Path(__file__).parents[1] / "examples" / "car-drive.yaml"
 ALL = StateLayout.of({"gyro_scale": (3e-3, np.inf), "accel_scale": (2e-3, np.inf),
                       "gnss_markov": ((0.5, 0.5, 1.0), 60.0)})
 
@@ -124,7 +127,7 @@ def test_configured_states_and_their_errors():
     assert lay.names == ("gyro_scale", "accel_scale", "gnss_markov")
     np.testing.assert_allclose(lay.sigma(), [1e-3] * 3 + [3e-3] * 3 + [0.3, 0.3, 0.6])
     with pytest.raises(ConfigError, match=r"filter\.states.*imu\.accel_scale_ppm"):
-        load_system({"filter": {"states": ["accel_scale"]}})
+        state_layout(load_system({"filter": {"states": ["accel_scale"]}}))
     with pytest.raises(ConfigError, match=r"gnss_markov needs sensors\.gnss\.markov_sigma"):
         load_system({"sensors": {"gnss": {}}, "filter": {"states": ["gnss_markov"]}})
     with pytest.raises(ConfigError, match="filter.state: error"):
@@ -313,3 +316,95 @@ def test_the_estimates_reach_summary_json_and_the_printed_run(gm_drive, monkeypa
     text = con.export_text()
     assert "gyro scale x/y/z [ppm] at the end: " in text
     assert "gnss markov E/N/U [m] at the end: " in text
+
+
+@pytest.fixture(scope="module")
+def visual_drive(tmp_path_factory):
+    """examples/car-drive.yaml's first 223 s with a velocity sensor whose error is mostly
+    a 30 s Gauss–Markov drift (0.1/0.1/0.05 m/s beside 0.03 m/s white; the file's sigma
+    the whole error's), written and read back as CSV, GNSS withheld over 100-160 s."""
+    from fednav.io import read_gnss_csv, read_imu_csv, read_reference_csv, read_velocity_csv
+    from fednav.process.tuning import withheld
+    from fednav.sim.dataset import (
+        VelocitySimConfig,
+        load_dataset_config,
+        simulate_dataset,
+        write_csv_dataset,
+    )
+
+    cfg = load_dataset_config(EXAMPLE)
+    cfg = cfg.model_copy(update={"segments": cfg.segments[:13], "velocity": VelocitySimConfig(
+        sigma_mps=(0.03, 0.03, 0.03), markov_sigma_mps=(0.1, 0.1, 0.05), markov_tau_s=30.0)})
+    d = tmp_path_factory.mktemp("visual")
+    write_csv_dataset(simulate_dataset(cfg), d)
+    system = load_system(d / "process.yaml")
+    gc = system.sensors.gnss
+    gnss = withheld(read_gnss_csv(d / "gnss.csv", gc.sigma_pos_enu_m, gc.sigma_vel_mps,
+                                  gc.lever_m), [(100.0, 160.0)])
+    return (read_imu_csv(d / "imu.csv"), gnss, read_velocity_csv(d / "velocity.csv"),
+            read_reference_csv(d / "reference.csv"), system)
+
+
+def test_velocity_markov_state_follows_a_drifting_velocity_sensor(visual_drive):
+    """A velocity sensor whose error drifts (visual odometry): as white noise of its
+    whole sigma its rows' NIS/dof is 0.2-0.4 and the solution drifts through a 60 s GNSS
+    outage; with the ``velocity_markov`` state (the figures ``fednav simulate`` wrote into
+    process.yaml) each row is in [0.5, 2] and the outage's horizontal error is smaller,
+    forward and smoothed."""
+    imu, gnss, vel, ref, system = visual_drive
+    assert system.sensors.velocity.markov_tau_s == 30.0
+    out = {}
+    for states in ([], ["velocity_markov"]):
+        d = system.model_dump(exclude_none=True)
+        d["filter"]["states"] = states
+        inn = []
+        res = process(imu, gnss, vel, load_system(d), smooth=True, innovations=inn)
+        nis = np.array([i.r**2 / np.diag(i.S) for i in inn if i.local == "velocity"])
+        drift = []
+        for sol in (res.forward, res.smoothed):
+            e = errors_against(sol, ref)
+            m = (e["t"] > 100.0) & (e["t"] < 160.0)
+            drift.append(float(np.sqrt(np.mean(e["east_m"][m]**2 + e["north_m"][m]**2))))
+        out[bool(states)] = nis.mean(axis=0), drift
+    (white, d0), (gm, d1) = out[False], out[True]
+    assert white.max() < 0.5, white
+    assert np.all((gm >= 0.5) & (gm <= 2.0)), gm
+    assert d1[0] < 0.8 * d0[0] and d1[1] < 0.8 * d0[1], (d0, d1)
+
+
+def test_both_engines_fly_the_velocity_markov_state_alike(monkeypatch, visual_drive):
+    imu, gnss, vel, ref, system = visual_drive
+    d = system.model_dump(exclude_none=True)
+    d["filter"]["states"] = ["velocity_markov", "gnss_markov"]
+    d["sensors"]["gnss"].update(markov_sigma_enu_m=0.5, markov_tau_s=100.0)
+    system = load_system(d)
+    out = {}
+    for name in ("compiled", "python"):
+        with monkeypatch.context() as m:
+            m.setenv("FEDNAV_ENGINE", name)
+            out[name] = process(imu, gnss, vel, system)
+    a, b = out["compiled"], out["python"]
+    np.testing.assert_array_equal(a.forward.lla, b.forward.lla)
+    np.testing.assert_array_equal(a.forward.sigma, b.forward.sigma)
+    for k in ("velocity_markov", "gnss_markov"):
+        np.testing.assert_array_equal(a.optional_states[k]["estimate"],
+                                      b.optional_states[k]["estimate"])
+
+
+def test_an_imu_without_figures_gets_the_preset_and_its_scale_figure(gm_drive):
+    """A recording with no IMU figures: ``process`` assumes the grade preset (and says
+    so); selected scale-factor states take the preset's figure when the config gives
+    none, and a config giving only the scale-factor sigmas still gets the preset for the
+    noise figures (they are not noise figures)."""
+    from dataclasses import replace
+
+    d = gm_drive
+    imu = replace(d.imu, errors=None)
+    gnss = {"gnss": d.system.sensors.gnss.model_dump(exclude_none=True)}
+    for imu_keys, expect in (({}, 10_000.0), ({"gyro_scale_ppm": 2000.0}, 2000.0)):
+        system = load_system({"imu": imu_keys, "sensors": gnss,
+                              "filter": {"states": ["gyro_scale"]}})
+        res = process(imu, d.gnss, None, system)
+        assert any("preset is assumed" in w for w in res.warnings), res.warnings
+        sd = res.optional_states["gyro_scale"]["sigma"]
+        assert sd.max() <= expect * 1e-6 * 1.0001 and sd.max() > 0.5 * expect * 1e-6

@@ -464,8 +464,9 @@ def _print_process(s: dict, compiled_s: float = 0.0) -> None:
     for name, (suffix, _) in STATE_UNITS.items():  # the optional states (filter.states)
         v = s.get("error_states", {}).get(f"{name}_{suffix}")
         if v is not None:
-            axes, unit = ("E/N/U", "m") if suffix == "enu_m" else ("x/y/z", suffix)
-            d = 3 if unit == "m" else 0
+            axes, unit = {"enu_m": ("E/N/U", "m"), "enu_mps": ("E/N/U", "m/s")}.get(
+                suffix, ("x/y/z", suffix))
+            d = 0 if unit == "ppm" else 3
             pm = "  ".join(f"{e:+.{d}f} ± {sd:.{d}f}"
                            for e, sd in zip(v["estimate"], v["sigma"], strict=True))
             console.print(f"  {name.replace('_', ' ')} {axes} \\[{unit}] at the end: {pm}",

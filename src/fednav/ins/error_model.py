@@ -11,7 +11,7 @@ State, in SI inside this module::
 
 This is paper 002's state (phi, dVE, dVN, dL, dlambda, eps_c, eps_r, nabla_c) extended by
 the vertical channel (dvU, dh) and with position in metres, the paper-004 18-state layout.
-Optional blocks (IMU scale factors, a Gauss–Markov GNSS position error) follow state 17
+Optional blocks (IMU scale factors, Gauss–Markov GNSS and velocity-sensor errors) follow state 17
 when a system selects them: :mod:`fednav.ins.states` (:class:`~fednav.ins.states.
 StateLayout`).
 With a barometric damping loop in the mechanization the loop terms appear in F, so the

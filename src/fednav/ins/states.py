@@ -6,6 +6,8 @@ A system description selects them (``filter.states``); each is a block of three:
     accel_scale   sa_x sa_y sa_z   accelerometer scale-factor error     [ppm; SI: fraction]
     gnss_markov   bE bN bU         GNSS position error correlated in    [m]
                                    time (first-order Gauss–Markov), ENU
+    velocity_markov  vbE vbN vbU   the velocity sensor's error (visual  [m/s]
+                                   odometry, DVL) likewise, ENU
 
 in this order after state 17 when present (KF-GINS's 21-state model is the 18 with the
 two scale-factor blocks).  The bracket is the filter unit (see
@@ -16,7 +18,8 @@ s_hat)``, so the compensated rate's error is ``eps + diag(w_b) ds`` (first order
 attitude error rate gains ``-C diag(w_b) ds_g``, the velocity error rate ``C diag(f_b)
 ds_a`` (``w_b``, ``f_b``: the interval's mean compensated body rate and specific force).
 A GNSS fix is ``p + b + v`` with ``b`` Gauss–Markov: the residual of its position rows is
-``INS - (z - b_hat) = dp - db``, so those rows have ``-1`` on ``db``
+``INS - (z - b_hat) = dp - db``, so those rows have ``-1`` on ``db`` (a velocity sensor's
+rows the same with its velocity error)
 (:func:`fednav.sensors.measurement.bias_columns`).  The navigator keeps the totals
 (``s_hat``, ``b_hat``) beside the INS and feeds every estimated error back into them, as
 it does the biases; ``b_hat`` follows its mean dynamics (decays by ``exp(-T / tau)``)
@@ -35,7 +38,8 @@ import numpy as np
 #: The optional blocks, in state order: name -> (state names, SI value of one filter unit).
 BLOCKS = {"gyro_scale": (("sg_x", "sg_y", "sg_z"), 1e-6),
           "accel_scale": (("sa_x", "sa_y", "sa_z"), 1e-6),
-          "gnss_markov": (("gnss_bE", "gnss_bN", "gnss_bU"), 1.0)}
+          "gnss_markov": (("gnss_bE", "gnss_bN", "gnss_bU"), 1.0),
+          "velocity_markov": (("vel_bE", "vel_bN", "vel_bU"), 1.0)}
 #: The 18 core states.
 N_CORE = 18
 

@@ -122,7 +122,8 @@ class FilterConfig(_Model):
     ``imu.gyro_scale_ppm`` / ``imu.accel_scale_ppm`` or the IMU grade; with both, the
     21-state model of KF-GINS plus fednav's Markov drift), ``gnss_markov`` (the GNSS
     position's time-correlated error, from ``sensors.gnss.markov_sigma_enu_m`` and
-    ``markov_tau_s``).  None by default.
+    ``markov_tau_s``), ``velocity_markov`` (the velocity sensor's, from
+    ``sensors.velocity.markov_sigma_mps`` and ``markov_tau_s``).  None by default.
     """
 
     type: str = "kf"
@@ -145,7 +146,7 @@ class FilterConfig(_Model):
     grid_level: int = Field(default=3, ge=1, le=5)
     accel_bias: Literal["random_walk", "gauss_markov"] = "random_walk"
     q_adaptation: QAdaptationConfig | None = None
-    states: list[Literal["gyro_scale", "accel_scale", "gnss_markov"]] = []
+    states: list[Literal["gyro_scale", "accel_scale", "gnss_markov", "velocity_markov"]] = []
 
     @field_validator("states")
     @classmethod
@@ -404,7 +405,7 @@ class System(_Model):
         if self.constraint == "wind" and self.sensors.airdata is None:
             raise nested_error(["constraint"], "the wind constraint needs sensors.airdata")
         if self.filter.states:
-            state_layout(self)  # (one line naming the key a state lacks)
+            state_layout(self, validating=True)  # (one line naming the key a state lacks)
         return self
 
     def aiding_sensors(self, available=None) -> list[str]:
@@ -468,50 +469,65 @@ def load_system(source) -> System:
 _SCENARIO_KEYS = {"start", "segments", "modes", "imu_period_s"}
 
 
-def state_layout(system: System) -> StateLayout:
+def state_layout(system: System, validating: bool = False) -> StateLayout:
     """The error state's optional blocks (``filter.states``, :mod:`fednav.ins.states`)
-    with their 1-sigma and correlation times from the IMU and GNSS sections.
+    with their 1-sigma and correlation times from the IMU and sensor sections.
+
+    ``validating``: called by the system's validator, which leaves a scale factor's
+    missing figure to the run (``fednav process`` gives an IMU without figures a grade
+    preset, whose figure it then has).
 
     Raises
     ------
-    ValueError
-        Naming the key a selected state lacks (pydantic reports it as a config error).
+    ConfigError
+        One line naming the key a selected state lacks (during validation, pydantic's
+        error, reported the same way).
     """
+    from ..core.config import ConfigError
+
+    def fail(path, message):
+        if validating:
+            raise nested_error(path, message)
+        raise ConfigError(f"key '{'.'.join(path)}': {message}")
+
     states = system.filter.states
     if not states:
         return CORE
     if system.filter.state == "total":
-        raise nested_error(["filter", "states"], "optional error states are states of the "
-                                                 "error-state filters (filter.state: error)")
+        fail(["filter", "states"], "optional error states are states of the error-state "
+                                   "filters (filter.state: error)")
     blocks = {}
     for which in ("gyro", "accel"):
         if f"{which}_scale" in states:
             s = system.imu.scale_sigma(which)
-            if s is None:
-                raise nested_error(["filter", "states"], f"{which}_scale needs its 1-sigma: "
-                                   f"imu.{which}_scale_ppm (or imu.grade)")
-            blocks[f"{which}_scale"] = (s, float("inf"))
-    if "gnss_markov" in states:
-        g = system.sensors.gnss
-        if g is None or g.markov_sigma_enu_m is None or g.markov_tau_s is None:
-            raise nested_error(["filter", "states"], "gnss_markov needs "
-                               "sensors.gnss.markov_sigma_enu_m and markov_tau_s")
-        s = np.broadcast_to(np.asarray(g.markov_sigma_enu_m, dtype=float), (3,))
-        if not (s > 0.0).all():
-            raise nested_error(["sensors", "gnss", "markov_sigma_enu_m"],
-                               "a Gauss-Markov sigma is positive")
-        blocks["gnss_markov"] = (s, float(g.markov_tau_s))
+            if s is None and not validating:
+                fail(["filter", "states"], f"{which}_scale needs its 1-sigma: "
+                                           f"imu.{which}_scale_ppm (or imu.grade)")
+            blocks[f"{which}_scale"] = (s or 0.0, float("inf"))
+    for block, sensor, key in (("gnss_markov", "gnss", "markov_sigma_enu_m"),
+                               ("velocity_markov", "velocity", "markov_sigma_mps")):
+        if block in states:
+            c = system.sensors[sensor] if sensor in system.sensors else None
+            if c is None or getattr(c, key) is None or c.markov_tau_s is None:
+                fail(["filter", "states"], f"{block} needs sensors.{sensor}.{key} and "
+                                           f"markov_tau_s")
+            s = np.broadcast_to(np.asarray(getattr(c, key), dtype=float), (3,))
+            if not (s > 0.0).all():
+                fail(["sensors", sensor, key], "a Gauss-Markov sigma is positive")
+            blocks[block] = (s, float(c.markov_tau_s))
     return StateLayout.of(blocks)
 
 
 def sensor_model(system: System, name: str, section=None):
     """Sensor ``name``'s measurement model in ``system`` (its ``section``, default the
-    system's): the section's model, the GNSS one noise-split for the ``gnss_markov``
-    state when the system has it (:meth:`fednav.sensors.gnss.GnssPosVel.with_markov`)."""
+    system's): the section's model, the GNSS and velocity ones noise-split for their
+    Gauss–Markov state when the system has it (``with_markov``)."""
     section = system.sensors[name] if section is None else section
     model = section.model()
     if name == "gnss" and "gnss_markov" in system.filter.states:
         model = model.with_markov(section.markov_sigma_enu_m)
+    if name == "velocity" and "velocity_markov" in system.filter.states:
+        model = model.with_markov(section.markov_sigma_mps)
     return model
 
 

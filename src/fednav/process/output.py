@@ -139,13 +139,14 @@ def consistency(sol: Solution) -> dict[str, dict[str, float]]:
 
 #: The unit each optional error state is reported in (summary.json): key suffix, per SI.
 STATE_UNITS = {"gyro_scale": ("ppm", 1e6), "accel_scale": ("ppm", 1e6),
-               "gnss_markov": ("enu_m", 1.0)}
+               "gnss_markov": ("enu_m", 1.0), "velocity_markov": ("enu_mps", 1.0)}
 
 
 def error_states(optional: dict) -> dict:
     """The optional error states at the end of the run, as ``summary.json`` has them:
     ``{"gyro_scale_ppm": {"estimate": [x, y, z], "sigma": [...]}, "gnss_markov_enu_m":
-    ...}`` (body axes for scale factors, east/north/up for the GNSS error)."""
+    ...}`` (body axes for scale factors, east/north/up for the GNSS and velocity
+    sensor's errors)."""
     out = {}
     for name, v in optional.items():
         unit, k = STATE_UNITS[name]

@@ -556,7 +556,8 @@ def with_imu_figures(imu: ImuData, cfg: System) -> tuple[System, list[str]]:
     neither its ``imu:`` section nor the data file gives any IMU figure; a one-line
     :class:`DataError` naming a figure that some are given but not that one (0 must be
     said: a filter that trusts the IMU completely is a choice)."""
-    figures = set(cfg.imu.model_fields_set) - {"max_bridge_s", "random_bias"}
+    figures = set(cfg.imu.model_fields_set) - {"max_bridge_s", "random_bias",
+                                               "gyro_scale_ppm", "accel_scale_ppm"}
     if not figures and imu.errors is None:
         cfg = cfg.model_copy(update={"imu": cfg.imu.model_copy(
             update={"grade": DEFAULT_GRADE})})
@@ -828,7 +829,7 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
                             f"sensors.{name}.timing.delay_compensation: interpolate corrects; "
                             f"use recompute or ins_increment (docs/paper004.md)")
     if velocity is not None:
-        model = system.sensors.velocity.model()
+        model = sensor_model(system, "velocity")
         meas["velocity"] = (velocity.t, velocity.vel,
                             np.array([model.R(c) for c in velocity.cov]))
     m = slice(i0, i0 + n_cycles * n_per)

@@ -22,7 +22,7 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from .base import MeasurementSeries, flight_times, position_noise_to_llh
-from .measurement import POS_E, POS_N, POS_U, VEL_E, VEL_N, VEL_U, RowModel
+from .measurement import POS_E, POS_N, POS_U, VEL_E, VEL_N, VEL_U, RowModel, white_part
 from .spec import Column, SensorConfig, SensorSpec
 
 _V3 = tuple[float, float, float]
@@ -153,21 +153,15 @@ class GnssPosVel(RowModel):
         """This model for a filter with the Gauss–Markov position-error state
         (``gnss_markov``, :mod:`fednav.ins.states`) of stationary 1-sigma ``sigma_enu``
         [m]: a position sigma is then the whole error's (as a receiver reports it) and
-        :meth:`R` keeps its white part, ``sigma^2 - sigma_markov^2``, at least
-        :data:`WHITE_FLOOR` of ``sigma^2``."""
+        :meth:`R` keeps its white part, ``sigma^2 - sigma_markov^2``, at least 1 % of
+        ``sigma^2`` (:func:`~fednav.sensors.measurement.white_part`)."""
         s = np.broadcast_to(np.asarray(sigma_enu, dtype=float), (3,))
         self.markov_var = np.r_[s[[1, 0, 2]] ** 2, np.zeros(3)]  # as z: north, east, up
         return self
 
     def R(self, sigma) -> np.ndarray:
         s = np.asarray(sigma, dtype=float)  # [north, east, up m, vE, vN, vU], as z
-        v = s[self.zindex] ** 2
-        return np.diag(np.maximum(v - self.markov_var[self.zindex], WHITE_FLOOR * v))
-
-
-#: The least part of a GNSS position variance :meth:`GnssPosVel.R` keeps as white noise
-#: when a Gauss–Markov state takes the rest.
-WHITE_FLOOR = 0.01
+        return white_part(np.diag(s[self.zindex] ** 2), self.markov_var[self.zindex])
 
 
 class GnssConfig(SensorConfig):

@@ -336,14 +336,33 @@ def row_predict(kinds, lla, vel, C, omega, lever, X, Z):
 def bias_columns(layout: StateLayout, sensor: str, kinds) -> np.ndarray:
     """Per row of a sensor's row model (its row ``kinds``, :mod:`fednav.sensors.
     measurement`), the error-state column of the additive bias its value carries (-1:
-    none): the GNSS position rows' Gauss–Markov error (``gnss_markov``)."""
+    none): the GNSS position rows' Gauss–Markov error (``gnss_markov``), the velocity
+    sensor's (``velocity_markov``)."""
     out = np.full(len(kinds), -1, dtype=np.int64)
-    i = layout.start("gnss_markov")
-    if sensor == "gnss" and i >= 0:
+    block, first, last = {"gnss": ("gnss_markov", POS_E, POS_U),
+                          "velocity": ("velocity_markov", VEL_E, VEL_U)}.get(
+                              sensor, (None, 0, -1))
+    i = layout.start(block) if block is not None else -1
+    if i >= 0:
         for r, k in enumerate(kinds):
-            if POS_E <= k <= POS_U:
-                out[r] = i + k - POS_E
+            if first <= k <= last:
+                out[r] = i + k - first
     return out
+
+
+def white_part(R, markov_var) -> np.ndarray:
+    """The white part of a noise covariance ``R`` whose diagonal holds a Gauss–Markov
+    process's variance ``markov_var`` too (a state carries that): ``D R D`` with ``D =
+    diag(sqrt(max(1 - markov_var / R_ii, WHITE_FLOOR)))`` — the diagonal less the
+    process's variance, at least :data:`WHITE_FLOOR` of it, correlations kept."""
+    R = np.asarray(R, dtype=float)
+    d = np.sqrt(np.maximum(1.0 - np.asarray(markov_var, dtype=float) / np.diag(R),
+                           WHITE_FLOOR))
+    return R * np.outer(d, d)
+
+
+#: The least part of a noise variance :func:`white_part` keeps as white noise.
+WHITE_FLOOR = 0.01
 
 
 class BiasedModel:

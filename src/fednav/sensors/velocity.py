@@ -13,10 +13,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from pydantic import field_validator
+from pydantic import Field, field_validator
 
 from .base import MeasurementSeries, flight_times, point_velocity
-from .measurement import VEL_E, VEL_N, VEL_U, RowModel
+from .measurement import VEL_E, VEL_N, VEL_U, RowModel, white_part
 from .spec import Column, SensorConfig, SensorSpec
 
 _V3 = tuple[float, float, float]
@@ -47,19 +47,35 @@ class VelocityENU(RowModel):
     kind = "velocity"
     rows = ((VEL_E, 0), (VEL_N, 1), (VEL_U, 2))
 
+    markov_var = np.zeros(3)
+
+    def with_markov(self, sigma_enu) -> VelocityENU:
+        """This model for a filter with the Gauss–Markov velocity-error state
+        (``velocity_markov``, :mod:`fednav.ins.states`) of stationary 1-sigma
+        ``sigma_enu`` [m/s]: a sigma (or covariance) is then the whole error's and
+        :meth:`R` keeps its white part (:func:`~fednav.sensors.measurement.white_part`)."""
+        self.markov_var = np.broadcast_to(np.asarray(sigma_enu, dtype=float), (3,)) ** 2
+        return self
+
     def R(self, cov) -> np.ndarray:
         c = np.asarray(cov, dtype=float)
-        return np.diag(c**2) if c.ndim == 1 else c
+        return white_part(np.diag(c**2) if c.ndim == 1 else c, self.markov_var)
 
 
 class VelocityConfig(SensorConfig):
     """Velocity sensor: 1-sigma [east, north, up] m/s (None: the file's covariance), lever
-    arm (None: the file's, else zero), the file's axis order and a time offset."""
+    arm (None: the file's, else zero), the file's axis order and a time offset;
+    ``markov_sigma_mps`` (one value or [east, north, up] m/s) and ``markov_tau_s`` [s]:
+    the time-correlated part of its error (first-order Gauss–Markov: visual odometry's
+    drift), which the optional ``velocity_markov`` error state (``filter.states``)
+    estimates; the sigma is then the whole error's and R its white part."""
 
     sigma_mps: _V3 | None = None
     lever_m: _V3 | None = None
     axes: tuple[str, str, str] = ("E", "N", "U")
     time_offset_s: float = 0.0
+    markov_sigma_mps: float | _V3 | None = None
+    markov_tau_s: float | None = Field(default=None, gt=0.0)
 
     @field_validator("axes")
     @classmethod

@@ -90,11 +90,20 @@ def gauss_markov(n: int, dt: float, sigma, tau: float, rng) -> np.ndarray:
 
 class VelocitySimConfig(_Model):
     """Velocity sensor (odometry, visual odometry): period [s], 1-sigma ENU noise [m/s],
-    lever arm (body right-forward-up, m)."""
+    lever arm (body right-forward-up, m); optionally a time-correlated error on top
+    (first-order Gauss–Markov per ENU axis: ``markov_sigma_mps``, ``markov_tau_s``; its
+    own random stream (``seed``, 3)), the sigma written for the filter then the whole
+    error's, ``hypot(sigma_mps, markov_sigma_mps)``."""
 
     period_s: float = Field(0.1, gt=0.0)
     sigma_mps: _V3 = (0.05, 0.05, 0.05)
     lever_m: _V3 = (0.0, 0.0, 0.0)
+    markov_sigma_mps: _V3 = (0.0, 0.0, 0.0)
+    markov_tau_s: float = Field(30.0, gt=0.0)
+
+    def reported_sigma_mps(self) -> np.ndarray:
+        """The 1-sigma [east, north, up] m/s of the whole error (white and Gauss–Markov)."""
+        return np.hypot(self.sigma_mps, self.markov_sigma_mps)
 
 
 class DatasetConfig(_Model):
@@ -182,6 +191,9 @@ def simulate_dataset(cfg: DatasetConfig) -> Dataset:
         vi = np.arange(step, len(tr.t), step)
         _, vv = _lever_point(tr, vi, vc.lever_m)
         vv = vv + rng.standard_normal((len(vi), 3)) * np.asarray(vc.sigma_mps)
+        if any(vc.markov_sigma_mps):  # (its own stream, as the GNSS's)
+            vv = vv + gauss_markov(len(vi), step * dt, vc.markov_sigma_mps, vc.markov_tau_s,
+                                   np.random.default_rng((cfg.seed, 3)))
         vt = tr.t[vi]
     return Dataset(cfg, tr.t[1:], dth / dt, dv / dt, tr.t[gi], lla, vel, vt, vv,
                    tr.lla[1:], tr.vel[1:], tr.euler[1:], imu_state)
@@ -209,6 +221,10 @@ def process_config(ds: Dataset) -> dict:
     if any(cfg.gnss.markov_sigma_enu_m):
         sensors["gnss"]["markov_sigma_enu_m"] = list(map(float, cfg.gnss.markov_sigma_enu_m))
         sensors["gnss"]["markov_tau_s"] = float(cfg.gnss.markov_tau_s)
+    v = cfg.velocity
+    if v is not None and any(v.markov_sigma_mps):
+        sensors["velocity"] = {"markov_sigma_mps": list(map(float, v.markov_sigma_mps)),
+                               "markov_tau_s": float(v.markov_tau_s)}
     return {"imu": {k: float(v) for k, v in imu.items()}, "sensors": sensors}
 
 
@@ -234,7 +250,7 @@ def write_csv_dataset(ds: Dataset, out) -> list[Path]:
             "vU_mps": ds.gnss_vel[:, 2]})]
     cfg = process_config(ds)
     if ds.vel is not None:
-        s = np.asarray(ds.cfg.velocity.sigma_mps)
+        s = ds.cfg.velocity.reported_sigma_mps()
         n = len(ds.vel_t)
         files.append(write_csv(out / "velocity.csv", {
             "t_s": ds.vel_t, "vE_mps": ds.vel[:, 0], "vN_mps": ds.vel[:, 1],
@@ -288,7 +304,7 @@ def write_navego_dataset(ds: Dataset, out) -> list[Path]:
                       "h": ds.ref_lla[:, 2], "vel": ds.ref_vel @ M.T, "roll": roll,
                       "pitch": pitch, "yaw": yaw}
     if ds.vel is not None:
-        s2 = np.asarray(cfg.velocity.sigma_mps)[[1, 0, 2]] ** 2   # NED variances
+        s2 = cfg.velocity.reported_sigma_mps()[[1, 0, 2]] ** 2   # NED variances
         structs["visual"] = {"t": ds.vel_t, "vel": ds.vel @ M.T,
                              "covv": np.tile(np.diag(s2).ravel(), (len(ds.vel_t), 1)),
                              "larm": M @ np.asarray(cfg.velocity.lever_m)}
