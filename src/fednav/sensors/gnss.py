@@ -147,7 +147,7 @@ class GnssPosVel(RowModel):
                 "velocity": slice(3, 6)}[measures]
         self.rows = GnssPosVel.rows[keep]
         super().__init__(lever)
-        self.markov_var = np.zeros(6)
+        self.markov_var = None
 
     def with_markov(self, sigma_enu) -> GnssPosVel:
         """This model for a filter with the Gauss–Markov position-error state
@@ -161,7 +161,8 @@ class GnssPosVel(RowModel):
 
     def R(self, sigma) -> np.ndarray:
         s = np.asarray(sigma, dtype=float)  # [north, east, up m, vE, vN, vU], as z
-        return white_part(np.diag(s[self.zindex] ** 2), self.markov_var[self.zindex])
+        R = np.diag(s[self.zindex] ** 2)
+        return R if self.markov_var is None else white_part(R, self.markov_var[self.zindex])
 
 
 class GnssConfig(SensorConfig):

@@ -47,7 +47,7 @@ class VelocityENU(RowModel):
     kind = "velocity"
     rows = ((VEL_E, 0), (VEL_N, 1), (VEL_U, 2))
 
-    markov_var = np.zeros(3)
+    markov_var = None
 
     def with_markov(self, sigma_enu) -> VelocityENU:
         """This model for a filter with the Gauss–Markov velocity-error state
@@ -59,7 +59,8 @@ class VelocityENU(RowModel):
 
     def R(self, cov) -> np.ndarray:
         c = np.asarray(cov, dtype=float)
-        return white_part(np.diag(c**2) if c.ndim == 1 else c, self.markov_var)
+        R = np.diag(c**2) if c.ndim == 1 else c
+        return R if self.markov_var is None else white_part(R, self.markov_var)
 
 
 class VelocityConfig(SensorConfig):
