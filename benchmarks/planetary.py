@@ -129,18 +129,25 @@ def corrections():
     for gname, gd in (("GNSS", g), ("sparse GNSS", gs)):
         for cname, cfg, v in (("no visual", ex, None), ("visual as filed", raw, vis),
                               ("visual corrected", ex, vis)):
-            res = process(imu, gd, v, cfg, smooth=True, force=True)
-            out = []
-            for sol in (res.forward, res.smoothed):
-                e = errors_against(sol, ref)
-                r = rmse(e)
-                m = (e["t"] > 100) & (e["t"] < 200)
-                out.append(" ".join(f"{r[k]:.3f}" for k in KEYS)
-                           + f" | {np.hypot(e['north_m'][m], e['east_m'][m]).max():.1f} m")
+            res, out = _scored(imu, gd, v, cfg, ref)
             c = consistency(res.forward)
             stats = {k: f"NIS/dof {x['nis_per_dof']:.2f}, isolated "
                         f"{100 * x['isolated_fraction']:.1f} %" for k, x in c.items()}
             print(f"{gname:11s} {cname:17s} {out[0]}  [{out[1]}]  {stats}", flush=True)
+
+
+def _scored(imu, gnss, vis, cfg, ref):
+    """The run (smoothed too) and, forward and smoothed, its RMSE and the largest
+    horizontal error through the sparse file's outage (100-200 s), as text."""
+    res = process(imu, gnss, vis, cfg, smooth=True, force=True)
+    out = []
+    for sol in (res.forward, res.smoothed):
+        e = errors_against(sol, ref)
+        r = rmse(e)
+        m = (e["t"] > 100) & (e["t"] < 200)
+        out.append(" ".join(f"{r[k]:.3f}" for k in KEYS)
+                   + f" | {np.hypot(e['north_m'][m], e['east_m'][m]).max():.1f} m")
+    return res, out
 
 
 def tune():
@@ -221,14 +228,7 @@ def markov():
     print("forward RMSE N/E/U m, vN/vE/vU m/s [smoothed]; max horizontal error 100-200 s")
     for gname, gd in (("GNSS", g), ("sparse GNSS", gs)):
         for cname, cfg in (("visual white", ex), ("velocity_markov", gm)):
-            res = process(imu, gd, vis, cfg, smooth=True, force=True)
-            out = []
-            for sol in (res.forward, res.smoothed):
-                e = errors_against(sol, ref)
-                r = rmse(e)
-                m = (e["t"] > 100) & (e["t"] < 200)
-                out.append(" ".join(f"{r[k]:.3f}" for k in KEYS)
-                           + f" | {np.hypot(e['north_m'][m], e['east_m'][m]).max():.1f} m")
+            res, out = _scored(imu, gd, vis, cfg, ref)
             c = consistency(res.forward)
             nis = " ".join(f"{k} {x['nis_per_dof']:.2f}" for k, x in c.items())
             print(f"{gname:11s} {cname:16s} {out[0]}  [{out[1]}]  NIS/dof {nis}", flush=True)

@@ -201,10 +201,11 @@ class ImuConfig(_Model):
     ``gyro_arw_rad_sqrt_s``, ``accel_vrw_ug_sqrt_hz`` / ``accel_vrw_mps_sqrt_s``; or per
     *sample* (``gyro_white_deg_h``, ``accel_white_ug``: converted with the IMU period).
     Bias random walk: ``gyro_bias_rw_deg_h_sqrt_h``, ``accel_bias_rw_ug_sqrt_h`` (the
-    bias grows by that much per square-root hour).  Scale-factor error (1-sigma, or with
-    ``random_bias`` of a per-run draw; a simulation applies it as the error itself):
-    ``gyro_scale_ppm``, ``accel_scale_ppm`` [ppm] — what the optional scale-factor states
-    (``filter.states``) start from; a ``grade`` gives one when left out.
+    bias grows by that much per square-root hour).  Scale-factor error
+    ``gyro_scale_ppm``, ``accel_scale_ppm`` [ppm]: the 1-sigma the optional scale-factor
+    states (``filter.states``) start from (a ``grade`` gives the filter one when left
+    out); a simulation applies the value given as the error itself (with ``random_bias``
+    as the 1-sigma of a per-run draw), and none when it is left out.
 
     A figure left out is unknown: recorded data take it from the data file (NaveGo's IMU
     struct), a simulation takes it as zero (infinite for correlation times).

@@ -367,7 +367,8 @@ WHITE_FLOOR = 0.01
 
 class BiasedModel:
     """A measurement model over an error state with optional blocks
-    (:mod:`fednav.ins.states`): ``model``'s ``h`` and ``H`` on the first 18 states,
+    (:mod:`fednav.ins.states`): ``model``'s ``h`` and ``H`` on the first 18 states (every
+    model of the 18-state filter reads only those),
     ``H`` widened to ``n`` columns, and the rows with a sensor bias (``bias[r]``: its
     column, -1 none) take the bias estimate out of the value (``xa``: the totals the
     navigator keeps, SI, read when called) and have ``-1`` on its error (the residual
@@ -395,7 +396,8 @@ class BiasedModel:
 
     def h(self, X, nav: NavSnapshot) -> np.ndarray:
         X = np.atleast_2d(X)
-        Z = np.array(self.model.h(X, nav), dtype=float).reshape(X.shape[0], -1)
+        Z = np.array(self.model.h(np.ascontiguousarray(X[:, :N_STATES]), nav),
+                     dtype=float).reshape(X.shape[0], -1)
         Z[:, self._rows] -= X[:, self.bias[self._rows]]
         return Z
 
