@@ -680,7 +680,10 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
             t0 = init.t_s
     else:
         t0 = imu.t[0] if gnss is None or init is not None else max(imu.t[0], gnss.t[0])
-    i0 = int(np.searchsorted(imu.t, t0 - 0.5 * dt))
+    # the first IMU sample at or after t0 (the first GNSS fix): the epoch grid t0 + k T
+    # then lies at or just after the fixes' stamps — from the nearest sample, which can
+    # lie just before, every fix waited a whole filter period for its epoch
+    i0 = int(np.searchsorted(imu.t, t0 - max(1e-9, 4.0 * np.spacing(abs(t0)))))
     n_cycles = (len(imu.t) - 1 - i0) // n_per
     span = float(imu.t[-1] - imu.t[0])
     if T > span:
