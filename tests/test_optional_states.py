@@ -48,6 +48,27 @@ def _process(layout, nsub=20):
     return em.ErrorProcess(nom, 1.0, noise, nsub=nsub, layout=layout)
 
 
+SINGLE = [StateLayout.of({"accel_scale": (2e-3, np.inf)}),
+          StateLayout.of({"velocity_markov": (0.05, 20.0)}),
+          StateLayout.of({"gyro_scale": (3e-3, np.inf), "velocity_markov": (0.05, 20.0)})]
+
+
+@pytest.mark.parametrize("layout", SINGLE, ids=lambda lay: "+".join(lay.names))
+def test_F_is_the_jacobian_for_a_block_that_starts_at_18(layout):
+    """A block alone starts at column 18 (the scale couplings follow its start)."""
+    p = _process(layout)
+    n, s = layout.n, p.scale
+    J = np.empty((n, n))
+    for i in range(n):
+        d = np.zeros(n)
+        d[i] = 1e-3
+        J[:, i] = (p.transition(d[None])[0] - p.transition(-d[None])[0]) / 2e-3
+    np.testing.assert_allclose(J, expm(p.F_si() * p.T) * s[None, :] / s[:, None],
+                               atol=2e-6, rtol=1e-5)
+    if "accel_scale" in layout.names:
+        assert np.abs(p.F_si()[3:6, 18:21]).max() > 0.1  # C diag(f_b): f_b has gravity
+
+
 def test_F_is_the_jacobian_of_the_nonlinear_model_with_every_optional_state():
     p = _process(ALL)
     n, s = ALL.n, p.scale
