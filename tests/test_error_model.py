@@ -24,11 +24,17 @@ def numerical_jacobian(f, n, eps=1e-3):
     return J
 
 
+def phi_of_F(p):
+    """``expm(F T)`` of the process ``p`` in its filter units: what the transition's
+    Jacobian must be."""
+    s = p.scale
+    return expm(p.F_si() * p.T) * s[None, :] / s[:, None]
+
+
 def test_F_is_jacobian_of_nonlinear_model():
     p = make_process()
     J = numerical_jacobian(p.transition, em.N_STATES)
-    s = em.SCALE
-    expected = expm(p.F_si() * p.T) * s[None, :] / s[:, None]
+    expected = phi_of_F(p)
     np.testing.assert_allclose(J, expected, atol=2e-6, rtol=1e-5)
     np.testing.assert_allclose(p.Phi, expected, atol=2e-5, rtol=1e-4)
 

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from scipy.linalg import expm
+from test_error_model import numerical_jacobian, phi_of_F
 
 from fednav.core import attitude as att
 from fednav.core import earth, units
@@ -57,13 +57,7 @@ SINGLE = [StateLayout.of({"accel_scale": (2e-3, np.inf)}),
 def test_F_is_the_jacobian_for_a_block_that_starts_at_18(layout):
     """A block alone starts at column 18 (the scale couplings follow its start)."""
     p = _process(layout)
-    n, s = layout.n, p.scale
-    J = np.empty((n, n))
-    for i in range(n):
-        d = np.zeros(n)
-        d[i] = 1e-3
-        J[:, i] = (p.transition(d[None])[0] - p.transition(-d[None])[0]) / 2e-3
-    np.testing.assert_allclose(J, expm(p.F_si() * p.T) * s[None, :] / s[:, None],
+    np.testing.assert_allclose(numerical_jacobian(p.transition, layout.n), phi_of_F(p),
                                atol=2e-6, rtol=1e-5)
     if "accel_scale" in layout.names:
         assert np.abs(p.F_si()[3:6, 18:21]).max() > 0.1  # C diag(f_b): f_b has gravity
@@ -71,14 +65,9 @@ def test_F_is_the_jacobian_for_a_block_that_starts_at_18(layout):
 
 def test_F_is_the_jacobian_of_the_nonlinear_model_with_every_optional_state():
     p = _process(ALL)
-    n, s = ALL.n, p.scale
-    J = np.empty((n, n))
-    for i in range(n):
-        d = np.zeros(n)
-        d[i] = 1e-3
-        J[:, i] = (p.transition(d[None])[0] - p.transition(-d[None])[0]) / 2e-3
-    expected = expm(p.F_si() * p.T) * s[None, :] / s[:, None]
-    np.testing.assert_allclose(J, expected, atol=2e-6, rtol=1e-5)
+    expected = phi_of_F(p)
+    np.testing.assert_allclose(numerical_jacobian(p.transition, ALL.n), expected, atol=2e-6,
+                               rtol=1e-5)
     np.testing.assert_allclose(p.Phi, expected, atol=2e-5, rtol=1e-4)
     # a Gauss-Markov block decays and is driven by 2 sigma^2 / tau
     assert p.Phi[24, 24] == pytest.approx(np.exp(-1.0 / 60.0), rel=1e-9)

@@ -459,18 +459,16 @@ def _print_process(s: dict, compiled_s: float = 0.0) -> None:
     for name, c in s["consistency"].items():
         console.print(f"  local '{name}': mean NIS/dof {c['nis_per_dof']:.2f}, isolated "
                       f"{100 * c['isolated_fraction']:.1f} % of {c['measurements']}")
-    from .process.output import STATE_UNITS
+    from .ins.states import BLOCKS
 
-    for name, (suffix, _) in STATE_UNITS.items():  # the optional states (filter.states)
-        v = s.get("error_states", {}).get(f"{name}_{suffix}")
+    for name, b in BLOCKS.items():  # the optional states (filter.states)
+        v = s.get("error_states", {}).get(f"{name}_{b.suffix}")
         if v is not None:
-            axes, unit = {"enu_m": ("E/N/U", "m"), "enu_mps": ("E/N/U", "m/s")}.get(
-                suffix, ("x/y/z", suffix))
-            d = 0 if unit == "ppm" else 3
+            d = 0 if b.label == "ppm" else 3
             pm = "  ".join(f"{e:+.{d}f} ± {sd:.{d}f}"
                            for e, sd in zip(v["estimate"], v["sigma"], strict=True))
-            console.print(f"  {name.replace('_', ' ')} {axes} \\[{unit}] at the end: {pm}",
-                          highlight=False)
+            console.print(f"  {name.replace('_', ' ')} {b.axes} \\[{b.label}] at the end: "
+                          f"{pm}", highlight=False)
     from rich.markup import escape
 
     from .campaign.explain import label

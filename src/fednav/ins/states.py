@@ -32,14 +32,32 @@ its P0) and correlation time ``tau`` (``inf``: a random constant, no process noi
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
-#: The optional blocks, in state order: name -> (state names, SI value of one filter unit).
-BLOCKS = {"gyro_scale": (("sg_x", "sg_y", "sg_z"), 1e-6),
-          "accel_scale": (("sa_x", "sa_y", "sa_z"), 1e-6),
-          "gnss_markov": (("gnss_bE", "gnss_bN", "gnss_bU"), 1.0),
-          "velocity_markov": (("vel_bE", "vel_bN", "vel_bU"), 1.0)}
+
+class Block(NamedTuple):
+    """One optional block: its three ``states``' names, the SI value of one filter
+    ``unit``, and how reports show it: the key ``suffix`` (``summary.json``
+    ``error_states``: name + suffix, values in filter units), its ``axes`` and its unit
+    ``label``."""
+
+    states: tuple[str, str, str]
+    unit: float
+    suffix: str
+    axes: str
+    label: str
+
+
+#: The optional blocks, in state order.  A sensor whose error a block models names it
+#: (its model's ``markov_block``, :class:`fednav.sensors.measurement.RowModel`).
+BLOCKS = {"gyro_scale": Block(("sg_x", "sg_y", "sg_z"), 1e-6, "ppm", "x/y/z", "ppm"),
+          "accel_scale": Block(("sa_x", "sa_y", "sa_z"), 1e-6, "ppm", "x/y/z", "ppm"),
+          "gnss_markov": Block(("gnss_bE", "gnss_bN", "gnss_bU"), 1.0, "enu_m", "E/N/U",
+                               "m"),
+          "velocity_markov": Block(("vel_bE", "vel_bN", "vel_bU"), 1.0, "enu_mps", "E/N/U",
+                                   "m/s")}
 #: The 18 core states.
 N_CORE = 18
 
@@ -88,11 +106,11 @@ class StateLayout:
 
     def state_names(self, core: tuple) -> tuple[str, ...]:
         """``core`` (the 18 names) and every optional state's."""
-        return tuple(core) + tuple(s for b in self.blocks for s in BLOCKS[b[0]][0])
+        return tuple(core) + tuple(s for b in self.blocks for s in BLOCKS[b[0]].states)
 
     def scale(self, core: np.ndarray) -> np.ndarray:
         """SI value of one filter unit per state (``core``: the 18 states')."""
-        return np.r_[core, [BLOCKS[b[0]][1] for b in self.blocks for _ in range(3)]]
+        return np.r_[core, [BLOCKS[b[0]].unit for b in self.blocks for _ in range(3)]]
 
     def _per_state(self, f) -> np.ndarray:
         return np.array([f(s, b[2]) for b in self.blocks for s in b[1]], dtype=float)
@@ -132,7 +150,7 @@ def with_optional(P0, layout: StateLayout) -> np.ndarray:
     if P0.shape != (N_CORE, N_CORE):
         raise ValueError(f"P0 is {P0.shape[0]}x{P0.shape[1]}; the error state has {n} "
                          f"states ({N_CORE} and {', '.join(layout.names) or 'no others'})")
-    units = np.array([BLOCKS[b[0]][1] for b in layout.blocks for _ in range(3)])
+    units = np.array([BLOCKS[b[0]].unit for b in layout.blocks for _ in range(3)])
     out = np.zeros((n, n))
     out[:N_CORE, :N_CORE] = P0
     sd = np.maximum(layout.sigma() / units, 1e-6)

@@ -513,7 +513,7 @@ class CompiledLoop:
         self.s_linear = np.array([m.model.linear for m in meas], dtype=np.bool_)
         self.s_bias = np.full((S, 6), -1, dtype=np.int64)
         for j, m in enumerate(meas):
-            self.s_bias[j, :m.model.dim] = bias_columns(core.layout, m.name, m.model.kinds)
+            self.s_bias[j, :m.model.dim] = bias_columns(core.layout, m.model)
         self.comp = np.r_[core.comp_g, core.comp_a]
         self.xa = core.xa  # (flown in place)
         self.decay = core.layout.decay(self.T)

@@ -141,12 +141,13 @@ def position_sources(names) -> list[str]:
 def compensated(dtheta, dv, dt: float, comp_g, comp_a, xa, layout: StateLayout):
     """The IMU increments (N, 3) with the estimated biases ``comp_g`` [rad/s], ``comp_a``
     [m/s^2] and the scale factors among the optional states' totals ``xa`` taken out
-    (:func:`fednav.ins.strapdown.compensate`)."""
+    (:func:`fednav.ins.strapdown.compensate`; ``xa`` None: a core without them)."""
     dtheta = np.ascontiguousarray(dtheta, dtype=float)
     dv = np.ascontiguousarray(dv, dtype=float)
     dth, dvc = np.empty_like(dtheta), np.empty_like(dv)
-    compensate(dtheta, dv, dt, np.r_[comp_g, comp_a], np.asarray(xa, dtype=float),
-               layout.start("gyro_scale"), layout.start("accel_scale"), dth, dvc)
+    xa = np.zeros(layout.n) if xa is None else np.asarray(xa, dtype=float)
+    compensate(dtheta, dv, dt, np.r_[comp_g, comp_a], xa, layout.start("gyro_scale"),
+               layout.start("accel_scale"), dth, dvc)
     return dth, dvc
 
 
@@ -211,15 +212,14 @@ class ErrorStateCore:
         BiasedModel` when the layout has optional states)."""
         model = self._models.get(m.name)
         if model is None:
-            model = self._models[m.name] = self.model_of(m.name, m.model)
+            model = self._models[m.name] = self.model_of(m.model)
         return model.residual(nav, m.z[i]), model, nav, m.R[i]
 
-    def model_of(self, sensor: str, model):
-        """Sensor ``sensor``'s measurement ``model`` over this core's error states."""
+    def model_of(self, model):
+        """A measurement ``model`` over this core's error states."""
         if self.n == em.N_STATES:
             return model
-        return BiasedModel(model, self.n, bias_columns(self.layout, sensor,
-                                                       getattr(model, "kinds", ())), self.xa)
+        return BiasedModel(model, self.n, bias_columns(self.layout, model), self.xa)
 
     def feed_back(self, fed) -> np.ndarray:
         fed.fuse()
@@ -452,6 +452,6 @@ class PythonLoop:
         model = WindConstraint.of(z[i])
         d, R = model.residual(nav, z[i]), model.R(m.sigma[i], nav)
         if hasattr(self.core, "model_of"):
-            model = self.core.model_of("wind", model)
+            model = self.core.model_of(model)
         for name in self.fed.locals:
             self.fed.update(name, d, model, nav, R, t=tk, readmit=False)

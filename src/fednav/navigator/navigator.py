@@ -801,10 +801,8 @@ class Navigator:
         if n > k * self.n_per:
             loop = self.loop
             comp_g, comp_a = self._free_comp if loop is None else (loop.comp_g, loop.comp_a)
-            xa = getattr(loop, "xa", None)
             dth, dvc = compensated(self._imu_dth.view[sl], self._imu_dv.view[sl], self.dt,
-                                   comp_g, comp_a, np.zeros(18) if xa is None else xa,
-                                   self.layout)
+                                   comp_g, comp_a, getattr(loop, "xa", None), self.layout)
             tmp.run(dth, dvc, self._h_ref.view[sl], record=False)
         s = tmp.state
         if self.loop is not None:

@@ -146,11 +146,17 @@ class FilterConfig(_Model):
     grid_level: int = Field(default=3, ge=1, le=5)
     accel_bias: Literal["random_walk", "gauss_markov"] = "random_walk"
     q_adaptation: QAdaptationConfig | None = None
-    states: list[Literal["gyro_scale", "accel_scale", "gnss_markov", "velocity_markov"]] = []
+    states: list[str] = []
 
     @field_validator("states")
     @classmethod
     def _states(cls, v):
+        from ..ins.states import BLOCKS
+
+        for k in v:
+            if k not in BLOCKS:
+                raise ValueError(f"unknown optional error state '{k}'; known: "
+                                 f"{', '.join(BLOCKS)}")
         if len(set(v)) != len(v):
             raise ValueError("each optional state once")
         return v
@@ -504,30 +510,30 @@ def state_layout(system: System, validating: bool = False) -> StateLayout:
                 fail(["filter", "states"], f"{which}_scale needs its 1-sigma: "
                                            f"imu.{which}_scale_ppm (or imu.grade)")
             blocks[f"{which}_scale"] = (s or 0.0, float("inf"))
-    for block, sensor, key in (("gnss_markov", "gnss", "markov_sigma_enu_m"),
-                               ("velocity_markov", "velocity", "markov_sigma_mps")):
-        if block in states:
-            c = system.sensors[sensor] if sensor in system.sensors else None
-            if c is None or getattr(c, key) is None or c.markov_tau_s is None:
-                fail(["filter", "states"], f"{block} needs sensors.{sensor}.{key} and "
-                                           f"markov_tau_s")
-            s = np.broadcast_to(np.asarray(getattr(c, key), dtype=float), (3,))
-            if not (s > 0.0).all():
-                fail(["sensors", sensor, key], "a Gauss-Markov sigma is positive")
-            blocks[block] = (s, float(c.markov_tau_s))
+    for sensor, spec in SENSORS.items():  # a sensor's own error (its model's markov_block)
+        block = getattr(spec.model, "markov_block", None)
+        if block not in states:
+            continue
+        c = system.sensors[sensor] if sensor in system.sensors else None
+        key = spec.config.MARKOV_KEY
+        if c is None or getattr(c, key) is None or c.markov_tau_s is None:
+            fail(["filter", "states"], f"{block} needs sensors.{sensor}.{key} and "
+                                       f"markov_tau_s")
+        s = np.broadcast_to(np.asarray(getattr(c, key), dtype=float), (3,))
+        if not (s > 0.0).all():
+            fail(["sensors", sensor, key], "a Gauss-Markov sigma is positive")
+        blocks[block] = (s, float(c.markov_tau_s))
     return StateLayout.of(blocks)
 
 
 def sensor_model(system: System, name: str, section=None):
     """Sensor ``name``'s measurement model in ``system`` (its ``section``, default the
-    system's): the section's model, the GNSS and velocity ones noise-split for their
-    Gauss–Markov state when the system has it (``with_markov``)."""
+    system's): the section's model, noise-split for its Gauss–Markov state when the
+    system selects it (:meth:`~fednav.sensors.measurement.RowModel.with_markov`)."""
     section = system.sensors[name] if section is None else section
     model = section.model()
-    if name == "gnss" and "gnss_markov" in system.filter.states:
-        model = model.with_markov(section.markov_sigma_enu_m)
-    if name == "velocity" and "velocity_markov" in system.filter.states:
-        model = model.with_markov(section.markov_sigma_mps)
+    if getattr(model, "markov_block", None) in system.filter.states:
+        model = model.with_markov(getattr(section, section.MARKOV_KEY))
     return model
 
 

@@ -137,21 +137,18 @@ def consistency(sol: Solution) -> dict[str, dict[str, float]]:
     return _consistency(sol.fdi)
 
 
-#: The unit each optional error state is reported in (summary.json): key suffix, per SI.
-STATE_UNITS = {"gyro_scale": ("ppm", 1e6), "accel_scale": ("ppm", 1e6),
-               "gnss_markov": ("enu_m", 1.0), "velocity_markov": ("enu_mps", 1.0)}
-
-
 def error_states(optional: dict) -> dict:
-    """The optional error states at the end of the run, as ``summary.json`` has them:
-    ``{"gyro_scale_ppm": {"estimate": [x, y, z], "sigma": [...]}, "gnss_markov_enu_m":
-    ...}`` (body axes for scale factors, east/north/up for the GNSS and velocity
-    sensor's errors)."""
+    """The optional error states at the end of the run, as ``summary.json`` has them, in
+    their filter units (:data:`fednav.ins.states.BLOCKS`): ``{"gyro_scale_ppm":
+    {"estimate": [x, y, z], "sigma": [...]}, "gnss_markov_enu_m": ...}`` (body axes for
+    scale factors, east/north/up for a sensor's error)."""
+    from ..ins.states import BLOCKS
+
     out = {}
     for name, v in optional.items():
-        unit, k = STATE_UNITS[name]
-        out[f"{name}_{unit}"] = {key: [round(float(x) * k, 6) for x in v[key]]
-                                 for key in ("estimate", "sigma")}
+        b = BLOCKS[name]
+        out[f"{name}_{b.suffix}"] = {key: [round(float(x) / b.unit, 6) for x in v[key]]
+                                     for key in ("estimate", "sigma")}
     return out
 
 

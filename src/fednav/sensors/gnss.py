@@ -16,13 +16,13 @@ import dataclasses
 import functools
 import warnings
 from dataclasses import dataclass
-from typing import Literal
+from typing import ClassVar, Literal
 
 import numpy as np
 from pydantic import Field, model_validator
 
 from .base import MeasurementSeries, flight_times, position_noise_to_llh
-from .measurement import POS_E, POS_N, POS_U, VEL_E, VEL_N, VEL_U, RowModel, white_part
+from .measurement import POS_E, POS_N, POS_U, VEL_E, VEL_N, VEL_U, RowModel
 from .spec import Column, SensorConfig, SensorSpec
 
 _V3 = tuple[float, float, float]
@@ -139,6 +139,8 @@ class GnssPosVel(RowModel):
 
     kind = "gnss"
     rows = ((POS_E, 1), (POS_N, 0), (POS_U, 2), (VEL_E, 3), (VEL_N, 4), (VEL_U, 5))
+    #: the positions' time-correlated error, [east, north, up] (``gnss_markov``)
+    markov_block, markov_kinds = "gnss_markov", (POS_E, POS_N, POS_U)
 
     def __init__(self, lever=(0.0, 0.0, 0.0), measures: str = "position_velocity"):
         # z keeps its 6 components; a receiver without velocity (or position) has rows
@@ -147,22 +149,10 @@ class GnssPosVel(RowModel):
                 "velocity": slice(3, 6)}[measures]
         self.rows = GnssPosVel.rows[keep]
         super().__init__(lever)
-        self.markov_var = None
-
-    def with_markov(self, sigma_enu) -> GnssPosVel:
-        """This model for a filter with the Gauss–Markov position-error state
-        (``gnss_markov``, :mod:`fednav.ins.states`) of stationary 1-sigma ``sigma_enu``
-        [m]: a position sigma is then the whole error's (as a receiver reports it) and
-        :meth:`R` keeps its white part, ``sigma^2 - sigma_markov^2``, at least 1 % of
-        ``sigma^2`` (:func:`~fednav.sensors.measurement.white_part`)."""
-        s = np.broadcast_to(np.asarray(sigma_enu, dtype=float), (3,))
-        self.markov_var = np.r_[s[[1, 0, 2]] ** 2, np.zeros(3)]  # as z: north, east, up
-        return self
 
     def R(self, sigma) -> np.ndarray:
         s = np.asarray(sigma, dtype=float)  # [north, east, up m, vE, vN, vU], as z
-        R = np.diag(s[self.zindex] ** 2)
-        return R if self.markov_var is None else white_part(R, self.markov_var[self.zindex])
+        return self.white(np.diag(s[self.zindex] ** 2))
 
 
 class GnssConfig(SensorConfig):
@@ -188,6 +178,8 @@ class GnssConfig(SensorConfig):
     velocity_latency_s: float = Field(default=0.0, ge=0.0, le=2.0)
     markov_sigma_enu_m: float | _V3 | None = None
     markov_tau_s: float | None = Field(default=None, gt=0.0)
+    #: the key of the 1-sigma the model's Gauss-Markov state takes
+    MARKOV_KEY: ClassVar[str] = "markov_sigma_enu_m"
     #: what the local filter uses (None: what the data hold; both in a simulation)
     measures: Literal["position_velocity", "position", "velocity"] | None = None
 

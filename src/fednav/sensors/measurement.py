@@ -72,10 +72,20 @@ def _v(a) -> np.ndarray:
 class RowModel:
     """A measurement model described by rows (see the module docstring): ``rows`` =
     ((row kind, index into z), ...); ``lever`` the sensor's point from the IMU (body
-    right-forward-up, m).  Subclasses give ``kind``, ``rows`` and ``R``."""
+    right-forward-up, m).  Subclasses give ``kind``, ``rows`` and ``R``.
+
+    A sensor whose value carries a time-correlated error that an optional error state
+    models (:mod:`fednav.ins.states`) names that state, ``markov_block``, and the row
+    kinds it adds to, ``markov_kinds`` (its three components in order); its config's
+    ``MARKOV_KEY`` gives the error's 1-sigma (:func:`fednav.navigator.system.
+    state_layout`)."""
 
     kind = "?"
     rows: tuple = ()
+    markov_block: str | None = None
+    markov_kinds: tuple = ()
+    #: per row, the Gauss-Markov variance the state carries (:meth:`with_markov`)
+    markov_var: np.ndarray | None = None
 
     def __init__(self, lever=(0.0, 0.0, 0.0)):
         self.lever = _v(np.asarray(lever, dtype=float).reshape(3))
@@ -110,6 +120,21 @@ class RowModel:
         Z = np.empty((X.shape[0], self.dim))
         row_predict(self.kinds, *self._nav(nav), self.lever, X, Z)
         return Z
+
+    def with_markov(self, sigma):
+        """This model for a filter with its ``markov_block`` state of stationary 1-sigma
+        ``sigma`` (one value or per component): the sensor's sigma (config or file) is
+        then the whole error's, as a receiver reports it, and :meth:`white` keeps its
+        white part."""
+        s = np.broadcast_to(np.asarray(sigma, dtype=float), (len(self.markov_kinds),))
+        self.markov_var = np.array([s[self.markov_kinds.index(k)] ** 2
+                                    if k in self.markov_kinds else 0.0 for k in self.kinds])
+        return self
+
+    def white(self, R) -> np.ndarray:
+        """``R`` of this model's rows, less the Gauss–Markov part a state carries
+        (:func:`white_part`; ``R`` itself without such a state)."""
+        return R if self.markov_var is None else white_part(R, self.markov_var)
 
 
 # ------------------------------------------------------------ shared pieces of models
@@ -333,20 +358,18 @@ def row_predict(kinds, lla, vel, C, omega, lever, X, Z):
                 Z[i, r] = X[i, _COLUMN[k]]
 
 
-def bias_columns(layout: StateLayout, sensor: str, kinds) -> np.ndarray:
-    """Per row of a sensor's row model (its row ``kinds``, :mod:`fednav.sensors.
-    measurement`), the error-state column of the additive bias its value carries (-1:
-    none): the GNSS position rows' Gauss–Markov error (``gnss_markov``), the velocity
-    sensor's (``velocity_markov``)."""
+def bias_columns(layout: StateLayout, model) -> np.ndarray:
+    """Per row of a measurement ``model``, the error-state column of the additive error
+    its value carries (-1: none): the columns of its ``markov_block`` in ``layout``, on
+    the rows of its ``markov_kinds`` (:class:`RowModel`)."""
+    kinds = getattr(model, "kinds", ())
     out = np.full(len(kinds), -1, dtype=np.int64)
-    block, first, last = {"gnss": ("gnss_markov", POS_E, POS_U),
-                          "velocity": ("velocity_markov", VEL_E, VEL_U)}.get(
-                              sensor, (None, 0, -1))
+    block = getattr(model, "markov_block", None)
     i = layout.start(block) if block is not None else -1
     if i >= 0:
         for r, k in enumerate(kinds):
-            if first <= k <= last:
-                out[r] = i + k - first
+            if k in model.markov_kinds:
+                out[r] = i + model.markov_kinds.index(k)
     return out
 
 

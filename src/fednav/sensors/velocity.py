@@ -11,12 +11,13 @@ Residual: INS-derived sensor velocity - measured, ENU [m/s] (linear).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 from pydantic import Field, field_validator
 
 from .base import MeasurementSeries, flight_times, point_velocity
-from .measurement import VEL_E, VEL_N, VEL_U, RowModel, white_part
+from .measurement import VEL_E, VEL_N, VEL_U, RowModel
 from .spec import Column, SensorConfig, SensorSpec
 
 _V3 = tuple[float, float, float]
@@ -47,20 +48,12 @@ class VelocityENU(RowModel):
     kind = "velocity"
     rows = ((VEL_E, 0), (VEL_N, 1), (VEL_U, 2))
 
-    markov_var = None
-
-    def with_markov(self, sigma_enu) -> VelocityENU:
-        """This model for a filter with the Gauss–Markov velocity-error state
-        (``velocity_markov``, :mod:`fednav.ins.states`) of stationary 1-sigma
-        ``sigma_enu`` [m/s]: a sigma (or covariance) is then the whole error's and
-        :meth:`R` keeps its white part (:func:`~fednav.sensors.measurement.white_part`)."""
-        self.markov_var = np.broadcast_to(np.asarray(sigma_enu, dtype=float), (3,)) ** 2
-        return self
+    #: the sensor's time-correlated error, [east, north, up] (``velocity_markov``)
+    markov_block, markov_kinds = "velocity_markov", (VEL_E, VEL_N, VEL_U)
 
     def R(self, cov) -> np.ndarray:
         c = np.asarray(cov, dtype=float)
-        R = np.diag(c**2) if c.ndim == 1 else c
-        return R if self.markov_var is None else white_part(R, self.markov_var)
+        return self.white(np.diag(c**2) if c.ndim == 1 else c)
 
 
 class VelocityConfig(SensorConfig):
@@ -77,6 +70,8 @@ class VelocityConfig(SensorConfig):
     time_offset_s: float = 0.0
     markov_sigma_mps: float | _V3 | None = None
     markov_tau_s: float | None = Field(default=None, gt=0.0)
+    #: the key of the 1-sigma the model's Gauss-Markov state takes
+    MARKOV_KEY: ClassVar[str] = "markov_sigma_mps"
 
     @field_validator("axes")
     @classmethod
