@@ -58,12 +58,19 @@ from .total import NAV_BIAS
 
 
 @numba.njit(cache=True)
+def stamp_tolerance(t):
+    """How close two time stamps near ``t`` [s] count as the same: 1 ns, or four units in
+    the last place of large stamps such as Unix time."""
+    return max(1e-9, 4.0 * np.spacing(abs(t)))
+
+
+@numba.njit(cache=True)
 def epoch_at(t, t0, T):
     """The filter epoch at or after time ``t`` (0: at or before the start ``t0``): the
-    first ``k`` with ``t0 + k T >= t - tol`` on the epoch grid as computed (``tol`` 1 ns,
-    or four units in the last place of large time stamps such as Unix time).  One
-    compiled source for one time (a stream) and for arrays (:func:`epochs_at`)."""
-    x = t - max(1e-9, 4.0 * np.spacing(abs(t)))
+    first ``k`` with ``t0 + k T >= t - tol`` on the epoch grid as computed (``tol``:
+    :func:`stamp_tolerance`).  One compiled source for one time (a stream) and for arrays
+    (:func:`epochs_at`)."""
+    x = t - stamp_tolerance(t)
     k = max(math.ceil((x - t0) / T), 0)
     if k > 0 and t0 + T * (k - 1) >= x:  # rounding at a grid point
         k -= 1

@@ -27,7 +27,7 @@ from ..io.data import DataError, GnssData, ImuData, Reference, VelocityData
 from ..io.sensorfile import SensorData
 from ..navigator.health import readmission_warnings, run_health
 from ..navigator.loop import InnovationRecord  # noqa: F401  (fednav.process's name)
-from ..navigator.navigator import InitialState, Navigator
+from ..navigator.navigator import InitialState, Navigator, stamp_tolerance
 from ..navigator.solution import Solution, epoch_rate, imu_rate
 from ..navigator.system import (
     System,
@@ -683,7 +683,7 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
     # the first IMU sample at or after t0 (the first GNSS fix): the epoch grid t0 + k T
     # then lies at or just after the fixes' stamps — from the nearest sample, which can
     # lie just before, every fix waited a whole filter period for its epoch
-    i0 = int(np.searchsorted(imu.t, t0 - max(1e-9, 4.0 * np.spacing(abs(t0)))))
+    i0 = int(np.searchsorted(imu.t, t0 - stamp_tolerance(float(t0))))
     n_cycles = (len(imu.t) - 1 - i0) // n_per
     span = float(imu.t[-1] - imu.t[0])
     if T > span:
