@@ -2,7 +2,9 @@
 
 Run only to pin a deliberate change of results, and say so in the commit:
 ``python tests/golden/make_golden.py [CASE ...]`` (cases: the keys of
-``golden_cases.CASES`` plus ``process``, ``planetary`` and ``tune``).
+``golden_cases.CASES`` plus ``process``, ``planetary`` and ``tune``), then measure how
+far they move in other numerical environments with ``python tests/golden/spread.py
+[CASE ...]`` (it writes ``spread.json``, the tolerances off this machine).
 """
 
 from __future__ import annotations
