@@ -2,8 +2,10 @@
 
 * Table 1 — observability degree of every error state for the SINS/CNS/SAR measurement
   set over the flight (:mod:`fednav.ins.observability`): the paper's SVD degree (SI units,
-  velocity error = 1) beside the same in filter units and the unit-free covariance
-  degree ``sigma(0) / sigma(T)``; per flight phase in ``observability_phases``.
+  velocity error = 1; the singular values assigned to the states one to one, the paper's
+  largest-component rule where that is one to one) beside the same in filter units and
+  the unit-free covariance degree ``sigma(0) / sigma(T)``; per flight phase in
+  ``observability_phases``.
 * Tables 2 and 3 — statistic (paper): errors sampled every 1 s, absolute value averaged
   over the flight.  Columns: ``dlambda_m`` / ``dL_m`` = east / north position error [m],
   ``dVx_mps`` / ``dVy_mps`` = east / north velocity error [m/s], ``phiE/N/U_arcsec``
@@ -63,7 +65,9 @@ PAPER_T4 = {"SGHQF": (0.6, 0.012, 0.80, 8.7), "AASGHQF": (0.58, 0.011, 0.75, 6.8
             "UKF": (0.62, 0.014, 0.85, 2.1)}
 T4_COLS = ("att_arcsec", "vel_mps", "pos_m", "ms_per_cycle")
 TABLE_TITLES = {
-    "T1": "Table 1 — observability degree, SINS/CNS/SAR (SVD: velocity error = 1; "
+    "T1": "Table 1 — observability degree, SINS/CNS/SAR (SVD: velocity error = 1, each "
+          "singular value assigned to one state — the paper's largest-component rule made "
+          "one to one, so that no state, e.g. a SAR-measured position, is left with 0; "
           "covariance: sigma(0)/sigma(T))",
     "T2": "Table 2 — mean absolute position / velocity error",
     "T3": "Table 3 — mean absolute misalignment (arc-seconds)",
