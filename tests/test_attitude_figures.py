@@ -86,9 +86,9 @@ def test_reproduction_tables_console_and_html():
     out = io.StringIO()
     print_tables({"paper": "003", "runs": 2, "seed": 1, "tables": {"T1": table}},
                  {"T1": "Table 1"}, PipeConsole(file=out))
-    assert "14.4″ ± 1.80″ | 0.07 ×0.06" in out.getvalue()
+    assert "14.4″ ± 1.80″ | 0.07 ×0.057 better" in out.getvalue()
     html = table_html("T1", table, "Table 1", 2, 1)
-    assert "14.4″ ± 1.80″<span class='p'>paper 0.07 · ×0.06" in html
+    assert "14.4″ ± 1.80″<span class='p'>paper 0.07 · ×0.057" in html
 
 
 def test_process_rmse_console_and_html(tmp_path, monkeypatch):
