@@ -472,6 +472,7 @@ def _print_process(s: dict, compiled_s: float = 0.0) -> None:
     from rich.markup import escape
 
     from .campaign.explain import label
+    from .campaign.report import format_attitude, is_attitude_deg
 
     what = {"rmse": "RMSE of the forward solution", "rmse_smoothed": "RMSE smoothed"}
     blocks = [(f"{what[key]} against the reference", s[key])
@@ -483,7 +484,8 @@ def _print_process(s: dict, compiled_s: float = 0.0) -> None:
         tab = Table(title=title)
         for k in block:
             tab.add_column(escape(label(k)), justify="right")  # ([m] is not markup)
-        tab.add_row(*(f"{v:.3f}" for v in block.values()))
+        tab.add_row(*(format_attitude(v, fmt=lambda x: f"{x:.3f}") if is_attitude_deg(k)
+                      else f"{v:.3f}" for k, v in block.items()))
         console.print(tab)
 
 

@@ -310,11 +310,24 @@ def tables_frame(summary: dict):
                          for t, m, q, s, c in _cells(summary)])
 
 
-def _pm(cell: dict) -> str:
+def _formatter(q: str, value):
+    """``(x, fmt) -> text`` for the figures of a cell of quantity ``q`` holding ``value``:
+    an attitude in the value's unit (:func:`~fednav.campaign.report.format_attitude`:
+    arc-seconds below 0.01°), anything else ``fmt(x)``."""
+    from .report import format_attitude, is_attitude_deg
+
+    if is_attitude_deg(q):
+        return lambda x, fmt: format_attitude(x, unit_of=value, fmt=fmt)
+    return lambda x, fmt: fmt(x)
+
+
+def _pm(cell: dict, q: str = "") -> str:
     from .report import format_number
 
     v, h = cell.get("value"), cell.get("ci95")
-    return format_number(v) if h is None else f"{format_number(v)} ± {format_number(h)}"
+    num = _formatter(q, v)
+    return (num(v, format_number) if h is None
+            else f"{num(v, format_number)} ± {num(h, format_number)}")
 
 
 def _columns(table: dict) -> list[str]:
@@ -341,7 +354,8 @@ def tables_markdown(summary: dict) -> str:
         for mode, qs in t["rows"].items():
             for q, stats in qs.items():
                 lines.append(f"| {mode} | {_label(q)} | "
-                             + " | ".join(_pm(stats[c]) if c in stats else "" for c in cols)
+                             + " | ".join(_pm(stats[c], q) if c in stats else ""
+                                          for c in cols)
                              + " |")
         lines.append("")
     return "\n".join(lines)
@@ -353,15 +367,21 @@ SHORT = {"horizontal_position_m": "horizontal [m]", "height_m": "height [m]",
          "roll_deg": "roll [deg]", "heading_deg": "heading [deg]"}
 
 
-def _short_pm(cell: dict) -> str:
-    """``value ±ci`` with the half-width to two significant figures (console)."""
+def _short_pm(cell: dict, q: str = "") -> str:
+    """``value ±ci`` with the half-width to two significant figures (console); an
+    attitude in arc-seconds below 0.01° (:func:`_formatter`)."""
     from .report import format_number
 
     v, h = cell.get("value"), cell.get("ci95")
-    if h is None:
-        return format_number(v)
-    two = format_number(h) if abs(h) >= 10 else f"{h:#.2g}".rstrip(".")
-    return f"{format_number(v)} ±{two}"
+    num = _formatter(q, v)
+    return num(v, format_number) if h is None else f"{num(v, format_number)} ±{num(h, _two)}"
+
+
+def _two(h: float) -> str:
+    """A half-width to two significant figures (whole from 10 up)."""
+    from .report import format_number
+
+    return format_number(h) if abs(h) >= 10 else f"{h:#.2g}".rstrip(".")
 
 
 def print_design_tables(summary: dict, console) -> None:
@@ -387,7 +407,7 @@ def print_design_tables(summary: dict, console) -> None:
             items = list(qs.items())
             for i, (q, stats) in enumerate(items):
                 tab.add_row("  " + escape(SHORT.get(q, q)),
-                            *[_short_pm(stats[c]) if c in stats else "" for c in cols],
+                            *[_short_pm(stats[c], q) if c in stats else "" for c in cols],
                             end_section=(i == len(items) - 1))
         console.print(tab)
 

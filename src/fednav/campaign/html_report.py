@@ -68,11 +68,16 @@ class ReportError(FednavError, ValueError):
     """A folder that holds no reproduction or processing run to report on."""
 
 
-def _num(x) -> str:
-    from .report import format_number
+def _num(x, key: str = "", unit_of=None) -> str:
+    """A number for a cell; of an attitude key (:func:`~fednav.campaign.report.
+    is_attitude_deg`) in arc-seconds below 0.01° (in the unit of ``unit_of`` [deg] when
+    given: a CI in its value's)."""
+    from .report import format_attitude, format_number, is_attitude_deg
 
     if x is None or isinstance(x, bool) or not isinstance(x, int | float):
         return "–" if x is None else escape(str(x))
+    if is_attitude_deg(key):
+        return format_attitude(x, unit_of=unit_of)
     return format_number(x)
 
 
@@ -168,7 +173,8 @@ def table_html(name: str, table: dict, title: str, runs, seed,
 
 def _cell(table: str, row: str, quantity: str, v: dict, reasons: _Reasons) -> str:
     ours, paper, ci = v.get("ours"), v.get("paper"), v.get("ci95")
-    value = _num(ours) + (f" ± {_num(ci)}" if _present(ci) else "")
+    col = quantity.partition(" / ")[0]
+    value = _num(ours, col) + (f" ± {_num(ci, col, ours)}" if _present(ci) else "")
     verdict = explain.compare(ours, paper, quantity)
     if paper is None:
         return f"<td>{value}</td>"
@@ -195,7 +201,8 @@ def _cell(table: str, row: str, quantity: str, v: dict, reasons: _Reasons) -> st
     line = f"<span class='p'>{verdict_line}</span>" if verdict_line else ""
     line += "".join(f"<span class='p'>{escape(k)}: {_num(x)}</span>"
                     for k, x in explain.extras(v))
-    return (f"<td class='{verdict.kind}'{title}>{value}<span class='p'>paper {_num(paper)}"
+    return (f"<td class='{verdict.kind}'{title}>{value}<span class='p'>paper "
+            f"{_num(paper, col)}"
             f" · {escape(verdict.text)}</span>{line}</td>")
 
 
@@ -233,8 +240,9 @@ def design_table_html(name: str, table: dict, title: str, seed,
             for c in cols:
                 v = stats.get(c) or {}
                 h = v.get("ci95")
-                cells.append(f"<td>{_num(v.get('value'))}"
-                             + ("" if h is None else f" ± {_num(h)}") + "</td>")
+                cells.append(f"<td>{_num(v.get('value'), q)}"
+                             + ("" if h is None else f" ± {_num(h, q, v.get('value'))}")
+                             + "</td>")
             first = " class='first'" if i == 0 else ""
             out.append(f"<tr{first}><td class='l'>"
                        f"{escape(explain.row_label(row)) if i == 0 else ''}</td>"
@@ -567,7 +575,8 @@ def render_process(folder: Path, s: dict) -> str:
             continue
         body.append(f"<h2 id='h-{escape(tid)}'>{escape(title)}</h2>")
         body.append(_simple_table(tid, [explain.label(k) for k in block],
-                                  [[_val(v) for v in block.values()]], text=()))
+                                  [[_num(v, k) if isinstance(v, float | int) else _val(v)
+                                    for k, v in block.items()]], text=()))
     known = {"inputs", "warnings", "epochs", "run_time_s", "alignment", "consistency",
              "data_quality", "rmse", "rmse_smoothed", "against"}
     rest = {k: v for k, v in s.items() if k not in known}

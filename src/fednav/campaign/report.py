@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -47,6 +49,40 @@ def format_number(x: float | None) -> str:
     return f"{x:.3g}"
 
 
+#: Attitude figures below this magnitude [deg] are printed in arc-seconds.
+ARCSEC_BELOW_DEG = 0.01
+#: Table keys of attitude errors in degrees (designs, paper 003, ``fednav process``).
+_ATTITUDE_DEG = re.compile(r"(pitch|roll|yaw|heading)_deg")
+
+
+def is_attitude_deg(key) -> bool:
+    """Whether a table key is an attitude error in degrees (``pitch_deg``, ``roll_deg``,
+    ``yaw_deg``, ``heading_deg``): the keys :func:`format_attitude` prints."""
+    return bool(_ATTITUDE_DEG.fullmatch(str(key)))
+
+
+def attitude_unit(value_deg) -> tuple[float, str]:
+    """The unit a human table prints an attitude figure [deg] in, as (factor from
+    degrees, suffix): arc-seconds ``(3600, "″")`` when its magnitude is below
+    :data:`ARCSEC_BELOW_DEG` (a star sensor's 0.0034° reads 12.2″, not 0.003 or 0.000),
+    else ``(1, "")`` (degrees, the column's unit).  The one place of this rule; machine
+    outputs (JSON, CSV) keep degrees."""
+    if value_deg is None or not np.isfinite(value_deg) or abs(value_deg) >= ARCSEC_BELOW_DEG:
+        return 1.0, ""
+    return float(units.to_arcsec(units.DEG)), "″"
+
+
+def format_attitude(value_deg, unit_of=None, fmt=format_number) -> str:
+    """An attitude figure [deg] for a human table (:func:`attitude_unit`): ``fmt`` of the
+    number in its unit, with ``″`` when that is arc-seconds; "–" for a missing or
+    non-finite value.  ``unit_of`` [deg]: take the unit of this figure instead (a
+    confidence interval is printed in its value's unit)."""
+    if value_deg is None or not np.isfinite(value_deg):
+        return "–"
+    k, suffix = attitude_unit(value_deg if unit_of is None else unit_of)
+    return f"{fmt(value_deg * k)}{suffix}"
+
+
 def print_tables(summary: dict, titles: dict[str, str], console: Console | None = None) -> None:
     """Print each table as the HTML report shows it: a row per filter (and statistic), a
     column per measure with its label and unit; each cell fednav's value (± 95 % CI where
@@ -85,13 +121,17 @@ def print_tables(summary: dict, titles: dict[str, str], console: Console | None 
                 if v is None:
                     cells.append("–")
                     continue
-                text = format_number(v.get("ours"))
+                num = (partial(format_attitude, unit_of=v.get("ours"))
+                       if is_attitude_deg(c) else format_number)
+                text = num(v.get("ours"))
                 if explain.present(v.get("ci95")):
-                    text += f" ± {format_number(v['ci95'])}"
+                    text += f" ± {num(v['ci95'])}"
                 if v.get("paper") is not None:
                     q = f"{c} / {stat}" if stat else c
                     verdict = explain.compare(v.get("ours"), v["paper"], q)
-                    text += f" | {format_number(v['paper'])} {verdict.text}"
+                    paper_text = (format_attitude(v["paper"]) if is_attitude_deg(c)
+                                  else format_number(v["paper"]))
+                    text += f" | {paper_text} {verdict.text}"
                     if verdict.kind == "better":
                         text += " [green]better[/]"
                     elif verdict.kind == "timing":

@@ -7,12 +7,22 @@ stripped observability matrix ::
 
     O = [O_1; O_2; ...; O_r],   O_j = [H_j; H_j F_j; ...; H_j F_j^(n-1)]
 
-is decomposed ``O = U S V'``.  Paper 002's attribution rule credits the singular value
-``s_i`` to the state ``k`` with the largest ``|V[k, i]|`` (it skips forming the initial
-state from the measurements); a state credited with several values keeps the largest,
-one credited with none gets 0 (not observable by this measure).  Degrees are normalised
+is decomposed ``O = U S V'``.  Paper 002's rule credits the singular value ``s_i`` to
+the state ``k`` with the largest component ``|V[k, i]|`` (it skips forming the initial
+state from the measurements), and its Table 1 gives each of its 16 states one value.
+Read literally the rule can credit two singular values to one state and none to
+another: where several singular values are (nearly) equal their vectors are any
+rotation within their subspace, and which state a vector's largest component falls on
+is decided by rounding.  fednav therefore **assigns** the singular values to the states
+one to one: the permutation that maximises ``sum_i V[k(i), i]**2`` (the share of each
+singular vector on the state it is credited to; ``V**2`` is doubly stochastic), solved by
+:func:`scipy.optimize.linear_sum_assignment`.  Wherever the largest-component rule is
+already one to one, it is this optimum (each term is its row's largest), so the paper's
+rule is kept where it is well defined; a collision goes to the vector with the larger
+share and the other vector to its next state.  With fewer singular values than states
+(fewer rows than columns in ``O``) the states left over get 0.  Degrees are normalised
 to a reference state (the paper: velocity error = 1) — to its own singular value, or,
-when it won none, to the singular value whose right vector has its largest component.
+when it got none, to the singular value whose right vector has its largest component.
 
 **The SVD degree depends on the units of the states.**  Scaling a state (arc-seconds
 instead of radians, metres instead of radians of latitude) scales its column of ``O`` and
@@ -52,25 +62,34 @@ def stripped_observability_matrix(F_list, H_list, powers: int | None = None) -> 
 
 
 def svd_degree(O, reference: int | None = None) -> tuple[np.ndarray, list[tuple]]:
-    """Per-state observability degree by paper 002's rule.
+    """Per-state SVD observability degree: paper 002's largest-component rule made one to
+    one (module docstring).
 
-    Returns the degrees (n,) — normalised by the reference state's degree when
-    ``reference`` is given — and the attribution ``[(singular value, state index), ...]``.
+    ``O`` (m, n): the stripped observability matrix (any consistent state units).  Returns
+    the degrees (n,) — the singular value assigned to each state, in the units of ``O``,
+    or divided by the reference state's one when ``reference`` (a state index) is given —
+    and the attribution ``[(singular value, state index), ...]`` in decreasing order of
+    the singular values, each state at most once.
     """
+    from scipy.optimize import linear_sum_assignment
+
     O = np.asarray(O, dtype=float)
+    if O.ndim != 2:
+        raise ValueError(f"observability: O must be a 2-D matrix; got shape {O.shape}")
     _, s, Vt = np.linalg.svd(O, full_matrices=False)
     n = O.shape[1]
+    rows, states = linear_sum_assignment(Vt**2, maximize=True)
     deg = np.zeros(n)
-    assign = []
-    for i, sv in enumerate(s):
-        k = int(np.argmax(np.abs(Vt[i])))
-        assign.append((float(sv), k))
-        deg[k] = max(deg[k], sv)
+    deg[states] = s[rows]
+    assign = [(float(s[i]), int(k)) for i, k in sorted(zip(rows, states, strict=True))]
     if reference is not None:
+        if not 0 <= reference < n:
+            raise ValueError(f"observability: reference state {reference} is not one of "
+                             f"the {n} states")
         ref = deg[reference]
         if ref <= 0:
-            # The reference state won no singular vector: use the singular value whose
-            # vector has the largest component along it.
+            # The reference state got no singular value (fewer of them than states): use
+            # the one whose vector has the largest component along it.
             ref = s[int(np.argmax(np.abs(Vt[:, reference])))]
         deg = deg / ref
     return deg, assign

@@ -2,8 +2,10 @@
 
 * Table 1 — observability degree of every error state for the SINS/CNS/SAR measurement
   set over the flight (:mod:`fednav.ins.observability`): the paper's SVD degree (SI units,
-  velocity error = 1) beside the same in filter units and the unit-free covariance
-  degree ``sigma(0) / sigma(T)``; per flight phase in ``observability_phases``.
+  velocity error = 1; the singular values assigned to the states one to one, the paper's
+  largest-component rule where that is one to one) beside the same in filter units and
+  the unit-free covariance degree ``sigma(0) / sigma(T)``; per flight phase in
+  ``observability_phases``.
 * Tables 2 and 3 — statistic (paper): errors sampled every 1 s, absolute value averaged
   over the flight.  Columns: ``dlambda_m`` / ``dL_m`` = east / north position error [m],
   ``dVx_mps`` / ``dVy_mps`` = east / north velocity error [m/s], ``phiE/N/U_arcsec``
@@ -63,7 +65,9 @@ PAPER_T4 = {"SGHQF": (0.6, 0.012, 0.80, 8.7), "AASGHQF": (0.58, 0.011, 0.75, 6.8
             "UKF": (0.62, 0.014, 0.85, 2.1)}
 T4_COLS = ("att_arcsec", "vel_mps", "pos_m", "ms_per_cycle")
 TABLE_TITLES = {
-    "T1": "Table 1 — observability degree, SINS/CNS/SAR (SVD: velocity error = 1; "
+    "T1": "Table 1 — observability degree, SINS/CNS/SAR (SVD: velocity error = 1, each "
+          "singular value assigned to one state — the paper's largest-component rule made "
+          "one to one, so that no state, e.g. a SAR-measured position, is left with 0; "
           "covariance: sigma(0)/sigma(T))",
     "T2": "Table 2 — mean absolute position / velocity error",
     "T3": "Table 3 — mean absolute misalignment (arc-seconds)",
@@ -120,36 +124,34 @@ def _measurement_H(scn: Scenario, nav):
     return out
 
 
-def observability(scn: Scenario, max_time: float | None = None) -> dict:
-    """Table 1 (whole flight) and the SVD degree per flight phase (one PWCS segment per
-    scenario segment, linearised at its middle), for the star + SAR measurement set."""
+def _error_process(scn: Scenario, tr):
+    """``k -> ErrorProcess`` linearised on the truth at sample ``k`` of ``tr``."""
     from ..ins import error_model as em
-    from ..ins.observability import (
-        covariance_degree,
-        stripped_observability_matrix,
-        svd_degree,
-    )
     from ..ins.strapdown import Strapdown
     from ..navigator.system import imu_noise_model
-    from ..sensors import NavSnapshot
-    from ..sim.runs import initial_covariance
 
-    tr = scn.trajectory(max_time)
     noise = imu_noise_model(scn, tr.dt)[0]
     baro = scn.sensors.baro.loop() if scn.sensors.baro is not None else None
     gains = Strapdown(tr.lla[0], tr.vel[0], tr.euler[0], tr.dt, baro).baro_gains[:2]
-    T = scn.filter.period_s
+    return lambda k: em.ErrorProcess(_nominal(tr, k), scn.filter.period_s, noise, gains)
 
-    def proc(k):
-        return em.ErrorProcess(_nominal(tr, k), T, noise, gains)
 
-    def nav(k):
-        return NavSnapshot(tr.lla[k], tr.vel[k], _nominal(tr, k).C)
+def _nav(tr, k):
+    """The true navigation state at sample ``k`` of ``tr`` (the measurement models' H)."""
+    from ..sensors import NavSnapshot
+
+    return NavSnapshot(tr.lla[k], tr.vel[k], _nominal(tr, k).C)
+
+
+def _segment_models(scn: Scenario, tr, proc) -> list[tuple[str, np.ndarray, np.ndarray]]:
+    """:func:`observability_models` on the trajectory ``tr`` with ``proc`` =
+    :func:`_error_process`."""
+    from ..ins import error_model as em
 
     # H and F in SI: the H rows of the measurement models map angles in the same unit on
     # both sides and metres to metres, so only the columns need the state scale.
     def H_si(k):
-        return np.vstack([H for H, _, _ in _measurement_H(scn, nav(k))]) / em.SCALE
+        return np.vstack([H for H, _, _ in _measurement_H(scn, _nav(tr, k))]) / em.SCALE
 
     bounds = np.cumsum([0.0] + [g.duration_s for g in scn.segments])
     bounds = bounds[bounds <= tr.t[-1] + 1e-9]
@@ -161,20 +163,49 @@ def observability(scn: Scenario, max_time: float | None = None) -> dict:
                           f"({scn.segments[0].duration_s:g} s)")
     mids = [int(round(0.5 * (a + b) / tr.dt)) for a, b in zip(bounds[:-1], bounds[1:],
                                                                strict=True)]
-    Fs = [proc(k).F_si() for k in mids]
-    Hs = [H_si(k) for k in mids]
+    return [(g.name, proc(k).F_si(), H_si(k))
+            for g, k in zip(scn.segments, mids, strict=False)]
+
+
+def observability_models(scn: Scenario, max_time: float | None = None
+                         ) -> list[tuple[str, np.ndarray, np.ndarray]]:
+    """The piecewise-constant system of Table 1: per flight segment flown within
+    ``max_time`` [s] (default: the whole flight), ``(segment name, F (18, 18), H (m, 18))``
+    linearised on the truth at the segment's middle, states in SI (rad, m/s, m, rad/s,
+    m/s^2), measurements the star Euler angles [rad] and the SAR east/north position [m]
+    and heading [rad]."""
+    tr = scn.trajectory(max_time)
+    return _segment_models(scn, tr, _error_process(scn, tr))
+
+
+def observability(scn: Scenario, max_time: float | None = None) -> dict:
+    """Table 1 (whole flight) and the SVD degree per flight phase (one PWCS segment per
+    scenario segment, linearised at its middle), for the star + SAR measurement set."""
+    from ..ins import error_model as em
+    from ..ins.observability import (
+        covariance_degree,
+        stripped_observability_matrix,
+        svd_degree,
+    )
+    from ..sim.runs import initial_covariance
+
+    tr = scn.trajectory(max_time)
+    proc = _error_process(scn, tr)
+    T = scn.filter.period_s
+    models = _segment_models(scn, tr, proc)
+    Fs, Hs = [F for _, F, _ in models], [H for _, _, H in models]
     ref = em.STATE_NAMES.index("dvE")
     deg_si, _ = svd_degree(stripped_observability_matrix(Fs, Hs), ref)
     # The same in filter units: state j scaled by SCALE_j (columns of O times SCALE).
     Of = stripped_observability_matrix(Fs, Hs) * em.SCALE
     deg_f, _ = svd_degree(Of, ref)
     phases = {"si": {}, "filter_units": {}}
-    for g, F, H in zip(scn.segments, Fs, Hs, strict=False):
+    for name, F, H in models:
         O1 = stripped_observability_matrix([F], [H])
         for unit, O in (("si", O1), ("filter_units", O1 * em.SCALE)):
             d, _ = svd_degree(O, ref)
-            phases[unit][g.name] = {T1_KEYS[n]: float(v)
-                                    for n, v in zip(em.STATE_NAMES, d, strict=True)}
+            phases[unit][name] = {T1_KEYS[n]: float(v)
+                                  for n, v in zip(em.STATE_NAMES, d, strict=True)}
     # Covariance degree: the KF covariance recursion with every star and SAR fix.
     per = round(T / tr.dt)
     n_cyc = (len(tr.t) - 1) // per
@@ -184,7 +215,7 @@ def observability(scn: Scenario, max_time: float | None = None) -> dict:
             k = (c + 1) * per
             p = proc(k - per // 2)
             t = tr.t[k]
-            meas = [(H, R) for H, R, period in _measurement_H(scn, nav(k))
+            meas = [(H, R) for H, R, period in _measurement_H(scn, _nav(tr, k))
                     if abs(t / period - round(t / period)) < 1e-6]
             yield p.Phi, p.Qd, meas
 
@@ -289,5 +320,5 @@ print_summary = EXPERIMENT.print_summary
 write_outputs = EXPERIMENT.write_outputs
 
 __all__ = ["ALIASES", "EXPERIMENT", "PAPER", "PAPER_TABLES", "TABLE_TITLES", "load_scenario",
-           "observability", "print_summary", "reproduce", "run_monte_carlo", "run_statistics",
-           "write_outputs"]
+           "observability", "observability_models", "print_summary", "reproduce",
+           "run_monte_carlo", "run_statistics", "write_outputs"]
