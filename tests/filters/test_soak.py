@@ -30,9 +30,14 @@ def test_a_gated_standard_cekf_says_when_its_prediction_goes_indefinite():
     """Issue 28's soak found the gated standard CEKF carrying an indefinite covariance
     from cycle 583 on, silently (a rejected update checks nothing and the Kalman predict
     only looked for NaN): the predict now checks positive definiteness and stops with a
-    FilterError naming the filter, the phase and the step."""
+    FilterError naming the filter, the phase and the step.  Which check trips first
+    depends on the BLAS kernel's rounding (the predict at step 195 with OpenBLAS's Haswell
+    kernels, 389 with SkylakeX; the update at step 137 with Prescott's), not whether one
+    does."""
+    import re
+
     from fednav.filters.soak import soak
 
     r = soak("cekf", 700, gate_alpha=1e-9)
-    assert r.error is not None and "cekf predict at step" in r.error
+    assert r.error is not None and re.search(r"cekf (predict|update) at step \d+", r.error)
     assert "not positive definite" in r.error
