@@ -84,13 +84,33 @@ def why_not_compiled(system, sensors: list, specs: dict) -> str | None:
     for a in sensors:
         if not specs[a].compiled:
             return f"sensor '{a}' (its model is Python)"
-        model = system.sensors[a].model()
+        model = system.sensors[a].measurement_model()
         if model.dim > 6 or (len(model.zindex) and int(max(model.zindex)) >= 6):
             return f"sensor '{a}' (more than 6 rows or values)"
         how = system.sensors[a].timing.delay_compensation
         if how not in HOWS:
             return f"delay compensation '{how}' ({a})"
     return None
+
+
+@numba.njit(cache=True)
+def _sensor_frame(C, omega, geom):
+    """``C M`` and ``M^T omega`` for a sensor of geometry ``geom`` (its rows 1..3: ``M =
+    C_s^b``); ``C`` and ``omega`` themselves when ``M`` is the identity
+    (:func:`fednav.sensors.measurement.sensor_frame`, which the Python models use)."""
+    M = geom[1:4]
+    if (M[0, 0] == 1.0 and M[1, 1] == 1.0 and M[2, 2] == 1.0 and M[0, 1] == 0.0
+            and M[0, 2] == 0.0 and M[1, 0] == 0.0 and M[1, 2] == 0.0 and M[2, 0] == 0.0
+            and M[2, 1] == 0.0):
+        return C, omega
+    Cs = np.zeros((3, 3))
+    om = np.zeros(3)
+    for i in range(3):
+        for j in range(3):
+            om[j] += M[i, j] * omega[i]
+            for k in range(3):
+                Cs[i, j] += C[i, k] * M[k, j]
+    return Cs, om
 
 
 @numba.njit(cache=True)
@@ -182,7 +202,7 @@ def run_epochs(k0, n_ep, state, comp, xa, decay, scale, dtheta, dv, h_ref, gains
                nsub, n_per, X, P, beta, qlog, passes, fam, sr, c, Wm, Wc, cm, thr, recovery,
                sharing, thr_drift, lk_pos, lk_hold, lk_state, lk_r0, lk_S0, lk_tpos,
                m_epoch, m_sens, m_t, m_z, m_R, s_filter, s_how, s_dim, s_kinds, s_zi,
-               s_lever, s_linear, s_bias, out_states, out_P, out_beta, out_Phi, out_Qd, out_dx,
+               s_geom, s_linear, s_bias, out_states, out_P, out_beta, out_Phi, out_Qd, out_dx,
                out_rows, out_nis, out_acc, out_r, out_S, out_bm, out_thr, out_tlog, out_re):
     """Fly epochs ``k0 + 1 .. k0 + n_ep`` (1-based) in place on ``state`` (the INS),
     ``comp`` (gyro and accelerometer compensation), ``xa`` (the optional error states'
@@ -203,8 +223,10 @@ def run_epochs(k0, n_ep, state, comp, xa, decay, scale, dtheta, dv, h_ref, gains
     test thresholds, position sources, hold time and state
     (:class:`fednav.filters.federated.Lockout`).  ``m_*``: the epochs' measurements
     in the order they are applied (epoch index, sensor, time of validity, z, R); ``s_*``:
-    per sensor its local filter, how, dimension, the rows of its model, its lever arm,
-    whether it is linear and its rows' bias columns (:func:`_biased_rows`).
+    per sensor its local filter, how, dimension, the rows of its model, its geometry
+    (``s_geom`` (S, 4, 3): the lever arm in its axes, then its mounting ``C_s^b``,
+    :attr:`~fednav.sensors.measurement.RowModel.geometry`), whether it is linear and its
+    rows' bias columns (:func:`_biased_rows`).
     Outputs per epoch and per measurement (``out_rows`` of zero length:
     no IMU-rate rows; ``out_re`` (M, 3): lockout start, NIS before and inflation of a
     re-admission, inflation 0 where none).  Returns (failure code, epoch, filter); code 0
@@ -327,16 +349,19 @@ def run_epochs(k0, n_ep, state, comp, xa, decay, scale, dtheta, dv, h_ref, gains
                 lla[0], lla[1], lla[2] = earth.moved_nb(
                     lla[0], lla[1], lla[2], -lag * vel[0], -lag * vel[1], -lag * vel[2])
                 C = _q2dcm(row_q)
-            kinds, zi, lever = s_kinds[sn, :d], s_zi[sn, :d], s_lever[sn]
+            kinds, zi, lever = s_kinds[sn, :d], s_zi[sn, :d], s_geom[sn, 0]
+            # the INS as the sensor sees it: its axes' attitude C M, the rate in them
+            # (sensors.measurement.sensor_frame)
+            C, om = _sensor_frame(C, omega, s_geom[sn])
             bias = s_bias[sn, :d]
             y = np.empty(d)
-            row_residual(kinds, zi, lla, vel, C, omega, m_z[m], lever, y)
+            row_residual(kinds, zi, lla, vel, C, om, m_z[m], lever, y)
             for rb in range(d):  # the sensor's bias estimate taken out of its value
                 if bias[rb] >= 0:
                     y[rb] += xa[bias[rb]]
             R = m_R[m, :d, :d].copy()
             x1, Pn, r, Sm, ni, code = _local_update(fam[f, 1], sr[f], X[f], P[f], c[f], Wm[f],
-                                                    Wc[f], cm[f], kinds, lla, vel, C, omega,
+                                                    Wc[f], cm[f], kinds, lla, vel, C, om,
                                                     lever, s_linear[sn], bias, y, R)
             if code:
                 return code, k, f
@@ -362,7 +387,7 @@ def run_epochs(k0, n_ep, state, comp, xa, decay, scale, dtheta, dv, h_ref, gains
                         P[g] = P[g] * (math.sqrt(s_in) if sr[g] else s_in)
                     x2, P2, r2, S2, n2, code = _local_update(
                         fam[f, 1], sr[f], X[f], P[f], c[f], Wm[f], Wc[f], cm[f], kinds, lla,
-                        vel, C, omega, lever, s_linear[sn], bias, y, R)
+                        vel, C, om, lever, s_linear[sn], bias, y, R)
                     if code == 0 and not n2 > th and (sr[f] or (
                             math.isfinite(x2.sum() + P2.sum()) and cholesky_lower(P2)[1])):
                         out_re[m, 0], out_re[m, 1], out_re[m, 2] = t_start, ni, s_in
@@ -509,7 +534,7 @@ class CompiledLoop:
         for j, m in enumerate(meas):
             self.s_kinds[j, :m.model.dim] = m.model.kinds
             self.s_zi[j, :m.model.dim] = m.model.zindex
-        self.s_lever = np.array([m.model.lever for m in meas]).reshape(S, 3)
+        self.s_geom = np.array([m.model.geometry for m in meas]).reshape(S, 4, 3)
         self.s_linear = np.array([m.model.linear for m in meas], dtype=np.bool_)
         self.s_bias = np.full((S, 6), -1, dtype=np.int64)
         for j, m in enumerate(meas):
@@ -618,7 +643,7 @@ class CompiledLoop:
             self.thr, self.recovery,
             self.sharing, self.thr_drift, lk.pos, lk.hold, lk.state, lk.r0, lk.S0, lk.t_pos,
             m_epoch, m_sens, m_t, m_z, m_R, self.s_filter, self.s_how,
-            self.s_dim, self.s_kinds, self.s_zi, self.s_lever, self.s_linear, self.s_bias,
+            self.s_dim, self.s_kinds, self.s_zi, self.s_geom, self.s_linear, self.s_bias,
             rec.states.a[e0:e0 + n_ep],
             rec.P.a[e0:e0 + n_ep], rec.beta.a[e0 - 1:e0 - 1 + n_ep], out_Phi, out_Qd,
             out_dx, out_rows, lg[:, 2], lg[:, 5], out_r, out_S, out_bm, lg[:, 4], lg[:, 0],

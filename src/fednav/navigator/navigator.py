@@ -393,7 +393,7 @@ class Navigator:
         self._constraint = None
         if system.constraint == "wind":
             cfg = system.sensors.airdata
-            self._constraint = Meas("airdata", cfg.model(), "none", cfg.timing)
+            self._constraint = Meas("airdata", cfg.measurement_model(), "none", cfg.timing)
         if mechanization is not None:
             if engine == "compiled":
                 raise ValueError(f"the compiled engine cannot run {mechanization.name}")

@@ -531,7 +531,7 @@ def sensor_model(system: System, name: str, section=None):
     system's): the section's model, noise-split for its Gauss–Markov state when the
     system selects it (:meth:`~fednav.sensors.measurement.RowModel.with_markov`)."""
     section = system.sensors[name] if section is None else section
-    model = section.model()
+    model = section.measurement_model()
     if getattr(model, "markov_block", None) in system.filter.states:
         model = model.with_markov(getattr(section, section.MARKOV_KEY))
     return model

@@ -29,6 +29,6 @@ __all__ = ["AirData", "AirDataConfig", "BaroConfig", "BaroHeight", "Barometer", 
 
 #: One model of each aiding sensor with default settings (no lever arm), by name —
 #: fednav 0.1's ``fednav.measurements.MODELS``; build a configured one with
-#: ``system.sensors[name].model()``.
+#: ``system.sensors[name].measurement_model()``.
 MODELS = {m.kind: m for m in (StarAttitude(), SarFix(), BaroHeight(), GnssPosVel(),
                               SarVelocityEN())}

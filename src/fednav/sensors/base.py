@@ -66,14 +66,49 @@ def flight_times(truth, period: float, t=None) -> np.ndarray:
     return sample_times(truth.t[-1], period, truth.t[0] + period)
 
 
-def point_velocity(truth, t, lever) -> tuple[np.ndarray, np.ndarray]:
-    """True ENU velocity [m/s] of the point at ``lever`` (body right-forward-up, m) at
-    times ``t`` (the trajectory's samples nearest them; body rate from the true angle
-    increments), and the attitude ``C_b^n`` there (N, 3, 3)."""
-    from ..core import attitude, earth
+class SensorView:
+    """A true trajectory as one sensor sees it: from its point at ``lever`` (body
+    right-forward-up, m) and in its axes (``M = C_s^b``, None: the body's).
 
-    idx = np.rint((np.asarray(t) - truth.t[0]) / truth.dt).astype(int)
-    w = truth.dtheta[np.maximum(idx - 1, 0)] / truth.dt
-    C = attitude.euler_to_dcm(truth.euler[idx])
-    _, v = earth.lever_arm_point(truth.lla[idx], truth.vel[idx], C, w, lever)
-    return v, C
+    The one place the simulator applies a sensor's lever arm and mounting
+    (:meth:`fednav.sensors.spec.SensorConfig.simulate` hands every sensor's simulator
+    this view): :meth:`at` gives the position ``lla`` and ENU velocity ``vel`` of the
+    sensor's point (``earth.lever_arm_point``: ``move_enu(lla, C l)`` and ``vel + C
+    (omega x l)``, the body rate from the true angle increments), the attitude of its axes
+    ``C`` (``C_b^n M``) and ``euler``, the point's velocity in its axes ``vel_sensor``
+    (``C^T vel``) and the wind; everything else (``t``, ``dt``, the IMU's own ``vel`` for
+    a stop detector) is the trajectory's.  Without a lever arm or mounting the values are
+    the trajectory's own, to the bit."""
+
+    def __init__(self, truth, lever, M):
+        self.truth = truth
+        self.lever = np.asarray(lever, dtype=float)
+        self.M = M
+
+    @classmethod
+    def of(cls, truth, lever=None, M=None) -> SensorView:
+        """``truth`` seen from ``lever`` in axes ``M`` (a view of a view sees through)."""
+        if isinstance(truth, SensorView):
+            truth = truth.truth
+        return cls(truth, np.zeros(3) if lever is None else lever, M)
+
+    def __getattr__(self, name):
+        return getattr(self.__dict__["truth"], name)
+
+    def at(self, times) -> dict[str, np.ndarray]:
+        from ..core import attitude, earth
+
+        tr = self.truth
+        out = dict(tr.at(times))
+        idx = np.rint((np.asarray(times) - tr.t[0]) / tr.dt).astype(int)
+        C = attitude.euler_to_dcm(out["euler"])
+        if np.any(self.lever):
+            w = tr.dtheta[np.maximum(idx - 1, 0)] / tr.dt
+            out["lla"], out["vel"] = earth.lever_arm_point(out["lla"], out["vel"], C, w,
+                                                           self.lever)
+        if self.M is not None:
+            C = C @ self.M
+            out["euler"] = attitude.dcm_to_euler(C)
+        out["C"] = C
+        out["vel_sensor"] = np.einsum("nji,nj->ni", C, out["vel"])
+        return out

@@ -33,35 +33,28 @@ from typing import Literal
 import numpy as np
 from pydantic import Field, field_validator
 
-from .base import MeasurementSeries, flight_times, point_velocity
+from .base import MeasurementSeries, flight_times
 from .measurement import BVEL_F, BVEL_R, BVEL_U, VEL_E, VEL_N, VEL_U, RowModel
 from .spec import Column, SensorConfig, SensorSpec
 
 _V3 = tuple[float, float, float]
 
 
-def body_velocity(truth, t, lever) -> np.ndarray:
-    """True velocity of the point at ``lever`` (body, m) in body axes right, forward, up
-    [m/s] at times ``t`` (the trajectory's samples nearest them)."""
-    v, C = point_velocity(truth, t, lever)
-    return np.einsum("nji,nj->ni", C, v)
-
-
 @dataclass(frozen=True)
 class BodyVelocitySensor:
-    """Body-axis velocity of the point at ``lever`` with white noise ``sigma`` (per
+    """Velocity of the sensor's point in its own axes (``truth``: the trajectory seen
+    from it, :class:`~fednav.sensors.base.SensorView`) with white noise ``sigma`` (per
     component of ``axes``: 0 right, 1 forward, 2 up) every ``period`` [s]."""
 
     kind: str
     axes: tuple[int, ...]
     sigma: tuple
-    lever: tuple
     period: float
 
     def simulate(self, truth, rng: np.random.Generator, t=None,
                  t_avail=None) -> MeasurementSeries:
         t = flight_times(truth, self.period, t)
-        v = body_velocity(truth, t, self.lever)[:, list(self.axes)]
+        v = truth.at(t)["vel_sensor"][:, list(self.axes)]
         sig = np.broadcast_to(np.asarray(self.sigma, dtype=float), (len(self.axes),))
         z = v + rng.standard_normal(v.shape) * sig
         return MeasurementSeries(self.kind, t, z, sig.copy(), t_avail)
@@ -151,7 +144,6 @@ class OdometerConfig(SensorConfig):
     against the GNSS speed, :func:`odometer_scale`); ``fednav process`` divides it out."""
 
     sigma_mps: float = Field(gt=0.0)
-    lever_m: _V3 = (0.0, 0.0, 0.0)
     scale: float | Literal["auto"] = 1.0
 
     @field_validator("scale")
@@ -162,11 +154,10 @@ class OdometerConfig(SensorConfig):
         return v
 
     def sensor(self) -> BodyVelocitySensor:
-        return BodyVelocitySensor("odometer", (1,), (self.sigma_mps,), self.lever_m,
-                                  self.period_s)
+        return BodyVelocitySensor("odometer", (1,), (self.sigma_mps,), self.period_s)
 
     def model(self) -> OdometerSpeed:
-        return OdometerSpeed(self.lever_m)
+        return OdometerSpeed()
 
     def sigma(self) -> np.ndarray:
         return np.array([self.sigma_mps])
@@ -177,14 +168,12 @@ class DvlConfig(SensorConfig):
     lever arm (body right-forward-up, m)."""
 
     sigma_mps: float | _V3
-    lever_m: _V3 = (0.0, 0.0, 0.0)
 
     def sensor(self) -> BodyVelocitySensor:
-        return BodyVelocitySensor("dvl", (0, 1, 2), tuple(self.sigma()), self.lever_m,
-                                  self.period_s)
+        return BodyVelocitySensor("dvl", (0, 1, 2), tuple(self.sigma()), self.period_s)
 
     def model(self) -> DvlVelocity:
-        return DvlVelocity(self.lever_m)
+        return DvlVelocity()
 
     def sigma(self) -> np.ndarray:
         return np.broadcast_to(np.asarray(self.sigma_mps, dtype=float), (3,)).copy()
@@ -198,7 +187,6 @@ class NhcConfig(SensorConfig):
     it every ``period_s`` (default: every filter epoch)."""
 
     sigma_mps: float | tuple[float, float] = (0.1, 0.1)
-    lever_m: _V3 = (0.0, 0.0, 0.0)
 
     def _sig(self) -> tuple[float, float]:
         s = np.broadcast_to(np.asarray(self.sigma_mps, dtype=float), (2,))
@@ -212,7 +200,7 @@ class NhcConfig(SensorConfig):
         return ZeroPseudo("nhc", self._sig(), self.period_s)
 
     def model(self) -> NonHolonomic:
-        return NonHolonomic(self.lever_m)
+        return NonHolonomic()
 
     def sigma(self) -> np.ndarray:
         return np.array(self._sig())

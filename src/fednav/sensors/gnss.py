@@ -173,7 +173,6 @@ class GnssConfig(SensorConfig):
 
     sigma_pos_enu_m: float | _V3 | None = None
     sigma_vel_mps: float | _V3 | None = None
-    lever_m: _V3 | None = None
     time_offset_s: float = 0.0
     velocity_latency_s: float = Field(default=0.0, ge=0.0, le=2.0)
     markov_sigma_enu_m: float | _V3 | None = None
@@ -197,8 +196,7 @@ class GnssConfig(SensorConfig):
         return Gnss(self.sigma_pos_enu_m, self.sigma_vel_mps, self.period_s)
 
     def model(self) -> GnssPosVel:
-        return GnssPosVel(self.lever_m or (0.0, 0.0, 0.0),
-                          self.measures or "position_velocity")
+        return GnssPosVel(measures=self.measures or "position_velocity")
 
     def sigma(self) -> np.ndarray | None:
         """1-sigma of ``z``: ``[north m, east m, up m, vE, vN, vU m/s]`` (None when the

@@ -187,4 +187,4 @@ SPEC = SensorSpec(
            "pitch", MagConfig, MagHeading,
     columns=(Column("magR_gauss", GAUSS, sigma=_SIGMA),
              Column("magF_gauss", GAUSS, sigma=_SIGMA),
-             Column("magU_gauss", GAUSS, sigma=_SIGMA)), valid=usable)
+             Column("magU_gauss", GAUSS, sigma=_SIGMA)), valid=usable, mountable=True)

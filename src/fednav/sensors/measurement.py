@@ -87,10 +87,25 @@ class RowModel:
     #: per row, the Gauss-Markov variance the state carries (:meth:`with_markov`)
     markov_var: np.ndarray | None = None
 
+    #: ``C_s^b``, the sensor's axes to the body's (None: aligned with the body)
+    mount: np.ndarray | None = None
+
     def __init__(self, lever=(0.0, 0.0, 0.0)):
         self.lever = _v(np.asarray(lever, dtype=float).reshape(3))
         self.kinds = np.array([k for k, _ in self.rows], dtype=np.int64)
         self.zindex = np.array([i for _, i in self.rows], dtype=np.int64)
+
+    @property
+    def lever_s(self) -> np.ndarray:
+        """The lever arm in the sensor's axes, ``M^T l`` [m] (what the row kernels take
+        together with the sensor frame's attitude ``C M``: ``C M M^T l = C l``)."""
+        return self.lever if self.mount is None else _v(self.mount.T @ self.lever)
+
+    @property
+    def geometry(self) -> np.ndarray:
+        """The sensor's geometry as the compiled engine takes it, (4, 3): the lever arm
+        in the sensor's axes, then ``C_s^b`` (identity when aligned)."""
+        return np.vstack([self.lever_s, np.eye(3) if self.mount is None else self.mount])
 
     @property
     def dim(self) -> int:
@@ -102,23 +117,26 @@ class RowModel:
         return not bool(np.any((self.kinds >= PITCH) & (self.kinds <= HEADING)))
 
     def _nav(self, nav: NavSnapshot):
-        return (_v(nav.lla), _v(nav.vel), _v(nav.C),
-                _ZERO3 if nav.omega_b is None else _v(nav.omega_b))
+        """The INS as the sensor sees it: position and velocity, the attitude of the
+        sensor's axes ``C M`` and the body rate in them ``M^T omega`` (:func:`sensor_frame`)."""
+        omega = _ZERO3 if nav.omega_b is None else _v(nav.omega_b)
+        C, omega = sensor_frame(_v(nav.C), omega, self.mount)
+        return _v(nav.lla), _v(nav.vel), C, omega
 
     def residual(self, nav: NavSnapshot, z) -> np.ndarray:
         out = np.empty(self.dim)
-        row_residual(self.kinds, self.zindex, *self._nav(nav), _v(z), self.lever, out)
+        row_residual(self.kinds, self.zindex, *self._nav(nav), _v(z), self.lever_s, out)
         return out
 
     def H(self, nav: NavSnapshot) -> np.ndarray:
         H = np.zeros((self.dim, N_STATES))
-        row_jacobian(self.kinds, *self._nav(nav), self.lever, H)
+        row_jacobian(self.kinds, *self._nav(nav), self.lever_s, H)
         return H
 
     def h(self, X, nav: NavSnapshot) -> np.ndarray:
         X = _v(np.atleast_2d(X))
         Z = np.empty((X.shape[0], self.dim))
-        row_predict(self.kinds, *self._nav(nav), self.lever, X, Z)
+        row_predict(self.kinds, *self._nav(nav), self.lever_s, X, Z)
         return Z
 
     def with_markov(self, sigma):
@@ -135,6 +153,58 @@ class RowModel:
         """``R`` of this model's rows, less the Gauss–Markov part a state carries
         (:func:`white_part`; ``R`` itself without such a state)."""
         return R if self.markov_var is None else white_part(R, self.markov_var)
+
+
+def sensor_frame(C, omega, M):
+    """The attitude of a sensor's axes ``C_s^n = C_b^n M`` and the body rate in them
+    ``M^T omega`` [rad/s], for a sensor mounted with ``M = C_s^b`` (None: ``C``, ``omega``
+    themselves).  Every row kind then reads in the sensor's axes: attitude rows the
+    sensor frame's Euler angles, body-velocity rows ``M^T (C^T v + omega x l)``, while
+    positions and ENU velocities stay those of its point (the lever arm goes to the
+    kernels in the sensor's axes, :attr:`RowModel.lever_s`).  The attitude error ``phi``
+    of the navigation frame is the same for both, so the kernels' Jacobians hold as
+    written."""
+    if M is None:
+        return C, omega
+    return np.ascontiguousarray(C @ M), np.ascontiguousarray(M.T @ omega)
+
+
+class Mounted:
+    """A measurement model that is not rows (one that reads the attitude, such as the
+    magnetometer's) fed the INS as seen in the sensor's axes (:func:`sensor_frame`);
+    everything else is ``model``'s."""
+
+    def __init__(self, model, M):
+        self.model, self.mount = model, np.asarray(M, dtype=float)
+
+    def __getattr__(self, name):
+        return getattr(self.__dict__["model"], name)
+
+    def _nav(self, nav: NavSnapshot) -> NavSnapshot:
+        C, omega = sensor_frame(np.asarray(nav.C, dtype=float), np.zeros(3) if
+                                nav.omega_b is None else nav.omega_b, self.mount)
+        return NavSnapshot(nav.lla, nav.vel, C, omega)
+
+    def residual(self, nav: NavSnapshot, z) -> np.ndarray:
+        return self.model.residual(self._nav(nav), z)
+
+    def H(self, nav: NavSnapshot) -> np.ndarray:
+        return self.model.H(self._nav(nav))
+
+    def h(self, X, nav: NavSnapshot) -> np.ndarray:
+        return self.model.h(X, self._nav(nav))
+
+
+def mounted(model, lever, M):
+    """``model`` at the sensor's lever arm ``lever`` (body, m) and mounting ``M = C_s^b``
+    (None: aligned): a row model takes both (:attr:`RowModel.lever_s`, ``mount``); any
+    other model only a mounting (:class:`Mounted`; a lever arm is refused for it by the
+    sensor's spec)."""
+    if isinstance(model, RowModel):
+        model.lever = _v(np.asarray(lever, dtype=float).reshape(3))
+        model.mount = None if M is None else _v(M)
+        return model
+    return model if M is None else Mounted(model, M)
 
 
 # ------------------------------------------------------------ shared pieces of models

@@ -132,11 +132,15 @@ class SensorSet(Mapping):
             model = SENSORS[name].config
             if isinstance(cfg, model):
                 out[name] = cfg
-                continue
-            try:
-                out[name] = model.model_validate(cfg)
-            except ValidationError as e:
-                raise nested_validation_error([name], e) from None
+            else:
+                try:
+                    out[name] = model.model_validate(cfg)
+                except ValidationError as e:
+                    raise nested_validation_error([name], e) from None
+            why = SENSORS[name].check_geometry(out[name])
+            if why is not None:
+                key, _, text = why.partition(": ")
+                raise nested_error([name, key], text)
         return cls(out)
 
     def dump(self) -> dict:

@@ -20,20 +20,53 @@ from dataclasses import dataclass, replace
 import numpy as np
 from pydantic import Field, field_validator
 
+from ..core import mounting
 from ..core.config import ConfigError, _Model
-from .measurement import RowModel
+from .base import SensorView
+from .measurement import BVEL_R, HEADING, PITCH, RATE_X, VEL_U, RowModel, mounted
 from .timing import TimingConfig, measurement_times
+
+_V3 = tuple[float, float, float]
 
 
 class SensorConfig(_Model):
     """Common to every sensor's section: its period (for simulation), timing and
     outages (simulated windows ``[start_s, end_s)`` without measurements: a GNSS
-    dropout, a star sensor blinded by the sun); a sensor's section gives its simulator
-    (``sensor``) and measurement model (``model``)."""
+    dropout, a star sensor blinded by the sun), and where it sits on the vehicle:
+    ``lever_m``, its point from the IMU (body right-forward-up, m; None: the data
+    file's where it gives one, else zero) and ``mounting``, the rotation from its own
+    axes to the body frame (:mod:`fednav.core.mounting`: axis letters such as ``FRD`` or
+    ``{euler_deg: [pitch, roll, heading]}``; None: aligned with the body).  Both are
+    applied by one code path in the simulator (:meth:`simulate` hands the sensor the
+    truth seen from its point and axes, :class:`~fednav.sensors.base.SensorView`) and one
+    in the filter (:meth:`measurement_model`); a sensor on which one of them cannot act
+    refuses it (:meth:`SensorSpec.check_geometry`).  A sensor's section gives its
+    simulator (``sensor``) and measurement model (``model``)."""
 
     period_s: float | None = Field(default=None, gt=0.0)
     timing: TimingConfig = TimingConfig()
     outages_s: list[tuple[float, float]] = []
+    lever_m: _V3 | None = None
+    mounting: str | dict | None = None
+
+    @field_validator("mounting")
+    @classmethod
+    def _mounting(cls, v):
+        return mounting.validate(v)
+
+    def lever(self) -> np.ndarray:
+        """The lever arm [m] (body right-forward-up; zeros when none is set)."""
+        return np.zeros(3) if self.lever_m is None else np.asarray(self.lever_m, dtype=float)
+
+    def mount(self) -> np.ndarray | None:
+        """``C_s^b`` of the mounting (None: aligned with the body)."""
+        M = mounting.parse(self.mounting)
+        return None if mounting.is_identity(M) else M
+
+    def measurement_model(self):
+        """The filter-side model of this sensor at its lever arm and mounting (the one
+        place the filter takes them from the section)."""
+        return mounted(self.model(), self.lever(), self.mount())
 
     @field_validator("outages_s")
     @classmethod
@@ -60,6 +93,7 @@ class SensorConfig(_Model):
         """The sensor's measurements over the flight, with their timing."""
         if self.period_s is None:
             raise ConfigError(f"sensors.{name}.period_s: needed to simulate the sensor")
+        truth = SensorView.of(truth, self.lever(), self.mount())
         tm = self.timing
         if not tm.delayed:
             series = self.sensor().simulate(truth, rng)
@@ -146,6 +180,9 @@ class SensorSpec:
     #: [warnings])`` correcting a file's values before filtering, e.g. the odometer's
     #: scale factor estimated against the GNSS speed
     calibrate: object = None
+    #: a model that is not rows but reads the attitude in the sensor's axes (the
+    #: magnetometer): its ``mounting`` acts (:func:`~fednav.sensors.measurement.mounted`)
+    mountable: bool = False
 
     @property
     def fixes_position(self) -> bool:
@@ -158,3 +195,23 @@ class SensorSpec:
     def compiled(self) -> bool:
         """Whether its model runs in the navigator's compiled engine."""
         return issubclass(self.model, RowModel)
+
+    def check_geometry(self, cfg: SensorConfig) -> str | None:
+        """Why ``cfg``'s lever arm or mounting cannot act on this sensor (one line naming
+        the key), or None.  A lever arm acts on a point's position or velocity (position,
+        velocity and body-velocity rows); a mounting on the sensor's own axes (attitude
+        and body-axis rows, or a model that reads the attitude, such as the
+        magnetometer's); neither on a sensor measured from the IMU itself (ZARU)."""
+        kinds = {k for k, _ in getattr(self.model, "rows", ())}
+        row = issubclass(self.model, RowModel)
+        lever_ok = row and any(k <= VEL_U or BVEL_R <= k < RATE_X for k in kinds)
+        mount_ok = (not row and self.mountable) or any(
+            PITCH <= k <= HEADING or BVEL_R <= k < RATE_X for k in kinds)
+        if cfg.lever_m is not None and any(cfg.lever_m) and not lever_ok:
+            return (f"lever_m: the {self.name} sensor measures no point's position or "
+                    f"velocity, so a lever arm cannot act on it")
+        if cfg.mount() is not None and not mount_ok:
+            return (f"mounting: the {self.name} sensor's values are in the navigation "
+                    f"frame (or the IMU's own axes), so a mounting rotation cannot act on "
+                    f"them")
+        return None

@@ -16,7 +16,7 @@ from typing import ClassVar
 import numpy as np
 from pydantic import Field, field_validator
 
-from .base import MeasurementSeries, flight_times, point_velocity
+from .base import MeasurementSeries, flight_times
 from .measurement import VEL_E, VEL_N, VEL_U, RowModel
 from .spec import Column, SensorConfig, SensorSpec
 
@@ -25,17 +25,17 @@ _V3 = tuple[float, float, float]
 
 @dataclass(frozen=True)
 class VelocitySensor:
-    """ENU velocity of the point at ``lever`` (body, m) with white noise ``sigma``
-    ([east, north, up] m/s) every ``period`` [s]."""
+    """ENU velocity of the sensor's point (``truth``: the trajectory seen from it,
+    :class:`~fednav.sensors.base.SensorView`) with white noise ``sigma`` ([east, north,
+    up] m/s) every ``period`` [s]."""
 
     sigma: tuple
-    lever: tuple
     period: float
 
     def simulate(self, truth, rng: np.random.Generator, t=None,
                  t_avail=None) -> MeasurementSeries:
         t = flight_times(truth, self.period, t)
-        v, _ = point_velocity(truth, t, self.lever)
+        v = truth.at(t)["vel"]
         sig = np.asarray(self.sigma, dtype=float)
         z = v + rng.standard_normal(v.shape) * sig
         return MeasurementSeries("velocity", t, z, sig.copy(), t_avail)
@@ -65,7 +65,6 @@ class VelocityConfig(SensorConfig):
     estimates; the sigma is then the whole error's and R its white part."""
 
     sigma_mps: _V3 | None = None
-    lever_m: _V3 | None = None
     axes: tuple[str, str, str] = ("E", "N", "U")
     time_offset_s: float = 0.0
     markov_sigma_mps: float | _V3 | None = None
@@ -94,10 +93,10 @@ class VelocityConfig(SensorConfig):
 
         if self.sigma_mps is None:
             raise ConfigError("sensors.velocity.sigma_mps: needed to simulate the sensor")
-        return VelocitySensor(self.sigma_mps, self.lever_m or (0.0, 0.0, 0.0), self.period_s)
+        return VelocitySensor(self.sigma_mps, self.period_s)
 
     def model(self) -> VelocityENU:
-        return VelocityENU(self.lever_m or (0.0, 0.0, 0.0))
+        return VelocityENU()
 
     def sigma(self) -> np.ndarray | None:
         return None if self.sigma_mps is None else np.asarray(self.sigma_mps, dtype=float)

@@ -22,8 +22,9 @@ from pathlib import Path
 import numpy as np
 from pydantic import Field, field_validator, model_validator
 
-from ..core import attitude, earth, units
+from ..core import earth, units
 from ..core.config import _Model, load_model
+from ..sensors.base import SensorView
 from ..sensors.gnss import renamed_neu_keys
 from ..sensors.imu import ImuConfig
 from .scenario import SegmentConfig, StartConfig
@@ -152,10 +153,10 @@ def load_dataset_config(path) -> DatasetConfig:
 
 def _lever_point(tr, idx, lever):
     """Position and ENU velocity of a point at ``lever`` (body) from the IMU, at samples
-    ``idx`` of the trajectory (rate from the true angle increments)."""
-    w = tr.dtheta[np.maximum(idx - 1, 0)] / tr.dt
-    return earth.lever_arm_point(tr.lla[idx], tr.vel[idx], attitude.euler_to_dcm(tr.euler[idx]),
-                                 w, lever)
+    ``idx`` of the trajectory: the sensors' own view of the truth
+    (:class:`~fednav.sensors.base.SensorView`, the one place lever arms are simulated)."""
+    at = SensorView.of(tr, lever).at(tr.t[idx])
+    return at["lla"], at["vel"]
 
 
 def simulate_dataset(cfg: DatasetConfig) -> Dataset:
