@@ -411,7 +411,7 @@ def _ulog_reader(log: Path):
         from .io import DataError, read_ulog
         from .process.flight_log import ulog_system
 
-        rec = read_ulog(log, cfg.imu.max_bridge_s)
+        rec = read_ulog(log, cfg.imu.max_bridge_s, cfg.imu.mounting)
         if rec.gnss is None and cfg.initial is None:
             why = [n for n in rec.notes if "gnss" in n.lower() or "gps" in n.lower()]
             raise DataError(f"{log}: no GNSS fix to start from"
@@ -499,7 +499,7 @@ def _navego_reader(imu: Path, gnss: Path, visual: Path | None, ref: Path | None 
             read_navego_visual,
         )
 
-        return {"imu": read_navego_imu(imu, cfg.imu.max_bridge_s),
+        return {"imu": read_navego_imu(imu, cfg.imu.max_bridge_s, cfg.imu.mounting),
                 "gnss": read_navego_gnss(gnss),
                 "velocity": None if visual is None else read_navego_visual(visual),
                 "ref": None if ref is None else read_navego_reference(ref)}
@@ -544,7 +544,8 @@ def _csv_reader(imu: Path | None, gnss: Path | None, velocity: Path | None,
             g = read_gnss_csv(paths["gnss"], given(gc and gc.sigma_pos_enu_m, (5.0, 5.0, 5.0)),
                               given(gc and gc.sigma_vel_mps, (0.1, 0.1, 0.1)),
                               given(gc and gc.lever_m, (0.0, 0.0, 0.0)))
-        return {"imu": read_imu_csv(paths["imu"], cfg.imu.max_bridge_s), "gnss": g,
+        return {"imu": read_imu_csv(paths["imu"], cfg.imu.max_bridge_s, cfg.imu.mounting),
+                "gnss": g,
                 "velocity": None if vel is None else read_velocity_csv(vel),
                 "ref": None if paths["reference"] is None
                 else read_reference_csv(paths["reference"]),

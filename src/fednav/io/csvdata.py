@@ -104,7 +104,7 @@ def _arrival(df) -> np.ndarray | None:
     return df["t_arrival_s"].to_numpy(float) if "t_arrival_s" in df.columns else None
 
 
-def read_imu_csv(path, max_bridge_s: float = 0.1) -> ImuData:
+def read_imu_csv(path, max_bridge_s: float = 0.1, mounting=None) -> ImuData:
     """Read an IMU CSV file (``docs/data-formats.md``).
 
     Body right-forward-up axes: rates (``gyro_*_radps``, ``accel_*_mps2``: the rate at
@@ -120,6 +120,10 @@ def read_imu_csv(path, max_bridge_s: float = 0.1) -> ImuData:
         The CSV file.
     max_bridge_s : float
         Longest gap or run of faulty samples bridged [s]; a longer one is refused.
+    mounting : str or dict, optional
+        How the IMU's axes in the file are mounted (``imu.mounting``: axis letters such
+        as ``FRD`` or ``{euler_deg: [pitch, roll, heading]}``, :mod:`fednav.core.mounting`);
+        default: the format's own axes (right-forward-up, ``RFU``).
 
     Returns
     -------
@@ -136,16 +140,18 @@ def read_imu_csv(path, max_bridge_s: float = 0.1) -> ImuData:
                     expected=IMU_COLUMNS)
     t = df["t_s"].to_numpy(float)
     if _has(df, INCREMENT_COLUMNS):
-        return ImuData.from_increments(src, t, _cols(df, INCREMENT_COLUMNS[:3]),
-                                       _cols(df, INCREMENT_COLUMNS[3:]),
-                                       max_bridge_s=max_bridge_s)
+        imu = ImuData.from_increments(src, t, _cols(df, INCREMENT_COLUMNS[:3]),
+                                      _cols(df, INCREMENT_COLUMNS[3:]),
+                                      max_bridge_s=max_bridge_s)
+        return imu if mounting is None else imu.remount(mounting)
     missing = [c for c in IMU_COLUMNS if c not in df.columns]
     if missing:
         raise DataError(f"{src}: missing column(s) {', '.join(missing)} (have "
                         f"{', '.join(map(str, df.columns))}; increments instead of rates: "
                         f"dtheta_x_rad ... dv_z_mps)")
-    return ImuData(src, t, _cols(df, IMU_COLUMNS[1:4]), _cols(df, IMU_COLUMNS[4:7]),
-                   max_bridge_s=max_bridge_s)
+    imu = ImuData(src, t, _cols(df, IMU_COLUMNS[1:4]), _cols(df, IMU_COLUMNS[4:7]),
+                  max_bridge_s=max_bridge_s)
+    return imu if mounting is None else imu.remount(mounting)
 
 
 def _lla(df) -> np.ndarray:

@@ -6,6 +6,7 @@ Frames: body right-forward-up, navigation ENU; positions geodetic ``[lat, lon, h
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -263,6 +264,12 @@ class ImuData:
     #: integrates them as they are (no rate round trip; a sigma-point filter with a
     #: small ``alpha`` magnifies even one-ulp differences)
     increments: tuple | None = None
+    #: the mounting the reader applied, ``C_file^b`` (:mod:`fednav.core.mounting`): its
+    #: format's axes (CSV right-forward-up, NaveGo and PX4 forward-right-down) or the
+    #: ``imu.mounting`` it was given; :func:`remount` turns the data to another
+    mounting: np.ndarray | None = None
+    #: how that mounting was written (axis letters or ``{euler_deg: ...}``), for messages
+    mounting_name: str = "RFU"
 
     def __post_init__(self):
         self.t = check_time(self.source, self.t)
@@ -302,6 +309,37 @@ class ImuData:
         if "imu_samples_missing" in imu.quality:
             imu.quality["imu_samples_missing"] = int(np.sum(np.rint(d[lost] / dt) - 1))
         return imu
+
+    def remount(self, mounting) -> ImuData:
+        """These samples with the file's axes taken as ``mounting`` (axis letters such as
+        ``FRD`` or ``{euler_deg: [pitch, roll, heading]}``, :mod:`fednav.core.mounting`)
+        instead of the mounting the reader applied: rates, specific forces, increments
+        and the per-axis error figures turned by ``C_new C_applied^T`` (a copy; the data
+        themselves when nothing changes)."""
+        from ..core import mounting as mt
+
+        M_new = mt.parse(mounting)
+        M_new = np.eye(3) if M_new is None else M_new
+        M_old = np.eye(3) if self.mounting is None else self.mounting
+        R = M_new @ M_old.T
+        name = mounting if isinstance(mounting, str) else str(mounting)
+        if mt.is_identity(R):
+            out = copy.copy(self)
+            out.mounting, out.mounting_name = M_new, name
+            return out
+        out = copy.copy(self)
+        out.gyro, out.accel = self.gyro @ R.T, self.accel @ R.T
+        if self.increments is not None:
+            out.increments = tuple(a @ R.T for a in self.increments)
+        if self.errors is not None:  # per-axis figures: the variance carried to each axis
+            # (a correlation time goes with the axis that contributes most)
+            major = np.argmax(np.abs(R), axis=1)
+            out.errors = ImuErrors(**{f: np.sqrt((R**2) @ np.asarray(v, dtype=float) ** 2)
+                                      if "tau" not in f else np.asarray(v)[major]
+                                      for f, v in vars(self.errors).items()})
+        out.mounting, out.mounting_name = M_new, name
+        out.quality = {**self.quality, "imu_mounting": name}
+        return out
 
     def period(self) -> float:
         """The sampling period [s]: the mean interval (uniform: :func:`regular_imu` made it

@@ -110,7 +110,7 @@ def _frd(v):
     return np.asarray(v)[[1, 0, 2]]
 
 
-def read_navego_imu(path, max_bridge_s: float = 0.1) -> ImuData:
+def read_navego_imu(path, max_bridge_s: float = 0.1, mounting=None) -> ImuData:
     """NaveGo IMU struct: ``t``, ``fb``, ``wb`` (FRD) and the error figures.
 
     Error figures (NaveGo names, SI): ``arw`` [rad/s/sqrt(Hz)], ``vrw`` [m/s^2/sqrt(Hz)],
@@ -118,7 +118,8 @@ def read_navego_imu(path, max_bridge_s: float = 0.1) -> ImuData:
     correlation times ``gb_corr``/``ab_corr``.  fednav takes the biases as 1-sigma figures
     (their magnitudes), as a datasheet gives them; NaveGo subtracts ``*_sta`` as known
     biases.  ``ini_align`` (roll, pitch, yaw) and ``ini_align_err`` give the initial
-    attitude and its 1-sigma.
+    attitude and its 1-sigma.  ``mounting``: the file's IMU axes when they are not
+    NaveGo's forward-right-down (``imu.mounting``, :meth:`fednav.io.ImuData.remount`).
     """
     src, s = _load(path, "IMU")
     t = check_time(src, _field(src, s, "t"))
@@ -143,8 +144,9 @@ def read_navego_imu(path, max_bridge_s: float = 0.1) -> ImuData:
         err = _vec3(src, s, "ini_align_err", required=False)
         if err is not None:
             sigma = np.abs(err[[1, 0, 2]])  # [roll, pitch, yaw] -> [pitch, roll, heading]
-    return ImuData(src, t, wb @ FRD_TO_RFU.T, fb @ FRD_TO_RFU.T, errors, euler, sigma,
-                   max_bridge_s=max_bridge_s)
+    imu = ImuData(src, t, wb @ FRD_TO_RFU.T, fb @ FRD_TO_RFU.T, errors, euler, sigma,
+                  max_bridge_s=max_bridge_s, mounting=FRD_TO_RFU, mounting_name="FRD")
+    return imu if mounting is None else imu.remount(mounting)
 
 
 def _lla(src, s):

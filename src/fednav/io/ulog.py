@@ -374,7 +374,7 @@ def _optional(read, notes: list, *args):
         return None
 
 
-def read_ulog(path, max_bridge_s: float = 0.1) -> UlogRecording:
+def read_ulog(path, max_bridge_s: float = 0.1, mounting=None) -> UlogRecording:
     """A PX4 ULog file as fednav data (:class:`UlogRecording`); a missing file, a file
     that is not a ULog, or a log without a usable IMU: one-line :class:`DataError`.  A
     GNSS, PX4-estimate or truth stream that fails fednav's checks (fewer than two rows,
@@ -383,8 +383,10 @@ def read_ulog(path, max_bridge_s: float = 0.1) -> UlogRecording:
     * ``imu`` from ``sensor_combined`` (``gyro_rad`` [rad/s], ``accelerometer_m_s2``
       [m/s^2], averaged over ``gyro_integral_dt`` ending at ``timestamp``: stamped at the
       interval's start), else from ``vehicle_imu`` increments (:func:`imu_from_vehicle_imu`);
-      FRD -> RFU.  Missing or jittered samples are integrated onto a uniform grid by
-      :class:`~fednav.io.data.ImuData` (:func:`~fednav.io.data.regular_imu`).
+      FRD -> RFU (``mounting``: the IMU's axes when they are not PX4's FRD,
+      ``imu.mounting``, :meth:`fednav.io.ImuData.remount`).  Missing or jittered
+      samples are integrated onto a uniform grid by :class:`~fednav.io.data.ImuData`
+      (:func:`~fednav.io.data.regular_imu`).
     * ``gnss`` from ``vehicle_gps_position`` (else ``sensor_gps``): rows with
       ``fix_type`` >= 3; latitude/longitude in degrees (``latitude_deg``) or 1e-7 deg
       integers (``lat``); the ellipsoidal height (``altitude_ellipsoid_m`` m or
@@ -429,6 +431,9 @@ def read_ulog(path, max_bridge_s: float = 0.1) -> UlogRecording:
         imu = _imu(log, max_bridge_s, quality, notes)
     except KeyError as e:
         raise DataError(f"{path}: the IMU topic has no field {e}") from None
+    imu.mounting, imu.mounting_name = FRD_TO_RFU, "FRD"
+    if mounting is not None:
+        imu = imu.remount(mounting)
     gnss = _optional(_gnss, notes, log, quality, notes)
     sensors = {}
     for name, s in (("baro", _optional(_baro, notes, log, gnss, quality, notes)),

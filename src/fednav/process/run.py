@@ -39,6 +39,7 @@ from ..navigator.system import (
 from ..navigator.system import imu_figures as _imu_figures
 from ..sensors import GnssConfig, VelocityConfig, registry
 from ..sensors.imu import FIGURES
+from .checks import check_mounting, mounted_imu
 
 #: The processing config of fednav 0.1 is a system description now (one schema); the
 #: old name is kept for one release.
@@ -556,7 +557,7 @@ def with_imu_figures(imu: ImuData, cfg: System) -> tuple[System, list[str]]:
     neither its ``imu:`` section nor the data file gives any IMU figure; a one-line
     :class:`DataError` naming a figure that some are given but not that one (0 must be
     said: a filter that trusts the IMU completely is a choice)."""
-    figures = set(cfg.imu.model_fields_set) - {"max_bridge_s", "random_bias",
+    figures = set(cfg.imu.model_fields_set) - {"max_bridge_s", "random_bias", "mounting",
                                                "gyro_scale_ppm", "accel_scale_ppm"}
     if not figures and imu.errors is None:
         cfg = cfg.model_copy(update={"imu": cfg.imu.model_copy(
@@ -637,6 +638,7 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
         raise DataError("the initial position: no GNSS positions to start from; give the "
                         "initial state in the system description (initial: lat_deg, "
                         "lon_deg, h_m, vel_mps, euler_deg, sigma)")
+    imu = mounted_imu(imu, cfg.imu.mounting)
     dt = imu.period()
     if dt > MAX_IMU_PERIOD_S:
         raise DataError(f"{imu.source}: IMU samples {dt:g} s apart: time stamps in "
@@ -644,7 +646,7 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
                         f"{1 / MAX_IMU_PERIOD_S:g} Hz or faster")
     cfg, assumed = with_imu_figures(imu, cfg)
     gnss, velocity = adjust_sensors(gnss, velocity, cfg)
-    warnings = assumed + check_units(imu, gnss)
+    warnings = assumed + check_units(imu, gnss) + check_mounting(imu, gnss)
     quality_extra = {}
     if gnss is not None:
         off = time_offset(imu, gnss)
@@ -916,6 +918,7 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
         One line for data it cannot use or a run whose innovations refuse it.
     """
     t_start = time.perf_counter()
+    imu = mounted_imu(imu, (cfg or System()).imu.mounting)
     prep = prepare(imu, gnss, velocity, cfg, sensors)
     nav = prep.feed(prep.navigator(record_rows=True, record_covariance=True,
                                    innovations=innovations is not None))

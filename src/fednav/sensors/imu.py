@@ -11,9 +11,9 @@ from typing import Literal
 
 import numba
 import numpy as np
-from pydantic import Field, model_validator
+from pydantic import Field, field_validator, model_validator
 
-from ..core import units
+from ..core import mounting, units
 from ..core.config import _Model
 
 
@@ -210,7 +210,9 @@ class ImuConfig(_Model):
     A figure left out is unknown: recorded data take it from the data file (NaveGo's IMU
     struct), a simulation takes it as zero (infinite for correlation times).
     ``max_bridge_s``: the longest run of faulty samples (NaN/inf/absurd) in a recorded
-    IMU file bridged by holding the last good one (docs/reliability.md).
+    IMU file bridged by holding the last good one (docs/reliability.md).  ``mounting``:
+    the recorded file's IMU axes in the body (axis letters or Euler angles,
+    :mod:`fednav.core.mounting`), applied where the file is read.
     """
 
     gyro_bias_deg_h: float | None = _NONNEG
@@ -237,9 +239,19 @@ class ImuConfig(_Model):
     accel_scale_ppm: float | None = _NONNEG
     random_bias: bool = False
     max_bridge_s: float = Field(0.1, gt=0.0)
+    #: how the IMU's axes in a recorded file are mounted in the body (axis letters such
+    #: as ``FRD``, ``FLU``, ``NED``, or ``{euler_deg: [pitch, roll, heading]}``,
+    #: :mod:`fednav.core.mounting`); None: the file format's own axes (fednav CSV
+    #: right-forward-up, NaveGo and PX4 forward-right-down)
+    mounting: str | dict | None = None
     #: a preset (:data:`GRADES`) for the figures neither this section nor the data file
     #: gives: consumer, industrial, tactical or navigation
     grade: Literal["consumer", "industrial", "tactical", "navigation"] | None = None
+
+    @field_validator("mounting")
+    @classmethod
+    def _mounting(cls, v):
+        return mounting.validate(v)
 
     @model_validator(mode="after")
     def _one_key_per_figure(self):
