@@ -98,13 +98,13 @@ MAG = {"declination_deg": 3.0, "inclination_deg": 63.5, "intensity_ga": 0.48,
 
 
 def imu_config() -> dict:
-    """The simulated IMU's figures as fednav's ``imu:`` section (SI keys)."""
-    return {"gyro_bias_radps": IMU["gyro_bias_radps"],
+    """The simulated IMU's figures as fednav's ``imu:`` section (SI keys, floats)."""
+    return {k: float(v) for k, v in {"gyro_bias_radps": IMU["gyro_bias_radps"],
             "gyro_markov_radps": IMU["gyro_markov_radps"], "gyro_tau_s": IMU["gyro_tau_s"],
             "gyro_arw_rad_sqrt_s": IMU["gyro_arw_rad_sqrt_s"],
             "accel_bias_mps2": IMU["accel_bias_mps2"],
             "accel_markov_mps2": IMU["accel_markov_mps2"], "accel_tau_s": IMU["accel_tau_s"],
-            "accel_vrw_mps_sqrt_s": IMU["accel_vrw_mps_sqrt_s"]}
+            "accel_vrw_mps_sqrt_s": IMU["accel_vrw_mps_sqrt_s"]}.items()}
 
 
 # ------------------------------------------------------------------- Earth geometry
