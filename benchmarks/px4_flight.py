@@ -4,7 +4,7 @@ The truth is closed-form motion written here, independent of fednav's trajectory
 sensor simulators (it imports nothing from fednav):
 
 * **Path** in the tangent plane at home (east, north, up; fixed to the Earth): 20 s at
-  rest on the ground, a climb to 30 m, then a figure of eight (200 m x 160 m, 90 s a
+  rest on the ground, a climb to 30 m, then a figure of eight (400 m x 160 m, 90 s a
   loop, 11-18 m/s) entered with a 15 s speed ramp, its height swinging 20 m, until
   :data:`DURATION_S`.  Every blend is a septic smoothstep, so the acceleration and its
   rate are continuous; position, velocity and acceleration are analytic.
