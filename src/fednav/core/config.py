@@ -24,6 +24,13 @@ class _Model(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
 
+def simulation_only(why: str) -> dict:
+    """A field's ``json_schema_extra`` saying that processing recorded data does not use
+    it, and why (``fednav process`` names such a key when a config sets it:
+    :func:`fednav.process.checks.ignored_keys`)."""
+    return {"simulation_only": why}
+
+
 def nested_error(path: list, message: str) -> PydanticCustomError:
     """An error found inside a value that a validator checks by hand (a section whose
     keys depend on a registry): reported as ``key 'outer.path': message``."""

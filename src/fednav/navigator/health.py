@@ -20,11 +20,13 @@ NIS_WARN = 3.0
 NIS_REFUSE = 100.0
 
 
-def nis_check(fdi: list | dict, force: bool = False, seen: list | None = None) -> list[str]:
+def nis_check(fdi: list | dict, force: bool = False, seen: list | None = None,
+              blame: str | None = None) -> list[str]:
     """Warnings for local filters whose mean NIS/dof over the run's accepted measurements
     exceeds :data:`NIS_WARN`, naming the likely causes; a one-line :class:`DataError`
     beyond :data:`NIS_REFUSE` unless ``force`` (with the first of the input checks'
-    warnings ``seen``, the likeliest cause, in it).  Measurements fault detection isolated
+    warnings ``seen``, the likeliest cause, in it — or ``blame``, the leave-one-out
+    culprit, :mod:`fednav.process.culprit`).  Measurements fault detection isolated
     did not touch the solution (a long isolation has its own warning).  ``fdi``: the FDI
     log, or it split per local filter (:func:`by_local`)."""
     out = []
@@ -39,7 +41,8 @@ def nis_check(fdi: list | dict, force: bool = False, seen: list | None = None) -
         why = (f"the '{local}' local filter's innovations are {n:.3g} times their expected "
                f"size (mean NIS/dof; a consistent filter gives 1)")
         if n > NIS_REFUSE and not force:
-            hint = f"; the input checks said: {seen[0]}" if seen else ""
+            hint = (f"; {blame}" if blame else
+                    f"; the input checks said: {seen[0]}" if seen else "")
             raise DataError(f"{why}: the data are likely wrong — a unit (deg/s, g, mg, ms), "
                             f"a time base (GPS vs UTC, Unix time), the axis order or a stuck "
                             f"axis; or the noise figures are far too small (--force to "
@@ -144,10 +147,118 @@ def window_nis(fdi: list | dict) -> list[str]:
     return out
 
 
+#: Row kinds by what they measure (:mod:`fednav.sensors.measurement`): a sensor's NIS is
+#: judged per group too, so that one group near zero is not hidden by another.
+ROW_GROUPS = {"position": (0, 1, 2), "velocity": (3, 4, 5), "attitude": (6, 7, 8),
+              "body velocity": (9, 10, 11), "angular rate": (12, 13, 14)}
+#: The fewest measurements a band is judged on (a mean of fewer is too noisy).
+BAND_MIN = 30
+
+
+def row_nis(innovations: list, kinds: dict) -> dict[str, dict[str, tuple[float, int]]]:
+    """Per local filter and row group (:data:`ROW_GROUPS`): the mean over its accepted
+    measurements of ``r_i^2 / S_ii`` (each row's squared innovation over its predicted
+    variance: 1 for a consistent filter) and how many.  ``innovations``: the run's
+    :class:`~fednav.navigator.record.InnovationRecord` s; ``kinds``: local filter ->
+    its model's row kinds (``RowModel.kinds``; a local without rows is left out)."""
+    by: dict[str, list] = {}
+    for rec in innovations:
+        if rec.accepted and rec.local in kinds:
+            by.setdefault(rec.local, []).append(rec)
+    out = {}
+    for local, recs in by.items():
+        k = np.asarray(kinds[local])
+        d = len(k)
+        rows = [(np.asarray(r.r, dtype=float)[:d], np.diagonal(np.asarray(r.S))[:d])
+                for r in recs if len(r.r) >= d]
+        if not rows:
+            continue
+        r = np.array([a for a, _ in rows])
+        sd = np.array([b for _, b in rows])
+        q = r**2 / np.where(sd > 0, sd, np.nan)
+        groups = {}
+        for name, members in ROW_GROUPS.items():
+            cols = np.flatnonzero(np.isin(k, members))
+            if len(cols):
+                v = q[:, cols]
+                v = v[np.isfinite(v)]
+                if len(v):
+                    groups[name] = (float(v.mean()), int(len(v)))
+        out[local] = groups
+    return out
+
+
+def band_warnings(fdi: list | dict, band=(0.5, 2.0), rows: dict | None = None,
+                  constraints=()) -> list[str]:
+    """Warnings for local filters whose run-mean NIS/dof lies outside ``band`` ([low,
+    high]), each with the likely causes ranked and the key that fixes each, and for a row
+    group of a local filter (``rows``: :func:`row_nis`) outside it while the filter's
+    mean is inside (one group near zero hidden by another).  ``constraints``: locals
+    whose sigma is a softness, not a noise (ZUPT, NHC, ZARU: their NIS sits well below 1
+    by design) — judged on the high side only.  (With a band, :func:`run_health` gives
+    these warnings instead of :func:`nis_check`'s.)"""
+    lo, hi = band
+    log = _split(fdi)
+    means = {}
+    for local, (_, nis, dof, iso) in log.items():
+        keep = ~iso
+        if keep.sum() >= BAND_MIN:
+            means[local] = float((nis[keep] / dof[keep]).mean())
+    sensors = [n for n in means if n not in constraints]
+    high_all = len(sensors) > 1 and all(means[n] > hi for n in sensors)
+    out = []
+    for local, n in means.items():
+        if lo <= n <= hi or (n < lo and local in constraints):
+            continue
+        if n > hi:
+            causes = [f"sensors.{local}'s sigma too small for its data (sensors.{local}."
+                      f"sigma_*, or fednav tune)",
+                      "the IMU figures too optimistic for this vehicle (fednav tune, or "
+                      "imu.grade)",
+                      f"its lever arm or mounting wrong (sensors.{local}.lever_m, "
+                      f"mounting)",
+                      f"a latency not compensated (sensors.{local}.time_offset_s, "
+                      f"timing.delay_compensation)"]
+            if high_all:  # every sensor: the common part, the IMU, first
+                causes.insert(0, causes.pop(1))
+            side = "larger"
+        else:
+            causes = [f"sensors.{local}'s sigma too large for its data (a sigma in the "
+                      f"wrong unit — millimetres as metres? — or a receiver's "
+                      f"pessimistic accuracy; sensors.{local}.sigma_*, or fednav tune)",
+                      "the IMU figures too pessimistic (imu.grade too noisy a class; "
+                      "fednav tune)"]
+            side = "smaller"
+        out.append(f"the '{local}' local filter's innovations are {n:.3g} times their "
+                   f"expected size (mean NIS/dof over the run, outside the band "
+                   f"[{lo:g}, {hi:g}]: {side} than its covariance says); likely causes, "
+                   f"most likely first: " + "; ".join(
+                       f"{i + 1}) {c}" for i, c in enumerate(causes)))
+    for local, groups in (rows or {}).items():
+        if local not in means or not lo <= means[local] <= hi or len(groups) < 2:
+            continue
+        for name, (v, m) in groups.items():
+            if m < BAND_MIN or lo <= v <= hi or (v < lo and local in constraints):
+                continue
+            others = ", ".join(f"{g} {w:.3g}" for g, (w, _) in groups.items() if g != name)
+            fix = (f"its {name} sigma too large (a wrong unit: millimetres as metres?)"
+                   if v < lo else f"its {name} sigma too small, or a lever arm / latency "
+                   f"that moves its {name} rows")
+            out.append(f"the '{local}' local filter's {name} rows have NIS/dof {v:.3g} "
+                       f"(outside [{lo:g}, {hi:g}]) while its other rows give {others}: "
+                       f"{fix} (sensors.{local}.sigma_*)")
+    return out
+
+
 def run_health(fdi: list, imu=None, gnss=None, solution=None, figures: dict | None = None,
-               force: bool = True, seen: list | None = None) -> list[str]:
+               force: bool = True, seen: list | None = None, band=None,
+               rows: dict | None = None, constraints=(),
+               blame: str | None = None) -> list[str]:
     """Every check of the health monitor, as warnings: the run's and the sliding
-    windows' NIS/dof per local filter, long isolations (from the FDI log ``fdi``), and,
+    windows' NIS/dof per local filter, long isolations (from the FDI log ``fdi``), the
+    NIS/dof band per local filter and row group (``band``, ``rows``, ``constraints``:
+    :func:`band_warnings`; ``blame``: the leave-one-out culprit, named in a refusal),
+    and,
     with the data, the plausibility checks of :mod:`fednav.navigator.plausibility` —
     stuck axes, gravity and Earth rate at rest and the solution's levelling there (needs
     ``imu`` (:class:`~fednav.io.data.ImuData`), ``gnss`` with velocities and the IMU's SI
@@ -159,7 +270,9 @@ def run_health(fdi: list, imu=None, gnss=None, solution=None, figures: dict | No
     from . import plausibility as pl
 
     log = by_local(fdi)
-    out = isolation_warnings(log) + nis_check(log, force, seen) + window_nis(log)
+    run = nis_check(log, force, seen, blame)  # (the refusal; its warnings without a band)
+    out = isolation_warnings(log) + (run if band is None else band_warnings(
+        log, band, rows, constraints)) + window_nis(log)
     if imu is None or gnss is None:
         return out
     t = imu.t

@@ -661,6 +661,14 @@ class Navigator:
         self.add_measurements(series.kind, series.t, series.z, sigma=series.sigma,
                               t_arrival=series.t_avail)
 
+    @property
+    def row_kinds(self) -> dict[str, np.ndarray]:
+        """Each aiding sensor's row kinds (:mod:`fednav.sensors.measurement`; sensors whose
+        model is not rows are left out): what the health monitor groups a sensor's
+        innovations by."""
+        return {a: m.model.kinds for a, m in self._meas.items()
+                if getattr(m.model, "kinds", None) is not None}
+
     def _epoch_of(self, t) -> np.ndarray:
         """The epoch at or after each time (:func:`epoch_at`)."""
         t = np.asarray(t, dtype=float)

@@ -313,6 +313,23 @@ def _translate_legacy(data: dict) -> dict:
     return out
 
 
+class HealthConfig(_Model):
+    """The health monitor (:mod:`fednav.navigator.health`): ``nis_band`` [low, high], the
+    band of a sensor's run-mean NIS/dof (and of each of its row kinds: positions,
+    velocities, attitude ...) outside which a run is warned about, with the likely causes
+    ranked (a consistent filter gives 1; over a few hundred measurements the mean of a
+    consistent filter lies within a few percent of it)."""
+
+    nis_band: tuple[float, float] = (0.5, 2.0)
+
+    @field_validator("nis_band")
+    @classmethod
+    def _band(cls, v):
+        if not 0.0 < v[0] < 1.0 < v[1]:
+            raise ValueError(f"a band [low, high] with 0 < low < 1 < high, got {list(v)}")
+        return v
+
+
 class System(_Model):
     """A navigation system: IMU, aiding sensors, estimator (see the module docstring).
 
@@ -341,6 +358,8 @@ class System(_Model):
     initial : InitialConfig, optional
         A known start (``lat_deg``, ``lon_deg`` [deg], ``h_m`` [m], ENU ``vel_mps``
         [m/s], ``euler_deg`` [deg] with their 1-sigma); replaces the alignment.
+    health : HealthConfig
+        The health monitor's NIS/dof band (``nis_band`` [low, high]).
     smoother : bool
         Also run the RTS smoother.
     output_rate_hz : float or {"imu", "filter"}, optional
@@ -359,6 +378,7 @@ class System(_Model):
     filter: FilterConfig = FilterConfig()
     alignment: AlignmentConfig = AlignmentConfig()
     initial: InitialConfig | None = None
+    health: HealthConfig = HealthConfig()
     smoother: bool = False
     output_rate_hz: float | Literal["imu", "filter"] | None = None
 

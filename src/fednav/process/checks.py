@@ -10,9 +10,12 @@ along the wrong one — and the check names the mounting that fits them.
 from __future__ import annotations
 
 import numpy as np
+from pydantic import BaseModel
 
 from ..core import mounting as mt
 from ..io.data import DataError, GnssData, ImuData
+from ..sensors import registry
+from ..sensors.imu import FIGURES
 
 #: The least angle [deg] between the mean specific force and the body's up axis that a
 #: declared mounting is refused at (another square mounting then fits better: a vehicle
@@ -54,6 +57,82 @@ def _track_correlation(imu: ImuData, gnss: GnssData | None, R) -> np.ndarray | N
         x = f_mean[moving, j]
         if np.std(x) > 0.0:
             out[j] = float(np.corrcoef(a_track[moving], x)[0, 1])
+    return out
+
+
+def _set_fields(model: BaseModel, prefix: str):
+    """(dotted key, field info) of every field ``model`` was given a value for, sections
+    walked into."""
+    for name in model.model_fields_set:
+        info = type(model).model_fields[name]
+        value = getattr(model, name)
+        if isinstance(value, BaseModel):
+            yield from _set_fields(value, f"{prefix}{name}.")
+        else:
+            yield f"{prefix}{name}", info
+
+
+def ignored_keys(cfg) -> list[str]:
+    """The keys a system description sets that processing recorded data does not use,
+    each with why: fields declared simulation-only
+    (:func:`fednav.core.config.simulation_only`), a sensor's ``period_s`` where its file
+    gives the times (not a pseudo-measurement or a detector's rate), and a sensor's
+    Gauss–Markov figures when ``filter.states`` does not select its state."""
+    out = []
+    for key, info in _set_fields(cfg, ""):
+        why = (info.json_schema_extra or {}).get("simulation_only") if isinstance(
+            info.json_schema_extra, dict) else None
+        if why:
+            out.append(f"{key} ({why})")
+    for name in cfg.sensors:
+        sec, spec = cfg.sensors[name], registry.spec(name)
+        for key, info in _set_fields(sec, f"sensors.{name}."):
+            extra = info.json_schema_extra if isinstance(info.json_schema_extra, dict) else {}
+            if extra.get("simulation_only"):
+                out.append(f"{key} ({extra['simulation_only']})")
+        if "period_s" in sec.model_fields_set and not (spec.pseudo or spec.detector):
+            out.append(f"sensors.{name}.period_s (the {name} file's time stamps give "
+                       f"the times)")
+        tm = sec.timing
+        if tm.delay_compensation != "curve_fit":
+            out += [f"sensors.{name}.timing.{k} (acts with delay_compensation: curve_fit)"
+                    for k in ("curve_fit_degree", "curve_fit_points")
+                    if k in tm.model_fields_set]
+        block = getattr(spec.model, "markov_block", None)
+        key = getattr(type(sec), "MARKOV_KEY", None)
+        if block and key and block not in cfg.filter.states:
+            out += [f"sensors.{name}.{k} (acts with filter.states: [{block}])"
+                    for k in (key, "markov_tau_s") if k in sec.model_fields_set]
+    out += _conditional(cfg)
+    return out
+
+
+#: Filter settings that act only for some filter types: key -> (the types, what to say).
+_BY_TYPE = {"alpha": ({"ukf", "sukf", "cukf", "raukf"}, "a sigma-point filter (ukf, sukf, "
+                      "cukf, raukf)"),
+            "beta": ({"ukf", "sukf", "cukf", "raukf"}, "a sigma-point filter"),
+            "kappa": ({"ukf", "sukf", "cukf", "raukf"}, "a sigma-point filter"),
+            "grid_level": ({"sghqf", "aasghqf"}, "a sparse-grid filter (sghqf, aasghqf)")}
+
+
+def _conditional(cfg) -> list[str]:
+    """Keys that act only with another setting, given without it."""
+    f, out = cfg.filter, []
+    types = {f.type} | {lc.type for lc in f.locals.values() if lc.type is not None}
+    for key, (need, what) in _BY_TYPE.items():
+        if key in f.model_fields_set and not types & need:
+            out.append(f"filter.{key} (acts with {what})")
+    if "fixed_factors" in f.model_fields_set and f.sharing != "fixed":
+        out.append("filter.fixed_factors (acts with filter.sharing: fixed)")
+    if f.fdi_alpha is None:
+        out += [f"filter.{k} (acts with filter.fdi_alpha)"
+                for k in ("fdi_recovery", "fdi_readmit_s") if k in f.model_fields_set]
+    given = cfg.imu.model_fields_set
+    if "grade" in given and all({eng, si} & given for eng, _, si in FIGURES.values()):
+        out.append("imu.grade (the config gives every figure: the preset fills none)")
+    for key, block in (("gyro_scale_ppm", "gyro_scale"), ("accel_scale_ppm", "accel_scale")):
+        if key in cfg.imu.model_fields_set and block not in f.states:
+            out.append(f"imu.{key} (acts with filter.states: [{block}])")
     return out
 
 

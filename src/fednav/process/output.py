@@ -12,6 +12,7 @@ from ..core.atomic import replacing, write_json
 from ..io.csvdata import write_csv
 from ..io.data import Reference
 from ..navigator.solution import consistency as _consistency
+from . import outages
 from .run import ProcessResult, Solution, errors_against, rmse
 
 #: Columns of the RMSE block of summary.json, in the solution's order: ENU position and
@@ -168,6 +169,8 @@ def summary(res: ProcessResult, ref: Reference | None, inputs: dict,
         out["rmse"] = _rmse_block(res.forward, ref)
         if res.smoothed is not None:
             out["rmse_smoothed"] = _rmse_block(res.smoothed, ref)
+        if res.outages:
+            out["outages"] = _outage_blocks(res, ref)
     for name, other in (others or {}).items():
         block = {"source": other.source, "rmse": _rmse_block(res.forward, other)}
         if res.smoothed is not None:
@@ -190,6 +193,24 @@ def _errors(sol: Solution, ref: Reference) -> dict:
     if key not in _MEMO:
         _MEMO[key] = (sol, ref, errors_against(sol, ref))  # (holds them: ids stay theirs)
     return _MEMO[key][2]
+
+
+def _outage_blocks(res: ProcessResult, ref: Reference) -> dict:
+    """Per sensor with ``outages_s``: each window withheld, with the RMSE of the forward
+    (and smoothed) solution inside it (:func:`fednav.process.outages.scored`)."""
+    out = {}
+    for name, windows in res.outages.items():
+        rows = outages.scored(_errors(res.forward, ref), windows)
+        if res.smoothed is not None:
+            for row, sm in zip(rows, outages.scored(_errors(res.smoothed, ref), windows),
+                               strict=True):
+                row["rmse_smoothed"] = sm["rmse"]
+        for row in rows:
+            for key in ("rmse", "rmse_smoothed"):
+                if key in row:
+                    row[key] = {k: row[key][k] for k in RMSE_KEYS if k in row[key]}
+        out[name] = rows
+    return out
 
 
 def _rmse_block(sol: Solution, ref: Reference) -> dict[str, float]:
@@ -533,6 +554,8 @@ def _write(out, res, ref, inputs, output_rate, gnss, others, fmt) -> list[Path]:
     for name, sol in (("solution", res.forward), ("solution_smoothed", res.smoothed)):
         if sol is not None:
             files.append(write_solution(out / f"{name}.{fmt}", decimate(sol, output_rate)))
+    if res.gnss_flown is not None:  # (the outages withheld: the plots shade them)
+        gnss = res.gnss_flown
     files.append(plot_track(res, gnss, ref, out / "track.png"))
     if ref is not None:
         files.append(write_errors(res, ref, out / "errors.csv", output_rate))

@@ -25,10 +25,10 @@ from ..ins import error_model as em
 from ..ins.alignment import UNKNOWN_HEADING_SIGMA, Alignment, align, coarse_level
 from ..io.data import DataError, GnssData, ImuData, Reference, VelocityData
 from ..io.sensorfile import SensorData
-from ..navigator.health import readmission_warnings, run_health
+from ..navigator.health import readmission_warnings, row_nis, run_health
 from ..navigator.loop import InnovationRecord  # noqa: F401  (fednav.process's name)
 from ..navigator.navigator import InitialState, Navigator, stamp_tolerance
-from ..navigator.solution import Solution, epoch_rate, imu_rate
+from ..navigator.solution import Solution, consistency, epoch_rate, imu_rate
 from ..navigator.system import (
     System,
     imu_noise_model,
@@ -39,7 +39,9 @@ from ..navigator.system import (
 from ..navigator.system import imu_figures as _imu_figures
 from ..sensors import GnssConfig, VelocityConfig, registry
 from ..sensors.imu import FIGURES
-from .checks import check_mounting, mounted_imu
+from . import outages
+from .checks import check_mounting, ignored_keys, mounted_imu
+from .culprit import culprit
 
 #: The processing config of fednav 0.1 is a system description now (one schema); the
 #: old name is kept for one release.
@@ -80,6 +82,12 @@ class ProcessResult:
     optional_states : dict
         The optional error states' (``filter.states``) ``estimate`` and ``sigma`` per axis
         at the end of the run, SI (:attr:`fednav.navigator.NavResult.optional`).
+    outages : dict
+        Per sensor with ``outages_s`` in the system description, its windows
+        ``[start, end)`` [s] whose measurements were withheld from the filter
+        (:mod:`fednav.process.outages`; ``summary.json`` scores the errors inside them).
+    gnss_flown : GnssData or None
+        The GNSS fixes the filter was given (those outside the outages).
     """
 
     forward: Solution
@@ -92,6 +100,8 @@ class ProcessResult:
     #: how the initial attitude was found (:mod:`fednav.ins.alignment`)
     alignment: dict = field(default_factory=dict)
     optional_states: dict = field(default_factory=dict)
+    outages: dict = field(default_factory=dict)
+    gnss_flown: GnssData | None = None
 
 
 def adjust_sensors(gnss: GnssData, velocity: VelocityData | None, cfg: System):
@@ -624,6 +634,7 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
         One line for data it cannot use.
     """
     cfg = cfg or System()
+    gnss, velocity, sensors = withheld_inputs(cfg, gnss, velocity, sensors)
     if cfg.filter.state == "total" and (cfg.smoother or cfg.output_rate_hz):
         raise DataError("filter.state: total — the total-state navigator's solution is at "
                         "its filter epochs (no IMU-rate rows to smooth or thin)")
@@ -647,6 +658,7 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
     cfg, assumed = with_imu_figures(imu, cfg)
     gnss, velocity = adjust_sensors(gnss, velocity, cfg)
     warnings = assumed + check_units(imu, gnss) + check_mounting(imu, gnss)
+    unused = ignored_keys(cfg)
     quality_extra = {}
     if gnss is not None:
         off = time_offset(imu, gnss)
@@ -706,7 +718,8 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
         if name in others or (cfg.aiding is not None and name not in cfg.aiding):
             continue
         if spec.pseudo:
-            others[name] = _pseudo(name, cfg, imu, T)
+            others[name] = outages.withhold(_pseudo(name, cfg, imu, T),
+                                            outages.windows_of(cfg, name), name)
         elif spec.detector is not None:
             t_nav = init.t_s if init is not None and init.t_s is not None else imu.t[i0]
             found = spec.detector(imu, gnss, cfg.sensors[name], noise, gb, T, float(t_nav))
@@ -717,9 +730,10 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
                 warnings.append(f"sensors.{name}: its detector found nothing in the data "
                                 f"(not used)")
                 continue
-            others[name] = SensorData(name, f"sensors.{name} (no file: detected)", t_det,
-                                      np.zeros((len(t_det), len(spec.columns))), quality={},
-                                      sigma=sig)
+            others[name] = outages.withhold(SensorData(
+                name, f"sensors.{name} (no file: detected)", t_det,
+                np.zeros((len(t_det), len(spec.columns))), quality={}, sigma=sig),
+                outages.windows_of(cfg, name), name)
 
     for name, d in list(others.items()):  # corrections a sensor makes to its file
         calibrate = registry.spec(name).calibrate
@@ -824,6 +838,13 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
             "velocity": velocity.t_arrival - velocity.t if velocity is not None and
             velocity.t_arrival is not None else None,
             **{n: d.t_arrival - d.t for n, d in others.items() if d.t_arrival is not None}}
+    unused += [f"sensors.{n}.timing.delay_compensation (the {n} data have no arrival "
+               f"times, t_arrival_s: each measurement is used at its time of validity)"
+               for n in aiding if late.get(n) is None and n in cfg.sensors
+               and "delay_compensation" in cfg.sensors[n].timing.model_fields_set]
+    if unused:
+        warnings.append("system description: not used on recorded data: "
+                        + "; ".join(unused))
     for name, lag in late.items():
         if lag is None or name not in aiding or not len(lag):
             continue
@@ -854,6 +875,16 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
                     else (imu.increments[0][m], imu.increments[1][m]),
                     {n: d.t_arrival for n, d in (("gnss", gnss), ("velocity", velocity))
                      if d is not None and d.t_arrival is not None})
+
+
+def withheld_inputs(cfg: System, gnss, velocity, sensors):
+    """The recordings without the measurements inside their sensor's ``outages_s``
+    (:func:`fednav.process.outages.withhold`): GNSS, velocity sensor, other sensors."""
+    return (outages.withhold(gnss, outages.windows_of(cfg, "gnss"), "gnss"),
+            outages.withhold(velocity, outages.windows_of(cfg, "velocity"), "velocity"),
+            None if sensors is None else {
+                n: outages.withhold(d, outages.windows_of(cfg, n), n)
+                for n, d in sensors.items()})
 
 
 def flown_gnss(gnss: GnssData | None, system: System) -> GnssData | None:
@@ -918,20 +949,32 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
         One line for data it cannot use or a run whose innovations refuse it.
     """
     t_start = time.perf_counter()
-    imu = mounted_imu(imu, (cfg or System()).imu.mounting)
+    cfg = cfg or System()
+    imu = mounted_imu(imu, cfg.imu.mounting)
+    gnss, velocity, sensors = withheld_inputs(cfg, gnss, velocity, sensors)
     prep = prepare(imu, gnss, velocity, cfg, sensors)
     nav = prep.feed(prep.navigator(record_rows=True, record_covariance=True,
-                                   innovations=innovations is not None))
+                                   innovations=True))
     out = nav.result()
     res = solution(out, prep, smooth)
+    constraints = [n for n in prep.system.aiding
+                   if registry.spec(n).pseudo or registry.spec(n).detector is not None]
+    band = prep.system.health.nis_band
+    means = {k: v["nis_per_dof"] for k, v in consistency(res.forward.fdi).items()}
+    blame = culprit(prep, means, band, constraints)
     res.warnings += run_health(res.forward.fdi, imu, flown_gnss(gnss, prep.system),
                                res.forward, imu_figures(imu, prep.system), force,
-                               list(res.warnings))
+                               list(res.warnings), band,
+                               row_nis(out.innovations, nav.row_kinds), constraints, blame)
+    if blame:
+        res.warnings.append(blame)
     res.warnings += readmission_warnings(out.readmissions)
     if prep.system.filter.q_adaptation is not None and hasattr(nav.loop, "q_scales"):
         res.data_quality["q_scale_final"] = {k: round(v, 3)
                                              for k, v in nav.loop.q_scales().items()}
     res.optional_states = out.optional
+    res.outages = {n: w for n in prep.system.sensors if (w := outages.windows_of(cfg, n))}
+    res.gnss_flown = gnss
     res.run_time_s = time.perf_counter() - t_start
     if innovations is not None:
         innovations.extend(out.innovations)

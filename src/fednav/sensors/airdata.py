@@ -24,6 +24,7 @@ import numpy as np
 from pydantic import Field
 
 from ..core import attitude as att
+from ..core.config import simulation_only
 from ..core.units import ARCMIN
 from ..ins.error_model import N_STATES, PHI
 from .base import MeasurementSeries, flight_times
@@ -141,7 +142,9 @@ class AirDataConfig(SensorConfig):
 
     sigma_airspeed_mps: float = Field(gt=0.0)
     wind_sigma_mps: float = Field(default=0.0, ge=0.0)
-    wind_bias_mps: tuple[float, float] = (0.0, 0.0)  # (east, north) error of the estimate
+    #: (east, north) error of the simulated wind estimate
+    wind_bias_mps: tuple[float, float] = Field((0.0, 0.0), json_schema_extra=simulation_only(
+        "a recorded wind estimate has the error it has"))
 
     def sensor(self) -> AirData:
         return AirData(self.sigma_airspeed_mps, max(self.wind_sigma_mps, 1e-6),

@@ -33,6 +33,7 @@ from typing import Literal
 import numpy as np
 from pydantic import Field, field_validator
 
+from ..core.config import simulation_only
 from .base import MeasurementSeries, flight_times
 from .measurement import BVEL_F, BVEL_R, BVEL_U, VEL_E, VEL_N, VEL_U, RowModel
 from .spec import Column, SensorConfig, SensorSpec
@@ -214,7 +215,8 @@ class StopConfig(SensorConfig):
     window called moving), and the GNSS horizontal speed a stop must stay under where a
     fix lies within 1 s (``max_gnss_speed_mps``)."""
 
-    stationary_below_mps: float = Field(default=1e-3, gt=0.0)
+    stationary_below_mps: float = Field(default=1e-3, gt=0.0, json_schema_extra=simulation_only(
+        "recorded stops come from the file or the stand-still detector (detect_*)"))
     detect_window_s: float = Field(default=0.5, gt=0.0)
     detect_alpha: float = Field(default=1e-3, gt=0.0, lt=1.0)
     max_gnss_speed_mps: float = Field(default=0.3, gt=0.0)

@@ -14,7 +14,7 @@ import numpy as np
 from pydantic import Field, field_validator, model_validator
 
 from ..core import mounting, units
-from ..core.config import _Model
+from ..core.config import _Model, simulation_only
 
 
 @dataclass(frozen=True)
@@ -237,7 +237,8 @@ class ImuConfig(_Model):
     accel_bias_rw_ug_sqrt_h: float | None = _NONNEG
     gyro_scale_ppm: float | None = _NONNEG
     accel_scale_ppm: float | None = _NONNEG
-    random_bias: bool = False
+    random_bias: bool = Field(False, json_schema_extra=simulation_only(
+        "the recording's IMU has the biases it has"))
     max_bridge_s: float = Field(0.1, gt=0.0)
     #: how the IMU's axes in a recorded file are mounted in the body (axis letters such
     #: as ``FRD``, ``FLU``, ``NED``, or ``{euler_deg: [pitch, roll, heading]}``,

@@ -42,6 +42,7 @@ from pydantic import Field
 
 from ..core import attitude as att
 from ..core import units
+from ..core.config import simulation_only
 from ..core.units import ARCMIN
 from ..ins.error_model import N_STATES, PHI, SCALE
 from .base import MeasurementSeries, flight_times
@@ -163,7 +164,8 @@ class MagConfig(SensorConfig):
     sigma_heading_deg: float = Field(gt=0.0)
     declination_deg: float = Field(default=0.0, ge=-180.0, le=180.0)
     inclination_deg: float = Field(default=60.0, gt=-89.0, lt=89.0)
-    field_gauss: float = Field(default=0.5, gt=0.0)
+    field_gauss: float = Field(default=0.5, gt=0.0, json_schema_extra=simulation_only(
+        "only the measured field's direction is used"))
 
     def sensor(self) -> Magnetometer:
         return Magnetometer(float(units.deg(self.sigma_heading_deg)),

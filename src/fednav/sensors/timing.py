@@ -21,7 +21,7 @@ from typing import Literal
 import numpy as np
 from pydantic import Field, model_validator
 
-from ..core.config import _Model
+from ..core.config import _Model, simulation_only
 from .base import sample_times
 
 #: How the navigator treats the time between a measurement's time of validity and the
@@ -106,6 +106,11 @@ def measurement_times(t0: float, t_end: float, period: float, latency: Latency,
     return t, t + (0.0 if latency.is_zero else latency.draw(len(t), rng))
 
 
+#: Why a declared latency is not used on recorded data.
+_ARRIVAL = ("fednav process takes each measurement's arrival from its file's t_arrival_s "
+            "column")
+
+
 class TimingConfig(_Model):
     """When a sensor's measurements become available and how the filter treats the delay.
 
@@ -126,10 +131,13 @@ class TimingConfig(_Model):
     costly reference).
     """
 
-    latency_s: float | None = Field(default=None, ge=0.0)
-    latency_range_s: tuple[float, float] | None = None
-    latency_list_s: list[float] | None = None
-    sequential: bool = False
+    latency_s: float | None = Field(default=None, ge=0.0,
+                                    json_schema_extra=simulation_only(_ARRIVAL))
+    latency_range_s: tuple[float, float] | None = Field(
+        default=None, json_schema_extra=simulation_only(_ARRIVAL))
+    latency_list_s: list[float] | None = Field(default=None,
+                                               json_schema_extra=simulation_only(_ARRIVAL))
+    sequential: bool = Field(False, json_schema_extra=simulation_only(_ARRIVAL))
     delay_compensation: Literal[DELAY_COMPENSATIONS] = "interpolate"
     curve_fit_degree: Literal[1, 2, 3] = 2
     curve_fit_points: int = Field(default=4, ge=2)
