@@ -149,3 +149,36 @@ def test_simulate_cli_errors_are_one_line(tmp_path):
     bad.write_text(EXAMPLE.read_text().replace("imu_period_s: 0.005", "imu_period_s: 0"))
     r = CliRunner().invoke(app, ["simulate", str(bad), "--out", str(tmp_path / "o")])
     assert r.exit_code == 2 and "key 'imu_period_s': Input should be greater than 0" in r.stderr
+
+
+def test_simulate_never_replaces_a_users_own_files(tmp_path):
+    """A folder holding the user's own imu.csv is refused (it was overwritten); a folder
+    fednav simulate wrote is written again."""
+    out = tmp_path / "mine"
+    out.mkdir()
+    (out / "imu.csv").write_text("t_s,my,own,recording\n")
+    import yaml
+
+    scn = yaml.safe_load(EXAMPLE.read_text())
+    scn["segments"] = scn["segments"][:3]
+    small = tmp_path / "small.yaml"
+    small.write_text(yaml.safe_dump(scn))
+    r = CliRunner().invoke(app, ["simulate", str(small), "--out", str(out)])
+    assert r.exit_code == 2 and "imu.csv" in r.stderr and "\n" not in r.stderr.strip()
+    assert (out / "imu.csv").read_text() == "t_s,my,own,recording\n"
+    fresh = tmp_path / "fresh"
+    for _ in range(2):  # (its own files, written twice)
+        r = CliRunner().invoke(app, ["simulate", str(small), "--out", str(fresh)])
+        assert r.exit_code == 0, r.output
+
+
+def test_the_api_recipe_reads_a_design_export(tmp_path):
+    """read_gnss_csv takes the system description's values as they are: one sigma for
+    three axes and no lever arm (None) — what a design's export holds."""
+    from fednav.io import read_gnss_csv
+
+    (tmp_path / "gnss.csv").write_text("t_s,lat_deg,lon_deg,h_m,vE_mps,vN_mps,vU_mps\n"
+                                       "0,45,7,100,1,2,0\n1,45.00001,7,100,1,2,0\n")
+    g = read_gnss_csv(tmp_path / "gnss.csv", 2.0, 0.1, None)
+    assert np.array_equal(g.sigma_pos_enu, [2.0, 2.0, 2.0])
+    assert np.array_equal(g.sigma_vel, [0.1, 0.1, 0.1]) and np.array_equal(g.lever, [0, 0, 0])

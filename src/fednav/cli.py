@@ -338,6 +338,45 @@ def _refuse_writing_over(out: Path, inputs: dict, writes) -> None:
             raise typer.Exit(2)
 
 
+#: The file in which ``fednav simulate`` lists what it wrote into a folder (so that it
+#: replaces those files again, and never a user's own).
+SIMULATED = ".fednav-simulated.json"
+
+
+def _refuse_foreign_files(out: Path) -> None:
+    """End with a one-line error when folder ``out`` holds a file ``simulate`` would write
+    that an earlier ``simulate`` did not write there (a user's own recording)."""
+    out = Path(out)
+    if not out.is_dir():
+        return
+    mine = set()
+    if (out / SIMULATED).is_file():
+        try:
+            mine = set(json.loads((out / SIMULATED).read_text()))
+        except (ValueError, OSError):
+            mine = set()
+    foreign = sorted(p.name for p in out.iterdir()
+                     if p.is_file() and _simulate_writes(Path(p.name)) and p.name not in mine)
+    if foreign:
+        typer.echo(f"error: --out {out}: it holds {', '.join(foreign[:3])}"
+                   f"{' ...' if len(foreign) > 3 else ''}, which fednav simulate did not write "
+                   f"there and would replace; choose an empty folder", err=True)
+        raise typer.Exit(2)
+
+
+def _mark_simulated(out: Path, files) -> None:
+    """List ``files`` (written into ``out``) as ``simulate``'s own."""
+    from .core.atomic import write_json
+
+    old = []
+    if (Path(out) / SIMULATED).is_file():
+        try:
+            old = json.loads((Path(out) / SIMULATED).read_text())
+        except (ValueError, OSError):
+            old = []
+    write_json(Path(out) / SIMULATED, sorted(set(old) | {Path(f).name for f in files}))
+
+
 def _campaign_writes(rel: Path) -> bool:
     """Whether a campaign (``reproduce``, ``run``) writes ``rel`` in its folder: run files
     (and ``--fresh`` removes them), tables, plots, summaries."""
@@ -480,6 +519,11 @@ def _print_process(s: dict, compiled_s: float = 0.0) -> None:
     for name, other in s.get("against", {}).items():
         blocks += [(f"{what[key]} against {name}", other[key])
                    for key in ("rmse", "rmse_smoothed") if key in other]
+    for name, rows in s.get("outages", {}).items():  # (sensors.<name>.outages_s)
+        for row in rows:
+            a, b = row["window_s"]
+            blocks += [(f"{what[key]} inside the {name} outage {a:g}-{b:g} s", row[key])
+                       for key in ("rmse", "rmse_smoothed") if key in row]
     for title, block in blocks:
         tab = Table(title=title)
         for k in block:
@@ -831,9 +875,11 @@ def simulate(
         cfg = cfg.model_copy(update={"seed": seed})
     out = out or Path("results/dataset")
     _refuse_writing_over(out, {"scenario": path}, _simulate_writes)
+    _refuse_foreign_files(out)
     out = _output_folder(out)
     ds = simulate_dataset(cfg)
     files = (write_csv_dataset if fmt == "csv" else write_navego_dataset)(ds, out)
+    _mark_simulated(out, files)
     console.print(f"{cfg.name}: {ds.t[-1] - ds.t[0]:.0f} s, {len(ds.t)} IMU samples, "
                   f"{len(ds.gnss_t)} GNSS fixes (seed {cfg.seed})")
     console.print(f"wrote {', '.join(str(f) for f in files)}")
@@ -878,8 +924,10 @@ def _simulate_run(mod, path: Path, out: Path | None, fmt: str, seed: int, mode: 
     out = out or Path("results") / f"{scn.name}-{seed}"
     _refuse_writing_over(out, {"scenario": None if mod is not None else path},
                          _simulate_writes)
+    _refuse_foreign_files(out)
     out = _output_folder(out)
     files = write_run(scn, seed, m, out, max_time)
+    _mark_simulated(out, files)
     console.print(f"{scn.name}: run seed {seed}, mode {m.name}: {truth.t[-1] - truth.t[0]:.0f} "
                   f"s, {len(truth.t) - 1} IMU samples")
     console.print(f"wrote {', '.join(str(f) for f in files)}")

@@ -177,13 +177,15 @@ def read_gnss_csv(path, sigma_pos_enu=None, sigma_vel=(0.1, 0.1, 0.1),
     ----------
     path : str or Path
         The CSV file.
-    sigma_pos_enu : sequence of float, optional
-        Position 1-sigma [east, north, up] [m] where the file has none (default 5 m
+    sigma_pos_enu : float or sequence of float, optional
+        Position 1-sigma [east, north, up] [m] (one value for all three) where the file
+        has none (default 5 m
         each).
-    sigma_vel : sequence of float
-        Velocity 1-sigma [east, north, up] [m/s] where the file has none.
-    lever : sequence of float
-        Antenna position from the IMU, body right-forward-up [m].
+    sigma_vel : float or sequence of float, optional
+        Velocity 1-sigma [east, north, up] [m/s] (one value for all three) where the file
+        has none (None: 0.1 m/s).
+    lever : sequence of float, optional
+        Antenna position from the IMU, body right-forward-up [m] (None: zero).
     sigma_pos : sequence of float, optional
         Deprecated: the position 1-sigma in the old order [north, east, up] [m], read
         and reordered with a ``FutureWarning`` for one more release (not with
@@ -240,10 +242,20 @@ def read_gnss_csv(path, sigma_pos_enu=None, sigma_vel=(0.1, 0.1, 0.1),
                       "read_gnss_csv(sigma_pos_enu=[east, north, up]): read and reordered "
                       "for one more release", FutureWarning, stacklevel=2)
         sigma_pos_enu = neu_to_enu(np.asarray(sigma_pos, dtype=float))
-    pos = np.asarray((5.0,) * 3 if sigma_pos_enu is None else sigma_pos_enu)
-    return GnssData(src, df["t_s"].to_numpy(float), lla, vel, sigma_vel=np.asarray(sigma_vel),
-                    lever=np.asarray(lever), sigma_rows=sig, t_arrival=_arrival(df),
-                    sigma_pos_enu=pos)
+    # (a system description's values as they are: one value for three axes, None for
+    # what it leaves out)
+    pos = _three(5.0 if sigma_pos_enu is None else sigma_pos_enu)
+    return GnssData(src, df["t_s"].to_numpy(float), lla, vel,
+                    sigma_vel=_three(0.1 if sigma_vel is None else sigma_vel),
+                    lever=_three(0.0 if lever is None else lever), sigma_rows=sig,
+                    t_arrival=_arrival(df), sigma_pos_enu=pos)
+
+
+def _three(v) -> np.ndarray:
+    """One value as three, three values as they are (anything else: for the container's
+    check to name)."""
+    a = np.asarray(v, dtype=float)
+    return np.full(3, float(a)) if a.ndim == 0 else a
 
 
 def read_velocity_csv(path, lever=(0.0, 0.0, 0.0)) -> VelocityData:
