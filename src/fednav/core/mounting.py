@@ -106,6 +106,15 @@ def letters_of(M) -> str | None:
     return out
 
 
+def rotate_rows(a, R) -> np.ndarray:
+    """``a @ R.T`` for rows of 3-vectors ``a`` (N, 3): each row turned by ``R``, by three
+    multiply-adds (a BLAS product of a tall, thin, column-major array with a 3 x 3 one
+    costs 70 ms per 100 000 rows on some kernels)."""
+    a = np.asarray(a, dtype=float)
+    R = np.asarray(R, dtype=float)
+    return a[:, 0:1] * R[:, 0] + a[:, 1:2] * R[:, 1] + a[:, 2:3] * R[:, 2]
+
+
 def proper_permutations() -> list[np.ndarray]:
     """The 24 axis-permutation rotations (every way a box can be mounted square)."""
     out = []

@@ -328,9 +328,9 @@ class ImuData:
             out.mounting, out.mounting_name = M_new, name
             return out
         out = copy.copy(self)
-        out.gyro, out.accel = self.gyro @ R.T, self.accel @ R.T
+        out.gyro, out.accel = mt.rotate_rows(self.gyro, R), mt.rotate_rows(self.accel, R)
         if self.increments is not None:
-            out.increments = tuple(a @ R.T for a in self.increments)
+            out.increments = tuple(mt.rotate_rows(a, R) for a in self.increments)
         if self.errors is not None:  # per-axis figures: the variance carried to each axis
             # (a correlation time goes with the axis that contributes most)
             major = np.argmax(np.abs(R), axis=1)

@@ -34,10 +34,10 @@ def _track_correlation(imu: ImuData, gnss: GnssData | None, R) -> np.ndarray | N
     averaged over the same intervals; None without GNSS velocities that vary."""
     if gnss is None or gnss.vel is None or len(gnss.t) < 10:
         return None
-    keep = [0]
-    for i in range(1, len(gnss.t)):
-        if gnss.t[i] - gnss.t[keep[-1]] >= 1.0 - 1e-9:
-            keep.append(i)
+    # the first fix at or after each whole second from the first (a fix-to-fix rate of
+    # 5 Hz fixes is mostly noise)
+    grid = gnss.t[0] + np.arange(int((gnss.t[-1] - gnss.t[0]) // 1.0) + 1)
+    keep = np.unique(np.searchsorted(gnss.t, grid - 1e-9))
     tg, vg = gnss.t[keep], gnss.vel[keep]
     inside = (tg >= imu.t[0]) & (tg <= imu.t[-1])
     tg, vg = tg[inside], vg[inside]
@@ -48,7 +48,7 @@ def _track_correlation(imu: ImuData, gnss: GnssData | None, R) -> np.ndarray | N
     a_track = np.diff(speed) / np.diff(tg)
     if moving.sum() < 10 or np.std(a_track[moving]) < 0.05:
         return None  # (a vehicle at constant speed says nothing)
-    f = imu.accel @ R.T
+    f = mt.rotate_rows(imu.accel, R)
     cum = np.vstack([np.zeros(2), np.cumsum(f[1:, :2] * np.diff(imu.t)[:, None], axis=0)])
     fi = np.column_stack([np.interp(tg, imu.t, cum[:, j]) for j in range(2)])
     f_mean = np.diff(fi, axis=0) / np.diff(tg)[:, None]
