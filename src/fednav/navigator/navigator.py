@@ -96,6 +96,25 @@ TOTAL_MODELS = {"gnss": GnssTotal(), "star": StarTotal()}
 class InitialState:
     """Where the navigator starts.
 
+    ``P0`` is the covariance of the 18 error states in the filter units of
+    :mod:`fednav.ins.error_model` (``x_filter = x_SI / SCALE``), ENU error states:
+
+    ========  =====================================================  ==============
+    rows      error state                                            filter unit
+    ========  =====================================================  ==============
+    0:3       platform misalignment phi east, north, up              arcmin
+    3:6       velocity error east, north, up                         m/s
+    6:9       position error east, north, up                         m
+    9:12      gyro constant drift, body x right, y forward, z up     deg/h
+    12:15     gyro first-order Gauss–Markov drift, body x, y, z      deg/h
+    15:18     accelerometer bias, body x, y, z                       mg
+    ========  =====================================================  ==============
+
+    (entries the squares of those units: 1 sigma of 0.1 deg east misalignment is
+    ``P0[0, 0] = 36``).  The optional states of ``filter.states`` follow, added by the
+    navigator (:mod:`fednav.ins.states`).  :meth:`from_sigmas` builds it from the 1-sigma
+    of each block in named units, as ``fednav process`` does from ``initial.sigma``.
+
     Parameters
     ----------
     t : float
@@ -109,7 +128,7 @@ class InitialState:
         heading from north toward east.
     P0 : ndarray, shape (18, 18)
         Initial error covariance in the filter units of :mod:`fednav.ins.error_model`
-        [arcmin, m/s, m, deg/h, mg squared], ENU error states.
+        [arcmin, m/s, m, deg/h, mg squared], ENU error states (the table above).
     gyro_bias : ndarray, shape (3,), optional
         Gyro bias to compensate from the start, body axes [rad/s]; None: zero.
     accel_bias : ndarray, shape (3,), optional
@@ -123,6 +142,124 @@ class InitialState:
     P0: np.ndarray
     gyro_bias: np.ndarray | None = None
     accel_bias: np.ndarray | None = None
+
+    @classmethod
+    def from_sigmas(cls, t: float, lla, vel, euler, *, attitude_deg, velocity_mps,
+                    position_m, gyro_bias_deg_h=None, accel_bias_mg=None,
+                    gyro_markov_deg_h=None, system: System | None = None, gyro_bias=None,
+                    accel_bias=None) -> InitialState:
+        """An initial state whose P0 is built from the 1-sigma of each block.
+
+        Each sigma is one value (every axis) or three, in the order the table of the
+        class docstring gives; the conversion is the processing path's
+        (:func:`fednav.navigator.system.covariance_from_sigmas`, ``diag((sigma /
+        SCALE)^2)``, a zero sigma floored at 1e-6 filter units).
+
+        Parameters
+        ----------
+        t : float
+            Time of the first epoch [s].
+        lla : ndarray, shape (3,)
+            Latitude, longitude [rad] and ellipsoidal height [m] (WGS-84).
+        vel : ndarray, shape (3,)
+            Velocity east, north, up [m/s].
+        euler : ndarray, shape (3,)
+            Attitude [pitch, roll, heading] [rad], body right-forward-up in ENU.
+        attitude_deg : float or ndarray, shape (3,)
+            1-sigma of the platform misalignment [phi east, phi north, phi up] [deg].
+        velocity_mps : float or ndarray, shape (3,)
+            1-sigma of the velocity error east, north, up [m/s].
+        position_m : float or ndarray, shape (3,)
+            1-sigma of the position error east, north, up [m].
+        gyro_bias_deg_h : float or ndarray, shape (3,), optional
+            1-sigma of the gyro constant drift, body x right, y forward, z up [deg/h];
+            None: the ``system``'s IMU figures.
+        accel_bias_mg : float or ndarray, shape (3,), optional
+            1-sigma of the accelerometer bias, body axes [mg]; None: the ``system``'s.
+        gyro_markov_deg_h : float or ndarray, shape (3,), optional
+            1-sigma of the gyro Gauss–Markov drift, body axes [deg/h]; None: the
+            ``system``'s, or 0 without one.
+        system : System, optional
+            The system description whose IMU figures give the bias sigmas left out
+            (as ``fednav process`` takes them).
+        gyro_bias : ndarray, shape (3,), optional
+            Gyro bias to compensate from the start, body axes [rad/s].
+        accel_bias : ndarray, shape (3,), optional
+            Accelerometer bias to compensate from the start, body axes [m/s^2].
+
+        Returns
+        -------
+        InitialState
+            With P0 (18, 18) in filter units [arcmin, m/s, m, deg/h, mg squared].
+
+        Raises
+        ------
+        ValueError
+            One line naming a sigma of the wrong shape, negative or not a number, or a
+            bias sigma missing without a ``system``.
+        """
+        from ..core import units
+        from .system import covariance_from_sigmas, imu_figures
+
+        def vec(name, v, what):
+            a = np.asarray(v, dtype=float)
+            if a.shape != (3,):
+                raise ValueError(f"InitialState.from_sigmas: {name} has shape {a.shape}; "
+                                 f"give {what}")
+            if not np.isfinite(a).all():
+                raise ValueError(f"InitialState.from_sigmas: {name} is not finite: "
+                                 f"{a.tolist()}")
+            return a
+
+        def sig(name, v, axes):
+            if v is None:
+                return None
+            a = np.asarray(v, dtype=float)
+            if a.ndim > 1 or a.size not in (1, 3):
+                raise ValueError(f"InitialState.from_sigmas: {name} has {a.size} values "
+                                 f"(shape {a.shape}); give one or three ({axes})")
+            if not (np.isfinite(a).all() and (a >= 0).all()):
+                raise ValueError(f"InitialState.from_sigmas: {name} must be >= 0 and "
+                                 f"finite, got {a.tolist()}")
+            return np.broadcast_to(a.ravel(), (3,)).copy()
+
+        enu, body = "east, north, up", "body x right, y forward, z up"
+        lla = vec("lla", lla, "[lat, lon] [rad] and h [m]")
+        if abs(lla[0]) > np.pi / 2:
+            raise ValueError(f"InitialState.from_sigmas: latitude {lla[0]:g} is not in "
+                             f"radians (|lat| <= pi/2)")
+        vel = vec("vel", vel, "the velocity east, north, up [m/s]")
+        euler = vec("euler", euler, "[pitch, roll, heading] [rad]")
+        att_sd = sig("attitude_deg", attitude_deg, "phi east, north, up")
+        vel_sd = sig("velocity_mps", velocity_mps, enu)
+        pos_sd = sig("position_m", position_m, enu)
+        gb = sig("gyro_bias_deg_h", gyro_bias_deg_h, body)
+        gm = sig("gyro_markov_deg_h", gyro_markov_deg_h, body)
+        ab = sig("accel_bias_mg", accel_bias_mg, body)
+        for name, v in (("attitude_deg", att_sd), ("velocity_mps", vel_sd),
+                        ("position_m", pos_sd)):
+            if v is None:
+                raise ValueError(f"InitialState.from_sigmas: {name} is needed")
+        gb = None if gb is None else units.deg_per_h(gb)
+        gm = None if gm is None else units.deg_per_h(gm)
+        ab = None if ab is None else units.milli_g(ab)
+        if gb is None or ab is None or gm is None:
+            if system is None:
+                if gb is None or ab is None:
+                    raise ValueError("InitialState.from_sigmas: give gyro_bias_deg_h and "
+                                     "accel_bias_mg, or system= to take them from its IMU "
+                                     "figures")
+                gm = np.zeros(3)
+            else:
+                from .system import imu_noise_model
+
+                _, gb0, ab0 = imu_noise_model(system, 1.0)
+                gb = np.full(3, gb0) if gb is None else gb
+                ab = np.full(3, ab0) if ab is None else ab
+                if gm is None:
+                    gm = np.full(3, imu_figures(system.imu)["gyro_markov"] or 0.0)
+        P0 = covariance_from_sigmas(units.deg(att_sd), vel_sd, pos_sd, gb, gm, ab)
+        return cls(float(t), lla, vel, euler, P0, gyro_bias, accel_bias)
 
 
 @dataclass
