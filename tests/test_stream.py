@@ -11,7 +11,7 @@ import pytest
 from test_process import make_flight
 
 from fednav import InitialState, Navigator, System, load_system
-from fednav.core import units
+from fednav.core import earth, units
 from fednav.io.data import regular_imu
 from fednav.navigator.navigator import LateMeasurementWarning, declared_latency
 from fednav.navigator.system import initial_covariance
@@ -243,6 +243,64 @@ def test_late_measurements_without_a_declared_latency_name_the_key(drive):
     with warnings.catch_warnings():
         warnings.simplefilter("error", LateMeasurementWarning)
         _stream(prep, prep.navigator(hold_s=0.3), 0.25).result()
+
+
+# ---------------------------------------------------------------------- 3. solution_at
+def _truth_error(snap, ref):
+    """(position error ENU [m], velocity error [m/s], heading error [rad]) of a snapshot
+    against the truth at its time."""
+    lla = np.array([np.interp(snap.t, ref.t, ref.lla[:, j]) for j in range(3)])
+    vel = np.array([np.interp(snap.t, ref.t, ref.vel[:, j]) for j in range(3)])
+    hd = np.interp(snap.t, ref.t, np.unwrap(ref.euler[:, 2]))
+    d = earth.llh_difference_enu(*snap.lla, *lla)
+    return np.asarray(d), snap.vel - vel, float(np.angle(np.exp(1j * (snap.euler[2] - hd))))
+
+
+def test_solution_at_a_chosen_time(drive):
+    """Mid-stream on the drive: within the samples since the last epoch (mechanized),
+    beyond the latest sample (extrapolated at its rates, the sigma growing), in the
+    recorded history (the forward solution's rows, interpolated), against the truth."""
+    _, _, ref = drive
+    prep = _prep(drive, 80.0)
+    nav = prep.navigator()
+    probe = 6000 + 7  # 60.07 s after the start: between epochs
+    _stream(prep, nav, 0.0, upto=probe)
+    latest = nav.solution()
+    tk = nav.t0 + nav.loop.k * nav.T
+    assert tk < latest.t
+    same = nav.solution_at(latest.t)
+    np.testing.assert_allclose(same.lla, latest.lla, rtol=1e-13)
+    np.testing.assert_allclose(same.vel, latest.vel, atol=1e-10)
+    mid = nav.solution_at(0.5 * (tk + latest.t) + 0.3 * prep.dt)
+    sig = [nav.solution_at(latest.t + h).sigma for h in (0.0, 0.5, 2.0, 5.0)]
+    for a, b in zip(sig[:-1], sig[1:], strict=True):
+        assert np.all(b[3:9] > a[3:9])  # velocity and position sigmas grow
+    assert np.all(sig[0][3:9] >= nav.solution_at(tk).sigma[3:9])
+    for snap, tol_p, tol_v in ((mid, 1.0, 0.1), (nav.solution_at(latest.t + 0.5), 1.0, 0.1),
+                               (nav.solution_at(latest.t + 2.0), 1.5, 0.2)):
+        dp, dv, dh = _truth_error(snap, ref)
+        assert np.linalg.norm(dp[:2]) < tol_p and np.linalg.norm(dv[:2]) < tol_v, snap.t
+        assert abs(dh) < units.deg(1.0)
+        assert np.all(np.abs(dp[:2]) < 4 * snap.sigma[6:8])
+    # the history: the forward solution at its rows, and between them
+    fwd = nav.result().forward
+    for i in (1234, 3000, 5000):
+        s = nav.solution_at(fwd.t[i])
+        np.testing.assert_allclose(s.lla, fwd.lla[i], rtol=1e-13)
+        np.testing.assert_allclose(s.euler, fwd.euler[i], atol=1e-12)
+        np.testing.assert_allclose(s.sigma, fwd.sigma[i], rtol=1e-9)
+    s = nav.solution_at(fwd.t[3000] + 0.25 * prep.dt)
+    assert np.all(np.abs(earth.llh_difference_enu(*s.lla, *fwd.lla[3000]))
+                  <= np.abs(earth.llh_difference_enu(*fwd.lla[3001], *fwd.lla[3000])) + 1e-9)
+    with pytest.raises(ValueError, match=r"^solution_at: .* is before the start"):
+        nav.solution_at(prep.t[0] - 1.0)
+    nav = prep.navigator(record_rows=False)
+    nav.add_imu(prep.t[:500], prep.gyro[:500], prep.accel[:500])
+    with pytest.raises(ValueError, match=r"^solution_at: .* before the kept history, which "
+                                         r"begins at the last filter epoch"):
+        nav.solution_at(prep.t[10])
+    with pytest.raises(ValueError, match="finite number"):
+        nav.solution_at(float("nan"))
 
 
 # --------------------------------------------------------------------- 4. P0 from sigmas

@@ -36,6 +36,7 @@ import numba
 import numpy as np
 
 from ..core import attitude as att
+from ..core import earth
 from ..filters import FederatedFilter, KalmanFilter
 from ..ins import error_model as em
 from ..ins.states import CORE, StateLayout, with_optional
@@ -1297,6 +1298,149 @@ class Navigator:
             sd = np.full(9, np.nan)
         return Snapshot(self.t0 + n * self.dt, s[STATE_LLA].copy(), s[STATE_VEL].copy(),
                         att.quat_to_euler(s[STATE_Q]), sd)
+
+    def solution_at(self, t: float) -> Snapshot:
+        """The solution at a chosen time.
+
+        * From the last filter epoch on: the epoch's state mechanized through the IMU
+          samples added since, the sample that holds ``t`` for the part of its interval
+          before ``t`` (its rates taken as constant over it); beyond the latest sample,
+          the strapdown runs on the latest sample's rates held constant (bias-compensated
+          as the filter compensates them), in steps of at most one IMU period.  The
+          1-sigma is the last epoch's fused covariance propagated by the error model
+          over ``[t_k, t]`` (:func:`fednav.ins.error_model.interval_process`: ``Phi P
+          Phi' + Qd`` with the system's IMU noise; a total-state navigator has no error
+          model to do so: NaN).
+        * Before the last epoch, with the IMU-rate rows recorded (``record_rows`` and
+          ``record_covariance``, the defaults): the rows interpolated to ``t`` (linearly,
+          the quaternion normalised), the 1-sigma as :attr:`NavResult.forward`'s
+          (linear in time from the corrected covariance of the interval's start to the
+          predicted one of its end).  Equal to the forward solution at its rows.
+        * Earlier (before the start, or before the last epoch without the rows): a
+          ValueError saying where the kept history begins.
+
+        Parameters
+        ----------
+        t : float
+            The time [s].
+
+        Returns
+        -------
+        Snapshot
+            ``t`` [s], lat/lon [rad], height [m], ENU velocity [m/s], Euler angles
+            [pitch, roll, heading] [rad] and the 1-sigma of attitude [rad], velocity
+            [m/s] and position [m] errors (ENU).
+        """
+        if not isinstance(self.ins, Strapdown):
+            raise ValueError(f"solution_at() gives the ENU solution; the navigator flies "
+                             f"{self.why_python}: read result().states")
+        try:
+            t = float(t)
+        except (TypeError, ValueError):
+            t = float("nan")
+        if not math.isfinite(t):
+            raise ValueError("solution_at: t must be a time [s], a finite number")
+        self._advance(final=False)
+        loop = self.loop
+        k = loop.k if loop is not None else self._free.n - 1
+        tk = self.t0 + k * self.T
+        if t < tk - stamp_tolerance(t):
+            return self._solution_from_rows(t, k)
+        dt, n, i0 = self.dt, self._imu_dth.n, k * self.n_per
+        comp_g, comp_a = self._free_comp if loop is None else (loop.comp_g, loop.comp_a)
+        xa = getattr(loop, "xa", None)
+        tmp = Strapdown.__new__(Strapdown)
+        tmp.__dict__.update(self.ins.__dict__)
+        tmp.state = self.ins.state.copy()
+        s0 = self.ins.state.copy()
+        whole = min(max(int(math.floor((t - tk) / dt + 1e-9)), 0), n - i0)
+        sums = np.zeros((2, 3))
+        if whole:
+            sl = slice(i0, i0 + whole)
+            dth, dvc = compensated(self._imu_dth.view[sl], self._imu_dv.view[sl], dt,
+                                   comp_g, comp_a, xa, self.layout)
+            tmp.run(dth, dvc, self._h_ref.view[sl], record=False)
+            sums += dth.sum(axis=0), dvc.sum(axis=0)
+        rest = t - (tk + whole * dt)
+        if rest > 1e-9 * dt:
+            j = i0 + whole
+            if j < n:  # a part of the next sample, at its rates
+                rate = np.r_[self._imu_dth.view[j], self._imu_dv.view[j]] / dt
+                steps = 1
+            elif n or self._jit is not None:  # beyond the latest sample: its rates held
+                rate = self._latest_rates()
+                steps = max(1, math.ceil(rest / dt - 1e-9))
+            else:
+                raise ValueError("solution_at: no IMU sample yet to carry the solution "
+                                 "forward from")
+            h = rest / steps
+            raw = np.repeat(rate[None] * h, steps, axis=0)
+            dth, dvc = compensated(raw[:, :3], raw[:, 3:], h, comp_g, comp_a, xa,
+                                   self.layout)
+            tmp.dt = h
+            tmp.run(dth, dvc, None, record=False)
+            sums += dth.sum(axis=0), dvc.sum(axis=0)
+        st = tmp.state
+        sd = np.full(9, np.nan)
+        if loop is not None:
+            P = loop.fused_P()
+            core, span = loop.core, t - tk
+            if span > 1e-9 * dt and not isinstance(core, ErrorStateCore):
+                P = None
+            elif span > 1e-9 * dt:
+                nsub = max(core.nsub, math.ceil(core.nsub * span / self.T))
+                proc = em.interval_process(s0, st, sums[1], span, core.noise,
+                                           core.baro_gains, core.baro_q, nsub, sums[0],
+                                           core.layout)
+                P = proc.Phi @ P @ proc.Phi.T + proc.Qd
+            if P is not None:
+                sd = np.sqrt(np.diagonal(P)[:9]) * em.SCALE[:9]
+        return Snapshot(t, st[STATE_LLA].copy(), st[STATE_VEL].copy(),
+                        att.quat_to_euler(st[STATE_Q]), sd)
+
+    def _latest_rates(self) -> np.ndarray:
+        """The latest IMU sample's rates [rad/s, m/s^2] (6,): the sample waiting for its
+        next stamp once stamps jitter, else the last on the grid."""
+        if self._jit is not None:
+            st, _, pend, _ = self._jit
+            if st[3] > 0.5:
+                return pend / self.dt if st[2] > 0.5 else pend.copy()
+        n = self._imu_dth.n
+        return np.r_[self._imu_dth.view[n - 1], self._imu_dv.view[n - 1]] / self.dt
+
+    def _solution_from_rows(self, t: float, k: int) -> Snapshot:
+        """:meth:`solution_at` before the last epoch ``k``: from the recorded rows."""
+        loop = self.loop
+        rec = getattr(loop, "rec", None)
+        if t < self.t0 - stamp_tolerance(t):
+            raise ValueError(f"solution_at: {t:.6f} s is before the start "
+                             f"({self.t0:.6f} s)")
+        if rec is None or rec.rows is None or rec.Phi is None:
+            raise ValueError(f"solution_at: {t:.6f} s is before the kept history, which "
+                             f"begins at the last filter epoch ({self.t0 + k * self.T:.6f} "
+                             f"s); a Navigator with record_rows=True and "
+                             f"record_covariance=True keeps every IMU sample")
+        rows = rec.rows.view
+        x = (t - self.t0) / self.dt
+        i = min(max(int(math.floor(x)), 0), len(rows) - 2)
+        f = min(max(x - i, 0.0), 1.0)
+        a, b = rows[i], rows[i + 1]
+        q1 = b[0:4] if a[0:4] @ b[0:4] >= 0.0 else -b[0:4]
+        q = (1.0 - f) * a[0:4] + f * q1
+        q /= np.linalg.norm(q)
+        vel = (1.0 - f) * a[4:7] + f * b[4:7]
+        lla = (1.0 - f) * a[7:10] + f * b[7:10]
+        lla[1] = earth.wrap_lon(float(a[8] + f * earth.wrap_lon(float(b[8] - a[8]))))
+        e = min(max(math.ceil((t - self.t0) / self.T - 1e-9), 1), k)
+        ff = (t - (self.t0 + (e - 1) * self.T)) / self.T
+        P = rec.P.view
+        if ff >= 1.0 - 1e-9:
+            var = np.diagonal(P[e])[:9]
+        else:
+            Phi = rec.Phi.view[e]
+            prior = Phi[:9] @ P[e - 1] @ Phi[:9].T + rec.Qd.view[e][:9, :9]
+            var = (1.0 - ff) * np.diagonal(P[e - 1])[:9] + ff * np.diagonal(prior)
+        return Snapshot(t, lla, vel, att.quat_to_euler(q), np.sqrt(var) * em.SCALE[:9])
 
     def result(self) -> NavResult:
         """Process every complete epoch and return what the run produced.
