@@ -652,7 +652,7 @@ class Navigator:
             # the components of z its model reads (NaN elsewhere: what it does not measure)
             self._used[a] = (np.asarray(model.zindex, dtype=np.int64)
                              if hasattr(model, "zindex") else None if mechanization
-                             is not None else np.arange(len(SENSORS[a].columns)))
+                             is not None else np.arange(self._widths(a, None)[0]))
         self._constraint = None
         if system.constraint == "wind":
             cfg = system.sensors.airdata
@@ -1024,29 +1024,36 @@ class Navigator:
                 bucket.setdefault(k, []).append(first + j)
         m.add(t, ta, z, R, sigma, epochs, capture)
 
-    def _width(self, sensor: str, m) -> int | None:
-        """How many values one measurement of ``sensor`` has (its registered columns; a
-        caller's mechanization: those it was first given, None before)."""
-        if self._mech is None or m is None:
-            return len(SENSORS[sensor].columns)
-        return m.z.shape[1] if len(m) else None
+    def _widths(self, sensor: str, m) -> tuple[int, ...] | None:
+        """How many values one measurement of ``sensor`` may have: those of the ones
+        before, else its registered columns less trailing ones a file may leave out
+        (:attr:`fednav.sensors.spec.Column.absent`); a caller's mechanization: any at
+        first (None)."""
+        if m is not None and len(m):
+            return (m.z.shape[1],)
+        if self._mech is not None and m is not None:
+            return None
+        cols = SENSORS[sensor].columns
+        need = max((i + 1 for i, c in enumerate(cols) if c.absent is None), default=1)
+        return tuple(range(need, len(cols) + 1))
 
     def _check_measurements(self, sensor: str, m, t, z, sigma, R, ta) -> np.ndarray:
         """Bad measurement input as one line naming the sensor and what is wrong; ``z``
         as (N, m)."""
         n = len(t)
         z = np.asarray(z, dtype=float)
-        want = self._width(sensor, m)
+        want = self._widths(sensor, m)
         if z.ndim > 2 or z.ndim == 2 and len(z) != n:
             raise ValueError(f"{sensor}: z has shape {z.shape} for {n} time(s) of validity "
                              f"(one row per measurement)")
         per = z.size // n if z.size % n == 0 else None
-        if not per or (want is not None and per != want):
+        if not per or (want is not None and per not in want):
             names = ", ".join(c.name for c in SENSORS[sensor].columns) if sensor in SENSORS \
                 else ""
+            takes = " or ".join(map(str, want)) if want else "?"
             raise ValueError(f"{sensor}: a measurement has {z.size // n if n else z.size} "
                              f"value(s) (z of shape {z.shape} for {n} time(s)); {sensor} "
-                             f"takes {want} ({names}, in SI units: rad, m, m/s)")
+                             f"takes {takes} ({names}, in SI units: rad, m, m/s)")
         z = z.reshape(n, -1)
         bad_t = ~np.isfinite(t)
         if bad_t.any():
@@ -1061,6 +1068,10 @@ class Navigator:
             raise ValueError(f"{sensor}: the measurement valid at {t[i]:.6f} s arrives at "
                              f"{ta[i]:.6f} s, before the time it describes")
         used = self._used.get(sensor)
+        if used is not None and m is not None and len(used) and used.max() >= z.shape[1]:
+            raise ValueError(f"{sensor}: a measurement has {z.shape[1]} value(s); its model "
+                             f"reads z[{int(used.max())}] (the system's sensors.{sensor} "
+                             f"settings measure more than the data hold)")
         if used is not None and m is not None:
             bad = ~np.isfinite(z[:, used]).all(axis=1)
             if bad.any():
