@@ -7,6 +7,7 @@ import runpy
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).parents[1]
@@ -59,14 +60,18 @@ def test_the_api_page_snippets_run(toured, tmp_path):
     configuration example on its own: it changes the system the others use)."""
     out, _ = toured
     blocks = re.findall(r"```python\n(.*?)```", API_MD.read_text(), re.S)
-    data, configure, batch, stream, evaluate, plot = blocks[1:7]
+    data, configure, batch, stream, flight, evaluate, plot = blocks[1:8]
     assert "load_system({" in configure and "prepare(" in stream
+    assert "solution_at(" in flight and "from_sigmas(" in flight
     exec(compile(configure, "docs/api.md (configure)", "exec"), {"fednav": __import__("fednav")})
-    code = "\n".join((data, batch, stream, evaluate, plot))
+    code = "\n".join((data, batch, stream, flight, evaluate, plot))
     code = code.replace('Path("results/car-drive")', f"Path({str(out)!r})")
     code = code.replace('"errors.png"', repr(str(tmp_path / "errors.png")))
     code = code.replace('"track.png"', repr(str(tmp_path / "track.png")))
     scope: dict = {}
     exec(compile(code, "docs/api.md", "exec"), scope)
     assert scope["result"].forward.t[-1] == scope["res"].forward.t[-1]
+    ahead, now = scope["ahead"], scope["now"]  # (the stream of flight software)
+    assert np.hypot(*ahead.sigma[6:8]) > np.hypot(*now.sigma[6:8])
+    assert scope["nav"].result().data_quality["late_measurements_dropped"] == 0
     assert (tmp_path / "errors.png").exists() and (tmp_path / "track.png").exists()

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import math
 import os
+import warnings
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -35,11 +36,13 @@ import numba
 import numpy as np
 
 from ..core import attitude as att
+from ..core import earth
 from ..filters import FederatedFilter, KalmanFilter
 from ..ins import error_model as em
 from ..ins.states import CORE, StateLayout, with_optional
 from ..ins.strapdown import STATE_LLA, STATE_Q, STATE_VEL, Strapdown
 from ..ins.total_state import GnssTotal, StarTotal
+from ..io.data import UNIFORM_TOLERANCE
 from ..sensors.registry import SENSORS
 from .engine import CompiledLoop, why_not_compiled
 from .loop import (
@@ -88,6 +91,101 @@ def epochs_at(t, t0, T):
     return out
 
 
+@numba.njit(cache=True)
+def integrate_stamps(t0, dt, n, st, acc, pend, stamps, data, data_inc, out):
+    """IMU samples stamped off the uniform grid, integrated onto it (the stream's form of
+    :func:`fednav.io.data.regular_imu`): sample ``i``'s rates hold over its own interval
+    ``[t_i, t_(i+1)]``, and the grid sample ``[t0 + m dt, t0 + (m+1) dt]`` receives the
+    integral over its span.
+
+    ``n``: grid samples made so far; ``st`` = [frontier F [s] (the integral into ``acc``
+    reaches it), start stamp of the pending sample [s], pending given as increments (1)
+    or rates (0), a sample pending (1/0)], ``acc`` (6,): the integral over ``[t0 + n dt,
+    F]`` [rad, m/s], ``pend`` (6,): the pending sample's rates [rad/s, m/s^2] or
+    increments [rad, m/s] — all updated in place.  ``stamps`` (N,) [s] and ``data`` (N, 6)
+    the new samples (increments when ``data_inc``); the grid samples completed are written
+    to ``out`` as increments (dtheta, dv); returns how many.  The latest sample stays
+    pending until the next stamp says where its interval ends."""
+    F = st[0]
+    praw = st[1]
+    pinc = st[2] > 0.5
+    has = st[3] > 0.5
+    r = np.empty(6)
+    m = 0
+    for j in range(stamps.shape[0]):
+        s = stamps[j]
+        if has:
+            if pinc:
+                d = s - praw
+                for c in range(6):
+                    r[c] = pend[c] / d
+            else:
+                for c in range(6):
+                    r[c] = pend[c]
+            x = F
+            g = t0 + dt * (n + m + 1)
+            while g <= s:
+                for c in range(6):
+                    out[m, c] = acc[c] + r[c] * (g - x)
+                    acc[c] = 0.0
+                m += 1
+                x = g
+                g = t0 + dt * (n + m + 1)
+            for c in range(6):
+                acc[c] += r[c] * (s - x)
+            F = s
+        for c in range(6):
+            pend[c] = data[j, c]
+        praw = s
+        pinc = data_inc
+        has = True
+    st[0] = F
+    st[1] = praw
+    st[2] = 1.0 if pinc else 0.0
+    st[3] = 1.0 if has else 0.0
+    return m
+
+
+def declared_latency(system: System) -> dict[str, float]:
+    """The latency each aiding sensor declares (``sensors.NAME.timing``: ``latency_s``,
+    the upper end of ``latency_range_s`` or the largest of ``latency_list_s``) [s], for
+    the sensors whose ``delay_compensation`` is ``interpolate`` (the default: a delayed
+    measurement is used at its time of validity within the epochs the navigator holds);
+    sensors with another strategy bridge their delays themselves and are left out."""
+    out = {}
+    for a in system.aiding_sensors():
+        tm = getattr(system.sensors[a], "timing", None)
+        if tm is None or tm.delay_compensation != "interpolate":
+            continue
+        if tm.latency_range_s is not None:
+            lat = float(tm.latency_range_s[1])
+        elif tm.latency_list_s is not None:
+            lat = float(max(tm.latency_list_s))
+        else:
+            lat = float(tm.latency_s or 0.0)
+        if lat > 0.0:
+            out[a] = lat
+    return out
+
+
+def _positive(name: str, value, zero: bool = False) -> float:
+    """``value`` as a float, or a one-line ValueError naming ``name``: a positive number
+    (``zero``: or zero) of seconds."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        v = float("nan")
+    if not (math.isfinite(v) and (v > 0.0 or (zero and v == 0.0))):
+        raise ValueError(f"Navigator: {name} must be a {'non-negative' if zero else 'positive'}"
+                         f" number of seconds, got {value!r}")
+    return v
+
+
+class LateMeasurementWarning(UserWarning):
+    """A measurement came later than the navigator holds its epochs for: dropped, or used
+    at a later epoch than its time of validity's (said once per sensor and navigator)."""
+
+
 #: Measurement models of the total-state navigator, by sensor.
 TOTAL_MODELS = {"gnss": GnssTotal(), "star": StarTotal()}
 
@@ -95,6 +193,25 @@ TOTAL_MODELS = {"gnss": GnssTotal(), "star": StarTotal()}
 @dataclass
 class InitialState:
     """Where the navigator starts.
+
+    ``P0`` is the covariance of the 18 error states in the filter units of
+    :mod:`fednav.ins.error_model` (``x_filter = x_SI / SCALE``), ENU error states:
+
+    ========  =====================================================  ==============
+    rows      error state                                            filter unit
+    ========  =====================================================  ==============
+    0:3       platform misalignment phi east, north, up              arcmin
+    3:6       velocity error east, north, up                         m/s
+    6:9       position error east, north, up                         m
+    9:12      gyro constant drift, body x right, y forward, z up     deg/h
+    12:15     gyro first-order Gauss–Markov drift, body x, y, z      deg/h
+    15:18     accelerometer bias, body x, y, z                       mg
+    ========  =====================================================  ==============
+
+    (entries the squares of those units: 1 sigma of 0.1 deg east misalignment is
+    ``P0[0, 0] = 36``).  The optional states of ``filter.states`` follow, added by the
+    navigator (:mod:`fednav.ins.states`).  :meth:`from_sigmas` builds it from the 1-sigma
+    of each block in named units, as ``fednav process`` does from ``initial.sigma``.
 
     Parameters
     ----------
@@ -109,7 +226,7 @@ class InitialState:
         heading from north toward east.
     P0 : ndarray, shape (18, 18)
         Initial error covariance in the filter units of :mod:`fednav.ins.error_model`
-        [arcmin, m/s, m, deg/h, mg squared], ENU error states.
+        [arcmin, m/s, m, deg/h, mg squared], ENU error states (the table above).
     gyro_bias : ndarray, shape (3,), optional
         Gyro bias to compensate from the start, body axes [rad/s]; None: zero.
     accel_bias : ndarray, shape (3,), optional
@@ -123,6 +240,124 @@ class InitialState:
     P0: np.ndarray
     gyro_bias: np.ndarray | None = None
     accel_bias: np.ndarray | None = None
+
+    @classmethod
+    def from_sigmas(cls, t: float, lla, vel, euler, *, attitude_deg, velocity_mps,
+                    position_m, gyro_bias_deg_h=None, accel_bias_mg=None,
+                    gyro_markov_deg_h=None, system: System | None = None, gyro_bias=None,
+                    accel_bias=None) -> InitialState:
+        """An initial state whose P0 is built from the 1-sigma of each block.
+
+        Each sigma is one value (every axis) or three, in the order the table of the
+        class docstring gives; the conversion is the processing path's
+        (:func:`fednav.navigator.system.covariance_from_sigmas`, ``diag((sigma /
+        SCALE)^2)``, a zero sigma floored at 1e-6 filter units).
+
+        Parameters
+        ----------
+        t : float
+            Time of the first epoch [s].
+        lla : ndarray, shape (3,)
+            Latitude, longitude [rad] and ellipsoidal height [m] (WGS-84).
+        vel : ndarray, shape (3,)
+            Velocity east, north, up [m/s].
+        euler : ndarray, shape (3,)
+            Attitude [pitch, roll, heading] [rad], body right-forward-up in ENU.
+        attitude_deg : float or ndarray, shape (3,)
+            1-sigma of the platform misalignment [phi east, phi north, phi up] [deg].
+        velocity_mps : float or ndarray, shape (3,)
+            1-sigma of the velocity error east, north, up [m/s].
+        position_m : float or ndarray, shape (3,)
+            1-sigma of the position error east, north, up [m].
+        gyro_bias_deg_h : float or ndarray, shape (3,), optional
+            1-sigma of the gyro constant drift, body x right, y forward, z up [deg/h];
+            None: the ``system``'s IMU figures.
+        accel_bias_mg : float or ndarray, shape (3,), optional
+            1-sigma of the accelerometer bias, body axes [mg]; None: the ``system``'s.
+        gyro_markov_deg_h : float or ndarray, shape (3,), optional
+            1-sigma of the gyro Gauss–Markov drift, body axes [deg/h]; None: the
+            ``system``'s, or 0 without one.
+        system : System, optional
+            The system description whose IMU figures give the bias sigmas left out
+            (as ``fednav process`` takes them).
+        gyro_bias : ndarray, shape (3,), optional
+            Gyro bias to compensate from the start, body axes [rad/s].
+        accel_bias : ndarray, shape (3,), optional
+            Accelerometer bias to compensate from the start, body axes [m/s^2].
+
+        Returns
+        -------
+        InitialState
+            With P0 (18, 18) in filter units [arcmin, m/s, m, deg/h, mg squared].
+
+        Raises
+        ------
+        ValueError
+            One line naming a sigma of the wrong shape, negative or not a number, or a
+            bias sigma missing without a ``system``.
+        """
+        from ..core import units
+        from .system import covariance_from_sigmas, imu_figures
+
+        def vec(name, v, what):
+            a = np.asarray(v, dtype=float)
+            if a.shape != (3,):
+                raise ValueError(f"InitialState.from_sigmas: {name} has shape {a.shape}; "
+                                 f"give {what}")
+            if not np.isfinite(a).all():
+                raise ValueError(f"InitialState.from_sigmas: {name} is not finite: "
+                                 f"{a.tolist()}")
+            return a
+
+        def sig(name, v, axes):
+            if v is None:
+                return None
+            a = np.asarray(v, dtype=float)
+            if a.ndim > 1 or a.size not in (1, 3):
+                raise ValueError(f"InitialState.from_sigmas: {name} has {a.size} values "
+                                 f"(shape {a.shape}); give one or three ({axes})")
+            if not (np.isfinite(a).all() and (a >= 0).all()):
+                raise ValueError(f"InitialState.from_sigmas: {name} must be >= 0 and "
+                                 f"finite, got {a.tolist()}")
+            return np.broadcast_to(a.ravel(), (3,)).copy()
+
+        enu, body = "east, north, up", "body x right, y forward, z up"
+        lla = vec("lla", lla, "[lat, lon] [rad] and h [m]")
+        if abs(lla[0]) > np.pi / 2:
+            raise ValueError(f"InitialState.from_sigmas: latitude {lla[0]:g} is not in "
+                             f"radians (|lat| <= pi/2)")
+        vel = vec("vel", vel, "the velocity east, north, up [m/s]")
+        euler = vec("euler", euler, "[pitch, roll, heading] [rad]")
+        att_sd = sig("attitude_deg", attitude_deg, "phi east, north, up")
+        vel_sd = sig("velocity_mps", velocity_mps, enu)
+        pos_sd = sig("position_m", position_m, enu)
+        gb = sig("gyro_bias_deg_h", gyro_bias_deg_h, body)
+        gm = sig("gyro_markov_deg_h", gyro_markov_deg_h, body)
+        ab = sig("accel_bias_mg", accel_bias_mg, body)
+        for name, v in (("attitude_deg", att_sd), ("velocity_mps", vel_sd),
+                        ("position_m", pos_sd)):
+            if v is None:
+                raise ValueError(f"InitialState.from_sigmas: {name} is needed")
+        gb = None if gb is None else units.deg_per_h(gb)
+        gm = None if gm is None else units.deg_per_h(gm)
+        ab = None if ab is None else units.milli_g(ab)
+        if gb is None or ab is None or gm is None:
+            if system is None:
+                if gb is None or ab is None:
+                    raise ValueError("InitialState.from_sigmas: give gyro_bias_deg_h and "
+                                     "accel_bias_mg, or system= to take them from its IMU "
+                                     "figures")
+                gm = np.zeros(3)
+            else:
+                from .system import imu_noise_model
+
+                _, gb0, ab0 = imu_noise_model(system, 1.0)
+                gb = np.full(3, gb0) if gb is None else gb
+                ab = np.full(3, ab0) if ab is None else ab
+                if gm is None:
+                    gm = np.full(3, imu_figures(system.imu)["gyro_markov"] or 0.0)
+        P0 = covariance_from_sigmas(units.deg(att_sd), vel_sd, pos_sd, gb, gm, ab)
+        return cls(float(t), lla, vel, euler, P0, gyro_bias, accel_bias)
 
 
 @dataclass
@@ -330,8 +565,14 @@ class Navigator:
         epochs turns both off.
     innovations : bool
         Keep every measurement's innovation (what ``fednav tune`` reads).
-    hold_s : float
-        How long after an epoch its measurements may still arrive [s].
+    hold_s : float, optional
+        How long after an epoch its measurements may still arrive [s]: epoch ``k`` runs
+        once an IMU sample stamped ``t_k + hold`` has come.  The navigator holds at least
+        as long as the system's aiding sensors declare (:func:`declared_latency`: the
+        largest ``sensors.NAME.timing.latency_s``, ``latency_range_s`` or
+        ``latency_list_s`` of the ``interpolate`` sensors, plus one IMU period), so that a
+        measurement within its declared latency is used at its time of validity; None:
+        just that.  :attr:`hold_s` is the hold in force.
     engine : str
         ``"auto"`` (compiled when every part of the system has a compiled form, else
         Python; the environment variable ``FEDNAV_ENGINE`` can set it for a whole
@@ -346,21 +587,37 @@ class Navigator:
 
     def __init__(self, system: System, initial: InitialState | None, imu_period: float, *,
                  imu_errors=None, record_rows: bool = True, record_covariance: bool = True,
-                 innovations: bool = False, hold_s: float = 0.0, engine: str = "auto",
-                 mechanization: Mechanization | None = None):
+                 innovations: bool = False, hold_s: float | None = None,
+                 engine: str = "auto", mechanization: Mechanization | None = None):
         self.system = system
-        self.dt = float(imu_period)
+        self.dt = _positive("imu_period", imu_period)
         f = system.filter
         period = f.period_s if f.period_s is not None else self.dt
         self.n_per = max(1, int(round(period / self.dt)))
         self.T = self.n_per * self.dt
         self.t0 = float(initial.t if mechanization is None else mechanization.t0)
-        self.hold_s = float(hold_s)
+        if not math.isfinite(self.t0):
+            raise ValueError(f"Navigator: the initial time is not a number ({self.t0})")
+        #: the latency each ``interpolate`` sensor declares [s] (:func:`declared_latency`)
+        self.latency = declared_latency(system)
+        held = max(self.latency.values(), default=0.0)
+        self.hold_s = max(0.0 if hold_s is None else _positive("hold_s", hold_s, zero=True),
+                          held + self.dt if held > 0.0 else 0.0)
+        # the IMU stamps: on the grid t0 + i dt (within _snap), else integrated onto it
+        self._snap = UNIFORM_TOLERANCE * self.dt
+        self._jit = None  # (st, acc, pend) of integrate_stamps once stamps jitter
+        self._warned: set = set()
         if mechanization is not None or f.state == "total":
             record_rows = record_covariance = False  # (these cores make neither)
         self.record_rows = record_rows
         self.aiding = system.aiding_sensors()
         self.quality = {"late_measurements_dropped": 0}
+        #: per sensor: how long its measurements may be late and still be used at their
+        #: time of validity [s] (the hold for ``interpolate``, 0: at the first epoch
+        #: after their arrival, which the other delay strategies bridge)
+        self._late_ok: dict[str, float] = {}
+        self._used: dict[str, np.ndarray | None] = {}
+        self._mech = mechanization
         baro = system.sensors.baro
         loop = baro.loop() if baro is not None else None
         if mechanization is None:
@@ -390,6 +647,12 @@ class Navigator:
             self._meas[a] = Meas(a, model, cfg.timing.delay_compensation, cfg.timing,
                                  SENSORS[a].angles)
             self._bucket[a] = {}
+            self._late_ok[a] = (self.hold_s if cfg.timing.delay_compensation == "interpolate"
+                                else 0.0)
+            # the components of z its model reads (NaN elsewhere: what it does not measure)
+            self._used[a] = (np.asarray(model.zindex, dtype=np.int64)
+                             if hasattr(model, "zindex") else None if mechanization
+                             is not None else np.arange(self._widths(a, None)[0]))
         self._constraint = None
         if system.constraint == "wind":
             cfg = system.sensors.airdata
@@ -465,10 +728,31 @@ class Navigator:
     def add_imu(self, t, gyro=None, accel=None, *, dtheta=None, dv=None) -> None:
         """Add IMU sample(s): rates, or increments over each sample's interval.
 
+        Time stamps on the grid ``t0 + i dt`` (within 1e-3 of a period,
+        :data:`fednav.io.data.UNIFORM_TOLERANCE`) are taken as its samples.  Stamps that
+        jitter — real-time stamps, a clock that drifts from the nominal period — are
+        integrated onto the grid as :func:`fednav.io.data.regular_imu` does for a file:
+        each sample's rates hold over its own interval, from its stamp to the next one,
+        and each grid sample receives the integral over its span, so no increment is
+        dropped or counted twice and time is the stamps' (a sample's increments are
+        spread over the grid by its own duration, not assumed to be one period).  From
+        the first stamp off the grid on, the latest sample waits for the next stamp to
+        close its interval.  A stream of jittered stamps gives the batch's result on the
+        same data (``fednav.process_data``, which resamples with ``regular_imu``) to
+        rounding: 4e-11 m, 1e-11 m/s and 1e-15 rad on the 240 s drive of
+        ``tests/test_stream.py`` with 2 ms of jitter at 100 Hz (the sample before the
+        first stamp off the grid was taken on the grid; from there on the two integrate
+        alike).
+
+        Accepted: a first stamp within half a period of the start ``t0``, then stamps
+        each after the one before by less than two periods (jitter of up to half a
+        period either side of the grid).  A stamp not after the one before, or a gap of
+        two periods or more (a missing sample), is a ValueError naming the stamp.
+
         Parameters
         ----------
         t : float or ndarray, shape (N,)
-            Time stamp(s) [s], increasing by the IMU period.
+            Time stamp(s) [s], increasing by about the IMU period.
         gyro : ndarray, shape (3,) or (N, 3), optional
             Angular rate, body right-forward-up [rad/s].
         accel : ndarray, shape (3,) or (N, 3), optional
@@ -478,61 +762,123 @@ class Navigator:
         dv : ndarray, shape (3,) or (N, 3), optional
             Velocity increments over the sample, body axes [m/s] (instead of ``accel``).
         """
-        if np.ndim(t) == 0:  # one sample: no arrays made, no block checks
+        rates = gyro is not None
+        if rates and accel is None or not rates and (dtheta is None or dv is None):
+            raise ValueError("add_imu: give gyro and accel (rates), or dtheta and dv "
+                             "(increments)")
+        if np.ndim(t) == 0:  # one sample: no block checks
             t = float(t)
-            prev = self.t0 - self.dt if self._t_last is None else self._t_last
-            if abs(t - prev - self.dt) > 0.1 * self.dt:
-                self._bad_stamp(t, prev)
-            if gyro is not None:
-                self._imu_dth.append(np.multiply(gyro, self.dt))
-                self._imu_dv.append(np.multiply(accel, self.dt))
-            else:
-                self._imu_dth.append(dtheta)
-                self._imu_dv.append(dv)
-            if self._h_ref.n < self._imu_dth.n:
-                self._h_ref.grow(1)
-            self._t_last = t
-            if self.hold_s or self._imu_dth.n % self.n_per == 1 % self.n_per:
-                self._advance(final=False)  # (a sample that starts an interval)
+            if self._jit is None and abs(t - (self.t0 + self._imu_dth.n * self.dt)) \
+                    <= self._snap:  # on the grid (the common case: no arrays made)
+                if rates:
+                    dth = np.multiply(gyro, self.dt)
+                    dvv = np.multiply(accel, self.dt)
+                else:
+                    dth, dvv = np.asarray(dtheta, dtype=float), np.asarray(dv, dtype=float)
+                if dth.shape != (3,) or dvv.shape != (3,):
+                    self._bad_imu_shape(1, dth, dvv)
+                self._imu_dth.append(dth)
+                self._imu_dv.append(dvv)
+                if self._h_ref.n < self._imu_dth.n:
+                    self._h_ref.grow(1)
+                self._t_last = t
+                if self.hold_s or self._imu_dth.n % self.n_per == 1 % self.n_per:
+                    self._advance(final=False)  # (a sample that starts an interval)
+                return
+            a, b = (gyro, accel) if rates else (dtheta, dv)
+            self._add_jittered(np.array([t]), np.asarray(a, dtype=float).reshape(1, -1),
+                               np.asarray(b, dtype=float).reshape(1, -1), not rates)
+            self._advance(final=False)
             return
         t = np.asarray(t, dtype=float).ravel()
         if not len(t):
             return
-        if gyro is not None:
-            dth = np.multiply(gyro, self.dt).reshape(-1, 3)
-            dvv = np.multiply(accel, self.dt).reshape(-1, 3)
-        else:
-            dth = np.asarray(dtheta, dtype=float).reshape(-1, 3)
-            dvv = np.asarray(dv, dtype=float).reshape(-1, 3)
-        if not (dth.shape == dvv.shape == (len(t), 3)):
-            raise ValueError(f"add_imu: {len(t)} times, rotations {dth.shape} and velocity "
-                             f"samples {dvv.shape} (expected ({len(t)}, 3) each)")
-        prev = self.t0 - self.dt if self._t_last is None else self._t_last
-        d = np.empty(len(t))
-        d[0] = t[0] - prev
-        np.subtract(t[1:], t[:-1], out=d[1:])
-        bad = np.abs(d - self.dt) > 0.1 * self.dt
-        if bad.any():
-            j = int(np.argmax(bad))
-            self._bad_stamp(t[j], prev if j == 0 else t[j - 1], self._imu_dth.n + j)
-        self._imu_dth.extend(dth)
-        self._imu_dv.extend(dvv)
+        a = np.asarray(gyro if rates else dtheta, dtype=float)
+        b = np.asarray(accel if rates else dv, dtype=float)
+        if a.size != 3 * len(t) or b.size != 3 * len(t):
+            self._bad_imu_shape(len(t), a, b)
+        a, b = a.reshape(-1, 3), b.reshape(-1, 3)
+        j = 0  # (stamps jittered before: every sample integrated)
+        if self._jit is None:
+            n = self._imu_dth.n
+            off = np.abs(t - (self.t0 + self.dt * np.arange(n, n + len(t)))) > self._snap
+            j = int(np.argmax(off)) if off.any() else len(t)
+        if j:  # the samples on the grid, as they are
+            self._imu_dth.extend(a[:j] * self.dt if rates else a[:j])
+            self._imu_dv.extend(b[:j] * self.dt if rates else b[:j])
+            self._t_last = float(t[j - 1])
+        if j < len(t):
+            self._add_jittered(t[j:], a[j:], b[j:], not rates)
         if self._h_ref.n < self._imu_dth.n:
             self._h_ref.grow(self._imu_dth.n - self._h_ref.n)
-        self._t_last = float(t[-1])
         self._advance(final=False)
 
-    def _bad_stamp(self, t: float, prev: float, i: int | None = None) -> None:
-        i = self._imu_dth.n if i is None else i
-        if self._t_last is None and i == 0:
-            raise ValueError(f"add_imu: the first sample is stamped {t:.6f} s, the "
-                             f"navigator starts at {self.t0:.6f} s")
-        raise ValueError(f"add_imu: sample {i} is stamped {t:.6f} s, {t - prev:.6f} s after "
-                         f"the one before (uniform sampling every {self.dt:g} s)")
+    def _bad_imu_shape(self, n: int, a, b) -> None:
+        raise ValueError(f"add_imu: {n} time stamp(s) with rotation data of shape "
+                         f"{np.shape(a)} and velocity data of shape {np.shape(b)} (expected "
+                         f"({n}, 3) each, or (3,) for one sample)")
+
+    def _add_jittered(self, t: np.ndarray, a: np.ndarray, b: np.ndarray, inc: bool) -> None:
+        """Samples stamped ``t`` off the grid: checked, then integrated onto the grid
+        (:func:`integrate_stamps`); ``a``, ``b`` (N, 3) rates or (``inc``) increments."""
+        if a.shape != (len(t), 3) or b.shape != (len(t), 3):
+            self._bad_imu_shape(len(t), a, b)
+        n0 = self._imu_dth.n
+        prev = self._t_last
+        d = np.diff(t, prepend=np.nan if prev is None else prev)
+        if prev is None and not abs(t[0] - self.t0) < 0.5 * self.dt:
+            raise ValueError(f"add_imu: the first sample is stamped {t[0]:.6f} s, the "
+                             f"navigator starts at {self.t0:.6f} s (a stamp may lie up to "
+                             f"half an IMU period, {0.5 * self.dt:g} s, from it)")
+        bad = ~(d > 0.0) | (d >= 2.0 * self.dt)
+        if prev is None:
+            bad[0] = False
+        if bad.any():
+            i = int(np.argmax(bad))
+            before = prev if i == 0 else t[i - 1]
+            why = ("not after the one before: time stamps must increase" if not d[i] > 0.0
+                   else "a gap of a missing sample or more")
+            raise ValueError(f"add_imu: sample {self._samples_in(n0) + i} is stamped "
+                             f"{t[i]:.6f} s, {t[i] - before:.6f} s after the one before "
+                             f"({why}; the IMU period is {self.dt:g} s and a stamp may "
+                             f"jitter by up to half of it)")
+        if self._jit is None:  # the first stamp off the grid: integrate from here on
+            st, acc, pend = np.array([self.t0, self.t0, 0.0, 0.0]), np.zeros(6), np.zeros(6)
+            if n0:  # the last sample on the grid holds until this stamp
+                st[:] = (self.t0 + n0 * self.dt, self.t0 + (n0 - 1) * self.dt, 0.0, 1.0)
+                pend[:3] = self._imu_dth.view[n0 - 1] / self.dt
+                pend[3:] = self._imu_dv.view[n0 - 1] / self.dt
+            self._jit = (st, acc, pend, [n0])
+        st, acc, pend, count = self._jit
+        out = np.empty((int((t[-1] - st[0]) / self.dt) + 3, 6))
+        m = integrate_stamps(self.t0, self.dt, n0, st, acc, pend, np.ascontiguousarray(t),
+                             np.ascontiguousarray(np.hstack([a, b])), inc, out)
+        count[0] += len(t)
+        if m:
+            self._imu_dth.extend(out[:m, :3])
+            self._imu_dv.extend(out[:m, 3:])
+            if self._h_ref.n < self._imu_dth.n:
+                self._h_ref.grow(self._imu_dth.n - self._h_ref.n)
+        self._t_last = float(t[-1])
+
+    def _samples_in(self, n_grid: int) -> int:
+        """Samples added so far (grid samples until the stamps jittered, then counted)."""
+        return n_grid if self._jit is None else self._jit[3][0]
 
     def add_measurement(self, sensor: str, t: float, z, *, sigma=None, R=None,
                         t_arrival: float | None = None) -> None:
         """Add one measurement of an aiding sensor.
+
+        It is used at the filter epoch of its time of validity when it comes within the
+        hold (:attr:`hold_s`: the latency the system declares), else at the first epoch
+        after its arrival (``interpolate`` then reaches back only within that epoch's
+        interval); one that comes after that epoch has run is dropped.  Either is
+        counted in :attr:`quality` (``late_measurements_deferred``,
+        ``late_measurements_dropped``) and said once per sensor with a
+        :class:`LateMeasurementWarning` naming the key to set
+        (``sensors.NAME.timing.latency_s``).  Bad input — an unknown sensor, ``z`` of the
+        wrong length, NaN where the sensor's model reads ``z``, ``R`` of the wrong shape,
+        an arrival before the time of validity — is a ValueError naming it.
 
         Parameters
         ----------
@@ -543,7 +889,7 @@ class Navigator:
         z : ndarray
             The measurement in the sensor's layout and units [rad, m, m/s ...]
             (``docs/data-formats.md``; GNSS: lat, lon [rad], h [m], velocity east,
-            north, up [m/s]).
+            north, up [m/s]; NaN in the components the sensor does not measure).
         sigma : ndarray, optional
             1-sigma of each component of ``z`` [units of z; latitude/longitude in north
             and east metres].
@@ -557,15 +903,32 @@ class Navigator:
         if R is not None and m is not None and m.how != "recompute" and len(m) \
                 and not self._total:
             # the common case of a stream: one value with its noise, appended in place
-            if sensor == "baro" and self._damping:  # (as add_measurements: kept if late)
-                self._baro_heights(np.array([float(t)]), np.ravel(z)[:1])
-            ta = float(t if t_arrival is None else t_arrival)
-            k = int(epoch_at(ta, self.t0, self.T))
-            if self.loop is not None and 0 < k <= self.loop.k:
-                self.quality["late_measurements_dropped"] += 1
+            t = float(t)
+            ta = t if t_arrival is None else float(t_arrival)
+            z = np.asarray(z, dtype=float)
+            R = np.asarray(R, dtype=float)
+            used = self._used[sensor]
+            if z.shape != m.z.shape[1:] or R.shape != m.R.shape[1:] or not math.isfinite(
+                    t + ta + (z.sum() if used is None else z[used].sum()) + R.sum()) \
+                    or ta < t - 1e-9:  # (the checks and their one-line errors)
+                self.add_measurements(sensor, [t], z.reshape(1, -1), R=R[None],
+                                      t_arrival=[ta])
                 return
+            if sensor == "baro" and self._damping:  # (as add_measurements: kept if late)
+                self._baro_heights(np.array([t]), z[:1])
+            k = int(epoch_at(ta, self.t0, self.T))
+            h = self._late_ok[sensor]
+            if h:
+                k0 = int(epoch_at(t, self.t0, self.T))
+                k = max(k0, int(epoch_at(ta - h, self.t0, self.T)))
+            if self.loop is not None and 0 < k <= self.loop.k:
+                self._late(sensor, "dropped", 1, t, ta)
+                return
+            if h and k > k0 or not h and ta > t and m.how == "interpolate" and k > int(
+                    epoch_at(t, self.t0, self.T)):
+                self._late(sensor, "deferred", 1, t, ta)
             self._bucket[sensor].setdefault(k, []).append(len(m))
-            m.append(float(t), ta, z, R, k)
+            m.append(t, ta, z, R, k)
             return
         self.add_measurements(sensor, [t], np.atleast_2d(z),
                               sigma=None if sigma is None else np.atleast_2d(sigma),
@@ -592,22 +955,22 @@ class Navigator:
         t_arrival : ndarray, shape (N,), optional
             Arrival times [s]; default ``t``.
         """
-        t = np.asarray(t, dtype=float).ravel()
-        if not len(t):
-            return  # (a sensor that delivered nothing: a stop detector before any stop)
-        z = np.asarray(z, dtype=float).reshape(len(t), -1)
-        ta = t if t_arrival is None else np.asarray(t_arrival, dtype=float).ravel()
-        if sensor == "baro" and self._damping:
-            self._baro_heights(t, z[:, 0])
         m = self._meas.get(sensor)
         if m is None:
             if self._constraint is not None and sensor == "airdata":
                 m = self._constraint
-            elif sensor in SENSORS:
-                return  # configured but not aiding (a baro that only damps, say)
-            else:
+            elif sensor not in SENSORS:
                 raise ValueError(f"unknown sensor '{sensor}'; registered: "
                                  f"{', '.join(sorted(SENSORS))}")
+        t = np.asarray(t, dtype=float).ravel()
+        if not len(t):
+            return  # (a sensor that delivered nothing: a stop detector before any stop)
+        ta = t if t_arrival is None else np.asarray(t_arrival, dtype=float).ravel()
+        z = self._check_measurements(sensor, m, t, z, sigma, R, ta)
+        if sensor == "baro" and self._damping:
+            self._baro_heights(t, z[:, 0])
+        if m is None:
+            return  # configured but not aiding (a baro that only damps, say)
         cfg = self.system.sensors[sensor]
         if self._total and R is not None and sigma is None:
             raise ValueError(f"{sensor}: the total-state navigator takes each measurement's "
@@ -622,11 +985,23 @@ class Navigator:
             sigma = np.broadcast_to(np.asarray(sigma, dtype=float), (len(t),) + np.shape(
                 sigma)[-1:]) if one_sigma else np.asarray(sigma, dtype=float)
         epochs = self._epoch_of(ta)
+        h = self._late_ok.get(sensor, 0.0)
+        if h or m.how == "interpolate" and t is not ta:
+            valid = self._epoch_of(t)
+            if h:
+                epochs = np.maximum(valid, self._epoch_of(ta - h))
         keep = np.ones(len(t), dtype=bool)
         if self.loop is not None:
             late = (epochs > 0) & (epochs <= self.loop.k)
-            self.quality["late_measurements_dropped"] += int(late.sum())
+            if late.any():
+                i = int(np.argmax(late))
+                self._late(sensor, "dropped", int(late.sum()), t[i], ta[i])
             keep = ~late
+        if m.how == "interpolate" and (h or t is not ta) and m is not self._constraint:
+            deferred = keep & (epochs > valid)
+            if deferred.any():
+                i = int(np.argmax(np.where(deferred, ta - t, -np.inf)))
+                self._late(sensor, "deferred", int(deferred.sum()), t[i], ta[i])
         t, ta, z, epochs = t[keep], ta[keep], z[keep], epochs[keep]
         if sigma is not None:
             sigma = sigma[keep]
@@ -648,6 +1023,121 @@ class Navigator:
             for j, k in enumerate(epochs.tolist()):
                 bucket.setdefault(k, []).append(first + j)
         m.add(t, ta, z, R, sigma, epochs, capture)
+
+    def _widths(self, sensor: str, m) -> tuple[int, ...] | None:
+        """How many values one measurement of ``sensor`` may have: those of the ones
+        before, else its registered columns less trailing ones a file may leave out
+        (:attr:`fednav.sensors.spec.Column.absent`); a caller's mechanization: any at
+        first (None)."""
+        if m is not None and len(m):
+            return (m.z.shape[1],)
+        if self._mech is not None and m is not None:
+            return None
+        cols = SENSORS[sensor].columns
+        need = max((i + 1 for i, c in enumerate(cols) if c.absent is None), default=1)
+        return tuple(range(need, len(cols) + 1))
+
+    def _check_measurements(self, sensor: str, m, t, z, sigma, R, ta) -> np.ndarray:
+        """Bad measurement input as one line naming the sensor and what is wrong; ``z``
+        as (N, m)."""
+        n = len(t)
+        z = np.asarray(z, dtype=float)
+        want = self._widths(sensor, m)
+        if z.ndim > 2 or z.ndim == 2 and len(z) != n:
+            raise ValueError(f"{sensor}: z has shape {z.shape} for {n} time(s) of validity "
+                             f"(one row per measurement)")
+        per = z.size // n if z.size % n == 0 else None
+        if not per or (want is not None and per not in want):
+            names = ", ".join(c.name for c in SENSORS[sensor].columns) if sensor in SENSORS \
+                else ""
+            takes = " or ".join(map(str, want)) if want else "?"
+            raise ValueError(f"{sensor}: a measurement has {z.size // n if n else z.size} "
+                             f"value(s) (z of shape {z.shape} for {n} time(s)); {sensor} "
+                             f"takes {takes} ({names}, in SI units: rad, m, m/s)")
+        z = z.reshape(n, -1)
+        bad_t = ~np.isfinite(t)
+        if bad_t.any():
+            raise ValueError(f"{sensor}: a time of validity is not a number "
+                             f"(t = {t[int(np.argmax(bad_t))]})")
+        if len(ta) != n or not np.isfinite(ta).all():
+            raise ValueError(f"{sensor}: t_arrival must be {n} finite time(s) [s], got "
+                             f"{np.asarray(ta).tolist()[:5]}")
+        early = ta < t - 1e-9
+        if early.any():
+            i = int(np.argmax(early))
+            raise ValueError(f"{sensor}: the measurement valid at {t[i]:.6f} s arrives at "
+                             f"{ta[i]:.6f} s, before the time it describes")
+        used = self._used.get(sensor)
+        if used is not None and m is not None and len(used) and used.max() >= z.shape[1]:
+            raise ValueError(f"{sensor}: a measurement has {z.shape[1]} value(s); its model "
+                             f"reads z[{int(used.max())}] (the system's sensors.{sensor} "
+                             f"settings measure more than the data hold)")
+        if used is not None and m is not None:
+            bad = ~np.isfinite(z[:, used]).all(axis=1)
+            if bad.any():
+                i = int(np.argmax(bad))
+                cols = [int(c) for c in used if not np.isfinite(z[i, c])]
+                names = SENSORS[sensor].columns if sensor in SENSORS else ()
+                which = ", ".join(f"z[{c}]" + (f" ({names[c].name})" if c < len(names)
+                                               else "") for c in cols)
+                raise ValueError(f"{sensor}: the measurement at t = {t[i]:.6f} s has NaN/inf "
+                                 f"in {which}, which its model reads")
+        if R is not None:
+            R = np.asarray(R, dtype=float)
+            d = getattr(m.model, "dim", None) if m is not None else None
+            if R.ndim != 3 or len(R) != n or (d is not None and R.shape[1:] != (d, d)):
+                raise ValueError(f"{sensor}: R has shape {R.shape[1:] if R.ndim == 3 else R.shape}"
+                                 f" per measurement; {sensor}'s residual takes ({d}, {d}) "
+                                 f"[residual units squared]")
+            if not np.isfinite(R).all():
+                raise ValueError(f"{sensor}: R is not finite (a NaN/inf in the noise of "
+                                 f"the measurement at t = {t[0]:.6f} s or later)")
+        if sigma is not None:
+            sg = np.asarray(sigma, dtype=float)
+            if sg.ndim > 2 or (sg.ndim == 2 and len(sg) != n):
+                raise ValueError(f"{sensor}: sigma has shape {sg.shape}; give one row "
+                                 f"({z.shape[1]},) or one per measurement ({n}, "
+                                 f"{z.shape[1]}) [units of z]")
+            if used is not None and m is not None and sg.shape[-1:] == (z.shape[1],) \
+                    and not np.isfinite(sg[..., used]).all():
+                raise ValueError(f"{sensor}: sigma has NaN/inf where the model reads z")
+        return z
+
+    def _late(self, sensor: str, what: str, count: int, t: float, ta: float) -> None:
+        """Count measurements that came later than the navigator holds for (``what``:
+        ``dropped`` or ``deferred``) and say so once per sensor."""
+        key = f"late_measurements_{what}"
+        self.quality[key] = self.quality.get(key, 0) + count
+        if (sensor, what) in self._warned:
+            return
+        self._warned.add((sensor, what))
+        m = self._meas.get(sensor)
+        how = m.how if m is not None else "interpolate"
+        declared = self.latency.get(sensor)
+        if ta > t:
+            late = f"arrived {ta - t:.3f} s after its time of validity ({t:.3f} s)"
+        else:
+            late = (f"valid at {t:.3f} s came when the IMU stream had reached "
+                    f"{self._t_last if self._t_last is not None else t:.3f} s")
+        said = (f"sensors.{sensor}.timing.latency_s = {declared:g} s declared"
+                if declared else f"no latency declared in sensors.{sensor}.timing")
+        if how == "interpolate":
+            fix = (f"set sensors.{sensor}.timing.latency_s (or latency_range_s, "
+                   f"latency_list_s) to the largest latency: the navigator then holds each "
+                   f"epoch that long and uses every measurement at its time of validity")
+        else:
+            fix = ("pass its arrival time (t_arrival), or hold the epochs longer "
+                   "(Navigator(hold_s=...))")
+        if what == "dropped":
+            did = (f"after its filter epoch had run (epochs are held {self.hold_s:g} s; "
+                   f"{said}): dropped")
+        else:
+            did = (f"later than the epochs are held ({self.hold_s:g} s; {said}): used at the "
+                   f"first filter epoch after its arrival, where interpolate reaches back "
+                   f"only within that epoch's {self.T:g} s, so the solution degrades")
+        warnings.warn(f"{sensor}: a measurement {late}, {did} (counted in "
+                      f"data_quality['{key}']; said once); {fix}", LateMeasurementWarning,
+                      stacklevel=4)
 
     def add_series(self, series) -> None:
         """Add a simulated measurement series.
@@ -827,6 +1317,149 @@ class Navigator:
             sd = np.full(9, np.nan)
         return Snapshot(self.t0 + n * self.dt, s[STATE_LLA].copy(), s[STATE_VEL].copy(),
                         att.quat_to_euler(s[STATE_Q]), sd)
+
+    def solution_at(self, t: float) -> Snapshot:
+        """The solution at a chosen time.
+
+        * From the last filter epoch on: the epoch's state mechanized through the IMU
+          samples added since, the sample that holds ``t`` for the part of its interval
+          before ``t`` (its rates taken as constant over it); beyond the latest sample,
+          the strapdown runs on the latest sample's rates held constant (bias-compensated
+          as the filter compensates them), in steps of at most one IMU period.  The
+          1-sigma is the last epoch's fused covariance propagated by the error model
+          over ``[t_k, t]`` (:func:`fednav.ins.error_model.interval_process`: ``Phi P
+          Phi' + Qd`` with the system's IMU noise; a total-state navigator has no error
+          model to do so: NaN).
+        * Before the last epoch, with the IMU-rate rows recorded (``record_rows`` and
+          ``record_covariance``, the defaults): the rows interpolated to ``t`` (linearly,
+          the quaternion normalised), the 1-sigma as :attr:`NavResult.forward`'s
+          (linear in time from the corrected covariance of the interval's start to the
+          predicted one of its end).  Equal to the forward solution at its rows.
+        * Earlier (before the start, or before the last epoch without the rows): a
+          ValueError saying where the kept history begins.
+
+        Parameters
+        ----------
+        t : float
+            The time [s].
+
+        Returns
+        -------
+        Snapshot
+            ``t`` [s], lat/lon [rad], height [m], ENU velocity [m/s], Euler angles
+            [pitch, roll, heading] [rad] and the 1-sigma of attitude [rad], velocity
+            [m/s] and position [m] errors (ENU).
+        """
+        if not isinstance(self.ins, Strapdown):
+            raise ValueError(f"solution_at() gives the ENU solution; the navigator flies "
+                             f"{self.why_python}: read result().states")
+        try:
+            t = float(t)
+        except (TypeError, ValueError):
+            t = float("nan")
+        if not math.isfinite(t):
+            raise ValueError("solution_at: t must be a time [s], a finite number")
+        self._advance(final=False)
+        loop = self.loop
+        k = loop.k if loop is not None else self._free.n - 1
+        tk = self.t0 + k * self.T
+        if t < tk - stamp_tolerance(t):
+            return self._solution_from_rows(t, k)
+        dt, n, i0 = self.dt, self._imu_dth.n, k * self.n_per
+        comp_g, comp_a = self._free_comp if loop is None else (loop.comp_g, loop.comp_a)
+        xa = getattr(loop, "xa", None)
+        tmp = Strapdown.__new__(Strapdown)
+        tmp.__dict__.update(self.ins.__dict__)
+        tmp.state = self.ins.state.copy()
+        s0 = self.ins.state.copy()
+        whole = min(max(int(math.floor((t - tk) / dt + 1e-9)), 0), n - i0)
+        sums = np.zeros((2, 3))
+        if whole:
+            sl = slice(i0, i0 + whole)
+            dth, dvc = compensated(self._imu_dth.view[sl], self._imu_dv.view[sl], dt,
+                                   comp_g, comp_a, xa, self.layout)
+            tmp.run(dth, dvc, self._h_ref.view[sl], record=False)
+            sums += dth.sum(axis=0), dvc.sum(axis=0)
+        rest = t - (tk + whole * dt)
+        if rest > 1e-9 * dt:
+            j = i0 + whole
+            if j < n:  # a part of the next sample, at its rates
+                rate = np.r_[self._imu_dth.view[j], self._imu_dv.view[j]] / dt
+                steps = 1
+            elif n or self._jit is not None:  # beyond the latest sample: its rates held
+                rate = self._latest_rates()
+                steps = max(1, math.ceil(rest / dt - 1e-9))
+            else:
+                raise ValueError("solution_at: no IMU sample yet to carry the solution "
+                                 "forward from")
+            h = rest / steps
+            raw = np.repeat(rate[None] * h, steps, axis=0)
+            dth, dvc = compensated(raw[:, :3], raw[:, 3:], h, comp_g, comp_a, xa,
+                                   self.layout)
+            tmp.dt = h
+            tmp.run(dth, dvc, None, record=False)
+            sums += dth.sum(axis=0), dvc.sum(axis=0)
+        st = tmp.state
+        sd = np.full(9, np.nan)
+        if loop is not None:
+            P = loop.fused_P()
+            core, span = loop.core, t - tk
+            if span > 1e-9 * dt and not isinstance(core, ErrorStateCore):
+                P = None
+            elif span > 1e-9 * dt:
+                nsub = max(core.nsub, math.ceil(core.nsub * span / self.T))
+                proc = em.interval_process(s0, st, sums[1], span, core.noise,
+                                           core.baro_gains, core.baro_q, nsub, sums[0],
+                                           core.layout)
+                P = proc.Phi @ P @ proc.Phi.T + proc.Qd
+            if P is not None:
+                sd = np.sqrt(np.diagonal(P)[:9]) * em.SCALE[:9]
+        return Snapshot(t, st[STATE_LLA].copy(), st[STATE_VEL].copy(),
+                        att.quat_to_euler(st[STATE_Q]), sd)
+
+    def _latest_rates(self) -> np.ndarray:
+        """The latest IMU sample's rates [rad/s, m/s^2] (6,): the sample waiting for its
+        next stamp once stamps jitter, else the last on the grid."""
+        if self._jit is not None:
+            st, _, pend, _ = self._jit
+            if st[3] > 0.5:
+                return pend / self.dt if st[2] > 0.5 else pend.copy()
+        n = self._imu_dth.n
+        return np.r_[self._imu_dth.view[n - 1], self._imu_dv.view[n - 1]] / self.dt
+
+    def _solution_from_rows(self, t: float, k: int) -> Snapshot:
+        """:meth:`solution_at` before the last epoch ``k``: from the recorded rows."""
+        loop = self.loop
+        rec = getattr(loop, "rec", None)
+        if t < self.t0 - stamp_tolerance(t):
+            raise ValueError(f"solution_at: {t:.6f} s is before the start "
+                             f"({self.t0:.6f} s)")
+        if rec is None or rec.rows is None or rec.Phi is None:
+            raise ValueError(f"solution_at: {t:.6f} s is before the kept history, which "
+                             f"begins at the last filter epoch ({self.t0 + k * self.T:.6f} "
+                             f"s); a Navigator with record_rows=True and "
+                             f"record_covariance=True keeps every IMU sample")
+        rows = rec.rows.view
+        x = (t - self.t0) / self.dt
+        i = min(max(int(math.floor(x)), 0), len(rows) - 2)
+        f = min(max(x - i, 0.0), 1.0)
+        a, b = rows[i], rows[i + 1]
+        q1 = b[0:4] if a[0:4] @ b[0:4] >= 0.0 else -b[0:4]
+        q = (1.0 - f) * a[0:4] + f * q1
+        q /= np.linalg.norm(q)
+        vel = (1.0 - f) * a[4:7] + f * b[4:7]
+        lla = (1.0 - f) * a[7:10] + f * b[7:10]
+        lla[1] = earth.wrap_lon(float(a[8] + f * earth.wrap_lon(float(b[8] - a[8]))))
+        e = min(max(math.ceil((t - self.t0) / self.T - 1e-9), 1), k)
+        ff = (t - (self.t0 + (e - 1) * self.T)) / self.T
+        P = rec.P.view
+        if ff >= 1.0 - 1e-9:
+            var = np.diagonal(P[e])[:9]
+        else:
+            Phi = rec.Phi.view[e]
+            prior = Phi[:9] @ P[e - 1] @ Phi[:9].T + rec.Qd.view[e][:9, :9]
+            var = (1.0 - ff) * np.diagonal(P[e - 1])[:9] + ff * np.diagonal(prior)
+        return Snapshot(t, lla, vel, att.quat_to_euler(q), np.sqrt(var) * em.SCALE[:9])
 
     def result(self) -> NavResult:
         """Process every complete epoch and return what the run produced.

@@ -565,14 +565,28 @@ def initial_covariance(system: System, dt: float, attitude, velocity, position,
     ``velocity`` [m/s] and ``position`` [m] (one value or ENU) and the IMU figures
     (:func:`imu_noise_model`): the bias states' sigmas.  A state with no uncertainty gets
     1e-6 filter units (P0 stays positive definite)."""
-    from ..ins.error_model import SCALE
 
     _, gb, ab = imu_noise_model(system, dt, file_errors)
     markov = imu_figures(system.imu, file_errors)["gyro_markov"] or 0.0
+    return covariance_from_sigmas(attitude, velocity, position, gb, markov, ab)
+
+
+def covariance_from_sigmas(attitude, velocity, position, gyro_bias, gyro_markov,
+                           accel_bias) -> np.ndarray:
+    """A diagonal P0 (18, 18) in the filter units of :mod:`fednav.ins.error_model`
+    (``diag((sigma / SCALE)^2)``) from the 1-sigma of each block, SI, one value or three:
+    platform misalignment [phi east, north, up] [rad], velocity and position errors ENU
+    [m/s, m], gyro constant and Gauss–Markov drift [rad/s] and accelerometer bias
+    [m/s^2] (body axes right, forward, up).  A state with no uncertainty gets 1e-6 filter
+    units (P0 stays positive definite)."""
+    from ..ins.error_model import SCALE
+
     sd = np.r_[np.broadcast_to(np.asarray(attitude, dtype=float), (3,)),
                np.broadcast_to(np.asarray(velocity, dtype=float), (3,)),
                np.broadcast_to(np.asarray(position, dtype=float), (3,)),
-               np.full(3, gb), np.full(3, markov), np.full(3, ab)]
+               np.broadcast_to(np.asarray(gyro_bias, dtype=float), (3,)),
+               np.broadcast_to(np.asarray(gyro_markov, dtype=float), (3,)),
+               np.broadcast_to(np.asarray(accel_bias, dtype=float), (3,))]
     sd = np.maximum(sd / SCALE, 1e-6)
     return np.diag(sd**2)
 

@@ -27,7 +27,7 @@ from ..io.data import DataError, GnssData, ImuData, Reference, VelocityData
 from ..io.sensorfile import SensorData
 from ..navigator.health import readmission_warnings, row_nis, run_health
 from ..navigator.loop import InnovationRecord  # noqa: F401  (fednav.process's name)
-from ..navigator.navigator import InitialState, Navigator, stamp_tolerance
+from ..navigator.navigator import InitialState, Navigator, declared_latency, stamp_tolerance
 from ..navigator.solution import Solution, consistency, epoch_rate, imu_rate
 from ..navigator.system import (
     System,
@@ -838,10 +838,12 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
             "velocity": velocity.t_arrival - velocity.t if velocity is not None and
             velocity.t_arrival is not None else None,
             **{n: d.t_arrival - d.t for n, d in others.items() if d.t_arrival is not None}}
-    unused += [f"sensors.{n}.timing.delay_compensation (the {n} data have no arrival "
-               f"times, t_arrival_s: each measurement is used at its time of validity)"
+    unused += [f"sensors.{n}.timing.{k} (the {n} data have no arrival times, "
+               f"t_arrival_s: each measurement is used at its time of validity)"
                for n in aiding if late.get(n) is None and n in cfg.sensors
-               and "delay_compensation" in cfg.sensors[n].timing.model_fields_set]
+               for k in ("latency_s", "latency_range_s", "latency_list_s",
+                         "delay_compensation")
+               if k in cfg.sensors[n].timing.model_fields_set]
     if unused:
         warnings.append("system description: not used on recorded data: "
                         + "; ".join(unused))
@@ -849,11 +851,13 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
         if lag is None or name not in aiding or not len(lag):
             continue
         how = system.sensors[name].timing.delay_compensation
-        if how == "interpolate" and float(lag.max()) > T:
+        declared = declared_latency(system).get(name, 0.0)  # (held: used when valid)
+        if how == "interpolate" and float(lag.max()) > max(T, declared):
             warnings.append(f"{name}: measurements arrive up to {lag.max():.3f} s after their "
                             f"time of validity, more than the filter period ({T:g} s) that "
                             f"sensors.{name}.timing.delay_compensation: interpolate corrects; "
-                            f"use recompute or ins_increment (docs/paper004.md)")
+                            f"declare sensors.{name}.timing.latency_s, or use recompute or "
+                            f"ins_increment (docs/paper004.md)")
     if velocity is not None:
         model = sensor_model(system, "velocity")
         meas["velocity"] = (velocity.t, velocity.vel,

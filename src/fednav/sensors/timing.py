@@ -131,12 +131,9 @@ class TimingConfig(_Model):
     costly reference).
     """
 
-    latency_s: float | None = Field(default=None, ge=0.0,
-                                    json_schema_extra=simulation_only(_ARRIVAL))
-    latency_range_s: tuple[float, float] | None = Field(
-        default=None, json_schema_extra=simulation_only(_ARRIVAL))
-    latency_list_s: list[float] | None = Field(default=None,
-                                               json_schema_extra=simulation_only(_ARRIVAL))
+    latency_s: float | None = Field(default=None, ge=0.0)
+    latency_range_s: tuple[float, float] | None = None
+    latency_list_s: list[float] | None = None
     sequential: bool = Field(False, json_schema_extra=simulation_only(_ARRIVAL))
     delay_compensation: Literal[DELAY_COMPENSATIONS] = "interpolate"
     curve_fit_degree: Literal[1, 2, 3] = 2
