@@ -114,3 +114,22 @@ def test_the_sensor_whose_file_is_wrong_is_named(flight, bad):
     except DataError as e:
         text = str(e)
     assert f"the {bad} data are the likely culprit" in text, text
+
+
+def test_the_stream_says_the_same_once(flight):
+    """Navigator.health(): the band's warning, through the warnings module, once."""
+    import warnings
+
+    from fednav.navigator.navigator import HealthWarning
+    from fednav.process.run import prepare
+
+    imu, gnss, _ = flight
+    cfg = load_system({"sensors": {"gnss": {"sigma_pos_enu_m": 3.0, "sigma_vel_mps": 0.15}}})
+    prep = prepare(imu, gnss, cfg=cfg)
+    nav = prep.feed(prep.navigator(innovations=True))
+    with pytest.warns(HealthWarning, match="outside the band"):
+        said = nav.health()
+    assert any("1) sensors.gnss's sigma too large" in w for w in said)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", HealthWarning)
+        assert nav.health() == said  # (the same list; nothing said again)

@@ -181,6 +181,10 @@ def _positive(name: str, value, zero: bool = False) -> float:
     return v
 
 
+class HealthWarning(UserWarning):
+    """The health monitor found something wrong with a run (:meth:`Navigator.health`)."""
+
+
 class LateMeasurementWarning(UserWarning):
     """A measurement came later than the navigator holds its epochs for: dropped, or used
     at a later epoch than its time of validity's (said once per sensor and navigator)."""
@@ -464,6 +468,10 @@ class NavResult:
     readmissions: list = field(default_factory=list)
     layout: StateLayout = CORE
     optional: dict = field(default_factory=dict)
+    #: each aiding sensor's row kinds (:attr:`Navigator.row_kinds`: the health monitor
+    #: judges each row kind's NIS) and the constraints among them (ZUPT, NHC, ZARU)
+    row_kinds: dict = field(default_factory=dict)
+    constraints: tuple = ()
 
     @cached_property
     def _imu_rate(self):
@@ -490,11 +498,13 @@ class NavResult:
 
         return consistency(self.fdi)
 
-    def health(self, imu=None, gnss=None, figures: dict | None = None) -> list[str]:
+    def health(self, imu=None, gnss=None, figures: dict | None = None,
+               band=(0.5, 2.0)) -> list[str]:
         """The health monitor's warnings about the run (never a refusal).
 
-        From its fault-detection log: the run's and sliding windows' NIS/dof per local
-        filter and long isolations (:func:`fednav.navigator.health.run_health`).  With
+        From its fault-detection log: the run's NIS/dof per local filter outside
+        ``band`` (and, with innovations recorded, each row kind's), the sliding windows'
+        NIS/dof and long isolations (:func:`fednav.navigator.health.run_health`).  With
         the data fed, also stuck axes and the GNSS positions against their velocities;
         with the IMU's figures, gravity, Earth rate and levelling at rest; with IMU-rate
         rows and covariances recorded, the GNSS residuals' bias per axis and the
@@ -511,17 +521,21 @@ class NavResult:
         figures : dict, optional
             The IMU's noise figures in SI units by ``imu:`` key (``gyro_arw_rad_sqrt_s``
             ...), for the checks at rest.
+        band : tuple of float
+            The NIS/dof band [low, high] (``health.nis_band`` of the system description).
 
         Returns
         -------
         list of str
             One line per warning; empty when all is well.
         """
-        from .health import readmission_warnings, run_health
+        from .health import readmission_warnings, row_nis, run_health
 
         sol = (self.forward if self.rows is not None and self.Phi is not None
                and len(self.states) > 1 else None)
-        return (run_health(self.fdi, imu, gnss, sol, figures)
+        rows = row_nis(self.innovations, self.row_kinds) if self.innovations else None
+        return (run_health(self.fdi, imu, gnss, sol, figures, band=band, rows=rows,
+                           constraints=self.constraints)
                 + readmission_warnings(self.readmissions))
 
     @property
@@ -1497,7 +1511,44 @@ class Navigator:
                          r.dx.view if cov else None, rows, dict(self.quality), self.engine,
                          self.dt, self.system.smoother,
                          [dict(e) for e in self.loop.fed.readmissions], self.layout,
-                         self._optional())
+                         self._optional(), self.row_kinds, self._constraints())
+
+    def _constraints(self) -> tuple:
+        """The aiding sensors that are constraints (their sigma a softness: ZUPT, NHC,
+        ZARU)."""
+        return tuple(a for a in self.aiding
+                     if SENSORS[a].pseudo or SENSORS[a].detector is not None)
+
+    def health(self, imu=None, gnss=None, figures: dict | None = None) -> list[str]:
+        """The health monitor's warnings now (:meth:`NavResult.health` of
+        :meth:`result`, with the system's ``health.nis_band``), each also said once
+        through Python's ``warnings`` module (:class:`HealthWarning`) — what a stream
+        polls.  Every complete epoch is processed first, as :meth:`result` does.
+
+        Parameters
+        ----------
+        imu : ImuData, optional
+            The IMU data fed (:class:`fednav.io.ImuData`), for the checks on the data.
+        gnss : GnssData, optional
+            The GNSS data fed (:class:`fednav.io.GnssData`).
+        figures : dict, optional
+            The IMU's noise figures in SI units by ``imu:`` key, for the checks at rest.
+
+        Returns
+        -------
+        list of str
+            One line per warning; empty when all is well.
+        """
+        import warnings
+
+        out = self.result().health(imu, gnss, figures, band=self.system.health.nis_band)
+        said = self.__dict__.setdefault("_health_said", set())
+        for w in out:
+            key = w.split(":")[0][:60]  # (the same check on the same sensor: said once)
+            if key not in said:
+                said.add(key)
+                warnings.warn(w, HealthWarning, stacklevel=2)
+        return out
 
     def _optional(self) -> dict:
         """Each optional block's total and 1-sigma now (:attr:`NavResult.optional`)."""
