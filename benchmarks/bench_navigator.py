@@ -49,13 +49,7 @@ def drive(folder: Path, seconds: float, velocity: bool):
     from fednav.sim.dataset import load_dataset_config, simulate_dataset, write_csv_dataset
 
     cfg = load_dataset_config(ROOT / "examples" / "car-drive.yaml")
-    segs, left = [], seconds
-    for s in cfg.segments:
-        if left <= 0:
-            break
-        segs.append(s.model_copy(update={"duration_s": min(s.duration_s, left)}))
-        left -= s.duration_s
-    cfg = cfg.model_copy(update={"segments": segs})
+    cfg = cfg.truncated(seconds)
     write_csv_dataset(simulate_dataset(cfg), folder)
     g = read_gnss_csv(folder / "gnss.csv", cfg.gnss.sigma_pos_enu_m, cfg.gnss.sigma_vel_mps,
                       cfg.gnss.lever_m)

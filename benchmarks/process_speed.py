@@ -34,13 +34,8 @@ DURATION = 437.0
 
 def drive(folder: Path):
     cfg = load_dataset_config(ROOT / "examples" / "car-drive.yaml")
-    segs, left = [], DURATION
-    for s in cfg.segments:
-        if left <= 0:
-            break
-        segs.append(s.model_copy(update={"duration_s": min(s.duration_s, left)}))
-        left -= s.duration_s
-    ds = simulate_dataset(cfg.model_copy(update={"segments": segs, "velocity": None}))
+    cfg = cfg.truncated(DURATION)
+    ds = simulate_dataset(cfg.model_copy(update={"velocity": None}))
     write_csv_dataset(ds, folder)
     lever = tuple(cfg.gnss.lever_m)
     return (read_imu_csv(folder / "imu.csv"),

@@ -44,13 +44,8 @@ def drive(folder: Path, seconds: float):
     from fednav.sim.dataset import load_dataset_config, simulate_dataset, write_csv_dataset
 
     cfg = load_dataset_config(ROOT / "examples" / "car-drive.yaml")
-    segs, left = [], seconds
-    for s in cfg.segments:
-        if left <= 0:
-            break
-        segs.append(s.model_copy(update={"duration_s": min(s.duration_s, left)}))
-        left -= s.duration_s
-    write_csv_dataset(simulate_dataset(cfg.model_copy(update={"segments": segs})), folder)
+    cfg = cfg.truncated(seconds)
+    write_csv_dataset(simulate_dataset(cfg), folder)
     system = fednav.load_system(folder / "process.yaml")
     g = system.sensors.gnss
     imu = fednav.read_imu_csv(folder / "imu.csv")

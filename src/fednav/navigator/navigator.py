@@ -449,6 +449,12 @@ class NavResult:
         Per optional block at the end of the run: its ``estimate`` (the total the
         navigator applied, SI: a fraction for scale factors, metres for the GNSS error)
         and ``sigma`` (the last fused covariance's 1-sigma, SI), each per axis.
+    row_kinds : dict of str to ndarray
+        Each aiding sensor's row kinds (:mod:`fednav.sensors.measurement`), what
+        :meth:`health` groups its innovations by.
+    constraints : tuple of str
+        The aiding sensors whose sigma is a softness (ZUPT, NHC, ZARU): judged on the
+        high side of the NIS band only.
     """
 
     t: np.ndarray
@@ -468,8 +474,6 @@ class NavResult:
     readmissions: list = field(default_factory=list)
     layout: StateLayout = CORE
     optional: dict = field(default_factory=dict)
-    #: each aiding sensor's row kinds (:attr:`Navigator.row_kinds`: the health monitor
-    #: judges each row kind's NIS) and the constraints among them (ZUPT, NHC, ZARU)
     row_kinds: dict = field(default_factory=dict)
     constraints: tuple = ()
 

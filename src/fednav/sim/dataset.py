@@ -122,6 +122,16 @@ class DatasetConfig(_Model):
     #: 1-sigma [pitch, roll, heading] deg of NaveGo's ini_align (written roll first)
     initial_attitude_error_deg: _V3 = (1.0, 1.0, 2.0)
 
+    def truncated(self, seconds: float) -> DatasetConfig:
+        """This scenario's first ``seconds`` [s] (the last segment cut short)."""
+        segs, left = [], float(seconds)
+        for seg in self.segments:
+            if left <= 0:
+                break
+            segs.append(seg.model_copy(update={"duration_s": min(seg.duration_s, left)}))
+            left -= seg.duration_s
+        return self.model_copy(update={"segments": segs})
+
 
 @dataclass
 class Dataset:
