@@ -450,11 +450,11 @@ class NavResult:
         navigator applied, SI: a fraction for scale factors, metres for the GNSS error)
         and ``sigma`` (the last fused covariance's 1-sigma, SI), each per axis.
     row_kinds : dict of str to ndarray
-        Each aiding sensor's row kinds (:mod:`fednav.sensors.measurement`), what
+        Each aiding sensor's row kinds [-] (:mod:`fednav.sensors.measurement`), what
         :meth:`health` groups its innovations by.
     constraints : tuple of str
-        The aiding sensors whose sigma is a softness (ZUPT, NHC, ZARU): judged on the
-        high side of the NIS band only.
+        The aiding sensors [-] whose sigma is a softness (ZUPT, NHC, ZARU): judged on
+        the high side of the NIS band only.
     """
 
     t: np.ndarray
