@@ -127,12 +127,12 @@ def test_what_process_refuses_or_moves_in_these_sets(flight):
 
 
 def test_position_only_velocity_sigma_is_that_of_its_window():
-    from fednav.process.run import VELOCITY_WINDOW_S, _position_velocity
+    from fednav.process.initial import VELOCITY_WINDOW_S, position_velocity
 
     t = np.arange(0.0, 20.0, 0.2)
     lla = np.column_stack([np.full_like(t, 0.7), 0.1 + t * 1e-6, np.zeros_like(t)])
     g = GnssData("p", t, lla, None, np.full(3, 2.0), np.full(3, 0.1), np.zeros(3))
-    v, s = _position_velocity(g)
+    v, s = position_velocity(g)
     # one-sided at the start (2 s apart), centred inside (4 s apart)
     assert s[0] == pytest.approx(np.hypot(2.0, 2.0) / VELOCITY_WINDOW_S)
     assert s[50] == pytest.approx(np.hypot(2.0, 2.0) / (2 * VELOCITY_WINDOW_S))

@@ -1,4 +1,7 @@
-"""Checks of recorded data against what the system description declares about them.
+"""Checks of recorded data before they are flown: their units (:func:`check_units`), the
+GNSS-IMU time offset (:func:`time_offset`) and the GNSS velocity's latency
+(:func:`velocity_latency`), the keys of the system description they leave unused
+(:func:`ignored_keys`), and the IMU's axes against what is declared.
 
 :func:`check_mounting`: do the IMU's axes, as declared (``imu.mounting``, or the file
 format's own axes), agree with the data?  An IMU logged forward-right-down and read as
@@ -12,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 from pydantic import BaseModel
 
+from ..core import earth
 from ..core import mounting as mt
 from ..io.data import DataError, GnssData, ImuData
 from ..sensors import registry
@@ -208,3 +212,164 @@ def check_mounting(imu: ImuData, gnss: GnssData | None = None) -> list[str]:
             f"turned about up from the declared mounting ({name})? imu.mounting: {fit} "
             f"fits (an aircraft or a boat that crabs may do this)")
     return warnings
+
+
+#: Largest GNSS-IMU time offset :func:`time_offset` looks for [s] (GPS - UTC is 18 s).
+OFFSET_SEARCH_S = 30.0
+
+
+#: An offset :func:`time_offset` finds is a warning beyond this [s] (or half a GNSS
+#: period): the course departs from the heading systematically (the antenna's lever arm,
+#: body roll, the angle of attack in banked turns), which moved the estimate by up to
+#: 0.25 s on data with no offset (docs/real-data.md, "Independent data").
+OFFSET_WARN_S = 0.3
+
+
+def time_offset(imu: ImuData, gnss: GnssData, step: float = 0.01) -> float | None:
+    """The GNSS-IMU time offset [s] the data show, to add to the GNSS time stamps (as
+    ``sensors.gnss.time_offset_s``): the shift of the GNSS course that best matches the
+    heading the gyro integrates (about the mean specific force's axis, at rest "up"),
+    searched over +-:data:`OFFSET_SEARCH_S` in ``step`` s — None when the vehicle turns
+    too little while moving (less than 30 deg of course change above 2 m/s) for the
+    offset to be observable."""
+    if gnss.vel is None or len(gnss.t) < 10:
+        return None
+    speed = np.hypot(gnss.vel[:, 0], gnss.vel[:, 1])
+    moving = speed > 2.0
+    if moving.sum() < 10:
+        return None
+    tg = gnss.t[moving]
+    course = np.unwrap(np.arctan2(gnss.vel[moving, 0], gnss.vel[moving, 1]))
+    if gnss.lla is not None:
+        # the course is measured from north, which turns while the gyro sees none of it
+        # (near the pole a false offset of 30 s)
+        course = course - earth.north_turn(gnss.t, gnss.lla, gnss.vel)[moving]
+    if np.ptp(course) < np.radians(30.0):
+        return None
+    up = np.mean(imu.accel, axis=0)
+    up /= max(np.linalg.norm(up), 1e-12)
+    dt = imu.period()
+    heading = -np.concatenate([[0.0], np.cumsum(imu.gyro[:-1] @ up) * dt])  # (gyro bias
+    # and Earth rate drift slowly: a straight-line trend is removed from the misfit below)
+    x = tg - tg.mean()
+
+    def best(lags):
+        """The lag of the least misfit (after a straight line over time is removed)."""
+        t = tg[None, :] + lags[:, None]
+        w = ((t >= imu.t[0]) & (t <= imu.t[-1])).astype(float)
+        r = (course[None, :] - np.interp(t, imu.t, heading)) * w
+        n, sx, sxx = w.sum(1), w @ x, w @ x**2
+        sr, sxr, srr = r.sum(1), r @ x, (r * r).sum(1)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            b = (n * sxr - sx * sr) / (n * sxx - sx**2)
+            a = (sr - b * sx) / n
+            cost = (srr - a * sr - b * sxr) / n
+        cost[~(n >= max(10, 0.5 * len(tg)))] = np.inf
+        cost[~np.isfinite(cost)] = np.inf
+        return None if not np.isfinite(cost).any() else float(lags[int(np.argmin(cost))])
+
+    coarse = best(np.arange(-OFFSET_SEARCH_S, OFFSET_SEARCH_S + 0.05, 0.1))
+    if coarse is None:
+        return None
+    return best(np.arange(coarse - 0.2, coarse + 0.2 + step / 2, step))
+
+
+#: A GNSS velocity latency :func:`velocity_latency` finds is a warning beyond this [s]
+#: (and three of its sigmas).
+LATENCY_WARN_S = 0.05
+
+
+def velocity_latency(gnss: GnssData) -> tuple[float, float] | None:
+    """How much older than its stamp the GNSS velocity is [s], and the estimate's 1-sigma,
+    from the positions: the velocity of position differences over about 1 s
+    (``v_p(t) = (p(t + h) - p(t - h)) / 2h``, valid at ``t``) minus the reported velocity
+    is ``L a(t)`` for a velocity that lags by ``L`` (``a``: the reported velocity's rate),
+    so ``L`` is the least-squares slope of that difference on ``a`` over the horizontal
+    components.  None without positions and velocities, or with too little acceleration
+    (the slope's sigma above 0.1 s)."""
+    if gnss.lla is None or gnss.vel is None or len(gnss.t) < 20:
+        return None
+    t = gnss.t
+    period = float(np.median(np.diff(t)))
+    k = max(1, int(round(0.5 / period)))
+    d = earth.llh_difference_enu(gnss.lla[:, 0], gnss.lla[:, 1], gnss.lla[:, 2],
+                                 gnss.lla[0, 0], gnss.lla[0, 1], gnss.lla[0, 2])
+    i = np.arange(k, len(t) - k)
+    span = t[i + k] - t[i - k]
+    ok = np.abs(span - 2 * k * period) < 0.25 * period  # no gap inside
+    i, span = i[ok], span[ok]
+    if len(i) < 10:
+        return None
+    vp = (d[i + k, :2] - d[i - k, :2]) / span[:, None]
+    a = (gnss.vel[i + k, :2] - gnss.vel[i - k, :2]) / span[:, None]
+    r = vp - gnss.vel[i, :2]
+    aa = float(np.sum(a * a))
+    if aa <= 0.0:
+        return None
+    L = float(np.sum(r * a)) / aa
+    res = r - L * a
+    sigma = float(np.sqrt(np.sum(res * res) / max(res.size - 1, 1) / aa))
+    # neighbouring differences share fixes: about 2k of them carry one error
+    sigma *= np.sqrt(2 * k)
+    if sigma > 0.1:
+        return None
+    return L, sigma
+
+
+def check_units(imu: ImuData, gnss: GnssData | None) -> list[str]:
+    """Refuse IMU data in the wrong unit; warn about GNSS positions that look like radians.
+
+    * accelerometer: the median specific-force magnitude of a vehicle on or near the
+      Earth is about 9.8 m/s^2; a median near 1 means the file is in g;
+    * gyro: the yaw rate measured about the mean "up" axis (the mean specific force) is
+      regressed on the GNSS course rate over the intervals where the vehicle moves and
+      turns; a slope near 57 means deg/s (needs some turning: a straight run is not
+      tested);
+    * GNSS latitude/longitude all within 3.2 deg of (0, 0): radians read as degrees?
+      (a warning: real data there exist).
+    Returns the warnings; raises DataError for the refusals.
+    """
+    warnings = []
+    fmag = float(np.median(np.linalg.norm(imu.accel, axis=1)))
+    if 0.5 < fmag < 1.5:
+        raise DataError(f"{imu.source}: median specific force {fmag:.3f}: looks like g; "
+                        f"fednav expects m/s^2")
+    if gnss is None:
+        return warnings
+    if gnss.vel is not None and len(gnss.t) > 5:
+        up = np.mean(imu.accel, axis=0)
+        up /= max(np.linalg.norm(up), 1e-12)
+        # GNSS epochs at least 1 s apart: the course rate of 5 Hz fixes is mostly noise
+        keep = [0]
+        for i in range(1, len(gnss.t)):
+            if gnss.t[i] - gnss.t[keep[-1]] >= 1.0 - 1e-9:
+                keep.append(i)
+        tg, vg = gnss.t[keep], gnss.vel[keep]
+        speed = np.hypot(vg[:, 0], vg[:, 1])
+        course = np.unwrap(np.arctan2(vg[:, 0], vg[:, 1]))
+        dt = np.diff(tg)
+        c_rate = -np.diff(course) / dt  # heading from north toward east: yaw rate = -dpsi/dt
+        moving = (speed[1:] > 2.0) & (speed[:-1] > 2.0) & (dt < 5.0)
+        yaw = np.cumsum(np.r_[0.0, (imu.gyro[1:] @ up) * np.diff(imu.t)])
+        g_rate = (np.interp(tg[1:], imu.t, yaw) - np.interp(tg[:-1], imu.t, yaw)) / dt
+        inside = (tg[:-1] >= imu.t[0]) & (tg[1:] <= imu.t[-1])
+        turning = moving & inside & (np.abs(c_rate) > np.radians(3.0))
+        if turning.sum() >= 5:
+            c, g = c_rate[turning], g_rate[turning]
+            slope = float(c @ g / (c @ c))
+            if 20.0 < abs(slope) < 200.0:
+                raise DataError(f"{imu.source}: gyro rates are {slope:.1f} x the GNSS course "
+                                f"rate while turning: looks like deg/s; fednav expects rad/s")
+    if gnss.lla is None:
+        return warnings
+    lat, lon = np.degrees(gnss.lla[:, 0]), np.degrees(gnss.lla[:, 1])
+    if np.all(np.abs(lat) < 1.6) and np.all(np.abs(lon) < 3.2):
+        warnings.append(f"{gnss.source}: every position lies within 1.6 deg of latitude 0 and "
+                        f"3.2 deg of longitude 0: latitude/longitude in radians where "
+                        f"degrees are expected?")
+    return warnings
+
+
+#: IMU samples further apart than this [s] are refused (time stamps in milliseconds read as
+#: seconds put them 1000x too far apart; no strapdown IMU samples below 1 Hz).
+MAX_IMU_PERIOD_S = 1.0

@@ -1,8 +1,10 @@
 """Post-processing of recorded data: the navigator on IMU, GNSS (and velocity-sensor)
 files, with an optional RTS smoother.
 
-The front end of ``fednav process``: the input checks (units, time offsets, the velocity
-sensor's axes), the initial attitude (:mod:`fednav.ins.alignment`) and P0, then the
+The front end of ``fednav process``: the input checks (:mod:`fednav.process.checks`:
+units, time offsets, IMU mounting, unused keys), the outages withheld
+(:mod:`fednav.process.outages`), the initial attitude and P0
+(:mod:`fednav.process.initial`), then the
 system description run by the :class:`~fednav.navigator.Navigator` — by default a
 loosely coupled federated Kalman filter with one local filter per sensor (``gnss``, and
 ``velocity`` when a velocity sensor is given), fusion-reset with equal sharing (which
@@ -13,7 +15,6 @@ validity — and the solution at every IMU sample with its sigmas, smoothed on r
 from __future__ import annotations
 
 import time
-import warnings as _warnings
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -21,9 +22,8 @@ from pydantic import ValidationError
 
 from ..core import attitude as att
 from ..core import earth, units
-from ..ins import error_model as em
-from ..ins.alignment import UNKNOWN_HEADING_SIGMA, Alignment, align, coarse_level
-from ..io.data import DataError, GnssData, ImuData, Reference, VelocityData
+from ..ins.alignment import UNKNOWN_HEADING_SIGMA, Alignment
+from ..io.data import DataError, GnssData, ImuData, VelocityData
 from ..io.sensorfile import SensorData
 from ..navigator.health import readmission_warnings, row_nis, run_health
 from ..navigator.loop import InnovationRecord  # noqa: F401  (fednav.process's name)
@@ -40,8 +40,27 @@ from ..navigator.system import imu_figures as _imu_figures
 from ..sensors import GnssConfig, VelocityConfig, registry
 from ..sensors.imu import FIGURES
 from . import outages
-from .checks import check_mounting, ignored_keys, mounted_imu
+from .checks import (  # noqa: F401  (fednav.process.run's names of 0.2)
+    LATENCY_WARN_S,
+    MAX_IMU_PERIOD_S,
+    OFFSET_SEARCH_S,
+    OFFSET_WARN_S,
+    check_mounting,
+    check_units,
+    ignored_keys,
+    mounted_imu,
+    time_offset,
+    velocity_latency,
+)
 from .culprit import culprit
+from .evaluation import RENAMED_ERRORS, errors_against, rmse  # noqa: F401
+from .initial import (  # noqa: F401  (gnss_course: fednav.process.run's name of 0.2)
+    VELOCITY_WINDOW_S,
+    attitude_at_start,
+    gnss_course,
+    position_velocity,
+    start_covariance,
+)
 
 #: The processing config of fednav 0.1 is a system description now (one schema); the
 #: old name is kept for one release.
@@ -168,222 +187,6 @@ def _noise(imu: ImuData, cfg: System, dt: float):
     """
     _check_figures(imu, cfg)
     return imu_noise_model(cfg, dt, imu.errors)
-
-
-def gnss_course(gnss: GnssData, seconds: float, min_speed: float = 0.5) -> float | None:
-    """Mean course over ground [rad, from north toward east] over the first ``seconds``
-    of GNSS velocity, or None when the vehicle is slower than ``min_speed`` [m/s]."""
-    if gnss.vel is None:
-        return None
-    v = gnss.vel[gnss.t <= gnss.t[0] + seconds, :2].mean(axis=0)
-    if np.hypot(*v) < min_speed:
-        return None
-    return float(np.arctan2(v[0], v[1]) % (2 * np.pi))
-
-
-def _initial_attitude(imu: ImuData, gnss: GnssData, system: System, t0: float, i0: int,
-                      dt: float, noise: em.ImuNoiseModel, accel_bias_sigma: float,
-                      gyro_bias_sigma: float, decorrelation_s: float = 1.0) -> Alignment:
-    cfg = system.alignment
-    sig = None if cfg.initial_attitude_sigma_deg is None else units.deg(
-        np.asarray(cfg.initial_attitude_sigma_deg))
-    heading = (None if cfg.coarse_heading_deg is None
-               else float(units.deg(cfg.coarse_heading_deg)))
-    if cfg.initial_attitude == "align":
-        a = align(imu, gnss, t0, i0, dt, noise.gyro_arw, noise.accel_vrw, accel_bias_sigma,
-                  imu.initial_euler, imu.initial_euler_sigma if sig is None else sig,
-                  cfg.coarse_seconds, heading, gyro_bias_sigma=gyro_bias_sigma,
-                  velocity_decorrelation_s=decorrelation_s)
-        if sig is not None:  # the user's sigmas win over what the alignment claims
-            a = Alignment(a.euler, sig, None, a.gyro_bias, a.gyro_bias_sigma,
-                          {k: a.report[k] for k in ("levelling", "heading")}, a.warnings)
-        return a
-    if cfg.initial_attitude == "file" and imu.initial_euler is not None:
-        euler = imu.initial_euler
-        sig = imu.initial_euler_sigma if sig is None else sig
-        how = "file"
-    else:
-        n = max(1, int(round(cfg.coarse_seconds / dt)))
-        if heading is None:
-            heading = gnss_course(gnss, cfg.coarse_seconds) or 0.0
-        euler = coarse_level(imu.accel[i0:i0 + n].mean(axis=0), heading)
-        how = f"coarse {cfg.coarse_seconds:g} s"
-    if sig is None:
-        sig = units.deg(np.array([2.0, 2.0, 10.0]))
-    return Alignment(np.asarray(euler, dtype=float), np.asarray(sig, dtype=float),
-                     report={"levelling": how, "heading": how})
-
-
-def _initial_covariance(al: Alignment, sig_vel, sig_pos_enu, gb: float, ab: float,
-                        noise: em.ImuNoiseModel) -> np.ndarray:
-    """P0 (filter units): diagonal from the figures, with the alignment's tilt/bias
-    coupling and gyro-bias accuracy where it has them (:mod:`fednav.ins.alignment`)."""
-    eps_c = gb if al.gyro_bias_sigma is None else min(gb, al.gyro_bias_sigma)
-    sd0 = np.r_[al.sigma, sig_vel, sig_pos_enu, np.full(3, eps_c),
-                np.full(3, noise.gyro_markov_sigma), np.full(3, ab)]
-    P0 = np.diag(np.maximum(sd0, 1e-6 * em.SCALE) ** 2)
-    if al.tilt_bias is not None:
-        A = al.tilt_bias
-        P0[0:2, 0:2] = ab**2 * A @ A.T + np.diag(al.sigma[:2] ** 2 - ab**2 * np.sum(A**2, 1))
-        P0[0:2, 15:18] = ab**2 * A
-        P0[15:18, 0:2] = P0[0:2, 15:18].T
-    d = np.diag_indices(len(P0))  # (a figure given as 0: no state without uncertainty)
-    P0[d] = np.maximum(P0[d], (1e-6 * em.SCALE) ** 2)
-    return P0 / np.outer(em.SCALE, em.SCALE)
-
-
-#: Largest GNSS-IMU time offset :func:`time_offset` looks for [s] (GPS - UTC is 18 s).
-OFFSET_SEARCH_S = 30.0
-#: An offset :func:`time_offset` finds is a warning beyond this [s] (or half a GNSS
-#: period): the course departs from the heading systematically (the antenna's lever arm,
-#: body roll, the angle of attack in banked turns), which moved the estimate by up to
-#: 0.25 s on data with no offset (docs/real-data.md, "Independent data").
-OFFSET_WARN_S = 0.3
-
-
-def time_offset(imu: ImuData, gnss: GnssData, step: float = 0.01) -> float | None:
-    """The GNSS-IMU time offset [s] the data show, to add to the GNSS time stamps (as
-    ``sensors.gnss.time_offset_s``): the shift of the GNSS course that best matches the
-    heading the gyro integrates (about the mean specific force's axis, at rest "up"),
-    searched over +-:data:`OFFSET_SEARCH_S` in ``step`` s — None when the vehicle turns
-    too little while moving (less than 30 deg of course change above 2 m/s) for the
-    offset to be observable."""
-    if gnss.vel is None or len(gnss.t) < 10:
-        return None
-    speed = np.hypot(gnss.vel[:, 0], gnss.vel[:, 1])
-    moving = speed > 2.0
-    if moving.sum() < 10:
-        return None
-    tg = gnss.t[moving]
-    course = np.unwrap(np.arctan2(gnss.vel[moving, 0], gnss.vel[moving, 1]))
-    if gnss.lla is not None:
-        # the course is measured from north, which turns while the gyro sees none of it
-        # (near the pole a false offset of 30 s)
-        course = course - earth.north_turn(gnss.t, gnss.lla, gnss.vel)[moving]
-    if np.ptp(course) < np.radians(30.0):
-        return None
-    up = np.mean(imu.accel, axis=0)
-    up /= max(np.linalg.norm(up), 1e-12)
-    dt = imu.period()
-    heading = -np.concatenate([[0.0], np.cumsum(imu.gyro[:-1] @ up) * dt])  # (gyro bias
-    # and Earth rate drift slowly: a straight-line trend is removed from the misfit below)
-    x = tg - tg.mean()
-
-    def best(lags):
-        """The lag of the least misfit (after a straight line over time is removed)."""
-        t = tg[None, :] + lags[:, None]
-        w = ((t >= imu.t[0]) & (t <= imu.t[-1])).astype(float)
-        r = (course[None, :] - np.interp(t, imu.t, heading)) * w
-        n, sx, sxx = w.sum(1), w @ x, w @ x**2
-        sr, sxr, srr = r.sum(1), r @ x, (r * r).sum(1)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            b = (n * sxr - sx * sr) / (n * sxx - sx**2)
-            a = (sr - b * sx) / n
-            cost = (srr - a * sr - b * sxr) / n
-        cost[~(n >= max(10, 0.5 * len(tg)))] = np.inf
-        cost[~np.isfinite(cost)] = np.inf
-        return None if not np.isfinite(cost).any() else float(lags[int(np.argmin(cost))])
-
-    coarse = best(np.arange(-OFFSET_SEARCH_S, OFFSET_SEARCH_S + 0.05, 0.1))
-    if coarse is None:
-        return None
-    return best(np.arange(coarse - 0.2, coarse + 0.2 + step / 2, step))
-
-
-#: A GNSS velocity latency :func:`velocity_latency` finds is a warning beyond this [s]
-#: (and three of its sigmas).
-LATENCY_WARN_S = 0.05
-
-
-def velocity_latency(gnss: GnssData) -> tuple[float, float] | None:
-    """How much older than its stamp the GNSS velocity is [s], and the estimate's 1-sigma,
-    from the positions: the velocity of position differences over about 1 s
-    (``v_p(t) = (p(t + h) - p(t - h)) / 2h``, valid at ``t``) minus the reported velocity
-    is ``L a(t)`` for a velocity that lags by ``L`` (``a``: the reported velocity's rate),
-    so ``L`` is the least-squares slope of that difference on ``a`` over the horizontal
-    components.  None without positions and velocities, or with too little acceleration
-    (the slope's sigma above 0.1 s)."""
-    if gnss.lla is None or gnss.vel is None or len(gnss.t) < 20:
-        return None
-    t = gnss.t
-    period = float(np.median(np.diff(t)))
-    k = max(1, int(round(0.5 / period)))
-    d = earth.llh_difference_enu(gnss.lla[:, 0], gnss.lla[:, 1], gnss.lla[:, 2],
-                                 gnss.lla[0, 0], gnss.lla[0, 1], gnss.lla[0, 2])
-    i = np.arange(k, len(t) - k)
-    span = t[i + k] - t[i - k]
-    ok = np.abs(span - 2 * k * period) < 0.25 * period  # no gap inside
-    i, span = i[ok], span[ok]
-    if len(i) < 10:
-        return None
-    vp = (d[i + k, :2] - d[i - k, :2]) / span[:, None]
-    a = (gnss.vel[i + k, :2] - gnss.vel[i - k, :2]) / span[:, None]
-    r = vp - gnss.vel[i, :2]
-    aa = float(np.sum(a * a))
-    if aa <= 0.0:
-        return None
-    L = float(np.sum(r * a)) / aa
-    res = r - L * a
-    sigma = float(np.sqrt(np.sum(res * res) / max(res.size - 1, 1) / aa))
-    # neighbouring differences share fixes: about 2k of them carry one error
-    sigma *= np.sqrt(2 * k)
-    if sigma > 0.1:
-        return None
-    return L, sigma
-
-
-def check_units(imu: ImuData, gnss: GnssData | None) -> list[str]:
-    """Refuse IMU data in the wrong unit; warn about GNSS positions that look like radians.
-
-    * accelerometer: the median specific-force magnitude of a vehicle on or near the
-      Earth is about 9.8 m/s^2; a median near 1 means the file is in g;
-    * gyro: the yaw rate measured about the mean "up" axis (the mean specific force) is
-      regressed on the GNSS course rate over the intervals where the vehicle moves and
-      turns; a slope near 57 means deg/s (needs some turning: a straight run is not
-      tested);
-    * GNSS latitude/longitude all within 3.2 deg of (0, 0): radians read as degrees?
-      (a warning: real data there exist).
-    Returns the warnings; raises DataError for the refusals.
-    """
-    warnings = []
-    fmag = float(np.median(np.linalg.norm(imu.accel, axis=1)))
-    if 0.5 < fmag < 1.5:
-        raise DataError(f"{imu.source}: median specific force {fmag:.3f}: looks like g; "
-                        f"fednav expects m/s^2")
-    if gnss is None:
-        return warnings
-    if gnss.vel is not None and len(gnss.t) > 5:
-        up = np.mean(imu.accel, axis=0)
-        up /= max(np.linalg.norm(up), 1e-12)
-        # GNSS epochs at least 1 s apart: the course rate of 5 Hz fixes is mostly noise
-        keep = [0]
-        for i in range(1, len(gnss.t)):
-            if gnss.t[i] - gnss.t[keep[-1]] >= 1.0 - 1e-9:
-                keep.append(i)
-        tg, vg = gnss.t[keep], gnss.vel[keep]
-        speed = np.hypot(vg[:, 0], vg[:, 1])
-        course = np.unwrap(np.arctan2(vg[:, 0], vg[:, 1]))
-        dt = np.diff(tg)
-        c_rate = -np.diff(course) / dt  # heading from north toward east: yaw rate = -dpsi/dt
-        moving = (speed[1:] > 2.0) & (speed[:-1] > 2.0) & (dt < 5.0)
-        yaw = np.cumsum(np.r_[0.0, (imu.gyro[1:] @ up) * np.diff(imu.t)])
-        g_rate = (np.interp(tg[1:], imu.t, yaw) - np.interp(tg[:-1], imu.t, yaw)) / dt
-        inside = (tg[:-1] >= imu.t[0]) & (tg[1:] <= imu.t[-1])
-        turning = moving & inside & (np.abs(c_rate) > np.radians(3.0))
-        if turning.sum() >= 5:
-            c, g = c_rate[turning], g_rate[turning]
-            slope = float(c @ g / (c @ c))
-            if 20.0 < abs(slope) < 200.0:
-                raise DataError(f"{imu.source}: gyro rates are {slope:.1f} x the GNSS course "
-                                f"rate while turning: looks like deg/s; fednav expects rad/s")
-    if gnss.lla is None:
-        return warnings
-    lat, lon = np.degrees(gnss.lla[:, 0]), np.degrees(gnss.lla[:, 1])
-    if np.all(np.abs(lat) < 1.6) and np.all(np.abs(lon) < 3.2):
-        warnings.append(f"{gnss.source}: every position lies within 1.6 deg of latitude 0 and "
-                        f"3.2 deg of longitude 0: latitude/longitude in radians where "
-                        f"degrees are expected?")
-    return warnings
 
 
 @dataclass
@@ -532,17 +335,6 @@ def _other_sensor(data: SensorData, cfg: System):
     return sc
 
 
-#: Half-width [s] of the window over which position-only fixes give a velocity.
-VELOCITY_WINDOW_S = 2.0
-
-
-def _position_velocity(gnss: GnssData) -> tuple[np.ndarray, np.ndarray]:
-    """ENU velocity [m/s] of position-only fixes and its 1-sigma, for the alignment's
-    course and the initial velocity (:meth:`GnssData.position_velocity` over +-
-    :data:`VELOCITY_WINDOW_S`)."""
-    return gnss.position_velocity(VELOCITY_WINDOW_S)
-
-
 def _period(cfg: System, gnss: GnssData | None, others: dict) -> float:
     """The filter epoch: the system's, else the GNSS period, else the shortest median
     period of the other aiding sensors' data."""
@@ -587,11 +379,6 @@ def with_imu_figures(imu: ImuData, cfg: System) -> tuple[System, list[str]]:
 def _check_figures(imu: ImuData, cfg: System) -> None:
     """:func:`with_imu_figures`' refusal alone."""
     with_imu_figures(imu, cfg)
-
-
-#: IMU samples further apart than this [s] are refused (time stamps in milliseconds read as
-#: seconds put them 1000x too far apart; no strapdown IMU samples below 1 Hz).
-MAX_IMU_PERIOD_S = 1.0
 
 
 def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData | None = None,
@@ -793,7 +580,7 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
                          quality={})
         sig_vel0, decorrelation = sig_vel, 1.0
         if gnss.vel is None:  # the alignment's course from the positions' differences
-            v, s_v = _position_velocity(gnss)
+            v, s_v = position_velocity(gnss)
             if not np.isfinite(s_v[0]):
                 raise DataError(f"{gnss.source}: one position-only fix: no initial "
                                 f"velocity; give the initial state (initial:)")
@@ -802,11 +589,11 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
                 np.minimum(s_v, 1e6)[:, None], 3, axis=1)])
             gnss_v = replace(gnss_v, vel=v, sigma_vel=sig_vel0, quality={}, sigma_rows=rows)
             decorrelation = 2.0 * VELOCITY_WINDOW_S  # (neighbours share their fixes)
-        al = _initial_attitude(imu, gnss_v, cfg, t0, i0, dt, noise, ab, gb, decorrelation)
+        al = attitude_at_start(imu, gnss_v, cfg, t0, i0, dt, noise, ab, gb, decorrelation)
         C0 = att.euler_to_dcm(al.euler)
         lla0 = earth.move_enu(gnss.lla[0], -(C0 @ lever))
         vel0 = gnss_v.vel[0]
-        P0 = _initial_covariance(al, sig_vel0, sig_pos_enu, gb, ab, noise)
+        P0 = start_covariance(al, sig_vel0, sig_pos_enu, gb, ab, noise)
         euler0, gyro_bias = al.euler, al.gyro_bias
     warnings += al.warnings
 
@@ -1015,132 +802,3 @@ def gnss_z(gnss: GnssData, i: int) -> np.ndarray:
     return np.concatenate((gnss.lla[i], gnss.vel[i]))
 
 
-#: Error keys of earlier releases (north, east, down) -> their key now (east, north, up).
-RENAMED_ERRORS = {"down_m": "up_m", "vd_mps": "vu_mps"}
-
-
-class _Errors(dict):
-    """Error series (``signed``) or their RMSE by key; the keys of
-    :data:`RENAMED_ERRORS` are read, as minus the new series (or the same RMSE), with a
-    ``FutureWarning`` for one more release."""
-
-    def __init__(self, *args, signed: bool = True):
-        super().__init__(*args)
-        self.signed = signed
-
-    def __missing__(self, key):
-        new = RENAMED_ERRORS.get(key)
-        if new is None or new not in self:
-            raise KeyError(key)
-        _warnings.warn(f"error key '{key}' is now '{new}' (errors are east, north, up, as the "
-                       f"solution): read as {'-' if self.signed else ''}{new} for one more "
-                       f"release", FutureWarning, stacklevel=2)
-        return -self[new] if self.signed else self[new]
-
-    def get(self, key, default=None):
-        """``self[key]`` (an old key too, with its warning), else ``default``."""
-        try:
-            return self[key]
-        except KeyError:
-            return default
-
-    def __contains__(self, key):
-        return super().__contains__(key) or (key in RENAMED_ERRORS
-                                             and super().__contains__(RENAMED_ERRORS[key]))
-
-
-def errors_against(sol: Solution, ref: Reference) -> dict[str, np.ndarray]:
-    """The solution's errors: solution minus reference at the reference's times inside
-    the solution's span.
-
-    The solution is moved to the point the reference describes (its lever arm) and
-    interpolated to the reference's times (attitude through quaternions, longitude
-    across +-180 deg unwrapped) before differencing.
-
-    Parameters
-    ----------
-    sol : Solution
-        A solution (``ProcessResult.forward``, ``NavResult.forward``; lat/lon [rad], h
-        [m], ENU velocity [m/s], Euler angles [rad]).
-    ref : Reference
-        The reference (:func:`fednav.read_reference_csv`; lat/lon [rad], h [m], ENU
-        velocity [m/s], optional Euler angles [rad]).
-
-    Returns
-    -------
-    dict of str to ndarray
-        ``t`` [s]; position errors ``east_m``, ``north_m``, ``up_m`` [m]; velocity
-        errors ``ve_mps``, ``vn_mps``, ``vu_mps`` [m/s] (ENU, as the solution); with a
-        reference attitude ``pitch_rad``, ``roll_rad``, ``yaw_rad`` [rad] (the Euler
-        angles' order).  The old keys ``down_m`` and ``vd_mps`` are read (as minus
-        ``up_m``, ``vu_mps``) with a ``FutureWarning`` for one more release.
-
-    Raises
-    ------
-    DataError
-        When the reference does not overlap the solution or lies over 10 km away.
-    """
-    # (the solution's time stamps t0 + k dt may end a few ulp before a reference stamp)
-    tol = 1e-6 * float(sol.t[1] - sol.t[0]) if len(sol.t) > 1 else 0.0
-    m = (ref.t >= sol.t[0] - tol) & (ref.t <= sol.t[-1] + tol)
-    if not m.any():
-        raise DataError(f"{ref.source}: reference does not overlap the solution in time")
-    tr = ref.t[m]
-    interp = lambda a: np.column_stack([np.interp(tr, sol.t, a[:, j])  # noqa: E731
-                                        for j in range(a.shape[1])])
-    lla, vel = sol.lla, sol.vel
-    if np.any(ref.lever):
-        lla, vel = earth.lever_arm_point(lla, vel, att.euler_to_dcm(sol.euler), sol.omega,
-                                         ref.lever)
-    # longitude unwrapped before interpolating: a span across +-180 deg is not 2 pi wide
-    lla = interp(np.column_stack([lla[:, 0], np.unwrap(lla[:, 1]), lla[:, 2]]))
-    lla[:, 1] = earth.wrap_lon_array(lla[:, 1])
-    vel = interp(vel)
-    rl = ref.lla[m]
-    d = earth.llh_difference_enu(lla[:, 0], lla[:, 1], lla[:, 2], rl[:, 0], rl[:, 1], rl[:, 2])
-    dv = vel - ref.vel[m]
-    far = float(np.median(np.hypot(d[:, 0], d[:, 1])))
-    if far > 10_000.0:
-        raise DataError(f"{ref.source}: the solution and the reference are {far / 1000:.0f} "
-                        f"km apart (median): reference or GNSS positions in another unit "
-                        f"(radians vs degrees) or datum?")
-    out = _Errors({"t": tr, "east_m": d[:, 0], "north_m": d[:, 1], "up_m": d[:, 2],
-                   "ve_mps": dv[:, 0], "vn_mps": dv[:, 1], "vu_mps": dv[:, 2]})
-    if ref.euler is not None:
-        # Interpolate attitude through unit quaternions (no heading wrap problems).
-        q = att.euler_to_quat(sol.euler)
-        flip = np.r_[1.0, np.sign(np.sum(q[1:] * q[:-1], axis=1))]
-        q = q * np.cumprod(np.where(flip == 0, 1.0, flip))[:, None]  # continuous sign
-        qi = interp(q)
-        qi /= np.linalg.norm(qi, axis=1)[:, None]
-        de = att.euler_difference(att.quat_to_euler(qi), ref.euler[m])
-        out.update({"pitch_rad": de[:, 0], "roll_rad": de[:, 1], "yaw_rad": de[:, 2]})
-    return out
-
-
-def rmse(err: dict[str, np.ndarray]) -> dict[str, float]:
-    """Root-mean-square of each error series.
-
-    Parameters
-    ----------
-    err : dict of str to ndarray
-        Error series by name (:func:`errors_against`'s), each in the unit its name says
-        [m, m/s, rad]; a ``t`` entry is left out.
-
-    Returns
-    -------
-    dict of str to float
-        The RMSE of each series in its unit [m, m/s]; angles (``*_rad``) in degrees under
-        ``*_deg`` [deg].  The old keys ``down_m`` and ``vd_mps`` are read (the same as
-        ``up_m``, ``vu_mps``) with a ``FutureWarning`` for one more release.
-    """
-    out = _Errors(signed=False)
-    for k, v in err.items():
-        if k == "t":
-            continue
-        r = float(np.sqrt(np.mean(v**2)))
-        if k.endswith("_rad"):
-            out[k[:-4] + "_deg"] = float(units.to_deg(r))
-        else:
-            out[k] = r
-    return out
