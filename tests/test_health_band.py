@@ -40,6 +40,8 @@ def test_the_band_warns_both_ways_with_causes_ranked():
     # every sensor high: the IMU figures come first
     both = band_warnings(log("gnss", 2.8) + log("star", 2.5), (0.5, 2.0))
     assert len(both) == 2 and all("1) the IMU figures too optimistic" in w for w in both)
+    low = band_warnings(log("gnss", 0.05) + log("baro", 0.06), (0.5, 2.0))
+    assert len(low) == 2 and all("1) the IMU figures too pessimistic" in w for w in low)
     # a constraint's NIS sits below 1 by design
     assert band_warnings(log("zupt", 0.01), (0.5, 2.0), constraints=("zupt",)) == []
 

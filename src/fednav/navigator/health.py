@@ -206,6 +206,7 @@ def band_warnings(fdi: list | dict, band=(0.5, 2.0), rows: dict | None = None,
             means[local] = float((nis[keep] / dof[keep]).mean())
     sensors = [n for n in means if n not in constraints]
     high_all = len(sensors) > 1 and all(means[n] > hi for n in sensors)
+    low_all = len(sensors) > 1 and all(means[n] < lo for n in sensors)
     out = []
     for local, n in means.items():
         if lo <= n <= hi or (n < lo and local in constraints):
@@ -224,10 +225,12 @@ def band_warnings(fdi: list | dict, band=(0.5, 2.0), rows: dict | None = None,
             side = "larger"
         else:
             causes = [f"sensors.{local}'s sigma too large for its data (a sigma in the "
-                      f"wrong unit — millimetres as metres? — or a receiver's "
+                      f"wrong unit — millimetres as metres? — or the sensor's own "
                       f"pessimistic accuracy; sensors.{local}.sigma_*, or fednav tune)",
-                      "the IMU figures too pessimistic (imu.grade too noisy a class; "
-                      "fednav tune)"]
+                      "the IMU figures too pessimistic (imu.grade too noisy a class, a "
+                      "preset assumed for a better IMU; fednav tune)"]
+            if low_all:  # every sensor: the common part, the IMU, first
+                causes.reverse()
             side = "smaller"
         out.append(f"the '{local}' local filter's innovations are {n:.3g} times their "
                    f"expected size (mean NIS/dof over the run, outside the band "
