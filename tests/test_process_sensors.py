@@ -397,3 +397,26 @@ def test_an_odometer_scale_factor_is_seen_said_and_estimated():
     auto, res = run(1.03, "auto")
     assert not any("sensors.odometer.scale" in w for w in res.warnings)
     assert auto < 1.5 * true and fast > 5.0 * true, (true, fast, auto)
+
+
+def test_no_false_time_offset_after_a_turn_inside_an_outage():
+    """A car turning 300 deg while the GNSS is out: the course unwrapped across the gap
+    took the wrong turn and read a 25 s time offset; each stretch of fixes now takes the
+    branch of the gyro's heading."""
+    from test_process import simulated_imu
+
+    from fednav.process.run import time_offset
+
+    segs = [Segment(20.0, accel=0.3), Segment(25.0, heading_rate=units.deg(12.0)),
+            Segment(20.0), Segment(15.0, heading_rate=units.deg(-6.0)), Segment(20.0)]
+    truth = generate(np.array([units.deg(45.0), units.deg(7.0), 50.0]), 8.0,
+                     [0.0, 0.0, units.deg(10.0)], segs, 0.01)
+    imu = simulated_imu(truth, np.random.default_rng(1))
+    tg = np.arange(0.2, truth.t[-1], 0.2)
+    tr = truth.at(tg)
+    out = (tg >= 18.0) & (tg <= 48.0)
+    g = GnssData("g", tg[~out], tr["lla"][~out], tr["vel"][~out], np.ones(3),
+                 np.full(3, 0.05), np.zeros(3))
+    assert abs(time_offset(imu, g)) < 0.05
+    late = replace(g, t=g.t + 2.0, quality={})
+    assert time_offset(imu, late) == pytest.approx(-2.0, abs=0.05)

@@ -239,18 +239,30 @@ def time_offset(imu: ImuData, gnss: GnssData, step: float = 0.01) -> float | Non
     if moving.sum() < 10:
         return None
     tg = gnss.t[moving]
-    course = np.unwrap(np.arctan2(gnss.vel[moving, 0], gnss.vel[moving, 1]))
+    up = np.mean(imu.accel, axis=0)
+    up /= max(np.linalg.norm(up), 1e-12)
+    dt = imu.period()
+    heading = -np.concatenate([[0.0], np.cumsum(imu.gyro[:-1] @ up) * dt])  # (gyro bias
+    # and Earth rate drift slowly: a straight-line trend is removed from the misfit below)
+    # The course unwrapped within each stretch of moving fixes; across a gap (an outage,
+    # a stop) its turns are unseen, so each stretch takes the 2 pi branch nearest the
+    # gyro's heading (unwrapped across a 300 deg turn in an outage it read 25 s offset)
+    course = np.arctan2(gnss.vel[moving, 0], gnss.vel[moving, 1])
+    cuts = np.flatnonzero(np.diff(tg) > 2.0) + 1
+    h0 = np.interp(tg, imu.t, heading)
+    offset = None  # (the gyro heading's unknown start against the course: the first
+    # stretch's, whatever its size)
+    for a, b in zip(np.r_[0, cuts], np.r_[cuts, len(tg)], strict=True):
+        c = np.unwrap(course[a:b])
+        d = float(np.median(h0[a:b] - c))
+        offset = d if offset is None else offset
+        course[a:b] = c + 2 * np.pi * np.round((d - offset) / (2 * np.pi))
     if gnss.lla is not None:
         # the course is measured from north, which turns while the gyro sees none of it
         # (near the pole a false offset of 30 s)
         course = course - earth.north_turn(gnss.t, gnss.lla, gnss.vel)[moving]
     if np.ptp(course) < np.radians(30.0):
         return None
-    up = np.mean(imu.accel, axis=0)
-    up /= max(np.linalg.norm(up), 1e-12)
-    dt = imu.period()
-    heading = -np.concatenate([[0.0], np.cumsum(imu.gyro[:-1] @ up) * dt])  # (gyro bias
-    # and Earth rate drift slowly: a straight-line trend is removed from the misfit below)
     x = tg - tg.mean()
 
     def best(lags):
