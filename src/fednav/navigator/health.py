@@ -189,13 +189,15 @@ def row_nis(innovations: list, kinds: dict) -> dict[str, dict[str, tuple[float, 
 
 
 def band_warnings(fdi: list | dict, band=(0.5, 2.0), rows: dict | None = None,
-                  constraints=()) -> list[str]:
+                  constraints=(), imu_preset: bool = True) -> list[str]:
     """Warnings for local filters whose run-mean NIS/dof lies outside ``band`` ([low,
     high]), each with the likely causes ranked and the key that fixes each, and for a row
     group of a local filter (``rows``: :func:`row_nis`) outside it while the filter's
     mean is inside (one group near zero hidden by another).  ``constraints``: locals
     whose sigma is a softness, not a noise (ZUPT, NHC, ZARU: their NIS sits well below 1
-    by design) — judged on the high side only.  (With a band, :func:`run_health` gives
+    by design) — judged on the high side only.  Every sensor below the band ranks the
+    IMU figures first when they are a preset (``imu_preset``: a grade's, not the IMU's
+    own).  (With a band, :func:`run_health` gives
     these warnings instead of :func:`nis_check`'s.)"""
     lo, hi = band
     log = _split(fdi)
@@ -229,7 +231,7 @@ def band_warnings(fdi: list | dict, band=(0.5, 2.0), rows: dict | None = None,
                       f"pessimistic accuracy; sensors.{local}.sigma_*, or fednav tune)",
                       "the IMU figures too pessimistic (imu.grade too noisy a class, a "
                       "preset assumed for a better IMU; fednav tune)"]
-            if low_all:  # every sensor: the common part, the IMU, first
+            if low_all and imu_preset:  # every sensor, a preset: the IMU first
                 causes.reverse()
             side = "smaller"
         out.append(f"the '{local}' local filter's innovations are {n:.3g} times their "
@@ -256,11 +258,12 @@ def band_warnings(fdi: list | dict, band=(0.5, 2.0), rows: dict | None = None,
 def run_health(fdi: list, imu=None, gnss=None, solution=None, figures: dict | None = None,
                force: bool = True, seen: list | None = None, band=None,
                rows: dict | None = None, constraints=(),
-               blame: str | None = None) -> list[str]:
+               blame: str | None = None, imu_preset: bool = True) -> list[str]:
     """Every check of the health monitor, as warnings: the run's and the sliding
     windows' NIS/dof per local filter, long isolations (from the FDI log ``fdi``), the
     NIS/dof band per local filter and row group (``band``, ``rows``, ``constraints``:
-    :func:`band_warnings`; ``blame``: the leave-one-out culprit, named in a refusal),
+    :func:`band_warnings`, ``imu_preset``: the IMU figures a grade's; ``blame``: the
+    leave-one-out culprit, named in a refusal),
     and,
     with the data, the plausibility checks of :mod:`fednav.navigator.plausibility` —
     stuck axes, gravity and Earth rate at rest and the solution's levelling there (needs
@@ -275,7 +278,7 @@ def run_health(fdi: list, imu=None, gnss=None, solution=None, figures: dict | No
     log = by_local(fdi)
     run = nis_check(log, force, seen, blame)  # (the refusal; its warnings without a band)
     out = isolation_warnings(log) + (run if band is None else band_warnings(
-        log, band, rows, constraints)) + window_nis(log)
+        log, band, rows, constraints, imu_preset)) + window_nis(log)
     if imu is None or gnss is None:
         return out
     t = imu.t

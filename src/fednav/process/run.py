@@ -756,7 +756,8 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
     res.warnings += run_health(res.forward.fdi, imu, flown_gnss(gnss, prep.system),
                                res.forward, imu_figures(imu, prep.system), force,
                                list(res.warnings), band,
-                               row_nis(out.innovations, nav.row_kinds), constraints, blame)
+                               row_nis(out.innovations, nav.row_kinds), constraints, blame,
+                               prep.system.imu.grade is not None)
     if blame:
         res.warnings.append(blame)
     res.warnings += readmission_warnings(out.readmissions)
