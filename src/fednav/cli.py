@@ -1043,5 +1043,109 @@ def _print_allan(res) -> None:
     console.print(escape(res.config_yaml()), highlight=False, end="")
 
 
+def _names_option(value: str | None, known: list[str], option: str) -> list[str] | None:
+    """A comma-separated ``--filters``/``--forms``/``--modes`` value checked against
+    ``known`` (None: all); a one-line error naming the unknown one."""
+    if value is None:
+        return None
+    names = [v.strip() for v in value.split(",") if v.strip()]
+    for n in names:
+        if n not in known:
+            typer.echo(f"error: {option}: unknown '{n}'; known: {', '.join(known)}", err=True)
+            raise typer.Exit(2)
+    return names
+
+
+@app.command("certify")
+@_one_line_errors
+def certify_command(
+    runs: int = typer.Option(None, help="Monte Carlo runs per combination (at least 1)",
+                             show_default="50; 3 with --quick"),
+    quick: bool = typer.Option(False, "--quick", help="the quick tier of the test suite: "
+                                                      "a few runs of the first 60 s"),
+    seed: int = typer.Option(1, help="seed of the first run (run i uses seed + i)"),
+    out: Path = typer.Option(Path("results/certificate"), help="output folder (its runs/ "
+                             "keeps every unit of work: the same command resumes)"),
+    jobs: int = typer.Option(min(2, os.cpu_count() or 1), help="worker processes (at least 1)"),
+    dask: str = typer.Option(None, "--dask", help="Dask scheduler address (tcp://HOST:PORT) "
+                                                  "to run on instead of local processes"),
+    filters: str = typer.Option(None, help="only these filter types (comma-separated)"),
+    forms: str = typer.Option(None, help="only these forms: standard, square_root"),
+    modes: str = typer.Option(None, help="only these modes (comma-separated: a sensor's "
+                                         "name, land-all, air-all)"),
+    duration: float = typer.Option(None, help="fly only the first T seconds [s]"),
+    runs_of: str = typer.Option(None, "--runs-of", help="fewer runs for some filter "
+                                "types, e.g. pf=20,aekf=20 (costly or known outside)"),
+    fresh: bool = typer.Option(False, "--fresh", help="discard the runs stored in --out"),
+) -> None:
+    """Consistency certificate: every registered sensor x every registered filter type and
+    form, random lever arms, mountings, latencies and rates, on trajectories made without
+    fednav's simulator; NEES of position, velocity and attitude and NIS of every sensor
+    against their 99 % chi-square bands (docs/certificate.md).  Writes
+    certificate.json and certificate.md; exit status 1 when a combination is outside its
+    band without a documented limitation."""
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
+
+    from .campaign import certify as cf
+    from .campaign.store import Campaign
+    from .filters.registry import FILTERS, FORMS
+
+    if runs is None:
+        runs = cf.QUICK_RUNS if quick else cf.FULL_RUNS
+    if quick and duration is None:
+        duration = cf.QUICK_DURATION_S
+    _check_counts(runs=runs, jobs=jobs, max_time=duration, seed=seed)
+    pick_f = _names_option(filters, list(FILTERS), "--filters")
+    pick_forms = _names_option(forms, list(FORMS), "--forms")
+    pick_m = _names_option(modes, [m.name for m in cf.modes()], "--modes")
+    fewer = {}
+    for item in (runs_of or "").split(","):
+        if not item.strip():
+            continue
+        name, _, n = item.partition("=")
+        _names_option(name.strip(), list(FILTERS), "--runs-of")
+        try:
+            fewer[name.strip()] = int(n)
+        except ValueError:
+            typer.echo(f"error: --runs-of: '{item.strip()}' is not TYPE=RUNS", err=True)
+            raise typer.Exit(2) from None
+        _check_counts(runs=fewer[name.strip()])
+    out = _output_folder(out)
+    n_units = len(cf.units(runs, seed, pick_f, pick_forms, pick_m, duration, fewer))
+    if not n_units:
+        typer.echo("error: no combination left (--filters and --forms select none)", err=True)
+        raise typer.Exit(2)
+    cold = _kernel_cache.cold()
+    if cold:
+        _say_on_stderr(_kernel_cache.NOTICE)
+    _kernel_cache.announced()
+    t0 = time.perf_counter()
+    camp = Campaign(out, "certify", cf.settings(), seed, fresh, dask)
+    with Progress("[progress.description]{task.description}", BarColumn(),
+                  MofNCompleteColumn(), TimeElapsedColumn(), console=console) as prog:
+        task = prog.add_task("certificate", total=n_units)
+        try:
+            with camp:
+                cert = cf.run(runs, seed, jobs, pick_f, pick_forms, pick_m, duration, camp,
+                              progress=lambda: prog.advance(task), runs_of=fewer)
+        except KeyboardInterrupt as e:
+            prog.stop()
+            if _state["debug"]:
+                raise
+            name, status = _interruption(e)
+            typer.echo(f"interrupted{'' if name == 'Ctrl-C' else f' ({name})'}: "
+                       f"{camp.computed + camp.reused} of {n_units} units of work are "
+                       f"stored in {out}; the same command computes the others", err=True)
+            raise typer.Exit(status) from None
+    cf.print_table(cert, console)
+    files = cf.write(cert, out)
+    c = camp.summary()
+    console.print(f"{c['runs_computed']} units computed, {c['runs_reused']} reused "
+                  f"({c['engine']}); wrote {', '.join(str(f) for f in files)} in "
+                  f"{time.perf_counter() - t0:.1f} s")
+    if cert["verdicts"]["outside"]:
+        raise typer.Exit(1)
+
+
 def main() -> None:  # pragma: no cover
     app()
