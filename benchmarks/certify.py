@@ -1,0 +1,204 @@
+"""The consistency certificate by hand, and the studies behind its documented limitations.
+
+    python benchmarks/certify.py [--runs 50] [--jobs 2] [--dask tcp://HOST:PORT]
+                                 [--out results/certificate]
+    python benchmarks/certify.py --study adaptive|pf|airdata|baro|quick [--runs N]
+
+Without ``--study``: the full certificate (``fednav certify --runs N``: every registered
+sensor x filter type x form, ``N`` runs per combination, resumable in ``--out``), its
+table and ``certificate.json`` / ``certificate.md``.  On 2 cores it takes hours
+(docs/certificate.md gives the figures); ``--dask`` spreads it over a cluster.
+
+The studies (in this process, seeds 1..N; docs/certificate.md quotes their output):
+
+* ``adaptive`` — the Sage-Husa filters (aekf, raukf, aasghqf) as they are, and with the
+  R floor taken in the metric of the nominal R (``R >= r_floor R_nominal``) instead of
+  ``r_floor`` times the nominal R's smallest eigenvalue: the floor is the cause of the
+  position NEES of tens to thousands with a GNSS receiver (metres and m/s in one R);
+* ``pf`` — the particle filter at 1000 (the registered default), 4000 and 16000 particles;
+* ``airdata`` — the wind constraint with air data every 0.1 s (one sample per epoch) and
+  every 1 s (the latest sample applied again at every epoch until the next);
+* ``baro`` — the barometer with its lever arm, as a filter measurement only and with the
+  vertical-channel damping loop (which takes the barometer's height as the IMU's);
+* ``quick`` — the wall time of the quick tier (the test suite's), every combination.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from contextlib import contextmanager
+from dataclasses import replace
+
+import numpy as np
+
+from fednav.campaign import certify as cf
+
+
+def _summary(mode, filter_type: str, runs: int, form: str = "standard",
+             duration: float | None = None, data_of=None) -> str:
+    """NEES per dof (pos, vel, att), NIS per dof of every figure, failed runs."""
+    nees: dict = {}
+    nis: dict = {}
+    errors = []
+    for s in range(1, runs + 1):
+        data = cf.run_data(s, duration) if data_of is None else data_of(s)
+        r = cf.fly(mode, filter_type, form, data)
+        if "error" in r:
+            errors.append(r["error"])
+            continue
+        for k, v in r["nees"].items():
+            nees.setdefault(k, []).append(v)
+        for k, (total, count, dof) in r["nis"].items():
+            a = nis.setdefault(k, [0.0, 0, dof])
+            a[0] += total
+            a[1] += count
+    parts = []
+    for k in ("pos", "vel", "att"):
+        if k in nees:
+            v = np.asarray(nees[k])
+            lo, hi = cf.band(3.0 * len(v))
+            x = v.mean(axis=0).mean() / 3.0
+            parts.append(f"NEES {k} {x:.2f}{'' if lo <= x <= hi else ' !'}")
+    for k, (total, count, dof) in nis.items():
+        lo, hi = cf.band(count * dof)
+        x = total / (count * dof)
+        parts.append(f"NIS {k} {x:.3f}{'' if lo <= x <= hi else ' !'}")
+    if errors:
+        parts.append(f"{len(errors)} of {runs} runs failed ({errors[0][:100]})")
+    return ", ".join(parts)
+
+
+def _mode(name: str):
+    return {m.name: m for m in cf.modes()}[name]
+
+
+@contextmanager
+def _setup(name: str, **changes):
+    """The certificate's setup of sensor ``name`` changed for a study (the run data
+    drawn afresh)."""
+    old = cf.SETUP[name]
+    cf.SETUP[name] = replace(old, **changes)
+    cf.run_data.cache_clear()
+    try:
+        yield
+    finally:
+        cf.SETUP[name] = old
+        cf.run_data.cache_clear()
+
+
+def study_adaptive(runs: int) -> None:
+    from fednav.filters import adaptive
+
+    def whitened(self, key, R_nominal, r, HPHt):
+        """Sage-Husa's step with the floor R >= r_floor R_nominal (whitened by the
+        nominal R's Cholesky factor)."""
+        R_nominal = np.asarray(R_nominal, dtype=float)
+        k = self.k.get(key, 0)
+        d = (1.0 - self.b) / (1.0 - self.b ** (k + 1))
+        R = (1.0 - d) * self.current(key, R_nominal) + d * (np.outer(r, r) - HPHt)
+        L = np.linalg.cholesky(R_nominal)
+        Li = np.linalg.inv(L)
+        w, V = np.linalg.eigh(0.5 * (Li @ (R + R.T) @ Li.T))
+        R = L @ ((V * np.maximum(w, self.floor)) @ V.T) @ L.T
+        self.R[key], self.k[key] = R, k + 1
+        return R
+
+    original = adaptive._SageHusa.adapt
+    for label, adapt in (("as registered", original), ("whitened floor", whitened)):
+        adaptive._SageHusa.adapt = adapt
+        try:
+            for f in ("aekf", "raukf", "aasghqf"):
+                for m in ("gnss", "star", "land-all"):
+                    print(f"{label:15s} {f:8s} {m:9s} {_summary(_mode(m), f, runs)}",
+                          flush=True)
+        finally:
+            adaptive._SageHusa.adapt = original
+
+
+def study_pf(runs: int) -> None:
+    from fednav.filters import registry
+    from fednav.filters.particle import ParticleFilter
+
+    for n in (1000, 4000, 16000):
+        cls = type(f"PF{n}", (ParticleFilter,), {"__init__": lambda self, x0, P0, name="pf",
+                                                  _n=n, **kw: ParticleFilter.__init__(
+                                                      self, x0, P0, name,
+                                                      **{"n_particles": _n, **kw})})
+        registry.register(f"pf{n}", cls)
+        try:
+            for m in ("gnss", "baro", "star"):
+                t0 = time.perf_counter()
+                s = _summary(_mode(m), f"pf{n}", runs, duration=cf.QUICK_DURATION_S)
+                print(f"pf {n:6d} particles {m:6s} ({time.perf_counter() - t0:.0f} s, "
+                      f"{cf.QUICK_DURATION_S:g} s flights) {s}", flush=True)
+        finally:
+            registry.unregister(f"pf{n}")
+
+
+def study_airdata(runs: int) -> None:
+    for period in (0.1, 1.0):
+        with _setup("airdata", periods=(period,)):
+            for f in ("kf", "cukf"):
+                print(f"air data every {period:g} s, {f:5s}: "
+                      f"{_summary(_mode('airdata'), f, runs)}", flush=True)
+
+
+def study_baro(runs: int) -> None:
+    from fednav.campaign import certify_truth as ct
+
+    mode = _mode("baro")
+    for loop, lever in ((False, True), (True, True), (True, False)):
+        def data_of(s, loop=loop, lever=lever):
+            d = cf.run_data(s)
+            sec = dict(d.sections["baro"], damping_loop=loop)
+            meas = dict(d.measurements)
+            if not lever:  # the same barometer at the IMU (its heights drawn again)
+                sec.pop("lever_m", None)
+                tr = d.truth[mode.trajectory]
+                t, ta, _ = meas[("baro", mode.trajectory)]
+                idx = np.rint(t / tr.dt).astype(int)
+                z = ct.measure("baro", tr, idx, np.zeros(3), None, cf.SETUP["baro"].sigma,
+                               np.random.default_rng(s))
+                meas[("baro", mode.trajectory)] = (t, ta, z)
+            return replace(d, sections={**d.sections, "baro": sec}, measurements=meas)
+
+        print(f"baro {'with its lever arm' if lever else 'at the IMU        '}, damping "
+              f"loop {'on ' if loop else 'off'}: {_summary(mode, 'kf', runs, data_of=data_of)}",
+              flush=True)
+
+
+def study_quick() -> None:
+    t0 = time.perf_counter()
+    cert = cf.run(cf.QUICK_RUNS, 1, 2, duration_s=cf.QUICK_DURATION_S)
+    print(f"quick tier: {len(cert['combinations'])} combinations x {cf.QUICK_RUNS} runs of "
+          f"{cf.QUICK_DURATION_S:g} s in {time.perf_counter() - t0:.1f} s on 2 worker "
+          f"processes; verdicts {cert['verdicts']}")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--runs", type=int, default=None)
+    ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--dask", default=None)
+    ap.add_argument("--out", default="results/certificate")
+    ap.add_argument("--study", choices=("adaptive", "pf", "airdata", "baro", "quick"))
+    a = ap.parse_args()
+    if a.study == "quick":
+        study_quick()
+        return
+    if a.study is not None:
+        {"adaptive": study_adaptive, "pf": study_pf, "airdata": study_airdata,
+         "baro": study_baro}[a.study](a.runs or 20)
+        return
+    from fednav.cli import app
+
+    args = ["certify", "--runs", str(a.runs or cf.FULL_RUNS), "--jobs", str(a.jobs),
+            "--out", a.out]
+    if a.dask:
+        args += ["--dask", a.dask]
+    app(args)
+
+
+if __name__ == "__main__":
+    main()
