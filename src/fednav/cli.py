@@ -1073,7 +1073,7 @@ def certify_command(
     forms: str = typer.Option(None, help="only these forms: standard, square_root"),
     modes: str = typer.Option(None, help="only these modes (comma-separated: a sensor's "
                                          "name, land-all, air-all)"),
-    duration: float = typer.Option(None, help="fly only the first T seconds [s]"),
+    duration: float = typer.Option(None, help="fly only the first T seconds"),
     runs_of: str = typer.Option(None, "--runs-of", help="fewer runs for some filter "
                                 "types, e.g. pf=20,aekf=20 (costly or known outside)"),
     fresh: bool = typer.Option(False, "--fresh", help="discard the runs stored in --out"),
