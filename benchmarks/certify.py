@@ -3,6 +3,7 @@
     python benchmarks/certify.py [--runs 50] [--jobs 2] [--dask tcp://HOST:PORT]
                                  [--out results/certificate]
     python benchmarks/certify.py --study adaptive|pf|airdata|baro|quick [--runs N]
+                                 (default 20 runs; pf: 3)
 
 Without ``--study``: the full certificate (``fednav certify --runs N``: every registered
 sensor x filter type x form, ``N`` runs per combination, resumable in ``--out``), its
@@ -142,6 +143,11 @@ def study_airdata(runs: int) -> None:
             for f in ("kf", "cukf"):
                 print(f"air data every {period:g} s, {f:5s}: "
                       f"{_summary(_mode('airdata'), f, runs)}", flush=True)
+    # the constraint in each of two local filters (star and baro)
+    two = cf.Mode("airdata-2", "air", ("star", "baro"), "wind")
+    for f in ("kf", "cukf"):
+        print(f"air data every 0.1 s, two local filters, {f:5s}: {_summary(two, f, runs)}",
+              flush=True)
 
 
 def study_baro(runs: int) -> None:
@@ -188,8 +194,10 @@ def main() -> None:
         study_quick()
         return
     if a.study is not None:
+        # (the particle filter at 16000 particles: minutes per flight)
+        runs = a.runs or (3 if a.study == "pf" else 20)
         {"adaptive": study_adaptive, "pf": study_pf, "airdata": study_airdata,
-         "baro": study_baro}[a.study](a.runs or 20)
+         "baro": study_baro}[a.study](runs)
         return
     from fednav.cli import app
 

@@ -203,3 +203,26 @@ def test_quick_tier_every_combination_in_band_or_a_documented_limitation():
     n = len(cf.modes()) * len(cf.filter_forms())
     assert len(cert["combinations"]) == n
     assert cert["verdicts"]["pass"] > n // 2
+
+
+def test_command_writes_the_certificate_and_resumes(tmp_path):
+    from typer.testing import CliRunner
+
+    from fednav.cli import app
+
+    args = ["certify", "--quick", "--filters", "kf", "--forms", "standard", "--modes",
+            "gnss,zupt", "--jobs", "1", "--out", str(tmp_path)]
+    res = CliRunner().invoke(app, args)
+    assert res.exit_code == 0, res.output
+    import json
+
+    cert = json.loads((tmp_path / "certificate.json").read_text())
+    assert [c["mode"] for c in cert["combinations"]] == ["gnss", "zupt"]
+    assert all(c["runs"] == cf.QUICK_RUNS for c in cert["combinations"])
+    assert "| gnss | kf | standard |" in (tmp_path / "certificate.md").read_text()
+    again = CliRunner().invoke(app, args)
+    assert "0 units computed, 3 reused" in again.output
+    for bad, why in ((["--runs-of", "pf=x"], "TYPE=RUNS"), (["--filters", "kalman"],
+                                                           "unknown 'kalman'")):
+        res = CliRunner().invoke(app, ["certify", "--out", str(tmp_path), *bad])
+        assert res.exit_code == 2 and why in res.output
