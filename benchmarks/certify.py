@@ -4,6 +4,7 @@
                                  [--out results/certificate]
     python benchmarks/certify.py --study adaptive|pf|airdata|baro|quick [--runs N]
                                  (default 20 runs; pf: 3)
+    python benchmarks/certify.py --condensed results/certificate/certificate.json
 
 Without ``--study``: the full certificate (``fednav certify --runs N``: every registered
 sensor x filter type x form, ``N`` runs per combination, resumable in ``--out``), its
@@ -182,6 +183,52 @@ def study_quick() -> None:
           f"processes; verdicts {cert['verdicts']}")
 
 
+def condensed(path) -> str:
+    """A certificate.json condensed for docs/certificate.md: per mode the range of each
+    figure over the filter types and forms in band, then per limited filter type the
+    figures outside and the failed runs."""
+    import json
+
+    cert = json.loads(open(path).read())
+    limited = {lim.filter for lim in cf.LIMITATIONS}
+    out = ["| mode | sensors | runs | NEES pos | NEES vel | NEES att | NEES band | "
+           "NIS per dof [band] | in band |", "|" + "---|" * 9]
+
+    def rng(vals):
+        lo, hi = min(vals), max(vals)
+        return f"{lo:.3f}" if f"{lo:.3f}" == f"{hi:.3f}" else f"{lo:.3f}–{hi:.3f}"
+
+    for mode in dict.fromkeys(c["mode"] for c in cert["combinations"]):
+        cs = [c for c in cert["combinations"] if c["mode"] == mode
+              and c["filter"] not in limited]
+        fig: dict = {}
+        for c in cs:
+            for x in c["figures"]:
+                fig.setdefault(x["figure"], []).append(x)
+        nees = [rng([x["value"] for x in fig[f"nees.{k}"]]) for k in ("pos", "vel", "att")]
+        b = fig["nees.pos"][0]
+        nis = "; ".join(f"{k[4:]} {rng([x['value'] for x in v])} [{v[0]['low']:.3f}, "
+                        f"{v[0]['high']:.3f}]" for k, v in fig.items() if k.startswith("nis."))
+        ok = sum(c["verdict"] == "pass" for c in cs)
+        out.append(f"| {mode} | {', '.join(cs[0]['sensors'])} | {cs[0]['runs']} | "
+                   f"{' | '.join(nees)} | [{b['low']:.2f}, {b['high']:.2f}] | {nis} | "
+                   f"{ok} of {len(cs)} |")
+    out += ["", "| filter | forms | runs | combinations outside | failed runs | NEES "
+            "outside (range) | NIS outside (range) |", "|" + "---|" * 7]
+    for f in sorted(limited):
+        cs = [c for c in cert["combinations"] if c["filter"] == f]
+        bad = [x for c in cs for x in c["figures"] if not x["inside"]]
+        nees = [x["value"] for x in bad if x["figure"].startswith("nees")]
+        nis = [x["value"] for x in bad if x["figure"].startswith("nis")]
+        out.append(f"| {f} | {', '.join(sorted({c['form'] for c in cs}))} | "
+                   f"{max(c['runs'] for c in cs)} | "
+                   f"{sum(c['verdict'] != 'pass' for c in cs)} of {len(cs)} | "
+                   f"{sum(c['failed_runs'] for c in cs)} of {sum(c['runs'] for c in cs)} | "
+                   f"{len(nees)}: {min(nees):.2f}–{max(nees):.0f} | "
+                   + (f"{len(nis)}: {min(nis):.3f}–{max(nis):.3f} |" if nis else "— |"))
+    return "\n".join(out)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=None)
@@ -189,7 +236,12 @@ def main() -> None:
     ap.add_argument("--dask", default=None)
     ap.add_argument("--out", default="results/certificate")
     ap.add_argument("--study", choices=("adaptive", "pf", "airdata", "baro", "quick"))
+    ap.add_argument("--condensed", metavar="CERTIFICATE_JSON",
+                    help="print the condensed tables of docs/certificate.md")
     a = ap.parse_args()
+    if a.condensed:
+        print(condensed(a.condensed))
+        return
     if a.study == "quick":
         study_quick()
         return

@@ -241,9 +241,9 @@ _SAGE_HUSA = (
     "Sage-Husa estimation of R from its own innovations (fading memory 0.97: about 33 "
     "innovations) is not meant to be consistent with a known R: the estimate's own noise "
     "leaves R too low about half the time, and the filter overconfident then (NEES 2-7 per "
-    "dof, NIS 0.93-0.96 with a single sensor); with a GNSS receiver the R floor, 0.1 x the "
+    "dof, NIS 0.91-0.97 with a single sensor); with a GNSS receiver the R floor, 0.1 x the "
     "smallest eigenvalue of the nominal R, lets the position variances fall to 0.1 x (0.05 "
-    "m/s)^2 (metres and m/s in one R): position NEES 80-600 - a defect, reported "
+    "m/s)^2 (metres and m/s in one R): position NEES 83-550 - a defect, reported "
     "(docs/certificate.md; benchmarks/certify.py --study adaptive)")
 #: The documented limitations (docs/certificate.md gives the figures behind each).
 LIMITATIONS: tuple[Limitation, ...] = (
@@ -251,9 +251,10 @@ LIMITATIONS: tuple[Limitation, ...] = (
                "the SIR particle filter at its registered 1000 particles on the 18-state "
                "error: a measurement much more precise than the prior (the star sensor's "
                "10 arcsec against the initial 30-120 arcsec) leaves a few effective "
-               "particles, too few for an 18 x 18 covariance (the run fails), and the runs "
-               "that finish are overconfident (NEES 5-2500: the sample covariance of a "
-               "depleted set); 4000 and 16000 particles bring GNSS and baro near their "
+               "particles, too few for an 18 x 18 covariance (the run fails: 77 of 300), "
+               "and the runs that finish are overconfident (NEES 9-7400: the sample "
+               "covariance of a depleted set); 4000 and 16000 particles bring GNSS and baro "
+               "near their "
                "bands but still fail the star sensor (17 effective of 16000); with "
                "progressive correction no run fails but the NEES stays at 12-19 "
                "(benchmarks/certify.py --study pf)"),
@@ -263,7 +264,7 @@ LIMITATIONS: tuple[Limitation, ...] = (
                "robust adaptive UKF: its IGG-III weights inflate R for every innovation "
                "component beyond 1.5 sigma (13 % of them in a consistent filter), so its "
                "NIS per dof is about 0.72 by construction; and the Sage-Husa R of aekf, "
-               "with the same R floor defect (GNSS position NEES of hundreds)"),
+               "with the same R floor defect (GNSS position NEES 1800-6100)"),
 )
 
 
@@ -728,8 +729,8 @@ def markdown(cert: dict) -> str:
     """``certificate.md``: the table, then every combination outside its band with the
     figures outside and the reason (or "no documented reason: a defect")."""
     n = cert["runs"]
-    lines = [f"# fednav consistency certificate ({n} runs per combination, seeds "
-             f"{cert['seed']}..{cert['seed'] + n - 1})", "",
+    lines = [f"# fednav consistency certificate (up to {n} runs per combination: the "
+             f"runs column; seeds from {cert['seed']})", "",
              f"fednav {cert['fednav_version']}; chi-square {cert['coverage']:.0%} "
              f"two-sided bands; {cert['figures']} figures, {cert['figures_outside']} "
              f"outside; combinations: " + ", ".join(f"{v} {k}" for k, v in
