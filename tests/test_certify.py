@@ -191,6 +191,7 @@ def test_bands():
     assert 0.99 < lo < 1.0 < hi < 1.01
 
 
+@pytest.mark.slow
 def test_quick_tier_every_combination_in_band_or_a_documented_limitation():
     """Every registered sensor x filter type x form, a few runs of the first
     QUICK_DURATION_S: each combination in its 99 % bands, or outside only by figures
