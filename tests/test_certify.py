@@ -227,3 +227,21 @@ def test_command_writes_the_certificate_and_resumes(tmp_path):
                                                            "unknown 'kalman'")):
         res = CliRunner().invoke(app, ["certify", "--out", str(tmp_path), *bad])
         assert res.exit_code == 2 and why in res.output
+
+
+def test_the_wind_constraint_uses_each_air_data_sample_once():
+    """Air data every 1 s into 0.1 s epochs and two local filters (star, baro): each
+    sample is one update per local filter, not one per epoch while it stays the latest
+    (which counted one sample's noise ten times: velocity NEES 9.6)."""
+    from dataclasses import replace
+
+    data = cf.run_data(3, 20.0)
+    t, ta, z = data.measurements[("airdata", "air")]
+    keep = np.flatnonzero(np.isclose(np.mod(t + 1e-9, 1.0), 0.0, atol=1e-6))
+    meas = {**data.measurements, ("airdata", "air"): (t[keep], ta[keep], z[keep])}
+    two = cf.Mode("airdata-2", "air", ("star", "baro"), "wind")
+    out = cf.fly(two, "kf", "standard", replace(data, measurements=meas))
+    assert "error" not in out, out
+    used = out["nis"]["airdata.constraint"][1]
+    t_end = data.truth["air"].t[-1]
+    assert used == 2 * np.count_nonzero(ta[keep] <= t_end + 1e-9)

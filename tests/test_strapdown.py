@@ -89,6 +89,28 @@ def test_baro_loop_does_not_lag_in_a_fast_climb():
     assert np.abs(out["lla"][:, 2] - tr.lla[1:, 2]).max() < 0.01
 
 
+def test_baro_loop_takes_the_barometers_lever_arm():
+    """A barometer at lever l measures the height of its own point, h + (C_b^n l)_up: the
+    loop told l keeps the INS on the IMU's height in a 20 deg climb; not told, it pulls the
+    INS by (C l)_up (the sign check: the lever's up component moves it the other way)."""
+    tr = generate([0.6, 2.0, 300.0], 100.0, [units.deg(20), 0, 0], [Segment(60.0)], 0.01)
+    lever = np.array([0.5, 3.0, 1.0])
+    h_sensor = tr.lla[:-1, 2] + (tr.dcm[:-1] @ lever)[:, 2]
+    h_ref = np.full(len(tr.t) - 1, np.nan)
+    h_ref[::10] = h_sensor[::10]
+    err = {}
+    for told in (True, False):
+        loop = BaroLoop(5.0, 2, tuple(lever) if told else (0.0, 0.0, 0.0))
+        ins = Strapdown(tr.lla[0], tr.vel[0], tr.euler[0], 0.01, baro=loop)
+        assert ins.baro_loop.shape == (6,) and ins.baro_gains.shape == (3,)
+        out = ins.run(tr.dtheta, tr.dv, h_ref=h_ref)
+        err[told] = out["lla"][-1, 2] - tr.lla[-1, 2]
+    up = (tr.dcm[-1] @ lever)[2]
+    assert abs(up) > 0.1
+    assert abs(err[True]) < 0.01
+    assert err[False] == pytest.approx(up, abs=0.05)
+
+
 def test_compiled_quat_to_dcm_matches_numpy():
     from fednav.ins.strapdown import quat_to_dcm_nb
 

@@ -45,6 +45,22 @@ def test_sage_husa_keeps_R_positive_definite():
         assert np.linalg.eigvalsh(f.sh.R["pos"]).min() >= 0.1 - 1e-12
 
 
+def test_sage_husa_floor_is_in_the_nominal_metric():
+    """An R of metres and m/s (1.5 m, 0.05 m/s) driven down by zero innovations stays
+    at least r_floor times the nominal R in every component: the metres may not fall to
+    0.1 x (0.05 m/s)^2, as a floor of the smallest eigenvalue let them."""
+    R0 = np.diag([1.5**2, 1.5**2, 0.05**2])
+    f = SageHusaEKF(np.zeros(3), np.diag([100.0, 100.0, 1.0]))
+    m = Pos(np.eye(3))
+    for _ in range(300):
+        f.update(np.zeros(3), m, R=R0)
+    R = f.sh.R["pos"]
+    L = np.linalg.cholesky(R0)
+    A = np.linalg.solve(L, np.linalg.solve(L, R).T)
+    assert np.linalg.eigvalsh(A).min() >= 0.1 - 1e-9
+    np.testing.assert_allclose(np.diag(R), 0.1 * np.diag(R0), rtol=1e-6)
+
+
 def test_igg3_weights():
     w = igg3_weights([0.0, 1.5, 3.0, 4.5, 10.0])
     np.testing.assert_allclose(w[:2], 1.0)

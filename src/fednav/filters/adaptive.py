@@ -8,10 +8,14 @@ For each measurement type (``model.kind``), at its k-th update, with innovation
     d_k = (1 - b) / (1 - b^(k+1))                  fading factor b (default 0.97)
     R_k = (1 - d_k) R_(k-1) + d_k (r r' - H P H')
 
-Safeguard (the difference can make ``R_k`` indefinite): the symmetric part is
-eigen-decomposed and every eigenvalue raised to at least ``r_floor`` (default 0.1) times
-the smallest eigenvalue of the nominal R, so R stays positive definite.  R starts from
-the nominal R the caller passes.
+Safeguard (the difference can make ``R_k`` indefinite): ``R_k`` is kept at least
+``r_floor`` (default 0.1) times the nominal R, in the nominal R's own metric — with
+``L L' = R_nominal``, every eigenvalue of ``L^-1 R_k L^-T`` raised to at least
+``r_floor`` — so R stays positive definite and no component falls below ``r_floor`` of
+its nominal variance.  (A floor of ``r_floor`` times the nominal R's *smallest*
+eigenvalue, used before, let the metres² of a GNSS position fall to 0.1 × (0.05 m/s)²
+when R also held velocities: position NEES of hundreds in ``fednav certify``.)  R starts
+from the nominal R the caller passes.
 
 **Sage–Husa process-noise estimation** (optional, ``adapt_q=True``; same fading weights,
 one step per filter cycle)::
@@ -72,18 +76,18 @@ class _SageHusa:
         self.b, self.floor = fading, r_floor
         self.R: dict = {}
         self.k: dict = {}
-        self._lo: dict = {}
+        self._chol: dict = {}
 
     def current(self, key, R_nominal) -> np.ndarray:
         return self.R.get(key, np.asarray(R_nominal, dtype=float))
 
-    def _floor(self, key, R_nominal) -> float:
-        """``r_floor`` times the smallest eigenvalue of the nominal R (cached per key)."""
+    def _factor(self, key, R_nominal) -> np.ndarray:
+        """``L`` with ``L L' = R_nominal`` (cached per key)."""
         tag = R_nominal.tobytes()
-        hit = self._lo.get(key)
+        hit = self._chol.get(key)
         if hit is None or hit[0] != tag:
-            hit = (tag, self.floor * np.linalg.eigvalsh(R_nominal).min())
-            self._lo[key] = hit
+            hit = (tag, np.linalg.cholesky(R_nominal))
+            self._chol[key] = hit
         return hit[1]
 
     def adapt(self, key, R_nominal, r, HPHt) -> np.ndarray:
@@ -92,12 +96,15 @@ class _SageHusa:
         d = (1.0 - self.b) / (1.0 - self.b ** (k + 1))
         R = (1.0 - d) * self.current(key, R_nominal) + d * (np.outer(r, r) - HPHt)
         R = 0.5 * (R + R.T)
-        lo = self._floor(key, R_nominal)
-        # Every eigenvalue >= lo exactly when R - lo I has a Cholesky factor: project
-        # (eigen-decomposition) only when the floor is active.
-        if not cholesky_lower(R - lo * np.eye(len(R)))[1]:
-            w, V = np.linalg.eigh(R)
-            R = (V * np.maximum(w, lo)) @ V.T
+        # R >= r_floor R_nominal exactly when R - r_floor R_nominal has a Cholesky
+        # factor: project (in the nominal R's metric) only when the floor is active.
+        if not cholesky_lower(R - self.floor * R_nominal)[1]:
+            L = self._factor(key, R_nominal)
+            A = np.linalg.solve(L, np.linalg.solve(L, R).T)  # L^-1 R L^-T
+            w, V = np.linalg.eigh(0.5 * (A + A.T))
+            LV = L @ V
+            R = (LV * np.maximum(w, self.floor)) @ LV.T
+            R = 0.5 * (R + R.T)
         self.R[key], self.k[key] = R, k + 1
         return R
 

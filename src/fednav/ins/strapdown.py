@@ -20,7 +20,10 @@ over each IMU interval ``dt`` [s] (body right-forward-up).  Per sample:
 The vertical channel can be damped by a barometric height reference through a second-
 or third-order loop (:class:`BaroLoop`).  The loop is driven by the height difference
 INS - baro formed at each baro sample and held until the next one (holding the baro
-height itself would inject the climb rate times the baro period as an error).  The state
+height itself would inject the climb rate times the baro period as an error).  The INS
+height is taken at the barometer's point, ``h + (C_b^n l)_up`` with the attitude at the
+sample and the barometer's lever arm ``l`` (body RFU, m; :attr:`BaroLoop.lever_m`), so a
+barometer 2 m above the IMU does not pull the INS 2 m up.  The state
 lives in a flat float array so the same compiled kernel serves open-loop runs and filter
 loops with feedback.
 """
@@ -54,11 +57,13 @@ class BaroLoop:
     """Barometric damping of the vertical channel.
 
     ``order`` 2 or 3; ``time_constant`` [s]: all loop poles are placed at -1/time_constant
-    (the 2g/R instability of the free vertical channel is cancelled in the gain).
+    (the 2g/R instability of the free vertical channel is cancelled in the gain);
+    ``lever_m``: the barometer's position from the IMU, body RFU axes [m].
     """
 
     time_constant: float = 10.0
     order: int = 3
+    lever_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
     def gains(self, lat: float = 0.0) -> np.ndarray:
         if self.order not in (2, 3):
@@ -75,6 +80,8 @@ class BaroLoop:
 
 @numba.njit(cache=True)
 def _run(state, dtheta, dv, dt, h_ref, gains, out_q, out_v, out_p):
+    """``gains``: the baro loop's [k1, k2, k3] and, when given, the barometer's lever arm
+    [lx, ly, lz] (body, m): :attr:`Strapdown.baro_loop`."""
     # Scalar arithmetic throughout: no array is allocated per sample.
     n = dtheta.shape[0]
     record = out_q.shape[0] == n
@@ -87,6 +94,9 @@ def _run(state, dtheta, dv, dt, h_ref, gains, out_q, out_v, out_p):
     has_prev = state[19] > 0.5
     b_int = state[20]
     dh = state[21]
+    lx = gains[3] if gains.shape[0] > 3 else 0.0
+    ly = gains[4] if gains.shape[0] > 3 else 0.0
+    lz = gains[5] if gains.shape[0] > 3 else 0.0
     om = earth.OMEGA_IE
     for k in range(n):
         ax, ay, az = dtheta[k, 0], dtheta[k, 1], dtheta[k, 2]
@@ -129,7 +139,7 @@ def _run(state, dtheta, dv, dt, h_ref, gains, out_q, out_v, out_p):
         acc_u = -(we * mn - wn * me)
         acc_u -= gmag
         if not math.isnan(h_ref[k]):
-            dh = h - h_ref[k]
+            dh = h + c20 * lx + c21 * ly + c22 * lz - h_ref[k]  # at the baro's point
         acc_u -= gains[1] * dh + b_int
         b_int += gains[2] * dh * dt
         ve_n = ve + de + acc_e * dt
@@ -253,12 +263,19 @@ class Strapdown:
         self.state[8] = earth.wrap_lon(float(self.state[8]))  # (-pi, pi], as it is kept
         self.state[_VPREV] = vel
         self.baro = baro
-        self._gains = baro.gains(float(lla[0])) if baro is not None else np.zeros(3)
+        self._gains = (np.r_[baro.gains(float(lla[0])), np.asarray(baro.lever_m, float)]
+                       if baro is not None else np.zeros(6))
 
     # --- read access -------------------------------------------------------------
     @property
     def baro_gains(self) -> np.ndarray:
         """Vertical-loop gains [k1, k2, k3] (zeros without a baro loop)."""
+        return self._gains[:3].copy()
+
+    @property
+    def baro_loop(self) -> np.ndarray:
+        """The compiled kernel's loop constants: gains [k1, k2, k3] and the barometer's
+        lever arm [lx, ly, lz] (body RFU, m)."""
         return self._gains.copy()
 
     @property

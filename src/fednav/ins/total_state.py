@@ -234,7 +234,7 @@ class TotalStateUKF:
                  else np.ascontiguousarray(h_ref, dtype=float))
         P, mean, ok = _predict(self.ins.state, np.ascontiguousarray(dth),
                                np.ascontiguousarray(dvc), h_ref, self.ins.dt,
-                               self.ins.baro_gains, self.P, self.c, self._Lw, self.Wm,
+                               self.ins.baro_loop, self.P, self.c, self._Lw, self.Wm,
                                self.Wc, self.decay, self.Qb, TSCALE, BSCALE)
         if not ok:
             raise FloatingPointError(f"{self.name} predict at step {self.step}: covariance is "

@@ -543,7 +543,7 @@ class CompiledLoop:
         self.xa = core.xa  # (flown in place)
         self.decay = core.layout.decay(self.T)
         self.scale = core.scale
-        self.gains = core.ins.baro_gains
+        self.gains = core.ins.baro_loop
         k1, k2, itg, ita, noise = em.model_constants(core.noise, core.baro_gains, core.baro_q,
                                                      core.layout)
         self.noise_vec = noise

@@ -441,17 +441,25 @@ class PythonLoop:
         self.k = k
 
     def _wind_constraint(self, k: int) -> None:
-        """The air-data wind constraint (latest air data available) in every local filter."""
+        """The air-data wind constraint in every local filter: the latest air-data sample
+        that arrived since the previous epoch, used once (a sample is one measurement
+        however many epochs it stays the latest), and in local filter ``i`` with
+        ``R / w_i``, ``w_i = beta_i / sum_j beta_j`` over the local filters, so the fused
+        information holds it once (as the process noise is shared), not once per local
+        filter (``fednav certify``: velocity NEES 9.6 with a 1 s sample re-applied at
+        0.1 s epochs; 1.63 against 1.33 with two local filters instead of one)."""
         m = self.constraint
         _, ta, z = m.arrays()
         tk = self.t_epoch(k)
         i = int(np.searchsorted(ta, tk + 1e-9)) - 1
-        if i < 0:
+        if i < 0 or ta[i] <= self.t_epoch(k - 1) + 1e-9:
             return
         nav = self.core.nav()
         model = WindConstraint.of(z[i])
         d, R = model.residual(nav, z[i]), model.R(m.sigma[i], nav)
         if hasattr(self.core, "model_of"):
             model = self.core.model_of(model)
+        share = sum(self.fed.beta[name] for name in self.fed.locals)
         for name in self.fed.locals:
-            self.fed.update(name, d, model, nav, R, t=tk, readmit=False)
+            w = self.fed.beta[name] / share
+            self.fed.update(name, d, model, nav, R / w, t=tk, readmit=False)

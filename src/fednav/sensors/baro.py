@@ -66,7 +66,7 @@ class BaroConfig(SensorConfig):
     def loop(self) -> BaroLoop | None:
         if not self.damping_loop:
             return None
-        return BaroLoop(self.loop_time_constant_s, self.loop_order)
+        return BaroLoop(self.loop_time_constant_s, self.loop_order, tuple(self.lever()))
 
 
 SPEC = SensorSpec("baro", "barometric altimeter: height (vertical-channel damping and/or "
