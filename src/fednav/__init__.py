@@ -15,11 +15,12 @@ from . import _compat  # noqa: E402
 
 _compat.install()
 
-from .navigator.system import System, load_system  # noqa: E402
-
-#: The Python API's main names (``docs/api.md``), by the module that defines each; all but
-#: the system description are imported on first use (``fednav --help`` stays quick).
+#: The Python API's main names (``docs/api.md``), by the module that defines each, each
+#: imported on first use (``import fednav`` and ``fednav --version`` stay quick).
 _LAZY = {
+    # the system description
+    "System": "fednav.navigator.system",
+    "load_system": "fednav.navigator.system",
     # the navigator and its results
     "Navigator": "fednav.navigator.navigator",
     "NavResult": "fednav.navigator.navigator",
@@ -48,11 +49,11 @@ _LAZY = {
 #: exported names that differ from their name in the defining module
 _NAMES = {"process_data": "process"}
 
-__all__ = ["System", "load_system", *_LAZY]
+__all__ = [*_LAZY]
 
 
 def __getattr__(name: str):
-    """The API's names other than the system description, imported on first use."""
+    """The API's names, imported on first use."""
     module = _LAZY.get(name)
     if module is None:
         raise AttributeError(f"module 'fednav' has no attribute '{name}'")
