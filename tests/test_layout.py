@@ -15,12 +15,14 @@ LAYERS = [{"core"}, {"ins"}, {"filters"}, {"sensors"}, {"io"}, {"navigator"},
           {"sim", "process"}, {"campaign"}, {"launch"}, {"scenarios"}]
 LEVEL = {name: i for i, layer in enumerate(LAYERS) for name in layer}
 TOP = len(LAYERS)  # the package's own top-level modules (cli, __init__, _compat)
+#: the console script's entry point, above the command line it loads
+ENTRY = TOP + 1
 
 
 def _level(module_path: Path) -> tuple[str, int]:
     rel = module_path.relative_to(PKG)
     name = rel.parts[0] if len(rel.parts) > 1 else rel.stem
-    return name, LEVEL.get(name, TOP)
+    return name, ENTRY if name == "__main__" else LEVEL.get(name, TOP)
 
 
 def _imports(path: Path):
@@ -69,8 +71,9 @@ def test_no_import_runs_upward_or_sideways():
 
 def test_top_level_holds_only_the_entry_points():
     # (and what must run before any subpackage is imported: old names, the kernel cache)
-    assert sorted(p.name for p in PKG.glob("*.py")) == ["__init__.py", "_compat.py",
-                                                        "_kernel_cache.py", "cli.py"]
+    assert sorted(p.name for p in PKG.glob("*.py")) == ["__init__.py", "__main__.py",
+                                                        "_compat.py", "_kernel_cache.py",
+                                                        "cli.py"]
 
 
 @pytest.mark.parametrize("old", ["fednav.earth", "fednav.simulate", "fednav.tuning",
