@@ -22,6 +22,8 @@ The studies (in this process, seeds 1..N; docs/certificate.md quotes their outpu
   used once), with one local filter and with two (the constraint in each with R / beta);
 * ``baro`` — the barometer with its lever arm, as a filter measurement only and with the
   vertical-channel damping loop (which takes the lever arm too), and at the IMU;
+* ``health`` — the health monitor on the clean runs of every mode (``kf``, ``ukf``): its
+  false alarms;
 * ``quick`` — the wall time of the quick tier (the test suite's), every combination.
 """
 
@@ -155,6 +157,29 @@ def study_baro(runs: int) -> None:
               flush=True)
 
 
+def study_health(runs: int, filters=("kf", "ukf")) -> None:
+    """The health monitor on the certificate's clean runs: every mode, ``runs`` runs of
+    each filter type (standard form); a warning here is a false alarm (the filters are in
+    their bands)."""
+    hits: dict = {(f, m.name): [] for f in filters for m in cf.modes()}
+    total = 0
+    for seed in range(1, runs + 1):
+        data = cf.run_data(seed)
+        for f in filters:
+            for mode in cf.modes():
+                r = cf.fly(mode, f, "standard", data)
+                if "error" in r:
+                    continue
+                total += 1
+                if r["health"]:
+                    hits[(f, mode.name)].append((seed, r["health"][0]))
+    for (f, name), h in hits.items():
+        print(f"{f:4s} {name:9s} {len(h)} of {runs} runs warned"
+              + (f": seed {h[0][0]}: {h[0][1][:160]}" if h else ""))
+    print(f"health monitor: {sum(map(len, hits.values()))} false alarms in {total} clean "
+          f"runs")
+
+
 def study_quick() -> None:
     t0 = time.perf_counter()
     cert = cf.run(cf.QUICK_RUNS, 1, 2, duration_s=cf.QUICK_DURATION_S)
@@ -217,7 +242,8 @@ def main() -> None:
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--dask", default=None)
     ap.add_argument("--out", default="results/certificate")
-    ap.add_argument("--study", choices=("adaptive", "pf", "airdata", "baro", "quick"))
+    ap.add_argument("--study", choices=("adaptive", "pf", "airdata", "baro", "health",
+                                        "quick"))
     ap.add_argument("--condensed", metavar="CERTIFICATE_JSON",
                     help="print the condensed tables of docs/certificate.md")
     a = ap.parse_args()
@@ -231,6 +257,7 @@ def main() -> None:
         # (the particle filter at 16000 particles: minutes per flight)
         runs = a.runs or (3 if a.study == "pf" else 20)
         {"adaptive": study_adaptive, "pf": study_pf, "airdata": study_airdata,
+         "health": study_health,
          "baro": study_baro}[a.study](runs)
         return
     from fednav.cli import app

@@ -514,7 +514,9 @@ def fly(mode: Mode, filter_type: str, form: str, data: RunData) -> dict:
         return {"error": "non-finite NEES (the covariance is singular)"}
     # (4 significant digits: what the averages need, a quarter of the stored size)
     return {"nees": {k: [float(f"{x:.4g}") for x in v] for k, v in nees.items()},
-            "nis": _nis(mode, system, res), "engine": res.engine}
+            "nis": _nis(mode, system, res), "engine": res.engine,
+            # the health monitor's warnings (a false alarm where the filter is in band)
+            "health": res.health(band=system.health.nis_band)}
 
 
 def _nis(mode: Mode, system, res) -> dict:
@@ -639,13 +641,18 @@ def certificate(args: list, results: list, runs: int, seed: int,
     for (s, f, form, names, _), res in zip(args, results, strict=True):
         for name in names:
             a = acc.setdefault((name, f, form), {"nees": {}, "nis": {}, "errors": [],
-                                                 "engines": set(), "runs": 0})
+                                                 "engines": set(), "runs": 0,
+                                                 "health": [], "health_runs": 0})
             a["runs"] += 1
             r = res[name]
             if "error" in r:
                 a["errors"].append({"seed": s, "error": r["error"]})
                 continue
             a["engines"].add(r["engine"])
+            if "health" in r:  # (not in units stored before the monitor flew along)
+                a["health_runs"] += 1
+                if r["health"]:
+                    a["health"].append({"seed": s, "warnings": r["health"][:3]})
             for k, v in r["nees"].items():
                 a["nees"].setdefault(k, []).append(v)
             for k, (total, count, dof) in r["nis"].items():
@@ -682,6 +689,9 @@ def certificate(args: list, results: list, runs: int, seed: int,
                        "sensors": list(by_mode[name].sensors), "filter": f, "form": form,
                        "runs": a["runs"], "failed_runs": len(a["errors"]),
                        "errors": a["errors"][:5], "engine": "/".join(sorted(a["engines"])),
+                       "health_runs": a["health_runs"],
+                       "health_warned_runs": len(a["health"]),
+                       "health_warnings": a["health"][:3],
                        "figures": figures, "verdict": verdict, "reasons": reasons})
     order = {m: i for i, m in enumerate(by_mode)}
     forder = {p: i for i, p in enumerate(filter_forms())}
@@ -756,6 +766,16 @@ def markdown(cert: dict) -> str:
                         f"{c['failed_runs']} of {c['runs']} runs failed: "
                         f"{c['errors'][0]['error'] if c['errors'] else ''}")
                 lines.append(f"  * {what} — {why or 'no documented reason: a defect'}")
+    passed = [c for c in cert["combinations"] if c["verdict"] == "pass"]
+    warned = [c for c in passed if c.get("health_warned_runs")]
+    lines += ["", "## The health monitor", "",
+              f"Runs of the {len(passed)} combinations in band with a health warning (a "
+              f"false alarm): {sum(c['health_warned_runs'] for c in warned)} of "
+              f"{sum(c.get('health_runs', 0) for c in passed)} flown with the monitor."]
+    for c in warned:
+        w = c["health_warnings"][0]
+        lines.append(f"* {c['mode']} / {c['filter']} / {c['form']}: "
+                     f"{c['health_warned_runs']} runs; seed {w['seed']}: {w['warnings'][0]}")
     return "\n".join(lines) + "\n"
 
 

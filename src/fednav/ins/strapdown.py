@@ -23,7 +23,9 @@ INS - baro formed at each baro sample and held until the next one (holding the b
 height itself would inject the climb rate times the baro period as an error).  The INS
 height is taken at the barometer's point, ``h + (C_b^n l)_up`` with the attitude at the
 sample and the barometer's lever arm ``l`` (body RFU, m; :attr:`BaroLoop.lever_m`), so a
-barometer 2 m above the IMU does not pull the INS 2 m up.  The state
+barometer 2 m above the IMU does not pull the INS 2 m up (the error model's loop terms
+leave out the attitude error's share of that height, at most ``|l| |phi|``: 2 mm at 2 m
+and 1 mrad).  The state
 lives in a flat float array so the same compiled kernel serves open-loop runs and filter
 loops with feedback.
 """
