@@ -247,3 +247,15 @@ def test_the_wind_constraint_uses_each_air_data_sample_once():
     used = out["nis"]["airdata.constraint"][1]
     t_end = data.truth["air"].t[-1]
     assert used == 2 * np.count_nonzero(ta[keep] <= t_end + 1e-9)
+
+
+def test_the_wind_constraint_in_three_local_filters_is_no_false_alarm():
+    """The constraint in three local filters (star, baro, GNSS), each with
+    R / w_i: its logged NIS is the whole measurement's (about 1 per dof, not w_i = 1/3
+    of it), so the health monitor does not call the star sensor's sigma too large."""
+    three = cf.Mode("airdata-3", "air", ("star", "baro", "gnss"), "wind")
+    out = cf.fly(three, "kf", "standard", cf.run_data(1, 40.0))
+    assert "error" not in out, out
+    total, count, dof = out["nis"]["airdata.constraint"]
+    assert 0.85 < total / (count * dof) < 1.15
+    assert out["health"] == []

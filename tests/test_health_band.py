@@ -16,13 +16,35 @@ from fednav import load_system
 from fednav.core import units
 from fednav.io import DataError, SensorData
 from fednav.io.data import VelocityData
-from fednav.navigator.health import band_warnings
+from fednav.navigator.health import band_warnings, local_nis, row_nis
+from fednav.navigator.record import InnovationRecord
 from fednav.process.run import process
 
 
 @pytest.fixture(scope="module")
 def flight():
     return make_flight()
+
+
+def test_a_local_filter_of_a_federation_is_judged_as_the_centralized_filter():
+    """A local filter among eight holds P / beta (beta = 1/8): its own S = H P H' / beta +
+    R is too large, and a precise sensor's NIS against it sits near 0.5 in a consistent
+    filter (the star sensor in fednav certify's air-all mode: a false alarm in 24 of 50
+    runs).  The band judges beta (S - R) + R, the centralized filter's S."""
+    rng = np.random.default_rng(4)
+    beta, HPH, R = 0.125, np.diag([4.0, 4.0, 1.0]), np.diag([1.0, 1.0, 2.0])
+    Sc = HPH + R
+    recs = [InnovationRecord("star", float(i), rng.multivariate_normal(np.zeros(3), Sc),
+                             HPH / beta + R, R, beta, True) for i in range(400)]
+    raw = np.mean([r.r @ np.linalg.solve(r.S, r.r) / 3 for r in recs])
+    (v, n), = local_nis(recs).values()
+    assert raw < 0.5 and 0.9 < v < 1.1 and n == 400
+    log = [(r.t, "star", float(r.r @ np.linalg.solve(r.S, r.r)), 3, np.nan, False)
+           for r in recs]
+    assert band_warnings(log, (0.5, 2.0))  # the local statistics: a false alarm
+    assert band_warnings(log, (0.5, 2.0), means=local_nis(recs)) == []
+    rows = row_nis(recs, {"star": [0, 0, 0]})["star"]
+    assert all(0.85 < m < 1.15 for m, _ in rows.values())
 
 
 def test_the_band_warns_both_ways_with_causes_ranked():

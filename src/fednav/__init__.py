@@ -52,12 +52,21 @@ _NAMES = {"process_data": "process"}
 __all__ = [*_LAZY]
 
 
+#: the subpackages, imported on first use as attributes (``fednav.core.config`` after
+#: ``import fednav``)
+_SUBPACKAGES = ("core", "ins", "filters", "sensors", "io", "navigator", "sim", "process",
+                "campaign", "launch", "scenarios")
+
+
 def __getattr__(name: str):
-    """The API's names, imported on first use."""
+    """The API's names and the subpackages, imported on first use."""
+    import importlib
+
+    if name in _SUBPACKAGES:
+        return importlib.import_module(f"fednav.{name}")
     module = _LAZY.get(name)
     if module is None:
         raise AttributeError(f"module 'fednav' has no attribute '{name}'")
-    import importlib
 
     value = getattr(importlib.import_module(module), _NAMES.get(name, name))
     globals()[name] = value  # (found directly next time)

@@ -149,6 +149,42 @@ def test_federated_reset_equals_centralized(sharing, with_master):
     assert sum(fed.beta.values()) == pytest.approx(1.0)
 
 
+@pytest.mark.parametrize("with_master", [True, False])
+def test_a_measurement_shared_by_every_local_filter_counts_once(with_master):
+    """One measurement given to every local filter with ``share = beta_i / sum beta_j``
+    (R / share in each): the fusion equals the centralized filter that uses it once (the
+    wind constraint's rule), and the logged statistic is the centralized NIS (not share
+    times it: the health monitor and the gate read it)."""
+    rng = np.random.default_rng(7)
+    n = 4
+    A, _ = linear_problem(3, n)
+    H = rng.standard_normal((2, n))
+    R = np.diag([0.2, 0.3])
+    proc = FunctionProcess(lambda x: A @ x, A, 0.02 * np.eye(n))
+    m = FunctionModel(lambda x: H @ x, H)
+    x0, P0 = rng.standard_normal(n), np.eye(n)
+    central = KalmanFilter(x0, P0)
+    names = ("one", "two", "three")
+    fed = FederatedFilter({k: KalmanFilter(x0, P0) for k in names},
+                          master=KalmanFilter(x0, P0) if with_master else None,
+                          sharing="equal")
+    for _ in range(20):
+        z = rng.standard_normal(2)
+        central.predict(proc)
+        inn = central.update(z, m, R=R)
+        fed.predict(proc)
+        total = sum(fed.beta[k] for k in names)
+        for k in names:
+            fed.update(k, z, m, R=R, readmit=False, share=fed.beta[k] / total)
+        if not with_master:  # (with a master the locals' prior is P / beta_i, not P)
+            assert [e[2] for e in fed.log[-3:]] == pytest.approx([inn.nis] * 3, rel=1e-9)
+        fed.fuse()
+    np.testing.assert_allclose(fed.x, central.x, atol=1e-10)
+    np.testing.assert_allclose(fed.P, central.P, atol=1e-10)
+    with pytest.raises(ValueError, match="explicit R"):
+        fed.update("one", z, m, share=0.5, readmit=False)
+
+
 def test_federated_feedback_zeroes_state():
     fed = FederatedFilter({"a": KalmanFilter(np.ones(2), np.eye(2))}, sharing="equal")
     dx = fed.feedback()

@@ -532,9 +532,7 @@ def _nis(mode: Mode, system, res) -> dict:
             g.setdefault(_GROUPS[int(k)], []).append(r)
         groups[name] = g
     out: dict = {}
-    beta = {}
     for rec in res.innovations:
-        beta[rec.local] = rec.beta
         S = rec.beta * (np.asarray(rec.S) - np.asarray(rec.R)) + np.asarray(rec.R)
         r = np.asarray(rec.r, dtype=float)
         for grp, rows in groups[rec.local].items():
@@ -545,13 +543,12 @@ def _nis(mode: Mode, system, res) -> dict:
             acc[0] += x
             acc[1] += 1
     if mode.constraint is not None:  # the constraint's updates, in the fault log
-        # (local i holds P / beta_i and the constraint's R / beta_i: its statistic is
-        # beta_i times the centralized one)
+        # (logged scaled to the whole measurement: FederatedFilter.update's share)
         dof = 2
         acc = out.setdefault("airdata.constraint", [0.0, 0, dof])
         for entry in res.fdi:
             if entry[3] == dof and np.isfinite(entry[2]):
-                acc[0] += float(entry[2]) / beta.get(entry[1], 1.0)
+                acc[0] += float(entry[2])
                 acc[1] += 1
     return out
 

@@ -81,12 +81,14 @@ class _SageHusa:
     def current(self, key, R_nominal) -> np.ndarray:
         return self.R.get(key, np.asarray(R_nominal, dtype=float))
 
-    def _factor(self, key, R_nominal) -> np.ndarray:
-        """``L`` with ``L L' = R_nominal`` (cached per key)."""
+    def _factor(self, key, R_nominal) -> np.ndarray | None:
+        """``L`` with ``L L' = R_nominal`` (cached per key; None when the nominal R is not
+        positive definite)."""
         tag = R_nominal.tobytes()
         hit = self._chol.get(key)
         if hit is None or hit[0] != tag:
-            hit = (tag, np.linalg.cholesky(R_nominal))
+            L, ok = cholesky_lower(np.ascontiguousarray(R_nominal))
+            hit = (tag, L if ok else None)
             self._chol[key] = hit
         return hit[1]
 
@@ -100,10 +102,14 @@ class _SageHusa:
         # factor: project (in the nominal R's metric) only when the floor is active.
         if not cholesky_lower(R - self.floor * R_nominal)[1]:
             L = self._factor(key, R_nominal)
-            A = np.linalg.solve(L, np.linalg.solve(L, R).T)  # L^-1 R L^-T
-            w, V = np.linalg.eigh(0.5 * (A + A.T))
-            LV = L @ V
-            R = (LV * np.maximum(w, self.floor)) @ LV.T
+            if L is None:  # a singular nominal R: floor the eigenvalues at zero
+                w, V = np.linalg.eigh(R)
+                R = (V * np.maximum(w, 0.0)) @ V.T
+            else:
+                A = np.linalg.solve(L, np.linalg.solve(L, R).T)  # L^-1 R L^-T
+                w, V = np.linalg.eigh(0.5 * (A + A.T))
+                LV = L @ V
+                R = (LV * np.maximum(w, self.floor)) @ LV.T
             R = 0.5 * (R + R.T)
         self.R[key], self.k[key] = R, k + 1
         return R

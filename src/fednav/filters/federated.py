@@ -439,11 +439,18 @@ class FederatedFilter:
         return self.lockout.episodes
 
     def update(self, local: str, y, model, nav=None, R=None, t: float = float("nan"),
-               readmit: bool = True):
+               readmit: bool = True, share: float = 1.0):
         """Measurement update of local filter ``local`` (at time ``t`` [s], for the log),
         with chi-square fault detection when ``fdi_alpha`` is set; ``readmit``: whether
         the measurement is one of its sensor's (a constraint applied to every local filter
-        is not), seen by the lockout guard (:func:`_lockout`)."""
+        is not), seen by the lockout guard (:func:`_lockout`).
+
+        ``share`` (0 < share <= 1): the part of the measurement's information this local
+        filter takes, when one measurement goes to several of them (the wind constraint):
+        it is updated with ``R / share`` (``R`` must be given), and its test statistic —
+        about ``share`` times the statistic of the whole measurement, since the local
+        filter holds ``P / beta`` — is divided by ``share`` for the gate, the log and the
+        Q adaptation."""
         try:
             f = self.locals[local]
         except KeyError:
@@ -451,21 +458,27 @@ class FederatedFilter:
                 from None
         dof = len(np.atleast_1d(y))
         thr = self.threshold(dof, local)
+        if share != 1.0:
+            if not 0.0 < share <= 1.0 or R is None or readmit:
+                raise ValueError(f"update of '{local}': a share of {share} needs 0 < share "
+                                 f"<= 1, an explicit R and readmit=False")
+            R = np.asarray(R, dtype=float) / share
         if self.fdi_alphas[local] is None:
             inn = f.update(y, model, nav, R)
         elif self._passes[local] + 1 < self.fdi_recovery:
             # Recently isolated: test only, and come back after fdi_recovery passes in a row.
             inn = f.update(y, model, nav, R, gate=-1.0)
-            passed = inn.nis <= thr
+            passed = inn.nis / share <= thr
             self._passes[local] = self._passes[local] + 1 if passed else 0
         else:
-            inn = f.update(y, model, nav, R, gate=thr)
+            inn = f.update(y, model, nav, R, gate=thr * share)
             self._passes[local] = self.fdi_recovery if inn.accepted else 0
         if readmit and self.lockout.on:
             inn = self._readmit(local, f, y, model, nav, R, t, thr, inn)
-        self.log.append((t, local, inn.nis, dof, thr, not inn.accepted))
+        nis = inn.nis / share
+        self.log.append((t, local, nis, dof, thr, not inn.accepted))
         if self.q_step and inn.accepted:
-            self.qlog[local] = min(max(self.qlog[local] + self.q_step * (inn.nis / dof - 1.0),
+            self.qlog[local] = min(max(self.qlog[local] + self.q_step * (nis / dof - 1.0),
                                        0.0), self.q_logmax)
         return inn
 

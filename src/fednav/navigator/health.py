@@ -155,12 +155,45 @@ ROW_GROUPS = {"position": (0, 1, 2), "velocity": (3, 4, 5), "attitude": (6, 7, 8
 BAND_MIN = 30
 
 
+def centralized_S(rec) -> np.ndarray:
+    """The innovation covariance of the equivalent centralized filter, ``beta (S - R) +
+    R``: a local filter of a federation holds ``P / beta``, so its own ``S`` is too large
+    by the prediction's part, and its NIS too small (a precise sensor among eight local
+    filters: 0.5 in a consistent filter, ``fednav certify``)."""
+    S, R = np.asarray(rec.S, dtype=float), np.asarray(rec.R, dtype=float)
+    return rec.beta * (S - R) + R if rec.beta != 1.0 else S
+
+
+def local_nis(innovations: list) -> dict[str, tuple[float, int]]:
+    """Per local filter: the mean NIS per degree of freedom of its accepted measurements
+    against :func:`centralized_S` (1 for a consistent filter) and how many."""
+    acc: dict[str, list] = {}
+    for rec in innovations:
+        if not rec.accepted:
+            continue
+        r = np.asarray(rec.r, dtype=float)
+        ok = np.isfinite(r)
+        if not ok.any():
+            continue
+        S = centralized_S(rec)[np.ix_(ok, ok)]
+        try:
+            x = float(r[ok] @ np.linalg.solve(S, r[ok]))
+        except np.linalg.LinAlgError:
+            continue
+        a = acc.setdefault(rec.local, [0.0, 0, 0])
+        a[0] += x
+        a[1] += int(ok.sum())
+        a[2] += 1
+    return {k: (t / d, n) for k, (t, d, n) in acc.items() if d}
+
+
 def row_nis(innovations: list, kinds: dict) -> dict[str, dict[str, tuple[float, int]]]:
     """Per local filter and row group (:data:`ROW_GROUPS`): the mean over its accepted
     measurements of ``r_i^2 / S_ii`` (each row's squared innovation over its predicted
-    variance: 1 for a consistent filter) and how many.  ``innovations``: the run's
-    :class:`~fednav.navigator.record.InnovationRecord` s; ``kinds``: local filter ->
-    its model's row kinds (``RowModel.kinds``; a local without rows is left out)."""
+    variance, :func:`centralized_S`'s: 1 for a consistent filter) and how many.
+    ``innovations``: the run's :class:`~fednav.navigator.record.InnovationRecord` s;
+    ``kinds``: local filter -> its model's row kinds (``RowModel.kinds``; a local
+    without rows is left out)."""
     by: dict[str, list] = {}
     for rec in innovations:
         if rec.accepted and rec.local in kinds:
@@ -169,7 +202,7 @@ def row_nis(innovations: list, kinds: dict) -> dict[str, dict[str, tuple[float, 
     for local, recs in by.items():
         k = np.asarray(kinds[local])
         d = len(k)
-        rows = [(np.asarray(r.r, dtype=float)[:d], np.diagonal(np.asarray(r.S))[:d])
+        rows = [(np.asarray(r.r, dtype=float)[:d], np.diagonal(centralized_S(r))[:d])
                 for r in recs if len(r.r) >= d]
         if not rows:
             continue
@@ -189,7 +222,8 @@ def row_nis(innovations: list, kinds: dict) -> dict[str, dict[str, tuple[float, 
 
 
 def band_warnings(fdi: list | dict, band=(0.5, 2.0), rows: dict | None = None,
-                  constraints=(), imu_preset: bool = True) -> list[str]:
+                  constraints=(), imu_preset: bool = True,
+                  means: dict | None = None) -> list[str]:
     """Warnings for local filters whose run-mean NIS/dof lies outside ``band`` ([low,
     high]), each with the likely causes ranked and the key that fixes each, and for a row
     group of a local filter (``rows``: :func:`row_nis`) outside it while the filter's
@@ -197,15 +231,22 @@ def band_warnings(fdi: list | dict, band=(0.5, 2.0), rows: dict | None = None,
     whose sigma is a softness, not a noise (ZUPT, NHC, ZARU: their NIS sits well below 1
     by design) — judged on the high side only.  Every sensor below the band ranks the
     IMU figures first when they are a preset (``imu_preset``: a grade's, not the IMU's
-    own).  (With a band, :func:`run_health` gives
+    own).  ``means``: per local filter the run's NIS/dof and its count from the
+    innovations (:func:`local_nis`: against the centralized filter's innovation
+    covariance), which replace the fault-detection log's local statistics where given.
+    (With a band, :func:`run_health` gives
     these warnings instead of :func:`nis_check`'s.)"""
     lo, hi = band
     log = _split(fdi)
+    given = means or {}
     means = {}
     for local, (_, nis, dof, iso) in log.items():
         keep = ~iso
         if keep.sum() >= BAND_MIN:
             means[local] = float((nis[keep] / dof[keep]).mean())
+    for local, (v, n) in given.items():
+        if n >= BAND_MIN and local in means:
+            means[local] = v
     sensors = [n for n in means if n not in constraints]
     high_all = len(sensors) > 1 and all(means[n] > hi for n in sensors)
     low_all = len(sensors) > 1 and all(means[n] < lo for n in sensors)
@@ -258,11 +299,12 @@ def band_warnings(fdi: list | dict, band=(0.5, 2.0), rows: dict | None = None,
 def run_health(fdi: list, imu=None, gnss=None, solution=None, figures: dict | None = None,
                force: bool = True, seen: list | None = None, band=None,
                rows: dict | None = None, constraints=(),
-               blame: str | None = None, imu_preset: bool = True) -> list[str]:
+               blame: str | None = None, imu_preset: bool = True,
+               means: dict | None = None) -> list[str]:
     """Every check of the health monitor, as warnings: the run's and the sliding
     windows' NIS/dof per local filter, long isolations (from the FDI log ``fdi``), the
-    NIS/dof band per local filter and row group (``band``, ``rows``, ``constraints``:
-    :func:`band_warnings`, ``imu_preset``: the IMU figures a grade's; ``blame``: the
+    NIS/dof band per local filter and row group (``band``, ``rows``, ``constraints``,
+    ``means``: :func:`band_warnings`, ``imu_preset``: the IMU figures a grade's; ``blame``: the
     leave-one-out culprit, named in a refusal),
     and,
     with the data, the plausibility checks of :mod:`fednav.navigator.plausibility` —
@@ -278,7 +320,7 @@ def run_health(fdi: list, imu=None, gnss=None, solution=None, figures: dict | No
     log = by_local(fdi)
     run = nis_check(log, force, seen, blame)  # (the refusal; its warnings without a band)
     out = isolation_warnings(log) + (run if band is None else band_warnings(
-        log, band, rows, constraints, imu_preset)) + window_nis(log)
+        log, band, rows, constraints, imu_preset, means)) + window_nis(log)
     if imu is None or gnss is None:
         return out
     t = imu.t

@@ -442,24 +442,30 @@ class PythonLoop:
 
     def _wind_constraint(self, k: int) -> None:
         """The air-data wind constraint in every local filter: the latest air-data sample
-        that arrived since the previous epoch, used once (a sample is one measurement
-        however many epochs it stays the latest), and in local filter ``i`` with
-        ``R / w_i``, ``w_i = beta_i / sum_j beta_j`` over the local filters, so the fused
-        information holds it once (as the process noise is shared), not once per local
-        filter (``fednav certify``: velocity NEES 9.6 with a 1 s sample re-applied at
-        0.1 s epochs; 1.63 against 1.33 with two local filters instead of one)."""
+        of those the navigator assigned to epoch ``k`` (one sample per epoch: the
+        constraint's error is mostly the wind estimate's, the same from one sample to the
+        next), used once — a sample is one measurement however many epochs it stays the
+        latest.  In reset mode local filter ``i`` (which holds ``P / beta_i``) takes it
+        with ``R / w_i``, ``w_i = beta_i / sum_j beta_j`` over the local filters, so the
+        fused information holds it once, not once per local filter (``fednav certify``:
+        velocity NEES 9.6 with a 1 s sample re-applied at 0.1 s epochs; 1.63 against 1.33
+        with two local filters instead of one); its test statistic is scaled back for the
+        gate, the log and the Q adaptation (:meth:`FederatedFilter.update`'s ``share``).
+        Without reset each local filter is a filter of its own and takes the full R."""
         m = self.constraint
-        _, ta, z = m.arrays()
-        tk = self.t_epoch(k)
-        i = int(np.searchsorted(ta, tk + 1e-9)) - 1
-        if i < 0 or ta[i] <= self.t_epoch(k - 1) + 1e-9:
+        mine = np.flatnonzero(m._times.view[:, 2] == k)
+        if not len(mine):
             return
+        i = int(mine[np.argmax(m.ta[mine])])
+        z = m.z
         nav = self.core.nav()
         model = WindConstraint.of(z[i])
         d, R = model.residual(nav, z[i]), model.R(m.sigma[i], nav)
         if hasattr(self.core, "model_of"):
             model = self.core.model_of(model)
-        share = sum(self.fed.beta[name] for name in self.fed.locals)
-        for name in self.fed.locals:
-            w = self.fed.beta[name] / share
-            self.fed.update(name, d, model, nav, R / w, t=tk, readmit=False)
+        fed = self.fed
+        total = sum(fed.beta[name] for name in fed.locals)
+        tk = self.t_epoch(k)
+        for name in fed.locals:
+            w = fed.beta[name] / total if fed.reset else 1.0
+            fed.update(name, d, model, nav, R, t=tk, readmit=False, share=w)

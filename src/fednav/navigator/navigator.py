@@ -533,13 +533,14 @@ class NavResult:
         list of str
             One line per warning; empty when all is well.
         """
-        from .health import readmission_warnings, row_nis, run_health
+        from .health import local_nis, readmission_warnings, row_nis, run_health
 
         sol = (self.forward if self.rows is not None and self.Phi is not None
                and len(self.states) > 1 else None)
         rows = row_nis(self.innovations, self.row_kinds) if self.innovations else None
+        means = local_nis(self.innovations) if self.innovations else None
         return (run_health(self.fdi, imu, gnss, sol, figures, band=band, rows=rows,
-                           constraints=self.constraints)
+                           constraints=self.constraints, means=means)
                 + readmission_warnings(self.readmissions))
 
     @property

@@ -25,7 +25,7 @@ from ..core import earth, units
 from ..ins.alignment import UNKNOWN_HEADING_SIGMA, Alignment
 from ..io.data import DataError, GnssData, ImuData, VelocityData
 from ..io.sensorfile import SensorData
-from ..navigator.health import readmission_warnings, row_nis, run_health
+from ..navigator.health import local_nis, readmission_warnings, row_nis, run_health
 from ..navigator.loop import InnovationRecord  # noqa: F401  (fednav.process's name)
 from ..navigator.navigator import InitialState, Navigator, declared_latency, stamp_tolerance
 from ..navigator.solution import Solution, consistency, epoch_rate, imu_rate
@@ -757,7 +757,7 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
                                res.forward, imu_figures(imu, prep.system), force,
                                list(res.warnings), band,
                                row_nis(out.innovations, nav.row_kinds), constraints, blame,
-                               prep.system.imu.grade is not None)
+                               prep.system.imu.grade is not None, local_nis(out.innovations))
     if blame:
         res.warnings.append(blame)
     res.warnings += readmission_warnings(out.readmissions)
