@@ -21,8 +21,9 @@ def _campaign(out: Path) -> tuple[subprocess.Popen, list]:
     """A `fednav reproduce` on two local Dask workers, caught mid-run (its first run
     stored): the process and its descendants (the workers)."""
     # (enough work that the campaign cannot end before the signal: a 60 s run of paper 002
-    # takes about 0.1 s on the compiled engine, and 16 of them ended within a second)
-    cmd = [FEDNAV, "reproduce", "002", "--runs", "64", "--max-time", "300", "--jobs", "2",
+    # takes about 0.1 s on the compiled engine, and 16 of them ended within a second; 64
+    # ended before a SIGTERM on a loaded machine)
+    cmd = [FEDNAV, "reproduce", "002", "--runs", "256", "--max-time", "300", "--jobs", "2",
            "--out", str(out)]
     p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                          start_new_session=True)
