@@ -521,6 +521,8 @@ def fly(mode: Mode, filter_type: str, form: str, data: RunData) -> dict:
 
 def _nis(mode: Mode, system, res) -> dict:
     """NIS sums per sensor and row group: ``{figure: [sum, count, dof]}``."""
+    from ..navigator.health import centralized_S
+
     groups = {}
     for name in mode.aiding:
         kinds = getattr(system.sensors[name].measurement_model(), "kinds", None)
@@ -533,7 +535,7 @@ def _nis(mode: Mode, system, res) -> dict:
         groups[name] = g
     out: dict = {}
     for rec in res.innovations:
-        S = rec.beta * (np.asarray(rec.S) - np.asarray(rec.R)) + np.asarray(rec.R)
+        S = centralized_S(rec.S, rec.R, rec.beta)
         r = np.asarray(rec.r, dtype=float)
         for grp, rows in groups[rec.local].items():
             sel = np.arange(len(r)) if rows is None else np.asarray(rows)

@@ -155,35 +155,56 @@ ROW_GROUPS = {"position": (0, 1, 2), "velocity": (3, 4, 5), "attitude": (6, 7, 8
 BAND_MIN = 30
 
 
-def centralized_S(rec) -> np.ndarray:
+def centralized_S(S, R, beta):
     """The innovation covariance of the equivalent centralized filter, ``beta (S - R) +
     R``: a local filter of a federation holds ``P / beta``, so its own ``S`` is too large
     by the prediction's part, and its NIS too small (a precise sensor among eight local
-    filters: 0.5 in a consistent filter, ``fednav certify``)."""
-    S, R = np.asarray(rec.S, dtype=float), np.asarray(rec.R, dtype=float)
-    return rec.beta * (S - R) + R if rec.beta != 1.0 else S
+    filters: 0.5 in a consistent filter, ``fednav certify``).  ``S``, ``R`` one
+    measurement's (d, d) or a stack (N, d, d), with ``beta`` a number or (N, 1, 1)."""
+    S, R = np.asarray(S, dtype=float), np.asarray(R, dtype=float)
+    return beta * (S - R) + R
+
+
+def _stacks(innovations: list):
+    """The accepted records by local filter and dimension, stacked: ``(local, r (N, d),
+    S (N, d, d) of the centralized filter)``."""
+    groups: dict[tuple[str, int], list] = {}
+    for rec in innovations:
+        if rec.accepted:
+            groups.setdefault((rec.local, len(rec.r)), []).append(rec)
+    for (local, _), recs in groups.items():
+        r = np.array([rec.r for rec in recs], dtype=float)
+        beta = np.array([rec.beta for rec in recs], dtype=float)[:, None, None]
+        yield local, r, centralized_S([rec.S for rec in recs], [rec.R for rec in recs], beta)
 
 
 def local_nis(innovations: list) -> dict[str, tuple[float, int]]:
     """Per local filter: the mean NIS per degree of freedom of its accepted measurements
     against :func:`centralized_S` (1 for a consistent filter) and how many."""
     acc: dict[str, list] = {}
-    for rec in innovations:
-        if not rec.accepted:
-            continue
-        r = np.asarray(rec.r, dtype=float)
-        ok = np.isfinite(r)
-        if not ok.any():
-            continue
-        S = centralized_S(rec)[np.ix_(ok, ok)]
-        try:
-            x = float(r[ok] @ np.linalg.solve(S, r[ok]))
+    for local, r, S in _stacks(innovations):
+        a = acc.setdefault(local, [0.0, 0, 0])
+        whole = np.isfinite(r).all(axis=1)
+        try:  # (every measurement at once; one by one below if a covariance is singular)
+            L = np.linalg.cholesky(S[whole])
         except np.linalg.LinAlgError:
-            continue
-        a = acc.setdefault(rec.local, [0.0, 0, 0])
-        a[0] += x
-        a[1] += int(ok.sum())
-        a[2] += 1
+            whole[:] = False
+        if whole.any():
+            w = np.linalg.solve(L, r[whole][..., None])[..., 0]
+            a[0] += float(np.einsum("ij,ij->", w, w))
+            a[1] += int(whole.sum()) * r.shape[1]
+            a[2] += int(whole.sum())
+        for i in np.flatnonzero(~whole):  # (a row without a value: the others alone)
+            ok = np.isfinite(r[i])
+            if not ok.any():
+                continue
+            try:
+                x = float(r[i, ok] @ np.linalg.solve(S[i][np.ix_(ok, ok)], r[i, ok]))
+            except np.linalg.LinAlgError:
+                continue
+            a[0] += x
+            a[1] += int(ok.sum())
+            a[2] += 1
     return {k: (t / d, n) for k, (t, d, n) in acc.items() if d}
 
 
@@ -202,12 +223,13 @@ def row_nis(innovations: list, kinds: dict) -> dict[str, dict[str, tuple[float, 
     for local, recs in by.items():
         k = np.asarray(kinds[local])
         d = len(k)
-        rows = [(np.asarray(r.r, dtype=float)[:d], np.diagonal(centralized_S(r))[:d])
-                for r in recs if len(r.r) >= d]
-        if not rows:
+        recs = [rec for rec in recs if len(rec.r) >= d]
+        if not recs:
             continue
-        r = np.array([a for a, _ in rows])
-        sd = np.array([b for _, b in rows])
+        r = np.array([rec.r[:d] for rec in recs], dtype=float)
+        beta = np.array([rec.beta for rec in recs], dtype=float)[:, None]
+        sd = centralized_S(np.array([np.diagonal(rec.S)[:d] for rec in recs]),
+                           np.array([np.diagonal(rec.R)[:d] for rec in recs]), beta)
         q = r**2 / np.where(sd > 0, sd, np.nan)
         groups = {}
         for name, members in ROW_GROUPS.items():
@@ -238,15 +260,13 @@ def band_warnings(fdi: list | dict, band=(0.5, 2.0), rows: dict | None = None,
     these warnings instead of :func:`nis_check`'s.)"""
     lo, hi = band
     log = _split(fdi)
-    given = means or {}
-    means = {}
+    run = {}
     for local, (_, nis, dof, iso) in log.items():
         keep = ~iso
         if keep.sum() >= BAND_MIN:
-            means[local] = float((nis[keep] / dof[keep]).mean())
-    for local, (v, n) in given.items():
-        if n >= BAND_MIN and local in means:
-            means[local] = v
+            run[local] = float((nis[keep] / dof[keep]).mean())
+    run.update({k: v for k, (v, n) in (means or {}).items() if n >= BAND_MIN and k in run})
+    means = run
     sensors = [n for n in means if n not in constraints]
     high_all = len(sensors) > 1 and all(means[n] > hi for n in sensors)
     low_all = len(sensors) > 1 and all(means[n] < lo for n in sensors)

@@ -66,6 +66,7 @@ import numpy as np
 from ..core import attitude, earth
 from ..core.config import ConfigError
 from ..io.data import DataError, GnssData, ImuData, VelocityData
+from ..navigator.health import centralized_S
 from ..navigator.system import System, _translate_legacy
 from ..sensors import GnssConfig, VelocityConfig
 from ..sensors.gnss import renamed_neu_keys
@@ -244,7 +245,7 @@ def innovation_statistics(inns: list[InnovationRecord],
         r = np.array([i.r for i in mine])
         R = np.array([i.R for i in mine])
         beta = np.array([i.beta for i in mine])[:, None, None]
-        Sc = beta * (np.array([i.S for i in mine]) - R) + R  # centralized S
+        Sc = centralized_S([i.S for i in mine], R, beta)
         L = np.linalg.cholesky(Sc)
         w = np.linalg.solve(L, r[..., None])[..., 0]
         q = np.einsum("ij,ij->i", w, w)
