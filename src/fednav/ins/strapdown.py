@@ -81,9 +81,9 @@ class BaroLoop:
 
 
 @numba.njit(cache=True)
-def _run(state, dtheta, dv, dt, h_ref, gains, out_q, out_v, out_p):
-    """``gains``: the baro loop's [k1, k2, k3] and, when given, the barometer's lever arm
-    [lx, ly, lz] (body, m): :attr:`Strapdown.baro_loop`."""
+def _run(state, dtheta, dv, dt, h_ref, loop, out_q, out_v, out_p):
+    """``loop``: the baro loop's gains [k1, k2, k3] and the barometer's lever arm [lx,
+    ly, lz] (body, m): :attr:`Strapdown.baro_loop`."""
     # Scalar arithmetic throughout: no array is allocated per sample.
     n = dtheta.shape[0]
     record = out_q.shape[0] == n
@@ -96,9 +96,7 @@ def _run(state, dtheta, dv, dt, h_ref, gains, out_q, out_v, out_p):
     has_prev = state[19] > 0.5
     b_int = state[20]
     dh = state[21]
-    lx = gains[3] if gains.shape[0] > 3 else 0.0
-    ly = gains[4] if gains.shape[0] > 3 else 0.0
-    lz = gains[5] if gains.shape[0] > 3 else 0.0
+    lx, ly, lz = loop[3], loop[4], loop[5]
     om = earth.OMEGA_IE
     for k in range(n):
         ax, ay, az = dtheta[k, 0], dtheta[k, 1], dtheta[k, 2]
@@ -142,13 +140,13 @@ def _run(state, dtheta, dv, dt, h_ref, gains, out_q, out_v, out_p):
         acc_u -= gmag
         if not math.isnan(h_ref[k]):
             dh = h + c20 * lx + c21 * ly + c22 * lz - h_ref[k]  # at the baro's point
-        acc_u -= gains[1] * dh + b_int
-        b_int += gains[2] * dh * dt
+        acc_u -= loop[1] * dh + b_int
+        b_int += loop[2] * dh * dt
         ve_n = ve + de + acc_e * dt
         vn_n = vn + dn + acc_n * dt
         vu_n = vu + du + acc_u * dt
         # Position: trapezoid on velocity.
-        h_new = h + 0.5 * dt * (vu + vu_n) - gains[0] * dh * dt
+        h_new = h + 0.5 * dt * (vu + vu_n) - loop[0] * dh * dt
         h_a = 0.5 * (h + h_new)
         lat_new = lat + 0.5 * dt * (vn + vn_n) / (rm + h_a)
         lat_a = 0.5 * (lat + lat_new)
@@ -183,12 +181,12 @@ def _run(state, dtheta, dv, dt, h_ref, gains, out_q, out_v, out_p):
 
 
 @numba.njit(cache=True)
-def _run_intervals(state, dtheta, dv, dt, h_ref, gains, n_per, out, no_q, no_3):
+def _run_intervals(state, dtheta, dv, dt, h_ref, loop, n_per, out, no_q, no_3):
     """:func:`_run` over consecutive intervals of ``n_per`` samples (recording nothing:
     ``no_q``, ``no_3`` are empty), the state after each into the rows of ``out``."""
     for k in range(out.shape[0]):
         a = k * n_per
-        _run(state, dtheta[a:a + n_per], dv[a:a + n_per], dt, h_ref[a:a + n_per], gains,
+        _run(state, dtheta[a:a + n_per], dv[a:a + n_per], dt, h_ref[a:a + n_per], loop,
              no_q, no_3, no_3)
         out[k] = state
 
@@ -265,20 +263,20 @@ class Strapdown:
         self.state[8] = earth.wrap_lon(float(self.state[8]))  # (-pi, pi], as it is kept
         self.state[_VPREV] = vel
         self.baro = baro
-        self._gains = (np.r_[baro.gains(float(lla[0])), np.asarray(baro.lever_m, float)]
+        self._loop = (np.r_[baro.gains(float(lla[0])), np.asarray(baro.lever_m, float)]
                        if baro is not None else np.zeros(6))
 
     # --- read access -------------------------------------------------------------
     @property
     def baro_gains(self) -> np.ndarray:
         """Vertical-loop gains [k1, k2, k3] (zeros without a baro loop)."""
-        return self._gains[:3].copy()
+        return self._loop[:3].copy()
 
     @property
     def baro_loop(self) -> np.ndarray:
         """The compiled kernel's loop constants: gains [k1, k2, k3] and the barometer's
         lever arm [lx, ly, lz] (body RFU, m)."""
-        return self._gains.copy()
+        return self._loop.copy()
 
     @property
     def q(self) -> np.ndarray:
@@ -327,7 +325,7 @@ class Strapdown:
             out_q, out_v, out_p = np.empty((n, 4)), np.empty((n, 3)), np.empty((n, 3))
         else:
             out_q, out_v, out_p = _NO_Q, _NO_3, _NO_3
-        _run(self.state, dtheta, dv, self.dt, h_ref, self._gains, out_q, out_v, out_p)
+        _run(self.state, dtheta, dv, self.dt, h_ref, self._loop, out_q, out_v, out_p)
         if not math.isfinite(self.state.sum()):
             raise FloatingPointError("Strapdown.run: navigation state became non-finite")
         if record:
@@ -345,7 +343,7 @@ class Strapdown:
         else:
             h_ref = np.ascontiguousarray(h_ref, dtype=float)
         out = np.empty((n // n_per, STATE_SIZE))
-        _run_intervals(self.state, dtheta, dv, self.dt, h_ref, self._gains, int(n_per), out,
+        _run_intervals(self.state, dtheta, dv, self.dt, h_ref, self._loop, int(n_per), out,
                        _NO_Q, _NO_3)
         if not math.isfinite(out[-1].sum() if len(out) else 0.0):
             raise FloatingPointError("Strapdown.run: navigation state became non-finite")
