@@ -41,7 +41,7 @@ def main() -> None:
         grade = "16405" if rng.random() < 0.5 else "16488"
         d = car_drive(h, v, seed=seed, imu=ADIS16405 if grade == "16405" else ADIS16488,
                       static_s=static, accel_mps2=acc)
-        res = process(d.imu, d.gnss, None, d.system)
+        res = process(d.imu, {"gnss": d.gnss}, d.system)
         e0 = res.forward.euler[0] - d.reference.euler[0]
         e0[2] = np.angle(np.exp(1j * e0[2]))
         ratio0 = np.abs(e0) / res.forward.sigma_euler[0]

@@ -57,7 +57,7 @@ def one(imu_class: str, seed: int, folder: Path) -> dict[str, dict[str, float]]:
         c = pc.model_copy(update={"alignment": pc.alignment.model_copy(
             update={"initial_attitude": "file" if how != "align" else "align"})})
         t0 = time.perf_counter()
-        r = rmse(errors_against(process(data, g, None, c).forward, ref))
+        r = rmse(errors_against(process(data, {"gnss": g}, c).forward, ref))
         out[how] = {**{k: r[k] for k in KEYS}, "s": time.perf_counter() - t0}
     return out
 

@@ -61,7 +61,8 @@ def schedule(prep, block: int) -> list:
     """The stream of the prepared data ``block`` IMU samples at a time: per block the
     measurements due before its last sample (sensor, t, z, R) and the block's samples;
     built beforehand, so the timing is the navigator's alone."""
-    meas = sorted((t, name, i) for name, (ts, _, _) in prep.measurements.items()
+    rows = {name: prep.rows(name) for name in prep.series}
+    meas = sorted((t, name, i) for name, (ts, _, _) in rows.items()
                   for i, t in enumerate(ts))
     out, j, n = [], 0, len(prep.t)
     for a in range(0, n, block):
@@ -69,15 +70,15 @@ def schedule(prep, block: int) -> list:
         due = []
         while j < len(meas) and meas[j][0] <= prep.t[b - 1] + 1e-9:
             _, name, i = meas[j]
-            t, z, R = prep.measurements[name]
+            t, z, R = rows[name]
             due.append((name, t[i], z[i], R[i]))
             j += 1
         if block == 1:
             out.append((due, prep.t[a], prep.gyro[a], prep.accel[a]))
         else:
             out.append((due, prep.t[a:b], prep.gyro[a:b], prep.accel[a:b]))
-    rest = [(name, prep.measurements[name][0][i], prep.measurements[name][1][i],
-             prep.measurements[name][2][i]) for _, name, i in meas[j:]]
+    rest = [(name, rows[name][0][i], rows[name][1][i], rows[name][2][i])
+            for _, name, i in meas[j:]]
     return out, rest
 
 
@@ -140,9 +141,9 @@ def main() -> None:
           f"{t_fp:.3f} s")
 
     # fednav process: forward, smoother.
-    process(imu, gnss, vel, cfg)  # compile
-    fwd, t_fwd = best_of(n, lambda: process(imu, gnss, vel, cfg))
-    _, t_smo = best_of(n, lambda: process(imu, gnss, vel, cfg, smooth=True))
+    process(imu, {"gnss": gnss, "velocity": vel}, cfg)  # compile
+    fwd, t_fwd = best_of(n, lambda: process(imu, {"gnss": gnss, "velocity": vel}, cfg))
+    _, t_smo = best_of(n, lambda: process(imu, {"gnss": gnss, "velocity": vel}, cfg, smooth=True))
     print(f"process forward, IMU-rate solution ({len(fwd.forward.t)} rows, {fwd.epochs} "
           f"epochs): {t_fwd:.3f} s = {t_fwd / t_sd:.1f} x strapdown (target <= 3), "
           f"{t_fwd / t_fp:.2f} x FilterPy 2400 steps (target <= 0.33), "
@@ -151,7 +152,7 @@ def main() -> None:
           f"(target <= 2)")
 
     # The same data through the navigator: one block, blocks of 100, single samples.
-    prep = prepare(imu, gnss, vel, cfg)
+    prep = prepare(imu, {"gnss": gnss, "velocity": vel}, cfg)
     batch, t_batch = best_of(n, lambda: prep.feed(prep.navigator(
         record_rows=True, record_covariance=True)).result())
     plan100, plan1 = schedule(prep, 100), schedule(prep, 1)
@@ -170,7 +171,7 @@ def main() -> None:
 
     # fednav tune.
     base = load_system({"sensors": {"gnss": {"lever_m": list(map(float, gnss.lever))}}})
-    tuned, t_tune = best_of(1, lambda: tune(imu, gnss, vel, base))
+    tuned, t_tune = best_of(1, lambda: tune(imu, {"gnss": gnss, "velocity": vel}, base))
     print(f"tune: {t_tune:.2f} s, {tuned.runs} filter runs = "
           f"{t_tune / tuned.runs / t_fwd:.2f} x forward per run (target <= 5), "
           f"{t_tune / t_fp:.2f} x FilterPy 2400 steps (target <= 5)")

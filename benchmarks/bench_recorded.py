@@ -67,11 +67,10 @@ def main() -> None:
 
         cfg, imu, sensors, ref = read()
         reproduce_run()
-        process(imu, None, None, cfg, sensors=sensors)  # compile
+        process(imu, {**sensors}, cfg)  # compile
         _, t_rep = best_of(a.repeat, reproduce_run)
         _, t_read = best_of(a.repeat, read)
-        res, t_proc = best_of(a.repeat, lambda: process(imu, None, None, cfg,
-                                                        sensors=sensors))
+        res, t_proc = best_of(a.repeat, lambda: process(imu, {**sensors}, cfg))
         _, t_out = best_of(1, lambda: output.write(d / "out", res, ref, {}))
     n = len(imu.t)
     print(f"paper {a.paper}, mode {mode.name}, seed {a.seed}: {n} IMU samples, "

@@ -35,11 +35,11 @@ def main(argv=None):
     for seed in range(1, a.seeds + 1):
         d = car_drive(heading_deg=30.0 + 41.0 * seed, seed=seed, static_s=5.0)
         imu = replace(d.imu, t=d.imu.t + a.shift_ms * 1e-3)
-        prep = prepare(imu, d.gnss, None, d.system)
+        prep = prepare(imu, {"gnss": d.gnss}, d.system)
         t0, T = prep.initial.t, prep.system.filter.period_s
         k = np.ceil((d.gnss.t - t0) / T - 1e-9)
         late.append(float(np.max((t0 + T * k - d.gnss.t)[k > 0])))
-        res = process(imu, d.gnss, None, d.system, smooth=True)
+        res = process(imu, {"gnss": d.gnss}, d.system, smooth=True)
         fwd.append(rmse(errors_against(res.forward, d.reference)))
         smo.append(rmse(errors_against(res.smoothed, d.reference)))
     print(f"IMU stamps {a.shift_ms:+g} ms against the fixes, {a.seeds} drives; a fix is used "

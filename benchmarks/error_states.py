@@ -49,7 +49,7 @@ def with_states(system, states, imu=None):
 
 def run(drive, system):
     inn = []
-    res = process(drive.imu, drive.gnss, None, system, smooth=True, innovations=inn)
+    res = process(drive.imu, {"gnss": drive.gnss}, system, smooth=True, innovations=inn)
     r2 = np.array([i.r**2 / np.diag(i.S) for i in inn if i.local == "gnss"]).mean(axis=0)
     return (rmse(errors_against(res.forward, drive.reference)),
             rmse(errors_against(res.smoothed, drive.reference)), r2, res.optional_states)
@@ -141,7 +141,8 @@ def drifting_velocity(n_seeds):
             dump = system.model_dump(exclude_none=True)
             dump["filter"]["states"] = states
             inn = []
-            res = process(imu, gnss, vel, load_system(dump), smooth=True, innovations=inn)
+            res = process(imu, {"gnss": gnss, "velocity": vel}, load_system(dump), smooth=True,
+                          innovations=inn)
             nis = np.array([i.r**2 / np.diag(i.S) for i in inn if i.local == "velocity"])
             drift = []
             for sol in (res.forward, res.smoothed):

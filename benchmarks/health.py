@@ -67,7 +67,7 @@ def classify(d, corruption, clean_res, clean_beyond) -> tuple[str, str]:
         imu, gnss = corruption.apply(d.imu, d.gnss)  # the loader's own checks may refuse
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            res = process(imu, gnss, None, d.system)
+            res = process(imu, {"gnss": gnss}, d.system)
     except DataError as exc:
         return "refused", str(exc)
     except Exception as exc:  # noqa: BLE001 - a traceback is a finding
@@ -89,12 +89,12 @@ def monitor_cost(d, repeats: int = 7) -> tuple[float, float]:
     """Seconds per filter epoch of ``process`` without the monitor and of the monitor
     (:func:`run_health` as ``process`` calls it: GNSS as flown, the forward solution and
     the IMU figures), each the least of ``repeats`` runs (a busy machine only adds)."""
-    prep = prepare(d.imu, d.gnss, None, d.system)
+    prep = prepare(d.imu, {"gnss": d.gnss}, d.system)
     gnss, figures = flown_gnss(d.gnss, prep.system), imu_figures(d.imu, prep.system)
     runs, mons = [], []
     for _ in range(repeats):
         t0 = time.perf_counter()
-        res = process(d.imu, d.gnss, None, d.system)
+        res = process(d.imu, {"gnss": d.gnss}, d.system)
         runs.append(time.perf_counter() - t0)
         t0 = time.perf_counter()
         run_health(res.forward.fdi, d.imu, gnss, res.forward, figures, True, [])
@@ -110,7 +110,7 @@ def main(argv=None) -> int:
     counts: dict[str, int] = {}
     false_alarms, harmful, caught = 0, 0, 0
     for name, d in drives(args.quick):
-        clean = process(d.imu, d.gnss, None, d.system)
+        clean = process(d.imu, {"gnss": d.gnss}, d.system)
         if clean.warnings:
             false_alarms += len(clean.warnings)
             print(f"[{name}] FALSE ALARM on clean data: {clean.warnings}")

@@ -47,14 +47,14 @@ def load():
 def cases():
     imu, g, gs, vis, ref = load()
     example = load_system(EXAMPLE)
-    process(imu, g, None, System())  # warm the compiled kernels
+    process(imu, {"gnss": g}, System())  # warm the compiled kernels
     print("RMSE against gnss_planetary_r (N/E/U m, vN/vE/vU m/s); time = forward + smoother")
     print(f"{'case':58s} " + " ".join(f"{k:>8s}" for k in KEYS) + "   time s  NIS/dof")
     for cname, cfg in (("file figures", System()), ("examples/canada-planetary", example)):
         for gname, gd in (("GNSS", g), ("sparse GNSS", gs)):
             for vname, v in (("", None), ("+visual", vis)):
                 t0 = time.perf_counter()
-                res = process(imu, gd, v, cfg, smooth=True, force=True)
+                res = process(imu, {"gnss": gd, "velocity": v}, cfg, smooth=True, force=True)
                 dt = time.perf_counter() - t0
                 c = consistency(res.forward)
                 nis = "/".join(f"{x['nis_per_dof']:.2f}" for x in c.values())
@@ -83,7 +83,7 @@ def noise():
     print("mean GNSS NIS/dof against the accelerometer noise figure (gyro 6e-4):")
     for vrw in (2e-5, 6e-3, 0.03, 0.06, 0.1):
         cfg = System(imu={"gyro_arw_rad_sqrt_s": 6e-4, "accel_vrw_mps_sqrt_s": vrw})
-        c = consistency(process(imu, g, None, cfg, force=True).forward)["gnss"]
+        c = consistency(process(imu, {"gnss": g}, cfg, force=True).forward)["gnss"]
         print(f"  vrw {vrw:7.0e}: NIS/dof {c['nis_per_dof']:.2f}")
 
 
@@ -139,7 +139,7 @@ def corrections():
 def _scored(imu, gnss, vis, cfg, ref):
     """The run (smoothed too) and, forward and smoothed, its RMSE and the largest
     horizontal error through the sparse file's outage (100-200 s), as text."""
-    res = process(imu, gnss, vis, cfg, smooth=True, force=True)
+    res = process(imu, {"gnss": gnss, "velocity": vis}, cfg, smooth=True, force=True)
     out = []
     for sol in (res.forward, res.smoothed):
         e = errors_against(sol, ref)
@@ -182,14 +182,15 @@ def tune():
                 print(f"  {f.key}: {f.start} -> {f.value} ({f.how})")
         for cname, cfg in (("file figures", bare), ("hand-tuned example", ex),
                            *((k, r.config) for k, r in tuned.items())):
-            res = process(imu, g, v, cfg, smooth=True, force=True)
+            res = process(imu, {"gnss": g, "velocity": v}, cfg, smooth=True, force=True)
             out = []
             for sol in (res.forward, res.smoothed):
                 r = rmse(errors_against(sol, ref))
                 out.append(" ".join(f"{r[k]:.3f}" for k in KEYS))
             c = consistency(res.forward)
             stats = " ".join(f"{k} {x['nis_per_dof']:.2f}" for k, x in c.items())
-            e = errors_against(process(imu, gs, v, cfg, force=True).forward, ref)
+            e = errors_against(process(imu, {"gnss": gs, "velocity": v}, cfg, force=True).forward,
+                               ref)
             m = (e["t"] > 100) & (e["t"] < 200)
             print(f"{vname:13s} {cname:18s} {out[0]}  [{out[1]}]  NIS/dof {stats}  sparse "
                   f"{np.hypot(e['north_m'][m], e['east_m'][m]).max():.1f} m", flush=True)

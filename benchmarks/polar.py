@@ -69,7 +69,7 @@ def ins_gnss(tr, lon360: bool, seed: int = 3) -> str:
     imu, gnss = recorded(tr, np.random.default_rng(seed), lon_0_360=lon360)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        res = process(imu, gnss, None, System(), force=True)
+        res = process(imu, {"gnss": gnss}, System(), force=True)
     sol = res.forward
     k = np.rint(sol.t / tr.dt).astype(int)
     later = sol.t > 60.0

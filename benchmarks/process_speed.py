@@ -67,8 +67,8 @@ def main() -> None:
                     "gyro_bias_radps": 1e-3, "accel_bias_mps2": 2e-2,
                     "gyro_markov_radps": 1.2e-4, "accel_markov_mps2": 2e-3,
                     "gyro_tau_s": 100.0, "accel_tau_s": 100.0}})
-        process(imu, gnss, None, cfg, smooth=True)  # compile
-        res, t_proc = best_of(n, lambda: process(imu, gnss, None, cfg, smooth=True))
+        process(imu, {"gnss": gnss}, cfg, smooth=True)  # compile
+        res, t_proc = best_of(n, lambda: process(imu, {"gnss": gnss}, cfg, smooth=True))
 
         def write():
             for name, sol in (("solution.csv", res.forward),
@@ -82,7 +82,7 @@ def main() -> None:
               f"{t_proc:.2f} s; writing both CSVs {t_write:.2f} s; total {total:.2f} s "
               f"(target < 2 s), {span / total:.0f} x real time")
         base = System(sensors={"gnss": {"lever_m": lever}})
-        tuned, t_tune = best_of(1, lambda: tune(imu, gnss, None, base))
+        tuned, t_tune = best_of(1, lambda: tune(imu, {"gnss": gnss}, base))
         print(f"fednav tune: {t_tune:.1f} s, {tuned.runs} filter runs (target < 30 s), "
               f"{span / t_tune:.0f} x real time")
 

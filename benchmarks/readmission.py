@@ -41,7 +41,7 @@ def flown(imu, gnss, system, hold):
     """The navigator's result and forward solution with ``fdi_alpha: 0.001`` and
     ``fdi_readmit_s: hold``."""
     f = system.filter.model_copy(update={"fdi_alpha": 0.001, "fdi_readmit_s": hold})
-    prep = prepare(imu, gnss, None, system.model_copy(update={"filter": f}))
+    prep = prepare(imu, {"gnss": gnss}, system.model_copy(update={"filter": f}))
     out = prep.feed(prep.navigator(record_rows=True, record_covariance=True)).result()
     return out, solution(out, prep, False).forward
 

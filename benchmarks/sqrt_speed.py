@@ -68,7 +68,8 @@ def engine_main(args) -> None:
         preps = {}
         for label, (form, eng) in runs.items():
             filt = {"type": name, "form": form, "alpha": 0.5}
-            preps[label] = (prepare(imu, g, v, load_system({"filter": filt})), eng)
+            preps[label] = (prepare(imu, {"gnss": g, "velocity": v}, load_system({"filter": filt})),
+                            eng)
         best: dict[str, float] = {}
         n_ep = 0
         for rep in range(args.repeats + 1):  # the first run compiles

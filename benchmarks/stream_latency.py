@@ -65,7 +65,7 @@ def stream(prep, latency: float, jitter: np.ndarray | None = None, **options):
     after its time of validity, told by ``t_arrival``).  ``jitter``: added to the IMU
     stamps [s]."""
     nav = prep.navigator(**options)
-    tg, zg, Rg = prep.measurements["gnss"]
+    tg, zg, Rg = prep.rows("gnss")
     ta = tg + latency
     stamps = prep.t if jitter is None else prep.t + jitter
     j = 0
@@ -98,14 +98,14 @@ def main() -> None:
         r = fednav.rmse(fednav.errors_against(sol, truth))
         return np.array([r[k] for k in KEYS])
 
-    batch = rmse(fednav.process_data(imu, gnss, cfg=system).forward)
+    batch = rmse(fednav.process_data(imu, {"gnss": gnss}, cfg=system).forward)
     runs = {"batch (fixes on time)": batch}
-    prep = fednav.prepare(imu, gnss, cfg=system)
+    prep = fednav.prepare(imu, {"gnss": gnss}, cfg=system)
     runs["stream, undeclared"] = rmse(stream(prep, L).forward)
     runs["stream, undeclared, hold_s"] = rmse(stream(prep, L, hold_s=L + 0.2).forward)
-    runs["stream, recompute"] = rmse(stream(fednav.prepare(imu, gnss, cfg=with_timing(
+    runs["stream, recompute"] = rmse(stream(fednav.prepare(imu, {"gnss": gnss}, cfg=with_timing(
         system, delay_compensation="recompute")), L).forward)
-    declared = fednav.prepare(imu, gnss, cfg=with_timing(system, latency_s=L))
+    declared = fednav.prepare(imu, {"gnss": gnss}, cfg=with_timing(system, latency_s=L))
     runs["stream, declared latency_s"] = rmse(stream(declared, L).forward)
     dt = declared.dt
     jit = np.random.default_rng(0).uniform(-1e-3, 1e-3, len(declared.t)) * args.jitter_ms
@@ -117,7 +117,7 @@ def main() -> None:
     dt_j = float(np.median(np.diff(declared.t + jit)))
     nav = fednav.Navigator(declared.system, declared.initial, dt_j,
                            imu_errors=declared.imu_errors)
-    tg, zg, Rg = declared.measurements["gnss"]
+    tg, zg, Rg = declared.rows("gnss")
     nav.add_measurements("gnss", tg, zg, R=Rg)
     nav.add_imu(t_j, g_j, a_j)
     runs["batch, jittered IMU"] = rmse(nav.result().forward)

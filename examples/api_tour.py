@@ -88,7 +88,7 @@ print(f"IMU {len(imu.t)} samples at {1 / np.median(np.diff(imu.t)):.0f} Hz, "
 # Checks, alignment (levelling at the static start, heading from the GNSS course),
 # the federated filter at every GNSS epoch, the solution at every IMU sample with its
 # 1-sigma, and the smoothed solution.
-res = fednav.process_data(imu, gnss, cfg=system, smooth=True)
+res = fednav.process_data(imu, {"gnss": gnss}, system, smooth=True)   # sensors by name
 fwd = res.forward
 print(f"{res.epochs} filter epochs in {res.run_time_s:.2f} s; alignment: "
       f"{res.alignment.get('heading')}")
@@ -102,9 +102,9 @@ print(f"last fix {lat:.6f} deg, {lon:.6f} deg, {h:.1f} m; horizontal 1-sigma "
 # prepare() does the checks, the alignment and the initial state of process(); the
 # navigator then takes each measurement when it arrives and each IMU sample; its
 # solution() is the latest state at any time.  The result equals the batch run's.
-prep = fednav.prepare(imu, gnss, cfg=system)
+prep = fednav.prepare(imu, {"gnss": gnss}, system)
 nav = prep.navigator()
-tg, zg, Rg = prep.measurements["gnss"]      # lat, lon [rad], h [m], ENU velocity [m/s]
+tg, zg, Rg = prep.rows("gnss")      # lat, lon [rad], h [m], ENU velocity [m/s]; R per fix
 j = 0
 for i in range(len(prep.t)):
     while j < len(tg) and tg[j] <= prep.t[i]:

@@ -106,8 +106,8 @@ def test_the_toy_sensor_runs_from_its_file(radalt, tmp_path):
     data = read_sensor_csv("radalt", path)
     np.testing.assert_allclose(data.z, series.z, rtol=1e-15)
     cfg = load_system({"sensors": {"radalt": {"sigma_m": 0.05, "sigma_mps": 0.02}}})
-    base = process(imu, gnss, None, System())
-    res = process(imu, gnss, None, cfg, sensors={"radalt": data})
+    base = process(imu, {"gnss": gnss}, System())
+    res = process(imu, {"gnss": gnss, "radalt": data}, cfg)
     from fednav.navigator.solution import consistency
 
     c = consistency(res.forward.fdi)
@@ -206,15 +206,15 @@ def test_process_refuses_or_warns_about_what_it_cannot_use():
     imu, gnss, _ = make_flight_cached()
     with pytest.raises(DataError, match="filter.state: total — the total-state navigator's "
                                         "solution is at its filter epochs"):
-        prepare(imu, gnss, None, load_system({"filter": {"state": "total"}, "smoother": True}))
+        prepare(imu, {"gnss": gnss}, load_system({"filter": {"state": "total"}, "smoother": True}))
     air = SensorData("airdata", "air.csv", np.arange(1.0, 50.0), np.ones((49, 3)))
     cfg = load_system({"sensors": {"airdata": {"sigma_airspeed_mps": 0.1,
                                                "wind_sigma_mps": 0.1}}})
-    prep = prepare(imu, gnss, None, cfg, sensors={"airdata": air})
+    prep = prepare(imu, {"gnss": gnss, "airdata": air}, cfg)
     assert any("air.csv: not used (air data feed only the wind constraint" in w
                for w in prep.warnings)
     with pytest.raises(DataError, match="airdata data given as sensor 'baro'"):
-        prepare(imu, gnss, None, cfg, sensors={"baro": air})
+        prepare(imu, {"gnss": gnss, "baro": air}, cfg)
 
 
 def test_a_scenario_states_its_filter_period(tmp_path):

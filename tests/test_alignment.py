@@ -183,7 +183,7 @@ def test_alignment_sigma_contains_the_error_from_any_start(heading, speed, accel
     the figures over 40 drives)."""
     d = car_drive(heading, speed, seed=seed, static_s=static, accel_mps2=accel,
                   imu=ADIS16405 if grade == "16405" else ADIS16488)
-    res = process(d.imu, d.gnss, None, d.system)
+    res = process(d.imu, {"gnss": d.gnss}, d.system)
     assert np.all(_start_errors(d, res) <= 3.0), res.alignment
     inside, worst = heading_containment(res.forward, d.reference)
     assert inside >= 0.9 and worst < 5.0
@@ -194,7 +194,7 @@ def test_a_moving_start_levels_from_the_gnss_acceleration():
     period.  Before, the levelling ignored the acceleration: 5.8 deg of pitch error with
     a claimed sigma of 2 deg."""
     d = car_drive(30.0, 0.02, seed=3)
-    res = process(d.imu, d.gnss, None, d.system)
+    res = process(d.imu, {"gnss": d.gnss}, d.system)
     assert res.alignment["levelling"].startswith("in motion")
     pitch_err = units.to_deg(res.forward.euler[0, 0] - d.reference.euler[0, 0])
     assert abs(pitch_err) < 0.7 and np.all(_start_errors(d, res) <= 3.0)
@@ -211,7 +211,7 @@ def test_a_standing_vehicle_keeps_an_unknown_heading_in_its_solution():
     imu = ImuData("still", d.imu.t[m], d.imu.gyro[m], d.imu.accel[m], d.imu.errors)
     gnss = dataclasses.replace(d.gnss, t=d.gnss.t[mg], lla=d.gnss.lla[mg],
                                vel=d.gnss.vel[mg], quality={})
-    res = process(imu, gnss, None, d.system, smooth=True)
+    res = process(imu, {"gnss": gnss}, d.system, smooth=True)
     assert res.alignment["heading"].startswith("unknown")
     assert any("never moves" in w for w in res.warnings)
     for sol in (res.forward, res.smoothed):

@@ -91,7 +91,7 @@ def drive(tmp_path_factory):
     out = {}
     for case, vel in (("gnss+velocity", read_velocity_csv(d / "velocity.csv")),
                       ("gnss", None)):
-        sol = process(imu, g, vel, cfg).forward
+        sol = process(imu, {"gnss": g, "velocity": vel}, cfg).forward
         out[case] = (sol, errors_against(sol, ref))
     return out, ref
 

@@ -34,19 +34,19 @@ def hills():
 
 @pytest.fixture(scope="module")
 def clean(drive):
-    return process(drive.imu, drive.gnss, None, drive.system)
+    return process(drive.imu, {"gnss": drive.gnss}, drive.system)
 
 
 def run(d, corruption, **kw):
     imu, gnss = corruption.apply(d.imu, d.gnss)
-    return process(imu, gnss, None, d.system, **kw)
+    return process(imu, {"gnss": gnss}, d.system, **kw)
 
 
 def test_clean_drives_raise_no_word(drive, hills, clean):
     assert clean.warnings == []
-    assert process(hills.imu, hills.gnss, None, hills.system).warnings == []
+    assert process(hills.imu, {"gnss": hills.gnss}, hills.system).warnings == []
     other = car_drive(200.0, 3.0, seed=2, imu=ADIS16488)
-    assert process(other.imu, other.gnss, None, other.system).warnings == []
+    assert process(other.imu, {"gnss": other.gnss}, other.system).warnings == []
 
 
 def test_a_stuck_gyro_axis_is_named(drive):
@@ -76,7 +76,7 @@ def test_a_time_offset_is_found_and_its_correction_closes_the_loop(drive, late):
     imu, gnss = cr.time_offset(late).apply(drive.imu, drive.gnss)
     cfg = load_system({**drive.system.model_dump(exclude_none=True),
                        "sensors": {"gnss": {"time_offset_s": fix}}})
-    assert not any("time offset" in w for w in process(imu, gnss, None, cfg).warnings)
+    assert not any("time offset" in w for w in process(imu, {"gnss": gnss}, cfg).warnings)
 
 
 def test_offset_estimate_on_clean_data_is_zero_within_its_sigma(drive, clean):
@@ -99,7 +99,7 @@ def test_a_fault_for_part_of_the_run_shows_in_the_sliding_window(drive):
     m = (drive.gnss.t > 70.0) & (drive.gnss.t < 82.0)
     lla[m, 1] += 30.0 / 6.371e6
     gnss = replace(drive.gnss, lla=lla, quality={})
-    said = process(drive.imu, gnss, None, drive.system, force=True).warnings
+    said = process(drive.imu, {"gnss": gnss}, drive.system, force=True).warnings
     assert any("over 7" in w and "NIS/dof over 10 s" in w for w in said), said
 
 
@@ -113,7 +113,7 @@ def test_time_bases_that_cannot_overlap_are_refused(drive):
 
 def test_streaming_users_get_the_same_warnings(drive):
     imu, gnss = cr.stuck_axis("gyro", 0).apply(drive.imu, drive.gnss)
-    prep = prepare(imu, gnss, None, drive.system)
+    prep = prepare(imu, {"gnss": gnss}, drive.system)
     nav = prep.feed(prep.navigator(record_rows=True, record_covariance=True))
     said = nav.result().health(imu, gnss, imu_figures(imu, prep.system))
     assert any("IMU gyro x reads" in w for w in said), said
@@ -180,8 +180,8 @@ def test_no_time_offset_is_claimed_where_the_imu_does_not_explain_the_gnss():
     from fednav.io import read_navego_gnss, read_navego_imu, read_navego_visual
 
     res = process(read_navego_imu(ROVER / "imu_planetary.mat"),
-                  read_navego_gnss(ROVER / "gnss_planetary.mat"),
-                  read_navego_visual(ROVER / "visual_planetary.mat"),
+                  {"gnss": read_navego_gnss(ROVER / "gnss_planetary.mat"),
+                   "velocity": read_navego_visual(ROVER / "visual_planetary.mat")},
                   load_system(ROOT / "examples" / "canada-planetary.yaml"))
     assert not any("time offset" in w for w in res.warnings), res.warnings
 

@@ -77,7 +77,7 @@ def test_a_sensor_sigma_too_small_or_too_large_is_warned(flight):
     for k, (sp, sv) in {"small": (0.4, 0.02), "large": (3.0, 0.15), "true": (1.0, 0.05)
                         }.items():
         cfg = load_system({"sensors": {"gnss": {"sigma_pos_enu_m": sp, "sigma_vel_mps": sv}}})
-        said[k] = [w for w in process(imu, gnss, cfg=cfg).warnings if "band" in w]
+        said[k] = [w for w in process(imu, {"gnss": gnss}, cfg=cfg).warnings if "band" in w]
     assert said["true"] == []
     assert len(said["small"]) == 1 and "1) sensors.gnss's sigma too small" in said["small"][0]
     assert len(said["large"]) == 1 and "1) sensors.gnss's sigma too large" in said["large"][0]
@@ -87,10 +87,10 @@ def test_a_sigma_column_in_millimetres_is_named(flight):
     imu, gnss, _ = flight
     rows = np.column_stack([np.full((len(gnss.t), 3), 1000.0),
                             np.full((len(gnss.t), 3), 0.05)])
-    res = process(imu, replace(gnss, sigma_rows=rows))
+    res = process(imu, {"gnss": replace(gnss, sigma_rows=rows)})
     assert any("position rows" in w and "millimetres" in w for w in res.warnings), \
         res.warnings
-    assert not any("position rows" in w for w in process(imu, gnss).warnings)
+    assert not any("position rows" in w for w in process(imu, {"gnss": gnss}).warnings)
 
 
 def _sensors(ref, rng):
@@ -122,7 +122,7 @@ def test_the_sensor_whose_file_is_wrong_is_named(flight, bad):
     imu, gnss, ref = flight
     star, baro, vel = _sensors(ref, np.random.default_rng(5))
     cfg = load_system(CFG)
-    clean = process(imu, gnss, vel, cfg, sensors={"star": star, "baro": baro})
+    clean = process(imu, {"gnss": gnss, "velocity": vel, "star": star, "baro": baro}, cfg)
     assert not any("likely culprit" in w for w in clean.warnings), clean.warnings
     if bad == "star":
         z = star.z.copy()
@@ -133,7 +133,7 @@ def test_the_sensor_whose_file_is_wrong_is_named(flight, bad):
     else:
         vel = replace(vel, vel=vel.vel[:, [1, 0, 2]])
     try:
-        res = process(imu, gnss, vel, cfg, sensors={"star": star, "baro": baro})
+        res = process(imu, {"gnss": gnss, "velocity": vel, "star": star, "baro": baro}, cfg)
         text = " ".join(res.warnings)
     except DataError as e:
         text = str(e)
@@ -149,7 +149,7 @@ def test_the_stream_says_the_same_once(flight):
 
     imu, gnss, _ = flight
     cfg = load_system({"sensors": {"gnss": {"sigma_pos_enu_m": 3.0, "sigma_vel_mps": 0.15}}})
-    prep = prepare(imu, gnss, cfg=cfg)
+    prep = prepare(imu, {"gnss": gnss}, cfg=cfg)
     nav = prep.feed(prep.navigator(innovations=True))
     with pytest.warns(HealthWarning, match="outside the band"):
         said = nav.health()

@@ -67,8 +67,8 @@ def test_process_is_the_same_with_the_mounting_declared(tmp_path, flight):
     _write(tmp_path / "rfu.csv", imu, "RFU")
     _write(tmp_path / "frd.csv", imu, "FRD")
     base = {"alignment": {"initial_attitude": "coarse"}}
-    a = process(read_imu_csv(tmp_path / "rfu.csv"), gnss, cfg=load_system(base))
-    b = process(read_imu_csv(tmp_path / "frd.csv"), gnss,
+    a = process(read_imu_csv(tmp_path / "rfu.csv"), {"gnss": gnss}, cfg=load_system(base))
+    b = process(read_imu_csv(tmp_path / "frd.csv"), {"gnss": gnss},
                 cfg=load_system({**base, "imu": {"mounting": "FRD"}}))
     ea, eb = rmse(errors_against(a.forward, ref)), rmse(errors_against(b.forward, ref))
     for k, v in ea.items():
@@ -89,7 +89,7 @@ def test_gravity_on_another_axis_is_refused_naming_the_fit(tmp_path, flight, let
     assert np.array_equal(mounting.from_letters(fit), mounting.from_letters(letters)), msg
     # and process refuses the run (one line), with the fit it names
     with pytest.raises(DataError, match=f"imu.mounting: {fit} fits"):
-        process(wrong, gnss)
+        process(wrong, {"gnss": gnss})
 
 
 def test_a_yawed_imu_is_warned_naming_the_fit(tmp_path, flight):

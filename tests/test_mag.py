@@ -178,9 +178,9 @@ def test_gnss_and_magnetometer_hold_the_heading_on_a_simulated_drive():
     data = SensorData("mag", "sim-mag", series.t, series.z)
     base = {"alignment": {"initial_attitude": "file"}}
     cfg = load_system({**base, "sensors": {"mag": sec}})
-    assert prepare(imu, gnss, None, cfg, sensors={"mag": data}).navigator().engine == "python"
-    res = process(imu, gnss, None, cfg, sensors={"mag": data})
-    without = process(imu, gnss, None, load_system(base))
+    assert prepare(imu, {"gnss": gnss, "mag": data}, cfg).navigator().engine == "python"
+    res = process(imu, {"gnss": gnss, "mag": data}, cfg)
+    without = process(imu, {"gnss": gnss}, load_system(base))
 
     def yaw_rms(r, a, b):
         e = errors_against(r.forward, ref)

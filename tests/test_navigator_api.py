@@ -22,7 +22,7 @@ def drive():
 def _prep(drive, seconds: float, **filt):
     imu, gnss, _ = drive
     cfg = load_system({"filter": filt}) if filt else System()
-    prep = prepare(imu, gnss, None, cfg)
+    prep = prepare(imu, {"gnss": gnss}, cfg)
     n = int(round(seconds / prep.dt))
     n -= n % prep.n_per
     prep.t, prep.gyro, prep.accel = prep.t[:n], prep.gyro[:n], prep.accel[:n]
@@ -33,7 +33,8 @@ def _events(prep, delay_s=None, rng=None):
     """Every measurement as (arrival, sensor, t, z, R): at its time of validity, or late by
     up to ``delay_s`` and shuffled."""
     ev = []
-    for name, (t, z, R) in prep.measurements.items():
+    for name in prep.series:
+        t, z, R = prep.rows(name)
         for i in range(len(t)):
             late = 0.0 if delay_s is None else rng.uniform(0.0, delay_s)
             ev.append((t[i] + late, name, t[i], z[i], R[i]))
@@ -185,8 +186,7 @@ def _baro_prep(drive, seconds: float, offset: float):
     tb = np.arange(1.0, seconds, 1.0) + offset
     h = np.interp(tb, ref.t, ref.lla[:, 2]) + np.random.default_rng(3).normal(0, 0.3, len(tb))
     cfg = load_system({"sensors": {"baro": {"sigma_m": 0.3, "damping_loop": True}}})
-    prep = prepare(imu, gnss, None, cfg, sensors={"baro": SensorData("baro", "b", tb,
-                                                                     h[:, None])})
+    prep = prepare(imu, {"gnss": gnss, "baro": SensorData("baro", "b", tb, h[:, None])}, cfg)
     n = int(round(seconds / prep.dt))
     n -= n % prep.n_per
     prep.t, prep.gyro, prep.accel = prep.t[:n], prep.gyro[:n], prep.accel[:n]
@@ -196,10 +196,10 @@ def _baro_prep(drive, seconds: float, offset: float):
 def test_a_damping_barometer_streamed_one_value_at_a_time_equals_the_batch(drive):
     prep = _baro_prep(drive, 60.0, 0.0)
     ref = _batch(prep)
-    d = prep.others["baro"]
+    d = prep.series["baro"]
     R = prep.system.sensors.baro.model().R(prep.system.sensors.baro.sigma())
     nav = prep.navigator()
-    ev = sorted([(t, "gnss", t, z, r) for t, z, r in zip(*prep.measurements["gnss"],
+    ev = sorted([(t, "gnss", t, z, r) for t, z, r in zip(*prep.rows("gnss"),
                                                           strict=True)]
                 + [(t, "baro", t, z, R) for t, z in zip(d.t, d.z, strict=True)],
                 key=lambda e: e[0])
@@ -221,7 +221,7 @@ def test_baro_heights_between_imu_samples_feed_the_damping_loop(drive):
     prep = _baro_prep(drive, 30.0, 0.0013)  # 1.3 ms after the samples
     nav = prep.feed(prep.navigator())
     used = np.isfinite(nav._h_ref.view).sum()
-    assert used == np.count_nonzero(prep.others["baro"].t < prep.t[-1] + prep.dt)
+    assert used == np.count_nonzero(prep.series["baro"].t < prep.t[-1] + prep.dt)
 
 
 def test_a_free_ins_applies_the_initial_imu_compensation(drive):
@@ -283,7 +283,7 @@ def test_the_total_state_navigator_runs_with_the_default_records():
 def test_a_sensor_that_delivered_nothing_is_no_error():
     """A stop detector before the first stop, an empty file after screening: no rows."""
     imu, gnss, _ = make_flight()
-    prep = prepare(imu, gnss, None, System())
+    prep = prepare(imu, {"gnss": gnss}, System())
     nav = prep.feed(prep.navigator())
     before = nav.result().states.copy()
     nav.add_measurements("gnss", np.zeros(0), np.zeros((0, 6)), sigma=np.ones(6))

@@ -97,8 +97,8 @@ def test_recorded_data_equal_on_both_engines(monkeypatch, drive, filt):
     for name in ("compiled", "python"):
         inns: list = []
         res = _with_engine(monkeypatch, name,
-                           lambda inns=inns: process(imu, g, v, cfg, smooth=True,
-                                                     innovations=inns))
+                           lambda inns=inns: process(imu, {"gnss": g, "velocity": v}, cfg,
+                                                     smooth=True, innovations=inns))
         out[name] = (res, inns)
     (a, ia), (b, ib) = out["compiled"], out["python"]
     for sol in ("forward", "smoothed"):

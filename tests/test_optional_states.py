@@ -170,7 +170,7 @@ def _with_states(system, states, imu=None, **filt):
 def scaled_run(scaled_drive):
     d = scaled_drive
     system = _with_states(d.system, ["gyro_scale", "accel_scale"])
-    return process(d.imu, d.gnss, None, system)
+    return process(d.imu, {"gnss": d.gnss}, system)
 
 
 def test_scale_factor_states_recover_the_simulated_scale_factors_within_3_sigma(
@@ -195,7 +195,7 @@ def test_scale_factor_states_help_where_the_imu_has_scale_factors(scaled_drive, 
     """On the same drive the 18-state filter cannot explain a 0.5 % gyro scale error in
     the turns: the 24-state filter's heading is better."""
     d = scaled_drive
-    plain = process(d.imu, d.gnss, None, d.system)
+    plain = process(d.imu, {"gnss": d.gnss}, d.system)
     a = rmse(errors_against(plain.forward, d.reference))
     b = rmse(errors_against(scaled_run.forward, d.reference))
     assert b["yaw_deg"] < a["yaw_deg"]
@@ -210,7 +210,7 @@ def gm_drive():
 
 def _gnss_nis_per_row(drive, states):
     inn = []
-    res = process(drive.imu, drive.gnss, None, _with_states(drive.system, states),
+    res = process(drive.imu, {"gnss": drive.gnss}, _with_states(drive.system, states),
                   innovations=inn)
     r2 = np.array([i.r**2 / np.diag(i.S) for i in inn if i.local == "gnss"])
     return res, r2.mean(axis=0)
@@ -228,7 +228,7 @@ def test_gnss_markov_state_makes_time_correlated_fixes_consistent(gm_drive):
     res, nis = _gnss_nis_per_row(d, ["gnss_markov"])
     assert np.all((nis >= 0.5) & (nis <= 2.0)), nis
     err = errors_against(res.forward, d.reference)
-    plain = rmse(errors_against(process(d.imu, d.gnss, None, d.system).forward, d.reference))
+    plain = rmse(errors_against(process(d.imu, {"gnss": d.gnss}, d.system).forward, d.reference))
     got = rmse(err)
     for k in ("east_m", "north_m", "up_m"):
         assert got[k] <= 1.02 * plain[k], (k, got[k], plain[k])
@@ -251,7 +251,7 @@ def test_both_engines_fly_the_optional_states_alike(monkeypatch, gm_drive, filt)
         inn: list = []
         with monkeypatch.context() as m:
             m.setenv("FEDNAV_ENGINE", name)
-            out[name] = (process(d.imu, d.gnss, None, system, smooth=True, innovations=inn),
+            out[name] = (process(d.imu, {"gnss": d.gnss}, system, smooth=True, innovations=inn),
                          inn)
     (a, ia), (b, ib) = out["compiled"], out["python"]
     for sol in ("forward", "smoothed"):
@@ -272,8 +272,8 @@ def test_a_centralized_filter_flies_the_optional_states_like_the_federated_one(g
     one (compiled) are the same estimator, up to rounding."""
     d = gm_drive
     states, imu = ["gnss_markov", "gyro_scale"], {"gyro_scale_ppm": 2000.0}
-    fed = process(d.imu, d.gnss, None, _with_states(d.system, states, imu))
-    cen = process(d.imu, d.gnss, None, _with_states(d.system, states, imu,
+    fed = process(d.imu, {"gnss": d.gnss}, _with_states(d.system, states, imu))
+    cen = process(d.imu, {"gnss": d.gnss}, _with_states(d.system, states, imu,
                                                     architecture="centralized"))
     np.testing.assert_allclose(cen.forward.vel, fed.forward.vel, atol=1e-6)
     for k in fed.optional_states:
@@ -292,7 +292,7 @@ def test_tune_with_the_gnss_markov_state_keeps_the_held_back_nis_in_band(gm_driv
 
     d = gm_drive
     base = _with_states(d.system, ["gnss_markov", "gyro_scale"], {"gyro_scale_ppm": 1000.0})
-    res = tune(d.imu, d.gnss, None, base)
+    res = tune(d.imu, {"gnss": d.gnss}, base)
     for ev in (res.before, res.after):
         assert 0.5 <= ev.nis_held["gnss"] <= 2.0, ev.nis_held
     out = yaml.safe_load(config_yaml(res, base.model_dump(exclude_none=True)))
@@ -312,7 +312,7 @@ def test_the_estimates_reach_summary_json_and_the_printed_run(gm_drive, monkeypa
     from fednav.process.output import summary
 
     d = gm_drive
-    res = process(d.imu, d.gnss, None, _with_states(
+    res = process(d.imu, {"gnss": d.gnss}, _with_states(
         d.system, ["gyro_scale", "gnss_markov"], {"gyro_scale_ppm": 1000.0}))
     s = summary(res, d.reference, {})
     assert set(s["error_states"]) == {"gyro_scale_ppm", "gnss_markov_enu_m"}
@@ -368,7 +368,8 @@ def test_velocity_markov_state_follows_a_drifting_velocity_sensor(visual_drive):
         d = system.model_dump(exclude_none=True)
         d["filter"]["states"] = states
         inn = []
-        res = process(imu, gnss, vel, load_system(d), smooth=True, innovations=inn)
+        res = process(imu, {"gnss": gnss, "velocity": vel}, load_system(d), smooth=True,
+                      innovations=inn)
         nis = np.array([i.r**2 / np.diag(i.S) for i in inn if i.local == "velocity"])
         drift = []
         for sol in (res.forward, res.smoothed):
@@ -392,7 +393,7 @@ def test_both_engines_fly_the_velocity_markov_state_alike(monkeypatch, visual_dr
     for name in ("compiled", "python"):
         with monkeypatch.context() as m:
             m.setenv("FEDNAV_ENGINE", name)
-            out[name] = process(imu, gnss, vel, system)
+            out[name] = process(imu, {"gnss": gnss, "velocity": vel}, system)
     a, b = out["compiled"], out["python"]
     np.testing.assert_array_equal(a.forward.lla, b.forward.lla)
     np.testing.assert_array_equal(a.forward.sigma, b.forward.sigma)
@@ -414,7 +415,7 @@ def test_an_imu_without_figures_gets_the_preset_and_its_scale_figure(gm_drive):
     for imu_keys, expect in (({}, 10_000.0), ({"gyro_scale_ppm": 2000.0}, 2000.0)):
         system = load_system({"imu": imu_keys, "sensors": gnss,
                               "filter": {"states": ["gyro_scale"]}})
-        res = process(imu, d.gnss, None, system)
+        res = process(imu, {"gnss": d.gnss}, system)
         assert any("preset is assumed" in w for w in res.warnings), res.warnings
         sd = res.optional_states["gyro_scale"]["sigma"]
         assert sd.max() <= expect * 1e-6 * 1.0001 and sd.max() > 0.5 * expect * 1e-6

@@ -270,7 +270,7 @@ def _flight(T=120.0):
 @pytest.fixture(scope="module")
 def processed():
     imu, gnss, ref = _flight()
-    return process(imu, gnss, None, System(), smooth=True), gnss, ref
+    return process(imu, {"gnss": gnss}, System(), smooth=True), gnss, ref
 
 
 def test_process_errors_have_human_titles_units_and_sigma_at_the_filter_epochs(processed):

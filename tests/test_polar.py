@@ -236,7 +236,7 @@ def test_process_near_the_pole_across_the_antimeridian_with_0_360_fixes(lat, lon
     assert lon.min() < np.pi < lon.max()
     # the initial attitude from the file (a heading from the course is held to its 1 deg
     # floor and wanders by it in straight flight: that is the next test's)
-    res = process(imu, gnss, None, load_system({"alignment": {"initial_attitude": "file"}}),
+    res = process(imu, {"gnss": gnss}, load_system({"alignment": {"initial_attitude": "file"}}),
                   force=True)
     sol = res.forward
     k = np.rint(sol.t / tr.dt).astype(int)
@@ -266,7 +266,7 @@ def test_heading_from_the_course_near_the_pole(lat, lon, hdg):
     tr = great_circle(np.array([units.deg(lat), units.deg(lon), 1000.0]), units.deg(hdg),
                       250.0, 60.0, 0.01)
     imu, gnss = recorded(tr, np.random.default_rng(11), imu_errors=False)
-    prep = prepare(imu, gnss, None, load_system({}))
+    prep = prepare(imu, {"gnss": gnss}, load_system({}))
     a = prep.alignment
     d0 = att.euler_difference(a.euler, tr.euler[int(np.rint((prep.t[0] - tr.t[0]) / tr.dt))])
     assert abs(units.to_deg(d0[2])) < 0.1

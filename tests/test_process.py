@@ -76,7 +76,7 @@ def flight():
 @pytest.fixture(scope="module")
 def result(flight):
     imu, gnss, _ = flight
-    return process(imu, gnss, None, System(), smooth=True)
+    return process(imu, {"gnss": gnss}, System(), smooth=True)
 
 
 def test_forward_filter_tracks_the_truth(flight, result):
@@ -107,7 +107,7 @@ def test_filter_is_consistent(result):
 def test_ignoring_the_lever_arm_costs_accuracy(flight, result):
     """End-to-end check of the lever-arm sign: zero lever -> clearly worse position."""
     imu, gnss, ref = flight
-    wrong = process(imu, gnss, None, load_system({"sensors": {"gnss": {"lever_m": [0, 0, 0]}}}))
+    wrong = process(imu, {"gnss": gnss}, load_system({"sensors": {"gnss": {"lever_m": [0, 0, 0]}}}))
     good = rmse(errors_against(result.forward, ref))
     bad = rmse(errors_against(wrong.forward, ref))
     assert bad["north_m"] + bad["east_m"] > 1.5 * (good["north_m"] + good["east_m"])
@@ -201,15 +201,15 @@ def test_csv_without_noise_figures_takes_a_preset_or_names_the_key(tmp_path, fli
     bare = ImuData("bare.csv", imu.t, imu.gyro, imu.accel)
     from fednav.io import DataError
 
-    res = process(bare, gnss)
+    res = process(bare, {"gnss": gnss})
     assert any("bare.csv: no IMU error figures in the file or the config: the 'consumer' "
                "MEMS preset is assumed" in w for w in res.warnings)
     r = rmse(errors_against(res.forward, ref))
     assert np.hypot(r["north_m"], r["east_m"]) < 1.0
     with pytest.raises(DataError, match=r"bare.csv: no IMU error figures.*imu\.accel_vrw"
                                         r".*imu\.grade"):
-        process(bare, gnss, None, load_system({"imu": {"gyro_arw_rad_sqrt_s": 1e-4}}))
-    res = process(bare, gnss, None, load_system({"imu": {"gyro_arw_rad_sqrt_s": 1e-4,
+        process(bare, {"gnss": gnss}, load_system({"imu": {"gyro_arw_rad_sqrt_s": 1e-4}}))
+    res = process(bare, {"gnss": gnss}, load_system({"imu": {"gyro_arw_rad_sqrt_s": 1e-4,
                                                          "grade": "industrial"}}))
     assert not any("preset is assumed" in w for w in res.warnings)
 
@@ -229,7 +229,7 @@ def test_each_fix_meets_the_first_epoch_at_or_after_it(flight, shift):
 
     imu, gnss, _ = flight
     imu = replace(imu, t=imu.t + shift)
-    prep = prepare(imu, gnss, None, System())
+    prep = prepare(imu, {"gnss": gnss}, System())
     t0, T = prep.initial.t, prep.system.filter.period_s
     k = epochs_at(np.ascontiguousarray(gnss.t), t0, T)
     late = (t0 + T * k - gnss.t)[k > 0]
@@ -447,7 +447,7 @@ def test_misleading_messages_are_gone(tmp_path, flight, result):
         read_imu_csv(f)
     imu, gnss, ref = flight
     with pytest.raises(DataError, match=r"filter.period_s = 1e\+300 s is longer than the IMU"):
-        process(imu, gnss, None, load_system({"filter": {"period_s": 1e300}}))
+        process(imu, {"gnss": gnss}, load_system({"filter": {"period_s": 1e300}}))
     shifted = replace(ref, lla=ref.lla + np.array([0.0, 2 * np.pi, 0.0]), quality={})
     e0 = rmse(errors_against(result.forward, ref))
     e1 = rmse(errors_against(result.forward, shifted))
@@ -467,10 +467,10 @@ def test_a_long_isolation_is_said(flight):
     lla = gnss.lla.copy()
     lla[off] = earth.move_enu(lla[off], np.array([200.0, 0.0, 0.0]))
     bad = replace(gnss, lla=lla, quality={})
-    res = process(imu, bad, None, load_system({"filter": {"fdi_alpha": 0.001}}))
+    res = process(imu, {"gnss": bad}, load_system({"filter": {"fdi_alpha": 0.001}}))
     said = [w for w in res.warnings if "fault detection isolated the 'gnss'" in w]
     assert len(said) == 1 and "from 100." in said[0], res.warnings
-    clean = process(imu, gnss, None, load_system({"filter": {"fdi_alpha": 0.001}}))
+    clean = process(imu, {"gnss": gnss}, load_system({"filter": {"fdi_alpha": 0.001}}))
     assert not any("fault detection isolated" in w for w in clean.warnings)
 
 
@@ -487,10 +487,10 @@ def test_innovations_far_beyond_their_sigma_end_the_run_unless_forced(flight):
     swapped = replace(gnss, vel=gnss.vel[:, [1, 0, 2]], quality={})
     with pytest.raises(DataError, match=r"'gnss' local filter's innovations are .* times "
                                         r"their expected size.*axis order"):
-        process(imu, swapped, None, System())
-    res = process(imu, swapped, None, System(), force=True)
+        process(imu, {"gnss": swapped}, System())
+    res = process(imu, {"gnss": swapped}, System(), force=True)
     assert any("innovations are" in w and "too optimistic" in w for w in res.warnings)
-    clean = process(imu, gnss, None, System())
+    clean = process(imu, {"gnss": gnss}, System())
     assert not any("innovations are" in w for w in clean.warnings)
 
 
@@ -503,12 +503,12 @@ def test_the_navigators_result_reports_its_health(flight):
 
     imu, gnss, _ = flight
     swapped = replace(gnss, vel=gnss.vel[:, [1, 0, 2]], quality={})
-    prep = prepare(imu, swapped, None, System())
+    prep = prepare(imu, {"gnss": swapped}, System())
     nav = prep.feed(prep.navigator(record_rows=False, record_covariance=False,
                                    innovations=False))
     said = nav.result().health()
     assert any("'gnss' local filter's innovations are" in w for w in said)
-    prep = prepare(imu, gnss, None, System())
+    prep = prepare(imu, {"gnss": gnss}, System())
     clean = prep.feed(prep.navigator(record_rows=False, record_covariance=False,
                                      innovations=False))
     assert clean.result().health() == []

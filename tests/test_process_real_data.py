@@ -43,7 +43,7 @@ def _rmse(res, ref):
 
 
 def test_imu_gnss_with_the_files_noise_figures_beats_navego(data):
-    res = process(data["imu"], data["gnss"], None, System())
+    res = process(data["imu"], {"gnss": data["gnss"]}, System())
     r = _rmse(res.forward, data["ref"])
     for k in KEYS:
         assert r[k] < MARGIN * NAVEGO_GNSS[k], (k, r[k])
@@ -51,7 +51,7 @@ def test_imu_gnss_with_the_files_noise_figures_beats_navego(data):
 
 def test_imu_gnss_visual_reaches_the_target_with_the_example_config(data):
     cfg = load_system(ROOT / "examples" / "canada-planetary.yaml")
-    res = process(data["imu"], data["gnss"], data["visual"], cfg, smooth=True)
+    res = process(data["imu"], {"gnss": data["gnss"], "velocity": data["visual"]}, cfg, smooth=True)
     r = _rmse(res.forward, data["ref"])
     for k in KEYS:
         margin = MARGIN_TARGET_VELOCITY if k.endswith("mps") else MARGIN
@@ -69,7 +69,8 @@ def test_visual_aiding_bounds_the_drift_through_the_gnss_outage(data):
     g = read_navego_gnss(DATA / "gnss_sparse_planetary.mat")
     drift = {}
     for name, vis in (("gnss", None), ("visual", data["visual"])):
-        e = errors_against(process(data["imu"], g, vis, cfg).forward, data["ref"])
+        e = errors_against(process(data["imu"], {"gnss": g, "velocity": vis}, cfg).forward,
+                           data["ref"])
         m = (e["t"] > 100) & (e["t"] < 200)
         drift[name] = float(np.hypot(e["north_m"][m], e["east_m"][m]).max())
     assert drift["visual"] < 0.2 * drift["gnss"]
@@ -85,13 +86,14 @@ def test_corrected_visual_data_is_consistent_and_bounds_the_outage(data):
 
     cfg = load_system(ROOT / "examples" / "canada-planetary.yaml")
     as_filed = cfg.model_copy(update={"sensors": cfg.sensors.replace(velocity=None)})
-    res = process(data["imu"], data["gnss"], data["visual"], cfg)
+    res = process(data["imu"], {"gnss": data["gnss"], "velocity": data["visual"]}, cfg)
     c = consistency(res.forward)["velocity"]
     assert 0.7 < c["nis_per_dof"] < 1.5 and c["isolated_fraction"] < 0.15
     g = read_navego_gnss(DATA / "gnss_sparse_planetary.mat")
     drift = {}
     for name, c in (("fixed", cfg), ("as filed", as_filed)):
-        e = errors_against(process(data["imu"], g, data["visual"], c).forward, data["ref"])
+        e = errors_against(process(data["imu"], {"gnss": g, "velocity": data["visual"]},
+                                   c).forward, data["ref"])
         m = (e["t"] > 100) & (e["t"] < 200)
         drift[name] = float(np.hypot(e["north_m"][m], e["east_m"][m]).max())
     assert drift["fixed"] < 6.0 and drift["fixed"] < 0.3 * drift["as filed"]

@@ -33,9 +33,9 @@ def _initial(ref, t0=None):
 
 def test_position_only_gnss(flight):
     imu, gnss, ref = flight
-    full = rmse(errors_against(process(imu, gnss, None, System()).forward, ref))
+    full = rmse(errors_against(process(imu, {"gnss": gnss}, System()).forward, ref))
     pos = replace(gnss, vel=None, quality={})
-    res = process(imu, pos, None, System())
+    res = process(imu, {"gnss": pos}, System())
     r = rmse(errors_against(res.forward, ref))
     assert res.forward.fdi and {e[3] for e in res.forward.fdi} == {3}  # 3 rows a fix
     # measured: 0.38 m horizontal RMSE, yaw 0.48 deg (with velocity: 0.15 m, 0.22 deg)
@@ -51,9 +51,9 @@ def test_velocity_only_gnss_needs_and_uses_the_initial_state(flight):
     from fednav.io.data import DataError
 
     with pytest.raises(DataError, match="no GNSS positions to start from"):
-        process(imu, vel, None, System())
+        process(imu, {"gnss": vel}, System())
     cfg = load_system({"initial": _initial(ref, imu.t[0])})
-    res = process(imu, vel, None, cfg)
+    res = process(imu, {"gnss": vel}, cfg)
     r = rmse(errors_against(res.forward, ref))
     assert {e[3] for e in res.forward.fdi} == {3}
     # dead reckoning on GNSS velocity; measured 0.26 m horizontal, yaw 0.22 deg
@@ -113,17 +113,17 @@ def test_what_process_refuses_or_moves_in_these_sets(flight):
     pos = replace(gnss, vel=None, quality={})
     with pytest.raises(DataError, match="total-state navigator's GNSS model needs positions "
                                         "and velocities"):
-        process(imu, pos, None, load_system({"filter": {"state": "total"}}))
+        process(imu, {"gnss": pos}, load_system({"filter": {"state": "total"}}))
     # an initial time between two IMU stamps moves to the nearest one, and says so
     init = _initial(ref, imu.t[0])
     init["t_s"] = float(imu.t[10] + 0.3 * (imu.t[11] - imu.t[10]))
-    res = process(imu, gnss, None, load_system({"initial": init}))
+    res = process(imu, {"gnss": gnss}, load_system({"initial": init}))
     assert res.forward.t[0] == imu.t[10]
     assert any("moved to the nearest IMU time stamp" in w for w in res.warnings)
     # a figure left out of the imu: section (and the file) is named, not taken as 0
     bare = replace(imu, errors=None, quality={})
     with pytest.raises(DataError, match=r"give imu\.accel_vrw_mps_sqrt_s"):
-        process(bare, gnss, None, load_system({"imu": {"gyro_arw_rad_sqrt_s": 1e-4}}))
+        process(bare, {"gnss": gnss}, load_system({"imu": {"gyro_arw_rad_sqrt_s": 1e-4}}))
 
 
 def test_position_only_velocity_sigma_is_that_of_its_window():
@@ -158,11 +158,11 @@ def test_gnss_arriving_late_is_used_when_it_arrives(flight, tmp_path):
                  + "\n".join(rows) + "\n")
     late = read_gnss_csv(f, gnss.sigma_pos_enu, gnss.sigma_vel, gnss.lever)
     np.testing.assert_allclose(late.t_arrival - late.t, 0.35)
-    on_time = rmse(errors_against(process(imu, gnss, None, System()).forward, ref))
-    res = process(imu, late, None, System())
+    on_time = rmse(errors_against(process(imu, {"gnss": gnss}, System()).forward, ref))
+    res = process(imu, {"gnss": late}, System())
     assert any("more than the filter period" in w for w in res.warnings)
     cfg = load_system({"sensors": {"gnss": {"timing": {"delay_compensation": "recompute"}}}})
-    res = process(imu, late, None, cfg)
+    res = process(imu, {"gnss": late}, cfg)
     r = rmse(errors_against(res.forward, ref))
     assert not any("more than the filter period" in w for w in res.warnings)
     assert r["north_m"] < 1.05 * on_time["north_m"] and r["east_m"] < 1.05 * on_time["east_m"]
@@ -183,7 +183,7 @@ def test_the_non_holonomic_constraint_holds_the_drift_through_a_gnss_outage(flig
     out = replace(gnss, t=gnss.t[keep], lla=gnss.lla[keep], vel=gnss.vel[keep], quality={})
 
     def drift(cfg):
-        res = process(imu, out, None, cfg)
+        res = process(imu, {"gnss": out}, cfg)
         e = errors_against(res.forward, ref)
         m = (e["t"] >= 120.0) & (e["t"] <= 180.0)
         return float(np.sqrt(np.mean(e["north_m"][m] ** 2 + e["east_m"][m] ** 2))), res
@@ -209,10 +209,10 @@ def test_a_gnss_time_offset_is_seen_and_said(flight):
     for late in (0.5, 18.0):
         g = replace(gnss, t=gnss.t + late, quality={})
         assert time_offset(imu, g) == pytest.approx(-late, abs=0.1)
-    res = process(imu, replace(gnss, t=gnss.t + 0.5, quality={}), None, System())
+    res = process(imu, {"gnss": replace(gnss, t=gnss.t + 0.5, quality={})}, System())
     assert any("moved by -0.5" in w and "time_offset_s" in w for w in res.warnings)
     assert res.data_quality["gnss_time_offset_seen_s"] == pytest.approx(-0.5, abs=0.1)
-    res = process(imu, gnss, None, System())
+    res = process(imu, {"gnss": gnss}, System())
     assert not any("time_offset_s" in w for w in res.warnings)
 
 
@@ -254,7 +254,7 @@ def test_detected_stops_and_an_odometer_hold_the_drift_through_a_gnss_outage():
 
     def run(extra=None, sensors=None):
         cfg = load_system({**base, "sensors": {**base["sensors"], **(extra or {})}})
-        return process(imu, gnss, None, cfg, sensors=sensors)
+        return process(imu, {"gnss": gnss, **(sensors or {})}, cfg)
 
     free = _outage_rms(run(), d.reference)
     res = run({"zupt": {"sigma_mps": 0.02}})
@@ -328,7 +328,7 @@ def test_zero_angular_rate_updates_at_detected_stops_hold_the_heading():
         im["gyro_arw_rad_sqrt_s"] = float(np.hypot(im["gyro_arw_rad_sqrt_s"], 2e-4))
         for name, extra in (("zupt", {"zupt": {}}), ("zupt+zaru", {"zupt": {}, "zaru": {}})):
             cfg = load_system({**base, "imu": im, "sensors": {**base["sensors"], **extra}})
-            res = process(imu, gnss, None, cfg)
+            res = process(imu, {"gnss": gnss}, cfg)
             if name == "zupt+zaru":  # the stops, not the vibrating motion (figures hold it)
                 assert 0.7 * 65 < res.data_quality["zaru_epochs_detected"] <= 67
             e = errors_against(res.forward, d.reference)
@@ -355,14 +355,14 @@ def test_a_gnss_velocity_latency_is_seen_said_and_corrected():
     L, s = velocity_latency(lagged)
     assert L == pytest.approx(0.1, abs=0.01) and s < 0.02
     assert abs(velocity_latency(g)[0]) < 0.01
-    res = process(d.imu, lagged, None, d.system)
+    res = process(d.imu, {"gnss": lagged}, d.system)
     assert res.data_quality["gnss_velocity_latency_seen_s"] == pytest.approx(0.1, abs=0.01)
     assert any("velocity_latency_s" in w for w in res.warnings)
     base = d.system.model_dump(exclude_unset=True)
     fixed = load_system({**base, "sensors": {"gnss": {**base["sensors"]["gnss"],
                                                       "velocity_latency_s": 0.1}}})
     before = rmse(errors_against(res.forward, d.reference))
-    after = rmse(errors_against(process(d.imu, lagged, None, fixed).forward, d.reference))
+    after = rmse(errors_against(process(d.imu, {"gnss": lagged}, fixed).forward, d.reference))
     assert after["vn_mps"] < 0.6 * before["vn_mps"] and after["ve_mps"] < 0.6 * before["ve_mps"]
 
 
@@ -387,7 +387,7 @@ def test_an_odometer_scale_factor_is_seen_said_and_estimated():
                          (scale * fwd[k] + noise)[:, None])
         cfg = load_system({**base, "sensors": {**base["sensors"], "nhc": {}, "odometer": {
             "sigma_mps": 0.05, **({} if setting is None else {"scale": setting})}}})
-        res = process(imu, gnss, None, cfg, sensors={"odometer": odo})
+        res = process(imu, {"gnss": gnss, "odometer": odo}, cfg)
         return _outage_rms(res, d.reference), res
 
     true, _ = run(1.0, None)

@@ -57,9 +57,9 @@ def test_adaptation_brings_the_nis_back_and_both_engines_agree(understated, monk
     out = {}
     for engine in ("compiled", "python"):
         monkeypatch.setenv("FEDNAV_ENGINE", engine)
-        out[engine] = process(imu, d.gnss, None, adapted_cfg, smooth=True)
+        out[engine] = process(imu, {"gnss": d.gnss}, adapted_cfg, smooth=True)
     monkeypatch.setenv("FEDNAV_ENGINE", "compiled")
-    plain = process(imu, d.gnss, None, load_system(cfg), smooth=True)
+    plain = process(imu, {"gnss": d.gnss}, load_system(cfg), smooth=True)
     adapted = out["compiled"]
     n0 = consistency(plain.forward)["gnss"]["nis_per_dof"]
     n1 = consistency(adapted.forward)["gnss"]["nis_per_dof"]
@@ -87,7 +87,7 @@ def test_the_scale_never_falls_below_the_figures(understated):
                           "gyro_arw_rad_sqrt_s": cfg["imu"]["gyro_arw_rad_sqrt_s"] * 100,
                           "accel_vrw_mps_sqrt_s": cfg["imu"]["accel_vrw_mps_sqrt_s"] * 100},
            "filter": {"q_adaptation": {}}}
-    res = process(imu, d.gnss, None, load_system(big))
+    res = process(imu, {"gnss": d.gnss}, load_system(big))
     assert consistency(res.forward)["gnss"]["nis_per_dof"] < 1.0
     assert 1.0 <= res.data_quality["q_scale_final"]["gnss"] < 1.1
 

@@ -150,7 +150,7 @@ def _drive(case, seed=1):
 def _fly(imu, gnss, system, readmit, engine="auto", ftype="kf"):
     f = system.filter.model_copy(update={"fdi_alpha": 0.001, "fdi_readmit_s": readmit,
                                          "type": ftype})
-    prep = prepare(imu, gnss, None, system.model_copy(update={"filter": f}))
+    prep = prepare(imu, {"gnss": gnss}, system.model_copy(update={"filter": f}))
     opts = {} if engine == "auto" else {"engine": engine}
     out = prep.feed(prep.navigator(record_rows=True, record_covariance=True,
                                    **opts)).result()
@@ -173,7 +173,7 @@ def test_overconfident_filter_recovers_and_a_true_fault_stays_isolated():
     assert _horizontal(sol_off, ref).max() > 300.0 and not out_off.readmissions
     assert out.readmissions and _horizontal(sol, ref).max() < 3.0
     f = system.filter.model_copy(update={"fdi_alpha": 0.001})
-    said = process(imu, gnss, None, system.model_copy(update={"filter": f})).warnings
+    said = process(imu, {"gnss": gnss}, system.model_copy(update={"filter": f})).warnings
     assert [w for w in said if "re-admitted the 'gnss' local filter 1 time(s)" in w]
     imu, gnss, ref, system = _drive("jump")
     out_off, sol_off = _fly(imu, gnss, system, None)

@@ -34,7 +34,7 @@ SYSTEMS = {
 
 def _prep(drive, filt):  # noqa: F811
     imu, g, v = drive
-    return prepare(imu, g, v, load_system({"imu": IMU, "filter": filt}))
+    return prepare(imu, {"gnss": g, "velocity": v}, load_system({"imu": IMU, "filter": filt}))
 
 
 def _standard(filt: dict) -> dict:
@@ -92,10 +92,9 @@ def test_square_root_failure_names_the_filter_step_and_why(drive, name):  # noqa
     """A measurement noise that is not positive semi-definite: the factored filter's
     error, from either engine."""
     prep = _prep(drive, SYSTEMS["kf"])
-    t, z, R = prep.measurements["velocity"]
-    R = R.copy()
-    R[40] = -R[40]
-    prep.measurements["velocity"] = (t, z, R)
+    d = prep.series["velocity"]
+    d.cov = d.cov.copy()
+    d.cov[40] = -d.cov[40]
     with pytest.raises(FilterError, match=r"kf local 'velocity' update at step \d+: "
                                           r"measurement noise R is not positive "
                                           r"semi-definite"):

@@ -25,7 +25,7 @@ def drive():
 
 def _prep(drive, seconds: float, cfg: System | None = None):
     imu, gnss, _ = drive
-    prep = prepare(imu, gnss, None, cfg or System())
+    prep = prepare(imu, {"gnss": gnss}, cfg or System())
     n = int(round(seconds / prep.dt))
     n -= n % prep.n_per
     prep.t, prep.gyro, prep.accel = prep.t[:n], prep.gyro[:n], prep.accel[:n]
@@ -42,7 +42,7 @@ def _stream(prep, nav, latency: float, *, arrival: bool = True, stamps=None,
     once it has arrived (``latency`` after its time of validity; told with ``t_arrival``
     when ``arrival``, else just added late); the rest of the fixes at the end unless
     ``upto``."""
-    tg, zg, Rg = prep.measurements["gnss"]
+    tg, zg, Rg = prep.rows("gnss")
     ta = tg + latency
     stamps = prep.t if stamps is None else stamps
     j, n = 0, len(stamps) if upto is None else upto
@@ -85,7 +85,7 @@ def test_jittered_stamps_stream_equals_the_batch_resampling(drive):
     is the batch's on the same data (resampled by regular_imu) to rounding."""
     prep = _prep(drive, 60.0)
     s, tg, g, a, dt = _jittered(prep, 0.002)
-    meas = prep.measurements["gnss"]
+    meas = prep.rows("gnss")
 
     def nav():
         return Navigator(prep.system, prep.initial, dt, imu_errors=prep.imu_errors)
@@ -200,11 +200,11 @@ def test_the_batch_with_arrival_times_uses_the_declared_latency(drive):
     late = replace(gnss, t_arrival=gnss.t + 0.3, quality={})
     on_time = _prep(drive, 60.0)
     on_time = on_time.feed(on_time.navigator()).result()
-    prep = prepare(imu, late, None, _latency(0.3))
+    prep = prepare(imu, {"gnss": late}, _latency(0.3))
     n = len(on_time.t) - 1
     prep.t, prep.gyro, prep.accel = (x[:n * prep.n_per] for x in (prep.t, prep.gyro,
                                                                     prep.accel))
-    assert "gnss" in prep.arrivals
+    assert prep.series["gnss"].t_arrival is not None
     with warnings.catch_warnings():
         warnings.simplefilter("error", LateMeasurementWarning)
         res = prep.feed(prep.navigator()).result()
@@ -221,7 +221,7 @@ def test_a_measurement_later_than_declared_is_said_once_and_counted(drive):
     assert msg.startswith("gnss: a measurement arrived 0.600 s after its time of validity")
     assert "sensors.gnss.timing.latency_s = 0.3 s declared" in msg
     assert "set sensors.gnss.timing.latency_s" in msg and "\n" not in msg
-    n = int(np.count_nonzero(prep.measurements["gnss"][0] < prep.t[-1] - 1.0))
+    n = int(np.count_nonzero(prep.series["gnss"].t < prep.t[-1] - 1.0))
     assert res.data_quality["late_measurements_deferred"] >= n
     # fed late without its arrival time: dropped when its epoch has run, said once
     with pytest.warns(LateMeasurementWarning, match=r"dropped .*latency_s") as w:
@@ -342,7 +342,7 @@ def test_initial_state_from_sigmas_is_the_hand_written_p0():
 # ----------------------------------------------------------------------- 5. bad input
 def test_bad_stream_input_is_one_line_naming_it(drive):
     prep = _prep(drive, 5.0)
-    tg, zg, Rg = prep.measurements["gnss"]
+    tg, zg, Rg = prep.rows("gnss")
     for period in (0.0, -0.01, float("nan"), "fast"):
         with pytest.raises(ValueError, match=r"^Navigator: imu_period must be a positive "
                                              r"number of seconds, got "):

@@ -59,7 +59,7 @@ def within(value, true, factor=1.5):
 def test_tune_recovers_the_figures_of_a_simulated_drive(drive):
     imu, g, truth = drive
     base = load_system({"sensors": {"gnss": {"lever_m": truth["sensors"]["gnss"]["lever_m"]}}})
-    res = tune(imu, g, None, base)
+    res = tune(imu, {"gnss": g}, base)
     fig = {f.key: f for f in res.figures}
     for key in ("sigma_pos_enu_m", "sigma_vel_mps"):
         f, true = fig[f"sensors.gnss.{key}"], truth["sensors"]["gnss"][key]
@@ -73,7 +73,7 @@ def test_tune_recovers_the_figures_of_a_simulated_drive(drive):
         if not within(f.value, truth["imu"][key]):
             assert f.how.startswith("kept"), (key, f)
             imu_true = {**res.config.imu.model_dump(exclude_none=True), key: truth["imu"][key]}
-            at_truth = evaluate(imu, g, None, res.config.model_copy(
+            at_truth = evaluate(imu, {"gnss": g}, res.config.model_copy(
                 update={"imu": res.config.imu.model_copy(update=imu_true)}))
             assert at_truth.loglik - res.after.loglik < LR_95, key
     assert 0.9 < res.after.nis_per_dof["gnss"] < 1.1
@@ -182,7 +182,7 @@ def test_tune_keeps_held_back_nis_in_band_with_correlated_gnss_errors(gm_drive):
     imu, gnss, truth, _ = gm_drive
     g = truth["sensors"]["gnss"]
     base = load_system({"imu": datasheet(truth), "sensors": {"gnss": g}})
-    res = tune(imu, gnss, None, base)
+    res = tune(imu, {"gnss": gnss}, base)
     assert res.before.nis_held["gnss"] > 2.0  # the data sheet: overconfident
     assert res.accepted and in_band(res.after.nis_held), res.summary()
     assert res.after.loglik_held > res.before.loglik_held
@@ -210,7 +210,7 @@ def test_tune_keeps_held_back_nis_in_band_with_correlated_gnss_errors(gm_drive):
 def test_tune_never_makes_the_held_back_fit_worse(gm_drive):
     imu, gnss, truth, _ = gm_drive
     base = load_system(truth)  # already right
-    res = tune(imu, gnss, None, base, outages=0)
+    res = tune(imu, {"gnss": gnss}, base, outages=0)
     assert res.after.loglik_held >= res.before.loglik_held
     assert in_band(res.after.nis_held)
     if not res.accepted:  # then the base's figures are what it gives back
@@ -224,7 +224,7 @@ def test_tune_never_makes_the_held_back_fit_worse(gm_drive):
 def test_tuned_sensor_sigma_never_falls_below_the_data_scatter(gm_drive):
     imu, gnss, truth, _ = gm_drive
     base = load_system({"imu": datasheet(truth), "sensors": {"gnss": truth["sensors"]["gnss"]}})
-    res = tune(imu, gnss, None, base, tune_sensors=True, outages=0)
+    res = tune(imu, {"gnss": gnss}, base, tune_sensors=True, outages=0)
     fig = {f.key: f for f in res.figures}
     pos, vel = fig["sensors.gnss.sigma_pos_enu_m"], fig["sensors.gnss.sigma_vel_mps"]
     # the floors: the white parts (0.5, 0.5, 1.0 m; 0.05, 0.05, 0.1 m/s)
@@ -243,7 +243,7 @@ def test_tune_keeps_a_figure_marked_fixed(gm_drive):
     imu, gnss, truth, _ = gm_drive
     sheet = datasheet(truth)
     base = load_system({"imu": sheet, "sensors": {"gnss": truth["sensors"]["gnss"]}})
-    res = tune(imu, gnss, None, base, fixed=["imu.gyro_arw_rad_sqrt_s", "accel_markov_ug"],
+    res = tune(imu, {"gnss": gnss}, base, fixed=["imu.gyro_arw_rad_sqrt_s", "accel_markov_ug"],
                outages=0)
     fig = {f.key: f for f in res.figures}
     f = fig["imu.gyro_arw_rad_sqrt_s"]
@@ -257,7 +257,7 @@ def test_tune_keeps_a_figure_marked_fixed(gm_drive):
 def test_tune_says_when_no_lever_arm_is_set(gm_drive, tmp_path):
     imu, _, truth, d = gm_drive
     gnss = read_gnss_csv(d / "gnss.csv")
-    res = tune(imu, gnss, None, load_system({"imu": truth["imu"]}), matching_passes=1,
+    res = tune(imu, {"gnss": gnss}, load_system({"imu": truth["imu"]}), matching_passes=1,
                outages=0)
     assert any(n.startswith("no GNSS antenna lever arm is set") for n in res.warnings)
     base = tmp_path / "base.yaml"

@@ -93,8 +93,8 @@ def test_a_run_with_the_old_key_equals_one_with_the_new_key():
     gnss.pop("sigma_pos_m")
     gnss["sigma_pos_enu_m"] = [1.6, 0.8, 3.0]                 # east, north, up
     new = load_system(data)
-    a = process(d.imu, d.gnss, None, old).forward
-    b = process(d.imu, d.gnss, None, new).forward
+    a = process(d.imu, {"gnss": d.gnss}, old).forward
+    b = process(d.imu, {"gnss": d.gnss}, new).forward
     np.testing.assert_array_equal(a.lla, b.lla)
     np.testing.assert_array_equal(a.sigma, b.sigma)
 

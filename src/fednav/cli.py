@@ -423,8 +423,7 @@ def _run_process(read, imu, gnss, velocity, ref, smooth, out, config, output_rat
         refuse_overwrite(paths)  # (and the files the description lists)
         clear_results(out)
         since = _kernel_cache.compile_seconds()
-        res = process(data["imu"], data["gnss"], data["velocity"], cfg, smooth,
-                      sensors=data.get("sensors"), force=force)
+        res = process(data["imu"], _series(data), cfg, smooth=smooth, force=force)
         compiled = _less_compile(res, since)
         res.warnings[:0] = data.get("warnings", [])
         files = process_output.write(out, res, data["ref"], {
@@ -463,11 +462,19 @@ def _ulog_reader(log: Path):
                             f"not used as the reference")
             truth = None
         warnings += [f"{log}: {note}" for note in rec.notes]
-        return {"imu": rec.imu, "gnss": rec.gnss, "velocity": None, "ref": truth,
-                "sensors": rec.sensors, "system": system, "warnings": warnings,
+        return {"imu": rec.imu, "gnss": rec.gnss, "ref": truth, "sensors": rec.series,
+                "system": system, "warnings": warnings,
                 "others": {} if rec.px4 is None else {"px4": rec.px4},
                 "paths": {"ulog": log}}
     return read
+
+
+def _series(data: dict) -> dict:
+    """Every sensor's series a reader gave, by registered name (its GNSS and velocity
+    sensor beside the others)."""
+    both = {"gnss": data.get("gnss"), "velocity": data.get("velocity"),
+            **(data.get("sensors") or {})}
+    return {n: d for n, d in both.items() if d is not None}
 
 
 def _less_compile(res, since: float) -> float:
@@ -746,7 +753,7 @@ def _run_tune(read, inputs: list, config, out: Path, fix=None, tune_sensors=Fals
     data = read(cfg)
     since = _kernel_cache.compile_seconds()
     with console.status("tuning") as status:
-        res = tune(data["imu"], data["gnss"], data["velocity"], cfg,
+        res = tune(data["imu"], _series(data), cfg,
                    progress=lambda what: status.update(f"filter run: {what}"),
                    fixed=fix or (), tune_sensors=tune_sensors, block_s=block_s,
                    outages=outages, sigma_from_file=sigma_from_file)

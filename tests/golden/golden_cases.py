@@ -244,7 +244,7 @@ def _solution(out: dict, prefix: str, sol, step: int) -> None:
 def _process_case(out: dict, prefix: str, imu, gnss, vel, ref, cfg, smooth: bool) -> None:
     from fednav.process.run import errors_against, process, rmse
 
-    res = process(imu, gnss, vel, cfg, smooth)
+    res = process(imu, {"gnss": gnss, "velocity": vel}, cfg, smooth=smooth)
     _solution(out, f"{prefix}/forward", res.forward, 200)
     _put(out, f"{prefix}/epochs", res.epochs)
     # the goldens' keys are the 0.1 names (down, not up: the same RMSE)
@@ -305,7 +305,7 @@ def tune_case(tmp: Path) -> dict:
     pcfg = load_system({"sensors": {"gnss": {"lever_m": list(cfg.gnss.lever_m)}}})
     imu, gnss, vel, _ = _read_csv(tmp, pcfg)
     imu.gyro = _ulp(imu.gyro)
-    res = tune(imu, gnss, vel, pcfg)
+    res = tune(imu, {"gnss": gnss, "velocity": vel}, pcfg)
     out: dict = {}
     legacy = {"sensors.gnss.sigma_pos_enu_m": "gnss_sigma_pos_m",
               "sensors.gnss.sigma_vel_mps": "gnss_sigma_vel_mps",

@@ -45,6 +45,7 @@ def test_topics_and_time_in_seconds_from_the_log_start(events, sim):
         assert {"sensor_combined", "vehicle_gps_position", "vehicle_air_data",
                 "vehicle_magnetometer", "vehicle_attitude"} <= set(rec.topics)
         assert set(rec.sensors) == {"baro", "mag"}
+        assert set(rec.series) == {"gnss", "baro", "mag"}  # (what process takes)
         assert rec.quality["rows_dropped"] == {}
     # this SITL log counts from the Unix epoch (2024-03-18), the other from boot
     assert events.start_s == pytest.approx(1710773350.346, abs=1e-6)
@@ -237,8 +238,8 @@ def test_the_log_runs_through_process_and_agrees_with_px4(events):
            "mag": {"sigma_heading_deg": 2.0, "inclination_deg": 64.0,
                    "declination_deg": events.quality["mag_declination_deg"]},
            "baro": {"sigma_m": 0.5, "damping_loop": False}}
-    res = process(events.imu, g, None, load_system({"imu": imu, "sensors": sec}),
-                  sensors=events.sensors)
+    res = process(events.imu, {"gnss": g, **events.sensors}, load_system({"imu": imu,
+                                                                          "sensors": sec}))
     r = rmse(errors_against(res.forward, events.px4))
     assert max(r["east_m"], r["north_m"], r["up_m"]) < 0.5
     assert max(r["ve_mps"], r["vn_mps"], r["vu_mps"]) < 0.2

@@ -9,6 +9,7 @@ from __future__ import annotations
 import copy
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -348,6 +349,61 @@ class ImuData:
         return float((self.t[-1] - self.t[0]) / (len(self.t) - 1))
 
 
+@runtime_checkable
+class Series(Protocol):
+    """What every sensor's recording is, whichever reader made it: the sensor's
+    registered ``name``, its ``source`` (file and record), times of validity ``t`` (N,)
+    [s], values ``z`` (N, m) in the sensor's SI layout (NaN in the ``absent``
+    components), each row's 1-sigma ``sigma`` (N, m) [units of the sensor's series] or
+    its covariance ``cov`` (N, m, m) or neither (the system description's figures),
+    arrival times ``t_arrival`` (N,) [s] or None, and ``quality`` (what the reader did).
+    :class:`SensorData` is the plain one; :class:`GnssData` and :class:`VelocityData`
+    are the GNSS's and velocity sensor's with their own fields beside."""
+
+    name: str
+    source: str
+    t: np.ndarray
+    t_arrival: np.ndarray | None
+    quality: dict
+
+    @property
+    def z(self) -> np.ndarray: ...
+
+    @property
+    def sigma(self) -> np.ndarray | None: ...
+
+    @property
+    def cov(self) -> np.ndarray | None: ...
+
+    @property
+    def absent(self) -> tuple[int, ...]: ...
+
+
+@dataclass
+class SensorData:
+    """One sensor's recorded measurements: ``name`` (registered), ``source`` (the file),
+    times of validity ``t`` (N,) [s], values ``z`` (N, m) in SI units (radians, metres,
+    m/s) in the layout of the sensor's measurement model, each row's 1-sigma ``sigma``
+    (N, m) in the units of the sensor's series (metres north/east for latitude and
+    longitude, radians, m/s) or None (the system description's figure), arrival times
+    ``t_arrival`` (N,) [s] or None, and what the reader found (``quality``: rows
+    dropped).  The one series type every sensor's recording is (:class:`Series`)."""
+
+    name: str
+    source: str
+    t: np.ndarray
+    z: np.ndarray
+    t_arrival: np.ndarray | None = None
+    quality: dict = field(default_factory=dict)
+    sigma: np.ndarray | None = None
+    #: components of ``z`` the file does not have (optional columns; NaN in ``z``)
+    absent: tuple[int, ...] = ()
+    #: each row's covariance (N, m, m) instead of ``sigma``, for a sensor whose errors
+    #: correlate between components (a velocity sensor's), in the units of ``sigma``
+    #: squared; None: ``sigma``
+    cov: np.ndarray | None = None
+
+
 @reads_old_sigma_pos
 @dataclass
 class GnssData:
@@ -418,6 +474,52 @@ class GnssData:
                 self.vel is not None and np.any(self.sigma_vel <= 0)):
             raise DataError(f"{self.source}: GNSS standard deviations must be positive")
 
+    #: its registered sensor (:class:`Series`)
+    name: ClassVar[str] = "gnss"
+    cov: ClassVar[None] = None
+
+    @property
+    def z(self) -> np.ndarray:
+        """The fixes as the sensor's series ``[lat, lon, h, vE, vN, vU]`` (N, 6) [rad, m,
+        m/s], NaN where the receiver gives no position or no velocity."""
+        n = len(self.t)
+        return np.column_stack([np.full((n, 3), np.nan) if self.lla is None else self.lla,
+                                np.full((n, 3), np.nan) if self.vel is None else self.vel])
+
+    @property
+    def sigma(self) -> np.ndarray | None:
+        """Each fix's 1-sigma in the series' order (``sigma_rows``) or None."""
+        return self.sigma_rows
+
+    @property
+    def absent(self) -> tuple[int, ...]:
+        """The components the receiver does not give (position or velocity)."""
+        return ((0, 1, 2) if self.lla is None else ()) + ((3, 4, 5) if self.vel is None
+                                                          else ())
+
+    @classmethod
+    def from_series(cls, d: Series, sigma_pos_enu=5.0, sigma_vel=0.1,
+                    lever=(0.0, 0.0, 0.0)) -> GnssData:
+        """A GNSS series of any reader (``read_sensor_csv("gnss", ...)``) as GNSS fixes,
+        with the figures for fixes without a 1-sigma (position [east, north, up] m,
+        velocity m/s; one value for three) and the antenna lever arm (body
+        right-forward-up, m)."""
+        if isinstance(d, cls):
+            return d
+        z = np.asarray(d.z, dtype=float)
+        absent = set(d.absent)
+        lla = None if {0, 1, 2} <= absent else z[:, :3]
+        vel = None if z.shape[1] < 6 or {3, 4, 5} <= absent else z[:, 3:6]
+        sig = None if d.sigma is None else np.asarray(d.sigma, dtype=float)
+        if sig is not None and sig.shape[1] < 6:
+            sig = np.column_stack([sig, np.ones((len(sig), 6 - sig.shape[1]))])
+        out = cls(d.source, d.t, lla, vel, np.broadcast_to(np.asarray(
+            sigma_pos_enu, dtype=float), (3,)).copy(), np.broadcast_to(np.asarray(
+                sigma_vel, dtype=float), (3,)).copy(), np.asarray(lever, dtype=float),
+            sigma_rows=sig, t_arrival=d.t_arrival)
+        out.quality = {**d.quality, **out.quality}
+        return out
+
     def position_velocity(self, window_s: float) -> tuple[np.ndarray, np.ndarray]:
         """ENU velocity [m/s] at each fix from the positions alone: their difference
         across +-``window_s`` around it (one-sided at the ends), and its 1-sigma [m/s]
@@ -457,6 +559,35 @@ class VelocityData:
     quality: dict = field(default_factory=dict)
     #: when each measurement reached the navigator [s] (None: at its time of validity)
     t_arrival: np.ndarray | None = None
+    #: its registered sensor (:class:`Series`); its noise is ``cov``
+    name: ClassVar[str] = "velocity"
+    sigma: ClassVar[None] = None
+    absent: ClassVar[tuple] = ()
+
+    @property
+    def z(self) -> np.ndarray:
+        """The series' values: ``vel``."""
+        return self.vel
+
+    @classmethod
+    def from_series(cls, d: Series, lever=(0.0, 0.0, 0.0)) -> VelocityData:
+        """A velocity series of any reader (``read_sensor_csv("velocity", ...)``, which
+        must give each row's 1-sigma or covariance) as velocity data, with the sensor's
+        lever arm (body right-forward-up, m)."""
+        if isinstance(d, cls):
+            return d
+        cov = d.cov
+        if cov is None:
+            if d.sigma is None:
+                raise DataError(f"{d.source}: velocity data without each row's 1-sigma "
+                                f"(sigma_vE_mps, sigma_vN_mps, sigma_vU_mps) or covariance")
+            s = np.asarray(d.sigma, dtype=float)
+            cov = np.zeros((len(s), 3, 3))
+            cov[:, np.arange(3), np.arange(3)] = s**2
+        out = cls(d.source, d.t, d.z, cov, np.asarray(lever, dtype=float),
+                  t_arrival=d.t_arrival)
+        out.quality = {**d.quality, **out.quality}
+        return out
 
     def __post_init__(self):
         t = _as_float(self.source, "t", self.t, (-1,))

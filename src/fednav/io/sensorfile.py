@@ -9,38 +9,16 @@ Adding a sensor to the registry adds its file layout; nothing here names a senso
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from ..sensors import registry
 from .csvdata import _read, write_csv
-from .data import DataError
+from .data import DataError, SensorData  # noqa: F401  (fednav.io.sensorfile's name)
 
 #: Optional column: when the measurement reached the navigator [s].
 ARRIVAL = "t_arrival_s"
-
-
-@dataclass
-class SensorData:
-    """One sensor's recorded measurements: ``name`` (registered), ``source`` (the file),
-    times of validity ``t`` (N,) [s], values ``z`` (N, m) in SI units (radians, metres,
-    m/s) in the layout of the sensor's measurement model, each row's 1-sigma ``sigma``
-    (N, m) in the units of the sensor's series (metres north/east for latitude and
-    longitude, radians, m/s) or None (the system description's figure), arrival times
-    ``t_arrival`` (N,) [s] or None, and what the reader found (``quality``: rows
-    dropped)."""
-
-    name: str
-    source: str
-    t: np.ndarray
-    z: np.ndarray
-    t_arrival: np.ndarray | None = None
-    quality: dict = field(default_factory=dict)
-    sigma: np.ndarray | None = None
-    #: components of ``z`` the file does not have (optional columns; NaN in ``z``)
-    absent: tuple[int, ...] = ()
 
 
 def columns(name: str) -> tuple[str, ...]:

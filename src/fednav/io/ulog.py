@@ -65,6 +65,12 @@ class UlogRecording:
     quality: dict = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
 
+    @property
+    def series(self) -> dict:
+        """Every sensor's series by registered name, the GNSS among them: what
+        :func:`fednav.process.process` takes."""
+        return {**({"gnss": self.gnss} if self.gnss is not None else {}), **self.sensors}
+
 
 class _Log:
     """The parsed log: topic data by name, the time origin, drop counts."""

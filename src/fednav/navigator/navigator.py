@@ -146,6 +146,20 @@ def integrate_stamps(t0, dt, n, st, acc, pend, stamps, data, data_inc, out):
     return m
 
 
+def residual_covariances(model, noise) -> np.ndarray:
+    """Each row's residual covariance R (N, r, r) [residual units squared] from its noise
+    (N, m) 1-sigma or (N, m, m) covariance [units of z], by the sensor's measurement
+    ``model`` — the one place a measurement's noise becomes R (one R, broadcast, when
+    every row's noise is the same)."""
+    noise = np.asarray(noise, dtype=float)
+    if not len(noise):
+        return np.zeros((0, 1, 1))
+    if (noise == noise[0]).all():
+        R0 = model.R(noise[0])
+        return np.broadcast_to(R0, (len(noise),) + R0.shape)
+    return np.array([model.R(s) for s in noise])
+
+
 def declared_latency(system: System) -> dict[str, float]:
     """The latency each aiding sensor declares (``sensors.NAME.timing``: ``latency_s``,
     the upper end of ``latency_range_s`` or the largest of ``latency_list_s``) [s], for
@@ -885,7 +899,7 @@ class Navigator:
         return n_grid if self._jit is None else self._jit[3][0]
 
     def add_measurement(self, sensor: str, t: float, z, *, sigma=None, R=None,
-                        t_arrival: float | None = None) -> None:
+                        t_arrival: float | None = None, cov=None) -> None:
         """Add one measurement of an aiding sensor.
 
         It is used at the filter epoch of its time of validity when it comes within the
@@ -917,8 +931,16 @@ class Navigator:
             squared]; neither: the system's figures.
         t_arrival : float, optional
             When the measurement reached the navigator [s]; default ``t``.
+        cov : ndarray, optional
+            Its covariance (m, m) instead of ``sigma``, for a sensor whose model takes
+            one (the velocity sensor's) [units of z squared].
         """
         m = self._meas.get(sensor)
+        if cov is not None:
+            self.add_measurements(sensor, [t], np.atleast_2d(z),
+                                  cov=np.asarray(cov, dtype=float)[None],
+                                  t_arrival=None if t_arrival is None else [t_arrival])
+            return
         if R is not None and m is not None and m.how != "recompute" and len(m) \
                 and not self._total:
             # the common case of a stream: one value with its noise, appended in place
@@ -955,7 +977,7 @@ class Navigator:
                               t_arrival=None if t_arrival is None else [t_arrival])
 
     def add_measurements(self, sensor: str, t, z, *, sigma=None, R=None,
-                         t_arrival=None) -> None:
+                         t_arrival=None, cov=None) -> None:
         """Add several measurements of one sensor (see :meth:`add_measurement`).
 
         Parameters
@@ -973,8 +995,22 @@ class Navigator:
             Residual covariances instead of ``sigma`` [residual units squared].
         t_arrival : ndarray, shape (N,), optional
             Arrival times [s]; default ``t``.
+        cov : ndarray, shape (N, m, m), optional
+            Each measurement's covariance instead of ``sigma``, for a sensor whose model
+            takes one (the velocity sensor's, with correlated axes) [units of z squared].
         """
         m = self._meas.get(sensor)
+        if cov is not None:  # (the model makes R of it, as of sigma)
+            cov = np.asarray(cov, dtype=float)
+            if sigma is not None or R is not None:
+                raise ValueError(f"{sensor}: give one of sigma, cov and R")
+            if cov.ndim != 3 or cov.shape[1] != cov.shape[2] or len(cov) != np.size(t):
+                raise ValueError(f"{sensor}: cov has shape {cov.shape}; give one (m, m) "
+                                 f"covariance per measurement [units of z squared]")
+            if m is not None and not self._total and hasattr(m.model, "R"):
+                R = residual_covariances(m.model, cov)
+            else:
+                sigma = np.sqrt(np.diagonal(cov, axis1=1, axis2=2))
         if m is None:
             if self._constraint is not None and sensor == "airdata":
                 m = self._constraint
@@ -1028,11 +1064,8 @@ class Navigator:
             R = np.asarray(R, dtype=float)[keep]
         elif m is self._constraint or not hasattr(m.model, "R"):
             R = np.full((len(t), 1, 1), np.nan)
-        elif one_sigma and len(t):
-            R0 = m.model.R(sigma[0])
-            R = np.broadcast_to(R0, (len(t),) + R0.shape)
         else:
-            R = np.array([m.model.R(s) for s in sigma])
+            R = residual_covariances(m.model, sigma)
         if sigma is None:
             sigma = np.full((len(t), z.shape[1]), np.nan)
         capture = np.maximum(self._epoch_of(t), 1) if m.how == "recompute" else epochs

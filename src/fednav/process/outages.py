@@ -10,11 +10,9 @@ recording's own clock [s].
 from __future__ import annotations
 
 import copy
+import dataclasses
 
 import numpy as np
-
-#: The fields of the recorded-data containers that hold one row per measurement.
-ROW_FIELDS = ("t", "lla", "vel", "z", "cov", "sigma_rows", "sigma", "t_arrival")
 
 
 def inside(t, windows) -> np.ndarray:
@@ -38,7 +36,7 @@ def withhold(data, windows, name: str = "sensor"):
         return data
     n, keep = len(data.t), ~drop
     out = copy.copy(data)  # (the kept rows passed the container's checks already)
-    for f in ROW_FIELDS:
+    for f in (f.name for f in dataclasses.fields(data)):  # (a series' own fields)
         v = getattr(data, f, None)
         if isinstance(v, np.ndarray) and v.ndim >= 1 and v.shape[0] == n and (
                 f != "sigma" or v.ndim == 2):

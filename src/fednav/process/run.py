@@ -14,7 +14,10 @@ validity — and the solution at every IMU sample with its sigmas, smoothed on r
 
 from __future__ import annotations
 
+import functools
 import time
+import warnings
+from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -23,11 +26,16 @@ from pydantic import ValidationError
 from ..core import attitude as att
 from ..core import earth, units
 from ..ins.alignment import UNKNOWN_HEADING_SIGMA, Alignment
-from ..io.data import DataError, GnssData, ImuData, VelocityData
-from ..io.sensorfile import SensorData
+from ..io.data import DataError, GnssData, ImuData, SensorData, Series, VelocityData
 from ..navigator.health import local_nis, readmission_warnings, row_nis, run_health
 from ..navigator.loop import InnovationRecord  # noqa: F401  (fednav.process's name)
-from ..navigator.navigator import InitialState, Navigator, declared_latency, stamp_tolerance
+from ..navigator.navigator import (
+    InitialState,
+    Navigator,
+    declared_latency,
+    residual_covariances,
+    stamp_tolerance,
+)
 from ..navigator.solution import Solution, consistency, epoch_rate, imu_rate
 from ..navigator.system import (
     System,
@@ -65,6 +73,36 @@ from .initial import (  # noqa: F401  (gnss_course: fednav.process.run's name of
 #: The processing config of fednav 0.1 is a system description now (one schema); the
 #: old name is kept for one release.
 ProcessConfig = System
+
+
+def old_layout(*old: str):
+    """Decorator of ``fn(imu, sensors, ...)``: a call in fednav 0.4's layout
+    ``fn(imu, gnss, velocity, *old, sensors=...)`` (GNSS and velocity sensor as their own
+    arguments) is read as ``fn(imu, {"gnss": gnss, "velocity": velocity, **sensors},
+    ...)`` with a ``FutureWarning``, for one more release."""
+    def wrap(fn):
+        @functools.wraps(fn)
+        def call(imu, *args, **kwargs):
+            second = args[0] if args else kwargs.get("gnss")
+            third = args[1] if len(args) > 1 else None
+            if not ("gnss" in kwargs or "velocity" in kwargs
+                    or isinstance(second, (GnssData, VelocityData))
+                    or isinstance(third, VelocityData)
+                    or (len(args) > 2 and isinstance(args[2], System))):
+                return fn(imu, *args, **kwargs)
+            given = dict(zip(("gnss", "velocity") + old, args, strict=False)) | kwargs
+            sensors = dict(given.pop("sensors", None) or {})
+            for name in ("gnss", "velocity"):
+                if given.get(name) is not None:
+                    sensors[name] = given[name]
+                given.pop(name, None)
+            warnings.warn(f"{fn.__name__}(imu, gnss, velocity, ...) is now "
+                          f"{fn.__name__}(imu, {{'gnss': gnss, 'velocity': velocity, ...}}, "
+                          f"...): every sensor's series by its registered name; read for "
+                          f"one more release", FutureWarning, stacklevel=2)
+            return fn(imu, sensors, **given)
+        return call
+    return wrap
 
 
 def _gnss_cfg(cfg: System) -> GnssConfig:
@@ -209,10 +247,13 @@ class Prepared:
         Angular rates, body right-forward-up [rad/s].
     accel : ndarray, shape (N, 3)
         Specific force, body right-forward-up [m/s^2].
-    measurements : dict of str to tuple
-        Each sensor's ``(t, z, R)``: times of validity [s], measurements in the sensor's
-        layout (GNSS: lat, lon [rad], h [m], ENU velocity [m/s]) and their residual
-        covariances [residual units squared].
+    series : dict of str to Series
+        Every sensor's measurements as the navigator takes them, by registered name
+        (:class:`fednav.io.data.Series`: times of validity and arrival [s], ``z`` in
+        the sensor's layout — GNSS: lat, lon [rad], h [m], ENU velocity [m/s] — and
+        each row's 1-sigma or covariance; the noise becomes R in one place, the
+        navigator's :meth:`~fednav.navigator.Navigator.add_measurements`), in the order
+        they are fed.
     imu_errors : ImuErrors or None
         The IMU file's error figures (SI units).
     n_per : int
@@ -223,15 +264,9 @@ class Prepared:
         How the initial attitude was found (:mod:`fednav.ins.alignment`).
     quality : dict
         What the input checks did (counts [-]) and measured (``*_seen_s`` [s]).
-    others : dict of str to SensorData
-        Other registered sensors' recordings by name.
-    sigmas : dict of str to ndarray
-        Each measurement stream's 1-sigma by sensor [sensor units].
     increments : tuple of ndarray or None
         The IMU file's own increments (dtheta [rad], dv [m/s]) of these samples, when it
         held them.
-    arrivals : dict of str to ndarray
-        When each measurement of ``measurements`` reached the navigator, by sensor [s].
     """
 
     system: System
@@ -240,19 +275,14 @@ class Prepared:
     t: np.ndarray
     gyro: np.ndarray
     accel: np.ndarray
-    measurements: dict
+    series: dict
     imu_errors: object
     n_per: int
     warnings: list
     alignment: Alignment
     quality: dict
-    others: dict = field(default_factory=dict)
-    #: each measurement stream's 1-sigma, by sensor (what the total-state navigator takes)
-    sigmas: dict = field(default_factory=dict)
     #: the IMU file's own increments (dtheta, dv) of these samples, when it held them
     increments: tuple | None = None
-    #: when each measurement of ``measurements`` reached the navigator, by sensor
-    arrivals: dict = field(default_factory=dict)
 
     def navigator(self, **options) -> Navigator:
         """A navigator for these data, nothing fed yet.
@@ -272,6 +302,29 @@ class Prepared:
         return Navigator(self.system, self.initial, self.dt, imu_errors=self.imu_errors,
                          **options)
 
+    def rows(self, name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """One sensor's series with each row's R, for a stream that passes its own R
+        with each measurement.
+
+        Parameters
+        ----------
+        name : str
+            The sensor's registered name (a key of :attr:`series`).
+
+        Returns
+        -------
+        tuple of ndarray
+            ``(t, z, R)``: times of validity (N,) [s], values (N, m) in the sensor's
+            layout [rad, m, m/s], residual covariances (N, r, r) by the system's
+            measurement model [residual units squared]
+            (:func:`~fednav.navigator.navigator.residual_covariances`).
+        """
+        d = self.series[name]
+        noise = d.cov if d.cov is not None else d.sigma
+        if noise is None:
+            noise = np.broadcast_to(self.system.sensors[name].sigma(), d.z.shape)
+        return d.t, d.z, residual_covariances(sensor_model(self.system, name), noise)
+
     def feed(self, nav: Navigator) -> Navigator:
         """Feed every measurement, then every IMU sample, in one block each.
 
@@ -285,15 +338,9 @@ class Prepared:
         Navigator
             ``nav``, fed (its :meth:`~fednav.navigator.Navigator.result` is the run's).
         """
-        total = self.system.filter.state == "total"
-        for name, (t, z, R) in self.measurements.items():
-            ta = self.arrivals.get(name)
-            if total:
-                nav.add_measurements(name, t, z, sigma=self.sigmas[name], t_arrival=ta)
-            else:
-                nav.add_measurements(name, t, z, R=R, t_arrival=ta)
-        for d in self.others.values():
-            nav.add_measurements(d.name, d.t, d.z, sigma=d.sigma, t_arrival=d.t_arrival)
+        for name, d in self.series.items():
+            nav.add_measurements(name, d.t, d.z, sigma=d.sigma, cov=d.cov,
+                                 t_arrival=d.t_arrival)
         if self.increments is not None:
             nav.add_imu(self.t, dtheta=self.increments[0], dv=self.increments[1])
         else:
@@ -381,8 +428,9 @@ def _check_figures(imu: ImuData, cfg: System) -> None:
     with_imu_figures(imu, cfg)
 
 
-def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData | None = None,
-            cfg: System | None = None, sensors: dict | None = None) -> Prepared:
+@old_layout("cfg", "sensors")
+def prepare(imu: ImuData, sensors: Mapping[str, Series] | None = None,
+            cfg: System | None = None) -> Prepared:
     """Make recorded data ready for a :class:`~fednav.navigator.Navigator`: the input
     checks, the sensor corrections, the initial state and P0 of :func:`process`.
 
@@ -395,17 +443,14 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
     imu : ImuData
         IMU samples (:class:`fednav.io.ImuData`: ``t`` [s], rates [rad/s] and specific
         force [m/s^2], body right-forward-up).
-    gnss : GnssData, optional
-        GNSS fixes (:class:`fednav.io.GnssData`: lat/lon [rad], h [m] and/or ENU velocity
-        [m/s]; position and velocity, position only, or velocity only).
-    velocity : VelocityData, optional
-        A velocity sensor's ENU velocities [m/s] (:class:`fednav.io.VelocityData`).
+    sensors : dict of str to Series
+        Every sensor's recording by its registered name (:class:`fednav.io.data.Series`:
+        ``"gnss"`` — :class:`fednav.io.GnssData` or ``read_sensor_csv("gnss", ...)``:
+        lat/lon [rad], h [m] and/or ENU velocity [m/s] — ``"velocity"``, ``"baro"``,
+        ``"star"`` ...); a row's noise is its 1-sigma (or covariance) when the file gives
+        it [sensor units], else the system description's.
     cfg : System, optional
         The system description (:func:`fednav.load_system`); default: ``System()``.
-    sensors : dict of str to SensorData, optional
-        Other registered sensors' recordings by name (:func:`fednav.read_sensor_csv`);
-        their noise is each row's 1-sigma when the file gives it [sensor units], else the
-        system description's.
 
     Returns
     -------
@@ -421,16 +466,11 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
         One line for data it cannot use.
     """
     cfg = cfg or System()
-    gnss, velocity, sensors = withheld_inputs(cfg, gnss, velocity, sensors)
+    others = withheld_inputs(cfg, recordings(sensors, cfg))
+    gnss, velocity = others.pop("gnss", None), others.pop("velocity", None)
     if cfg.filter.state == "total" and (cfg.smoother or cfg.output_rate_hz):
         raise DataError("filter.state: total — the total-state navigator's solution is at "
                         "its filter epochs (no IMU-rate rows to smooth or thin)")
-    others = dict(sensors or {})
-    for name, d in others.items():
-        if name != d.name:
-            raise DataError(f"{d.source}: {d.name} data given as sensor '{name}'")
-        if name in ("gnss", "velocity"):
-            raise DataError(f"{d.source}: {name} data is given as its own argument")
     init = cfg.initial
     if init is None and (gnss is None or gnss.lla is None):
         raise DataError("the initial position: no GNSS positions to start from; give the "
@@ -530,7 +570,7 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
             quality_extra.update(q)
             warnings += w
 
-    sensors, meas, sigmas = {}, {}, {}
+    sensors, series = {}, {}
     if gnss is not None:
         gc = _gnss_cfg(cfg)
         sig_pos_enu = np.broadcast_to(np.asarray(
@@ -554,15 +594,12 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
             "lever_m": tuple(map(float, lever)),
             "sigma_pos_enu_m": tuple(map(float, sig_pos_enu)),
             "sigma_vel_mps": tuple(map(float, sig_vel)), "measures": has})
-        n = len(gnss.t)
-        z = np.column_stack([np.full((n, 3), np.nan) if gnss.lla is None else gnss.lla,
-                             np.full((n, 3), np.nan) if gnss.vel is None else gnss.vel])
-        model = sensor_model(cfg, "gnss", sensors["gnss"])
-        R = (np.broadcast_to(model.R(np.r_[sig_pos, sig_vel]), (n, model.dim, model.dim))
-             if gnss.sigma_rows is None else np.array([model.R(s) for s in gnss.sigma_rows]))
-        meas["gnss"] = (gnss.t, z, R)
-        sigmas["gnss"] = (np.r_[sig_pos, sig_vel] if gnss.sigma_rows is None
-                          else gnss.sigma_rows)
+        # (each fix's 1-sigma: the file's, else the section's, in the order of z)
+        series["gnss"] = SensorData("gnss", gnss.source, gnss.t, gnss.z, gnss.t_arrival,
+                                    gnss.quality, np.broadcast_to(
+                                        np.r_[sig_pos, sig_vel], (len(gnss.t), 6))
+                                    if gnss.sigma_rows is None else gnss.sigma_rows,
+                                    gnss.absent)
 
     # Initial state: the description's, else the first GNSS fix (antenna moved to the
     # IMU), its velocity and the alignment's attitude.
@@ -646,9 +683,10 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
                             f"declare sensors.{name}.timing.latency_s, or use recompute or "
                             f"ins_increment (docs/paper004.md)")
     if velocity is not None:
-        model = sensor_model(system, "velocity")
-        meas["velocity"] = (velocity.t, velocity.vel,
-                            np.array([model.R(c) for c in velocity.cov]))
+        series["velocity"] = SensorData("velocity", velocity.source, velocity.t,
+                                        velocity.vel, velocity.t_arrival, velocity.quality,
+                                        cov=velocity.cov)
+    series.update(others)
     m = slice(i0, i0 + n_cycles * n_per)
     quality = {**imu.quality, **(gnss.quality if gnss else {}),
                **(velocity.quality if velocity else {}), **quality_extra}
@@ -661,21 +699,45 @@ def prepare(imu: ImuData, gnss: GnssData | None = None, velocity: VelocityData |
                             f"data's {t_start:.1f}..{t_end:.1f} s (a time offset?)")
     return Prepared(system, InitialState(t_start, lla0, vel0, euler0, P0,
                                          gyro_bias=gyro_bias), dt, imu.t[m], imu.gyro[m],
-                    imu.accel[m], meas, imu.errors, n_per, warnings, al, quality, others,
-                    sigmas, None if imu.increments is None
-                    else (imu.increments[0][m], imu.increments[1][m]),
-                    {n: d.t_arrival for n, d in (("gnss", gnss), ("velocity", velocity))
-                     if d is not None and d.t_arrival is not None})
+                    imu.accel[m], series, imu.errors, n_per, warnings, al, quality,
+                    None if imu.increments is None
+                    else (imu.increments[0][m], imu.increments[1][m]))
 
 
-def withheld_inputs(cfg: System, gnss, velocity, sensors):
+def recordings(sensors: Mapping[str, Series] | None, cfg: System) -> dict[str, Series]:
+    """The recordings by registered name, checked (an unknown name, or a series given
+    under another sensor's name, is one line); the GNSS and velocity-sensor series of any
+    reader as :class:`~fednav.io.GnssData` and :class:`~fednav.io.VelocityData` (the
+    section's figures for rows without their own noise, its lever arm); a name given
+    None is left out."""
+    out = {}
+    for name, d in (sensors or {}).items():
+        if d is None:  # (a sensor without data: left out)
+            continue
+        if name not in registry.SENSORS:
+            raise DataError(f"{getattr(d, 'source', name)}: unknown sensor '{name}'; "
+                            f"registered: {', '.join(sorted(registry.SENSORS))}")
+        if not isinstance(d, Series):
+            raise DataError(f"sensors['{name}']: a {type(d).__name__}, not a sensor's "
+                            f"series (fednav.io.read_sensor_csv, read_gnss_csv ...)")
+        if d.name != name:
+            raise DataError(f"{d.source}: {d.name} data given as sensor '{name}'")
+        if name == "gnss":
+            gc = _gnss_cfg(cfg)
+            d = GnssData.from_series(d, 5.0 if gc.sigma_pos_enu_m is None
+                                     else gc.sigma_pos_enu_m, 0.1 if gc.sigma_vel_mps is None
+                                     else gc.sigma_vel_mps, gc.lever())
+        elif name == "velocity":
+            d = VelocityData.from_series(d, _velocity_cfg(cfg).lever())
+        out[name] = d
+    return out
+
+
+def withheld_inputs(cfg: System, sensors: dict[str, Series]) -> dict[str, Series]:
     """The recordings without the measurements inside their sensor's ``outages_s``
-    (:func:`fednav.process.outages.withhold`): GNSS, velocity sensor, other sensors."""
-    return (outages.withhold(gnss, outages.windows_of(cfg, "gnss"), "gnss"),
-            outages.withhold(velocity, outages.windows_of(cfg, "velocity"), "velocity"),
-            None if sensors is None else {
-                n: outages.withhold(d, outages.windows_of(cfg, n), n)
-                for n, d in sensors.items()})
+    (:func:`fednav.process.outages.withhold`)."""
+    return {n: outages.withhold(d, outages.windows_of(cfg, n), n)
+            for n, d in sensors.items()}
 
 
 def flown_gnss(gnss: GnssData | None, system: System) -> GnssData | None:
@@ -691,9 +753,9 @@ def flown_gnss(gnss: GnssData | None, system: System) -> GnssData | None:
                    sigma_vel=np.asarray(g.sigma_vel_mps, dtype=float))
 
 
-def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
-            cfg: System | None = None, smooth: bool = False,
-            innovations: list | None = None, sensors: dict | None = None,
+@old_layout("cfg", "smooth", "innovations", "sensors", "force")
+def process(imu: ImuData, sensors: Mapping[str, Series], cfg: System | None = None,
+            smooth: bool = False, innovations: list | None = None,
             force: bool = False) -> ProcessResult:
     """Process recorded data: loosely coupled INS/GNSS (/velocity, /any registered
     sensor) through the navigator — what ``fednav process`` runs (``fednav.process_data``).
@@ -708,11 +770,8 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
     imu : ImuData
         IMU samples (:class:`fednav.io.ImuData`: ``t`` [s], rates [rad/s] and specific
         force [m/s^2], body right-forward-up).
-    gnss : GnssData or None
-        GNSS fixes (:class:`fednav.io.GnssData`: lat/lon [rad], h [m] and/or ENU velocity
-        [m/s], antenna lever arm body right-forward-up [m]).
-    velocity : VelocityData, optional
-        A velocity sensor's ENU velocities [m/s] (:class:`fednav.io.VelocityData`).
+    sensors : dict of str to Series
+        Every sensor's recording by its registered name (see :func:`prepare`).
     cfg : System, optional
         The system description (:func:`fednav.load_system`); default: ``System()``.
     smooth : bool
@@ -720,8 +779,6 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
     innovations : list, optional
         When given, receives one :class:`~fednav.navigator.loop.InnovationRecord` per
         measurement (what :mod:`fednav.process.tuning` estimates noise figures from).
-    sensors : dict of str to SensorData, optional
-        Other registered sensors' recordings by name (:func:`fednav.read_sensor_csv`).
     force : bool
         Give the solution even when a local filter's mean NIS/dof exceeds
         :data:`~fednav.navigator.health.NIS_REFUSE` (the data are then most likely wrong:
@@ -742,8 +799,9 @@ def process(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
     t_start = time.perf_counter()
     cfg = cfg or System()
     imu = mounted_imu(imu, cfg.imu.mounting)
-    gnss, velocity, sensors = withheld_inputs(cfg, gnss, velocity, sensors)
-    prep = prepare(imu, gnss, velocity, cfg, sensors)
+    sensors = withheld_inputs(cfg, recordings(sensors, cfg))
+    gnss = sensors.get("gnss")
+    prep = prepare(imu, sensors, cfg)
     nav = prep.feed(prep.navigator(record_rows=True, record_covariance=True,
                                    innovations=True))
     out = nav.result()

@@ -71,7 +71,15 @@ from ..navigator.system import System, _translate_legacy
 from ..sensors import GnssConfig, VelocityConfig
 from ..sensors.gnss import renamed_neu_keys
 from ..sensors.imu import FIGURES
-from .run import InnovationRecord, adjust_sensors, imu_figures, process, with_imu_figures
+from .run import (
+    InnovationRecord,
+    adjust_sensors,
+    imu_figures,
+    old_layout,
+    process,
+    recordings,
+    with_imu_figures,
+)
 
 #: Starting IMU figures (a generic MEMS IMU) where neither the file nor the config has one.
 MEMS_DEFAULTS = {"gyro_arw_rad_sqrt_s": 5.8e-4, "accel_vrw_mps_sqrt_s": 2.0e-3,
@@ -270,12 +278,12 @@ def innovation_statistics(inns: list[InnovationRecord],
                       nis_held)
 
 
-def evaluate(imu: ImuData, gnss: GnssData, velocity: VelocityData | None,
-             cfg: System, blocks: Blocks | None = None) -> Evaluation:
-    """Run the forward filter with ``cfg`` and sum up its innovations (all of them
-    fitted without ``blocks``)."""
+def evaluate(imu: ImuData, sensors: dict, cfg: System,
+             blocks: Blocks | None = None) -> Evaluation:
+    """Run the forward filter with ``cfg`` on ``sensors`` (series by registered name) and
+    sum up its innovations (all of them fitted without ``blocks``)."""
     inns: list[InnovationRecord] = []
-    process(imu, gnss, velocity, cfg, innovations=inns, force=True)  # (candidates may fit badly)
+    process(imu, sensors, cfg, innovations=inns, force=True)  # (candidates may fit badly)
     return innovation_statistics(inns, blocks)
 
 
@@ -295,11 +303,12 @@ def withheld(gnss: GnssData, windows) -> GnssData:
     return g
 
 
-def outage_drift(imu: ImuData, gnss: GnssData, velocity: VelocityData | None, cfg: System,
-                 windows) -> list[float]:
-    """Process with the GNSS fixes of ``windows`` withheld; the horizontal distance [m]
-    of the solution (moved to the antenna) from the last withheld fix of each window."""
-    res = process(imu, withheld(gnss, windows), velocity, cfg, force=True)
+def outage_drift(imu: ImuData, sensors: dict, cfg: System, windows) -> list[float]:
+    """Process ``sensors`` (series by registered name) with the GNSS fixes of ``windows``
+    withheld; the horizontal distance [m] of the solution (moved to the antenna) from
+    the last withheld fix of each window."""
+    gnss = sensors["gnss"]
+    res = process(imu, {**sensors, "gnss": withheld(gnss, windows)}, cfg, force=True)
     sol = res.forward
     gc = cfg.sensors.gnss or GnssConfig()
     lever = np.asarray(gc.lever_m if gc.lever_m is not None else gnss.lever, dtype=float)
@@ -424,8 +433,9 @@ def worse(after: Evaluation, before: Evaluation) -> str | None:
     return None
 
 
-def tune(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
-         base: System | None = None, matching_passes: int = 2, progress=None, *,
+@old_layout("base", "matching_passes", "progress")
+def tune(imu: ImuData, sensors: dict, base: System | None = None, matching_passes: int = 2,
+         progress=None, *,
          fixed=(), tune_sensors: bool = False, sigma_from_file=(),
          block_s: float = 60.0, outages: int = 3, outage_s: float = 30.0) -> TuneResult:
     """Tune the noise figures of ``base`` (default :class:`System`) on the data (see the
@@ -437,9 +447,16 @@ def tune(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
     (``"gnss"``: e.g. NaveGo's ``stdm``/``stdv``; a GNSS CSV's sigma columns and a
     velocity file's sigma are seen without it); ``block_s``: the length of the fitted
     and held-back blocks [s]; ``outages`` windows of ``outage_s`` [s] withheld to measure
-    the drift.  ``progress(text)`` is called before each filter run."""
+    the drift.  ``progress(text)`` is called before each filter run.  ``sensors``: every
+    sensor's series by registered name (GNSS needed; the velocity sensor's sigma is
+    tuned too, the other sensors fly with their sections' figures)."""
     t_start = time.perf_counter()
     base = base or System()
+    recs = recordings(sensors, base)
+    gnss, velocity = recs.get("gnss"), recs.get("velocity")
+    if gnss is None or gnss.lla is None:
+        raise DataError("fednav tune: needs GNSS positions (sensors['gnss']): the figures "
+                        "are fitted to their innovations")
     notes: list[str] = []
     warns: list[str] = []
     runs = 0
@@ -533,7 +550,7 @@ def tune(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
         runs += 1
         if progress is not None:
             progress(what)
-        return evaluate(imu, gnss, velocity, config(fig_imu, rg, rv), blocks)
+        return evaluate(imu, recs, config(fig_imu, rg, rv), blocks)
 
     def match(rg, rv, ev):
         """Covariance matching of the free sensor variances on the fitted blocks, never
@@ -639,12 +656,12 @@ def tune(imu: ImuData, gnss: GnssData, velocity: VelocityData | None = None,
     if windows:
         if progress is not None:
             progress("simulated GNSS outages, untuned")
-        drift_before = outage_drift(imu, gnss, velocity, start_cfg, windows)
+        drift_before = outage_drift(imu, recs, start_cfg, windows)
         runs += 1
         if accepted:
             if progress is not None:
                 progress("simulated GNSS outages, tuned")
-            drift_after = outage_drift(imu, gnss, velocity, tuned_cfg, windows)
+            drift_after = outage_drift(imu, recs, tuned_cfg, windows)
             runs += 1
         else:
             drift_after = drift_before

@@ -1,0 +1,135 @@
+"""One route for a measurement: every sensor's recording is a series (``Series``), given to
+``prepare``/``process``/``tune`` in one mapping by registered name — the GNSS and the
+velocity sensor as ordinary entries — and its noise becomes R in one place (the
+navigator's ``residual_covariances``)."""
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from test_process import make_flight
+
+from fednav import System, load_system
+from fednav.io import read_gnss_csv, read_sensor_csv, write_sensor_csv
+from fednav.io.data import DataError, SensorData, Series, VelocityData
+from fednav.navigator.navigator import residual_covariances
+from fednav.process import prepare, process
+from fednav.sensors.base import MeasurementSeries
+
+
+@pytest.fixture(scope="module")
+def flight():
+    return make_flight()
+
+
+def _short(flight, seconds=60.0):
+    imu, gnss, ref = flight
+    n = int(seconds / imu.period())
+    cut = replace(imu, t=imu.t[:n], gyro=imu.gyro[:n], accel=imu.accel[:n], quality={})
+    keep = gnss.t < imu.t[n - 1]
+    g = replace(gnss, t=gnss.t[keep], lla=gnss.lla[keep], vel=gnss.vel[keep], quality={})
+    return cut, g, ref
+
+
+def _velocity(gnss, seed=0):
+    """An ENU velocity sensor (the GNSS velocity with 5 cm/s noise, correlated E-N)."""
+    rng = np.random.default_rng(seed)
+    c = np.array([[0.05**2, 0.0015, 0.0], [0.0015, 0.05**2, 0.0], [0.0, 0.0, 0.08**2]])
+    v = gnss.vel + rng.multivariate_normal(np.zeros(3), c, len(gnss.t))
+    return VelocityData("vel", gnss.t, v, np.broadcast_to(c, (len(gnss.t), 3, 3)).copy(),
+                        np.zeros(3))
+
+
+def test_every_reader_gives_a_series(flight):
+    imu, gnss, _ = flight
+    vel = _velocity(gnss)
+    for d in (gnss, vel, SensorData("baro", "b", gnss.t, gnss.lla[:, 2:])):
+        assert isinstance(d, Series)
+    assert gnss.name == "gnss" and gnss.z.shape == (len(gnss.t), 6) and gnss.absent == ()
+    pos = replace(gnss, vel=None, quality={})
+    assert pos.absent == (3, 4, 5) and np.isnan(pos.z[:, 3:]).all()
+    assert vel.name == "velocity" and vel.z is vel.vel and vel.cov.shape == (len(vel.t), 3, 3)
+
+
+def test_gnss_read_as_any_sensor_flies_as_the_gnss_reader(flight, tmp_path):
+    """The GNSS file read by the generic reader (``read_sensor_csv("gnss", ...)``) and by
+    its own reader: the same navigation."""
+    imu, gnss, _ = _short(flight)
+    sig = np.r_[gnss.sigma_pos_enu[[1, 0, 2]], gnss.sigma_vel]
+    path = write_sensor_csv(tmp_path / "gnss.csv", MeasurementSeries(
+        "gnss", gnss.t, gnss.z, sig), sigma=True)
+    generic = read_sensor_csv("gnss", path)
+    own = read_gnss_csv(path, lever=gnss.lever)
+    cfg = load_system({"sensors": {"gnss": {"lever_m": list(map(float, gnss.lever))}}})
+    a = process(imu, {"gnss": generic}, cfg).forward
+    b = process(imu, {"gnss": own}, cfg).forward
+    np.testing.assert_array_equal(a.lla, b.lla)
+    np.testing.assert_array_equal(a.euler, b.euler)
+
+
+def test_velocity_sensor_as_a_plain_series_with_its_covariance(flight):
+    imu, gnss, _ = _short(flight)
+    vel = _velocity(gnss)
+    plain = SensorData("velocity", "vel", vel.t, vel.vel, cov=vel.cov)
+    a = process(imu, {"gnss": gnss, "velocity": vel}, System()).forward
+    b = process(imu, {"gnss": gnss, "velocity": plain}, System()).forward
+    np.testing.assert_array_equal(a.lla, b.lla)
+    # a series without its noise: one line
+    with pytest.raises(DataError, match="velocity data without each row's 1-sigma"):
+        process(imu, {"gnss": gnss, "velocity": SensorData("velocity", "v", vel.t,
+                                                             vel.vel)}, System())
+
+
+def test_the_old_layout_is_read_with_a_warning(flight):
+    imu, gnss, _ = _short(flight, 30.0)
+    new = process(imu, {"gnss": gnss}, System()).forward
+    with pytest.warns(FutureWarning, match=r"process\(imu, \{'gnss': gnss"):
+        old = process(imu, gnss, None, System()).forward
+    np.testing.assert_array_equal(new.lla, old.lla)
+    with pytest.warns(FutureWarning, match=r"prepare\(imu, gnss, velocity"):
+        prepare(imu, gnss=gnss, cfg=System())
+
+
+def test_a_bad_mapping_is_one_line(flight):
+    imu, gnss, _ = _short(flight, 30.0)
+    with pytest.raises(DataError, match=r"unknown sensor 'gps'; registered: .*gnss"):
+        process(imu, {"gps": gnss}, System())
+    with pytest.raises(DataError, match=r"gnss data given as sensor 'baro'"):
+        process(imu, {"gnss": gnss, "baro": gnss}, System())
+    with pytest.raises(DataError, match=r"sensors\['gnss'\]: a ndarray, not a sensor's "
+                                        r"series"):
+        process(imu, {"gnss": gnss.lla}, System())
+    # a sensor given None is left out
+    a = process(imu, {"gnss": gnss, "velocity": None}, System()).forward
+    b = process(imu, {"gnss": gnss}, System()).forward
+    np.testing.assert_array_equal(a.lla, b.lla)
+
+
+def test_noise_becomes_R_in_one_place(flight):
+    """``Prepared.series`` holds each row's 1-sigma or covariance, not R; ``rows`` gives
+    the R the navigator builds of it (one for all rows when they are the same)."""
+    imu, gnss, _ = _short(flight, 30.0)
+    vel = _velocity(gnss)
+    rows = np.column_stack([np.full((len(gnss.t), 3), 2.0), np.full((len(gnss.t), 3), 0.2)])
+    rows[::3] *= 1.5
+    mixed = replace(gnss, sigma_rows=rows, quality={})
+    prep = prepare(imu, {"gnss": mixed, "velocity": vel}, System())
+    assert set(prep.series) == {"gnss", "velocity"}
+    t, z, R = prep.rows("gnss")
+    model = prep.system.sensors.gnss.measurement_model()
+    np.testing.assert_array_equal(R[1], model.R(rows[1]))
+    np.testing.assert_array_equal(R[0], model.R(rows[0]))
+    assert not np.array_equal(R[0], R[1])
+    _, _, Rv = prep.rows("velocity")
+    np.testing.assert_allclose(Rv[0], vel.cov[0])  # (no Gauss-Markov part: R is cov)
+    same = residual_covariances(model, np.broadcast_to(rows[1], (5, 6)))
+    assert same.strides[0] == 0  # one R broadcast
+    # fed with R per call, the stream equals the batch's series fed with their noise
+    batch = prep.feed(prep.navigator()).result()
+    nav = prep.navigator()
+    for name in prep.series:
+        tn, zn, Rn = prep.rows(name)
+        nav.add_measurements(name, tn, zn, R=Rn)
+    nav.add_imu(prep.t, prep.gyro, prep.accel)
+    np.testing.assert_array_equal(nav.result().states, batch.states)
+
