@@ -211,7 +211,8 @@ def test_process_refuses_or_warns_about_what_it_cannot_use():
     cfg = load_system({"sensors": {"airdata": {"sigma_airspeed_mps": 0.1,
                                                "wind_sigma_mps": 0.1}}})
     prep = prepare(imu, {"gnss": gnss, "airdata": air}, cfg)
-    assert any("air.csv: not used (air data feed only the wind constraint" in w
+    assert any("air.csv: not used (air data: true airspeed and the wind estimate (the wind "
+               "constraint; no local filter of its own); the system gives it no role" in w
                for w in prep.warnings)
     with pytest.raises(DataError, match="airdata data given as sensor 'baro'"):
         prepare(imu, {"gnss": gnss, "baro": air}, cfg)

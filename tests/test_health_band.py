@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from test_process import make_flight
 
-from fednav import load_system
+from fednav import System, load_system
 from fednav.core import units
 from fednav.io import DataError, SensorData
 from fednav.io.data import VelocityData
@@ -157,3 +157,23 @@ def test_the_stream_says_the_same_once(flight):
     with warnings.catch_warnings():
         warnings.simplefilter("error", HealthWarning)
         assert nav.health() == said  # (the same list; nothing said again)
+
+
+def test_the_summary_reports_the_centralized_nis_beside_the_gates(flight):
+    """``summary.json``'s ``consistency``: ``nis_per_dof`` against the centralized
+    filter's innovation covariance (what the band judges), ``gate_nis_per_dof`` the local
+    filter's own — smaller in a sharing federation, equal with one local filter."""
+    from fednav.process.output import summary
+
+    imu, gnss, ref = flight
+    star, baro, vel = _sensors(ref, np.random.default_rng(5))
+    res = process(imu, {"gnss": gnss, "velocity": vel, "star": star, "baro": baro},
+                  load_system(CFG))
+    c = summary(res, None, {})["consistency"]
+    assert set(c) == {"gnss", "velocity", "star", "baro"}
+    for k, v in c.items():
+        assert v["gate_nis_per_dof"] < v["nis_per_dof"], (k, v)
+        assert 0.5 < v["nis_per_dof"] < 2.0, (k, v)  # (a consistent run)
+    alone = summary(process(imu, {"gnss": gnss}, System()), None, {})["consistency"]
+    assert alone["gnss"]["nis_per_dof"] == pytest.approx(alone["gnss"]["gate_nis_per_dof"],
+                                                         rel=1e-9)

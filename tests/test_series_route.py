@@ -133,3 +133,30 @@ def test_noise_becomes_R_in_one_place(flight):
     nav.add_imu(prep.t, prep.gyro, prep.accel)
     np.testing.assert_array_equal(nav.result().states, batch.states)
 
+
+
+def test_a_section_takes_what_it_leaves_to_the_recording(flight):
+    """``SensorConfig.for_recording``: one method per sensor, the same path for all."""
+    from fednav.sensors import GnssConfig, VelocityConfig, registry
+
+    _, gnss, _ = flight
+    g = GnssConfig(sigma_vel_mps=0.3).for_recording(gnss)
+    assert g.sigma_pos_enu_m == tuple(gnss.sigma_pos_enu) and g.sigma_vel_mps == (0.3,) * 3
+    assert g.lever_m == tuple(gnss.lever) and g.measures == "position_velocity"
+    assert g.period_s == pytest.approx(float(np.median(np.diff(gnss.t))))
+    pos = replace(gnss, vel=None, quality={})
+    assert GnssConfig().for_recording(pos).measures == "position"
+    with pytest.raises(DataError, match="sensors.gnss.measures is velocity, the file has "
+                                        "position only"):
+        GnssConfig(measures="velocity").for_recording(pos)
+    vel = _velocity(gnss)
+    vel.lever = np.array([0.1, 0.2, 0.3])
+    assert VelocityConfig().for_recording(vel).lever_m == (0.1, 0.2, 0.3)
+    assert VelocityConfig(lever_m=(0, 0, 1)).for_recording(vel).lever_m == (0, 0, 1)
+    baro = registry.spec("baro").config(sigma_m=1.0)
+    air = registry.spec("airdata").config(sigma_airspeed_mps=0.5)
+    assert baro.roles(System()) == {"damping": "sensors.baro.damping_loop"}
+    assert baro.model_copy(update={"damping_loop": False}).roles(System()) == {}
+    assert air.roles(System()) == {}
+    assert air.roles(System.model_construct(constraint="wind")) == {
+        "constraint": "constraint: wind"}

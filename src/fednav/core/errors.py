@@ -9,3 +9,7 @@ numpy or numba.
 
 class FednavError(Exception):
     """Base class of fednav's own errors (one-line message)."""
+
+
+class DataError(FednavError, ValueError):
+    """A sensor data file that cannot be used (one line naming the file and the field)."""

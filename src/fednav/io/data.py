@@ -13,12 +13,8 @@ from typing import ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 
-from ..core.errors import FednavError
+from ..core.errors import DataError, FednavError  # noqa: F401  (fednav.io.data's name)
 from ..sensors.gnss import reads_old_sigma_pos
-
-
-class DataError(FednavError, ValueError):
-    """A sensor data file that cannot be used (one line naming the file and the field)."""
 
 
 def require_file(path: Path, kind: str) -> None:

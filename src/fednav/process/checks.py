@@ -385,3 +385,31 @@ def check_units(imu: ImuData, gnss: GnssData | None) -> list[str]:
 #: IMU samples further apart than this [s] are refused (time stamps in milliseconds read as
 #: seconds put them 1000x too far apart; no strapdown IMU samples below 1 Hz).
 MAX_IMU_PERIOD_S = 1.0
+
+
+def check_gnss_timing(imu: ImuData, gnss: GnssData | None) -> tuple[list[str], dict]:
+    """The GNSS's clock against the IMU's: a time offset between the two
+    (:func:`time_offset`) and a lag of the receiver's velocity behind its positions
+    (:func:`velocity_latency`), each in the data quality (``gnss_time_offset_seen_s``,
+    ``gnss_velocity_latency_seen_s`` [s]) and a warning naming the key that corrects it
+    when it exceeds what the data can tell apart.  Returns (warnings, quality)."""
+    warnings, quality = [], {}
+    if gnss is None:
+        return warnings, quality
+    off = time_offset(imu, gnss)
+    if off is not None:
+        quality["gnss_time_offset_seen_s"] = round(off, 2)
+        if abs(off) > max(OFFSET_WARN_S, 0.5 * float(np.median(np.diff(gnss.t)))):
+            warnings.append(f"{gnss.source}: the GNSS course matches the gyro's heading "
+                            f"best with the GNSS time stamps moved by {off:+.2f} s: a "
+                            f"time offset between the receiver's and the IMU's clock "
+                            f"(UTC vs GPS time: 18 s)? sensors.gnss.time_offset_s "
+                            f"corrects it")
+    lat = velocity_latency(gnss)
+    if lat is not None:
+        quality["gnss_velocity_latency_seen_s"] = round(lat[0], 3)
+        if abs(lat[0]) > max(LATENCY_WARN_S, 3.0 * lat[1]):
+            warnings.append(f"{gnss.source}: the GNSS velocity lags its positions by "
+                            f"{lat[0]:+.3f} s (+-{lat[1]:.3f} s, from the positions' "
+                            f"differences): sensors.gnss.velocity_latency_s corrects it")
+    return warnings, quality

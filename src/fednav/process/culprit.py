@@ -13,13 +13,15 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..navigator.health import local_nis
 from ..navigator.solution import consistency
 
 
 def leave_one_out(prep, band) -> dict[str, dict[str, float]]:
     """Per aiding sensor ``s`` of ``prep`` (a :class:`~fednav.process.run.Prepared`):
-    each remaining local filter's mean NIS/dof with ``s`` left out (the system without
-    it in ``aiding``, the same data and start)."""
+    each remaining local filter's mean NIS/dof (against the centralized filter's
+    innovation covariance, :func:`~fednav.navigator.health.local_nis`) with ``s`` left
+    out (the system without it in ``aiding``, the same data and start)."""
     out = {}
     aiding = list(prep.system.aiding)
     for s in aiding:
@@ -29,8 +31,11 @@ def leave_one_out(prep, band) -> dict[str, dict[str, float]]:
         sub = type(prep).__new__(type(prep))
         sub.__dict__.update(prep.__dict__)
         sub.system = prep.system.model_copy(update={"aiding": rest})
-        res = sub.feed(sub.navigator(record_rows=False, record_covariance=False)).result()
-        out[s] = {k: v["nis_per_dof"] for k, v in consistency(res.fdi).items()}
+        res = sub.feed(sub.navigator(record_rows=False, record_covariance=False,
+                                     innovations=True)).result()
+        central = local_nis(res.innovations)  # (the centralized filter's, as the band's)
+        out[s] = {k: central[k][0] if k in central else v["nis_per_dof"]
+                  for k, v in consistency(res.fdi).items()}
     return out
 
 

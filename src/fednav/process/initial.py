@@ -5,12 +5,15 @@ course and velocity the GNSS gives, and the filter's initial covariance.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
-from ..core import units
+from ..core import attitude as att
+from ..core import earth, units
 from ..ins import error_model as em
 from ..ins.alignment import Alignment, align, coarse_level
-from ..io.data import GnssData, ImuData
+from ..io.data import DataError, GnssData, ImuData
 from ..navigator.system import System
 
 
@@ -88,3 +91,34 @@ def position_velocity(gnss: GnssData) -> tuple[np.ndarray, np.ndarray]:
     course and the initial velocity (:meth:`GnssData.position_velocity` over +-
     :data:`VELOCITY_WINDOW_S`)."""
     return gnss.position_velocity(VELOCITY_WINDOW_S)
+
+
+def start_at_first_fix(imu: ImuData, gnss: GnssData, section, system: System, t0: float,
+                       i0: int, dt: float, noise: em.ImuNoiseModel, accel_bias_sigma: float,
+                       gyro_bias_sigma: float):
+    """The start of a run without an ``initial:`` section: the first GNSS fix moved from
+    the antenna to the IMU, its velocity and the alignment's attitude (the alignment sees
+    the antenna lever arm and velocity 1-sigma the filter flies: ``section``, the GNSS's
+    effective :class:`~fednav.sensors.GnssConfig`; position-only fixes give the course by
+    their differences).  Returns (alignment, lat/lon [rad] and h [m], ENU velocity [m/s],
+    P0 in filter units)."""
+    lever = np.asarray(section.lever_m, dtype=float)
+    sig_vel = np.asarray(section.sigma_vel_mps, dtype=float)
+    gnss_v = replace(gnss, lever=lever, sigma_vel=sig_vel, quality={})
+    sig_vel0, decorrelation = sig_vel, 1.0
+    if gnss.vel is None:  # the alignment's course from the positions' differences
+        v, s_v = position_velocity(gnss)
+        if not np.isfinite(s_v[0]):
+            raise DataError(f"{gnss.source}: one position-only fix: no initial "
+                            f"velocity; give the initial state (initial:)")
+        sig_vel0 = np.full(3, s_v[0])
+        rows = np.column_stack([np.ones((len(v), 3)), np.repeat(
+            np.minimum(s_v, 1e6)[:, None], 3, axis=1)])
+        gnss_v = replace(gnss_v, vel=v, sigma_vel=sig_vel0, quality={}, sigma_rows=rows)
+        decorrelation = 2.0 * VELOCITY_WINDOW_S  # (neighbours share their fixes)
+    al = attitude_at_start(imu, gnss_v, system, t0, i0, dt, noise, accel_bias_sigma,
+                           gyro_bias_sigma, decorrelation)
+    lla0 = earth.move_enu(gnss.lla[0], -(att.euler_to_dcm(al.euler) @ lever))
+    P0 = start_covariance(al, sig_vel0, np.asarray(section.sigma_pos_enu_m, dtype=float),
+                          gyro_bias_sigma, accel_bias_sigma, noise)
+    return al, lla0, gnss_v.vel[0], P0

@@ -162,7 +162,8 @@ def summary(res: ProcessResult, ref: Reference | None, inputs: dict,
         quality.update(ref.quality)
     out: dict = {"inputs": inputs, "run_time_s": res.run_time_s, "epochs": res.epochs,
                  "data_quality": quality, "warnings": list(res.warnings),
-                 "consistency": consistency(res.forward), "alignment": res.alignment}
+                 "consistency": res.consistency or consistency(res.forward),
+                 "alignment": res.alignment}
     if res.optional_states:
         out["error_states"] = error_states(res.optional_states)
     if ref is not None:

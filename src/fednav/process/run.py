@@ -23,8 +23,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from pydantic import ValidationError
 
-from ..core import attitude as att
-from ..core import earth, units
+from ..core import units
 from ..ins.alignment import UNKNOWN_HEADING_SIGMA, Alignment
 from ..io.data import DataError, GnssData, ImuData, SensorData, Series, VelocityData
 from ..navigator.health import local_nis, readmission_warnings, row_nis, run_health
@@ -53,6 +52,7 @@ from .checks import (  # noqa: F401  (fednav.process.run's names of 0.2)
     MAX_IMU_PERIOD_S,
     OFFSET_SEARCH_S,
     OFFSET_WARN_S,
+    check_gnss_timing,
     check_mounting,
     check_units,
     ignored_keys,
@@ -67,6 +67,7 @@ from .initial import (  # noqa: F401  (gnss_course: fednav.process.run's name of
     attitude_at_start,
     gnss_course,
     position_velocity,
+    start_at_first_fix,
     start_covariance,
 )
 
@@ -76,7 +77,7 @@ ProcessConfig = System
 
 
 def old_layout(*old: str):
-    """Decorator of ``fn(imu, sensors, ...)``: a call in fednav 0.4's layout
+    """Decorator of ``fn(imu, sensors, ...)``: a call in fednav 0.1's layout
     ``fn(imu, gnss, velocity, *old, sensors=...)`` (GNSS and velocity sensor as their own
     arguments) is read as ``fn(imu, {"gnss": gnss, "velocity": velocity, **sensors},
     ...)`` with a ``FutureWarning``, for one more release."""
@@ -139,6 +140,13 @@ class ProcessResult:
     optional_states : dict
         The optional error states' (``filter.states``) ``estimate`` and ``sigma`` per axis
         at the end of the run, SI (:attr:`fednav.navigator.NavResult.optional`).
+    consistency : dict
+        Per local filter: ``nis_per_dof``, the mean NIS per degree of freedom against
+        the innovation covariance of the equivalent centralized filter (1 for a
+        consistent filter; what the health band judges,
+        :func:`~fednav.navigator.health.local_nis`), ``gate_nis_per_dof``, the local
+        filter's own (what its chi-square gate tests: smaller in a federation that shares
+        its information), ``isolated_fraction`` and ``measurements``.
     outages : dict
         Per sensor with ``outages_s`` in the system description, its windows
         ``[start, end)`` [s] whose measurements were withheld from the filter
@@ -159,6 +167,7 @@ class ProcessResult:
     optional_states: dict = field(default_factory=dict)
     outages: dict = field(default_factory=dict)
     gnss_flown: GnssData | None = None
+    consistency: dict = field(default_factory=dict)
 
 
 def adjust_sensors(gnss: GnssData, velocity: VelocityData | None, cfg: System):
@@ -358,9 +367,11 @@ def _pseudo(name: str, cfg: System, imu: ImuData, T: float) -> SensorData:
                       np.zeros((len(t), m)), quality={})
 
 
-def _other_sensor(data: SensorData, cfg: System):
-    """The system's section for a recorded sensor other than GNSS and the velocity sensor
-    (its noise): the description's, else the section's defaults when they suffice."""
+def _section(data: Series, cfg: System):
+    """The system's section of a recorded sensor as it flies ``data``: the description's
+    (else the section's defaults when they suffice), the components the file leaves out
+    said, and what the section leaves to the data taken from them
+    (:meth:`~fednav.sensors.spec.SensorConfig.for_recording`)."""
     spec = registry.spec(data.name)
     sc = cfg.sensors[data.name] if data.name in cfg.sensors else None
     if sc is None:
@@ -374,12 +385,20 @@ def _other_sensor(data: SensorData, cfg: System):
             # each row gives its noise: the section's other settings at their defaults
             sc = spec.config.model_construct()
     for j in data.absent:  # a column the file leaves out: the section says so
-        sc = sc.model_copy(update=spec.columns[j].absent)
-    if spec.aiding and data.sigma is None and sc.sigma() is None:
+        if spec.columns[j].absent:
+            sc = sc.model_copy(update=spec.columns[j].absent)
+    sc = sc.for_recording(data)
+    if spec.aiding and data.sigma is None and data.cov is None and sc.sigma() is None:
         raise DataError(f"{data.source}: sensors.{data.name} gives no noise figure")
-    if sc.period_s is None and len(data.t) > 1:  # the data's own
-        sc = sc.model_copy(update={"period_s": float(np.median(np.diff(data.t)))})
     return sc
+
+
+def _plain(d: Series) -> SensorData:
+    """A series as the navigator is fed it: its own fields only."""
+    if type(d) is SensorData:
+        return d
+    return SensorData(d.name, d.source, d.t, d.z, d.t_arrival, d.quality, d.sigma, d.absent,
+                      d.cov)
 
 
 def _period(cfg: System, gnss: GnssData | None, others: dict) -> float:
@@ -484,27 +503,9 @@ def prepare(imu: ImuData, sensors: Mapping[str, Series] | None = None,
                         f"{1 / MAX_IMU_PERIOD_S:g} Hz or faster")
     cfg, assumed = with_imu_figures(imu, cfg)
     gnss, velocity = adjust_sensors(gnss, velocity, cfg)
-    warnings = assumed + check_units(imu, gnss) + check_mounting(imu, gnss)
+    warnings, quality_extra = check_gnss_timing(imu, gnss)
+    warnings[:0] = assumed + check_units(imu, gnss) + check_mounting(imu, gnss)
     unused = ignored_keys(cfg)
-    quality_extra = {}
-    if gnss is not None:
-        off = time_offset(imu, gnss)
-        if off is not None:
-            quality_extra["gnss_time_offset_seen_s"] = round(off, 2)
-            if abs(off) > max(OFFSET_WARN_S, 0.5 * float(np.median(np.diff(gnss.t)))):
-                warnings.append(f"{gnss.source}: the GNSS course matches the gyro's heading "
-                                f"best with the GNSS time stamps moved by {off:+.2f} s: a "
-                                f"time offset between the receiver's and the IMU's clock "
-                                f"(UTC vs GPS time: 18 s)? sensors.gnss.time_offset_s "
-                                f"corrects it")
-    if gnss is not None:
-        lat = velocity_latency(gnss)
-        if lat is not None:
-            quality_extra["gnss_velocity_latency_seen_s"] = round(lat[0], 3)
-            if abs(lat[0]) > max(LATENCY_WARN_S, 3.0 * lat[1]):
-                warnings.append(f"{gnss.source}: the GNSS velocity lags its positions by "
-                                f"{lat[0]:+.3f} s (+-{lat[1]:.3f} s, from the positions' "
-                                f"differences): sensors.gnss.velocity_latency_s corrects it")
     period = _period(cfg, gnss, others)
     n_per = max(1, int(round(period / dt)))
     T = n_per * dt
@@ -570,36 +571,18 @@ def prepare(imu: ImuData, sensors: Mapping[str, Series] | None = None,
             quality_extra.update(q)
             warnings += w
 
-    sensors, series = {}, {}
-    if gnss is not None:
-        gc = _gnss_cfg(cfg)
-        sig_pos_enu = np.broadcast_to(np.asarray(
-            gc.sigma_pos_enu_m if gc.sigma_pos_enu_m is not None else gnss.sigma_pos_enu,
-            dtype=float), (3,))
-        sig_pos = sig_pos_enu[[1, 0, 2]]  # in the order of z (lat, lon, h): north, east, up
-        sig_vel = np.broadcast_to(np.asarray(gc.sigma_vel_mps if gc.sigma_vel_mps is not None
-                                             else gnss.sigma_vel, dtype=float), (3,))
-        lever = np.asarray(gc.lever_m or gnss.lever, dtype=float)
-        has = ("position" if gnss.vel is None else "velocity" if gnss.lla is None
-               else "position_velocity")
-        if gc.measures is not None and gc.measures != has and has != "position_velocity":
-            raise DataError(f"{gnss.source}: sensors.gnss.measures is {gc.measures}, the "
-                            f"file has {has.replace('_', ' and ')} only")
-        has = gc.measures or has
-        if cfg.filter.state == "total" and has != "position_velocity":
-            raise DataError(f"{gnss.source}: filter.state: total — the total-state "
-                            f"navigator's GNSS model needs positions and velocities; the "
-                            f"file has {has.replace('_', ' and ')} only")
-        sensors["gnss"] = gc.model_copy(update={
-            "lever_m": tuple(map(float, lever)),
-            "sigma_pos_enu_m": tuple(map(float, sig_pos_enu)),
-            "sigma_vel_mps": tuple(map(float, sig_vel)), "measures": has})
-        # (each fix's 1-sigma: the file's, else the section's, in the order of z)
-        series["gnss"] = SensorData("gnss", gnss.source, gnss.t, gnss.z, gnss.t_arrival,
-                                    gnss.quality, np.broadcast_to(
-                                        np.r_[sig_pos, sig_vel], (len(gnss.t), 6))
-                                    if gnss.sigma_rows is None else gnss.sigma_rows,
-                                    gnss.absent)
+    # Every recorded sensor's section as it flies its data (what the section leaves to
+    # the file taken from it: the GNSS's lever arm and noise, a sensor's period), and its
+    # series as the navigator takes it, in one order: GNSS, velocity sensor, the others.
+    recorded = {n: d for n, d in (("gnss", gnss), ("velocity", velocity)) if d is not None}
+    recorded.update(others)
+    sensors = {name: _section(d, cfg) for name, d in recorded.items()}
+    series = {name: _plain(d) for name, d in recorded.items()}
+    if cfg.filter.state == "total" and "gnss" in sensors \
+            and sensors["gnss"].measures != "position_velocity":
+        raise DataError(f"{gnss.source}: filter.state: total — the total-state navigator's "
+                        f"GNSS model needs positions and velocities; the file has "
+                        f"{sensors['gnss'].measures.replace('_', ' and ')} only")
 
     # Initial state: the description's, else the first GNSS fix (antenna moved to the
     # IMU), its velocity and the alignment's attitude.
@@ -612,44 +595,19 @@ def prepare(imu: ImuData, sensors: Mapping[str, Series] | None = None,
                        report={"levelling": "initial", "heading": "initial"})
         gyro_bias = None
     else:
-        # (the alignment sees the antenna's lever arm and velocity sigma the filter flies)
-        gnss_v = replace(gnss, lever=lever, sigma_vel=np.asarray(sig_vel, dtype=float),
-                         quality={})
-        sig_vel0, decorrelation = sig_vel, 1.0
-        if gnss.vel is None:  # the alignment's course from the positions' differences
-            v, s_v = position_velocity(gnss)
-            if not np.isfinite(s_v[0]):
-                raise DataError(f"{gnss.source}: one position-only fix: no initial "
-                                f"velocity; give the initial state (initial:)")
-            sig_vel0 = np.full(3, s_v[0])
-            rows = np.column_stack([np.ones((len(v), 3)), np.repeat(
-                np.minimum(s_v, 1e6)[:, None], 3, axis=1)])
-            gnss_v = replace(gnss_v, vel=v, sigma_vel=sig_vel0, quality={}, sigma_rows=rows)
-            decorrelation = 2.0 * VELOCITY_WINDOW_S  # (neighbours share their fixes)
-        al = attitude_at_start(imu, gnss_v, cfg, t0, i0, dt, noise, ab, gb, decorrelation)
-        C0 = att.euler_to_dcm(al.euler)
-        lla0 = earth.move_enu(gnss.lla[0], -(C0 @ lever))
-        vel0 = gnss_v.vel[0]
-        P0 = start_covariance(al, sig_vel0, sig_pos_enu, gb, ab, noise)
+        al, lla0, vel0, P0 = start_at_first_fix(imu, gnss, sensors["gnss"], cfg, t0, i0, dt,
+                                                noise, ab, gb)
         euler0, gyro_bias = al.euler, al.gyro_bias
     warnings += al.warnings
 
     # The system the navigator flies: the config with the epoch period and the sensors'
-    # effective settings (the data files' where the config leaves them out).
-    vc = _velocity_cfg(cfg)
-    if velocity is not None:
-        sensors["velocity"] = vc.model_copy(update={"lever_m": tuple(map(float, (
-            velocity.lever if vc.lever_m is None else vc.lever_m)))})
-    for name, d in others.items():
-        sensors[name] = _other_sensor(d, cfg)
+    # effective settings.
     have = [n for n in sensors if registry.spec(n).aiding]
     aiding = have if cfg.aiding is None else [n for n in cfg.aiding if n in have]
-    for name, d in others.items():
-        damps = name == "baro" and sensors[name].damping_loop
-        wind = name == "airdata" and cfg.constraint == "wind"
-        if name not in aiding and not damps and not wind:
-            why = ("air data feed only the wind constraint (constraint: wind)"
-                   if name == "airdata" else "it is not in the system's aiding list")
+    for name, d in recorded.items():  # (a sensor's data feed a local filter, or a role)
+        if name not in aiding and not sensors[name].roles(cfg):
+            why = ("it is not in the system's aiding list" if registry.spec(name).aiding
+                   else f"{registry.spec(name).summary}; the system gives it no role")
             warnings.append(f"{d.source}: not used ({why})")
     if not aiding:
         raise DataError(f"the system's aiding list {cfg.aiding} names none of the sensors "
@@ -657,11 +615,7 @@ def prepare(imu: ImuData, sensors: Mapping[str, Series] | None = None,
     system = cfg.model_copy(update={
         "filter": cfg.filter.model_copy(update={"period_s": T}),
         "sensors": cfg.sensors.replace(**sensors), "aiding": aiding})
-    late = {"gnss": gnss.t_arrival - gnss.t if gnss is not None and gnss.t_arrival
-            is not None else None,
-            "velocity": velocity.t_arrival - velocity.t if velocity is not None and
-            velocity.t_arrival is not None else None,
-            **{n: d.t_arrival - d.t for n, d in others.items() if d.t_arrival is not None}}
+    late = {n: d.t_arrival - d.t for n, d in series.items() if d.t_arrival is not None}
     unused += [f"sensors.{n}.timing.{k} (the {n} data have no arrival times, "
                f"t_arrival_s: each measurement is used at its time of validity)"
                for n in aiding if late.get(n) is None and n in cfg.sensors
@@ -672,7 +626,7 @@ def prepare(imu: ImuData, sensors: Mapping[str, Series] | None = None,
         warnings.append("system description: not used on recorded data: "
                         + "; ".join(unused))
     for name, lag in late.items():
-        if lag is None or name not in aiding or not len(lag):
+        if name not in aiding or not len(lag):
             continue
         how = system.sensors[name].timing.delay_compensation
         declared = declared_latency(system).get(name, 0.0)  # (held: used when valid)
@@ -682,19 +636,13 @@ def prepare(imu: ImuData, sensors: Mapping[str, Series] | None = None,
                             f"sensors.{name}.timing.delay_compensation: interpolate corrects; "
                             f"declare sensors.{name}.timing.latency_s, or use recompute or "
                             f"ins_increment (docs/paper004.md)")
-    if velocity is not None:
-        series["velocity"] = SensorData("velocity", velocity.source, velocity.t,
-                                        velocity.vel, velocity.t_arrival, velocity.quality,
-                                        cov=velocity.cov)
-    series.update(others)
     m = slice(i0, i0 + n_cycles * n_per)
-    quality = {**imu.quality, **(gnss.quality if gnss else {}),
-               **(velocity.quality if velocity else {}), **quality_extra}
+    quality = {**imu.quality, **quality_extra}
     t_start = init.t_s if init is not None and init.t_s is not None else float(imu.t[i0])
-    for name, d in others.items():
+    t_end = imu.t[m][-1]
+    for name, d in recorded.items():
         quality.update(d.quality)
-        t_end = imu.t[m][-1]
-        if d.t[-1] < t_start or d.t[0] > t_end:
+        if name in others and (d.t[-1] < t_start or d.t[0] > t_end):
             warnings.append(f"{d.source}: no {name} measurement falls within the IMU "
                             f"data's {t_start:.1f}..{t_end:.1f} s (a time offset?)")
     return Prepared(system, InitialState(t_start, lla0, vel0, euler0, P0,
@@ -809,7 +757,8 @@ def process(imu: ImuData, sensors: Mapping[str, Series], cfg: System | None = No
     constraints = [n for n in prep.system.aiding
                    if registry.spec(n).pseudo or registry.spec(n).detector is not None]
     band = prep.system.health.nis_band
-    means = {k: v["nis_per_dof"] for k, v in consistency(res.forward.fdi).items()}
+    res.consistency = centralized_consistency(res.forward.fdi, out.innovations)
+    means = {k: v["nis_per_dof"] for k, v in res.consistency.items()}
     blame = culprit(prep, means, band, constraints)
     res.warnings += run_health(res.forward.fdi, imu, flown_gnss(gnss, prep.system),
                                res.forward, imu_figures(imu, prep.system), force,
@@ -829,6 +778,20 @@ def process(imu: ImuData, sensors: Mapping[str, Series], cfg: System | None = No
     if innovations is not None:
         innovations.extend(out.innovations)
     return res
+
+
+def centralized_consistency(fdi: list, innovations: list) -> dict[str, dict[str, float]]:
+    """Per local filter, the fault log's consistency
+    (:func:`~fednav.navigator.solution.consistency`) with ``nis_per_dof`` against the
+    equivalent centralized filter's innovation covariance (:func:`local_nis`, the health
+    band's) and the local filter's own as ``gate_nis_per_dof`` (equal with one local
+    filter, or without reset)."""
+    out = consistency(fdi)
+    for k, (v, _) in local_nis(innovations).items():
+        if k in out:
+            out[k] = {"nis_per_dof": v, "gate_nis_per_dof": out[k]["nis_per_dof"],
+                      **{a: b for a, b in out[k].items() if a != "nis_per_dof"}}
+    return out
 
 
 def solution(res, prep: Prepared, smooth: bool = False) -> ProcessResult:

@@ -153,6 +153,10 @@ class AirDataConfig(SensorConfig):
     def model(self) -> WindConstraint:
         return WindConstraint()
 
+    def roles(self, system) -> dict[str, str]:
+        """The wind constraint, when the system flies it (``constraint: wind``)."""
+        return {"constraint": "constraint: wind"} if system.constraint == "wind" else {}
+
     def sigma(self) -> np.ndarray:
         w = max(self.wind_sigma_mps, 1e-6)
         return np.array([self.sigma_airspeed_mps, w, w])

@@ -63,6 +63,10 @@ class BaroConfig(SensorConfig):
     def sigma(self) -> np.ndarray:
         return np.array([self.sigma_m])
 
+    def roles(self, system) -> dict[str, str]:
+        """The damping loop of the INS vertical channel, when ``damping_loop``."""
+        return {"damping": "sensors.baro.damping_loop"} if self.damping_loop else {}
+
     def loop(self) -> BaroLoop | None:
         if not self.damping_loop:
             return None

@@ -21,6 +21,7 @@ from typing import ClassVar, Literal
 import numpy as np
 from pydantic import Field, model_validator
 
+from ..core.errors import DataError
 from .base import MeasurementSeries, flight_times, position_noise_to_llh
 from .measurement import POS_E, POS_N, POS_U, VEL_E, VEL_N, VEL_U, RowModel
 from .spec import Column, SensorConfig, SensorSpec
@@ -197,6 +198,30 @@ class GnssConfig(SensorConfig):
 
     def model(self) -> GnssPosVel:
         return GnssPosVel(measures=self.measures or "position_velocity")
+
+    def for_recording(self, data) -> GnssConfig:
+        """The section as it flies the receiver's recording ``data``
+        (:class:`~fednav.io.GnssData`): the antenna lever arm and the position and
+        velocity 1-sigma the section leaves out taken from the data's figures, ``measures``
+        from what the file holds (a section that asks for what the file lacks: a
+        one-line :class:`~fednav.core.errors.DataError`)."""
+        absent = set(data.absent)
+        has = ("position" if {3, 4, 5} <= absent else "velocity" if {0, 1, 2} <= absent
+               else "position_velocity")
+        if self.measures is not None and self.measures != has and has != "position_velocity":
+            raise DataError(f"{data.source}: sensors.gnss.measures is {self.measures}, the "
+                            f"file has {has.replace('_', ' and ')} only")
+
+        def three(mine, theirs):
+            v = theirs if mine is None else mine
+            return tuple(map(float, np.broadcast_to(np.asarray(v, dtype=float), (3,))))
+
+        return super().for_recording(data).model_copy(update={
+            "lever_m": three(self.lever_m, getattr(data, "lever", 0.0)),
+            "sigma_pos_enu_m": three(self.sigma_pos_enu_m, getattr(data, "sigma_pos_enu",
+                                                                   5.0)),
+            "sigma_vel_mps": three(self.sigma_vel_mps, getattr(data, "sigma_vel", 0.1)),
+            "measures": self.measures or has})
 
     def sigma(self) -> np.ndarray | None:
         """1-sigma of ``z``: ``[north m, east m, up m, vE, vN, vU m/s]`` (None when the

@@ -89,6 +89,22 @@ class SensorConfig(_Model):
         when the configuration leaves it to the data."""
         return None
 
+    def roles(self, system) -> dict[str, str]:
+        """What the sensor's data feed in ``system`` (a
+        :class:`~fednav.navigator.system.System`) besides a local filter of its own
+        (``system.aiding``), each with the key that turns it on: ``{"damping": ...}``,
+        ``{"constraint": ...}``; {} for most sensors."""
+        return {}
+
+    def for_recording(self, data) -> SensorConfig:
+        """This section as it flies the recording ``data`` (a
+        :class:`~fednav.io.data.Series`): the settings it leaves to the data taken from
+        them — here the period, the median interval of the time stamps [s]; a sensor whose
+        file carries more (the GNSS's antenna lever arm and noise) takes those too."""
+        if self.period_s is None and len(data.t) > 1:
+            return self.model_copy(update={"period_s": float(np.median(np.diff(data.t)))})
+        return self
+
     def simulate(self, truth, rng, name: str = "sensor"):
         """The sensor's measurements over the flight, with their timing."""
         if self.period_s is None:

@@ -101,6 +101,14 @@ class VelocityConfig(SensorConfig):
     def sigma(self) -> np.ndarray | None:
         return None if self.sigma_mps is None else np.asarray(self.sigma_mps, dtype=float)
 
+    def for_recording(self, data) -> VelocityConfig:
+        """The section as it flies the recording ``data``: the sensor's lever arm the
+        section leaves out taken from the data (:class:`~fednav.io.VelocityData`'s)."""
+        lever = self.lever_m if self.lever_m is not None else getattr(data, "lever", None)
+        out = super().for_recording(data)
+        return out if lever is None else out.model_copy(update={
+            "lever_m": tuple(map(float, lever))})
+
 
 SPEC = SensorSpec("velocity", "velocity sensor (visual odometry, DVL ...): ENU velocity "
                   "at its lever arm", VelocityConfig, VelocityENU,
