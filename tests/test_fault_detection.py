@@ -69,3 +69,46 @@ def test_isolation_equals_an_outage_and_beats_no_isolation(runs):
 def test_fdi_plot(runs, tmp_path):
     p = plot_fdi(runs["isolated"].fdi, tmp_path / "fdi.png")
     assert p.stat().st_size > 10_000
+
+
+@pytest.mark.parametrize("fault", [
+    {"sensor": "gnss", "kind": "spoofing", "size_sigma": 40.0},
+    {"sensor": "sar", "kind": "false_match", "size_sigma": 15.0},
+    {"sensor": "star", "kind": "misidentification", "size_sigma": 30.0},
+    {"sensor": "gnss", "kind": "burst", "size_sigma": 6.0},
+])
+def test_each_fault_model_is_detected_and_isolated(tmp_path, fault):
+    """A short campaign (two runs, the fault's start, length and direction drawn per run)
+    with each of the sensor failure models: the chi-square FDI isolates the faulty local
+    filter's measurements inside the fault and hardly any outside."""
+    f = {"start_s": {"between": [150.0, 200.0]}, "duration_s": {"between": [60.0, 90.0]},
+         **fault}
+    scn = scenario(tmp_path, 0.005, [f])
+    scn = scn.model_copy(update={"modes": [scn.modes[0].model_copy(update={
+        "aiding": ["gnss", "star", "sar"]})]})
+    for seed in (1, 2):
+        data = make_run_data(scn, seed, max_time=T_END)
+        drawn = scn.faults[0].fault(np.random.default_rng([seed, 0xFA17]))
+        res = run_mode(scn, ["gnss", "star", "sar"], data, "faulty", max_time=T_END)
+        g = res.fdi[res.fdi["local"] == fault["sensor"]]
+        end = T_END if fault["kind"] in ("false_match", "spoofing") else drawn.end  # (held)
+        inside = g[(g["t"] >= drawn.start) & (g["t"] <= end)]
+        outside = g[(g["t"] < drawn.start - 1.0) | (g["t"] > end + 5.0)]
+        assert inside["isolated"].mean() > 0.5, (seed, drawn)
+        assert outside["isolated"].mean() < 0.05, (seed, drawn)
+
+
+def test_drawn_faults_leave_the_runs_noise_as_it_was(tmp_path):
+    """The faults' draws come from a stream of their own: a run's IMU errors and sensor
+    noise are the same with or without them, outside the faulty sensor's window."""
+    f = {"sensor": "sar", "kind": "false_match", "start_s": {"between": [100.0, 200.0]},
+         "duration_s": 50.0, "size_sigma": {"between": [5.0, 10.0]}}
+    clean = make_run_data(scenario(tmp_path, 0.005, []), 3, max_time=T_END)
+    faulty = make_run_data(scenario(tmp_path, 0.005, [f]), 3, max_time=T_END)
+    np.testing.assert_array_equal(clean.dtheta, faulty.dtheta)
+    for name in ("gnss", "star", "baro"):
+        np.testing.assert_array_equal(clean.series[name].z, faulty.series[name].z)
+    before = clean.series["sar"].t < 100.0
+    np.testing.assert_array_equal(clean.series["sar"].z[before],
+                                  faulty.series["sar"].z[before])
+    assert not np.array_equal(clean.series["sar"].z, faulty.series["sar"].z)

@@ -109,7 +109,7 @@ def one_run(args):
                 update={"fdi_alpha": a})})
             res = run_configured_mode(s2, mode, fdata, T)
             fault_rows.append({"seed": seed, "case": name,
-                               **fault_metrics(res, fe.fault.start_s, fe.fault.end_s, alpha,
+                               **fault_metrics(res, fe.fault.start_s, fe.fault.end_fixed, alpha,
                                                scn.filter.period_s)})
             fault_series[name] = res
     return rows, series, fault_rows, fault_series

@@ -64,6 +64,10 @@ class RunResult:
     euler: np.ndarray | None = None  # Euler [pitch, roll, heading] estimated - true [rad]
 
 
+#: The second word of the seed of a run's fault draws (``[seed, FAULT_STREAM]``).
+FAULT_STREAM = 0xFA17
+
+
 def make_run_data(scn: Scenario, seed: int, max_time: float | None = None) -> RunData:
     """Draw the IMU errors, sensor noise and initial errors of run ``seed``."""
     truth = scn.trajectory(max_time)
@@ -74,7 +78,9 @@ def make_run_data(scn: Scenario, seed: int, max_time: float | None = None) -> Ru
     init_dp = rng.standard_normal(3) * np.asarray(ie.position_m, dtype=float)
     dth, dv, _ = corrupt_imu(truth.dtheta, truth.dv, truth.dt, scn.imu.errors(truth.dt), rng)
     series = {}
-    faults = [f.fault() for f in scn.faults]
+    # (the faults' draws from a stream of their own: the noise is the same without them)
+    frng = np.random.default_rng([seed, FAULT_STREAM])
+    faults = [f.fault(frng) for f in scn.faults]
     for name in SENSORS:  # registry order: the order of the draws
         cfg = scn.sensors.get(name)
         if cfg is not None:

@@ -82,15 +82,45 @@ class SegmentConfig(_Model):
                        self.name)
 
 
+class Between(_Model):
+    """A value drawn per run, uniformly between the two bounds ``between: [low, high]``."""
+
+    between: tuple[float, float]
+
+    @field_validator("between")
+    @classmethod
+    def _ordered(cls, v):
+        if not v[1] >= v[0]:
+            raise ValueError(f"between: [low, high] with high >= low, got {list(v)}")
+        return v
+
+    def draw(self, rng: np.random.Generator) -> float:
+        return float(rng.uniform(*self.between))
+
+
+def _value(v, rng: np.random.Generator):
+    """A fixed value as it is, a :class:`Between` drawn."""
+    return v.draw(rng) if isinstance(v, Between) else v
+
+
 class FaultConfig(_Model):
-    """Additive sensor fault: ``size_sigma`` times the sensor sigma on ``components``
-    (indices into the sensor's measurement; all when omitted), ``step`` or ``ramp``."""
+    """A sensor fault injected in every run (:mod:`fednav.sensors.faults`): ``kind`` (step,
+    ramp, drift, burst, false_match, misidentification, spoofing) on ``components``
+    (indices into the sensor's measurement; omitted: all, or the position's for
+    false_match and spoofing, the angles for misidentification), of ``size_sigma`` times
+    the sensor's sigma, from ``start_s`` to ``end_s`` (or for ``duration_s``).  Start,
+    duration and size may each be ``{between: [low, high]}``, drawn per run; the
+    direction of a false match or a spoofing pull and the signs of a misidentification are
+    always drawn per run — from a stream of their own, so the runs' noise is the same with
+    or without faults."""
 
     sensor: str
-    start_s: float
-    end_s: float
-    size_sigma: float | list[float]
-    kind: Literal["step", "ramp"] = "step"
+    start_s: float | Between
+    end_s: float | None = None
+    duration_s: float | Between | None = None
+    size_sigma: float | list[float] | Between
+    kind: Literal["step", "ramp", "drift", "burst", "false_match", "misidentification",
+                  "spoofing"] = "step"
     components: list[int] | None = None
 
     @field_validator("sensor")
@@ -98,10 +128,51 @@ class FaultConfig(_Model):
     def _sensor(cls, v):
         return check_names([v])[0]
 
-    def fault(self) -> Fault:
-        size = self.size_sigma if isinstance(self.size_sigma, float) else tuple(self.size_sigma)
+    @model_validator(mode="after")
+    def _window(self):
+        if (self.end_s is None) == (self.duration_s is None):
+            raise ValueError("give end_s or duration_s (one of them)")
+        if self.end_s is not None and isinstance(self.start_s, Between):
+            raise ValueError("a start drawn per run (start_s: {between: ...}) takes "
+                             "duration_s, not end_s")
+        lo = self.duration_s.between[0] if isinstance(self.duration_s, Between) \
+            else self.duration_s
+        if lo is not None and not lo > 0.0:
+            raise ValueError(f"duration_s must be positive, got {lo}")
+        from ..sensors.faults import HORIZONTAL
+        from ..sensors.registry import spec
+
+        sp = spec(self.sensor)
+        if self.kind in HORIZONTAL and sp.latlon is None:
+            raise ValueError(f"kind: {self.kind} moves a position fix; the {self.sensor} "
+                             f"sensor measures no latitude/longitude")
+        if self.kind == "misidentification" and not sp.angles:
+            raise ValueError(f"kind: misidentification is an attitude jump; the "
+                             f"{self.sensor} sensor measures no angle")
+        return self
+
+    @property
+    def end_fixed(self) -> float | None:
+        """The end [s] when nothing of the window is drawn, else None."""
+        if self.end_s is not None:
+            return self.end_s
+        if isinstance(self.start_s, Between) or isinstance(self.duration_s, Between):
+            return None
+        return self.start_s + self.duration_s
+
+    def fault(self, rng: np.random.Generator | None = None) -> Fault:
+        """The fault of one run, what is drawn drawn from ``rng`` (the run's fault stream;
+        None: a generator seeded 0)."""
+        rng = np.random.default_rng(0) if rng is None else rng
+        start = float(_value(self.start_s, rng))
+        end = self.end_s if self.end_s is not None else start + _value(self.duration_s, rng)
+        size = _value(self.size_sigma, rng)
+        size = float(size) if not isinstance(size, list) else tuple(size)
         comps = None if self.components is None else tuple(self.components)
-        return Fault(self.sensor, self.start_s, self.end_s, size, self.kind, comps)
+        bearing = float(rng.uniform(0.0, 2.0 * np.pi))
+        signs = tuple(float(s) for s in rng.choice([-1.0, 1.0], 3))
+        return Fault(self.sensor, start, float(end), size, self.kind, comps, bearing, signs,
+                     int(rng.integers(2**31)))
 
 
 class InitialErrorConfig(_Model):
@@ -172,6 +243,13 @@ class FaultExperimentConfig(_Model):
     duration_s: float = Field(gt=0.0)
     fault: FaultConfig
     mode: str  # name of the mode (in ``modes``) that flies it
+
+    @model_validator(mode="after")
+    def _fixed(self):
+        if self.fault.end_fixed is None:
+            raise ValueError("fault_experiment.fault: its window is fixed (start_s and "
+                             "end_s), not drawn per run")
+        return self
 
 
 class Scenario(System):
