@@ -173,3 +173,23 @@ def test_table_titles_do_not_wrap_when_piped():
     print_design_tables(summary, PipeConsole(file=out))
     lines = out.getvalue().splitlines()
     assert lines[:2] == [title, "Monte Carlo mean ±95% CI over 12 runs (seed 3)"]
+
+
+def test_a_designs_nis_is_the_centralized_filters():
+    """In a federation (GNSS, baro, star sharing their information) each local filter's
+    ``nis_per_dof`` is against the centralized filter's innovation covariance — about 1
+    for a consistent filter — and the local filter's own, which its gate tests, is beside
+    it as ``gate_nis_per_dof`` (the star's: about 0.6)."""
+    from fednav.campaign.design import one_run
+    from fednav.sim.scenario import load_scenario
+
+    scn = load_scenario(EXAMPLES / "uav-gnss-baro-star.yaml")
+    rows = [r for seed in (1, 2) for r in one_run((scn, seed, 200.0))[0]
+            if r["mode"] == "INS/GNSS/baro/star"]
+    for local in ("gnss", "baro", "star"):
+        central = np.mean([r[f"nis_per_dof.{local}"] for r in rows])
+        gate = np.mean([r[f"gate_nis_per_dof.{local}"] for r in rows])
+        assert 0.75 < central < 1.35, (local, central)
+        assert gate <= central + 1e-9, (local, gate, central)
+    star_gate = np.mean([r["gate_nis_per_dof.star"] for r in rows])
+    assert star_gate < 0.8

@@ -21,7 +21,11 @@ value), ``max`` (largest absolute value).  They are computed over the whole flig
 (table ``flight``) and over each outage window of the sensors' ``outages_s`` (tables
 ``outage_<start>_<end>s``: the epochs ``start <= t < end``).  ``nis_per_dof.<local>``:
 the mean over the run of each local filter's normalised innovation squared divided by
-its degrees of freedom (about 1 for a filter whose covariance matches its errors).
+its degrees of freedom, against the innovation covariance of the equivalent centralized
+filter (about 1 for a filter whose covariance matches its errors; the health band's
+statistic, :func:`fednav.navigator.health.local_nis`); ``gate_nis_per_dof.<local>``:
+the local filter's own, which its chi-square gate tests (smaller in a federation that
+shares out its information).
 
 **Tables** (``summary.json``): each cell is the Monte Carlo mean of a per-run statistic
 (``value``) and the half-width of its 95 % confidence interval (``ci95``, Student t over
@@ -128,9 +132,11 @@ def run_statistics(result, windows: list[dict]) -> dict[str, float]:
     if result.fdi is not None and len(result.fdi):
         f = result.fdi
         ratio = (f["statistic"] / f["dof"]).to_numpy()
+        central = result.nis or {}
         for local in dict.fromkeys(f["local"]):
-            row[f"nis_per_dof.{local}"] = float(np.mean(ratio[(f["local"] == local)
-                                                              .to_numpy()]))
+            gate = float(np.mean(ratio[(f["local"] == local).to_numpy()]))
+            row[f"nis_per_dof.{local}"] = central.get(local, gate)
+            row[f"gate_nis_per_dof.{local}"] = gate
     return row
 
 
@@ -139,10 +145,11 @@ def one_run(args) -> tuple[list[dict], dict]:
     per-mode statistics rows and the error series by mode (without the per-measurement
     fault-detection log, summarised in the rows as NIS/dof)."""
     scn, seed, max_time = args
-    series = run_all_modes(scn, make_run_data(scn, seed, max_time), max_time)
+    series = run_all_modes(scn, make_run_data(scn, seed, max_time), max_time,
+                           innovations=True)
     windows = outage_windows(scn, max_time)
     rows = [{"seed": seed, "mode": m, **run_statistics(r, windows)} for m, r in series.items()]
-    return rows, {m: replace(r, fdi=None) for m, r in series.items()}
+    return rows, {m: replace(r, fdi=None, nis=None) for m, r in series.items()}
 
 
 def summarize_rows(rows: list[dict], modes: list[str], windows: list[dict],

@@ -62,6 +62,9 @@ class RunResult:
     beta: dict[str, np.ndarray] = field(default_factory=dict)
     fdi: pd.DataFrame | None = None
     euler: np.ndarray | None = None  # Euler [pitch, roll, heading] estimated - true [rad]
+    #: per local filter, the mean NIS/dof against the centralized filter's innovation
+    #: covariance (:func:`fednav.navigator.health.local_nis`; run with ``innovations``)
+    nis: dict[str, float] | None = None
 
 
 #: The second word of the seed of a run's fault draws (``[seed, FAULT_STREAM]``).
@@ -108,12 +111,15 @@ def _initial_state(scn: Scenario, truth, data: RunData):
 
 def run_mode(scn: Scenario, aiding: list[str], data: RunData, mode: str = "",
              max_time: float | None = None, filter_type: str | None = None,
-             delay: str | None = None, constraint: str | None = None) -> RunResult:
+             delay: str | None = None, constraint: str | None = None,
+             innovations: bool = False) -> RunResult:
     """Fly one mode (list of aiding sensors; empty = free SINS) on the run's data.
 
     ``filter_type`` overrides the scenario's (``total-ukf``: the total-state navigator);
     ``delay`` overrides the delay strategy of every aiding sensor with a latency;
-    ``constraint="wind"`` applies the air-data wind constraint in every local filter.
+    ``constraint="wind"`` applies the air-data wind constraint in every local filter;
+    ``innovations``: record them, for each local filter's NIS against the centralized
+    filter's innovation covariance (:attr:`RunResult.nis`).
     The mode is the scenario's system with these settings (:meth:`Scenario.system_for`),
     flown by the :class:`~fednav.navigator.Navigator`.
     """
@@ -137,7 +143,7 @@ def run_mode(scn: Scenario, aiding: list[str], data: RunData, mode: str = "",
                                        filter=filter_type, delay_compensation=delay,
                                        constraint=constraint))
     nav = Navigator(system, _initial_state(scn, truth, data), dt, record_rows=False,
-                    record_covariance=False)
+                    record_covariance=False, innovations=innovations)
     feed = list(aiding) + ["baro"] * ("baro" not in aiding) + ["airdata"] * (
         constraint is not None)
     for a in feed:
@@ -150,7 +156,12 @@ def run_mode(scn: Scenario, aiding: list[str], data: RunData, mode: str = "",
     if not aiding:
         sigma = np.full((K, em.N_STATES), np.nan)
         return _result(scn, truth, n_per, res.states[1:], mode, sigma, {}, None)
-    return _result(scn, truth, n_per, res.states[1:], mode, res.sigma[1:], res.beta, res.fdi)
+    out = _result(scn, truth, n_per, res.states[1:], mode, res.sigma[1:], res.beta, res.fdi)
+    if innovations:
+        from ..navigator.health import local_nis
+
+        out.nis = {k: v for k, (v, _) in local_nis(res.innovations).items()}
+    return out
 
 
 def _result(scn, truth, n_per, states, mode, sigma, betas, log) -> RunResult:
@@ -181,14 +192,15 @@ def _stats_epochs(t, period):
     return ph < 1e-6
 
 
-def run_all_modes(scn: Scenario, data: RunData,
-                  max_time: float | None = None) -> dict[str, RunResult]:
+def run_all_modes(scn: Scenario, data: RunData, max_time: float | None = None,
+                  innovations: bool = False) -> dict[str, RunResult]:
     """Every mode of the scenario flown on the same run data, by mode name."""
-    return {m.name: run_configured_mode(scn, m, data, max_time) for m in scn.modes}
+    return {m.name: run_configured_mode(scn, m, data, max_time, innovations)
+            for m in scn.modes}
 
 
-def run_configured_mode(scn: Scenario, mode, data: RunData,
-                        max_time: float | None = None) -> RunResult:
+def run_configured_mode(scn: Scenario, mode, data: RunData, max_time: float | None = None,
+                        innovations: bool = False) -> RunResult:
     """Run a :class:`~fednav.sim.scenario.ModeConfig` of the scenario."""
     return run_mode(scn, list(mode.aiding), data, mode.name, max_time, mode.filter,
-                    mode.delay_compensation, mode.constraint)
+                    mode.delay_compensation, mode.constraint, innovations)
