@@ -160,3 +160,70 @@ def test_a_section_takes_what_it_leaves_to_the_recording(flight):
     assert air.roles(System()) == {}
     assert air.roles(System.model_construct(constraint="wind")) == {
         "constraint": "constraint: wind"}
+
+
+def test_simulated_and_recorded_series_take_one_route(flight):
+    """A simulated sensor's series is a Series too, and the navigator's add_series takes
+    either: the same data as a recorded file and as the simulator's give the same run."""
+    from fednav.sensors.base import MeasurementSeries
+
+    imu, gnss, _ = _short(flight, 30.0)
+    prep = prepare(imu, {"gnss": gnss}, System())
+    d = prep.series["gnss"]
+    sim = MeasurementSeries("gnss", d.t, d.z, prep.system.sensors.gnss.sigma())
+    assert isinstance(sim, Series) and sim.name == "gnss" and sim.t_arrival is sim.t_avail
+    a = prep.feed(prep.navigator()).result()
+    nav = prep.navigator()
+    nav.add_series(sim)
+    nav.add_imu(prep.t, prep.gyro, prep.accel)
+    np.testing.assert_array_equal(nav.result().states, a.states)
+
+
+def test_process_csv_reads_an_rtklib_solution_as_the_gnss_file(flight, tmp_path):
+    """``fednav process csv --gnss FILE.pos``: the RTKLIB solution of the same fixes (its
+    own layout: date and time on the GPS clock, degrees, N/E/U sigmas, vn/ve/vu) gives the
+    run the fednav CSV gives."""
+    import json
+    import time as _time
+
+    from typer.testing import CliRunner
+
+    from fednav.cli import app
+    from fednav.core import units
+    from fednav.io.csvdata import write_csv
+
+    imu, gnss, _ = _short(flight, 60.0)
+    write_csv(tmp_path / "imu.csv", {"t_s": imu.t, **{
+        f"{k}_{a}_{u}": v[:, i] for k, v, u in (("gyro", imu.gyro, "radps"),
+                                                ("accel", imu.accel, "mps2"))
+        for i, a in enumerate("xyz")}}, significant=17)
+    lat, lon = units.to_deg(gnss.lla[:, 0]), units.to_deg(gnss.lla[:, 1])
+    write_csv(tmp_path / "gnss.csv", {"t_s": gnss.t, "lat_deg": lat, "lon_deg": lon,
+                                      "h_m": gnss.lla[:, 2], "vE_mps": gnss.vel[:, 0],
+                                      "vN_mps": gnss.vel[:, 1], "vU_mps": gnss.vel[:, 2]},
+              significant=17)
+    lines = ["%  GPST  latitude(deg) longitude(deg) height(m) Q ns sdn(m) sde(m) sdu(m) "
+             "sdne(m) sdeu(m) sdun(m) age(s) ratio vn(m/s) ve(m/s) vu(m/s) sdvn sdve sdvu "
+             "sdvne sdveu sdvun"]
+    for i, t in enumerate(gnss.t):  # (times since 1970-01-01: the IMU file's 0)
+        day = _time.strftime("%Y/%m/%d %H:%M:", _time.gmtime(int(t // 60) * 60))
+        lines.append(f"{day}{t % 60:06.3f} {lat[i]:.12f} {lon[i]:.12f} {gnss.lla[i, 2]:.6f} "
+                     f"1 12 0 0 0 0 0 0 0 0 {gnss.vel[i, 1]:.9f} {gnss.vel[i, 0]:.9f} "
+                     f"{gnss.vel[i, 2]:.9f} 0 0 0 0 0 0")
+    (tmp_path / "gnss.pos").write_text("\n".join(lines) + "\n")
+    (tmp_path / "cfg.yaml").write_text(
+        "imu: {grade: tactical}\nsensors: {gnss: {sigma_pos_enu_m: 1, sigma_vel_mps: 0.05, "
+        f"lever_m: {list(map(float, gnss.lever))}}}}}\n")
+    out = {}
+    for name in ("gnss.csv", "gnss.pos"):
+        r = CliRunner().invoke(app, ["process", "csv", "--imu", str(tmp_path / "imu.csv"),
+                                     "--gnss", str(tmp_path / name), "--config",
+                                     str(tmp_path / "cfg.yaml"), "--out",
+                                     str(tmp_path / name.replace(".", "_"))])
+        assert r.exit_code == 0, r.output
+        out[name] = json.loads((tmp_path / name.replace(".", "_") / "summary.json")
+                               .read_text())
+    a, b = out["gnss.csv"]["consistency"]["gnss"], out["gnss.pos"]["consistency"]["gnss"]
+    assert a["measurements"] == b["measurements"] >= len(gnss.t) - 1
+    assert b["nis_per_dof"] == pytest.approx(a["nis_per_dof"], rel=1e-3)
+    assert out["gnss.pos"]["data_quality"]["gnss_rtklib_q"] == {"fixed": len(gnss.t)}

@@ -570,6 +570,7 @@ def _csv_reader(imu: Path | None, gnss: Path | None, velocity: Path | None,
             read_gnss_csv,
             read_imu_csv,
             read_reference_csv,
+            read_rtklib_pos,
             read_sensor_csv,
             read_velocity_csv,
         )
@@ -592,9 +593,13 @@ def _csv_reader(imu: Path | None, gnss: Path | None, velocity: Path | None,
 
         g = None
         if paths["gnss"] is not None:
-            g = read_gnss_csv(paths["gnss"], given(gc and gc.sigma_pos_enu_m, (5.0, 5.0, 5.0)),
-                              given(gc and gc.sigma_vel_mps, (0.1, 0.1, 0.1)),
-                              given(gc and gc.lever_m, (0.0, 0.0, 0.0)))
+            # (an RTKLIB solution by its suffix, else fednav's CSV)
+            reader = read_rtklib_pos if Path(paths["gnss"]).suffix.lower() == ".pos" \
+                else read_gnss_csv
+            g = reader(paths["gnss"], sigma_pos_enu=given(gc and gc.sigma_pos_enu_m,
+                                                          (5.0, 5.0, 5.0)),
+                       sigma_vel=given(gc and gc.sigma_vel_mps, (0.1, 0.1, 0.1)),
+                       lever=given(gc and gc.lever_m, (0.0, 0.0, 0.0)))
         return {"imu": read_imu_csv(paths["imu"], cfg.imu.max_bridge_s, cfg.imu.mounting),
                 "gnss": g,
                 "velocity": None if vel is None else read_velocity_csv(vel),
@@ -668,7 +673,8 @@ def process_navego(
 @_sensor_file_options("gnss", "velocity")
 def process_csv(
     imu: Path = typer.Option(None, help="IMU CSV: rates or increments (docs/data-formats.md)"),
-    gnss: Path = typer.Option(None, help="GNSS CSV: positions and/or velocities"),
+    gnss: Path = typer.Option(None, help="GNSS CSV: positions and/or velocities (or an "
+                                         "RTKLIB .pos solution)"),
     velocity: Path = typer.Option(None, help="velocity-sensor CSV"),
     ref: Path = typer.Option(None, help="reference CSV (for RMSE and errors.csv)"),
     smooth: bool = _SMOOTH, out: Path = _OUT, config: Path = _CONFIG,
@@ -820,7 +826,7 @@ def tune_navego(
 @_one_line_errors
 def tune_csv(
     imu: Path = typer.Option(..., help="IMU CSV (docs/data-formats.md)"),
-    gnss: Path = typer.Option(..., help="GNSS CSV"),
+    gnss: Path = typer.Option(..., help="GNSS CSV (or an RTKLIB .pos solution)"),
     velocity: Path = typer.Option(None, help="velocity-sensor CSV"),
     config: Path = _TUNE_CONFIG, out: Path = _TUNE_OUT, fix: list[str] = _TUNE_FIX,
     tune_sensors: bool = _TUNE_SENSORS, block_s: float = _TUNE_BLOCK,

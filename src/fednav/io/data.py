@@ -354,7 +354,9 @@ class Series(Protocol):
     its covariance ``cov`` (N, m, m) or neither (the system description's figures),
     arrival times ``t_arrival`` (N,) [s] or None, and ``quality`` (what the reader did).
     :class:`SensorData` is the plain one; :class:`GnssData` and :class:`VelocityData`
-    are the GNSS's and velocity sensor's with their own fields beside."""
+    are the GNSS's and velocity sensor's with their own fields beside; a simulated
+    sensor's :class:`~fednav.sensors.base.MeasurementSeries` is one too (one ``sigma``
+    (m,) for every row).  :meth:`fednav.navigator.Navigator.add_series` takes any."""
 
     name: str
     source: str

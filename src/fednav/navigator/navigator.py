@@ -1192,16 +1192,18 @@ class Navigator:
                       stacklevel=4)
 
     def add_series(self, series) -> None:
-        """Add a simulated measurement series.
+        """Add one sensor's whole series, recorded or simulated.
 
         Parameters
         ----------
-        series : MeasurementSeries
-            A :class:`fednav.sensors.base.MeasurementSeries`: its sensor, times [s],
-            arrival times [s], values and 1-sigma in the sensor's units.
+        series : Series
+            A :class:`fednav.io.data.Series` (``read_sensor_csv``'s, ``Prepared.series``'
+            or a simulated :class:`fednav.sensors.base.MeasurementSeries`): its sensor's
+            ``name``, times of validity and arrival [s], values ``z`` and each row's
+            1-sigma or covariance in the sensor's units (neither: the system's figures).
         """
-        self.add_measurements(series.kind, series.t, series.z, sigma=series.sigma,
-                              t_arrival=series.t_avail)
+        self.add_measurements(series.name, series.t, series.z, sigma=series.sigma,
+                              cov=series.cov, t_arrival=series.t_arrival)
 
     @property
     def row_kinds(self) -> dict[str, np.ndarray]:

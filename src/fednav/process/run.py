@@ -347,9 +347,8 @@ class Prepared:
         Navigator
             ``nav``, fed (its :meth:`~fednav.navigator.Navigator.result` is the run's).
         """
-        for name, d in self.series.items():
-            nav.add_measurements(name, d.t, d.z, sigma=d.sigma, cov=d.cov,
-                                 t_arrival=d.t_arrival)
+        for d in self.series.values():
+            nav.add_series(d)
         if self.increments is not None:
             nav.add_imu(self.t, dtheta=self.increments[0], dv=self.increments[1])
         else:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
@@ -16,6 +17,8 @@ class MeasurementSeries:
     the sensor's natural units (radians, metres ...); ``sigma`` (m,) 1-sigma noise of each
     component of ``z``, in metric units for latitude/longitude (north/east metres), else in
     the component's own units; ``kind`` names the measurement model that interprets ``z``.
+    A simulated sensor's :class:`~fednav.io.data.Series` (``name``, ``t_arrival``,
+    ``source``, ``cov``, ``absent``, ``quality`` give it the recorded series' fields).
     """
 
     kind: str
@@ -41,6 +44,26 @@ class MeasurementSeries:
             raise ValueError(f"{self.kind}: {len(self.t)} times but {self.z.shape[0]} values")
         if not np.all(np.isfinite(self.z)):
             raise ValueError(f"{self.kind}: non-finite measurement values")
+
+    # -- the fields of a recorded series (fednav.io.data.Series)
+    cov: ClassVar[None] = None
+    absent: ClassVar[tuple] = ()
+
+    @property
+    def name(self) -> str:
+        return self.kind
+
+    @property
+    def t_arrival(self) -> np.ndarray:
+        return self.t_avail
+
+    @property
+    def source(self) -> str:
+        return f"simulated {self.kind}"
+
+    @property
+    def quality(self) -> dict:
+        return {}
 
 
 def position_noise_to_llh(lla, d_neu):
