@@ -392,7 +392,8 @@ def _simulate_writes(rel: Path) -> bool:
 
 
 def _run_process(read, imu, gnss, velocity, ref, smooth, out, config, output_rate,
-                 files: dict | None = None, force: bool = False, fmt: str = "csv") -> None:
+                 files: dict | None = None, force: bool = False, fmt: str = "csv",
+                 export: str | None = None) -> None:
     from .core.atomic import clear_results
     from .core.config import load_model
     from .navigator.system import System
@@ -411,6 +412,9 @@ def _run_process(read, imu, gnss, velocity, ref, smooth, out, config, output_rat
         refuse_overwrite({"imu": imu, "gnss": gnss, "velocity": velocity, **(files or {}),
                           "reference": ref, "config": config})
         fmt = process_output.check_format(fmt)  # (before the work: a missing extra)
+        from .process.export import check_exports, write_exports
+
+        kinds = check_exports(export)
         rate = process_output.parse_rate(output_rate)
         cfg = System() if config is None else load_model(config, System, "processing config")
         if rate is None and cfg.output_rate_hz is not None:
@@ -431,6 +435,9 @@ def _run_process(read, imu, gnss, velocity, ref, smooth, out, config, output_rat
             "config": None if config is None else str(config), "smooth": smooth,
             "output_rate_hz": process_output.DEFAULT_OUTPUT_RATE_HZ if rate is None else rate,
             "format": fmt}, rate, data["gnss"], data.get("others"), fmt)
+        if kinds:  # (before summary.json, the last file)
+            files[-1:-1] = write_exports(out, process_output.decimate(res.forward, rate),
+                                         kinds, res.outages)
     except (FednavError, ValueError) as e:
         if _state["debug"]:
             raise
@@ -651,6 +658,8 @@ _FORMAT = typer.Option("csv", "--format", help="solution file format: csv or par
                        "(needs pyarrow: the extra 'parquet' of fednav)")
 _FORCE = typer.Option(False, "--force", help="write the solution even when its innovations "
                       "say the data are wrong (mean NIS/dof above 100)")
+_EXPORT = typer.Option(None, "--export", help="also write the solution as kml, gpx and/or "
+                       "geojson (comma-separated; needs the extra 'export' of fednav)")
 
 
 @process_app.command("navego")
@@ -662,10 +671,11 @@ def process_navego(
     ref: Path = typer.Option(None, help="NaveGo reference .mat (for RMSE)"),
     smooth: bool = _SMOOTH, out: Path = _OUT, config: Path = _CONFIG,
     output_rate: str = _RATE, fmt: str = _FORMAT, force: bool = _FORCE,
+    export: str = _EXPORT,
 ) -> None:
     """Loosely coupled INS/GNSS (+ visual velocity) on NaveGo .mat files."""
     _run_process(_navego_reader(imu, gnss, visual, ref), imu, gnss, visual, ref, smooth, out,
-                 config, output_rate, force=force, fmt=fmt)
+                 config, output_rate, force=force, fmt=fmt, export=export)
 
 
 @process_app.command("csv")
@@ -678,7 +688,8 @@ def process_csv(
     velocity: Path = typer.Option(None, help="velocity-sensor CSV"),
     ref: Path = typer.Option(None, help="reference CSV (for RMSE and errors.csv)"),
     smooth: bool = _SMOOTH, out: Path = _OUT, config: Path = _CONFIG,
-    output_rate: str = _RATE, fmt: str = _FORMAT, force: bool = _FORCE, **files: Path,
+    output_rate: str = _RATE, fmt: str = _FORMAT, force: bool = _FORCE,
+    export: str = _EXPORT, **files: Path,
 ) -> None:
     """The system described by --config (any registered sensors, local filters, fault
     detection, delay handling, smoother) on fednav CSV files: one option per sensor, or
@@ -686,7 +697,8 @@ def process_csv(
     come from --config (or each row's sigma columns)."""
     files = {n: f for n, f in files.items() if f is not None}
     _run_process(_csv_reader(imu, gnss, velocity, ref, files, config), imu, gnss, velocity,
-                 ref, smooth, out, config, output_rate, files, force=force, fmt=fmt)
+                 ref, smooth, out, config, output_rate, files, force=force, fmt=fmt,
+                 export=export)
 
 
 @process_app.command("ulog")
@@ -698,12 +710,13 @@ def process_ulog(
                                            "sensors aid (aiding:), filters; what it leaves "
                                            "out comes from the log"),
     output_rate: str = _RATE, fmt: str = _FORMAT, force: bool = _FORCE,
+    export: str = _EXPORT,
 ) -> None:
     """A PX4 autopilot log (ULog, read with pyulog): its IMU, GNSS, barometer and
     magnetometer through the navigator, compared with PX4's own estimate (and the log's
     ground truth when it has one)."""
     _run_process(_ulog_reader(log), log, None, None, None, smooth, out, config,
-                 output_rate, force=force, fmt=fmt)
+                 output_rate, force=force, fmt=fmt, export=export)
 
 
 tune_app = typer.Typer(no_args_is_help=True,
