@@ -576,6 +576,7 @@ def _csv_reader(imu: Path | None, gnss: Path | None, velocity: Path | None,
         from .io import (
             read_gnss_csv,
             read_imu_csv,
+            read_nmea,
             read_reference_csv,
             read_rtklib_pos,
             read_sensor_csv,
@@ -600,9 +601,9 @@ def _csv_reader(imu: Path | None, gnss: Path | None, velocity: Path | None,
 
         g = None
         if paths["gnss"] is not None:
-            # (an RTKLIB solution by its suffix, else fednav's CSV)
-            reader = read_rtklib_pos if Path(paths["gnss"]).suffix.lower() == ".pos" \
-                else read_gnss_csv
+            # (an RTKLIB solution or an NMEA log by its suffix, else fednav's CSV)
+            reader = {".pos": read_rtklib_pos, ".nmea": read_nmea, ".nme": read_nmea}.get(
+                Path(paths["gnss"]).suffix.lower(), read_gnss_csv)
             g = reader(paths["gnss"], sigma_pos_enu=given(gc and gc.sigma_pos_enu_m,
                                                           (5.0, 5.0, 5.0)),
                        sigma_vel=given(gc and gc.sigma_vel_mps, (0.1, 0.1, 0.1)),
@@ -684,7 +685,7 @@ def process_navego(
 def process_csv(
     imu: Path = typer.Option(None, help="IMU CSV: rates or increments (docs/data-formats.md)"),
     gnss: Path = typer.Option(None, help="GNSS CSV: positions and/or velocities (or an "
-                                         "RTKLIB .pos solution)"),
+                                         "RTKLIB .pos solution, an NMEA .nmea log)"),
     velocity: Path = typer.Option(None, help="velocity-sensor CSV"),
     ref: Path = typer.Option(None, help="reference CSV (for RMSE and errors.csv)"),
     smooth: bool = _SMOOTH, out: Path = _OUT, config: Path = _CONFIG,

@@ -16,6 +16,7 @@ from .navego import (
     read_navego_reference,
     read_navego_visual,
 )
+from .nmea import read_nmea
 from .rtklib import read_rtklib_pos
 from .sensorfile import SensorData, read_sensor_csv, write_sensor_csv
 from .ulog import UlogRecording, read_ulog
@@ -24,7 +25,7 @@ __all__ = [
     "DataError", "FRD_TO_RFU", "GnssData", "ImuData", "ImuErrors", "Reference",
     "VelocityData", "navego_euler_to_fednav", "read_gnss_csv", "read_imu_csv",
     "read_navego_gnss", "read_navego_imu", "read_navego_reference", "read_navego_visual",
-    "read_reference_csv", "read_rtklib_pos", "read_sensor_csv", "read_velocity_csv",
+    "read_nmea", "read_reference_csv", "read_rtklib_pos", "read_sensor_csv", "read_velocity_csv",
     "SensorData",
     "write_sensor_csv", "UlogRecording", "read_ulog",
 ]
