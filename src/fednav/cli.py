@@ -580,6 +580,7 @@ def _csv_reader(imu: Path | None, gnss: Path | None, velocity: Path | None,
             read_reference_csv,
             read_rtklib_pos,
             read_sensor_csv,
+            read_ubx,
             read_velocity_csv,
         )
 
@@ -602,8 +603,10 @@ def _csv_reader(imu: Path | None, gnss: Path | None, velocity: Path | None,
         g = None
         if paths["gnss"] is not None:
             # (an RTKLIB solution or an NMEA log by its suffix, else fednav's CSV)
-            reader = {".pos": read_rtklib_pos, ".nmea": read_nmea, ".nme": read_nmea}.get(
-                Path(paths["gnss"]).suffix.lower(), read_gnss_csv)
+            reader = {".pos": read_rtklib_pos, ".nmea": read_nmea, ".nme": read_nmea,
+                      ".ubx": lambda p, sigma_pos_enu, sigma_vel, lever: read_ubx(
+                          p, lever=lever)}.get(Path(paths["gnss"]).suffix.lower(),
+                                               read_gnss_csv)
             g = reader(paths["gnss"], sigma_pos_enu=given(gc and gc.sigma_pos_enu_m,
                                                           (5.0, 5.0, 5.0)),
                        sigma_vel=given(gc and gc.sigma_vel_mps, (0.1, 0.1, 0.1)),
@@ -685,7 +688,8 @@ def process_navego(
 def process_csv(
     imu: Path = typer.Option(None, help="IMU CSV: rates or increments (docs/data-formats.md)"),
     gnss: Path = typer.Option(None, help="GNSS CSV: positions and/or velocities (or an "
-                                         "RTKLIB .pos solution, an NMEA .nmea log)"),
+                                         "RTKLIB .pos solution, an NMEA .nmea or a "
+                                         "u-blox .ubx log)"),
     velocity: Path = typer.Option(None, help="velocity-sensor CSV"),
     ref: Path = typer.Option(None, help="reference CSV (for RMSE and errors.csv)"),
     smooth: bool = _SMOOTH, out: Path = _OUT, config: Path = _CONFIG,

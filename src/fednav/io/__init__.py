@@ -19,6 +19,7 @@ from .navego import (
 from .nmea import read_nmea
 from .rtklib import read_rtklib_pos
 from .sensorfile import SensorData, read_sensor_csv, write_sensor_csv
+from .ubx import read_ubx
 from .ulog import UlogRecording, read_ulog
 
 __all__ = [
@@ -26,6 +27,6 @@ __all__ = [
     "VelocityData", "navego_euler_to_fednav", "read_gnss_csv", "read_imu_csv",
     "read_navego_gnss", "read_navego_imu", "read_navego_reference", "read_navego_visual",
     "read_nmea", "read_reference_csv", "read_rtklib_pos", "read_sensor_csv", "read_velocity_csv",
-    "SensorData",
+    "SensorData", "read_ubx",
     "write_sensor_csv", "UlogRecording", "read_ulog",
 ]
