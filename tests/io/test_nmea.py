@@ -49,7 +49,7 @@ def test_positions_times_and_gst_sigmas_round_trip(tmp_path):
     p = tmp_path / "log.nmea"
     p.write_text("\n".join(lines) + "\n")
     g = read_nmea(p)
-    t0 = dt.datetime(2025, 7, 8, 23, 59, 59, tzinfo=dt.timezone.utc).timestamp()
+    t0 = dt.datetime(2025, 7, 8, 23, 59, 59, tzinfo=dt.UTC).timestamp()
     np.testing.assert_allclose(g.t - t0, [0.0, 0.5, 1.0, 1.5], atol=1e-9)
     np.testing.assert_allclose(np.degrees(g.lla[:, 0]), 40.1 + 1e-5 * np.arange(4),
                                atol=1e-9)
@@ -84,7 +84,7 @@ def test_no_date_no_fix_and_bad_files(tmp_path):
         g = read_nmea(p)
     np.testing.assert_array_equal(g.t, [100.0, 101.0])
     g = read_nmea(p, date="2020-02-29")
-    assert g.t[0] == dt.datetime(2020, 2, 29, 0, 1, 40, tzinfo=dt.timezone.utc).timestamp()
+    assert g.t[0] == dt.datetime(2020, 2, 29, 0, 1, 40, tzinfo=dt.UTC).timestamp()
     nofix = tmp_path / "nofix.nmea"
     nofix.write_text("\n".join(_log(1.0, 2.0, 3.0, 0.0, 5.0, quality="0")))
     with pytest.raises(DataError, match="no GGA sentence with a fix"):
