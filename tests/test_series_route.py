@@ -11,7 +11,7 @@ from test_process import make_flight
 
 from fednav import System, load_system
 from fednav.io import read_gnss_csv, read_sensor_csv, write_sensor_csv
-from fednav.io.data import DataError, SensorData, Series, VelocityData
+from fednav.io.data import DataError, GnssData, SensorData, Series, VelocityData
 from fednav.navigator.navigator import residual_covariances
 from fednav.process import prepare, process
 from fednav.sensors.base import MeasurementSeries
@@ -143,7 +143,10 @@ def test_a_section_takes_what_it_leaves_to_the_recording(flight):
     g = GnssConfig(sigma_vel_mps=0.3).for_recording(gnss)
     assert g.sigma_pos_enu_m == tuple(gnss.sigma_pos_enu) and g.sigma_vel_mps == (0.3,) * 3
     assert g.lever_m == tuple(gnss.lever) and g.measures == "position_velocity"
-    assert g.period_s == pytest.approx(float(np.median(np.diff(gnss.t))))
+    assert g.period_s is None  # (the filter's epochs follow the fixes)
+    baro = SensorData("baro", "b", gnss.t[::5], gnss.lla[::5, 2:])
+    assert registry.spec("baro").config(sigma_m=1.0).for_recording(baro).period_s == \
+        pytest.approx(1.0)
     pos = replace(gnss, vel=None, quality={})
     assert GnssConfig().for_recording(pos).measures == "position"
     with pytest.raises(DataError, match="sensors.gnss.measures is velocity, the file has "
@@ -227,3 +230,44 @@ def test_process_csv_reads_an_rtklib_solution_as_the_gnss_file(flight, tmp_path)
     assert a["measurements"] == b["measurements"] >= len(gnss.t) - 1
     assert b["nis_per_dof"] == pytest.approx(a["nis_per_dof"], rel=1e-3)
     assert out["gnss.pos"]["data_quality"]["gnss_rtklib_q"] == {"fixed": len(gnss.t)}
+
+
+def test_edges_of_the_route(flight):
+    """A file's three figures are not rows (a 3-fix GNSS through an outage), a simulated
+    series flies as any other (GNSS, velocity, baro through an outage), a sensor whose
+    every measurement an outage withholds is said and left out, an old call with
+    placeholders is read, a sensor given twice is refused."""
+    from fednav.process.outages import withhold
+    from fednav.sensors.base import MeasurementSeries
+
+    imu, gnss, _ = _short(flight, 40.0)
+    three = GnssData("g", np.array([0.0, 1.0, 2.0]), gnss.lla[:3], gnss.vel[:3],
+                     np.array([1.0, 2.0, 3.0]), np.array([0.1, 0.2, 0.3]),
+                     np.array([0.5, 0.0, 1.0]))
+    w = withhold(three, [(0.5, 1.5)])
+    assert len(w.t) == 2 and list(w.sigma_pos_enu) == [1.0, 2.0, 3.0]
+    assert list(w.lever) == [0.5, 0.0, 1.0]
+    cfg = load_system({"sensors": {"gnss": {"lever_m": list(map(float, gnss.lever))},
+                                   "baro": {"sigma_m": 1.0, "damping_loop": False,
+                                            "outages_s": [[10.0, 20.0]]}}})
+    sig = np.r_[gnss.sigma_pos_enu[[1, 0, 2]], gnss.sigma_vel]
+    sims = {"gnss": MeasurementSeries("gnss", gnss.t, gnss.z, sig),
+            "velocity": MeasurementSeries("velocity", gnss.t, gnss.vel, np.full(3, 0.05)),
+            "baro": MeasurementSeries("baro", gnss.t, gnss.lla[:, 2:], np.array([1.0]))}
+    a = process(imu, sims, cfg)
+    b = process(imu, {"gnss": SensorData("gnss", "g", gnss.t, gnss.z,
+                                         sigma=np.tile(sig, (len(gnss.t), 1))),
+                      "velocity": SensorData("velocity", "v", gnss.t, gnss.vel,
+                                             sigma=np.full((len(gnss.t), 3), 0.05)),
+        "baro": SensorData("baro", "b", gnss.t, gnss.lla[:, 2:])}, cfg)
+    np.testing.assert_array_equal(a.forward.lla, b.forward.lla)
+    gone = load_system({"sensors": {"baro": {"sigma_m": 1.0, "damping_loop": False,
+                                             "outages_s": [[0.0, 100.0]]}}})
+    res = process(imu, {"gnss": gnss, "baro": sims["baro"]}, gone)
+    assert any("every baro measurement lies inside sensors.baro.outages_s" in w
+               for w in res.warnings)
+    with pytest.warns(FutureWarning):
+        with pytest.raises(DataError, match="no GNSS positions to start from"):
+            process(imu, None, None, cfg=System())  # (the old layout's placeholders)
+    with pytest.warns(FutureWarning), pytest.raises(DataError, match="gnss data given twice"):
+        process(imu, gnss, None, System(), sensors={"gnss": gnss})

@@ -111,3 +111,24 @@ def test_the_real_drives_solution():
     assert np.all(np.diff(g.t) > 0) and np.median(np.diff(g.t)) == pytest.approx(0.25)
     np.testing.assert_allclose(np.degrees(g.lla[0, :2]), [40.0966268, -105.1474483])
     assert g.vel is not None and np.all(g.sigma_rows > 0)
+
+
+def test_zero_or_missing_sigmas_take_the_figures(tmp_path):
+    """A 1-sigma of 0 (RTKLIB writes 0.0000 where it has none) or a column the solution
+    lacks: the figures given, per component, counted; the rows the quality filter drops
+    play no part."""
+    rows = ROWS.replace("   0.0099   0.0098", "   0.0000   0.0098", 1)  # (row 1: sdn 0)
+    rows = rows.replace("0.0587   0.0586   0.0590", "0.0000   0.0000   0.0000", 1)
+    g = read_rtklib_pos(_file(tmp_path, HEAD + COLS + rows), sigma_pos_enu=(2.0, 3.0, 4.0),
+                        sigma_vel=0.7)
+    np.testing.assert_allclose(g.sigma_rows[0], [3.0, 0.0098, 0.01, 0.7, 0.7, 0.7])
+    np.testing.assert_allclose(g.sigma_rows[1], [0.2, 0.3, 0.5, 0.2, 0.1, 0.3])
+    assert g.quality["gnss_sigma_zero_replaced"] == 1
+    fixed = rows.replace("   2  20   0.2000", "   1  20   0.2000", 1)
+    assert read_rtklib_pos(_file(tmp_path, HEAD + COLS + fixed.replace(
+        "   1  21   0.0000", "   2  21   0.0000", 1)), quality=(1,)).quality[
+        "gnss_sigma_zero_replaced"] == 0  # (row 1, float, dropped by the filter)
+    no_sdv = COLS.split("sdvn")[0] + "\n"
+    short = "\n".join(" ".join(r.split()[:18]) for r in ROWS.strip().splitlines()) + "\n"
+    g = read_rtklib_pos(_file(tmp_path, HEAD + no_sdv + short), sigma_vel=0.4)
+    np.testing.assert_allclose(g.sigma_rows[:, 3:], 0.4)

@@ -21,9 +21,9 @@ value), ``max`` (largest absolute value).  They are computed over the whole flig
 (table ``flight``) and over each outage window of the sensors' ``outages_s`` (tables
 ``outage_<start>_<end>s``: the epochs ``start <= t < end``).  ``nis_per_dof.<local>``:
 the mean over the run of each local filter's normalised innovation squared divided by
-its degrees of freedom, against the innovation covariance of the equivalent centralized
-filter (about 1 for a filter whose covariance matches its errors; the health band's
-statistic, :func:`fednav.navigator.health.local_nis`); ``gate_nis_per_dof.<local>``:
+its degrees of freedom over every measurement, against the innovation covariance of the
+equivalent centralized filter (about 1 for a filter whose covariance matches its errors;
+:func:`fednav.navigator.health.local_nis`); ``gate_nis_per_dof.<local>``:
 the local filter's own, which its chi-square gate tests (smaller in a federation that
 shares out its information).
 

@@ -48,7 +48,7 @@ def _dms(deg, minutes, sec) -> np.ndarray:
 
 
 def read_rtklib_pos(path, *, time: str = "rtklib", quality: tuple[int, ...] | None = None,
-                    sigma_pos_enu=5.0, sigma_vel=0.1, lever=(0.0, 0.0, 0.0)) -> GnssData:
+                     sigma_pos_enu=5.0, sigma_vel=0.1, lever=(0.0, 0.0, 0.0)) -> GnssData:
     """Read an RTKLIB ``.pos`` solution (module docstring).
 
     Parameters
@@ -62,8 +62,9 @@ def read_rtklib_pos(path, *, time: str = "rtklib", quality: tuple[int, ...] | No
         The solution qualities Q kept (e.g. ``(1,)``: fixed only); default all.  The rows
         of each Q are counted in ``data.quality`` (``gnss_rtklib_q``).
     sigma_pos_enu, sigma_vel, lever
-        As :func:`fednav.io.read_gnss_csv`: the figures where the file gives none
-        [m, m/s], the antenna lever arm body right-forward-up [m].
+        As :func:`fednav.io.read_gnss_csv`: the figures where the file gives none, or 0
+        (counted in ``gnss_sigma_zero_replaced``) [m, m/s], the antenna lever arm body
+        right-forward-up [m].
 
     Returns
     -------
@@ -154,28 +155,26 @@ def read_rtklib_pos(path, *, time: str = "rtklib", quality: tuple[int, ...] | No
                         f"{counts})")
     has_vel = all(k in col for k in ("vn", "ve", "vu"))
     vel = v[:, [col["ve"], col["vn"], col["vu"]]] if has_vel else None
-    sig = None
-    pos_sd = [col.get(k) for k in ("sdn", "sde", "sdu")]
-    if None not in pos_sd:
-        vel_sd = [col.get(k) for k in ("sdve", "sdvn", "sdvu")]
-        s = np.ones((len(v), 6))
-        s[:, :3] = v[:, pos_sd]
-        if has_vel and None not in vel_sd:
-            s[:, 3:] = v[:, vel_sd]
-        used = slice(0, 6) if has_vel and None not in vel_sd else slice(0, 3)
-        if np.all(s[:, used] > 0):
-            sig = s
-        elif not np.any(s[:, used] > 0):
-            sig = None  # (a solution without sigmas: the figures given)
-        else:
-            i = int(np.argmax((s[:, used] <= 0).any(axis=1)))
-            raise DataError(f"{src}: solution row {i + 1} has a 1-sigma of 0 among positive "
-                            f"ones (sdn/sde/sdu, sdvn/sdve/sdvu)")
-    pick = (lambda x: None if x is None else x[keep])  # noqa: E731
-    out = GnssData(src, t[keep], lla[keep], pick(vel),
+    v, t, lla, q = v[keep], t[keep], lla[keep], q[keep]
+    vel = None if vel is None else vel[keep]
+    # each fix's 1-sigma [north, east, up m, vE, vN, vU m/s]: the file's where it gives a
+    # positive one, the figures given where it has none or 0 (counted)
+    figures = np.r_[np.broadcast_to(np.asarray(sigma_pos_enu, dtype=float), (3,))[[1, 0, 2]],
+                    np.broadcast_to(np.asarray(sigma_vel, dtype=float), (3,))]
+    s = np.tile(figures, (len(v), 1))
+    given = np.zeros((len(v), 6), dtype=bool)
+    for j, k in enumerate(("sdn", "sde", "sdu", "sdve", "sdvn", "sdvu")):
+        if k in col and (j < 3 or has_vel):
+            s[:, j] = v[:, col[k]]
+            given[:, j] = True
+    zero = given & ~(s > 0)
+    s[zero] = np.broadcast_to(figures, s.shape)[zero]
+    sig = s if (given & ~zero).any() else None  # (none given: the figures, per file)
+    out = GnssData(src, t, lla, vel,
                    np.broadcast_to(np.asarray(sigma_pos_enu, dtype=float), (3,)).copy(),
                    np.broadcast_to(np.asarray(sigma_vel, dtype=float), (3,)).copy(),
-                   np.asarray(lever, dtype=float), sigma_rows=pick(sig))
+                   np.asarray(lever, dtype=float), sigma_rows=sig)
+    out.quality["gnss_sigma_zero_replaced"] = int(zero.any(axis=1).sum())
     out.quality.update({"gnss_rtklib_q": counts, "gnss_time_system": system,
                         "gnss_rows_of_other_quality": int((~keep).sum())})
     return out

@@ -54,7 +54,7 @@ def read_sensor_csv(name: str, path) -> SensorData:
     SensorData
         :class:`fednav.io.SensorData`: times of validity and arrival [s], values ``z``
         and 1-sigma in the sensor's SI layout [rad, m, m/s ...], for
-        ``process_data(..., sensors={name: data})``.
+        ``process_data(imu, {"gnss": gnss, name: data}, cfg)``.
 
     Raises
     ------

@@ -165,12 +165,13 @@ def centralized_S(S, R, beta):
     return beta * (S - R) + R
 
 
-def _stacks(innovations: list):
-    """The accepted records by local filter and dimension, stacked: ``(local, r (N, d),
-    S (N, d, d) of the centralized filter)``."""
+def _stacks(innovations: list, every: bool = False):
+    """The accepted records (``every``: all of them, those fault detection rejected too)
+    by local filter and dimension, stacked: ``(local, r (N, d), S (N, d, d) of the
+    centralized filter)``."""
     groups: dict[tuple[str, int], list] = {}
     for rec in innovations:
-        if rec.accepted:
+        if rec.accepted or every:
             groups.setdefault((rec.local, len(rec.r)), []).append(rec)
     for (local, _), recs in groups.items():
         r = np.array([rec.r for rec in recs], dtype=float)
@@ -178,11 +179,12 @@ def _stacks(innovations: list):
         yield local, r, centralized_S([rec.S for rec in recs], [rec.R for rec in recs], beta)
 
 
-def local_nis(innovations: list) -> dict[str, tuple[float, int]]:
+def local_nis(innovations: list, every: bool = False) -> dict[str, tuple[float, int]]:
     """Per local filter: the mean NIS per degree of freedom of its accepted measurements
-    against :func:`centralized_S` (1 for a consistent filter) and how many."""
+    (``every``: of all, those fault detection rejected too) against
+    :func:`centralized_S` (1 for a consistent filter) and how many."""
     acc: dict[str, list] = {}
-    for local, r, S in _stacks(innovations):
+    for local, r, S in _stacks(innovations, every):
         a = acc.setdefault(local, [0.0, 0, 0])
         whole = np.isfinite(r).all(axis=1)
         try:  # (every measurement at once; one by one below if a covariance is singular)

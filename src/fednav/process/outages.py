@@ -14,6 +14,10 @@ import dataclasses
 
 import numpy as np
 
+#: The fields of the recorded-data containers that hold one row per measurement (not a
+#: file's figures: GnssData's sigma_pos_enu, sigma_vel and lever are three values too).
+ROW_FIELDS = {"t", "lla", "vel", "z", "cov", "sigma_rows", "sigma", "t_arrival", "t_avail"}
+
 
 def inside(t, windows) -> np.ndarray:
     """Whether each time of ``t`` [s] lies in one of ``windows`` ([start, end) s)."""
@@ -36,7 +40,8 @@ def withhold(data, windows, name: str = "sensor"):
         return data
     n, keep = len(data.t), ~drop
     out = copy.copy(data)  # (the kept rows passed the container's checks already)
-    for f in (f.name for f in dataclasses.fields(data)):  # (a series' own fields)
+    own = {f.name for f in dataclasses.fields(data)}  # (fields, not a series' properties)
+    for f in ROW_FIELDS & own:
         v = getattr(data, f, None)
         if isinstance(v, np.ndarray) and v.ndim >= 1 and v.shape[0] == n and (
                 f != "sigma" or v.ndim == 2):

@@ -89,18 +89,23 @@ def old_layout(*old: str):
             if not ("gnss" in kwargs or "velocity" in kwargs
                     or isinstance(second, (GnssData, VelocityData))
                     or isinstance(third, VelocityData)
-                    or (len(args) > 2 and isinstance(args[2], System))):
+                    or (len(args) > 2 and isinstance(args[2], System))
+                    or (len(args) >= 2 and args[0] is None and args[1] is None
+                        and (len(args) > 2 or old[0] in kwargs))):
                 return fn(imu, *args, **kwargs)
-            given = dict(zip(("gnss", "velocity") + old, args, strict=False)) | kwargs
-            sensors = dict(given.pop("sensors", None) or {})
-            for name in ("gnss", "velocity"):
-                if given.get(name) is not None:
-                    sensors[name] = given[name]
-                given.pop(name, None)
             warnings.warn(f"{fn.__name__}(imu, gnss, velocity, ...) is now "
                           f"{fn.__name__}(imu, {{'gnss': gnss, 'velocity': velocity, ...}}, "
                           f"...): every sensor's series by its registered name; read for "
                           f"one more release", FutureWarning, stacklevel=2)
+            given = dict(zip(("gnss", "velocity") + old, args, strict=False)) | kwargs
+            sensors = dict(given.pop("sensors", None) or {})
+            for name in ("gnss", "velocity"):
+                if given.get(name) is not None:
+                    if name in sensors:
+                        raise DataError(f"{name} data given twice: as the {name} argument "
+                                        f"and in sensors")
+                    sensors[name] = given[name]
+                given.pop(name, None)
             return fn(imu, sensors, **given)
         return call
     return wrap
@@ -141,9 +146,9 @@ class ProcessResult:
         The optional error states' (``filter.states``) ``estimate`` and ``sigma`` per axis
         at the end of the run, SI (:attr:`fednav.navigator.NavResult.optional`).
     consistency : dict
-        Per local filter: ``nis_per_dof``, the mean NIS per degree of freedom against
-        the innovation covariance of the equivalent centralized filter (1 for a
-        consistent filter; what the health band judges,
+        Per local filter: ``nis_per_dof``, the mean NIS per degree of freedom over every
+        measurement, isolated ones included, against the innovation covariance of the
+        equivalent centralized filter (1 for a consistent filter;
         :func:`~fednav.navigator.health.local_nis`), ``gate_nis_per_dof``, the local
         filter's own (what its chi-square gate tests: smaller in a federation that shares
         its information), ``isolated_fraction`` and ``measurements``.
@@ -393,11 +398,15 @@ def _section(data: Series, cfg: System):
 
 
 def _plain(d: Series) -> SensorData:
-    """A series as the navigator is fed it: its own fields only."""
+    """A series as the navigator is fed it: its own fields only (a sigma for every row
+    given once, as a simulated series has it, repeated per row)."""
     if type(d) is SensorData:
         return d
-    return SensorData(d.name, d.source, d.t, d.z, d.t_arrival, d.quality, d.sigma, d.absent,
-                      d.cov)
+    sigma = d.sigma
+    if sigma is not None and np.ndim(sigma) == 1:
+        sigma = np.broadcast_to(np.asarray(sigma, dtype=float), np.shape(d.z))
+    return SensorData(d.name, d.source, np.asarray(d.t, dtype=float), np.asarray(d.z),
+                      d.t_arrival, dict(d.quality), sigma, d.absent, d.cov)
 
 
 def _period(cfg: System, gnss: GnssData | None, others: dict) -> float:
@@ -485,6 +494,9 @@ def prepare(imu: ImuData, sensors: Mapping[str, Series] | None = None,
     """
     cfg = cfg or System()
     others = withheld_inputs(cfg, recordings(sensors, cfg))
+    emptied = [f"{d.source}: every {n} measurement lies inside sensors.{n}.outages_s "
+               f"(not used)" for n, d in others.items() if not len(d.t)]
+    others = {n: d for n, d in others.items() if len(d.t)}
     gnss, velocity = others.pop("gnss", None), others.pop("velocity", None)
     if cfg.filter.state == "total" and (cfg.smoother or cfg.output_rate_hz):
         raise DataError("filter.state: total — the total-state navigator's solution is at "
@@ -503,7 +515,7 @@ def prepare(imu: ImuData, sensors: Mapping[str, Series] | None = None,
     cfg, assumed = with_imu_figures(imu, cfg)
     gnss, velocity = adjust_sensors(gnss, velocity, cfg)
     warnings, quality_extra = check_gnss_timing(imu, gnss)
-    warnings[:0] = assumed + check_units(imu, gnss) + check_mounting(imu, gnss)
+    warnings[:0] = emptied + assumed + check_units(imu, gnss) + check_mounting(imu, gnss)
     unused = ignored_keys(cfg)
     period = _period(cfg, gnss, others)
     n_per = max(1, int(round(period / dt)))
@@ -669,6 +681,8 @@ def recordings(sensors: Mapping[str, Series] | None, cfg: System) -> dict[str, S
                             f"series (fednav.io.read_sensor_csv, read_gnss_csv ...)")
         if d.name != name:
             raise DataError(f"{d.source}: {d.name} data given as sensor '{name}'")
+        if not isinstance(d, (SensorData, GnssData, VelocityData)):
+            d = _plain(d)  # (a simulated series: one sigma for every row, as rows)
         if name == "gnss":
             gc = _gnss_cfg(cfg)
             d = GnssData.from_series(d, 5.0 if gc.sigma_pos_enu_m is None
@@ -781,12 +795,12 @@ def process(imu: ImuData, sensors: Mapping[str, Series], cfg: System | None = No
 
 def centralized_consistency(fdi: list, innovations: list) -> dict[str, dict[str, float]]:
     """Per local filter, the fault log's consistency
-    (:func:`~fednav.navigator.solution.consistency`) with ``nis_per_dof`` against the
-    equivalent centralized filter's innovation covariance (:func:`local_nis`, the health
-    band's) and the local filter's own as ``gate_nis_per_dof`` (equal with one local
-    filter, or without reset)."""
+    (:func:`~fednav.navigator.solution.consistency`) with ``nis_per_dof`` over every
+    measurement, isolated ones included, against the equivalent centralized filter's
+    innovation covariance (:func:`local_nis`) and the local filter's own as
+    ``gate_nis_per_dof`` (equal with one local filter, or without reset)."""
     out = consistency(fdi)
-    for k, (v, _) in local_nis(innovations).items():
+    for k, (v, _) in local_nis(innovations, every=True).items():
         if k in out:
             out[k] = {"nis_per_dof": v, "gate_nis_per_dof": out[k]["nis_per_dof"],
                       **{a: b for a, b in out[k].items() if a != "nis_per_dof"}}

@@ -204,7 +204,8 @@ class GnssConfig(SensorConfig):
         (:class:`~fednav.io.GnssData`): the antenna lever arm and the position and
         velocity 1-sigma the section leaves out taken from the data's figures, ``measures``
         from what the file holds (a section that asks for what the file lacks: a
-        one-line :class:`~fednav.core.errors.DataError`)."""
+        one-line :class:`~fednav.core.errors.DataError`); ``period_s`` left as it is (the
+        filter's epochs follow the fixes)."""
         absent = set(data.absent)
         has = ("position" if {3, 4, 5} <= absent else "velocity" if {0, 1, 2} <= absent
                else "position_velocity")
@@ -216,7 +217,7 @@ class GnssConfig(SensorConfig):
             v = theirs if mine is None else mine
             return tuple(map(float, np.broadcast_to(np.asarray(v, dtype=float), (3,))))
 
-        return super().for_recording(data).model_copy(update={
+        return self.model_copy(update={  # (its period: the filter's epochs take the fixes')
             "lever_m": three(self.lever_m, getattr(data, "lever", 0.0)),
             "sigma_pos_enu_m": three(self.sigma_pos_enu_m, getattr(data, "sigma_pos_enu",
                                                                    5.0)),

@@ -103,10 +103,10 @@ class VelocityConfig(SensorConfig):
 
     def for_recording(self, data) -> VelocityConfig:
         """The section as it flies the recording ``data``: the sensor's lever arm the
-        section leaves out taken from the data (:class:`~fednav.io.VelocityData`'s)."""
+        section leaves out taken from the data (:class:`~fednav.io.VelocityData`'s;
+        ``period_s`` left as it is)."""
         lever = self.lever_m if self.lever_m is not None else getattr(data, "lever", None)
-        out = super().for_recording(data)
-        return out if lever is None else out.model_copy(update={
+        return self if lever is None else self.model_copy(update={
             "lever_m": tuple(map(float, lever))})
 
 

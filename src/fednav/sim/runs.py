@@ -160,7 +160,7 @@ def run_mode(scn: Scenario, aiding: list[str], data: RunData, mode: str = "",
     if innovations:
         from ..navigator.health import local_nis
 
-        out.nis = {k: v for k, (v, _) in local_nis(res.innovations).items()}
+        out.nis = {k: v for k, (v, _) in local_nis(res.innovations, every=True).items()}
     return out
 
 
