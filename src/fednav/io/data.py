@@ -24,6 +24,18 @@ def require_file(path: Path, kind: str) -> None:
                         f"{'is a folder, not a file' if path.is_dir() else 'not found'}")
 
 
+def import_for(path, module: str, what: str, extra: str = "formats"):
+    """``module`` imported to read ``path`` (a ``what`` file), or a one-line
+    :class:`DataError` naming the extra of fednav that installs it."""
+    import importlib
+
+    try:
+        return importlib.import_module(module)
+    except ImportError:
+        raise DataError(f"{path}: reading {what} needs {module}: pip install "
+                        f"'fednav[{extra}]'") from None
+
+
 def check_array(source: str, field: str, a, shape: tuple) -> np.ndarray:
     """``a`` as a float array of ``shape`` (``-1`` = any length), finite, else DataError."""
     try:

@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core import units
-from .data import DataError, GnssData, require_file
+from .data import DataError, GnssData, import_for, require_file
 
 #: Knots and km/h in m/s.
 KNOT_MPS = 1852.0 / 3600.0
@@ -79,12 +79,7 @@ def read_nmea(path, *, date: str | _dt.date | None = None, sigma_pos_enu=5.0,
     DataError
         One line naming the file and what is wrong.
     """
-    try:
-        import pynmea2
-    except ImportError:
-        raise DataError(f"{path}: reading NMEA needs pynmea2: pip install "
-                        f"'fednav[formats]'") from None
-
+    pynmea2 = import_for(path, "pynmea2", "NMEA")
     path = Path(path)
     require_file(path, "NMEA log")
     src = str(path)

@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core import units
-from .data import DataError, GnssData, require_file
+from .data import DataError, GnssData, import_for, require_file
 
 #: NAV-PVT fix types and carrier solutions.
 FIX_TYPE = {0: "no_fix", 1: "dead_reckoning", 2: "2d", 3: "3d", 4: "gnss_dr", 5: "time_only"}
@@ -52,11 +52,7 @@ def read_ubx(path, *, time: str = "utc", lever=(0.0, 0.0, 0.0)) -> GnssData:
     DataError
         One line naming the file and what is wrong.
     """
-    try:
-        from pyubx2 import UBX_PROTOCOL, UBXReader
-    except ImportError:
-        raise DataError(f"{path}: reading UBX needs pyubx2: pip install "
-                        f"'fednav[formats]'") from None
+    pyubx2 = import_for(path, "pyubx2", "UBX")
     path = Path(path)
     require_file(path, "UBX log")
     src = str(path)
@@ -65,7 +61,7 @@ def read_ubx(path, *, time: str = "utc", lever=(0.0, 0.0, 0.0)) -> GnssData:
     rows, kinds, left = [], {}, {"not_3d_or_no_fix_ok": 0, "no_valid_utc": 0,
                                  "other_messages": 0, "errors": 0}
     with path.open("rb") as f:
-        reader = UBXReader(f, protfilter=UBX_PROTOCOL, quitonerror=1,
+        reader = pyubx2.UBXReader(f, protfilter=pyubx2.UBX_PROTOCOL, quitonerror=1,
                            errorhandler=lambda e: left.__setitem__("errors",
                                                                    left["errors"] + 1))
         for _, m in reader:
