@@ -210,6 +210,22 @@ def local_nis(innovations: list, every: bool = False) -> dict[str, tuple[float, 
     return {k: (t / d, n) for k, (t, d, n) in acc.items() if d}
 
 
+def centralized_consistency(fdi: list, innovations: list) -> dict[str, dict[str, float]]:
+    """Per local filter, the fault log's consistency
+    (:func:`~fednav.navigator.solution.consistency`) with ``nis_per_dof`` over every
+    measurement, isolated ones included, against the equivalent centralized filter's
+    innovation covariance (:func:`local_nis`) and the local filter's own as
+    ``gate_nis_per_dof`` (equal with one local filter, or without reset)."""
+    from .solution import consistency
+
+    out = consistency(fdi)
+    for k, (v, _) in local_nis(innovations, every=True).items():
+        if k in out:
+            out[k] = {"nis_per_dof": v, "gate_nis_per_dof": out[k]["nis_per_dof"],
+                      **{a: b for a, b in out[k].items() if a != "nis_per_dof"}}
+    return out
+
+
 def row_nis(innovations: list, kinds: dict) -> dict[str, dict[str, tuple[float, int]]]:
     """Per local filter and row group (:data:`ROW_GROUPS`): the mean over its accepted
     measurements of ``r_i^2 / S_ii`` (each row's squared innovation over its predicted

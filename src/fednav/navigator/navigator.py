@@ -511,9 +511,16 @@ class NavResult:
 
     @property
     def consistency(self) -> dict:
-        """Per local filter: mean NIS per degree of freedom, fraction isolated, count."""
+        """Per local filter: mean NIS per degree of freedom, fraction isolated, count —
+        with innovations recorded, ``nis_per_dof`` against the centralized filter's
+        innovation covariance and the local filter's own beside it as
+        ``gate_nis_per_dof`` (:func:`~fednav.navigator.health.centralized_consistency`,
+        what ``fednav process`` reports); without, the local filter's own."""
+        from .health import centralized_consistency
         from .solution import consistency
 
+        if self.innovations:
+            return centralized_consistency(self.fdi, self.innovations)
         return consistency(self.fdi)
 
     def health(self, imu=None, gnss=None, figures: dict | None = None,

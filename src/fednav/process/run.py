@@ -26,7 +26,13 @@ from pydantic import ValidationError
 from ..core import units
 from ..ins.alignment import UNKNOWN_HEADING_SIGMA, Alignment
 from ..io.data import DataError, GnssData, ImuData, SensorData, Series, VelocityData
-from ..navigator.health import local_nis, readmission_warnings, row_nis, run_health
+from ..navigator.health import (
+    centralized_consistency,
+    local_nis,
+    readmission_warnings,
+    row_nis,
+    run_health,
+)
 from ..navigator.loop import InnovationRecord  # noqa: F401  (fednav.process's name)
 from ..navigator.navigator import (
     InitialState,
@@ -35,7 +41,7 @@ from ..navigator.navigator import (
     residual_covariances,
     stamp_tolerance,
 )
-from ..navigator.solution import Solution, consistency, epoch_rate, imu_rate
+from ..navigator.solution import Solution, epoch_rate, imu_rate
 from ..navigator.system import (
     System,
     imu_noise_model,
@@ -791,20 +797,6 @@ def process(imu: ImuData, sensors: Mapping[str, Series], cfg: System | None = No
     if innovations is not None:
         innovations.extend(out.innovations)
     return res
-
-
-def centralized_consistency(fdi: list, innovations: list) -> dict[str, dict[str, float]]:
-    """Per local filter, the fault log's consistency
-    (:func:`~fednav.navigator.solution.consistency`) with ``nis_per_dof`` over every
-    measurement, isolated ones included, against the equivalent centralized filter's
-    innovation covariance (:func:`local_nis`) and the local filter's own as
-    ``gate_nis_per_dof`` (equal with one local filter, or without reset)."""
-    out = consistency(fdi)
-    for k, (v, _) in local_nis(innovations, every=True).items():
-        if k in out:
-            out[k] = {"nis_per_dof": v, "gate_nis_per_dof": out[k]["nis_per_dof"],
-                      **{a: b for a, b in out[k].items() if a != "nis_per_dof"}}
-    return out
 
 
 def solution(res, prep: Prepared, smooth: bool = False) -> ProcessResult:
