@@ -175,7 +175,7 @@ def test_tune_table_keeps_each_why_on_one_line(tmp_path, monkeypatch):
                           config=System(), lever_from_file=(0.1, 0.2, 0.3), notes=[],
                           warnings=[], runs=20, run_time_s=1.0, summary=lambda: [])
     monkeypatch.setattr(cli, "_csv_reader", lambda *a: (
-        lambda cfg: {"imu": None, "gnss": None, "velocity": None}))
+        lambda cfg: {"imu": None, "sensors": {"gnss": None}}))
     monkeypatch.setattr(tuning, "tune", lambda *a, **k: res)
     monkeypatch.setattr(tuning, "config_yaml", lambda *a, **k: "imu: {}\n")
     args = ["tune", "csv", "--imu", str(tmp_path / "i.csv"), "--gnss",

@@ -434,7 +434,7 @@ def _run_process(read, imu, gnss, velocity, ref, smooth, out, config, output_rat
             **{n: None if f is None else str(f) for n, f in paths.items()},
             "config": None if config is None else str(config), "smooth": smooth,
             "output_rate_hz": process_output.DEFAULT_OUTPUT_RATE_HZ if rate is None else rate,
-            "format": fmt}, rate, data["gnss"], data.get("others"), fmt)
+            "format": fmt}, rate, data["sensors"].get("gnss"), data.get("others"), fmt)
         if kinds:  # (before summary.json, the last file)
             files[-1:-1] = write_exports(out, process_output.decimate(res.forward, rate),
                                          kinds, res.outages)
@@ -469,7 +469,7 @@ def _ulog_reader(log: Path):
                             f"not used as the reference")
             truth = None
         warnings += [f"{log}: {note}" for note in rec.notes]
-        return {"imu": rec.imu, "gnss": rec.gnss, "ref": truth, "sensors": rec.series,
+        return {"imu": rec.imu, "ref": truth, "sensors": rec.series,
                 "system": system, "warnings": warnings,
                 "others": {} if rec.px4 is None else {"px4": rec.px4},
                 "paths": {"ulog": log}}
@@ -477,11 +477,9 @@ def _ulog_reader(log: Path):
 
 
 def _series(data: dict) -> dict:
-    """Every sensor's series a reader gave, by registered name (its GNSS and velocity
-    sensor beside the others)."""
-    both = {"gnss": data.get("gnss"), "velocity": data.get("velocity"),
-            **(data.get("sensors") or {})}
-    return {n: d for n, d in both.items() if d is not None}
+    """Every sensor's series a reader gave, by registered name (those it has no file
+    for left out)."""
+    return {n: d for n, d in data["sensors"].items() if d is not None}
 
 
 def _less_compile(res, since: float) -> float:
@@ -558,8 +556,8 @@ def _navego_reader(imu: Path, gnss: Path, visual: Path | None, ref: Path | None 
         )
 
         return {"imu": read_navego_imu(imu, cfg.imu.max_bridge_s, cfg.imu.mounting),
-                "gnss": read_navego_gnss(gnss),
-                "velocity": None if visual is None else read_navego_visual(visual),
+                "sensors": {"gnss": read_navego_gnss(gnss), "velocity": None if visual
+                            is None else read_navego_visual(visual)},
                 "ref": None if ref is None else read_navego_reference(ref)}
     return read
 
@@ -612,11 +610,11 @@ def _csv_reader(imu: Path | None, gnss: Path | None, velocity: Path | None,
                        sigma_vel=given(gc and gc.sigma_vel_mps, (0.1, 0.1, 0.1)),
                        lever=given(gc and gc.lever_m, (0.0, 0.0, 0.0)))
         return {"imu": read_imu_csv(paths["imu"], cfg.imu.max_bridge_s, cfg.imu.mounting),
-                "gnss": g,
-                "velocity": None if vel is None else read_velocity_csv(vel),
+                "sensors": {"gnss": g, "velocity": None if vel is None
+                            else read_velocity_csv(vel),
+                            **{n: read_sensor_csv(n, f) for n, f in others.items()}},
                 "ref": None if paths["reference"] is None
                 else read_reference_csv(paths["reference"]),
-                "sensors": {n: read_sensor_csv(n, f) for n, f in others.items()},
                 "paths": {k: v for k, v in {**paths, **others, "velocity": vel}.items()
                           if v is not None}}
     return read
