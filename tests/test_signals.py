@@ -125,3 +125,23 @@ def test_a_stop_signal_ends_process_in_one_line(tmp_path, name):
     assert sum("interrupted" in line for line in stderr.splitlines()) == 1
     assert not [f for f in out.iterdir() if f.name.startswith(".")]
     assert not (out / "summary.json").exists()
+
+
+def test_a_swallowed_stop_is_raised_again_at_the_next_checkpoint():
+    """A library that catches every exception (KeyboardInterrupt too) around the moment a
+    SIGTERM arrives must not let the command run to its end: the next checkpoint a long
+    loop passes (each stored campaign unit) raises the stop again."""
+    from fednav.cli import _stop_signals_interrupt
+    from fednav.core.errors import Interrupted, check_stop
+
+    check_stop()  # (no stop: nothing)
+    with _stop_signals_interrupt():
+        try:
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(1.0)
+        except BaseException:  # noqa: BLE001  (the library that swallows it)
+            pass
+        with pytest.raises(Interrupted) as e:
+            check_stop()
+        assert e.value.signum == signal.SIGTERM
+    check_stop()  # (the command's stop handled: cleared)

@@ -13,7 +13,7 @@ import typer
 
 from . import __version__, _kernel_cache
 from .core.console import PipeConsole
-from .core.errors import FednavError
+from .core.errors import STOPS, FednavError, Interrupted  # noqa: F401  (cli.Interrupted)
 
 app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="fednav — federated multi-sensor integrated navigation.")
@@ -50,16 +50,6 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
     typer.echo(f"warning: {message}", err=True)
 
 
-class Interrupted(KeyboardInterrupt):
-    """SIGTERM or SIGHUP, raised in the main thread as Ctrl-C raises KeyboardInterrupt
-    (so every command stops the same way: files being written removed, Dask workers
-    stopped in order)."""
-
-    def __init__(self, signum: int):
-        super().__init__(signum)
-        self.signum = signum
-
-
 #: Signals that stop a command as Ctrl-C does (their exit status is 128 + the signal's
 #: number, as a shell reports a process the signal killed: 143, 129; Ctrl-C's 130).
 STOP_SIGNALS = ("SIGTERM", "SIGHUP")
@@ -80,12 +70,14 @@ def _stop_signals_interrupt():
     def stop(signum, frame):
         for s in sigs:
             signal.signal(s, signal.SIG_IGN)  # stopping already: a second one must not
-        raise Interrupted(signum)             # break the stop of the workers
+        STOPS.append(signum)                  # break the stop of the workers; (checked
+        raise Interrupted(signum)             # again where a library caught this one)
 
     old = {s: signal.signal(s, stop) for s in sigs}
     try:
         yield
     finally:
+        STOPS.clear()
         for s, h in old.items():
             signal.signal(s, h)
 

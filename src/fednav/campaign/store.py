@@ -45,7 +45,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.atomic import output_error, write_bytes, write_json
-from ..core.errors import FednavError
+from ..core.errors import FednavError, check_stop
 
 
 class CampaignError(FednavError, ValueError):
@@ -204,6 +204,7 @@ def run_units(fn: Callable, args: list, jobs: int = 1, progress: Callable | None
             campaign.computed += 1
         if progress:
             progress()
+        check_stop()  # (a stop signal whose interrupt a library swallowed)
 
     address = campaign.address if campaign is not None else None
     if not todo:
