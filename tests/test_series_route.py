@@ -271,3 +271,17 @@ def test_edges_of_the_route(flight):
             process(imu, None, None, cfg=System())  # (the old layout's placeholders)
     with pytest.warns(FutureWarning), pytest.raises(DataError, match="gnss data given twice"):
         process(imu, gnss, None, System(), sensors={"gnss": gnss})
+
+
+def test_prepareds_old_names_are_read_for_a_release(flight):
+    imu, gnss, _ = _short(flight, 30.0)
+    prep = prepare(imu, {"gnss": gnss, "baro": SensorData("baro", "b", gnss.t,
+                                                         gnss.lla[:, 2:])},
+                   load_system({"sensors": {"baro": {"sigma_m": 1.0}}}))
+    with pytest.warns(FutureWarning, match=r"Prepared.measurements is now Prepared.series"):
+        t, z, R = prep.measurements["gnss"]
+    np.testing.assert_array_equal(R, prep.rows("gnss")[2])
+    with pytest.warns(FutureWarning, match="Prepared.others"):
+        assert set(prep.others) == {"baro"}
+    with pytest.warns(FutureWarning, match="Prepared.arrivals"):
+        assert prep.arrivals == {}

@@ -322,6 +322,35 @@ class Prepared:
         return Navigator(self.system, self.initial, self.dt, imu_errors=self.imu_errors,
                          **options)
 
+    # -- fednav 0.1's names, read for one more release (the series hold all of it now)
+    def _old(self, name: str, new: str):
+        warnings.warn(f"Prepared.{name} is now {new}: read for one more release",
+                      FutureWarning, stacklevel=3)
+
+    @property
+    def measurements(self) -> dict:
+        """Deprecated: ``{name: self.rows(name)}`` for the GNSS and the velocity sensor."""
+        self._old("measurements", "Prepared.series (Prepared.rows(name) for (t, z, R))")
+        return {n: self.rows(n) for n in ("gnss", "velocity") if n in self.series}
+
+    @property
+    def others(self) -> dict:
+        """Deprecated: the series of the sensors other than the GNSS and velocity sensor."""
+        self._old("others", "Prepared.series")
+        return {n: d for n, d in self.series.items() if n not in ("gnss", "velocity")}
+
+    @property
+    def sigmas(self) -> dict:
+        """Deprecated: each series' 1-sigma (the series' ``sigma``)."""
+        self._old("sigmas", "Prepared.series[name].sigma")
+        return {n: d.sigma for n, d in self.series.items() if d.sigma is not None}
+
+    @property
+    def arrivals(self) -> dict:
+        """Deprecated: each series' arrival times (the series' ``t_arrival``)."""
+        self._old("arrivals", "Prepared.series[name].t_arrival")
+        return {n: d.t_arrival for n, d in self.series.items() if d.t_arrival is not None}
+
     def rows(self, name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """One sensor's series with each row's R, for a stream that passes its own R
         with each measurement.
