@@ -57,12 +57,16 @@ STOP_SIGNALS = ("SIGTERM", "SIGHUP")
 
 @contextlib.contextmanager
 def _stop_signals_interrupt():
-    """While the block runs (in the main thread), SIGTERM and SIGHUP raise
-    :class:`Interrupted`; after the first, both are ignored while the command stops."""
+    """While the block runs (in the main thread), SIGTERM and SIGHUP (and Ctrl-C, where
+    Python's own handler has it) raise :class:`Interrupted`, each recorded for
+    :func:`~fednav.core.errors.check_stop`; after the first, all are ignored while the
+    command stops."""
     import signal
     import threading
 
     sigs = [getattr(signal, n) for n in STOP_SIGNALS if hasattr(signal, n)]
+    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+        sigs.append(signal.SIGINT)  # (Ctrl-C too: recorded for check_stop)
     if threading.current_thread() is not threading.main_thread():
         yield
         return
