@@ -472,6 +472,26 @@ def _ulog_reader(log: Path):
     return read
 
 
+def _gnss_ins_sim_reader(folder: Path, run: int):
+    """``read(cfg)`` of a gnss-ins-sim output folder (run ``run``): the IMU, the GPS (and
+    the magnetometer and odometer when the description configures them), the simulator's
+    true trajectory as the reference; the description completed from the folder
+    (:func:`fednav.io.gnss_ins_sim.gnss_ins_sim_system`)."""
+    def read(cfg):
+        from .io import DataError, read_gnss_ins_sim
+        from .io.gnss_ins_sim import gnss_ins_sim_system
+
+        rec = read_gnss_ins_sim(folder, run=run, max_bridge_s=cfg.imu.max_bridge_s,
+                                mounting=cfg.imu.mounting)
+        if rec.gnss is None and cfg.initial is None:
+            raise DataError(f"{folder}: no GPS fix to start from (no gps-{run}.csv or no "
+                            f"visible epoch); give the initial state in --config (initial:)")
+        system, series, warnings = gnss_ins_sim_system(rec, cfg)
+        return {"imu": rec.imu, "ref": rec.ref, "sensors": series, "system": system,
+                "warnings": warnings, "paths": {"gnss-ins-sim": folder}}
+    return read
+
+
 def _series(data: dict) -> dict:
     """Every sensor's series a reader gave, by registered name (those it has no file
     for left out)."""
@@ -555,6 +575,25 @@ def _navego_reader(imu: Path, gnss: Path, visual: Path | None, ref: Path | None 
                 "sensors": {"gnss": read_navego_gnss(gnss), "velocity": None if visual
                             is None else read_navego_visual(visual)},
                 "ref": None if ref is None else read_navego_reference(ref)}
+    return read
+
+
+def _kfgins_reader(path: Path):
+    """``read(cfg)`` of a KF-GINS user's folder or ``kf-gins.yaml``: its files and its
+    configuration translated key by key (:mod:`fednav.process.kfgins`), ``cfg``'s keys
+    laid over it."""
+    def read(cfg):
+        from .process.kfgins import read_kfgins
+
+        data = read_kfgins(path, cfg)
+        tr = data.pop("translation")
+        counts = {}
+        for k in tr.keys:
+            counts[k.fate] = counts.get(k.fate, 0) + 1
+        console.print(f"KF-GINS configuration {tr.source}: "
+                      + ", ".join(f"{n} {f}" for f, n in counts.items())
+                      + " (fednav process kfgins --keys lists each)")
+        return data
     return read
 
 
@@ -700,6 +739,45 @@ def process_csv(
                  export=export)
 
 
+@process_app.command("kfgins")
+@_one_line_errors
+def process_kfgins(
+    path: Path = typer.Argument(..., help="a KF-GINS configuration (kf-gins.yaml) or the "
+                                          "folder holding it"),
+    keys: bool = typer.Option(False, "--keys", help="list what became of each KF-GINS key "
+                                                    "and stop"),
+    smooth: bool = _SMOOTH, out: Path = _OUT,
+    config: Path = typer.Option(None, help="fednav system description YAML whose keys are "
+                                           "laid over the translated configuration"),
+    output_rate: str = _RATE, fmt: str = _FORMAT, force: bool = _FORCE,
+    export: str = _EXPORT,
+) -> None:
+    """A KF-GINS user's data as they are: its IMU and GNSS text files and its kf-gins.yaml
+    (every key used, translated into fednav's units and frames, or named as ignored), the
+    dataset's truth.nav as the reference when it is there; the solution also written as
+    KF_GINS_Navresult.nav for KF-GINS's plotting script."""
+    if keys:
+        from rich.table import Table
+
+        from .process.kfgins import find_config, translate
+
+        try:
+            tr = translate(find_config(path))
+        except (FednavError, ValueError) as e:
+            typer.echo(f"error: {e}", err=True)
+            raise typer.Exit(2) from None
+        tab = Table(title=f"KF-GINS configuration {tr.source}")
+        for c in ("key", "fate", "what fednav does"):
+            tab.add_column(c)
+        for k in tr.keys:
+            tab.add_row(k.key, k.fate, k.detail)
+        console.print(tab)
+        return
+    kinds = "kfgins" if not export else f"{export},kfgins"
+    _run_process(_kfgins_reader(path), None, None, None, None, smooth, out, config,
+                 output_rate, force=force, fmt=fmt, export=kinds)
+
+
 @process_app.command("ulog")
 @_one_line_errors
 def process_ulog(
@@ -716,6 +794,27 @@ def process_ulog(
     ground truth when it has one)."""
     _run_process(_ulog_reader(log), log, None, None, None, smooth, out, config,
                  output_rate, force=force, fmt=fmt, export=export)
+
+
+@process_app.command("gnss-ins-sim")
+@_one_line_errors
+def process_gnss_ins_sim(
+    folder: Path = typer.Argument(..., help="a folder gnss-ins-sim wrote (time.csv, "
+                                            "accel-0.csv, gyro-0.csv, gps-0.csv ...)"),
+    run: int = typer.Option(0, "--run", min=0, help="which simulation run (accel-RUN.csv "
+                                                    "...)"),
+    smooth: bool = _SMOOTH, out: Path = _OUT,
+    config: Path = typer.Option(None, help="system description YAML: IMU figures (the "
+                                           "folder has none), sensors.mag / "
+                                           "sensors.odometer to aid with them, filters; the "
+                                           "GPS sigmas come from the folder"),
+    output_rate: str = _RATE, fmt: str = _FORMAT, force: bool = _FORCE,
+    export: str = _EXPORT,
+) -> None:
+    """A gnss-ins-sim (Aceinna) output folder: its IMU and GPS (NED, FRD, units from the
+    headers) through the navigator, compared with the simulator's true trajectory."""
+    _run_process(_gnss_ins_sim_reader(folder, run), None, None, None, None, smooth, out,
+                 config, output_rate, force=force, fmt=fmt, export=export)
 
 
 tune_app = typer.Typer(no_args_is_help=True,

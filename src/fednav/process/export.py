@@ -1,7 +1,8 @@
 """The solution in the field's common formats, on request (``fednav process ... --export
 kml,gpx,geojson``): ``solution.kml`` for Google Earth (the track coloured by its
-horizontal 1-sigma, the outages drawn apart), ``solution.gpx`` for GPS tools and
-``solution.geojson`` for a GIS.
+horizontal 1-sigma, the outages drawn apart), ``solution.gpx`` for GPS tools,
+``solution.geojson`` for a GIS and ``KF_GINS_Navresult.nav`` in KF-GINS's layout
+(:func:`fednav.io.kfgins.write_kfgins_nav`: its plotting script reads it).
 
 Heights: GeoJSON's third coordinate is the height above the WGS-84 ellipsoid (RFC 7946),
 which is what fednav's ``h`` is; KML and most GPX readers take heights above mean sea
@@ -22,10 +23,13 @@ import numpy as np
 
 from ..core import units
 from ..core.atomic import replacing
+from ..io.kfgins import write_kfgins_nav
 from ..navigator.solution import Solution
 
 #: The formats ``--export`` takes, each with the package that writes it.
-EXPORTS = {"kml": "simplekml", "gpx": "gpxpy", "geojson": "geojson"}
+EXPORTS = {"kml": "simplekml", "gpx": "gpxpy", "geojson": "geojson", "kfgins": "numpy"}
+#: the file each kind writes, when it is not ``solution.<kind>``
+FILE_NAMES = {"kfgins": "KF_GINS_Navresult.nav"}
 #: Horizontal 1-sigma bins of the KML track's colours [m] and their colours (aabbggrr).
 SIGMA_BINS_M = (0.1, 0.5, 2.0, 10.0)
 COLOURS = ("ff00ff00", "ff00ffaa", "ff00ffff", "ff0088ff", "ff0000ff")
@@ -172,5 +176,6 @@ def write_exports(out: Path, sol: Solution, kinds, outages: dict | None = None) 
     (:data:`EXPORTS`)."""
     Path(out).mkdir(parents=True, exist_ok=True)
     writers = {"kml": lambda p: write_kml(p, sol, outages), "gpx": lambda p: write_gpx(p, sol),
-               "geojson": lambda p: write_geojson(p, sol, outages)}
-    return [writers[k](Path(out) / f"solution.{k}") for k in kinds]
+               "geojson": lambda p: write_geojson(p, sol, outages),
+               "kfgins": lambda p: write_kfgins_nav(p, sol.t, sol.lla, sol.vel, sol.euler)}
+    return [writers[k](Path(out) / FILE_NAMES.get(k, f"solution.{k}")) for k in kinds]

@@ -1,0 +1,245 @@
+"""KF-GINS's files and configuration: a KF-GINS user's folder, written here in KF-GINS's
+layout from a simulated drive, read back to the same samples and the same solution as
+fednav's own CSV path; every key of its configuration accounted for."""
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from test_process import LEVER, make_flight  # noqa: E402
+
+from fednav.core import units  # noqa: E402
+from fednav.io import DataError  # noqa: E402
+from fednav.io.kfgins import (  # noqa: E402
+    read_kfgins_gnss,
+    read_kfgins_imu,
+    read_kfgins_nav,
+    write_kfgins_nav,
+)
+from fednav.io.navego import FRD_TO_RFU, fednav_euler_to_navego  # noqa: E402
+from fednav.process.kfgins import KEYS, read_kfgins, translate  # noqa: E402
+
+WEEK_S = 456_000.0  # (a GPS second of the week the drive starts at)
+SECONDS = 90.0
+
+#: KF-GINS's own template (config/kf-gins.yaml of its repository), values as published
+TEMPLATE = {
+    "imudatalen": 7, "imudatarate": 100, "starttime": 0, "endtime": -1,
+    "initgyrbias": [0, 0, 0], "initaccbias": [0, 0, 0], "initgyrscale": [0, 0, 0],
+    "initaccscale": [0, 0, 0], "initposstd": [0.1, 0.1, 0.2], "initvelstd": [0.05] * 3,
+    "initattstd": [0.5, 0.5, 1.0],
+    "imunoise": {"arw": [0.24] * 3, "vrw": [0.24] * 3, "gbstd": [50.0] * 3,
+                 "abstd": [250.0] * 3, "gsstd": [1000.0] * 3, "asstd": [1000.0] * 3,
+                 "corrtime": 1.0},
+}
+
+
+@pytest.fixture(scope="module")
+def drive():
+    return make_flight()
+
+
+def write_folder(folder: Path, drive, seconds=SECONDS, gnss_columns=7, **cfg) -> Path:
+    """A KF-GINS user's folder: Leador-style IMU text (increments FRD, stamped at each
+    interval's end, GPS seconds of the week), GNSS-RTK text, kf-gins.yaml, truth.nav."""
+    imu, gnss, ref = drive
+    folder.mkdir(parents=True, exist_ok=True)
+    dt = imu.period()
+    n = int(seconds / dt)
+    t_end = imu.t[:n] + dt + WEEK_S
+    frd = FRD_TO_RFU  # (its own inverse)
+    rows = np.column_stack([t_end, imu.gyro[:n] @ frd.T * dt, imu.accel[:n] @ frd.T * dt])
+    np.savetxt(folder / "imu.txt", rows, fmt="%.3f" + " %.12e" * 6)
+    keep = gnss.t + WEEK_S <= t_end[-1]
+    lat, lon = units.to_deg(gnss.lla[keep, 0]), units.to_deg(gnss.lla[keep, 1])
+    ned_sd = np.tile(gnss.sigma_pos_enu[[1, 0, 2]], (keep.sum(), 1))
+    cols = [gnss.t[keep] + WEEK_S, lat, lon, gnss.lla[keep, 2]]
+    if gnss_columns == 13:
+        v = gnss.vel[keep]
+        cols += [v[:, 1], v[:, 0], -v[:, 2], ned_sd, np.tile(gnss.sigma_vel, (keep.sum(), 1))]
+    else:
+        cols += [ned_sd]
+    np.savetxt(folder / "gnss.txt", np.column_stack(cols), fmt="%.3f %.10f %.10f"
+               + " %.4f" * (len(np.column_stack(cols)[0]) - 3))
+    # the truth at the start (KF-GINS starts from a given state)
+    k = int(np.searchsorted(ref.t, imu.t[1] - 1e-9))
+    roll, pitch, yaw = (units.to_deg(a) for a in fednav_euler_to_navego(ref.euler[k]))
+    vel = ref.vel[k]
+    config = {**TEMPLATE, "imupath": "imu.txt", "gnsspath": "gnss.txt", "outputpath": ".",
+              "starttime": float(t_end[0]), "initpos": [float(units.to_deg(ref.lla[k, 0])),
+                                                        float(units.to_deg(ref.lla[k, 1])),
+                                                        float(ref.lla[k, 2])],
+              "initvel": [float(vel[1]), float(vel[0]), float(-vel[2])],
+              "initatt": [float(roll), float(pitch), float(yaw % 360.0)],
+              "antlever": [float(LEVER[1]), float(LEVER[0]), float(-LEVER[2])], **cfg}
+    (folder / "kf-gins.yaml").write_text(yaml.safe_dump(config))
+    keep = ref.t <= t_end[-1] - WEEK_S
+    write_kfgins_nav(folder / "truth.nav", ref.t[keep] + WEEK_S, ref.lla[keep],
+                     ref.vel[keep], ref.euler[keep])
+    return folder / "kf-gins.yaml"
+
+
+def test_every_key_is_accounted_for(tmp_path, drive):
+    cfg = write_folder(tmp_path / "d", drive, initbgstd=[80.0, 80.0, 80.0],
+                       unexpected_key=3)
+    tr = translate(cfg)
+    fates = {k.key: k for k in tr.keys}
+    assert set(KEYS) <= set(fates)  # every key KF-GINS reads
+    assert fates["unexpected_key"].fate == "unknown"
+    assert fates["outputpath"].fate == "ignored"
+    assert all(k.fate in ("used", "translated", "ignored", "unknown") for k in tr.keys)
+    s = tr.system
+    # units: deg/sqrt(h) as is; m/s/sqrt(h) / 60; deg/h; mGal 1e-5; h -> s; ppm
+    assert s["imu"]["gyro_arw_deg_sqrt_h"] == 0.24
+    assert s["imu"]["accel_vrw_mps_sqrt_s"] == pytest.approx(0.24 / 60.0)
+    assert s["imu"]["gyro_markov_deg_h"] == 50.0
+    assert s["imu"]["accel_markov_mps2"] == pytest.approx(250e-5)
+    assert s["imu"]["gyro_markov_tau_s"] == 3600.0
+    assert s["imu"]["gyro_bias_deg_h"] == pytest.approx(np.sqrt(80.0**2 - 50.0**2))
+    assert s["imu"]["gyro_scale_ppm"] == 1000.0
+    assert s["filter"] == {"accel_bias": "gauss_markov",
+                           "states": ["gyro_scale", "accel_scale"]}
+    # frames: the lever arm FRD -> RFU, the velocity NED -> ENU
+    np.testing.assert_allclose(s["sensors"]["gnss"]["lever_m"], LEVER)
+    _, _, ref = drive
+    k = int(np.searchsorted(ref.t, drive[0].t[1] - 1e-9))
+    np.testing.assert_allclose(s["initial"]["vel_mps"], ref.vel[k], atol=1e-12)
+    np.testing.assert_allclose(s["initial"]["euler_deg"][:2], units.to_deg(ref.euler[k, :2]),
+                               atol=1e-9)
+    assert s["initial"]["euler_deg"][2] == pytest.approx(units.to_deg(ref.euler[k, 2]) % 360)
+    # Euler sigmas [roll 0.5, pitch 0.5, yaw 1.0] deg: the tilts' misalignment sigma is the
+    # same 0.5 deg whatever the heading (equal roll and pitch), the heading's 1 deg (level)
+    att = np.asarray(s["initial"]["sigma"]["attitude_arcsec"]) / 3600.0
+    np.testing.assert_allclose(att[:2], 0.5, rtol=0.02)
+    assert att[2] == pytest.approx(1.0, rel=0.05)
+    assert s["initial"]["sigma"]["position_m"] == [0.1, 0.1, 0.2]
+
+
+def test_files_read_back_to_the_same_samples(tmp_path, drive):
+    imu, gnss, _ = drive
+    cfg = write_folder(tmp_path / "d", drive, gnss_columns=13)
+    tr = translate(cfg)
+    k = read_kfgins_imu(tr.imu, start_s=tr.start_s, rate_hz=tr.rate_hz)
+    n = len(k.t)
+    # the first row ends at starttime: its interval starts one period before
+    np.testing.assert_allclose(k.t - WEEK_S, imu.t[:n], atol=2e-6)
+    np.testing.assert_allclose(k.gyro, imu.gyro[:n], rtol=1e-8, atol=1e-14)  # (stamps)
+    np.testing.assert_allclose(k.accel, imu.accel[:n], rtol=1e-8, atol=1e-12)
+    assert k.mounting_name == "FRD"
+    g = read_kfgins_gnss(tr.gnss, lever=LEVER, start_s=tr.start_s)
+    m = len(g.t)
+    first = int(np.searchsorted(gnss.t + WEEK_S, g.t[0] - 1e-6))
+    np.testing.assert_allclose(g.lla[:, :2], gnss.lla[first:first + m, :2], atol=1e-10)
+    np.testing.assert_allclose(g.vel, gnss.vel[first:first + m], atol=1e-4)
+    np.testing.assert_allclose(g.sigma_rows[0], np.r_[gnss.sigma_pos_enu[[1, 0, 2]],
+                                                      gnss.sigma_vel])
+    assert read_kfgins_gnss(tr.gnss, velocity=False).vel is None
+
+
+def test_nav_file_round_trip_and_plot_script_layout(tmp_path, drive):
+    _, _, ref = drive
+    p = write_kfgins_nav(tmp_path / "x.nav", ref.t[:500], ref.lla[:500], ref.vel[:500],
+                         ref.euler[:500])
+    a = np.loadtxt(p)  # what KF-GINS's plot_navresult.py does
+    assert a.shape == (500, 11)
+    assert (a[:, 0] == 0).all()
+    np.testing.assert_allclose(a[:, 5], ref.vel[:500, 1], atol=1e-4)  # north
+    np.testing.assert_allclose(a[:, 7], -ref.vel[:500, 2], atol=1e-4)  # down
+    back = read_kfgins_nav(p)
+    np.testing.assert_allclose(back.lla[:, :2], ref.lla[:500, :2], atol=1e-11)
+    np.testing.assert_allclose(back.euler, ref.euler[:500], atol=1e-9)
+
+
+def test_same_solution_as_the_csv_path(tmp_path, drive):
+    """The folder through fednav process kfgins and the same data through fednav's own
+    objects with the translated description: the same solution; against the truth the
+    KF-GINS folder's run is as good as the simulation allows."""
+    from fednav.navigator.system import System
+    from fednav.process import process
+
+    cfg = write_folder(tmp_path / "d", drive)
+    data = read_kfgins(cfg)
+    res = process(data["imu"], data["sensors"], data["system"])
+    # the same data as fednav's objects (rates RFU, fixes, description by hand)
+    imu, gnss, _ = drive
+    tr = translate(cfg)
+    system = System.model_validate(tr.system)
+    assert system == data["system"]
+    sol = res.forward
+    assert np.isfinite(sol.lla).all()
+    ref = data["ref"]
+    assert ref is not None and any("truth.nav" in w for w in data["warnings"])
+    j = np.searchsorted(ref.t, sol.t[-1] - 1e-6)
+    err_h = np.hypot(*(np.array([ref.lla[j, 0] - sol.lla[-1, 0],
+                                 (ref.lla[j, 1] - sol.lla[-1, 1]) * np.cos(ref.lla[j, 0])])
+                       * 6.378e6))
+    assert err_h < 3.0  # (1 m GNSS noise)
+
+
+def test_cli_runs_the_folder_and_writes_the_nav_file(tmp_path, drive):
+    from typer.testing import CliRunner
+
+    from fednav.cli import app
+
+    cfg = write_folder(tmp_path / "d", drive, seconds=60.0)
+    out = tmp_path / "out"
+    r = CliRunner().invoke(app, ["process", "kfgins", str(cfg.parent), "--out", str(out)])
+    assert r.exit_code == 0, r.output
+    nav = np.loadtxt(out / "KF_GINS_Navresult.nav")
+    assert nav.shape[1] == 11
+    s = json.loads((out / "summary.json").read_text())
+    assert s["rmse"]["east_m"] < 3.0
+    r = CliRunner().invoke(app, ["process", "kfgins", str(cfg), "--keys"])
+    assert r.exit_code == 0 and "imunoise.corrtime" in r.output
+
+
+def test_known_initial_errors_are_taken_out_of_the_increments(tmp_path, drive):
+    cfg = write_folder(tmp_path / "d", drive, initgyrbias=[36.0, 0.0, 0.0],
+                       initaccscale=[0.0, 0.0, 1000.0])
+    tr = translate(cfg)
+    assert tr.fate("initgyrbias").fate == "translated"
+    plain = read_kfgins_imu(tr.imu, start_s=tr.start_s)
+    k = read_kfgins_imu(tr.imu, start_s=tr.start_s, known_errors=tr.known_errors)
+    # 36 deg/h on FRD x = fednav forward (y): taken out
+    np.testing.assert_allclose(plain.gyro[:, 1] - k.gyro[:, 1], units.deg_per_h(36.0),
+                               rtol=1e-6)
+    np.testing.assert_allclose(k.gyro[:, 0], plain.gyro[:, 0])
+    # 1000 ppm on FRD z = fednav up (sign flips, the scale does not)
+    np.testing.assert_allclose(k.accel[:, 2], plain.accel[:, 2] / 1.001, rtol=1e-12)
+
+
+def test_bad_folders_and_files_are_one_line(tmp_path, drive):
+    from fednav.core.config import ConfigError
+    from fednav.process.kfgins import find_config
+
+    with pytest.raises(ConfigError, match="no KF-GINS configuration"):
+        find_config(tmp_path)
+    cfg = write_folder(tmp_path / "d", drive, seconds=20.0)
+    text = yaml.safe_load(cfg.read_text())
+    del text["imunoise"]["corrtime"]
+    bad = tmp_path / "d" / "bad.yaml"
+    bad.write_text(yaml.safe_dump(text))
+    with pytest.raises(ConfigError, match="missing imunoise.corrtime"):
+        translate(bad)
+    with pytest.raises(ConfigError, match="several|2 KF-GINS"):
+        find_config(tmp_path / "d")
+    text = yaml.safe_load(cfg.read_text())
+    text["imudatarate"] = 200
+    cfg.write_text(yaml.safe_dump(text))
+    bad.unlink()
+    with pytest.raises(DataError, match="imudatarate says 200 Hz"):
+        read_kfgins(cfg)
+    (tmp_path / "six.txt").write_text("1 2 3 4 5 6\n2 3 4 5 6 7\n")
+    with pytest.raises(DataError, match="6 columns; a KF-GINS IMU file has 7"):
+        read_kfgins_imu(tmp_path / "six.txt")
+    (tmp_path / "g.txt").write_text("1 2 3 4 5 6 7\n2 3 4 5 6\n")
+    with pytest.raises(DataError, match="row 2 has fewer numbers"):
+        read_kfgins_gnss(tmp_path / "g.txt")
+    (tmp_path / "t.txt").write_text("time lat lon\n")
+    with pytest.raises(DataError, match="not a KF-GINS GNSS file"):
+        read_kfgins_gnss(tmp_path / "t.txt")
