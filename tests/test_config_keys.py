@@ -95,6 +95,7 @@ WALK = {
     "alignment.coarse_seconds": ("acts", 5.0, {"alignment.initial_attitude": "coarse"}),
     "initial": ("acts", "INITIAL"),  # (the drive's first reference row)
     "health.nis_band": ("acts", [0.99, 1.01]),  # (the drive's NIS/dof lies outside it)
+    "integrity": ("acts", {"alert_limit_horizontal_m": 40.0}),  # (levels in the summary)
     "smoother": ("acts", True),
     "output_rate_hz": ("acts", 2.0),
     "files": ("acts", "FILES"),  # (the velocity file named there, not by --velocity)

@@ -56,6 +56,11 @@ class Solution:
         isolated).
     epoch_rows : ndarray, shape (K+1,), or None
         Row index of each filter epoch [-].
+    levels : dict of str to ndarray, or None
+        Per row, the protection levels and the alert state when integrity was asked for
+        (:mod:`fednav.navigator.integrity`): ``hpl_m``, ``vpl_m``, ``heading_pl_deg``,
+        ``integrity_alert`` (1: an alert), ``excluded`` (the sensor excluded, index into
+        the integrity result's ``sensors``; −1 none).
     """
 
     t: np.ndarray
@@ -68,6 +73,7 @@ class Solution:
     label: str = "forward"
     fdi: list = field(default_factory=list)
     epoch_rows: np.ndarray | None = None
+    levels: dict | None = None
 
     def rows(self, index) -> Solution:
         """The solution at some of its rows.
@@ -84,7 +90,8 @@ class Solution:
         """
         return Solution(self.t[index], self.lla[index], self.vel[index], self.euler[index],
                         self.sigma[index], self.sigma_euler[index], self.omega[index],
-                        self.label, self.fdi)
+                        self.label, self.fdi, levels=None if self.levels is None
+                        else {k: v[index] for k, v in self.levels.items()})
 
 
 def imu_rate(res, smooth: bool = False) -> tuple[Solution, Solution | None]:

@@ -12,6 +12,7 @@ is made of::
                 in ``locals``), federated / centralized, sharing, reset, fault detection,
                 period, the filter's IMU bias model
     alignment:  how recorded data find the initial attitude
+    integrity:  protection levels by solution separation (fednav.navigator.integrity)
     smoother:   also run the RTS smoother
     output_rate_hz: solution rows per second of fednav process's files (default: 10 Hz)
 
@@ -36,6 +37,7 @@ from ..ins.states import CORE, StateLayout
 from ..sensors.gnss import neu_to_enu
 from ..sensors.imu import ImuConfig
 from ..sensors.registry import SENSORS, SensorSet, check_names
+from .integrity import IntegrityConfig
 
 _V3 = tuple[float, float, float]
 
@@ -360,6 +362,10 @@ class System(_Model):
         [m/s], ``euler_deg`` [deg] with their 1-sigma); replaces the alignment.
     health : HealthConfig
         The health monitor's NIS/dof band (``nis_band`` [low, high]).
+    integrity : IntegrityConfig, optional
+        Protection levels by solution separation (:mod:`fednav.navigator.integrity`):
+        the integrity-risk and false-alert budget, each sensor's prior fault
+        probability, the alert limits; None (default): no levels.
     smoother : bool
         Also run the RTS smoother.
     output_rate_hz : float or {"imu", "filter"}, optional
@@ -379,6 +385,7 @@ class System(_Model):
     alignment: AlignmentConfig = AlignmentConfig()
     initial: InitialConfig | None = None
     health: HealthConfig = HealthConfig()
+    integrity: IntegrityConfig | None = None
     smoother: bool = False
     output_rate_hz: float | Literal["imu", "filter"] | None = None
 

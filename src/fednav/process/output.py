@@ -37,6 +37,7 @@ def solution_columns(sol: Solution) -> dict[str, np.ndarray]:
         "sigma_pitch_deg": units.to_deg(sol.sigma_euler[:, 0]),
         "sigma_roll_deg": units.to_deg(sol.sigma_euler[:, 1]),
         "sigma_heading_deg": units.to_deg(sol.sigma_euler[:, 2]),
+        **(sol.levels or {}),
     }
 
 
@@ -46,8 +47,8 @@ def solution_decimals(names) -> dict[str, int]:
     def d(name):
         if name == "t_s" or name.startswith("sigma_"):
             return 6
-        return {"lat_deg": 9, "lon_deg": 9, "h_m": 4}.get(name, 5 if name.endswith("mps")
-                                                         else 6)
+        return {"lat_deg": 9, "lon_deg": 9, "h_m": 4, "integrity_alert": 0,
+                "excluded": 0}.get(name, 5 if name.endswith("mps") else 6)
     return {k: d(k) for k in names}
 
 
@@ -172,6 +173,13 @@ def summary(res: ProcessResult, ref: Reference | None, inputs: dict,
             out["rmse_smoothed"] = _rmse_block(res.smoothed, ref)
         if res.outages:
             out["outages"] = _outage_blocks(res, ref)
+    if res.integrity is not None:
+        errs = None
+        if ref is not None:
+            e = _errors(res.forward, ref)
+            errs = {"t": e["t"], "horizontal": np.hypot(e["east_m"], e["north_m"]),
+                    "vertical": e["up_m"], "heading": e.get("yaw_rad")}
+        out["integrity"] = res.integrity.summary(errs)
     for name, other in (others or {}).items():
         block = {"source": other.source, "rmse": _rmse_block(res.forward, other)}
         if res.smoothed is not None:

@@ -179,6 +179,9 @@ class ProcessResult:
     outages: dict = field(default_factory=dict)
     gnss_flown: GnssData | None = None
     consistency: dict = field(default_factory=dict)
+    #: the protection levels, tests and exclusions (the system's ``integrity:``;
+    #: :class:`fednav.navigator.integrity.IntegrityResult`), else None
+    integrity: object = None
 
 
 def adjust_sensors(gnss: GnssData, velocity: VelocityData | None, cfg: System):
@@ -820,6 +823,12 @@ def process(imu: ImuData, sensors: Mapping[str, Series], cfg: System | None = No
         res.data_quality["q_scale_final"] = {k: round(v, 3)
                                              for k, v in nav.loop.q_scales().items()}
     res.optional_states = out.optional
+    if prep.system.integrity is not None:
+        from .integrity import run_integrity
+
+        res.forward, res.integrity, said = run_integrity(prep, res.forward,
+                                                         prep.system.integrity)
+        res.warnings += said
     res.outages = {n: w for n in prep.system.sensors if (w := outages.windows_of(cfg, n))}
     res.gnss_flown = gnss
     res.run_time_s = time.perf_counter() - t_start

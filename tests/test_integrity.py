@@ -1,0 +1,127 @@
+"""Protection levels by solution separation: the equations against a case written by
+hand, and on a processed drive — fault-free levels that bound the error, a GNSS height
+ramp detected and the GNSS excluded with three sensors, detected and alerted (not
+excluded) with two."""
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from test_process import LEVER, make_flight
+from test_series_route import _velocity
+
+from fednav import System
+from fednav.io.data import SensorData
+from fednav.navigator.integrity import (
+    IntegrityConfig,
+    protection_level,
+    q_function,
+    q_inverse,
+    separation_threshold,
+)
+from fednav.process import process
+from fednav.process.output import solution_columns, summary
+
+
+def test_two_position_sensors_by_hand():
+    """A constant position measured once by two sensors (sigma 1 and 2): the all-sensor
+    estimate has variance 1/(1 + 1/4); leaving one out leaves the other's."""
+    s1, s2 = 1.0, 2.0
+    s0 = np.sqrt(1.0 / (1.0 / s1**2 + 1.0 / s2**2))
+    sk = np.array([[s2], [s1]])  # without sensor 1: sensor 2's; without 2: sensor 1's
+    k_fa = q_inverse(1e-3 / 4)
+    ss, T = separation_threshold(np.array([s0]), sk, k_fa)
+    np.testing.assert_allclose(ss[:, 0], [np.sqrt(s2**2 - s0**2), np.sqrt(s1**2 - s0**2)])
+    np.testing.assert_allclose(T, k_fa * ss)
+    p = np.array([1e-3, 1e-3])
+    pl = protection_level(np.array([s0]), sk, T, p, 1e-6)[0]
+    lhs = 2 * q_function(pl / s0) + sum(p[k] * q_function((pl - T[k, 0]) / sk[k, 0])
+                                        for k in range(2))
+    assert lhs == pytest.approx(1e-6, rel=1e-6)
+    # the level grows with the prior fault probability and with the threshold
+    assert protection_level(np.array([s0]), sk, T, p * 10, 1e-6)[0] > pl
+    assert protection_level(np.array([s0]), sk, 2 * T, p, 1e-6)[0] > pl
+    # no fault hypotheses: the fault-free term alone, K_ff sigma0
+    assert protection_level(np.array([s0]), sk, T, 0 * p, 1e-6)[0] == pytest.approx(
+        q_inverse(0.5e-6) * s0, rel=1e-6)
+
+
+def test_budget_defaults_and_priors():
+    c = IntegrityConfig(prior_fault={"gnss": 1e-3})
+    assert c.prior("gnss") == 1e-3 and c.prior("baro") == 1e-4
+    assert IntegrityConfig().risk_vertical == 1e-7
+
+
+@pytest.fixture(scope="module")
+def drive():
+    imu, gnss, ref = make_flight()
+    rng = np.random.default_rng(3)
+    tb = np.arange(0.1, ref.t[-1], 0.1)
+    h = np.interp(tb, ref.t, ref.lla[:, 2]) + 0.3 * rng.standard_normal(len(tb))
+    baro = SensorData("baro", "sim-baro", tb, h[:, None])
+    return imu, gnss, _velocity(gnss), baro, ref
+
+
+def _cfg(**integrity):
+    return System.model_validate({
+        "imu": {"gyro_arw_deg_sqrt_h": 0.2, "accel_vrw_mps_sqrt_s": 0.002,
+                "gyro_bias_deg_h": 10, "accel_bias_mps2": 0.01, "gyro_markov_deg_h": 0,
+                "accel_markov_mps2": 0},
+        "sensors": {"gnss": {"lever_m": list(LEVER)}, "velocity": {"lever_m": list(LEVER)},
+                    "baro": {"sigma_m": 0.3, "damping_loop": False}},
+        "integrity": integrity})
+
+
+def _ramp(gnss, rate_mps, start_s=120.0):
+    g = replace(gnss, lla=gnss.lla.copy(), quality={})
+    k = g.t > start_s
+    g.lla[k, 2] += (g.t[k] - start_s) * rate_mps
+    return g
+
+
+def test_fault_free_levels_bound_the_error(drive):
+    imu, gnss, vel, baro, ref = drive
+    res = process(imu, {"gnss": gnss, "velocity": vel, "baro": baro},
+                  _cfg(alert_limit_vertical_m=50.0))
+    s = summary(res, ref, {})["integrity"]
+    assert s["sensors"] == ["gnss", "velocity", "baro"]
+    assert s["exclusions"] == [] and s["alert_fraction"] == 0.0
+    assert res.integrity.test_ratio.max() < 1.0
+    assert s["vertical_error_above_level"] == 0.0
+    assert s["horizontal_error_above_level"] == 0.0
+    assert s["availability"] == 1.0
+    # the vertical level: a few times the error, not a wall (the baro witnesses the height)
+    assert s["vpl_m"]["median"] < 30 * s["vertical_error_median"]
+    cols = solution_columns(res.forward)
+    assert {"hpl_m", "vpl_m", "heading_pl_deg", "integrity_alert"} <= set(cols)
+    assert not [w for w in res.warnings if w.startswith("integrity")]
+
+
+def test_gnss_ramp_is_detected_and_excluded(drive):
+    imu, gnss, vel, baro, ref = drive
+    res = process(imu, {"gnss": _ramp(gnss, 0.1), "velocity": vel, "baro": baro}, _cfg())
+    s = summary(res, ref, {})["integrity"]
+    assert [e["sensor"] for e in s["exclusions"]] == ["gnss"]
+    t_ex = s["exclusions"][0]["t_s"]
+    assert 120.0 < t_ex < 150.0  # (before the ramp reaches 3 m)
+    assert s["vertical_error_above_level"] == 0.0
+    assert summary(res, ref, {})["rmse"]["up_m"] < 0.2  # (the ramp is 12 m at the end)
+    assert any("'gnss' excluded" in w for w in res.warnings)
+
+
+def test_two_sensors_detect_but_do_not_exclude(drive):
+    imu, gnss, vel, _, ref = drive
+    cfg = _cfg()
+    cfg = cfg.model_copy(update={"sensors": cfg.sensors})
+    res = process(imu, {"gnss": _ramp(gnss, 0.5), "velocity": vel}, cfg)
+    s = summary(res, ref, {})["integrity"]
+    assert s["exclusions"] == [] and s["alert_fraction"] > 0.3
+    assert any("two sensors cannot say which one is faulty" in w for w in res.warnings)
+
+
+def test_one_sensor_is_refused_in_one_line(drive):
+    from fednav.io.data import DataError
+
+    imu, gnss, _, _, _ = drive
+    with pytest.raises(DataError, match="two or more recorded aiding sensors"):
+        process(imu, {"gnss": gnss}, _cfg())
