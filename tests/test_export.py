@@ -87,24 +87,31 @@ def test_export_requests_are_checked_first():
         check_exports("kml,shp")
 
 
-def test_cli_writes_the_exports_beside_the_solution(tmp_path):
-    from typer.testing import CliRunner
-
-    from fednav.cli import app
+def write_short_flight(folder, n: int = 3000, velocity: bool = True) -> None:
+    """The first ``n`` IMU samples of the test flight and its fixes over them as fednav
+    CSV files ``imu.csv`` and ``gnss.csv`` in ``folder`` (17 significant digits)."""
     from fednav.io.csvdata import write_csv
 
     imu, gnss, _ = make_flight()
-    n = 3000
-    write_csv(tmp_path / "imu.csv", {"t_s": imu.t[:n], **{
+    write_csv(folder / "imu.csv", {"t_s": imu.t[:n], **{
         f"{k}_{a}_{u}": v[:n, i] for k, v, u in (("gyro", imu.gyro, "radps"),
                                                  ("accel", imu.accel, "mps2"))
         for i, a in enumerate("xyz")}}, significant=17)
     g = gnss.t < imu.t[n - 1]
-    write_csv(tmp_path / "gnss.csv", {
-        "t_s": gnss.t[g], "lat_deg": units.to_deg(gnss.lla[g, 0]),
-        "lon_deg": units.to_deg(gnss.lla[g, 1]), "h_m": gnss.lla[g, 2],
-        "vE_mps": gnss.vel[g, 0], "vN_mps": gnss.vel[g, 1], "vU_mps": gnss.vel[g, 2]},
-        significant=17)
+    cols = {"t_s": gnss.t[g], "lat_deg": units.to_deg(gnss.lla[g, 0]),
+            "lon_deg": units.to_deg(gnss.lla[g, 1]), "h_m": gnss.lla[g, 2]}
+    if velocity:
+        cols.update({"vE_mps": gnss.vel[g, 0], "vN_mps": gnss.vel[g, 1],
+                     "vU_mps": gnss.vel[g, 2]})
+    write_csv(folder / "gnss.csv", cols, significant=17)
+
+
+def test_cli_writes_the_exports_beside_the_solution(tmp_path):
+    from typer.testing import CliRunner
+
+    from fednav.cli import app
+
+    write_short_flight(tmp_path)
     args = ["process", "csv", "--imu", str(tmp_path / "imu.csv"), "--gnss",
             str(tmp_path / "gnss.csv"), "--out", str(tmp_path / "out")]
     r = CliRunner().invoke(app, [*args, "--export", "kml,gpx,geojson"])

@@ -213,6 +213,17 @@ def regular_imu(source: str, t, gyro, accel, max_gap_s: float):
     return grid[:-1], out[0], out[1], quality
 
 
+def height_offset_to_gnss(t: np.ndarray, h: np.ndarray, gnss) -> float:
+    """The median of the GNSS's ellipsoidal heights minus heights ``h`` [m] (at times
+    ``t`` [s], interpolated to the fixes inside their span): what moves a barometric
+    altitude onto the GNSS's ellipsoidal height; NaN without GNSS heights over ``t``."""
+    if gnss is None or gnss.lla is None or len(t) < 2:
+        return float("nan")
+    hb = np.interp(gnss.t, t, h, left=np.nan, right=np.nan)
+    both = np.isfinite(hb)
+    return float(np.median(gnss.lla[both, 2] - hb[both])) if both.any() else float("nan")
+
+
 def check_arrival(source: str, t: np.ndarray, ta) -> np.ndarray | None:
     """Arrival times ``ta`` [s] of measurements valid at ``t`` (None: on time); a
     measurement arriving before the time it describes is a DataError naming it."""

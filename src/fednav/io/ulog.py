@@ -29,7 +29,7 @@ import numpy as np
 from ..core import attitude as att
 from ..core import units
 from ..sensors.mag import GAUSS, MIN_FIELD_GAUSS
-from .data import DataError, GnssData, ImuData, Reference, require_file
+from .data import DataError, GnssData, ImuData, Reference, height_offset_to_gnss, require_file
 from .navego import FRD_TO_RFU
 from .sensorfile import SensorData
 
@@ -289,12 +289,7 @@ def _baro(log: _Log, gnss: GnssData | None, quality: dict, notes: list):
     t, h = t[ok], h[ok]
     if len(t) < 2:
         return None
-    off = np.nan
-    if gnss is not None:
-        hb = _interp(t, h, gnss.t)[:, 0]
-        both = np.isfinite(hb)
-        if both.any():
-            off = float(np.median(gnss.lla[both, 2] - hb[both]))
+    off = height_offset_to_gnss(t, h, gnss)
     if np.isfinite(off):
         quality["baro_offset_m"] = off
         h = h + off

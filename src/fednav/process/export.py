@@ -1,8 +1,10 @@
 """The solution in the field's common formats, on request (``fednav process ... --export
 kml,gpx,geojson``): ``solution.kml`` for Google Earth (the track coloured by its
 horizontal 1-sigma, the outages drawn apart), ``solution.gpx`` for GPS tools,
-``solution.geojson`` for a GIS and ``KF_GINS_Navresult.nav`` in KF-GINS's layout
-(:func:`fednav.io.kfgins.write_kfgins_nav`: its plotting script reads it).
+``solution.geojson`` for a GIS, ``KF_GINS_Navresult.nav`` in KF-GINS's layout
+(:func:`fednav.io.kfgins.write_kfgins_nav`: its plotting script reads it) and
+``solution_bag/``, a ROS 2 bag for ROS tools (:func:`write_rosbag`:
+``nav_msgs/msg/Odometry`` and ``sensor_msgs/msg/NavSatFix``).
 
 Heights: GeoJSON's third coordinate is the height above the WGS-84 ellipsoid (RFC 7946),
 which is what fednav's ``h`` is; KML and most GPX readers take heights above mean sea
@@ -27,9 +29,12 @@ from ..io.kfgins import write_kfgins_nav
 from ..navigator.solution import Solution
 
 #: The formats ``--export`` takes, each with the package that writes it.
-EXPORTS = {"kml": "simplekml", "gpx": "gpxpy", "geojson": "geojson", "kfgins": "numpy"}
-#: the file each kind writes, when it is not ``solution.<kind>``
-FILE_NAMES = {"kfgins": "KF_GINS_Navresult.nav"}
+EXPORTS = {"kml": "simplekml", "gpx": "gpxpy", "geojson": "geojson", "kfgins": "numpy",
+           "rosbag": "rosbags"}
+#: the file each kind writes, when it is not ``solution.<kind>`` (``rosbag``: a folder)
+FILE_NAMES = {"kfgins": "KF_GINS_Navresult.nav", "rosbag": "solution_bag"}
+#: The extra of fednav that installs a kind's package, when it is not ``export``.
+EXTRAS = {"rosbag": "formats"}
 #: Horizontal 1-sigma bins of the KML track's colours [m] and their colours (aabbggrr).
 SIGMA_BINS_M = (0.1, 0.5, 2.0, 10.0)
 COLOURS = ("ff00ff00", "ff00ffaa", "ff00ffff", "ff0088ff", "ff0000ff")
@@ -50,7 +55,7 @@ def check_exports(spec: str | None) -> tuple[str, ...]:
             __import__(EXPORTS[k])
         except ImportError:
             raise ValueError(f"--export {k} needs {EXPORTS[k]}: pip install "
-                             f"'fednav[export]'") from None
+                             f"'fednav[{EXTRAS.get(k, 'export')}]'") from None
     return kinds
 
 
@@ -171,11 +176,160 @@ def write_geojson(path: Path, sol: Solution, outages: dict | None = None) -> Pat
     return Path(path)
 
 
+#: ``--export rosbag``: the bag's topics and frames.
+ODOMETRY_TOPIC, FIX_TOPIC = "/fednav/odometry", "/fednav/fix"
+MAP_FRAME, BODY_FRAME = "map", "base_link"
+#: The key of the bag's ``custom_data`` (metadata.yaml) that marks it as fednav's: a
+#: folder without it is never replaced.
+ROSBAG_MARK = "fednav"
+
+
+def rosbag_frames(sol: Solution):
+    """What :func:`write_rosbag` writes of each row, in ROS's frames: positions [m]
+    (N, 3) in the map frame (the ENU tangent frame at the first row, exact through
+    ECEF), ``C_flu^map`` (N, 3, 3) (the body's FLU axes in it), ``R`` = ``C_enu^map``
+    (N, 3, 3) (each row's local ENU frame in it: the identity at the first row), and
+    ``C_flu^enu`` (N, 3, 3)."""
+    from ..core import attitude as att
+    from ..core import earth
+    from ..core import mounting as mt
+
+    lat, lon, h = sol.lla[:, 0], sol.lla[:, 1], sol.lla[:, 2]
+    C0 = earth.enu_to_ecef(lat[0], lon[0])
+    r = earth.llh_to_ecef(lat, lon, h)
+    pos = (r - r[0]) @ C0  # C0^T (r - r0), row by row
+    R = np.einsum("ji,njk->nik", C0, earth.enu_to_ecef(lat, lon))
+    C_enu = att.euler_to_dcm(sol.euler) @ mt.from_letters("FLU")  # C_rfu^enu C_flu^rfu
+    return pos, R @ C_enu, R, C_enu
+
+
+def write_rosbag(path: Path, sol: Solution) -> Path:
+    """The solution as a ROS 2 bag folder (sqlite3 storage, metadata version 8), one
+    message of each topic per row, stamped with the row's time as a ROS time (seconds
+    since 1970: the input's own ROS times when it was a bag, :func:`fednav.io.read_rosbag`;
+    bag time = header stamp):
+
+    * ``/fednav/odometry`` — ``nav_msgs/msg/Odometry``; ``header.frame_id`` ``map``: the
+      ENU tangent frame at the first row (x east, y north, z up, origin at the first
+      row's position: its latitude, longitude and height in the bag's ``custom_data``,
+      ``fednav.map_origin_lat_deg`` ...); ``child_frame_id`` ``base_link``: fednav's body
+      (the IMU) in ROS's FLU axes (x forward, y left, z up).  ``pose.position`` [m];
+      ``pose.orientation`` the quaternion of ``C_flu^map`` (it turns FLU body vectors into
+      the map frame); ``pose.covariance`` (x, y, z, then rotations about the map's x, y,
+      z) from the position and attitude-error 1-sigmas (ENU, turned into the map frame;
+      no cross terms).  ``twist`` in the child frame (FLU): the velocity [m/s] and the
+      body rate [rad/s]; its covariance's velocity block from the ENU velocity 1-sigmas,
+      its body-rate block zero (fednav gives no 1-sigma of the rate).
+    * ``/fednav/fix`` — ``sensor_msgs/msg/NavSatFix``, ``frame_id`` ``base_link``: the
+      IMU's latitude, longitude [deg] and height above the WGS-84 ellipsoid [m],
+      ``status`` 0 (a fix), ``position_covariance`` ENU [m^2] from the position
+      1-sigmas, ``position_covariance_type`` 2 (DIAGONAL_KNOWN).
+
+    A ``path`` that exists is replaced only when fednav wrote it (:data:`ROSBAG_MARK` in
+    its metadata); anything else there is a ValueError naming it.  The bag is written in
+    a hidden folder beside ``path`` and moved into place when complete."""
+    import os
+    import shutil
+
+    from rosbags.rosbag2 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    from ..core import attitude as att
+    from ..core import mounting as mt
+    from ..core.atomic import output_error
+
+    path = Path(path)
+    if (path.exists() or path.is_symlink()) and not _fednav_bag(path):
+        raise ValueError(f"{path}: exists and is not a bag fednav wrote (no "
+                         f"'{ROSBAG_MARK}' in its metadata.yaml custom_data): not "
+                         f"replaced; move it away or choose another output folder")
+    t = np.asarray(sol.t, dtype=float)
+    if len(t) and t[0] < 0:
+        raise ValueError(f"{path}: solution times from {t[0]:.6f} s: ROS times are not "
+                         f"negative")
+    ns = np.rint(t * 1e9).astype(np.int64)
+    ts = get_typestore(Stores.ROS2_HUMBLE)
+    T = ts.types
+    Time, Header = T["builtin_interfaces/msg/Time"], T["std_msgs/msg/Header"]
+    Odometry, Fix = T["nav_msgs/msg/Odometry"], T["sensor_msgs/msg/NavSatFix"]
+    Pose, PoseCov = T["geometry_msgs/msg/Pose"], T["geometry_msgs/msg/PoseWithCovariance"]
+    Twist, TwistCov = (T["geometry_msgs/msg/Twist"],
+                       T["geometry_msgs/msg/TwistWithCovariance"])
+    Point, Quat, Vec = (T["geometry_msgs/msg/Point"], T["geometry_msgs/msg/Quaternion"],
+                        T["geometry_msgs/msg/Vector3"])
+    Status = T["sensor_msgs/msg/NavSatStatus"]
+    pos, C, R, C_enu = rosbag_frames(sol)
+    q = att.dcm_to_quat(C)  # [w, x, y, z]
+    s = np.asarray(sol.sigma, dtype=float)
+    Rt = np.swapaxes(R, 1, 2)
+    pose_cov = np.zeros((len(t), 6, 6))
+    pose_cov[:, :3, :3] = R @ (s[:, 6:9, None] ** 2 * np.eye(3)) @ Rt
+    pose_cov[:, 3:, 3:] = R @ (s[:, 0:3, None] ** 2 * np.eye(3)) @ Rt
+    v_flu = np.einsum("nji,nj->ni", C_enu, sol.vel)  # C_flu^enu^T v_enu
+    w_flu = np.asarray(sol.omega, dtype=float) @ mt.from_letters("FLU")  # M^T omega_rfu
+    twist_cov = np.zeros((len(t), 6, 6))
+    twist_cov[:, :3, :3] = (np.swapaxes(C_enu, 1, 2) @ (s[:, 3:6, None] ** 2 * np.eye(3))
+                            @ C_enu)
+    fix_cov = s[:, 6:9, None] ** 2 * np.eye(3)
+    lat, lon = units.to_deg(sol.lla[:, 0]), units.to_deg(sol.lla[:, 1])
+    work = path.with_name(f".{path.name}.{os.getpid()}.tmp")  # (the bag: work/<name>)
+    old = path.with_name(f".{path.name}.{os.getpid()}.old")
+    for p in (work, old):
+        shutil.rmtree(p, ignore_errors=True)
+    try:
+        work.mkdir()
+        w = Writer(work / path.name, version=8)
+        w.set_custom_data(ROSBAG_MARK, "fednav process --export rosbag")
+        if len(t):
+            for k, v in (("lat_deg", lat[0]), ("lon_deg", lon[0]), ("h_m", sol.lla[0, 2])):
+                w.set_custom_data(f"fednav.map_origin_{k}", f"{float(v):.10f}")
+        with w:
+            co = w.add_connection(ODOMETRY_TOPIC, Odometry.__msgtype__, typestore=ts)
+            cf = w.add_connection(FIX_TOPIC, Fix.__msgtype__, typestore=ts)
+            for i in range(len(t)):
+                n = int(ns[i])
+                stamp = Time(n // 1_000_000_000, n % 1_000_000_000)
+                odo = Odometry(
+                    Header(stamp, MAP_FRAME), BODY_FRAME,
+                    PoseCov(Pose(Point(*pos[i]), Quat(q[i, 1], q[i, 2], q[i, 3], q[i, 0])),
+                            pose_cov[i].ravel()),
+                    TwistCov(Twist(Vec(*v_flu[i]), Vec(*w_flu[i])), twist_cov[i].ravel()))
+                w.write(co, n, ts.serialize_cdr(odo, Odometry.__msgtype__))
+                fix = Fix(Header(stamp, BODY_FRAME), Status(0, 0), float(lat[i]),
+                          float(lon[i]), float(sol.lla[i, 2]), fix_cov[i].ravel(), 2)
+                w.write(cf, n, ts.serialize_cdr(fix, Fix.__msgtype__))
+        if path.exists():
+            os.replace(path, old)
+        os.replace(work / path.name, path)
+    except OSError as e:
+        raise output_error(path, e) from e
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+        shutil.rmtree(old, ignore_errors=True)
+    return path
+
+
+def _fednav_bag(path: Path) -> bool:
+    """Whether ``path`` is a bag folder fednav wrote (:data:`ROSBAG_MARK` in its
+    metadata's ``custom_data``)."""
+    import yaml
+
+    meta = path / "metadata.yaml"
+    if path.is_symlink() or not path.is_dir() or not meta.is_file():
+        return False
+    try:
+        info = yaml.safe_load(meta.read_text())["rosbag2_bagfile_information"]
+        return ROSBAG_MARK in (info.get("custom_data") or {})
+    except (OSError, KeyError, TypeError, AttributeError, yaml.YAMLError):
+        return False
+
+
 def write_exports(out: Path, sol: Solution, kinds, outages: dict | None = None) -> list[Path]:
     """``solution.<kind>`` in ``out`` (made if missing) for each of ``kinds``
     (:data:`EXPORTS`)."""
     Path(out).mkdir(parents=True, exist_ok=True)
     writers = {"kml": lambda p: write_kml(p, sol, outages), "gpx": lambda p: write_gpx(p, sol),
                "geojson": lambda p: write_geojson(p, sol, outages),
-               "kfgins": lambda p: write_kfgins_nav(p, sol.t, sol.lla, sol.vel, sol.euler)}
+               "kfgins": lambda p: write_kfgins_nav(p, sol.t, sol.lla, sol.vel, sol.euler),
+               "rosbag": lambda p: write_rosbag(p, sol)}
     return [writers[k](Path(out) / FILE_NAMES.get(k, f"solution.{k}")) for k in kinds]
