@@ -75,6 +75,34 @@ def test_navego_layout_reads_back_in_fednav_frames(short, tmp_path):
     np.testing.assert_allclose(np.sqrt(np.diagonal(v.cov, axis1=1, axis2=2)), 0.1)
 
 
+def test_kfgins_layout_reads_back_in_fednav_frames(short, tmp_path):
+    """KF-GINS's increments (FRD, stamped at the interval's end), its GNSS text, its
+    configuration and its .nav reference read back to the simulated samples."""
+    from fednav.process.kfgins import read_kfgins, translate
+    from fednav.sim.dataset import write_kfgins_dataset
+
+    write_kfgins_dataset(short, tmp_path)
+    tr = translate(tmp_path / "kf-gins.yaml")
+    assert not [k for k in tr.keys if k.fate == "unknown"]
+    data = read_kfgins(tmp_path)
+    imu = data["imu"]
+    n = len(imu.t)
+    assert imu.t[0] == pytest.approx(short.t[0], abs=1e-9) and n == len(short.t)
+    np.testing.assert_allclose(imu.gyro, short.gyro, rtol=1e-6, atol=1e-15)
+    np.testing.assert_allclose(imu.accel, short.accel, rtol=1e-6, atol=1e-12)
+    g = data["sensors"]["gnss"]
+    np.testing.assert_allclose(g.lla[:, :2], short.gnss_lla[:, :2], atol=1e-11)
+    np.testing.assert_allclose(g.lever, [0.3, -1.0, 1.2], atol=1e-15)
+    np.testing.assert_allclose(g.sigma_rows[0, :3], [1.5, 1.5, 3.0])  # N, E, U
+    cfg = data["system"]
+    np.testing.assert_allclose(cfg.imu.gyro_arw_deg_sqrt_h, 2.0)
+    assert cfg.initial.t_s == pytest.approx(short.t[1])
+    r = data["ref"]
+    np.testing.assert_allclose(r.vel, short.ref_vel, atol=1e-4)
+    d = (r.euler - short.ref_euler + np.pi) % (2 * np.pi) - np.pi
+    assert np.max(np.abs(d)) < 1e-9
+
+
 @pytest.fixture(scope="module")
 def drive(tmp_path_factory):
     """examples/car-drive.yaml -> CSV (`fednav simulate`) -> processed (forward filter at
@@ -143,8 +171,8 @@ def test_no_velocity_spike_at_turn_entries(drive):
 def test_simulate_cli_errors_are_one_line(tmp_path):
     r = CliRunner().invoke(app, ["simulate", str(EXAMPLE), "--format", "rinex",
                                  "--out", str(tmp_path)])
-    assert r.exit_code == 2 and r.stderr.strip() == ("error: --format must be csv or "
-                                                     "navego, got 'rinex'")
+    assert r.exit_code == 2 and r.stderr.strip() == ("error: --format must be csv, "
+                                                     "navego or kfgins, got 'rinex'")
     bad = tmp_path / "bad.yaml"
     bad.write_text(EXAMPLE.read_text().replace("imu_period_s: 0.005", "imu_period_s: 0"))
     r = CliRunner().invoke(app, ["simulate", str(bad), "--out", str(tmp_path / "o")])

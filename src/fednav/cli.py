@@ -383,8 +383,9 @@ def _campaign_writes(rel: Path) -> bool:
 def _simulate_writes(rel: Path) -> bool:
     """Whether ``simulate`` writes ``rel`` in its folder (a sensor CSV or .mat each, the
     reference, the config it writes)."""
-    return len(rel.parts) == 1 and (rel.suffix in (".csv", ".mat")
-                                    or rel.name in ("process.yaml", "system.yaml"))
+    return len(rel.parts) == 1 and (rel.suffix in (".csv", ".mat", ".txt", ".nav")
+                                    or rel.name in ("process.yaml", "system.yaml",
+                                                    "kf-gins.yaml"))
 
 
 def _run_process(read, imu, gnss, velocity, ref, smooth, out, config, output_rate,
@@ -472,14 +473,56 @@ def _ulog_reader(log: Path):
     return read
 
 
+def _rosbag_reader(bag: Path, topics: dict, time: str):
+    """``read(cfg)`` of a ROS 1 or ROS 2 bag (:func:`fednav.io.read_rosbag`): the IMU and
+    the sensors found by message type (or on the topics given); the GNSS's 1-sigma for
+    fixes without a covariance and its lever arm from ``sensors.gnss`` when given; a
+    sensor the bag has but the description has no section for (and whose messages give
+    no noise) left out with a warning."""
+    def read(cfg):
+        from dataclasses import replace
+
+        import numpy as np
+        from pydantic import ValidationError
+
+        from .io import read_rosbag
+        from .sensors import registry
+
+        rec = read_rosbag(bag, topics=topics, time=time, max_bridge_s=cfg.imu.max_bridge_s,
+                          mounting=cfg.imu.mounting)
+        warnings = [f"{bag}: {note}" for note in rec.notes]
+        sensors = dict(rec.series)
+        g, gc = sensors.get("gnss"), cfg.sensors.gnss
+        if g is not None and gc is not None:
+            given = {k: np.broadcast_to(np.asarray(v, dtype=float), (3,)).copy()
+                     for k, v in (("sigma_pos_enu", gc.sigma_pos_enu_m), ("lever", gc.lever_m))
+                     if v is not None}
+            if given:
+                quality = dict(g.quality)
+                sensors["gnss"] = replace(g, quality={}, **given)
+                sensors["gnss"].quality = quality
+        for name, d in list(sensors.items()):
+            if name in cfg.sensors or d.sigma is not None or d.cov is not None:
+                continue
+            try:
+                registry.spec(name).config()
+            except ValidationError:
+                del sensors[name]
+                warnings.append(f"{d.source}: not used: the system description has no "
+                                f"sensors.{name} section (its noise figure)")
+        return {"imu": rec.imu, "sensors": sensors, "ref": None, "warnings": warnings,
+                "paths": {"bag": bag}}
+    return read
+
+
 def _gnss_ins_sim_reader(folder: Path, run: int):
     """``read(cfg)`` of a gnss-ins-sim output folder (run ``run``): the IMU, the GPS (and
     the magnetometer and odometer when the description configures them), the simulator's
     true trajectory as the reference; the description completed from the folder
-    (:func:`fednav.io.gnss_ins_sim.gnss_ins_sim_system`)."""
+    (:func:`fednav.process.gnss_ins_sim.gnss_ins_sim_system`)."""
     def read(cfg):
         from .io import DataError, read_gnss_ins_sim
-        from .io.gnss_ins_sim import gnss_ins_sim_system
+        from .process.gnss_ins_sim import gnss_ins_sim_system
 
         rec = read_gnss_ins_sim(folder, run=run, max_bridge_s=cfg.imu.max_bridge_s,
                                 mounting=cfg.imu.mounting)
@@ -517,8 +560,10 @@ def _print_process(s: dict, compiled_s: float = 0.0) -> None:
                if al.get("levelling") != "initial" else "the system description's initial:")
         console.print(f"initial attitude: {how}; pitch/roll/heading {al.get('euler_deg')} "
                       f"deg, 1-sigma {al.get('sigma_deg')} deg")
+    from rich.markup import escape
+
     for w in s.get("warnings", []):
-        console.print(f"[yellow]warning:[/] {w}")
+        console.print(f"[yellow]warning:[/] {escape(w)}")
     q = {k: v for k, v in s.get("data_quality", {}).items() if v and not k.endswith("_seen_s")}
     if q:
         console.print("data: " + ", ".join(f"{k.replace('_', ' ')} {v}" for k, v in q.items())
@@ -695,8 +740,9 @@ _FORMAT = typer.Option("csv", "--format", help="solution file format: csv or par
                        "(needs pyarrow: the extra 'parquet' of fednav)")
 _FORCE = typer.Option(False, "--force", help="write the solution even when its innovations "
                       "say the data are wrong (mean NIS/dof above 100)")
-_EXPORT = typer.Option(None, "--export", help="also write the solution as kml, gpx and/or "
-                       "geojson (comma-separated; needs the extra 'export' of fednav)")
+_EXPORT = typer.Option(None, "--export", help="also write the solution as kml, gpx, geojson, "
+                       "kfgins and/or rosbag (comma-separated; kml, gpx, geojson need the "
+                       "extra 'export' of fednav, rosbag the extra 'formats')")
 
 
 @process_app.command("navego")
@@ -769,8 +815,10 @@ def process_kfgins(
         tab = Table(title=f"KF-GINS configuration {tr.source}")
         for c in ("key", "fate", "what fednav does"):
             tab.add_column(c)
+        from rich.markup import escape
+
         for k in tr.keys:
-            tab.add_row(k.key, k.fate, k.detail)
+            tab.add_row(k.key, k.fate, escape(k.detail))
         console.print(tab)
         return
     kinds = "kfgins" if not export else f"{export},kfgins"
@@ -794,6 +842,47 @@ def process_ulog(
     ground truth when it has one)."""
     _run_process(_ulog_reader(log), log, None, None, None, smooth, out, config,
                  output_rate, force=force, fmt=fmt, export=export)
+
+
+@process_app.command("rosbag")
+@_one_line_errors
+def process_rosbag(
+    bag: Path = typer.Argument(..., help="ROS 1 bag (.bag) or ROS 2 bag (folder, .db3 or "
+                                         ".mcap)"),
+    imu_topic: str = typer.Option(None, "--imu-topic", help="the sensor_msgs/msg/Imu topic "
+                                                            "(default: the bag's one)"),
+    gnss_topic: str = typer.Option(None, "--gnss-topic", help="the sensor_msgs/msg/NavSatFix "
+                                                              "topic (default: the bag's "
+                                                              "one)"),
+    topic: list[str] = typer.Option(None, "--topic", help="NAME=TOPIC for another sensor: "
+                                    "velocity (TwistWithCovarianceStamped, ENU), odometer "
+                                    "(Odometry), mag (MagneticField), baro (FluidPressure); "
+                                    "NAME= leaves it out; repeat for more"),
+    time: str = typer.Option("header", "--time", help="each message's time: header "
+                             "(header.stamp, the receive time as its arrival) or bag (the "
+                             "receive time)"),
+    smooth: bool = _SMOOTH, out: Path = _OUT,
+    config: Path = typer.Option(None, help="system description YAML: IMU figures (a bag has "
+                                           "none), sensor sections (sigmas where the "
+                                           "messages give no covariance, lever arms), "
+                                           "filters"),
+    output_rate: str = _RATE, fmt: str = _FORMAT, force: bool = _FORCE,
+    export: str = _EXPORT,
+) -> None:
+    """A ROS 1 or ROS 2 bag (read with rosbags: no ROS install): its IMU, GNSS fixes and
+    the other sensors found by message type through the navigator; ROS's body FLU and
+    world ENU turned into fednav's frames at the reader (docs/recorded-data.md)."""
+    topics = {}
+    for item in topic or []:
+        name, sep, value = item.partition("=")
+        if not sep or not name.strip():
+            typer.echo(f"error: --topic {item}: NAME=TOPIC (velocity, odometer, mag or "
+                       f"baro)", err=True)
+            raise typer.Exit(2)
+        topics[name.strip()] = value.strip() or None
+    topics.update({k: v for k, v in (("imu", imu_topic), ("gnss", gnss_topic)) if v})
+    _run_process(_rosbag_reader(bag, topics, time), bag, None, None, None, smooth, out,
+                 config, output_rate, force=force, fmt=fmt, export=export)
 
 
 @process_app.command("gnss-ins-sim")
@@ -957,19 +1046,20 @@ def simulate(
                                              "paper-layout scenario YAML (with modes), or a "
                                              "dataset scenario YAML (examples/car-drive.yaml)"),
     out: Path = typer.Option(None, help="output folder", show_default="results/dataset"),
-    fmt: str = typer.Option("csv", "--format", help="csv (fednav layout) or navego (.mat; "
-                                                    "dataset scenarios)"),
+    fmt: str = typer.Option("csv", "--format", help="csv (fednav layout), navego (.mat) or "
+                                                    "kfgins (KF-GINS's text files and "
+                                                    "kf-gins.yaml; both dataset scenarios)"),
     seed: int = typer.Option(None, help="the run's seed (a paper's run S of `fednav "
                                         "reproduce --seed S`; default 1 or the dataset's)"),
     mode: str = typer.Option(None, help="the mode whose sensors and system to write (papers "
                                         "and scenarios; default: the last, the full system)"),
     max_time: float = typer.Option(None, help="truncate the flight (as reproduce --max-time)"),
 ) -> None:
-    """Simulate recorded data in the layouts `fednav process csv|navego` reads: a paper's
+    """Simulate recorded data in the layouts `fednav process csv|navego|kfgins` reads: a paper's
     or scenario's run (IMU increments, each sensor of the mode, reference, system.yaml) or
     a dataset scenario (IMU, GNSS, velocity sensor, reference)."""
-    if fmt not in ("csv", "navego"):
-        typer.echo(f"error: --format must be csv or navego, got '{fmt}'", err=True)
+    if fmt not in ("csv", "navego", "kfgins"):
+        typer.echo(f"error: --format must be csv, navego or kfgins, got '{fmt}'", err=True)
         raise typer.Exit(2)
     _check_counts(max_time=max_time, seed=seed)
     from .scenarios import paper_module
@@ -991,6 +1081,7 @@ def simulate(
         load_dataset_config,
         simulate_dataset,
         write_csv_dataset,
+        write_kfgins_dataset,
         write_navego_dataset,
     )
 
@@ -1002,7 +1093,8 @@ def simulate(
     _refuse_foreign_files(out)
     out = _output_folder(out)
     ds = simulate_dataset(cfg)
-    files = (write_csv_dataset if fmt == "csv" else write_navego_dataset)(ds, out)
+    files = {"csv": write_csv_dataset, "navego": write_navego_dataset,
+             "kfgins": write_kfgins_dataset}[fmt](ds, out)
     _mark_simulated(out, files)
     console.print(f"{cfg.name}: {ds.t[-1] - ds.t[0]:.0f} s, {len(ds.t)} IMU samples, "
                   f"{len(ds.gnss_t)} GNSS fixes (seed {cfg.seed})")
@@ -1026,8 +1118,8 @@ def _simulate_run(mod, path: Path, out: Path | None, fmt: str, seed: int, mode: 
     from .sim.scenario import Scenario, load_scenario
 
     if fmt != "csv":
-        typer.echo("error: --format navego applies to dataset scenarios (NaveGo has no "
-                   "star sensor or SAR layout)", err=True)
+        typer.echo(f"error: --format {fmt} applies to dataset scenarios ({fmt} has no "
+                   f"star sensor or SAR layout)", err=True)
         raise typer.Exit(2)
     scn = mod.EXPERIMENT.load_scenario() if mod is not None else load_scenario(path)
     if not isinstance(scn, Scenario):

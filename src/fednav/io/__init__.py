@@ -1,4 +1,5 @@
-"""Readers for real sensor data: NaveGo ``.mat`` structs and fednav's plain CSV layout.
+"""Readers for real sensor data: fednav's plain CSV layout, NaveGo ``.mat`` structs, PX4
+ULog, KF-GINS and gnss-ins-sim folders, ROS bags, RTKLIB, NMEA and u-blox logs.
 
 Everything is converted at the boundary into fednav's frames and units (see
 ``docs/conventions.md`` and ``docs/data-formats.md``): body right-forward-up, ENU
@@ -8,6 +9,8 @@ velocities, heading from north toward east, SI units.  A bad file raises
 
 from .csvdata import read_gnss_csv, read_imu_csv, read_reference_csv, read_velocity_csv
 from .data import DataError, GnssData, ImuData, ImuErrors, Reference, VelocityData
+from .gnss_ins_sim import GnssInsSimRecording, read_gnss_ins_sim
+from .kfgins import read_kfgins_gnss, read_kfgins_imu, read_kfgins_nav, write_kfgins_nav
 from .navego import (
     FRD_TO_RFU,
     navego_euler_to_fednav,
@@ -17,9 +20,10 @@ from .navego import (
     read_navego_visual,
 )
 from .nmea import read_nmea
+from .rosbag import BagRecording, read_rosbag
 from .rtklib import read_rtklib_pos
 from .sensorfile import SensorData, read_sensor_csv, write_sensor_csv
-from .ubx import read_ubx
+from .ubx import read_ubx, read_ubx_imu, read_ubx_odometer
 from .ulog import UlogRecording, read_ulog
 
 __all__ = [
@@ -27,6 +31,9 @@ __all__ = [
     "VelocityData", "navego_euler_to_fednav", "read_gnss_csv", "read_imu_csv",
     "read_navego_gnss", "read_navego_imu", "read_navego_reference", "read_navego_visual",
     "read_nmea", "read_reference_csv", "read_rtklib_pos", "read_sensor_csv", "read_velocity_csv",
-    "SensorData", "read_ubx",
+    "SensorData", "read_ubx", "read_ubx_imu", "read_ubx_odometer",
     "write_sensor_csv", "UlogRecording", "read_ulog",
+    "BagRecording", "read_rosbag",
+    "GnssInsSimRecording", "read_gnss_ins_sim",
+    "read_kfgins_gnss", "read_kfgins_imu", "read_kfgins_nav", "write_kfgins_nav",
 ]

@@ -23,6 +23,7 @@ The configuration ``kf-gins.yaml`` is translated by :mod:`fednav.process.kfgins`
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -97,8 +98,8 @@ def read_kfgins_imu(path, *, start_s: float | None = None, end_s: float | None =
         The processing window (GPS seconds of the week; ``end_s`` -1: to the end), as
         ``starttime``/``endtime`` choose it.
     rate_hz : float, optional
-        ``imudatarate``: checked against the stamps (a mismatch of more than 10 % is a
-        DataError: the file is not the one the configuration describes).
+        ``imudatarate``: checked against the stamps (a mismatch of more than 10 % is
+        warned about: the stamps are used).
     max_bridge_s : float
         Longest faulty stretch bridged (:class:`~fednav.io.data.ImuData`).
     mounting : str or dict, optional
@@ -119,9 +120,10 @@ def read_kfgins_imu(path, *, start_s: float | None = None, end_s: float | None =
     t = check_time(src, a[:, 0])
     if rate_hz:
         dt = float(np.median(np.diff(t)))
-        if abs(dt * rate_hz - 1.0) > 0.1:
-            raise DataError(f"{src}: the stamps are {1.0 / dt:.1f} Hz apart, imudatarate "
-                            f"says {rate_hz:g} Hz")
+        if abs(dt * rate_hz - 1.0) > 0.1:  # (KF-GINS uses it only across a gap)
+            warnings.warn(f"{src}: the stamps are {1.0 / dt:.1f} Hz apart, imudatarate says "
+                          f"{rate_hz:g} Hz: the stamps are used (is it the file the "
+                          f"configuration describes?)", stacklevel=2)
     dth, dv = a[:, 1:4], a[:, 4:7]
     if known_errors:
         d = np.diff(t)

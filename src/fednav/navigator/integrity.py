@@ -211,7 +211,8 @@ class IntegrityResult:
         availability against the alert limits, alerts, exclusions; with ``errors``
         (``{"t": ..., "horizontal": ..., "vertical": ..., "heading": ...}``: the
         errors against a reference at its times ``t`` [s]; m, m, rad) the fraction of
-        those times whose error exceeds the level (interpolated to them)."""
+        those times whose error exceeds the level (interpolated to them), and of those
+        with no alert (``*_misleading``: misleading information)."""
         cfg = self.config or IntegrityConfig()
         finite = np.isfinite(self.hpl)
         out = {
@@ -241,7 +242,12 @@ class IntegrityResult:
                 e = errors.get(axis)
                 if e is not None:
                     pl = np.interp(errors["t"], self.t, pl)
-                    out[f"{axis}_error_above_level"] = float(np.mean(np.abs(e) > pl))
+                    over = np.abs(e) > pl
+                    # (an alert at the nearest row before: the user was warned)
+                    i = np.clip(np.searchsorted(self.t, errors["t"], side="right") - 1, 0,
+                                len(self.t) - 1)
+                    out[f"{axis}_error_above_level"] = float(np.mean(over))
+                    out[f"{axis}_misleading"] = float(np.mean(over & ~self.alert[i]))
                     out[f"{axis}_error_median"] = float(np.median(np.abs(e)))
         return out
 

@@ -58,9 +58,9 @@ class Solution:
         Row index of each filter epoch [-].
     levels : dict of str to ndarray, or None
         Per row, the protection levels and the alert state when integrity was asked for
-        (:mod:`fednav.navigator.integrity`): ``hpl_m``, ``vpl_m``, ``heading_pl_deg``,
-        ``integrity_alert`` (1: an alert), ``excluded`` (the sensor excluded, index into
-        the integrity result's ``sensors``; −1 none).
+        (:mod:`fednav.navigator.integrity`): ``hpl_m``, ``vpl_m`` [m], ``heading_pl_deg``
+        [deg], ``integrity_alert`` (1: an alert) and ``excluded`` (the sensor excluded,
+        index into the integrity result's ``sensors``; −1 none) [-].
     """
 
     t: np.ndarray

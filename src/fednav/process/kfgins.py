@@ -163,10 +163,11 @@ def translate(path) -> Translation:
         f"{cols} columns: the 8th, an odometer speed, is the odometer sensor's series when "
         f"sensors.odometer is configured (KF-GINS does not use it)")
     rate = _num(src, flat, "imudatarate")
-    say("imudatarate", "used", f"{rate:g} Hz, checked against the file's stamps")
+    say("imudatarate", "used", f"{rate:g} Hz, checked against the file's stamps (the "
+        f"stamps are used; a mismatch is warned about)")
     start, end = _num(src, flat, "starttime"), _num(src, flat, "endtime")
-    say("starttime", "used", f"the first IMU row at or after {start:g} s; the initial "
-        f"state holds there (initial.t_s)")
+    say("starttime", "used", f"the IMU rows that end at or after {start:g} s; the "
+        f"initial state holds at the IMU stamp nearest it (initial.t_s)")
     say("endtime", "used", "to the end of the IMU file" if end < 0 else
         f"the last IMU row at or before {end:g} s")
 

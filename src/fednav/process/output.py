@@ -252,13 +252,26 @@ def epoch_sigma(sol: Solution) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return sol.t[k], sol.sigma[k], sol.sigma_euler[k]
 
 
+#: the protection level drawn on each panel (row, sigma column) and its name
+_LEVEL_NAMES = {(0, 6): "HPL", (0, 7): "HPL", (0, 8): "VPL", (2, 2): "heading PL"}
+
+
+def _level_of(sol: Solution, row: int, j: int) -> np.ndarray | None:
+    """The protection level a panel draws (m, or deg for the heading), else None."""
+    if sol.levels is None or (row, j) not in _LEVEL_NAMES:
+        return None
+    return sol.levels[{"HPL": "hpl_m", "VPL": "vpl_m",
+                       "heading PL": "heading_pl_deg"}[_LEVEL_NAMES[(row, j)]]]
+
+
 def errors_figure(res: ProcessResult, ref: Reference, gnss=None, title: str = ""):
     """``errors.png`` as a :class:`~matplotlib.figure.Figure`: east, north, up position
     [m], velocity [m/s] and (with a reference attitude) pitch, roll, yaw [deg] errors of
     the forward (and smoothed) solution against ``ref``, each with its filter's +-3 sigma
     at the filter epochs (the smoothed one's from the RTS covariance; over more than 500
-    epochs their upper envelope, :func:`fednav.core.plots.envelope`), GNSS outages
-    (``gnss``'s gaps) shaded, one legend beside the axes."""
+    epochs their upper envelope, :func:`fednav.core.plots.envelope`), the protection
+    levels when integrity was asked for (HPL on east and north, VPL on up, the
+    heading's on yaw), GNSS outages (``gnss``'s gaps) shaded, one legend beside the axes."""
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
@@ -284,12 +297,24 @@ def errors_figure(res: ProcessResult, ref: Reference, gnss=None, title: str = ""
                 for sgn in (1, -1):
                     ax.plot(ts, sgn * 3 * sd, color=st["color"], ls=":", lw=1.0, gid="sigma")
                 arrays += [v, 3 * sd]
+            level = _level_of(res.forward, i, j)
+            if level is not None:  # (the protection level, when integrity was asked for)
+                k = _thin(len(res.forward.t))
+                for sgn in (1, -1):
+                    ax.plot(res.forward.t[k], sgn * level[k], color="k", ls="--", lw=0.9,
+                            gid="protection_level")
             plots.shade_spans(ax, outages, facecolor="tab:red", alpha=0.12)
             # the start-up transient (alignment, heading not yet known) would set the scale
             lim = 1.1 * max(plots.robust_scale(a) for a in arrays)
+            off = level is not None and plots.robust_scale(level) > 5 * lim
+            if level is not None and not off:  # (a level far above the errors: said)
+                lim = max(lim, 1.1 * plots.robust_scale(level))
             ax.set_ylim(-lim, lim)
             rms = ", ".join(f"{s.label} {r[key]:.3g}" for s, r in zip(sols, rmses, strict=True))
-            ax.set_title(f"{name}\nRMSE {rms} {unit}", fontsize=9.5)
+            pl = "" if level is None else (f"; {_LEVEL_NAMES[(i, j)]} median "
+                                             f"{np.median(level[np.isfinite(level)]):.3g}"
+                                             + (" (off scale)" if off else ""))
+            ax.set_title(f"{name}\nRMSE {rms} {unit}{pl}", fontsize=9.5)
             ax.set_ylabel(f"{name} error [{unit}]")
             ax.axhline(0.0, color="0.6", lw=0.6, zorder=0)
             ax.grid(alpha=0.3)
@@ -300,6 +325,9 @@ def errors_figure(res: ProcessResult, ref: Reference, gnss=None, title: str = ""
         handles += [Line2D([], [], color=st["color"], lw=1.3, label=f"{s.label} error"),
                     Line2D([], [], color=st["color"], ls=":", lw=1.0,
                            label=f"{s.label} ±3σ (at filter epochs)")]
+    if res.forward.levels is not None:
+        handles.append(Line2D([], [], color="k", ls="--", lw=0.9,
+                              label="protection levels"))
     if outages:
         handles.append(Patch(facecolor="tab:red", alpha=0.2, label="GNSS outage"))
     plots.legend_outside(fig, handles, x=0.84, y=0.92)

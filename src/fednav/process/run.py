@@ -164,6 +164,10 @@ class ProcessResult:
         (:mod:`fednav.process.outages`; ``summary.json`` scores the errors inside them).
     gnss_flown : GnssData or None
         The GNSS fixes the filter was given (those outside the outages).
+    integrity : IntegrityResult or None
+        With the system's ``integrity:``, the protection levels [m, rad], tests and
+        exclusions of every row (:class:`fednav.navigator.integrity.IntegrityResult`;
+        ``forward`` is then the output after any exclusion).
     """
 
     forward: Solution

@@ -326,3 +326,71 @@ def write_navego_dataset(ds: Dataset, out) -> list[Path]:
             scipy.io.savemat(f, {name: s})
         files.append(path)
     return files
+
+
+def write_kfgins_dataset(ds: Dataset, out) -> list[Path]:
+    """A KF-GINS user's folder into ``out``: ``imu.txt`` (increments, forward-right-down,
+    stamped at each interval's end), ``gnss.txt`` (positions and their N/E/D 1-sigma),
+    ``kf-gins.yaml`` (the true figures in KF-GINS's units; the initial state from the
+    truth with the configured initial attitude error drawn, as the NaveGo files' is) and
+    the truth ``truth.nav``; times are the dataset's, taken as GPS seconds of the week."""
+    import yaml
+
+    from ..core.atomic import replacing, write_text
+    from ..io.kfgins import write_kfgins_nav
+    from ..io.navego import FRD_TO_RFU, fednav_euler_to_navego
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    cfg, dt = ds.cfg, ds.cfg.imu_period_s
+    M = FRD_TO_RFU  # RFU -> FRD and ENU -> NED (its own inverse)
+    deg = units.to_deg
+    files = []
+    rows = np.column_stack([ds.t + dt, ds.gyro @ M.T * dt, ds.accel @ M.T * dt])
+    with replacing(out / "imu.txt") as tmp:
+        np.savetxt(tmp, rows, fmt="%.6f" + " %.12e" * 6)
+    files.append(out / "imu.txt")
+    sd = np.asarray(cfg.gnss.reported_sigma_pos_enu_m(), dtype=float)[[1, 0, 2]]  # N, E, D
+    rows = np.column_stack([ds.gnss_t, deg(ds.gnss_lla[:, 0]), deg(ds.gnss_lla[:, 1]),
+                            ds.gnss_lla[:, 2], np.tile(sd, (len(ds.gnss_t), 1))])
+    with replacing(out / "gnss.txt") as tmp:
+        np.savetxt(tmp, rows, fmt="%.6f %.10f %.10f %.4f %.4f %.4f %.4f")
+    files.append(out / "gnss.txt")
+    f = process_config(ds)["imu"]
+    err = units.deg(np.asarray(cfg.initial_attitude_error_deg))[[1, 0, 2]]  # roll, pitch, yaw
+    rng = np.random.default_rng(cfg.seed + 7919)
+    r0, p0, y0 = (np.array(fednav_euler_to_navego(ds.ref_euler[1]))
+                  + err * rng.standard_normal(3))
+    v0 = ds.ref_vel[1]
+    per_h = 180.0 / np.pi * 3600.0
+    tau = f.get("gyro_tau_s", f.get("accel_tau_s", 1e9))
+    three = lambda v: [float(v)] * 3  # noqa: E731
+    yml = {
+        "imupath": "imu.txt", "gnsspath": "gnss.txt", "outputpath": ".",
+        "imudatalen": 7, "imudatarate": int(round(1.0 / dt)),  # (KF-GINS: an int)
+        "starttime": float(ds.t[0] + dt), "endtime": -1,
+        "initpos": [float(deg(ds.ref_lla[1, 0])), float(deg(ds.ref_lla[1, 1])),
+                    float(ds.ref_lla[1, 2])],
+        "initvel": [float(v0[1]), float(v0[0]), float(-v0[2])],
+        "initatt": [float(deg(r0)), float(deg(p0)), float(deg(y0) % 360.0)],
+        "initgyrbias": three(0), "initaccbias": three(0), "initgyrscale": three(0),
+        "initaccscale": three(0),
+        "initposstd": three(0.1), "initvelstd": three(0.05),
+        "initattstd": [float(x) for x in np.degrees(err)],
+        "initbgstd": three(np.hypot(f["gyro_bias_radps"], f["gyro_markov_radps"]) * per_h),
+        "initbastd": three(np.hypot(f["accel_bias_mps2"], f["accel_markov_mps2"]) / 1e-5),
+        "imunoise": {"arw": three(f["gyro_arw_rad_sqrt_s"] * 180.0 / np.pi * 60.0),
+                     "vrw": three(f["accel_vrw_mps_sqrt_s"] * 60.0),
+                     "gbstd": three(f["gyro_markov_radps"] * per_h),
+                     "abstd": three(f["accel_markov_mps2"] / 1e-5),
+                     "gsstd": three(f.get("gyro_scale_ppm", 0.0)),
+                     "asstd": three(f.get("accel_scale_ppm", 0.0)),
+                     "corrtime": float(tau / 3600.0)},
+        "antlever": [float(x) for x in M @ np.asarray(cfg.gnss.lever_m, dtype=float)],
+    }
+    files.append(write_text(out / "kf-gins.yaml", "# KF-GINS configuration of a dataset "
+                            "simulated by fednav (its true figures in KF-GINS's units)\n"
+                            + yaml.safe_dump(yml, sort_keys=False)))
+    files.append(write_kfgins_nav(out / "truth.nav", ds.t, ds.ref_lla, ds.ref_vel,
+                                  ds.ref_euler))
+    return files
