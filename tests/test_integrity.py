@@ -125,3 +125,34 @@ def test_one_sensor_is_refused_in_one_line(drive):
     imu, gnss, _, _, _ = drive
     with pytest.raises(DataError, match="two or more recorded aiding sensors"):
         process(imu, {"gnss": gnss}, _cfg())
+
+
+def test_stanford_regions_by_hand():
+    from fednav.process.stanford import regions
+
+    err = np.array([0.5, 2.0, 12.0, 0.5, 15.0, 2.0])
+    pl = np.array([1.0, 1.0, 1.0, 20.0, 12.0, 1.0])
+    alert = np.array([False, False, False, False, False, True])
+    r = regions(err, pl, alert, limit=10.0)
+    assert r == {"epochs": 6, "alerted": 1, "normal": 1, "misleading": 1,
+                 "hazardously_misleading": 1, "unavailable": 1, "unavailable_misleading": 1}
+    assert regions(err, pl, alert, None) == {"epochs": 6, "alerted": 1, "bounded": 2,
+                                             "misleading": 3}
+
+
+def test_outputs_carry_the_levels_and_the_stanford_diagram(drive, tmp_path):
+    import json
+
+    from fednav.process import output
+
+    imu, gnss, vel, baro, ref = drive
+    res = process(imu, {"gnss": _ramp(gnss, 0.1), "velocity": vel, "baro": baro},
+                  _cfg(alert_limit_vertical_m=5.0))
+    files = output.write(tmp_path, res, ref, {}, None, gnss)
+    assert tmp_path / "stanford.png" in files
+    s = json.loads((tmp_path / "summary.json").read_text())["integrity"]
+    v = s["stanford"]["vertical"]
+    assert v["hazardously_misleading"] == 0 and v["misleading"] == 0
+    assert v["epochs"] == sum(v[k] for k in v if k != "epochs")
+    head = (tmp_path / "solution.csv").read_text().splitlines()[0].split(",")
+    assert {"hpl_m", "vpl_m", "heading_pl_deg", "integrity_alert", "excluded"} <= set(head)

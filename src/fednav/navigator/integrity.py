@@ -171,6 +171,9 @@ class IntegrityResult:
     config: IntegrityConfig | None = None
     #: each sensor's test ratio per row (N, M): above 1 its separation test trips
     ratios: np.ndarray | None = None
+    #: per row, a fault detected and not excluded (the part of ``alert`` that is not a
+    #: level above its limit)
+    detected: np.ndarray | None = None
 
     def first_trip(self) -> int | None:
         """The first row whose tests trip (a fault detected), else None."""
@@ -200,8 +203,8 @@ class IntegrityResult:
                               self.heading_pl.copy(), self.test_ratio.copy(),
                               self.alert.copy(), self.excluded.copy(), list(self.sensors),
                               [*self.exclusions, (float(self.t[row]), name)], self.config,
-                              self.ratios)
-        for f in ("hpl", "vpl", "heading_pl", "test_ratio", "alert"):
+                              self.ratios, self.detected.copy())
+        for f in ("hpl", "vpl", "heading_pl", "test_ratio", "alert", "detected"):
             getattr(out, f)[row:] = getattr(after, f)[row:]
         out.excluded[row:] = self.sensors.index(name)
         return out
@@ -310,7 +313,7 @@ def solution_separation(full, subs: dict, cfg: IntegrityConfig | None = None
     tripped = worst.max(axis=0) > 1.0
     hpl, vpl, hdg = np.hypot(pl[:, 0], pl[:, 1]), pl[:, 2], pl[:, 3]
     out = IntegrityResult(full.t, hpl, vpl, hdg, worst.max(axis=0), tripped.copy(),
-                          np.full(m, -1), names, [], cfg, worst)
+                          np.full(m, -1), names, [], cfg, worst, tripped.copy())
     out.alert |= out.above_limits()
     return out
 

@@ -180,6 +180,18 @@ def summary(res: ProcessResult, ref: Reference | None, inputs: dict,
             errs = {"t": e["t"], "horizontal": np.hypot(e["east_m"], e["north_m"]),
                     "vertical": e["up_m"], "heading": e.get("yaw_rad")}
         out["integrity"] = res.integrity.summary(errs)
+        if errs is not None:  # (the Stanford diagram's regions, stanford.png)
+            from .stanford import regions
+
+            ig, cfg = res.integrity, res.integrity.config
+            i = np.clip(np.searchsorted(ig.t, errs["t"], side="right") - 1, 0,
+                        len(ig.t) - 1)
+            out["integrity"]["stanford"] = {
+                axis: regions(errs[axis], np.interp(errs["t"], ig.t, lvl), ig.detected[i],
+                              lim)
+                for axis, lvl, lim in (
+                    ("horizontal", ig.hpl, cfg and cfg.alert_limit_horizontal_m),
+                    ("vertical", ig.vpl, cfg and cfg.alert_limit_vertical_m))}
     for name, other in (others or {}).items():
         block = {"source": other.source, "rmse": _rmse_block(res.forward, other)}
         if res.smoothed is not None:
@@ -554,7 +566,7 @@ def plot_track(res: ProcessResult, gnss, ref: Reference | None, path: Path) -> P
 #: the files :func:`write` may write into its folder (``errors_NAME.*`` besides)
 OUTPUT_NAMES = ("solution.csv", "solution_smoothed.csv", "solution.parquet",
                 "solution_smoothed.parquet", "errors.csv", "errors.png", "track.png",
-                "summary.json", "report.html")
+                "stanford.png", "summary.json", "report.html")
 
 
 def would_overwrite(out: Path, path: Path) -> bool:
@@ -597,6 +609,10 @@ def _write(out, res, ref, inputs, output_rate, gnss, others, fmt) -> list[Path]:
     if ref is not None:
         files.append(write_errors(res, ref, out / "errors.csv", output_rate))
         files.append(plot_errors(res, ref, out / "errors.png", gnss))
+        if res.integrity is not None:
+            from .stanford import plot_run
+
+            files.append(plot_run(res, _errors(res.forward, ref), out / "stanford.png"))
     for name, other in (others or {}).items():
         files.append(write_errors(res, other, out / f"errors_{name}.csv", output_rate))
         files.append(plot_errors(res, other, out / f"errors_{name}.png", gnss,
