@@ -571,6 +571,22 @@ def _print_process(s: dict, compiled_s: float = 0.0) -> None:
     for name, c in s["consistency"].items():
         console.print(f"  local '{name}': mean NIS/dof {c['nis_per_dof']:.2f}, isolated "
                       f"{100 * c['isolated_fraction']:.1f} % of {c['measurements']}")
+    ig = s.get("integrity")
+    if ig:  # (docs/integrity.md)
+        def level(k, unit):
+            v = ig[k]
+            return "-" if v["median"] is None else f"{v['median']:.3g} (max {v['max']:.3g}) {unit}"
+        ex = ", ".join(f"{e['sensor']} at {e['t_s']:.1f} s" for e in ig["exclusions"])
+        console.print(f"integrity ({'+'.join(ig['sensors'])}): HPL median {level('hpl_m', 'm')}, "
+                      f"VPL {level('vpl_m', 'm')}, heading PL {level('heading_pl_deg', 'deg')}"
+                      f"; alerts {100 * ig['alert_fraction']:.1f} % of rows"
+                      + (f"; availability {100 * ig['availability']:.1f} %"
+                         if "availability" in ig else "")
+                      + (f"; excluded {ex}" if ex else "")
+                      + ("" if "horizontal_misleading" not in ig else
+                         f"; error above the level with no alert: horizontal "
+                         f"{100 * ig['horizontal_misleading']:.2f} %, vertical "
+                         f"{100 * ig['vertical_misleading']:.2f} % of the reference's epochs"))
     from .ins.states import BLOCKS
 
     for name, b in BLOCKS.items():  # the optional states (filter.states)
