@@ -22,6 +22,7 @@ from fednav.io.kfgins import (  # noqa: E402
     write_kfgins_nav,
 )
 from fednav.io.navego import FRD_TO_RFU, fednav_euler_to_navego  # noqa: E402
+from fednav.navigator.system import System  # noqa: E402
 from fednav.process.kfgins import KEYS, read_kfgins, translate  # noqa: E402
 
 WEEK_S = 456_000.0  # (a GPS second of the week the drive starts at)
@@ -260,3 +261,35 @@ def test_bad_folders_and_files_are_one_line(tmp_path, drive):
     (tmp_path / "t.txt").write_text("time lat lon\n")
     with pytest.raises(DataError, match="not a KF-GINS GNSS file"):
         read_kfgins_gnss(tmp_path / "t.txt")
+
+
+def test_an_imu_clock_off_its_rate_drifts_the_epochs_against_the_fixes():
+    """25 samples of an IMU 294 ppm slow span 0.250073 s against fixes 0.25 s apart: over
+    2 000 epochs the grid drifts 0.15 s — warned, with the period that bounds the wait;
+    the KF-GINS translation sets that period itself (KF-GINS updates at each fix)."""
+    from types import SimpleNamespace
+
+    from fednav.navigator.system import System
+    from fednav.process.run import epoch_drift
+
+    dt = 0.0100029
+    gnss = SimpleNamespace(t=np.arange(0.0, 500.0, 0.25))
+    q = {}
+    w = epoch_drift(System(), gnss, 25 * dt, dt, 2000, q)
+    assert len(w) == 1 and "drift against the GNSS fixes" in w[0]
+    assert "0.0500145 s, 5 IMU samples" in w[0]
+    assert q["epoch_drift_s"] == pytest.approx(2000 * 25 * 2.9e-6, rel=1e-3)
+    assert epoch_drift(System(), gnss, 25 * 0.01, 0.01, 2000, {}) == []  # (no drift)
+    fixed = System.model_validate({"filter": {"period_s": 0.05}})
+    assert epoch_drift(fixed, gnss, 25 * dt, dt, 2000, {}) == []  # (the user chose)
+
+
+def test_the_translation_updates_within_a_fifth_of_the_fix_interval(tmp_path, drive):
+    cfg = write_folder(tmp_path / "d", drive, seconds=20.0)
+    data = read_kfgins(cfg)
+    assert data["system"].filter.period_s == pytest.approx(0.04)  # 100 Hz IMU, 5 Hz fixes
+    user = System.model_validate({"filter": {"period_s": 0.2},
+                                  "sensors": {"gnss": {"timing": {"latency_s": 0.0}}}})
+    data = read_kfgins(cfg, user)
+    assert data["system"].filter.period_s == 0.2  # (--config wins)
+    np.testing.assert_allclose(data["sensors"]["gnss"].lever, LEVER)  # (kept)

@@ -341,6 +341,9 @@ def read_kfgins(path, cfg=None) -> dict:
 
     tr = translate(find_config(path))
     user = {} if cfg is None else cfg.model_dump(exclude_unset=True, mode="json")
+    if cfg is not None and "sensors" in user:  # (a section's dump holds every default)
+        user["sensors"] = {n: c.model_dump(exclude_unset=True, mode="json")
+                           for n, c in cfg.sensors.items()}
     system = validate(merge(tr.system, user), System, f"{tr.source} (as fednav's system "
                                                       f"description, with --config)")
     imu = read_kfgins_imu(tr.imu, start_s=tr.start_s, end_s=tr.end_s, rate_hz=tr.rate_hz,
@@ -351,6 +354,20 @@ def read_kfgins(path, cfg=None) -> dict:
                                         end_s=tr.end_s)}
     warnings = [f"{tr.source}: {k.line()}" for k in tr.keys if k.fate in ("ignored",
                                                                            "unknown")]
+    if system.filter.period_s is None and len(sensors["gnss"].t) > 1:
+        # KF-GINS updates at each fix's own time; fednav's epochs are whole IMU samples
+        # on a grid: about a fifth of the fix interval bounds a fix's wait for its update
+        # whatever the IMU clock's offset from its nominal rate (epoch_drift)
+        from .run import samples_within
+
+        dt = imu.period()
+        p = float(np.median(np.diff(sensors["gnss"].t)))
+        n = samples_within(p / 5, dt)
+        system = system.model_copy(update={"filter": system.filter.model_copy(
+            update={"period_s": n * dt})})
+        tr.keys.append(KeyFate("(update timing)", "translated", f"KF-GINS updates at each "
+                               f"fix's time: filter.period_s {n * dt:.6g} s ({n} IMU "
+                               f"samples, a fifth of the {p:g} s between fixes)"))
     paths = {"kfgins_config": tr.source, "imu": tr.imu, "gnss": tr.gnss}
     if tr.imu_columns > 7:
         if "odometer" in system.sensors:

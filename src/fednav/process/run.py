@@ -451,6 +451,35 @@ def _plain(d: Series) -> SensorData:
                       d.t_arrival, dict(d.quality), sigma, d.absent, d.cov)
 
 
+def samples_within(interval: float, dt: float) -> int:
+    """The whole number of IMU samples ``dt`` [s] nearest ``interval`` [s] (at least
+    one)."""
+    return max(1, int(round(interval / dt)))
+
+
+def epoch_drift(cfg: System, gnss: GnssData | None, T: float, dt: float, n_cycles: int,
+                quality: dict) -> list[str]:
+    """A warning when the filter epochs — a whole number of IMU samples, ``T`` [s] by the
+    IMU's stamps — drift against fixes taken every GNSS period by more than one IMU
+    sample ``dt`` over the run's ``n_cycles`` epochs (an IMU clock a few hundred ppm off
+    its nominal rate): each fix then waits a varying part of an epoch for its update, and
+    the solution between a fix and its epoch is the prediction.  Records the drift in
+    ``quality["epoch_drift_s"]``."""
+    if cfg.filter.period_s is not None or gnss is None or len(gnss.t) < 2:
+        return []
+    p = float(np.median(np.diff(gnss.t)))
+    drift = abs(T - p) * n_cycles
+    if drift <= dt:
+        return []
+    quality["epoch_drift_s"] = round(drift, 6)
+    n = samples_within(p / 5, dt)
+    return [f"the filter epochs ({int(round(T / dt))} IMU samples, {T:.6f} s by the IMU's "
+            f"stamps) drift against the GNSS fixes ({p:.6f} s apart) by {drift:.3f} s over "
+            f"the run: a fix waits up to one epoch for its update, and the solution between "
+            f"a fix and its epoch is the prediction; set filter.period_s to a fraction of the "
+            f"fix interval (e.g. {n * dt:.6g} s, {n} IMU samples) to bound the wait"]
+
+
 def _period(cfg: System, gnss: GnssData | None, others: dict) -> float:
     """The filter epoch: the system's, else the GNSS period, else the shortest median
     period of the other aiding sensors' data."""
@@ -580,6 +609,7 @@ def prepare(imu: ImuData, sensors: Mapping[str, Series] | None = None,
     # lie just before, every fix waited a whole filter period for its epoch
     i0 = int(np.searchsorted(imu.t, t0 - stamp_tolerance(float(t0))))
     n_cycles = (len(imu.t) - 1 - i0) // n_per
+    warnings += epoch_drift(cfg, gnss, T, dt, n_cycles, quality_extra)
     span = float(imu.t[-1] - imu.t[0])
     if T > span:
         raise DataError(f"filter.period_s = {T:g} s is longer than the IMU data "
