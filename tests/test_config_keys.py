@@ -57,6 +57,8 @@ WALK = {
     "imu.accel_bias_rw_ug_sqrt_h": ("acts", 500.0),
     "imu.gyro_scale_ppm": ("named", 3000.0),
     "imu.accel_scale_ppm": ("named", 3000.0),
+    "imu.gyro_scale_tau_s": ("named", 3600.0),
+    "imu.accel_scale_tau_s": ("named", 3600.0),
     "imu.random_bias": ("named", True),
     "imu.max_bridge_s": ("covered", "io/test_sensor_files.py::"
                                     "test_jittered_and_missing_imu_stamps_keep_every_increment"),

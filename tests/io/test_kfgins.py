@@ -293,3 +293,25 @@ def test_the_translation_updates_within_a_fifth_of_the_fix_interval(tmp_path, dr
     data = read_kfgins(cfg, user)
     assert data["system"].filter.period_s == 0.2  # (--config wins)
     np.testing.assert_allclose(data["sensors"]["gnss"].lever, LEVER)  # (kept)
+
+
+def test_scale_factors_are_gauss_markov_as_kfgins_models_them(tmp_path, drive):
+    """gsstd with corrtime: Gauss–Markov scale states (stationary sigma, correlation
+    time, process noise 2 sigma^2 / tau); gsstd 0 with initsgstd: random constants."""
+    from fednav.navigator.system import state_layout
+
+    cfg = write_folder(tmp_path / "d", drive, seconds=20.0)
+    system = System.model_validate(translate(cfg).system)
+    layout = state_layout(system)
+    blocks = {name: (sigma, tau) for name, sigma, tau in layout.blocks}
+    assert blocks["gyro_scale"] == ((1e-3,) * 3, 3600.0)
+    assert blocks["accel_scale"] == ((1e-3,) * 3, 3600.0)
+    text = yaml.safe_load(cfg.read_text())
+    text["imunoise"]["gsstd"] = [0.0] * 3
+    text["initsgstd"] = [500.0] * 3
+    cfg.write_text(yaml.safe_dump(text))
+    tr = translate(cfg)
+    layout = state_layout(System.model_validate(tr.system))
+    blocks = {name: (sigma, tau) for name, sigma, tau in layout.blocks}
+    assert blocks["gyro_scale"] == ((5e-4,) * 3, float("inf"))
+    assert tr.fate("imunoise.gsstd").detail.startswith("zero: the gyro scale factors")

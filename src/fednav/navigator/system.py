@@ -536,7 +536,7 @@ def state_layout(system: System, validating: bool = False) -> StateLayout:
             if s is None and not validating:
                 fail(["filter", "states"], f"{which}_scale needs its 1-sigma: "
                                            f"imu.{which}_scale_ppm (or imu.grade)")
-            blocks[f"{which}_scale"] = (s or 0.0, float("inf"))
+            blocks[f"{which}_scale"] = (s or 0.0, system.imu.scale_tau(which))
     for sensor, spec in SENSORS.items():  # a sensor's own error (its model's markov_block)
         block = getattr(spec.model, "markov_block", None)
         if block not in states:

@@ -134,7 +134,9 @@ def _conditional(cfg) -> list[str]:
     given = cfg.imu.model_fields_set
     if "grade" in given and all({eng, si} & given for eng, _, si in FIGURES.values()):
         out.append("imu.grade (the config gives every figure: the preset fills none)")
-    for key, block in (("gyro_scale_ppm", "gyro_scale"), ("accel_scale_ppm", "accel_scale")):
+    for key, block in (("gyro_scale_ppm", "gyro_scale"), ("accel_scale_ppm", "accel_scale"),
+                       ("gyro_scale_tau_s", "gyro_scale"),
+                       ("accel_scale_tau_s", "accel_scale")):
         if key in cfg.imu.model_fields_set and block not in f.states:
             out.append(f"imu.{key} (acts with filter.states: [{block}])")
     return out

@@ -12,8 +12,9 @@ The models differ in two places, said where they apply: KF-GINS's biases and sca
 factors are first-order Gauss–Markov states sharing one correlation time; fednav's gyro
 has a constant-bias state beside its Gauss–Markov one (``imu.gyro_bias_deg_h`` is set so
 that the two start with KF-GINS's initial sigma), its accelerometer bias is Gauss–Markov
-(``filter.accel_bias: gauss_markov``) and its scale factors are random constants (over a
-run shorter than ``corrtime`` the difference is small).  fednav's IMU figures are one per
+(``filter.accel_bias: gauss_markov``), and its Gauss–Markov scale-factor states
+(``imu.*_scale_tau_s``) start at their stationary sigma where KF-GINS's may start
+elsewhere (``initsgstd``).  fednav's IMU figures are one per
 model (isotropic): a figure that differs between axes is taken at its largest axis.
 """
 
@@ -232,8 +233,8 @@ def translate(path) -> Translation:
         + note)
     say("imunoise.abstd", "translated", "mGal -> imu.accel_markov_mps2 (x 1e-5), "
         "filter.accel_bias: gauss_markov" + note_a)
-    say("imunoise.corrtime", "translated", f"{tau_h:g} h -> imu.gyro_markov_tau_s and "
-        f"accel_markov_tau_s {tau_h * 3600:g} s (fednav's scale factors are constants)")
+    say("imunoise.corrtime", "translated", f"{tau_h:g} h -> imu.gyro_markov_tau_s, "
+        f"accel_markov_tau_s and the scale states' *_scale_tau_s {tau_h * 3600:g} s")
     for key, of in (("initbgstd", "gbstd"), ("initbastd", "abstd"), ("initsgstd", "gsstd"),
                     ("initsastd", "asstd")):
         if key not in flat:
@@ -258,21 +259,33 @@ def translate(path) -> Translation:
     states = []
     for which, key, key0 in (("gyro", "imunoise.gsstd", "initsgstd"),
                              ("accel", "imunoise.asstd", "initsastd")):
+        # KF-GINS: a Gauss–Markov state of stationary sigma gsstd and correlation time
+        # corrtime, starting at initsgstd (default gsstd); fednav's Gauss–Markov scale
+        # states start at their stationary sigma
         s, note = _largest(_vec(src, flat, key), "ppm")
         s0 = _vec(src, flat, key0)
-        if s0 is not None:
-            s0v, note0 = _largest(s0, "ppm")
-            say(key0, "used", f"imu.{which}_scale_ppm, the scale states' start sigma"
-                + note0)
-            s = s0v
+        s0v, note0 = _largest(s0, "ppm") if s0 is not None else (s, "")
         if s > 0:
             states.append(f"{which}_scale")
             imu[f"{which}_scale_ppm"] = s
-        say(key, "translated" if s > 0 else "used",
-            (f"filter.states {which}_scale (random constants) with imu.{which}_scale_ppm "
-             f"{s:g} as their start sigma" if s0 is None else f"filter.states "
-             f"{which}_scale (its start sigma from {key0})") + note if s > 0 else
-            f"zero: no {which} scale-factor state")
+            imu[f"{which}_scale_tau_s"] = tau_h * 3600.0
+            say(key, "translated", f"filter.states {which}_scale, Gauss–Markov: "
+                f"imu.{which}_scale_ppm {s:g} and imu.{which}_scale_tau_s "
+                f"{tau_h * 3600:g} (corrtime)" + note)
+            if s0 is not None:
+                say(key0, "used" if s0v == s else "translated", "the start sigma, "
+                    + ("as gsstd's" if s0v == s else f"approximated by {key}'s {s:g} "
+                       f"(fednav's Gauss–Markov scale states start at their stationary "
+                       f"sigma)") + note0)
+        elif s0v > 0:  # (no noise: random constants that start at initsgstd)
+            states.append(f"{which}_scale")
+            imu[f"{which}_scale_ppm"] = s0v
+            say(key, "used", f"zero: the {which} scale factors are random constants")
+            say(key0, "used", f"imu.{which}_scale_ppm {s0v:g}, their start sigma" + note0)
+        else:
+            say(key, "used", f"zero: no {which} scale-factor state")
+            if s0 is not None:
+                say(key0, "used", "zero")
     if states:
         system["filter"]["states"] = states
     lever = _vec(src, flat, "antlever")

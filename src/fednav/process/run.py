@@ -505,7 +505,8 @@ def with_imu_figures(imu: ImuData, cfg: System) -> tuple[System, list[str]]:
     :class:`DataError` naming a figure that some are given but not that one (0 must be
     said: a filter that trusts the IMU completely is a choice)."""
     figures = set(cfg.imu.model_fields_set) - {"max_bridge_s", "random_bias", "mounting",
-                                               "gyro_scale_ppm", "accel_scale_ppm"}
+                                               "gyro_scale_ppm", "accel_scale_ppm",
+                                               "gyro_scale_tau_s", "accel_scale_tau_s"}
     if not figures and imu.errors is None:
         cfg = cfg.model_copy(update={"imu": cfg.imu.model_copy(
             update={"grade": DEFAULT_GRADE})})

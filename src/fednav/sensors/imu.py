@@ -206,6 +206,10 @@ class ImuConfig(_Model):
     states (``filter.states``) start from (a ``grade`` gives the filter one when left
     out); a simulation applies the value given as the error itself (with ``random_bias``
     as the 1-sigma of a per-run draw), and none when it is left out.
+    ``gyro_scale_tau_s``, ``accel_scale_tau_s`` [s]: the filter's scale-factor states as
+    first-order Gauss–Markov processes with that correlation time (their stationary
+    1-sigma the ``*_scale_ppm``; KF-GINS's model); left out, random constants (a
+    simulation's scale factors are constants either way).
 
     A figure left out is unknown: recorded data take it from the data file (NaveGo's IMU
     struct), a simulation takes it as zero (infinite for correlation times).
@@ -237,6 +241,8 @@ class ImuConfig(_Model):
     accel_bias_rw_ug_sqrt_h: float | None = _NONNEG
     gyro_scale_ppm: float | None = _NONNEG
     accel_scale_ppm: float | None = _NONNEG
+    gyro_scale_tau_s: float | None = _POS
+    accel_scale_tau_s: float | None = _POS
     random_bias: bool = Field(False, json_schema_extra=simulation_only(
         "the recording's IMU has the biases it has"))
     max_bridge_s: float = Field(0.1, gt=0.0)
@@ -311,6 +317,12 @@ class ImuConfig(_Model):
             accel_markov_tau=self._or("accel_tau", inf),
             gyro_scale=(self.gyro_scale_ppm or 0.0) * 1e-6,
             accel_scale=(self.accel_scale_ppm or 0.0) * 1e-6, random_bias=self.random_bias)
+
+    def scale_tau(self, which: str) -> float:
+        """Correlation time [s] of the ``gyro`` or ``accel`` scale-factor state (inf: a
+        random constant)."""
+        v = getattr(self, f"{which}_scale_tau_s")
+        return float("inf") if v is None else float(v)
 
     def scale_sigma(self, which: str) -> float | None:
         """1-sigma of the ``gyro`` or ``accel`` scale-factor error (a fraction): the
