@@ -62,6 +62,21 @@ def g_per_sqrt_hz(x):
     return np.multiply(x, G0)
 
 
+def milligal(x):
+    """Acceleration in mGal -> m/s^2."""
+    return np.multiply(x, 1e-5)
+
+
+def ppm(x):
+    """Parts per million -> a fraction."""
+    return np.multiply(x, 1e-6)
+
+
+def mps_per_sqrt_h(x):
+    """Velocity random walk in m/s/sqrt(h) -> m/s/sqrt(s)."""
+    return np.divide(x, np.sqrt(HOUR))
+
+
 def to_deg(x):
     """Radians -> degrees."""
     return np.divide(x, DEG)
@@ -85,6 +100,21 @@ def to_deg_per_h(x):
 def to_micro_g(x):
     """m/s^2 -> micro-g."""
     return np.divide(x, 1e-6 * G0)
+
+
+def to_deg_per_sqrt_h(x):
+    """rad/sqrt(s) -> deg/sqrt(h)."""
+    return np.divide(x, DEG / np.sqrt(HOUR))
+
+
+def to_milligal(x):
+    """m/s^2 -> mGal."""
+    return np.divide(x, 1e-5)
+
+
+def to_mps_per_sqrt_h(x):
+    """m/s/sqrt(s) -> m/s/sqrt(h)."""
+    return np.multiply(x, np.sqrt(HOUR))
 
 
 #: Names accepted in configuration files, mapped to their converter into SI.

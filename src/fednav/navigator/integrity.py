@@ -43,8 +43,9 @@ import numpy as np
 from pydantic import Field
 from scipy.special import ndtr, ndtri
 
+from ..core.attitude import wrap_pi
 from ..core.config import _Model
-from ..core.earth import radii
+from ..core.earth import llh_difference_enu
 
 
 def q_function(x):
@@ -175,6 +176,10 @@ class IntegrityResult:
     #: level above its limit)
     detected: np.ndarray | None = None
 
+    def rows_at(self, t) -> np.ndarray:
+        """The row in force at each time ``t`` [s]: the last at or before it."""
+        return np.clip(np.searchsorted(self.t, t, side="right") - 1, 0, len(self.t) - 1)
+
     def first_trip(self) -> int | None:
         """The first row whose tests trip (a fault detected), else None."""
         hit = self.test_ratio > 1.0
@@ -246,11 +251,10 @@ class IntegrityResult:
                 if e is not None:
                     pl = np.interp(errors["t"], self.t, pl)
                     over = np.abs(e) > pl
-                    # (an alert at the nearest row before: the user was warned)
-                    i = np.clip(np.searchsorted(self.t, errors["t"], side="right") - 1, 0,
-                                len(self.t) - 1)
+                    # (an alert in force then: the user was warned)
+                    alerted = self.alert[self.rows_at(errors["t"])]
                     out[f"{axis}_error_above_level"] = float(np.mean(over))
-                    out[f"{axis}_misleading"] = float(np.mean(over & ~self.alert[i]))
+                    out[f"{axis}_misleading"] = float(np.mean(over & ~alerted))
                     out[f"{axis}_error_median"] = float(np.median(np.abs(e)))
         return out
 
@@ -265,15 +269,6 @@ def _stat(fn, a) -> float | None:
     a = np.asarray(a, dtype=float)
     a = a[np.isfinite(a)]
     return float(fn(a)) if len(a) else None
-
-
-def local_enu(lla, lla0) -> np.ndarray:
-    """Position ``lla`` [rad, rad, m] (M, 3) relative to ``lla0`` (M, 3), east, north, up
-    [m] (small differences: the radii at ``lla0``)."""
-    rm, rn = radii(lla0[:, 0])
-    h = lla0[:, 2]
-    return np.column_stack([(lla[:, 1] - lla0[:, 1]) * (rn + h) * np.cos(lla0[:, 0]),
-                            (lla[:, 0] - lla0[:, 0]) * (rm + h), lla[:, 2] - h])
 
 
 def solution_separation(full, subs: dict, cfg: IntegrityConfig | None = None
@@ -296,8 +291,8 @@ def solution_separation(full, subs: dict, cfg: IntegrityConfig | None = None
     s0 = np.column_stack([full.sigma[:, 6:9], full.sigma_euler[:, 2]])
     sk = np.stack([np.column_stack([subs[k].sigma[:, 6:9], subs[k].sigma_euler[:, 2]])
                    for k in names])
-    d = np.stack([np.column_stack([local_enu(subs[k].lla, full.lla),
-                                   _wrap(subs[k].euler[:, 2] - full.euler[:, 2])])
+    d = np.stack([np.column_stack([llh_difference_enu(*subs[k].lla.T, *full.lla.T),
+                                   wrap_pi(subs[k].euler[:, 2] - full.euler[:, 2])])
                   for k in names])
     p_fa = cfg.false_alert / 3.0
     k_fa = q_inverse(np.array([p_fa / (4 * n), p_fa / (4 * n), p_fa / (2 * n),
@@ -316,7 +311,3 @@ def solution_separation(full, subs: dict, cfg: IntegrityConfig | None = None
                           np.full(m, -1), names, [], cfg, worst, tripped.copy())
     out.alert |= out.above_limits()
     return out
-
-
-def _wrap(a):
-    return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi

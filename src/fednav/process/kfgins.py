@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core import attitude as att
+from ..core import units
 from ..core.config import ConfigError, read_mapping
 from ..io.navego import navego_euler_to_fednav
 
@@ -41,7 +42,6 @@ REQUIRED = ("imupath", "gnsspath", "imudatalen", "imudatarate", "starttime", "en
             "initpos", "initvel", "initatt", "initposstd", "initvelstd", "initattstd",
             "imunoise.arw", "imunoise.vrw", "imunoise.gbstd", "imunoise.abstd",
             "imunoise.gsstd", "imunoise.asstd", "imunoise.corrtime", "antlever")
-MGAL = 1e-5  # m/s^2
 
 
 @dataclass(frozen=True)
@@ -194,7 +194,7 @@ def translate(path) -> Translation:
     phi_sd = np.sqrt(np.diag(Ji @ np.diag(e_sd**2) @ Ji.T))
     initial["sigma"] = {"position_m": [float(psd[1]), float(psd[0]), float(psd[2])],
                         "velocity_mps": [float(vsd[1]), float(vsd[0]), float(vsd[2])],
-                        "attitude_arcsec": [float(x) for x in np.degrees(phi_sd) * 3600.0]}
+                        "attitude_arcsec": [float(x) for x in units.to_arcsec(phi_sd)]}
     system["initial"] = initial
     say("initposstd", "translated", "[N, E, D] -> initial.sigma.position_m [E, N, U]")
     say("initvelstd", "translated", "[N, E, D] -> initial.sigma.velocity_mps [E, N, U]")
@@ -202,15 +202,15 @@ def translate(path) -> Translation:
         "the misalignment [east, north, up] with the same Euler-angle sigmas at the "
         "initial attitude")
     known = {}
-    for key, name, si in (("initgyrbias", "gyro_bias", np.radians(1.0) / 3600.0),
-                          ("initaccbias", "accel_bias", MGAL),
-                          ("initgyrscale", "gyro_scale", 1e-6),
-                          ("initaccscale", "accel_scale", 1e-6)):
+    for key, name, si in (("initgyrbias", "gyro_bias", units.deg_per_h),
+                          ("initaccbias", "accel_bias", units.milligal),
+                          ("initgyrscale", "gyro_scale", units.ppm),
+                          ("initaccscale", "accel_scale", units.ppm)):
         v = _vec(src, flat, key)
         if v is None or not np.any(v != 0):
             say(key, "used", "zero (or not given): nothing taken out of the increments")
             continue
-        known[name] = v * si
+        known[name] = si(v)
         say(key, "translated", f"{v.tolist()} (FRD axes) taken out of the IMU increments as "
             f"KF-GINS does; fednav's estimate is of what remains")
 
@@ -219,15 +219,16 @@ def translate(path) -> Translation:
     imu["gyro_arw_deg_sqrt_h"] = arw
     say("imunoise.arw", "used", "imu.gyro_arw_deg_sqrt_h [deg/sqrt(h)]" + note)
     vrw, note = _largest(_vec(src, flat, "imunoise.vrw"), "m/s/sqrt(h)")
-    imu["accel_vrw_mps_sqrt_s"] = vrw / 60.0
+    imu["accel_vrw_mps_sqrt_s"] = float(units.mps_per_sqrt_h(vrw))
     say("imunoise.vrw", "translated", "m/s/sqrt(h) / 60 -> imu.accel_vrw_mps_sqrt_s" + note)
     tau_h = _num(src, flat, "imunoise.corrtime")
     if tau_h <= 0:
         raise ConfigError(f"{src}: imunoise.corrtime must be positive, got {tau_h}")
     gb, note = _largest(_vec(src, flat, "imunoise.gbstd"), "deg/h")
     ab, note_a = _largest(_vec(src, flat, "imunoise.abstd"), "mGal")
-    imu.update({"gyro_markov_deg_h": gb, "gyro_markov_tau_s": tau_h * 3600.0,
-                "accel_markov_mps2": ab * MGAL, "accel_markov_tau_s": tau_h * 3600.0})
+    tau_s = tau_h * units.HOUR
+    imu.update({"gyro_markov_deg_h": gb, "gyro_markov_tau_s": tau_s,
+                "accel_markov_mps2": float(units.milligal(ab)), "accel_markov_tau_s": tau_s})
     system["filter"]["accel_bias"] = "gauss_markov"
     say("imunoise.gbstd", "used", "imu.gyro_markov_deg_h, the Gauss–Markov drift's sigma"
         + note)
@@ -253,7 +254,7 @@ def translate(path) -> Translation:
     imu["accel_bias_mps2"] = 0.0  # (the Gauss–Markov state starts with abstd's sigma)
     if ba0 is not None:
         b, note = _largest(ba0, "mGal")
-        imu["accel_bias_mps2"] = b * MGAL
+        imu["accel_bias_mps2"] = float(units.milligal(b))
         say("initbastd", "translated", "mGal -> imu.accel_bias_mps2 (fednav's start sigma "
             "is the larger of it and abstd)" + note)
     states = []
@@ -268,7 +269,7 @@ def translate(path) -> Translation:
         if s > 0:
             states.append(f"{which}_scale")
             imu[f"{which}_scale_ppm"] = s
-            imu[f"{which}_scale_tau_s"] = tau_h * 3600.0
+            imu[f"{which}_scale_tau_s"] = tau_s
             say(key, "translated", f"filter.states {which}_scale, Gauss–Markov: "
                 f"imu.{which}_scale_ppm {s:g} and imu.{which}_scale_tau_s "
                 f"{tau_h * 3600:g} (corrtime)" + note)

@@ -184,8 +184,7 @@ def summary(res: ProcessResult, ref: Reference | None, inputs: dict,
             from .stanford import regions
 
             ig, cfg = res.integrity, res.integrity.config
-            i = np.clip(np.searchsorted(ig.t, errs["t"], side="right") - 1, 0,
-                        len(ig.t) - 1)
+            i = ig.rows_at(errs["t"])
             out["integrity"]["stanford"] = {
                 axis: regions(errs[axis], np.interp(errs["t"], ig.t, lvl), ig.detected[i],
                               lim)

@@ -94,7 +94,7 @@ def plot_run(res, errors: dict, path: Path) -> Path:
     ig = res.integrity
     cfg = ig.config or IntegrityConfig()
     t = errors["t"]
-    i = np.clip(np.searchsorted(ig.t, t, side="right") - 1, 0, len(ig.t) - 1)
+    i = ig.rows_at(t)
     panels = [("horizontal", "m", np.hypot(errors["east_m"], errors["north_m"]),
                np.interp(t, ig.t, ig.hpl), ig.detected[i], cfg.alert_limit_horizontal_m),
               ("vertical", "m", errors["up_m"], np.interp(t, ig.t, ig.vpl), ig.detected[i],

@@ -362,7 +362,6 @@ def write_kfgins_dataset(ds: Dataset, out) -> list[Path]:
     r0, p0, y0 = (np.array(fednav_euler_to_navego(ds.ref_euler[1]))
                   + err * rng.standard_normal(3))
     v0 = ds.ref_vel[1]
-    per_h = 180.0 / np.pi * 3600.0
     tau = f.get("gyro_tau_s", f.get("accel_tau_s", 1e9))
     three = lambda v: [float(v)] * 3  # noqa: E731
     yml = {
@@ -377,15 +376,17 @@ def write_kfgins_dataset(ds: Dataset, out) -> list[Path]:
         "initaccscale": three(0),
         "initposstd": three(0.1), "initvelstd": three(0.05),
         "initattstd": [float(x) for x in np.degrees(err)],
-        "initbgstd": three(np.hypot(f["gyro_bias_radps"], f["gyro_markov_radps"]) * per_h),
-        "initbastd": three(np.hypot(f["accel_bias_mps2"], f["accel_markov_mps2"]) / 1e-5),
-        "imunoise": {"arw": three(f["gyro_arw_rad_sqrt_s"] * 180.0 / np.pi * 60.0),
-                     "vrw": three(f["accel_vrw_mps_sqrt_s"] * 60.0),
-                     "gbstd": three(f["gyro_markov_radps"] * per_h),
-                     "abstd": three(f["accel_markov_mps2"] / 1e-5),
+        "initbgstd": three(units.to_deg_per_h(np.hypot(f["gyro_bias_radps"],
+                                                       f["gyro_markov_radps"]))),
+        "initbastd": three(units.to_milligal(np.hypot(f["accel_bias_mps2"],
+                                                      f["accel_markov_mps2"]))),
+        "imunoise": {"arw": three(units.to_deg_per_sqrt_h(f["gyro_arw_rad_sqrt_s"])),
+                     "vrw": three(units.to_mps_per_sqrt_h(f["accel_vrw_mps_sqrt_s"])),
+                     "gbstd": three(units.to_deg_per_h(f["gyro_markov_radps"])),
+                     "abstd": three(units.to_milligal(f["accel_markov_mps2"])),
                      "gsstd": three(f.get("gyro_scale_ppm", 0.0)),
                      "asstd": three(f.get("accel_scale_ppm", 0.0)),
-                     "corrtime": float(tau / 3600.0)},
+                     "corrtime": float(tau / units.HOUR)},
         "antlever": [float(x) for x in M @ np.asarray(cfg.gnss.lever_m, dtype=float)],
     }
     files.append(write_text(out / "kf-gins.yaml", "# KF-GINS configuration of a dataset "
