@@ -61,7 +61,8 @@ def test_a_stop_signal_ends_a_campaign_in_one_line_and_no_worker_outlives_it(
     stdout, stderr = p.communicate(timeout=60)
     assert p.returncode == 128 + signum, stdout + stderr
     assert "Traceback" not in stdout + stderr
-    lines = stderr.strip().splitlines()
+    lines = [li for li in stderr.strip().splitlines()   # (a cold kernel cache says so
+             if not li.startswith("compiling fast kernels")]  # first: not the stop's)
     assert len(lines) == 1 and lines[0].startswith(f"interrupted ({name}): "), stderr
     told = int(lines[0].split()[2])
     stored = len(list(out.glob("runs/*.nc")))
@@ -145,3 +146,24 @@ def test_a_swallowed_stop_is_raised_again_at_the_next_checkpoint():
             check_stop()
         assert e.value.signum == signal.SIGTERM
     check_stop()  # (the command's stop handled: cleared)
+
+
+def test_a_stop_inside_a_c_callback_is_raised_once_python_holds_the_stack():
+    """A SIGTERM that lands while llvmlite's Python callback runs under C (numba loading a
+    kernel: raised there, ctypes drops the exception and the C caller crashes the process
+    with SIGSEGV — seen in CI) is not raised there but sent again, and raised once the
+    stack has left the callback."""
+    from fednav.cli import _stop_signals_interrupt
+    from fednav.core.errors import Interrupted
+
+    callback = compile("import os, signal, time\nos.kill(os.getpid(), signal.SIGTERM)\n"
+                       "for _ in range(20):\n    time.sleep(0.01)\nleft = True\n",
+                       str(Path("site-packages", "llvmlite", "binding", "ee.py")), "exec")
+    scope: dict = {}
+    with _stop_signals_interrupt():
+        with pytest.raises(Interrupted) as e:
+            exec(callback, scope)       # (not raised in there: it runs to its end)
+            for _ in range(100):
+                time.sleep(0.01)        # (raised here, at the next resend)
+        assert scope.get("left") is True
+        assert e.value.signum == signal.SIGTERM

@@ -55,12 +55,31 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
 STOP_SIGNALS = ("SIGTERM", "SIGHUP")
 
 
+#: Packages whose Python functions C code calls back (ctypes callbacks): an exception
+#: raised in one is printed and dropped by ctypes, and the C caller goes on with an
+#: unset result (llvmlite's object cache, reached while numba compiles or loads a kernel,
+#: then crashes the process with SIGSEGV instead of stopping it).
+C_CALLBACK_PACKAGES = ("llvmlite",)
+_RESEND_S = 0.02
+
+
+def _in_c_callback(frame) -> bool:
+    """Whether the interrupted Python stack runs inside one of :data:`C_CALLBACK_PACKAGES`."""
+    while frame is not None:
+        parts = Path(frame.f_code.co_filename).parts
+        if any(p in parts for p in C_CALLBACK_PACKAGES):
+            return True
+        frame = frame.f_back
+    return False
+
+
 @contextlib.contextmanager
 def _stop_signals_interrupt():
     """While the block runs (in the main thread), SIGTERM and SIGHUP (and Ctrl-C, where
     Python's own handler has it) raise :class:`Interrupted`, each recorded for
     :func:`~fednav.core.errors.check_stop`; after the first, all are ignored while the
-    command stops."""
+    command stops. One that lands inside a C library's callback is sent again 20 ms
+    later, until it lands in fednav's or another pure-Python frame."""
     import signal
     import threading
 
@@ -72,6 +91,10 @@ def _stop_signals_interrupt():
         return
 
     def stop(signum, frame):
+        if _in_c_callback(frame):             # raised there, C would go on with garbage
+            threading.Timer(_RESEND_S, signal.pthread_kill,   # (a segfault): the same
+                            (threading.main_thread().ident, signum)).start()  # signal
+            return                            # again once Python holds the stack
         for s in sigs:
             signal.signal(s, signal.SIG_IGN)  # stopping already: a second one must not
         STOPS.append(signum)                  # break the stop of the workers; (checked
