@@ -92,9 +92,11 @@ def _stop_signals_interrupt():
 
     def stop(signum, frame):
         if _in_c_callback(frame):             # raised there, C would go on with garbage
-            threading.Timer(_RESEND_S, signal.pthread_kill,   # (a segfault): the same
-                            (threading.main_thread().ident, signum)).start()  # signal
-            return                            # again once Python holds the stack
+            again = threading.Timer(_RESEND_S, signal.pthread_kill,  # (a segfault):
+                                    (threading.main_thread().ident, signum))  # the same
+            again.daemon = True               # signal again once Python holds the stack
+            again.start()
+            return
         for s in sigs:
             signal.signal(s, signal.SIG_IGN)  # stopping already: a second one must not
         STOPS.append(signum)                  # break the stop of the workers; (checked

@@ -617,10 +617,10 @@ def run(runs: int = QUICK_RUNS, seed: int = 1, jobs: int = 1, filters=None, form
 def band(dof: float, coverage: float = COVERAGE) -> tuple[float, float]:
     """The two-sided ``coverage`` band of a chi-square variable of ``dof`` degrees of
     freedom divided by ``dof`` (a mean per degree of freedom)."""
-    from scipy.stats import chi2
+    from ..core.stats import chi2_ppf
 
     a = 0.5 * (1.0 - coverage)
-    return float(chi2.ppf(a, dof) / dof), float(chi2.ppf(1.0 - a, dof) / dof)
+    return float(chi2_ppf(a, dof) / dof), float(chi2_ppf(1.0 - a, dof) / dof)
 
 
 def _figure(name: str, value: float, dof: float, count: int, extra: dict | None = None):

@@ -127,9 +127,9 @@ READMIT_ALPHA = 1e-7
 def drift_threshold(dof: int, alpha: float) -> float:
     """The drift test's threshold for ``dof`` components: the chi-square quantile at
     the stricter of :data:`READMIT_ALPHA` and the detection level ``alpha``."""
-    from scipy.stats import chi2
+    from ..core.stats import chi2_ppf
 
-    return float(chi2.ppf(1.0 - min(alpha, READMIT_ALPHA), dof))
+    return float(chi2_ppf(1.0 - min(alpha, READMIT_ALPHA), dof))
 
 
 @numba.njit(cache=True)
@@ -427,9 +427,9 @@ class FederatedFilter:
             return float("nan")
         key = (dof, alpha)
         if key not in self._thresholds:
-            from scipy.stats import chi2
+            from ..core.stats import chi2_ppf
 
-            self._thresholds[key] = float(chi2.ppf(1.0 - alpha, dof))
+            self._thresholds[key] = float(chi2_ppf(1.0 - alpha, dof))
         return self._thresholds[key]
 
     @property

@@ -99,8 +99,7 @@ def soak(name: str, cycles: int, seed: int = 0, huge_p: float = 1e6, tiny_q: flo
     by ``Phi x`` instead of the nonlinear error model (the model the Kalman filter's
     covariance assumes; with the nonlinear mean and errors of the 1e3 the huge P0 allows,
     an EKF's covariance does not describe its error, whatever its numerics)."""
-    from scipy.stats import chi2
-
+    from ..core.stats import chi2_ppf
     from . import make_filter
     from .federated import _inflation
 
@@ -117,7 +116,7 @@ def soak(name: str, cycles: int, seed: int = 0, huge_p: float = 1e6, tiny_q: flo
     D[[0, 1, 2], [3, 4, 5]] = 1.0
     cons = _Constraint(D)
     f = make_filter(name, np.zeros(n), huge_p * np.eye(n), form=form, **options)
-    gate = None if gate_alpha is None else float(chi2.ppf(1.0 - gate_alpha, 6))
+    gate = None if gate_alpha is None else float(chi2_ppf(1.0 - gate_alpha, 6))
     factored = f.form == "square_root"
     asym, min_eig, max_cond = 0.0, np.inf, 0.0
     t0 = time.perf_counter()

@@ -31,9 +31,9 @@ from __future__ import annotations
 
 import numba
 import numpy as np
-from scipy.stats import chi2
 
 from ..core import earth
+from ..core.stats import chi2_ppf
 
 #: Window [s] of the detector.
 WINDOW_S = 0.5
@@ -114,8 +114,8 @@ def stationary(gyro: np.ndarray, accel: np.ndarray, dt: float, gyro_arw: float,
     # share of the windows is still; else it is motion's, above the figures, unused).
     q = QUIET_PERCENTILE / 100.0
     quiet_a = (np.percentile(scatter / (3 * np.maximum(cnt - 1, 1)), QUIET_PERCENTILE)
-               / (chi2.ppf(q, 3 * (W - 1)) / (3 * (W - 1))))
-    quiet_w = np.percentile(s_ww / (3 * cnt), QUIET_PERCENTILE) / (chi2.ppf(q, 3 * W)
+               / (chi2_ppf(q, 3 * (W - 1)) / (3 * (W - 1))))
+    quiet_w = np.percentile(s_ww / (3 * cnt), QUIET_PERCENTILE) / (chi2_ppf(q, 3 * W)
                                                                    / (3 * W))
     sa2 = accel_vrw**2 / dt
     sw2 = gyro_arw**2 / dt + earth.OMEGA_IE**2 + gyro_bias**2
@@ -125,7 +125,7 @@ def stationary(gyro: np.ndarray, accel: np.ndarray, dt: float, gyro_arw: float,
     dof = 3 * (cnt - 1) + 3 * cnt
     # (the quantile once per distinct window length: only the edges' windows are shorter)
     dofs, which = np.unique(dof, return_inverse=True)
-    return stat <= chi2.ppf(1.0 - alpha, dofs)[which]
+    return stat <= chi2_ppf(1.0 - alpha, dofs)[which]
 
 
 def still_spans(t: np.ndarray, still: np.ndarray, min_s: float = 0.0) -> list[tuple[float,

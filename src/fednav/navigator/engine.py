@@ -514,9 +514,9 @@ class CompiledLoop:
         for i, k in enumerate(self.names):
             a = fed.fdi_alphas.get(k)
             if a is not None:
-                from scipy.stats import chi2  # (0.4 s to import: only with detection on)
+                from ..core.stats import chi2_ppf
 
-                self.thr[i, 1:] = [float(chi2.ppf(1.0 - a, d)) for d in range(1, 7)]
+                self.thr[i, 1:] = [float(chi2_ppf(1.0 - a, d)) for d in range(1, 7)]
                 self.thr_drift[i, 1:] = [drift_threshold(d, a) for d in range(1, 7)]
         self.recovery = int(fed.fdi_recovery)
         self.lockout = fed.lockout  # (its state arrays are flown in place)

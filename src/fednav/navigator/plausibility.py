@@ -173,9 +173,9 @@ def _percentile(x, d, p, floor=np.inf):
 
 @lru_cache(maxsize=64)
 def _chi2_ppf(p: float, dof: int) -> float:
-    from scipy.stats import chi2
+    from ..core.stats import chi2_ppf
 
-    return float(chi2.ppf(p, dof))
+    return float(chi2_ppf(p, dof))
 
 
 @numba.njit(cache=True)

@@ -238,9 +238,9 @@ def white_noise_floor(x: np.ndarray, dt: float, n_per: int) -> float:
 
 
 def _cap(dof: int) -> float:
-    from scipy.stats import chi2
+    from ..core.stats import chi2_ppf
 
-    return float(chi2.ppf(_CAP_P, dof))
+    return float(chi2_ppf(_CAP_P, dof))
 
 
 def innovation_statistics(inns: list[InnovationRecord],

@@ -9,12 +9,12 @@ federated linear KF (``FKF``); improvement percentages; the fault experiment (fi
 from __future__ import annotations
 
 import numpy as np
-from scipy.stats import chi2
 
 from ..campaign.evaluation import mean_ci95
 from ..campaign.paper import Paper, Unit
 from ..core import units
 from ..core.atomic import write_frame
+from ..core.stats import chi2_ppf
 from ..sim.runs import make_run_data, run_all_modes, run_configured_mode
 from ..sim.scenario import Scenario
 from ..sim.scenario import load_scenario as _load
@@ -72,7 +72,7 @@ def fault_metrics(result, start: float, end: float, alpha: float, period: float)
     threshold, whether or not isolation was on) and position error in the fault window."""
     f = result.fdi
     g = f[f["local"] == "gnss"]
-    thr = chi2.ppf(1.0 - alpha, int(g["dof"].iloc[0]))
+    thr = chi2_ppf(1.0 - alpha, int(g["dof"].iloc[0]))
     flagged = g["statistic"].to_numpy() > thr
     t = g["t"].to_numpy()
     inside = (t >= start) & (t <= end)
