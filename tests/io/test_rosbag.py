@@ -112,16 +112,20 @@ class Bag:
             self._add(topic, "sensor_msgs/msg/FluidPressure", ti, 0.0, m)
 
     def write(self, path: Path, storage: str = "sqlite3") -> Path:
-        """The bag at ``path`` (a ROS 2 folder, or ``path.bag`` for ROS 1)."""
+        """The bag at ``path`` (a ROS 2 folder, or ``path.bag`` for ROS 1); ``storage``
+        ``sqlite3``, ``mcap`` or ``mcap-zstd`` (MCAP with zstd-compressed chunks)."""
         from rosbags.rosbag1 import Writer as Writer1
-        from rosbags.rosbag2 import StoragePlugin, Writer
+        from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer
 
         if self.ros1:
             path = path.with_suffix(".bag")
             writer = Writer1(path)
         else:
             writer = Writer(path, version=9, storage_plugin={
-                "sqlite3": StoragePlugin.SQLITE3, "mcap": StoragePlugin.MCAP}[storage])
+                "sqlite3": StoragePlugin.SQLITE3, "mcap": StoragePlugin.MCAP,
+                "mcap-zstd": StoragePlugin.MCAP}[storage])
+            if storage == "mcap-zstd":
+                writer.set_compression(CompressionMode.STORAGE, CompressionFormat.ZSTD)
         ser = self.ts.serialize_ros1 if self.ros1 else self.ts.serialize_cdr
         with writer as w:
             conns = {}
@@ -199,11 +203,12 @@ def _drive_bag(drive, path: Path, storage="sqlite3", ros1=False) -> Path:
     return b.write(path, storage)
 
 
-@pytest.mark.parametrize("storage, ros1, decoding", [
-    ("sqlite3", False, "sqlite3"), ("mcap", False, "numpy"), ("bag", True, "numpy")])
+@pytest.mark.parametrize("storage, ros1, decoding, reader", [
+    ("sqlite3", False, "sqlite3", "sqlite3"), ("mcap", False, "numpy", "mcap"),
+    ("mcap-zstd", False, "numpy", "mcap"), ("bag", True, "numpy", "rosbags")])
 def test_a_bag_reads_as_the_same_samples_and_fixes_as_the_csv_files(drive, tmp_path,
                                                                      storage, ros1,
-                                                                     decoding):
+                                                                     decoding, reader):
     d = drive.folder
     rec = read_rosbag(_drive_bag(drive, tmp_path / "drive", storage, ros1))
     imu, gnss = read_imu_csv(d / "imu.csv"), read_gnss_csv(d / "gnss.csv")
@@ -219,6 +224,7 @@ def test_a_bag_reads_as_the_same_samples_and_fixes_as_the_csv_files(drive, tmp_p
     assert rec.topics == {"/fix": "sensor_msgs/msg/NavSatFix",
                           "/imu/data": "sensor_msgs/msg/Imu"}
     assert rec.quality["decoding"] == {"/imu/data": decoding, "/fix": "numpy"}
+    assert rec.quality["storage_reader"] == reader
     assert rec.imu.mounting_name == "FLU" and rec.quality["imu_rate_hz"] == pytest.approx(200)
 
 
@@ -441,6 +447,56 @@ def test_numpy_decoding_is_rosbags_deserialisation(ros1):
         want = _deserialised(deser, datas, msgtype)
         for k, v in want.items():
             np.testing.assert_array_equal(got[k].astype(float), v.astype(float), err_msg=k)
+
+
+@pytest.mark.parametrize("storage", ["mcap", "mcap-zstd"])
+def test_mcap_index_is_rosbags_reading(tmp_path, storage):
+    """fednav.io.mcap's walk of an MCAP file (chunks plain or zstd) finds every message
+    of every channel with the bytes and log time ``rosbags``' own MCAP reader gives, in
+    the same order per channel."""
+    from rosbags.highlevel import AnyReader
+
+    from fednav.io import mcap
+
+    t, gyro, accel, tg, lla = _rest(n=3000)
+    b = Bag(False)
+    b.imu("/imu/data", t, gyro, accel)
+    b.fix("/fix", tg, lla, np.tile([1.0, 1.0, 2.0], (len(tg), 1)))
+    path = b.write(tmp_path / "b", storage)
+    m = mcap.read(next(path.glob("*.mcap")))
+    with AnyReader([path]) as r:
+        want = {}
+        for c, ns, data in r.messages():
+            want.setdefault(c.topic, []).append((ns, data))
+        types = {t: i.msgtype for t, i in r.topics.items()}
+    got = {}
+    for cid, (topic, schema, enc) in m.channels.items():
+        rows = np.flatnonzero(m.channel == cid)
+        assert enc == "cdr" and schema == types[topic]
+        got[topic] = [(int(m.log_ns[i]), m.buf[m.offs[i]:m.offs[i] + m.lens[i]].tobytes())
+                      for i in rows]
+    assert got.keys() == want.keys() and all(got[k] == want[k] for k in want)
+    assert len(got["/imu/data"]) == 3000
+
+
+def test_an_mcap_file_the_index_cannot_read_falls_back_to_rosbags(tmp_path):
+    """An MCAP file whose records do not add up is read by ``rosbags`` (said in the
+    quality), or refused by it in one line; garbage is :class:`McapError`."""
+    from fednav.io import mcap
+
+    _, p = _bag(tmp_path, storage="mcap")
+    f = next(p.glob("*.mcap"))
+    with pytest.raises(mcap.McapError, match="not an MCAP file"):
+        mcap.read(tmp_path / "x.mcap") if (tmp_path / "x.mcap").write_bytes(b"x" * 40) \
+            else None
+    data = bytearray(f.read_bytes())
+    data[8 + 1:8 + 9] = (10**12).to_bytes(8, "little")  # (the first record's length)
+    f.write_bytes(bytes(data))
+    with pytest.raises(mcap.McapError, match="do not add up"):
+        mcap.read(f)
+    with pytest.raises(DataError) as e:
+        read_rosbag(p)
+    assert "\n" not in str(e.value)
 
 
 # ------------------------------------------------------------------------ errors

@@ -21,8 +21,10 @@ messages read here have a fixed layout after their header (and Odometry's
 (:func:`decode`), checked against ``rosbags``' own deserialisation of the first message
 (any difference: every message deserialised by ``rosbags``).  A ROS 2 bag folder with
 uncompressed sqlite3 storage is read with ``sqlite3`` itself (:class:`_SqliteBag`: the
-IMU's fields concatenated by SQLite, no Python object per message); every other bag
-through ``AnyReader``, one pass over its messages (``benchmarks/rosbag_read.py``).
+IMU's fields concatenated by SQLite, no Python object per message), one with MCAP storage
+with :mod:`fednav.io.mcap` (:class:`_McapBag`: the file's records walked by a compiled
+loop); every other bag through ``AnyReader``, one pass over its messages
+(``benchmarks/rosbag_read.py``).
 """
 
 from __future__ import annotations
@@ -203,13 +205,13 @@ def _raw(bag_ns, datas) -> _Raw:
 def _take(buf: np.ndarray, off: np.ndarray, rows: np.ndarray | None, dtype: np.dtype,
           count: int) -> np.ndarray:
     """``count`` values of ``dtype`` at byte offsets ``off`` (N,) of ``buf``: (N, count).
-    ``rows``: ``buf`` as (N, L) messages of one length, used (a slice, no gather) when
-    every offset is the same distance into its message."""
+    ``rows``: ``buf`` as (N, L) messages of one length, used (a view of ``buf``, no
+    copy) when every offset is the same distance into its message."""
     k = dtype.itemsize * count
     if rows is not None:
         rel = off - np.arange(len(off)) * rows.shape[1]
         if len(rel) and np.all(rel == rel[0]):
-            return rows[:, rel[0]:rel[0] + k].copy().view(dtype)
+            return rows[:, rel[0]:rel[0] + k].view(dtype)
     return buf[off[:, None] + np.arange(k)].view(dtype)
 
 
@@ -360,6 +362,8 @@ class _AnyBag:
     ``topics`` {topic: message type}, ``counts`` {topic: messages}, :meth:`load`,
     :meth:`deserialize`."""
 
+    reader_name = "rosbags"
+
     def __init__(self, path: Path):
         from rosbags.highlevel import AnyReader
 
@@ -409,13 +413,15 @@ class _AnyBag:
 class _SqliteBag:
     """A ROS 2 bag folder with uncompressed sqlite3 storage, read with ``sqlite3``
     itself: topics and counts from ``metadata.yaml``, the messages of the topics wanted
-    in two SQL scans per storage file (the IMU's 56 bytes a message, :data:`_IMU_SQL`,
-    concatenated by SQLite: no Python object per message; then the other topics' rows).
+    in one SQL scan per storage file (the IMU's 56 bytes a message, :data:`_IMU_SQL`,
+    and the other topics' messages concatenated by SQLite: no Python object per
+    message).
     (``AnyReader`` counts each topic's messages with a join when it opens a sqlite3 bag:
     more time than the whole read here.)  Messages deserialised with ``rosbags``'
     standard types."""
 
     ros2 = True
+    reader_name = "sqlite3"
 
     def __init__(self, path: Path, files: list[Path], info: dict):
         self.path, self.src, self.files, self.decoding = path, str(path), files, {}
@@ -433,23 +439,8 @@ class _SqliteBag:
     def of(cls, path: Path) -> _SqliteBag | None:
         """The bag at ``path`` when it is a ROS 2 folder with uncompressed sqlite3
         storage whose metadata this reader knows, else None."""
-        import yaml
-
-        if not (path / "metadata.yaml").is_file():
-            return None
-        try:
-            loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
-            info = yaml.load((path / "metadata.yaml").read_text(), Loader=loader)[
-                "rosbag2_bagfile_information"]
-            if (info.get("storage_identifier") != "sqlite3" or int(info["version"]) > 9
-                    or str(info.get("compression_mode") or "").lower() not in ("", "none")):
-                return None
-            files = [path / PurePath(f).name for f in info["relative_file_paths"]]
-            if not files or not all(f.is_file() for f in files):
-                return None
-            return cls(path, files, info)
-        except (OSError, KeyError, TypeError, ValueError, AttributeError, yaml.YAMLError):
-            return None
+        found = _ros2_folder(path, "sqlite3")
+        return None if found is None else cls(path, *found)
 
     def deserialize(self, data: bytes, msgtype: str):
         return _standard_types().deserialize_cdr(data, msgtype)
@@ -471,7 +462,7 @@ class _SqliteBag:
                 finally:
                     con.close()
         except sqlite3.Error as e:
-            raise _NotSqlite(_one_line(e)) from None
+            raise _NoFastPath(_one_line(e)) from None
         out = {}
         for t, ps in parts.items():
             if t == imu:
@@ -489,44 +480,121 @@ class _SqliteBag:
     @staticmethod
     def _scan(con, wanted: dict, imu, imu_bag_time: bool, parts: dict) -> None:
         """One storage file's messages of the topics ``wanted`` into ``parts``: per
-        topic, ``(bag ns, raw messages, lengths)`` (the IMU: ``(bag ns or None,
-        records, one whole message)``).  Two table scans (the messages table has no
-        index on the topic): the IMU's records, concatenated by SQLite, and the rows of
-        the other topics."""
+        topic, a :class:`_Raw` (the IMU: its :data:`_IMU_SQL` records, with bag times or
+        None, and one whole message).  One scan of the messages table (it has no index
+        on the topic), each topic's rows concatenated by SQLite in aggregate FILTERs:
+        the IMU's records, the other topics' whole messages with their lengths."""
         ids = {}
         for t, m in wanted.items():
             for (tid,) in con.execute("SELECT id FROM topics WHERE name = ? AND type = ?",
                                       (t, m)).fetchall():
                 ids[int(tid)] = t
+        if not ids:
+            return
+        cols = []
         for tid, t in ids.items():
-            if t != imu:
-                continue
-            n, blob, stamps = con.execute(
-                f"SELECT count(*), group_concat({_IMU_SQL}, ''), "
-                f"{'group_concat(timestamp)' if imu_bag_time else 'NULL'} "
-                f"FROM messages WHERE topic_id = ?", (tid,)).fetchone()
+            only = f"FILTER (WHERE topic_id = {tid})"
+            cols += [f"count(*) {only}", f"group_concat(timestamp) {only}"
+                     if t != imu or imu_bag_time else "NULL"]
+            cols += ([f"group_concat({_IMU_SQL}, '') {only}"] if t == imu else
+                     [f"group_concat(data, '') {only}", f"group_concat(length(data)) {only}"])
+        row = con.execute(f"SELECT {', '.join(cols)} FROM messages WHERE topic_id IN "
+                          f"({', '.join(map(str, ids))})").fetchone()
+        i = 0
+        for tid, t in ids.items():
+            n, stamps, blob = row[i:i + 3]
+            lens = None if t == imu else row[i + 3]
+            i += 3 if t == imu else 4
             if not n:
                 continue
+            ns = None if stamps is None else _integers(stamps, n, f"{t}: time stamps")
+            if t != imu:
+                lens = _integers(lens, n, f"{t}: message lengths")
+                if int(lens.sum()) != len(blob or b""):
+                    raise _NoFastPath(f"{t}: the messages do not add up to their lengths")
+                parts[t].append(_Raw(ns, np.frombuffer(blob, np.uint8), lens))
+                continue
             if blob is None or len(blob) != _IMU_RECORD * n:
-                raise _NotSqlite(f"{t}: messages too short for {IMU}")
-            ns = None
-            if imu_bag_time:
-                ns = np.fromstring(stamps, dtype=np.int64, sep=",")
-                if len(ns) != n:
-                    raise _NotSqlite(f"{t}: {n} messages, {len(ns)} time stamps")
+                raise _NoFastPath(f"{t}: messages too short for {IMU}")
             first = con.execute("SELECT data FROM messages WHERE topic_id = ? LIMIT 1",
                                 (tid,)).fetchone()[0]
             parts[t].append((ns, np.frombuffer(blob, np.uint8).reshape(n, _IMU_RECORD),
                              first))
-        others = [tid for tid, t in ids.items() if t != imu]
-        if not others:
-            return
-        rows = con.execute(f"SELECT topic_id, timestamp, data FROM messages WHERE topic_id "
-                           f"IN ({', '.join(map(str, others))})").fetchall()
-        for tid in others:
-            got = [r for r in rows if r[0] == tid]
-            if got:
-                parts[ids[tid]].append(_raw([r[1] for r in got], [r[2] for r in got]))
+
+
+def _integers(text: bytes, n: int, what: str) -> np.ndarray:
+    """``n`` comma-separated integers (an SQLite ``group_concat``) as int64."""
+    out = np.fromstring(text, dtype=np.int64, sep=",")
+    if len(out) != n:
+        raise _NoFastPath(f"{what}: {len(out)} for {n} messages")
+    return out
+
+
+def _ros2_folder(path: Path, storage: str) -> tuple[list[Path], dict] | None:
+    """(storage files, ``rosbag2_bagfile_information``) of the ROS 2 bag folder ``path``
+    when its ``metadata.yaml`` names ``storage``, a version this reader knows and no
+    whole-file compression, and its files are all there; else None."""
+    import yaml
+
+    if not (path / "metadata.yaml").is_file():
+        return None
+    try:
+        loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+        info = yaml.load((path / "metadata.yaml").read_text(), Loader=loader)[
+            "rosbag2_bagfile_information"]
+        if (info.get("storage_identifier") != storage or int(info["version"]) > 9
+                or str(info.get("compression_mode") or "").lower() not in ("", "none")):
+            return None
+        files = [path / PurePath(f).name for f in info["relative_file_paths"]]
+        if not files or not all(f.is_file() for f in files):
+            return None
+        return files, info
+    except (OSError, KeyError, TypeError, ValueError, AttributeError, yaml.YAMLError):
+        return None
+
+
+class _McapBag(_SqliteBag):
+    """A ROS 2 bag folder with MCAP storage (ROS 2's default since Iron), read with
+    :mod:`fednav.io.mcap`: every file read whole, its chunks walked by a compiled loop,
+    the messages of the topics wanted copied back to back (no Python object per
+    message).  Topics and counts from ``metadata.yaml``; messages deserialised with
+    ``rosbags``' standard types."""
+
+    reader_name = "mcap"
+
+    @classmethod
+    def of(cls, path: Path) -> _McapBag | None:
+        """The bag at ``path`` when it is a ROS 2 folder with MCAP storage whose
+        metadata this reader knows, else None."""
+        found = _ros2_folder(path, "mcap")
+        return None if found is None else cls(path, *found)
+
+    def load(self, wanted: dict[str, str], imu: str | None = None,
+             imu_bag_time: bool = True) -> dict[str, _Raw]:
+        """The raw messages of the topics ``wanted`` {topic: message type} (``imu``,
+        ``imu_bag_time``: the sqlite3 path's, not needed here)."""
+        from . import mcap
+
+        parts: dict[str, list[_Raw]] = {t: [] for t in wanted}
+        for f in self.files:
+            try:
+                m = mcap.read(f)
+            except mcap.McapError as e:
+                raise _NoFastPath(str(e)) from None
+            for t, msgtype in wanted.items():
+                ids = [c for c, (topic, schema, enc) in m.channels.items()
+                       if topic == t and schema == msgtype and enc == "cdr"]
+                rows = np.flatnonzero(np.isin(m.channel, ids))
+                if len(rows):
+                    lens = m.lens[rows]
+                    parts[t].append(_Raw(m.log_ns[rows], mcap.gather(m.buf, m.offs[rows],
+                                                                     lens), lens))
+        empty = _Raw(np.zeros(0, np.int64), np.zeros(0, np.uint8), np.zeros(0, np.int64))
+        return {t: (ps[0] if len(ps) == 1 else empty if not ps else
+                    _Raw(np.concatenate([p.bag_ns for p in ps]),
+                         np.concatenate([p.buf for p in ps]),
+                         np.concatenate([p.lens for p in ps])))
+                for t, ps in parts.items()}
 
 
 @functools.cache
@@ -538,9 +606,10 @@ def _standard_types():
     return get_typestore(Stores.LATEST)
 
 
-class _NotSqlite(Exception):
-    """A sqlite3 bag this path cannot read (an SQLite without aggregate filters, another
-    schema, concatenations that do not add up): read with ``AnyReader`` instead."""
+class _NoFastPath(Exception):
+    """A bag the sqlite3 or MCAP path cannot read (an SQLite without aggregate filters,
+    another schema, concatenations that do not add up; an MCAP file :mod:`fednav.io.mcap`
+    does not know): read with ``AnyReader`` instead."""
 
 
 def _ns(sec, nsec) -> np.ndarray:
@@ -800,6 +869,7 @@ def _read(bag, given: dict, time: str, max_bridge_s: float, mounting) -> BagReco
     if "baro" in got and got["baro"].d:
         series["baro"] = _baro(got["baro"], times, series.get("gnss"), quality, notes)
     quality["decoding"] = dict(bag.decoding)
+    quality["storage_reader"] = bag.reader_name
     return BagRecording(bag.src, imu, series, dict(bag.topics), quality, notes)
 
 
@@ -873,7 +943,10 @@ def read_rosbag(path, *, topics: dict[str, str] | None = None, time: str = "head
         ``rows_dropped`` {topic: repeated or zero stamps}; ``latency_s`` {topic: median
         receive time minus stamp [s]}; ``stamp_after_bag_time`` {topic: messages stamped
         after they were received}; ``decoding`` {topic: "sqlite3", "numpy" or
-        "rosbags"}.
+        "rosbags"}; ``storage_reader`` what read the bag's storage: "sqlite3" (a ROS 2
+        sqlite3 folder), "mcap" (a ROS 2 MCAP folder, :mod:`fednav.io.mcap`) or
+        "rosbags" (``AnyReader``: ROS 1 bags, compressed or other ROS 2 bags, and what
+        the first two could not read).
 
     Raises
     ------
@@ -894,11 +967,11 @@ def read_rosbag(path, *, topics: dict[str, str] | None = None, time: str = "head
     import_for(path, "rosbags", "ROS bag")
     if not path.exists():
         raise DataError(f"ROS bag {path}: not found")
-    fast = _SqliteBag.of(path) if path.is_dir() else None
+    fast = (_SqliteBag.of(path) or _McapBag.of(path)) if path.is_dir() else None
     if fast is not None:
         try:
             return _read(fast, given, time, max_bridge_s, mounting)
-        except _NotSqlite:
+        except _NoFastPath:
             pass  # (read with AnyReader)
     bag = _AnyBag(path)
     try:
