@@ -145,11 +145,22 @@ def one_run(args) -> tuple[list[dict], dict]:
     per-mode statistics rows and the error series by mode (without the per-measurement
     fault-detection log, summarised in the rows as NIS/dof)."""
     scn, seed, max_time = args
-    series = run_all_modes(scn, make_run_data(scn, seed, max_time), max_time,
-                           innovations=True)
+    data = make_run_data(scn, seed, max_time)
+    series = run_all_modes(scn, data, max_time, innovations=True)
     windows = outage_windows(scn, max_time)
     rows = [{"seed": seed, "mode": m, **run_statistics(r, windows)} for m, r in series.items()]
-    return rows, {m: replace(r, fdi=None, nis=None) for m, r in series.items()}
+    out = {m: replace(r, fdi=None, nis=None) for m, r in series.items()}
+    if scn.integrity is None:
+        return rows, out
+    from . import integrity as ig
+
+    counts = {}
+    for row, mode in zip(rows, scn.modes, strict=True):
+        got = ig.mode_levels(scn, mode, data, series[mode.name], max_time)
+        if got is not None:
+            extra, counts[mode.name] = ig.run_row(got[1], got[0], data.faults)
+            row.update(extra)
+    return rows, out, counts
 
 
 def summarize_rows(rows: list[dict], modes: list[str], windows: list[dict],
@@ -267,21 +278,50 @@ class Design(Paper):
                           "flown)",
             "tables": summarize_rows(rows, modes, windows, runs),
         }
+        integrity = {}
+        if scn.integrity is not None:
+            from . import integrity as ig
+
+            integrity = ig.summarize(rows, [o[2] for o in results if len(o) > 2], modes,
+                                     scn.integrity)
+            summary["integrity"] = {m: {k: v for k, v in s.items() if k != "_counts"}
+                                    for m, s in integrity.items()}
         return {"rows": rows, "series": runs_series[0], "runs_series": runs_series,
-                "windows": windows, "summary": json_safe(summary)}
+                "windows": windows, "summary": json_safe(summary), "integrity": integrity}
 
     # ---------------------------------------------------------------------- outputs
     def print_summary(self, summary: dict, console) -> None:
         print_design_tables(summary, console)
+        if summary.get("integrity"):
+            from rich.markup import escape
+
+            from .integrity import integrity_lines
+
+            console.print("[bold]Integrity: protection levels against the truth[/]\n"
+                          + "\n".join(escape(x) for x in
+                                      integrity_lines(summary["integrity"])),
+                          highlight=False)
 
     def plots(self, out: Path, rep: dict) -> list[Path]:
-        return [plot_spread(rep["runs_series"], rep["windows"], out / "errors.png",
+        figs = [plot_spread(rep["runs_series"], rep["windows"], out / "errors.png",
                             rep["summary"]["design"])]
+        if any(s.get("_counts") is not None for s in rep.get("integrity", {}).values()):
+            from .integrity import stanford_figure
+
+            figs.append(save_figure(stanford_figure(rep["integrity"],
+                                                    rep["summary"]["design"]),
+                                    out / "stanford.png"))
+        return figs
 
     def files(self, out: Path, rep: dict) -> list[Path]:
         frame = tables_frame(rep["summary"])
-        return [write_frame(frame, out / "tables.csv"),
-                write_text(out / "tables.md", tables_markdown(rep["summary"]))]
+        text = tables_markdown(rep["summary"])
+        if rep["summary"].get("integrity"):
+            from .integrity import integrity_lines
+
+            text += ("\n## Integrity: protection levels against the truth\n\n```\n"
+                     + "\n".join(integrity_lines(rep["summary"]["integrity"])) + "\n```\n")
+        return [write_frame(frame, out / "tables.csv"), write_text(out / "tables.md", text)]
 
     def write_outputs(self, out: Path, rep: dict) -> list[Path]:
         """As :meth:`Paper.write_outputs`, with a ``summary.json`` that cannot hold NaN."""

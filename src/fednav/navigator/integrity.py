@@ -276,10 +276,8 @@ def solution_separation(full, subs: dict, cfg: IntegrityConfig | None = None
     """Tests and protection levels of ``full`` (the all-sensor
     :class:`~fednav.navigator.solution.Solution`) from ``subs``, the sub-solutions by the
     sensor each leaves out, row for row with ``full`` (module docstring)."""
-    cfg = cfg or IntegrityConfig()
     names = list(subs)
-    n = len(names)
-    if n == 0:
+    if not names:
         raise ValueError("solution separation needs at least one sub-solution (a system "
                          "with two or more aiding sensors)")
     m = len(full.t)
@@ -294,6 +292,19 @@ def solution_separation(full, subs: dict, cfg: IntegrityConfig | None = None
     d = np.stack([np.column_stack([llh_difference_enu(*subs[k].lla.T, *full.lla.T),
                                    wrap_pi(subs[k].euler[:, 2] - full.euler[:, 2])])
                   for k in names])
+    return separation(full.t, d, s0, sk, names, cfg)
+
+
+def separation(t, d, s0, sk, names: list[str], cfg: IntegrityConfig | None = None
+               ) -> IntegrityResult:
+    """Tests and protection levels from the separations ``d`` (M, N, 4) of the M
+    sub-solutions (each leaving out sensor ``names[k]``) from the all-sensor solution at
+    the N epochs ``t`` [s] — east, north, up [m] and heading [rad], sub minus full — the
+    all-sensor solution's 1-sigma ``s0`` (N, 4) and the sub-solutions' ``sk`` (M, N, 4)
+    on the same axes: :func:`solution_separation` for any source of the solutions (a
+    processed recording's bank, a design's Monte Carlo runs)."""
+    cfg = cfg or IntegrityConfig()
+    n, m = len(names), len(t)
     p_fa = cfg.false_alert / 3.0
     k_fa = q_inverse(np.array([p_fa / (4 * n), p_fa / (4 * n), p_fa / (2 * n),
                                p_fa / (2 * n)]))
@@ -307,7 +318,7 @@ def solution_separation(full, subs: dict, cfg: IntegrityConfig | None = None
     worst = ratio.max(axis=2)  # (N, M)
     tripped = worst.max(axis=0) > 1.0
     hpl, vpl, hdg = np.hypot(pl[:, 0], pl[:, 1]), pl[:, 2], pl[:, 3]
-    out = IntegrityResult(full.t, hpl, vpl, hdg, worst.max(axis=0), tripped.copy(),
-                          np.full(m, -1), names, [], cfg, worst, tripped.copy())
+    out = IntegrityResult(np.asarray(t), hpl, vpl, hdg, worst.max(axis=0), tripped.copy(),
+                          np.full(m, -1), list(names), [], cfg, worst, tripped.copy())
     out.alert |= out.above_limits()
     return out

@@ -43,8 +43,6 @@ def regions(err, pl, alert, limit: float | None) -> dict[str, int]:
 
 
 def _panel(ax, err, pl, alert, limit, name: str, unit: str) -> None:
-    from matplotlib.colors import LogNorm
-
     err = np.abs(np.asarray(err, dtype=float))
     pl = np.asarray(pl, dtype=float)
     ok = np.isfinite(err) & np.isfinite(pl) & (pl > 0)
@@ -52,8 +50,29 @@ def _panel(ax, err, pl, alert, limit, name: str, unit: str) -> None:
     lo = 10 ** np.floor(np.log10(max(min(e.min(), p.min()), 1e-4)))
     hi = 10 ** np.ceil(np.log10(max(e.max(), p.max(), limit or 0.0) * 1.5))
     bins = np.logspace(np.log10(lo), np.log10(hi), 60)
-    h = ax.hist2d(e, p, bins=[bins, bins], norm=LogNorm(), cmap="viridis", cmin=1)
-    ax.figure.colorbar(h[3], ax=ax, label="epochs")
+    counts = np.histogram2d(e, p, bins=[bins, bins])[0]
+    r = regions(err[ok], pl[ok], np.asarray(alert, dtype=bool)[ok], limit)
+    counts_panel(ax, counts, bins, r, limit, name, unit)
+
+
+def counts_panel(ax, counts, edges, region_counts: dict, limit, name: str, unit: str,
+                 what: str = "epochs", title: str | None = None) -> None:
+    """One panel of the diagram from a histogram ``counts`` (error bin, level bin) on
+    ``edges`` (logarithmic, the same for both axes; empty rows and columns at the ends
+    cut off) and the :func:`regions` counts ``region_counts``; ``name`` the axes' quantity,
+    ``title`` the panel's (default ``name``)."""
+    from matplotlib.colors import LogNorm
+
+    counts = np.asarray(counts, dtype=float)
+    used = np.flatnonzero(counts.sum(axis=0) + counts.sum(axis=1))
+    lo_i = max(int(used[0]) - 1, 0) if len(used) else 0
+    hi_i = min(int(used[-1]) + 2, len(edges) - 1) if len(used) else len(edges) - 1
+    if limit is not None:
+        hi_i = max(hi_i, min(int(np.searchsorted(edges, limit * 1.5)), len(edges) - 1))
+    lo, hi = edges[lo_i], edges[hi_i]
+    mesh = ax.pcolormesh(edges, edges, np.ma.masked_less(counts.T, 1), norm=LogNorm(),
+                         cmap="viridis")
+    ax.figure.colorbar(mesh, ax=ax, label=what)
     ax.plot([lo, hi], [lo, hi], color="k", lw=0.9)
     if limit is not None:
         ax.axhline(limit, color="tab:red", lw=0.9, ls="--")
@@ -62,13 +81,12 @@ def _panel(ax, err, pl, alert, limit, name: str, unit: str) -> None:
     ax.set_yscale("log")
     ax.set_xlim(lo, hi)
     ax.set_ylim(lo, hi)
-    r = regions(err[ok], pl[ok], np.asarray(alert, dtype=bool)[ok], limit)
-    text = "\n".join(f"{k.replace('_', ' ')}: {v}" for k, v in r.items())
+    text = "\n".join(f"{k.replace('_', ' ')}: {v}" for k, v in region_counts.items())
     ax.text(0.97, 0.03, text, transform=ax.transAxes, ha="right", va="bottom", fontsize=8,
             bbox={"facecolor": "white", "alpha": 0.8, "edgecolor": "0.7"})
     ax.set_xlabel(f"{name} error [{unit}]")
     ax.set_ylabel(f"{name} protection level [{unit}]")
-    ax.set_title(f"{name}: {r['epochs']} epochs", fontsize=10)
+    ax.set_title(f"{title or name}: {region_counts['epochs']} {what}", fontsize=10)
     ax.grid(alpha=0.3, which="both")
 
 

@@ -40,6 +40,7 @@ class RunData:
     init_phi: np.ndarray
     init_dv: np.ndarray
     init_dp: np.ndarray
+    faults: list = field(default_factory=list)  # the run's drawn faults (sensors.faults)
 
 
 @dataclass
@@ -88,7 +89,7 @@ def make_run_data(scn: Scenario, seed: int, max_time: float | None = None) -> Ru
         cfg = scn.sensors.get(name)
         if cfg is not None:
             series[name] = inject_faults(cfg.simulate(truth, rng, name), faults)
-    return RunData(seed, dth, dv, series, init_phi, init_dv, init_dp)
+    return RunData(seed, dth, dv, series, init_phi, init_dv, init_dp, faults)
 
 
 def initial_covariance(scn: Scenario) -> np.ndarray:
