@@ -136,8 +136,9 @@ def run_row(full, res: IntegrityResult, faults=()) -> tuple[dict, StanfordCounts
     cfg = res.config
     row: dict = {}
     counts = {}
+    both = _errors_and_levels(full, res)
     for axis, _, key in AXES:
-        err, pl = _errors_and_levels(full, res)[axis]
+        err, pl = both[axis]
         limit = getattr(cfg, key)
         for k, v in regions(err, pl, res.detected, limit).items():
             row[f"integrity.{axis}.{k}"] = v
