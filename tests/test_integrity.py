@@ -11,6 +11,7 @@ from test_process import LEVER, make_flight
 from test_series_route import _velocity
 
 from fednav import System
+from fednav.core import earth
 from fednav.io.data import SensorData
 from fednav.navigator.integrity import (
     IntegrityConfig,
@@ -156,3 +157,70 @@ def test_outputs_carry_the_levels_and_the_stanford_diagram(drive, tmp_path):
     assert v["epochs"] == sum(v[k] for k in v if k != "epochs")
     head = (tmp_path / "solution.csv").read_text().splitlines()[0].split(",")
     assert {"hpl_m", "vpl_m", "heading_pl_deg", "integrity_alert", "excluded"} <= set(head)
+
+
+def _stream_levels(prep, block: int = 500):
+    """The levels of an :class:`IntegrityNavigator` fed the prepared data: every series
+    first, then the IMU samples ``block`` at a time, a snapshot after each block."""
+    from fednav.navigator.integrity_stream import IntegrityNavigator
+
+    nav = IntegrityNavigator(prep.system, prep.initial, prep.dt, imu_errors=prep.imu_errors,
+                             record_rows=False, record_covariance=False)
+    for s in prep.series.values():
+        nav.add_series(s)
+    snaps = []
+    for a in range(0, len(prep.t), block):
+        b = min(a + block, len(prep.t))
+        nav.add_imu(prep.t[a:b], prep.gyro[a:b], prep.accel[a:b])
+        snaps.append(nav.solution())
+    return nav, snaps
+
+
+def test_the_stream_gives_levels_that_bound_the_error(drive):
+    """IntegrityNavigator: the batch bank run as a stream — fault-free, every snapshot
+    has finite levels above the error against the reference, no test trips and no
+    alert; its levels are the batch's at the same time."""
+    from fednav.process.run import prepare
+
+    imu, gnss, vel, baro, ref = drive
+    cfg = _cfg(alert_limit_vertical_m=50.0)
+    nav, snaps = _stream_levels(prepare(imu, {"gnss": gnss, "velocity": vel, "baro": baro},
+                                        cfg))
+    assert nav.sensors == ["gnss", "velocity", "baro"] and len(snaps) > 20
+    for s in snaps[2:]:
+        lv = s.levels
+        assert lv["alert"] is False and lv["tripped_s"] is None and lv["test_ratio"] < 1
+        k = np.searchsorted(ref.t, s.t)
+        e = np.asarray(earth.llh_difference_enu(*s.lla, *ref.lla[k]))
+        assert np.hypot(e[0], e[1]) < lv["hpl_m"] and abs(e[2]) < lv["vpl_m"]
+    batch = process(imu, {"gnss": gnss, "velocity": vel, "baro": baro}, cfg).integrity
+    s = snaps[-2]
+    i = batch.rows_at(s.t)
+    assert s.levels["vpl_m"] == pytest.approx(batch.vpl[i], rel=0.05)
+    assert s.levels["hpl_m"] == pytest.approx(batch.hpl[i], rel=0.05)
+
+
+def test_the_stream_alerts_on_a_gnss_ramp(drive):
+    from fednav.process.run import prepare
+
+    imu, gnss, vel, baro, _ = drive
+    _, snaps = _stream_levels(prepare(imu, {"gnss": _ramp(gnss, 0.5), "velocity": vel,
+                                            "baro": baro}, _cfg()))
+    tripped = [s for s in snaps if s.levels["tripped_s"] is not None]
+    assert tripped and 120.0 < tripped[0].levels["tripped_s"] < 150.0
+    assert all(s.levels["alert"] for s in tripped)
+    # (the sub-solution that separates most: here the one without the barometer, which
+    # then follows the ramped GNSS height fully — a candidate, not an identification;
+    # the velocity sensor sees no height)
+    assert tripped[0].levels["candidate"] in ("gnss", "baro")
+    assert all(s.levels["alert"] is False for s in snaps if s.t < 120.0)
+
+
+def test_the_stream_refuses_one_sensor(drive):
+    from fednav.navigator.integrity_stream import IntegrityNavigator
+    from fednav.process.run import prepare
+
+    imu, gnss, *_ = drive
+    prep = prepare(imu, {"gnss": gnss}, _cfg())
+    with pytest.raises(ValueError, match="two or more aiding sensors"):
+        IntegrityNavigator(prep.system, prep.initial, prep.dt)

@@ -395,6 +395,9 @@ class Snapshot:
     sigma : ndarray, shape (9,)
         1-sigma of the last epoch's fused estimate: attitude errors phi east, north, up
         [rad], velocity errors east, north, up [m/s], position errors east, north, up [m].
+    levels : dict or None
+        The protection levels and alert state, from an
+        :class:`~fednav.navigator.integrity_stream.IntegrityNavigator` (None otherwise).
     """
 
     t: float
@@ -402,6 +405,7 @@ class Snapshot:
     vel: np.ndarray
     euler: np.ndarray
     sigma: np.ndarray
+    levels: dict | None = None
 
 
 @dataclass
