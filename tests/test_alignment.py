@@ -170,6 +170,7 @@ def _start_errors(d, res):
     return np.abs(e) / res.forward.sigma_euler[0]
 
 
+@pytest.mark.slow
 @settings(max_examples=25, deadline=None, derandomize=True)
 @given(heading=st.floats(0.0, 360.0), speed=st.sampled_from([0.0, 0.02, 0.5, 3.0, 12.0]),
        accel=st.floats(0.2, 2.0), static=st.sampled_from([0.0, 5.0]),

@@ -223,6 +223,7 @@ def _no_nan(text: str):
     return json.loads(text, parse_constant=bad)
 
 
+@pytest.mark.slow
 def test_command_writes_the_plot_the_summary_and_the_snippet(tmp_path):
     path = _csv(tmp_path / "imu.csv", int(1200 * FS), np.random.default_rng(9))
     out = tmp_path / "allan"

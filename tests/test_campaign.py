@@ -79,6 +79,7 @@ def test_codec_round_trip_of_an_analysis_dict():
     assert decode(encode((obs, [{"seed": 1, "x": 0.5}]))) == (obs, [{"seed": 1, "x": 0.5}])
 
 
+@pytest.mark.slow
 def test_resume_computes_only_missing_runs_and_gives_identical_tables(tmp_path):
     whole = _reproduce(tmp_path / "whole")
     part = tmp_path / "part"
@@ -94,6 +95,7 @@ def test_resume_computes_only_missing_runs_and_gives_identical_tables(tmp_path):
     assert "SINS/CNS/SAR" in list(ds.mode.values) and np.isfinite(ds.pos).any()
 
 
+@pytest.mark.slow
 def test_other_seed_or_scenario_refused_in_one_line_and_fresh(tmp_path):
     out = tmp_path / "c"
     _reproduce(out)
@@ -315,6 +317,7 @@ def test_a_flight_too_short_for_a_table_ends_in_one_line(tmp_path):
         assert r.exit_code == 2 and "--seed must be 0 .. 2^63-1" in r.output, r.output
 
 
+@pytest.mark.slow
 def test_dask_pointing_at_a_non_dask_server_fails_in_one_line(tmp_path):
     """Issue 27: `--dask tcp://HOST:PORT` at an HTTP server (the dashboard's port, say)
     waited forever: Dask's connect timeout does not cover its handshake."""
@@ -336,6 +339,7 @@ def test_dask_pointing_at_a_non_dask_server_fails_in_one_line(tmp_path):
         server.shutdown()
 
 
+@pytest.mark.slow
 def test_a_stored_run_of_another_campaign_is_refused_not_used(tmp_path):
     """Issue 27: a stored run file replaced by one from another seed's campaign was used
     silently (the tables changed); each run file now carries its work key."""
@@ -380,6 +384,7 @@ def test_a_stored_run_of_another_fednav_version_is_refused_not_used(tmp_path):
     assert r.exit_code == 2 and "made with fednav_version 0.0.1" in r.output
 
 
+@pytest.mark.slow
 def test_dask_pointing_at_a_silent_server_fails_in_one_line_within_10_s(tmp_path):
     """A TCP server that accepts and never sends (Dask would wait for its handshake
     forever): one line, exit 2, within 10 s."""
@@ -425,6 +430,7 @@ def test_fresh_removes_only_the_run_files(tmp_path):
     assert [f.name for f in (out / "runs").iterdir()] == ["notes.txt"]
 
 
+@pytest.mark.slow
 def test_a_folder_holding_more_runs_than_asked_says_so_and_reports_on_all(tmp_path):
     """Issue 29: re-running into a 3-run folder with --runs 2 used to replace the 3-run
     tables with 2-run tables without a word; it now says so and reports on all 3 stored

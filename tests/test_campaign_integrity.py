@@ -92,6 +92,7 @@ def test_a_mode_with_one_tested_sensor_has_no_levels(tmp_path):
     assert list(counts) == [MODE]
 
 
+@pytest.mark.slow
 def test_the_campaign_writes_and_resumes_its_integrity(tmp_path):
     """``fednav run`` of the example: summary.json's integrity (per axis the epochs, rates
     and bounds, the faults' detection and exclusion), the Stanford diagram in

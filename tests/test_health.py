@@ -154,6 +154,7 @@ corruption = st.one_of(
 
 @settings(max_examples=30, deadline=None, derandomize=True,
           suppress_health_check=[HealthCheck.function_scoped_fixture])
+@pytest.mark.slow
 @given(c=corruption)
 def test_a_corrupted_drive_is_refused_warned_about_or_harmless(drive, clean, c):
     base = beyond_3_sigma(clean.forward, clean.forward, drive.reference)

@@ -141,6 +141,7 @@ def test_stanford_regions_by_hand():
                                              "misleading": 3}
 
 
+@pytest.mark.slow
 def test_outputs_carry_the_levels_and_the_stanford_diagram(drive, tmp_path):
     import json
 

@@ -288,6 +288,7 @@ def test_velocity_sensor_axes_and_clock_corrections():
         load_system({"sensors": {"velocity": {"axes": ["N", "N", "U"]}}})
 
 
+@pytest.mark.slow
 def test_cli_output_rate_defaults_to_10_hz_keeps_the_figures_and_refuses_a_rate_above_the_imu(
         tmp_path, flight):
     """Issue 29: the solution files come at 10 Hz unless asked (every IMU sample made a

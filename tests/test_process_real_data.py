@@ -76,6 +76,7 @@ def test_visual_aiding_bounds_the_drift_through_the_gnss_outage(data):
     assert drift["visual"] < 0.2 * drift["gnss"]
 
 
+@pytest.mark.slow
 def test_corrected_visual_data_is_consistent_and_bounds_the_outage(data):
     """examples/canada-planetary.yaml exchanges the visual east/north and shifts its clock by
     7.5 s: its innovations become consistent (NIS/dof near 1 instead of ~60) and the drift

@@ -103,6 +103,7 @@ def _drift_bound(tau):
     return 3 * EPH + VEL * tau + 0.5 * flight.IMU["accel_bias_mps2"] * tau ** 2
 
 
+@pytest.mark.slow
 def test_process_ulog_bridges_a_gnss_outage_on_a_moving_vehicle(tmp_path):
     """300 s, seed 38 (the figures docs/data-formats.md quotes), fednav told the IMU's
     figures; GNSS withheld 120-160 s.  Aided: within the fixes' own noise; in the outage:

@@ -31,6 +31,7 @@ def _run(path, out, *extra):
                                     *extra])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("name", "max_time"), DESIGNS)
 def test_run_example_end_to_end_and_resume(tmp_path, name, max_time):
     out = tmp_path / "out"
@@ -76,6 +77,7 @@ def test_run_example_end_to_end_and_resume(tmp_path, name, max_time):
     assert s2["tables"] == s["tables"]
 
 
+@pytest.mark.slow
 def test_outage_windows_and_more_runs_reuse_the_stored_ones(tmp_path):
     out = tmp_path / "uav"
     path = EXAMPLES / "uav-gnss-baro-star.yaml"

@@ -100,6 +100,7 @@ def test_local_workers_watch_their_parent():
         cluster.close()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["SIGTERM", "SIGHUP"])
 def test_a_stop_signal_ends_process_in_one_line(tmp_path, name):
     """`fednav process` stopped mid-run: one line, 128 + the signal's number, no

@@ -56,6 +56,7 @@ def within(value, true, factor=1.5):
     return bool(np.all((ratio <= factor) & (ratio >= 1.0 / factor)))
 
 
+@pytest.mark.slow
 def test_tune_recovers_the_figures_of_a_simulated_drive(drive):
     imu, g, truth = drive
     base = load_system({"sensors": {"gnss": {"lever_m": truth["sensors"]["gnss"]["lever_m"]}}})
@@ -90,6 +91,7 @@ def short(tmp_path_factory):
     return d
 
 
+@pytest.mark.slow
 def test_cli_tune_writes_a_config_that_process_accepts(short, tmp_path):
     base = tmp_path / "base.yaml"
     base.write_text("gnss_lever_m: [0.3, -1.0, 1.2]\nimu: {gyro_arw_rad_sqrt_s: 1.0e-3}\n"
@@ -178,6 +180,7 @@ def in_band(nis: dict) -> bool:
     return all(NIS_BAND[0] <= v <= NIS_BAND[1] for v in nis.values())
 
 
+@pytest.mark.slow
 def test_tune_keeps_held_back_nis_in_band_with_correlated_gnss_errors(gm_drive):
     imu, gnss, truth, _ = gm_drive
     g = truth["sensors"]["gnss"]
@@ -207,6 +210,7 @@ def test_tune_keeps_held_back_nis_in_band_with_correlated_gnss_errors(gm_drive):
     assert np.all(np.isfinite(res.drift_after)) and "drift through 2" in res.summary()[2]
 
 
+@pytest.mark.slow
 def test_tune_never_makes_the_held_back_fit_worse(gm_drive):
     imu, gnss, truth, _ = gm_drive
     base = load_system(truth)  # already right
@@ -221,6 +225,7 @@ def test_tune_never_makes_the_held_back_fit_worse(gm_drive):
         assert res.tuned.loglik_held >= res.before.loglik_held
 
 
+@pytest.mark.slow
 def test_tuned_sensor_sigma_never_falls_below_the_data_scatter(gm_drive):
     imu, gnss, truth, _ = gm_drive
     base = load_system({"imu": datasheet(truth), "sensors": {"gnss": truth["sensors"]["gnss"]}})
@@ -239,6 +244,7 @@ def test_tuned_sensor_sigma_never_falls_below_the_data_scatter(gm_drive):
     assert res.after.loglik_held >= res.before.loglik_held and in_band(res.after.nis_held)
 
 
+@pytest.mark.slow
 def test_tune_keeps_a_figure_marked_fixed(gm_drive):
     imu, gnss, truth, _ = gm_drive
     sheet = datasheet(truth)
@@ -254,6 +260,7 @@ def test_tune_keeps_a_figure_marked_fixed(gm_drive):
     assert fig["imu.accel_vrw_mps_sqrt_s"].value > 10 * sheet["accel_vrw_mps_sqrt_s"]
 
 
+@pytest.mark.slow
 def test_tune_says_when_no_lever_arm_is_set(gm_drive, tmp_path):
     imu, _, truth, d = gm_drive
     gnss = read_gnss_csv(d / "gnss.csv")

@@ -184,6 +184,7 @@ _SHORT = {"sghqf": 1500, "cukf": 5000, "cekf": 5000, "ukf": 20_000, "sukf": 20_0
           "kf": 20_000, "ekf": 20_000}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(_SHORT))
 def test_short_hostile_soak_on_factors(name):
     """Hostile conditions (P0 = 1e6 I, Q x 1e-12, a 1e-12 measurement variance, a 1e6-sigma

@@ -3,6 +3,7 @@
 import json
 
 import numpy as np
+import pytest
 from typer.testing import CliRunner
 
 from fednav.cli import app
@@ -10,6 +11,7 @@ from fednav.scenarios import paper000
 from fednav.sim.runs import make_run_data, run_configured_mode
 
 
+@pytest.mark.slow
 def test_cli_reproduce_000_smoke(tmp_path, report_complete):
     r = CliRunner().invoke(app, ["reproduce", "airship", "--runs", "1", "--jobs", "1",
                                  "--max-time", "40", "--out", str(tmp_path)])

@@ -30,6 +30,7 @@ def test_thresholds_and_scenario():
     assert scn.fault_experiment.fault.start_s == 401 and scn.filter.fdi_alpha == 0.005
 
 
+@pytest.mark.slow
 def test_reproduce_summary_shape_and_fault_experiment(short, tmp_path, report_complete):
     r = CliRunner().invoke(app, ["reproduce", "federated-ukf", "--runs", "2", "--jobs", "1",
                                  "--max-time", "200", "--scenario", str(short),

@@ -4,6 +4,7 @@
 import json
 
 import numpy as np
+import pytest
 from typer.testing import CliRunner
 
 from fednav.cli import app
@@ -11,6 +12,7 @@ from fednav.scenarios import paper004
 from fednav.sim.runs import make_run_data, run_all_modes
 
 
+@pytest.mark.slow
 def test_cli_reproduce_004_smoke(tmp_path, report_complete):
     r = CliRunner().invoke(app, ["reproduce", "sar-delay", "--runs", "1", "--jobs", "1",
                                  "--max-time", "80", "--out", str(tmp_path)])
@@ -31,6 +33,7 @@ def test_cli_reproduce_004_smoke(tmp_path, report_complete):
     assert (tmp_path / "latency_sweep.png").exists() and (tmp_path / "errors.png").exists()
 
 
+@pytest.mark.slow
 def test_claims_on_a_full_flight():
     scn = paper004.load_scenario()
     res = run_all_modes(scn, make_run_data(scn, 1))
