@@ -122,3 +122,11 @@ def test_the_campaign_writes_and_resumes_its_integrity(tmp_path):
     assert r.exit_code == 0, r.output
     s2 = json.loads((out / "summary.json").read_text())
     assert s2["campaign"]["runs_reused"] == 2 and s2["integrity"] == s["integrity"]
+
+
+def test_a_modes_system_carries_the_integrity_section():
+    """``fednav simulate`` writes each mode's system description (``system_for``): the
+    design's integrity budget goes with it, so ``fednav process`` of the files gives
+    the levels the design asked for."""
+    scn = load_scenario(EXAMPLE)
+    assert scn.system_for(scn.modes[0]).integrity == scn.integrity is not None

@@ -242,6 +242,11 @@ def reproduce(
     _refuse_writing_over(out, {"scenario": scenario}, _campaign_writes)
     out = _output_folder(out)
     scn = exp.load_scenario(scenario)
+    if getattr(scn, "integrity", None) is not None:
+        typer.echo(f"error: scenario file {scenario}: key 'integrity': a paper's "
+                   f"reproduction computes no protection levels; fednav run (a design) and "
+                   f"fednav process do (docs/integrity.md)", err=True)
+        raise typer.Exit(2)
     _campaign(exp, scn, exp.number, f"paper {exp.number}: {scn.name}", "units of work", out,
               runs, seed, jobs, max_time, fresh, dask, extra)
 

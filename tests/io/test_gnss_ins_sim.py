@@ -166,16 +166,22 @@ def _one_line(match, folder, **kw):
 
 
 def test_a_folder_that_is_not_gnss_ins_sim_output_is_one_line(tmp_path):
-    _one_line(r"gnss-ins-sim folder .*nowhere: not found", tmp_path / "nowhere")
+    """Each refusal is one line (``_one_line`` asserts it) that names the path given."""
+    msg = _one_line(r"gnss-ins-sim folder .*nowhere: not found", tmp_path / "nowhere")
+    assert str(tmp_path / "nowhere") in msg
     (tmp_path / "f.csv").write_text("x\n")
-    _one_line(r"is a file, not a folder", tmp_path / "f.csv")
+    msg = _one_line(r"is a file, not a folder", tmp_path / "f.csv")
+    assert str(tmp_path / "f.csv") in msg
     empty = tmp_path / "empty"
     empty.mkdir()
-    _one_line(r"not a gnss-ins-sim output folder: no time.csv, accel-0.csv, gyro-0.csv",
-              empty)
+    msg = _one_line(r"not a gnss-ins-sim output folder: no time.csv, accel-0.csv, "
+                    r"gyro-0.csv", empty)
+    assert str(empty) in msg
     d = _copy(tmp_path)
     (d / "gyro-0.csv").unlink()
-    _one_line(r"not a gnss-ins-sim output folder: no gyro-0.csv \(gnss-ins-sim writes", d)
+    msg = _one_line(r"not a gnss-ins-sim output folder: no gyro-0.csv \(gnss-ins-sim "
+                    r"writes", d)
+    assert str(d) in msg
 
 
 def test_units_rows_and_frames_are_checked(tmp_path):

@@ -123,3 +123,18 @@ def test_cli_reports_bad_scenario_in_one_line(tmp_path):
     r = CliRunner().invoke(app, ["reproduce", "002", "--scenario", str(p)])
     assert r.exit_code == 2
     assert "bad.yaml" in r.output and "key 'bogus': unknown key" in r.output
+
+
+def test_cli_refuses_an_integrity_section_in_one_line(tmp_path):
+    """``integrity:`` acts in designs (fednav run) and fednav process; a paper's
+    reproduction computes no levels, so the key is refused there, not ignored."""
+    from fednav.scenarios import scenario_path
+
+    p = tmp_path / "with-integrity.yaml"
+    p.write_text(scenario_path("paper002").read_text()
+                 + "integrity: {alert_limit_horizontal_m: 50.0}\n")
+    r = CliRunner().invoke(app, ["reproduce", "002", "--scenario", str(p), "--out",
+                                 str(tmp_path / "out")])
+    assert r.exit_code == 2, r.output
+    assert "with-integrity.yaml" in r.output and "key 'integrity'" in r.output
+    assert not (tmp_path / "out" / "summary.json").exists()

@@ -33,9 +33,14 @@ import numpy as np
 
 from ..core.attitude import wrap_pi
 from ..ins.error_model import DP
-from ..navigator.integrity import NOT_PROTECTED, IntegrityResult, separation
+from ..navigator.integrity import (
+    NOT_PROTECTED,
+    IntegrityResult,
+    exclusion,
+    separation,
+    tested_sensors,
+)
 from ..process.stanford import regions
-from ..sensors import registry
 
 #: The Stanford histogram's bins (error and level on the same edges): horizontal and
 #: vertical [m], heading [deg]; ten per decade; values outside fall in the end bins.
@@ -58,13 +63,6 @@ class StanfordCounts:
     horizontal: np.ndarray
     vertical: np.ndarray
     heading: np.ndarray
-
-
-def tested(aiding) -> list[str]:
-    """The aiding sensors whose faults separation tests (constraints and detectors —
-    NHC, ZUPT — are the vehicle's, not sensors that fail)."""
-    return [a for a in aiding if not registry.spec(a).pseudo
-            and registry.spec(a).detector is None]
 
 
 def _separation(full, subs: dict, cfg) -> IntegrityResult:
@@ -98,26 +96,26 @@ def mode_levels(scn, mode, data, full, max_time=None):
     def less(aiding, k):
         return [a for a in aiding if a != k]
 
-    names = tested(mode.aiding)
+    names = tested_sensors(mode.aiding)
     if len(names) < 2:
         return None
     subs = {k: fly(less(mode.aiding, k)) for k in names}
     res = _separation(full, subs, scn.integrity)
     row = res.first_trip()
-    if row is None:
-        return res, full
-    for k in res.candidates(row):
-        rest = tested(less(mode.aiding, k))
+
+    def after_without(k):
+        rest = tested_sensors(less(mode.aiding, k))
         if len(rest) < 2:
-            continue  # (nothing left to check the candidate with)
-        after = _separation(subs[k], {j: fly(less(less(mode.aiding, k), j)) for j in rest},
-                            scn.integrity)
-        if not (after.test_ratio[row:] > 1.0).any():
-            out = replace(full, **{f: np.concatenate([getattr(full, f)[:row],
-                                                      getattr(subs[k], f)[row:]])
-                                   for f in ("pos", "vel", "att", "sigma", "euler")})
-            return res.excluding(row, k, after), out
-    return res, full
+            return None  # (nothing left to check the candidate with)
+        return _separation(subs[k], {j: fly(less(less(mode.aiding, k), j)) for j in rest},
+                           scn.integrity)
+
+    res, k = exclusion(res, after_without)
+    if k is None:
+        return res, full
+    return res, replace(full, **{f: np.concatenate([getattr(full, f)[:row],
+                                                    getattr(subs[k], f)[row:]])
+                                 for f in ("pos", "vel", "att", "sigma", "euler")})
 
 
 def _errors_and_levels(full, res: IntegrityResult) -> dict[str, tuple]:

@@ -88,6 +88,32 @@ class IntegrityConfig(_Model):
         return float(self.prior_fault.get(name, self.prior_fault.get("default", 1e-4)))
 
 
+def tested_sensors(aiding) -> list[str]:
+    """The aiding sensors whose faults solution separation tests, in ``aiding``'s order
+    (constraints and detectors — NHC, ZUPT — are the vehicle's, not sensors that fail)."""
+    from ..sensors import registry
+
+    return [a for a in aiding if not registry.spec(a).pseudo
+            and registry.spec(a).detector is None]
+
+
+def exclusion(result: IntegrityResult, after_without) -> tuple[IntegrityResult, str | None]:
+    """Fault exclusion after a detection: the first candidate (largest test ratio first)
+    whose solution without it passes its own separation tests from the detection on —
+    ``after_without(k)`` gives those tests (an :class:`IntegrityResult` row for row with
+    ``result``), or None where nothing is left to check ``k`` with.  ``(result with the
+    exclusion, the sensor)``; ``(result, None)`` when nothing tripped or no candidate
+    passes (the fault stays detected and alerted)."""
+    row = result.first_trip()
+    if row is None:
+        return result, None
+    for k in result.candidates(row):
+        after = after_without(k)
+        if after is not None and not (after.test_ratio[row:] > 1.0).any():
+            return result.excluding(row, k, after), k
+    return result, None
+
+
 #: the axes tested: east, north, up [m] and heading [rad]
 AXES = ("east", "north", "up", "heading")
 

@@ -20,16 +20,8 @@ import numpy as np
 
 from ..core.attitude import wrap_pi
 from ..core.earth import llh_difference_enu
-from ..sensors import registry
-from .integrity import IntegrityConfig, separation
+from .integrity import IntegrityConfig, separation, tested_sensors
 from .navigator import Navigator, Snapshot
-
-
-def tested_sensors(aiding) -> list[str]:
-    """The aiding sensors whose faults the bank tests (constraints and detectors — NHC,
-    ZUPT — are the vehicle's, not sensors that fail)."""
-    return [a for a in aiding if not registry.spec(a).pseudo
-            and registry.spec(a).detector is None]
 
 
 class IntegrityNavigator:

@@ -16,16 +16,15 @@ from dataclasses import replace
 import numpy as np
 
 from ..core.errors import DataError
+from ..navigator import integrity
 from ..navigator.integrity import IntegrityResult, solution_separation
 from ..navigator.solution import Solution
-from ..sensors import registry
 
 
 def tested_sensors(prep) -> list[str]:
-    """The recorded aiding sensors whose faults the bank tests (constraints and
-    detectors — NHC, ZUPT — are the vehicle's, not sensors that fail)."""
-    return [n for n in prep.system.aiding if n in prep.series
-            and not registry.spec(n).pseudo and registry.spec(n).detector is None]
+    """The recorded aiding sensors whose faults the bank tests
+    (:func:`fednav.navigator.integrity.tested_sensors` of those with data)."""
+    return [n for n in integrity.tested_sensors(prep.system.aiding) if n in prep.series]
 
 
 def without(prep, name: str):
@@ -55,21 +54,16 @@ def sensor_bank(prep) -> dict[str, Solution]:
 
 
 def exclude(prep, result: IntegrityResult, subs: dict[str, Solution]):
-    """After a detection, the first candidate (largest test ratio first) whose
-    sub-solution passes its own separation tests from the detection on: ``(result with
-    the exclusion, the sensor)``; ``(result, None)`` when none can be checked or none
-    passes (the fault stays detected and alerted)."""
-    row = result.first_trip()
-    if row is None:
-        return result, None
-    for k in result.candidates(row):
+    """After a detection, :func:`fednav.navigator.integrity.exclusion` with each
+    candidate's own bank (its sub-solution against those leaving out one more):
+    ``(result with the exclusion, the sensor)``, or ``(result, None)``."""
+    def after_without(k):
         p = without(prep, k)
         if len(tested_sensors(p)) < 2:
-            continue  # (nothing left to check the candidate with)
-        after = solution_separation(subs[k], sensor_bank(p), result.config)
-        if not (after.test_ratio[row:] > 1.0).any():
-            return result.excluding(row, k, after), k
-    return result, None
+            return None  # (nothing left to check the candidate with)
+        return solution_separation(subs[k], sensor_bank(p), result.config)
+
+    return integrity.exclusion(result, after_without)
 
 
 def apply(forward: Solution, result: IntegrityResult, subs: dict[str, Solution]

@@ -309,7 +309,7 @@ class Scenario(System):
                     update={"delay_compensation": mode.delay_compensation})})
                 for a in mode.aiding if (cfg := self.sensors[a]).timing.delayed})
         return System(imu=self.imu, sensors=sensors, aiding=list(mode.aiding),
-                      constraint=mode.constraint, filter=flt)
+                      constraint=mode.constraint, filter=flt, integrity=self.integrity)
 
     @model_validator(mode="after")
     def _fault_experiment_needs_detection(self):
