@@ -57,13 +57,13 @@ def bench_transition():
     @numba.njit
     def together(X, T, nsub, par, C, scale, reps):
         for _ in range(reps):
-            em._transition(X, T, nsub, par, C, scale)
+            em.propagate_points(X, T, nsub, par, C, scale)
 
     @numba.njit
     def one_each(X, T, nsub, par, C, scale, reps):
         for _ in range(reps):
             for i in range(X.shape[0]):
-                em._transition(X[i:i + 1], T, nsub, par, C, scale)
+                em.propagate_points(X[i:i + 1], T, nsub, par, C, scale)
 
     nom = em.Nominal(lat=units.deg(39.0), h=5000.0, vel=np.array([283.0, 282.0, 15.0]),
                      C=np.eye(3), fn=np.array([0.3, -0.2, 9.8]))

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from fednav.filters import FederatedFilter, FilterError, LinearModel, make_filter
-from fednav.filters.federated import _fuse
+from fednav.filters.federated import fuse_information
 from fednav.filters.soak import _Constraint, cruise_process, soak
 from fednav.filters.square_root import SQUARE_ROOT
 from fednav.filters.sr_kernels import chol_downdate, factor_product, psd_sqrt, sr_fuse, tria
@@ -146,7 +146,7 @@ def test_square_root_information_fusion_equals_the_standard_fusion():
         B = rng.standard_normal((n, n))
         Ps.append(B @ B.T / n + np.diag(rng.uniform(0.1, 10.0, n)))
     Ps = np.array(Ps)
-    xg, Pg, tr, bad = _fuse(xs, Ps)
+    xg, Pg, tr, bad = fuse_information(xs, Ps)
     xs2, Sg, tr2, bad2 = sr_fuse(xs, np.array([np.linalg.cholesky(P) for P in Ps]))
     assert bad == bad2 == -1
     assert _rel(xg, xs2) < 1e-8 and _rel(Pg, Sg @ Sg.T) < 1e-8 and _rel(tr, tr2) < 1e-8

@@ -102,6 +102,9 @@ class Filter(ABC):
     #: ``standard`` (the covariance ``P`` itself) or ``square_root`` (a Cholesky factor,
     #: :mod:`fednav.filters.square_root`)
     form = "standard"
+    #: the name it is registered under (:func:`fednav.filters.registry.make_filter` sets
+    #: it: ``kf`` and ``ekf`` are one class); "" for a filter built by hand
+    kind = ""
 
     def __init__(self, x0, P0, name: str = "filter"):
         self.x = np.array(x0, dtype=float)

@@ -5,11 +5,11 @@ Cycle (Carlson's federated filter, paper 002 eq. 13–15, paper 003 eq. 16–22)
 1. every filter (locals and master) time-updates with its share of the process noise,
    ``Q_i = Q / beta_i``;
 2. local filters measurement-update with their own sensors (the master has none);
-3. global fusion ``P_g = (sum P_i^-1)^-1``, ``x_g = P_g sum P_i^-1 x_i`` over the filters
-   that are not isolated (when a local filter's covariance is a sample estimate — a
+3. global fusion ``P_g = (sum P_i^-1)^-1``, ``x_g = P_g sum P_i^-1 x_i`` over every
+   filter (when a local filter's covariance is a sample estimate — a
    particle filter — the fused covariance is corrected for the bias that fusing noisy
-   covariances introduces, :func:`_sampling_bias_correction`).  When every filter that
-   takes part keeps a Cholesky factor (``form: square_root``), the fusion is the
+   covariances introduces, :func:`_sampling_bias_correction`).  When every filter
+   keeps a Cholesky factor (``form: square_root``), the fusion is the
    square-root information form (:func:`fednav.filters.sr_kernels.sr_fuse`: the
    information factors ``S_i^-1`` and vectors ``S_i^-1 x_i`` stacked and triangularized;
    no covariance is formed or inverted) and the reset hands each filter the factor
@@ -62,6 +62,7 @@ import numba
 import numpy as np
 
 from ..core.kernels import spd_inverse
+from . import policy
 from .base import Filter, FilterError
 from .sr_kernels import factor_product, sr_fuse
 
@@ -93,7 +94,7 @@ def sharing_factors(covs: dict[str, np.ndarray], rule: str = "equal",
 
 
 @numba.njit(cache=True)
-def _fuse(xs, Ps):
+def fuse_information(xs, Ps):
     """Information fusion of k estimates: (x_g, P_g, tr(P_i^-1) (k,), index of failure).
     One estimate is its own fusion (returned as it is, its trace set to 1: the sharing
     factor is 1 whatever it is)."""
@@ -117,7 +118,7 @@ def _fuse(xs, Ps):
 
 
 #: Test level of the drift test that re-admits a locked-out position source
-#: (:func:`_lockout`), per measurement: strict, as it is tried at every measurement of a
+#: (:func:`lockout_step`), per measurement: strict, as it is tried at every measurement of a
 #: long fault (at 20 Hz, 1e-7 is one false re-admission in ~140 h of a true fault, were
 #: the tests independent); never looser than the detection level itself.
 READMIT_ALPHA = 1e-7
@@ -165,7 +166,7 @@ def _inflation(r, S, R, nis):
 
 
 @numba.njit(cache=True)
-def _lockout(f, t, accepted, nis, r, S, R, thr_drift, hold, pos, state, r0, S0, t_pos):
+def lockout_step(f, t, accepted, nis, r, S, R, thr_drift, hold, pos, state, r0, S0, t_pos):
     """One local measurement through the guard against locking out the last position
     source (the same function in the Python loop and the compiled engine).
 
@@ -217,7 +218,7 @@ def _lockout(f, t, accepted, nis, r, S, R, thr_drift, hold, pos, state, r0, S0, 
 
 
 class Lockout:
-    """The state of :func:`_lockout` for local filters ``names`` of which ``positions``
+    """The state of :func:`lockout_step` for local filters ``names`` of which ``positions``
     fix the position, re-admitting after ``hold_s`` [s] (None: never); ``episodes``:
     one entry per re-admission (:meth:`episode`)."""
 
@@ -239,7 +240,7 @@ class Lockout:
 
     def track(self, f: int, t: float, accepted: bool, nis: float, r, S, R,
               thr_drift: float):
-        """:func:`_lockout` for filter index ``f`` (widening the state for a measurement
+        """:func:`lockout_step` for filter index ``f`` (widening the state for a measurement
         of more than its width)."""
         r = np.ascontiguousarray(r, dtype=float).ravel()
         if len(r) > self.r0.shape[1]:
@@ -252,7 +253,7 @@ class Lockout:
         R = np.asarray(R, dtype=float) if R is not None else None
         R = (np.ascontiguousarray(R).reshape(len(r), len(r))
              if R is not None and R.size == len(r) ** 2 else np.full_like(S, np.nan))
-        return _lockout(f, float(t), bool(accepted), float(nis), r, S, R, float(thr_drift),
+        return lockout_step(f, float(t), bool(accepted), float(nis), r, S, R, float(thr_drift),
                         self.hold, self.pos, self.state, self.r0, self.S0, self.t_pos)
 
     def episode(self, f: int, t_start: float, t: float, nis_before: float, s: float,
@@ -276,7 +277,7 @@ class Lockout:
         del self.episodes[n:]
 
 
-def _cov(f: Filter) -> np.ndarray:
+def kept_cov(f: Filter) -> np.ndarray:
     """What a filter keeps of its covariance: ``P``, or the factor ``S`` of a factored one
     (restored as it was, with no factorization of ``S S'``)."""
     return f.S if f.form == "square_root" else f.P
@@ -347,7 +348,6 @@ class FederatedFilter:
         first = next(iter(self.filters.values()))
         self.x = first.x.copy()
         self.P = first.P.copy()
-        self.isolated: set[str] = set()
         alphas = (dict(fdi_alpha) if isinstance(fdi_alpha, dict)
                   else dict.fromkeys(self.locals, fdi_alpha))
         for k, a in alphas.items():
@@ -405,19 +405,17 @@ class FederatedFilter:
     def predict(self, process) -> None:
         """Time update of every filter with its share of the process noise (the white
         part scaled by the filter's adapted factor, :meth:`adapt_q`)."""
-        inv = 0.0
         for k, f in self.filters.items():
             proc = process
-            s = np.exp(self.qlog[k])
-            inv += self.beta[k] / s
             if self.q_step and self.qlog[k] > 0.0:
                 proc = copy.copy(process)
-                proc.Qd = process.Qd + (s - 1.0) * process.Qd_white
+                proc.Qd = policy.adapted_qd(process.Qd, process.Qd_white, self.qlog[k])
             f.predict(proc, q_scale=1.0 / self.beta[k] if self.reset else 1.0)
-        #: the fused prior's white-noise scale this interval (the filters' information
-        #: summed: 1 / sum(beta_i / s_i); exact when the scales are equal) — what the
-        #: smoother's prior must use
-        self.q_scale_fused = 1.0 / inv if inv > 0.0 else 1.0
+        #: the fused prior's white-noise scale this interval — what the smoother's prior
+        #: must use
+        self.q_scale_fused = policy.fused_q_scale(
+            np.array([self.beta[k] for k in self.filters]),
+            np.array([self.qlog[k] for k in self.filters]))
 
     def threshold(self, dof: int, local: str | None = None) -> float:
         """Chi-square detection threshold for ``dof`` measurement components of local filter
@@ -443,7 +441,7 @@ class FederatedFilter:
         """Measurement update of local filter ``local`` (at time ``t`` [s], for the log),
         with chi-square fault detection when ``fdi_alpha`` is set; ``readmit``: whether
         the measurement is one of its sensor's (a constraint applied to every local filter
-        is not), seen by the lockout guard (:func:`_lockout`).
+        is not), seen by the lockout guard (:func:`lockout_step`).
 
         ``share`` (0 < share <= 1): the part of the measurement's information this local
         filter takes, when one measurement goes to several of them (the wind constraint):
@@ -463,28 +461,25 @@ class FederatedFilter:
                 raise ValueError(f"update of '{local}': a share of {share} needs 0 < share "
                                  f"<= 1, an explicit R and readmit=False")
             R = np.asarray(R, dtype=float) / share
-        if self.fdi_alphas[local] is None:
-            inn = f.update(y, model, nav, R)
-        elif self._passes[local] + 1 < self.fdi_recovery:
-            # Recently isolated: test only, and come back after fdi_recovery passes in a row.
-            inn = f.update(y, model, nav, R, gate=-1.0)
-            passed = inn.nis / share <= thr
-            self._passes[local] = self._passes[local] + 1 if passed else 0
-        else:
-            inn = f.update(y, model, nav, R, gate=thr * share)
-            self._passes[local] = self.fdi_recovery if inn.accepted else 0
+        # the gate (none, the threshold, or -1 while recovering: test only) and the
+        # passes after the test (policy.fdi_gate, fdi_passes: the engine's rules too)
+        gate = policy.fdi_gate(thr, self._passes[local], self.fdi_recovery)
+        inn = f.update(y, model, nav, R, gate=None if gate == np.inf else gate * share
+                       if gate > 0.0 else gate)
+        self._passes[local] = policy.fdi_passes(thr, gate, self._passes[local],
+                                                self.fdi_recovery, inn.nis / share)
         if readmit and self.lockout.on:
             inn = self._readmit(local, f, y, model, nav, R, t, thr, inn)
         nis = inn.nis / share
         self.log.append((t, local, nis, dof, thr, not inn.accepted))
         if self.q_step and inn.accepted:
-            self.qlog[local] = min(max(self.qlog[local] + self.q_step * (nis / dof - 1.0),
-                                       0.0), self.q_logmax)
+            self.qlog[local] = policy.adapt_qlog(self.qlog[local], self.q_step, nis, dof,
+                                                 self.q_logmax)
         return inn
 
     def _readmit(self, local, f, y, model, nav, R, t, thr, inn):
         """The lockout guard on a measurement of ``local``: re-admitted, every filter's
-        covariance inflated, when :func:`_lockout` says so and it then passes the test."""
+        covariance inflated, when :func:`lockout_step` says so and it then passes the test."""
         lk = self.lockout
         i = lk.names.index(local)
         alpha = self.fdi_alphas[local]
@@ -492,7 +487,7 @@ class FederatedFilter:
         s, t_start = lk.track(i, t, inn.accepted, inn.nis, inn.r, inn.S, R, thr_drift)
         if not s > 0.0:
             return inn
-        saved = [(g, g.x, _cov(g)) for g in self.filters.values()]
+        saved = [(g, g.x, kept_cov(g)) for g in self.filters.values()]
         for g in self.filters.values():
             g.inflate(s)
         try:
@@ -510,10 +505,9 @@ class FederatedFilter:
         return new
 
     def fuse(self) -> tuple[np.ndarray, np.ndarray]:
-        """Global fusion over the filters not isolated; then reset (in reset mode)."""
-        use = {k: f for k, f in self.filters.items() if k not in self.isolated}
-        if not use:
-            raise FilterError("federated fusion: every filter is isolated")
+        """Global fusion of every filter (an isolated measurement leaves its filter with
+        its share of the prior); then reset (in reset mode)."""
+        use = self.filters
         names = list(use)
         xs = np.array([use[k].x for k in names])
         # every filter factored: square-root information fusion (no covariance inverted)
@@ -522,7 +516,7 @@ class FederatedFilter:
             xg, Sg, traces, bad = sr_fuse(xs, np.array([use[k].S for k in names]))
         else:
             Ps = np.array([use[k].P for k in names])
-            xg, Pg, traces, bad = _fuse(xs, Ps)
+            xg, Pg, traces, bad = fuse_information(xs, Ps)
         if bad >= 0:
             who = names[bad] if bad < len(names) else "fused information"
             raise FilterError(f"federated fusion: covariance of '{who}' is not positive "
@@ -536,11 +530,8 @@ class FederatedFilter:
         self.x, self.P = xg, Pg
         if self.reset:
             if self.sharing == "adaptive":
-                # Only the filters that take part share information; isolated ones keep
-                # running on their own until they pass the test again.
-                budget = 1.0 - sum(self.beta[k] for k in self.isolated)
-                s = traces.sum()
-                self.beta.update({k: budget * t / s for k, t in zip(names, traces, strict=True)})
+                self.beta.update(zip(names, policy.adaptive_shares(traces).tolist(),
+                                     strict=True))
             for k, f in use.items():
                 f.x = self.x.copy()
                 if factored:
@@ -552,20 +543,20 @@ class FederatedFilter:
     def snapshot(self) -> tuple:
         """Everything the filter carries from epoch to epoch (for re-running from the past,
         :meth:`restore`); the log keeps its entries up to this point."""
-        return ([(f.x.copy(), _cov(f).copy(), f.step) for f in self.filters.values()],
-                self.x.copy(), self.P.copy(), dict(self.beta), set(self.isolated),
-                dict(self._passes), len(self.log), dict(self.qlog), self.lockout.snapshot())
+        return ([(f.x.copy(), kept_cov(f).copy(), f.step) for f in self.filters.values()],
+                self.x.copy(), self.P.copy(), dict(self.beta), dict(self._passes),
+                len(self.log), dict(self.qlog), self.lockout.snapshot())
 
     def restore(self, snap: tuple) -> None:
         """Return to a :meth:`snapshot` (log entries made since are dropped)."""
-        filters, self.x, self.P, beta, isolated, passes, n_log, qlog, lockout = snap
+        filters, self.x, self.P, beta, passes, n_log, qlog, lockout = snap
         self.qlog = dict(qlog)
         self.lockout.restore(lockout)
         for f, (x, P, step) in zip(self.filters.values(), filters, strict=True):
             f.x, f.step = x.copy(), step
             _set_cov(f, P.copy())
         self.x, self.P = self.x.copy(), self.P.copy()
-        self.beta, self.isolated, self._passes = dict(beta), set(isolated), dict(passes)
+        self.beta, self._passes = dict(beta), dict(passes)
         del self.log[n_log:]
 
     def feedback(self) -> np.ndarray:

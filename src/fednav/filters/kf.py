@@ -10,7 +10,7 @@ from .base import Filter, FilterError, Innovation, chol
 
 
 @numba.njit(cache=True)
-def _propagate(Phi, P, Q, q_scale):
+def propagate_cov(Phi, P, Q, q_scale):
     """Phi P Phi' + q_scale Q, symmetrised; ok False if it is not finite."""
     Pn = Phi @ P @ Phi.T + q_scale * Q
     Pn = 0.5 * (Pn + Pn.T)
@@ -18,7 +18,7 @@ def _propagate(Phi, P, Q, q_scale):
 
 
 @numba.njit(cache=True)
-def _joseph_update(x, P, H, r, R):
+def joseph_update(x, P, H, r, R):
     """K = P H' S^-1, x + K r, P = (I - K H) P (I - K H)' + K R K'; returns
     (x, P, S, r' S^-1 r, ok)."""
     PHt = P @ H.T
@@ -44,7 +44,7 @@ class KalmanFilter(Filter):
     def predict(self, process, q_scale: float = 1.0) -> None:
         self.step += 1
         self.x = process.transition(self.x[None])[0]
-        self.P, ok = _propagate(np.ascontiguousarray(process.Phi, dtype=float), self.P,
+        self.P, ok = propagate_cov(np.ascontiguousarray(process.Phi, dtype=float), self.P,
                                 np.ascontiguousarray(process.Qd, dtype=float), q_scale)
         if not ok or not np.all(np.isfinite(self.x)):
             raise FilterError(f"{self._who('predict')}: state or covariance became NaN/inf")
@@ -60,7 +60,7 @@ class KalmanFilter(Filter):
         # a linear model (h(x) = H x) needs no second evaluation of its Jacobian
         yhat = H @ self.x if getattr(model, "linear", False) else model.h(self.x[None], nav)[0]
         r = np.asarray(y, dtype=float) - yhat
-        x, P, S, nis, ok = _joseph_update(self.x, self.P, H, r, np.asarray(R, dtype=float))
+        x, P, S, nis, ok = joseph_update(self.x, self.P, H, r, np.asarray(R, dtype=float))
         if not ok:
             raise FilterError(f"{self._who('update')}: innovation covariance not positive "
                               f"definite")

@@ -85,4 +85,6 @@ def make_filter(name: str, x0, P0, common: dict | None = None, form: str = "stan
     if common:
         takes = inspect.signature(cls.__init__).parameters
         options = {**{k: v for k, v in common.items() if k in takes}, **options}
-    return cls(x0, P0, name=name.lower(), **options)
+    flt = cls(x0, P0, name=name.lower(), **options)
+    flt.kind = name.lower()
+    return flt

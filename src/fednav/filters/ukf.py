@@ -21,7 +21,7 @@ from .kf import KalmanFilter
 
 
 @numba.njit(cache=True)
-def _sigma_points(x, P, c):
+def sigma_points(x, P, c):
     """Rows: x, x + L[:, i], x - L[:, i] with L L' = c P; empty array if not PD."""
     n = x.shape[0]
     L, ok = cholesky_lower(c * P)
@@ -37,7 +37,7 @@ def _sigma_points(x, P, c):
 
 
 @numba.njit(cache=True)
-def _predict_moments(Y, Wm, Wc, Q):
+def predict_moments(Y, Wm, Wc, Q):
     y = Wm @ Y
     D = Y - y
     P = (D * Wc.reshape(-1, 1)).T @ D + Q
@@ -46,7 +46,7 @@ def _predict_moments(Y, Wm, Wc, Q):
 
 
 @numba.njit(cache=True)
-def _update(X, Z, Wm, Wc, x, P, y, R):
+def sigma_update(X, Z, Wm, Wc, x, P, y, R):
     """UKF measurement update; returns x, P, r, Pzz, nis and an ok flag."""
     z_hat = Wm @ Z
     dz = Z - z_hat
@@ -88,7 +88,7 @@ class UnscentedKalmanFilter(Filter):
     def sigma_points(self, x=None, P=None, phase: str = "sigma points") -> np.ndarray:
         x = self.x if x is None else np.asarray(x, dtype=float)
         P = self.P if P is None else np.asarray(P, dtype=float)
-        X = _sigma_points(x, P, self.c)
+        X = sigma_points(x, P, self.c)
         if X.shape[0] == 0:
             raise not_pd_error(P, self._who(phase))
         return X
@@ -98,7 +98,7 @@ class UnscentedKalmanFilter(Filter):
         X = self.sigma_points(phase="predict")
         Xf = np.ascontiguousarray(process.transition(X), dtype=float)
         Q = process.Qd if q_scale == 1.0 else q_scale * process.Qd
-        self.x, self.P, ok = _predict_moments(Xf, self.Wm, self.Wc, np.asarray(Q, dtype=float))
+        self.x, self.P, ok = predict_moments(Xf, self.Wm, self.Wc, np.asarray(Q, dtype=float))
         if not ok:
             raise FilterError(f"{self._who('predict')}: state or covariance became NaN/inf")
 
@@ -110,12 +110,12 @@ class UnscentedKalmanFilter(Filter):
     def _sigma_update(self, X, Z, y, R, gate) -> Innovation:
         """The measurement update from the points ``X`` and their predicted measurements
         ``Z`` (the square-root form has its own)."""
-        return self._accept(*_update(X, Z, self.Wm, self.Wc, self.x, self.P,
+        return self._accept(*sigma_update(X, Z, self.Wm, self.Wc, self.x, self.P,
                                      np.asarray(y, dtype=float), np.asarray(R, dtype=float)),
                             gate)
 
     def _accept(self, x, P, r, Pzz, nis, ok, gate) -> Innovation:
-        """Finish an update computed by ``_update``: a clear error if its innovation
+        """Finish an update computed by ``sigma_update``: a clear error if its innovation
         covariance was not positive definite, the gate, then the new estimate (whose
         covariance must be positive definite)."""
         if not ok or not np.isfinite(nis):

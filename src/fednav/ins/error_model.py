@@ -284,7 +284,7 @@ def _rates(x, E, p, C0, k0, cs, out):
 
 
 @numba.njit(cache=True)
-def _transition(X, T, nsub, p, C0, scale):
+def propagate_points(X, T, nsub, p, C0, scale):
     """Propagate each row of X (filter units) over T seconds with the nonlinear model
     (midpoint rule: geometric for the attitude error rotation, RK2 for the rest)."""
     P, n = X.shape
@@ -528,7 +528,7 @@ class ErrorProcess:
         self = cls.__new__(cls)
         self._set_model(T, noise, baro_gains, baro_q, nsub, layout)
         dth = np.zeros(3) if dtheta_sum is None else np.asarray(dtheta_sum, dtype=float)
-        self._set_nominal(*_interval(np.asarray(s0, dtype=float), np.asarray(s1, dtype=float),
+        self._set_nominal(*interval_model(np.asarray(s0, dtype=float), np.asarray(s1, dtype=float),
                                      np.asarray(dv_sum, dtype=float), dth, self.T, self.k1,
                                      self.k2, self.itg, self.ita, self._noise, self.scale))
         return self
@@ -566,7 +566,7 @@ class ErrorProcess:
     def transition(self, X: np.ndarray) -> np.ndarray:
         """Nonlinear propagation of state rows ``X`` (S, n) in filter units over T."""
         X = np.ascontiguousarray(np.atleast_2d(X), dtype=float)
-        return _transition(X, self.T, self.nsub, self._params, self._C0, self.scale)
+        return propagate_points(X, self.T, self.nsub, self._params, self._C0, self.scale)
 
     def linear_transition(self, X: np.ndarray) -> np.ndarray:
         """``Phi @ x`` for each row of X (filter units)."""
@@ -622,7 +622,7 @@ def _nominal_params(lat, h, ve, vn, vu, fe, fn, fu, k1, k2, itg, ita, wb, fb, au
 
 
 @numba.njit(cache=True)
-def _interval(s0, s1, dv_sum, dth_sum, T, k1, k2, itg, ita, noise, scale):
+def interval_model(s0, s1, dv_sum, dth_sum, T, k1, k2, itg, ita, noise, scale):
     """Nominal parameters, C_b^n, Phi and Qd of one INS interval (see interval_process)."""
     qm = s0[0:4] + s1[0:4]
     Cm = _quat_to_dcm(qm / np.sqrt(qm @ qm))

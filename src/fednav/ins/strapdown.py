@@ -81,7 +81,7 @@ class BaroLoop:
 
 
 @numba.njit(cache=True)
-def _run(state, dtheta, dv, dt, h_ref, loop, out_q, out_v, out_p):
+def mechanize(state, dtheta, dv, dt, h_ref, loop, out_q, out_v, out_p):
     """``loop``: the baro loop's gains [k1, k2, k3] and the barometer's lever arm [lx,
     ly, lz] (body, m): :attr:`Strapdown.baro_loop`."""
     # Scalar arithmetic throughout: no array is allocated per sample.
@@ -182,11 +182,11 @@ def _run(state, dtheta, dv, dt, h_ref, loop, out_q, out_v, out_p):
 
 @numba.njit(cache=True)
 def _run_intervals(state, dtheta, dv, dt, h_ref, loop, n_per, out, no_q, no_3):
-    """:func:`_run` over consecutive intervals of ``n_per`` samples (recording nothing:
+    """:func:`mechanize` over consecutive intervals of ``n_per`` samples (recording nothing:
     ``no_q``, ``no_3`` are empty), the state after each into the rows of ``out``."""
     for k in range(out.shape[0]):
         a = k * n_per
-        _run(state, dtheta[a:a + n_per], dv[a:a + n_per], dt, h_ref[a:a + n_per], loop,
+        mechanize(state, dtheta[a:a + n_per], dv[a:a + n_per], dt, h_ref[a:a + n_per], loop,
              no_q, no_3, no_3)
         out[k] = state
 
@@ -210,7 +210,7 @@ def compensate(dtheta, dv, dt, comp, xa, isg, isa, out_th, out_v):
 
 
 @numba.njit(cache=True)
-def _correct(state, phi, dvel, dpos):
+def correct_state(state, phi, dvel, dpos):
     q = _qmul(_rv2q(phi), state[0:4])
     state[0:4] = q / np.sqrt(q[0] ** 2 + q[1] ** 2 + q[2] ** 2 + q[3] ** 2)
     for i in range(3):
@@ -234,7 +234,7 @@ def correct_rows(q, vel, lla, err):
         s[0:4] = q[k]
         s[4:7] = vel[k]
         s[7:10] = lla[k]
-        _correct(s, err[k, 0:3], err[k, 3:6], err[k, 6:9])
+        correct_state(s, err[k, 0:3], err[k, 3:6], err[k, 6:9])
         q[k] = s[0:4]
         vel[k] = s[4:7]
         lla[k] = s[7:10]
@@ -325,7 +325,7 @@ class Strapdown:
             out_q, out_v, out_p = np.empty((n, 4)), np.empty((n, 3)), np.empty((n, 3))
         else:
             out_q, out_v, out_p = _NO_Q, _NO_3, _NO_3
-        _run(self.state, dtheta, dv, self.dt, h_ref, self._loop, out_q, out_v, out_p)
+        mechanize(self.state, dtheta, dv, self.dt, h_ref, self._loop, out_q, out_v, out_p)
         if not math.isfinite(self.state.sum()):
             raise FloatingPointError("Strapdown.run: navigation state became non-finite")
         if record:
@@ -355,5 +355,5 @@ class Strapdown:
         ``phi`` platform error angles [rad] (C_hat = exp(-[phi x]) C), ``dvel`` ENU velocity
         error [m/s], ``dpos`` ENU position error [m].
         """
-        _correct(self.state, np.asarray(phi, dtype=float), np.asarray(dvel, dtype=float),
+        correct_state(self.state, np.asarray(phi, dtype=float), np.asarray(dvel, dtype=float),
                  np.asarray(dpos, dtype=float))

@@ -50,7 +50,7 @@ from ..core.kernels import (
     rotvec_to_quat,
 )
 from .error_model import SCALE
-from .strapdown import STATE_Q, STATE_VEL, Strapdown, _run
+from .strapdown import STATE_Q, STATE_VEL, Strapdown, mechanize
 
 N_NAV = 9
 N_BIAS = 6
@@ -134,7 +134,7 @@ def _fly_coarse(states, dth, dv, noise, T, gains):
         for j in range(3):
             a[0, j] = dth[j] - noise[i, j] * T
             b[0, j] = dv[j] - noise[i, 3 + j] * T
-        _run(states[i], a, b, T, nan, gains, o4, o3, o3)
+        mechanize(states[i], a, b, T, nan, gains, o4, o3, o3)
 
 
 @numba.njit(cache=True)
@@ -182,7 +182,7 @@ def _predict(state, dth, dv, h_ref, dt, gains, P, c, Lw, Wm, Wc, decay, Qb, tsca
     Pn = 0.5 * (Pn + Pn.T)
     o4 = np.empty((0, 4))
     o3 = np.empty((0, 3))
-    _run(state, dth, dv, dt, h_ref, gains, o4, o3, o3)  # the navigation mean at full rate
+    mechanize(state, dth, dv, dt, h_ref, gains, o4, o3, o3)  # the navigation mean at full rate
     return Pn, mean, True
 
 

@@ -31,15 +31,15 @@ import numpy as np
 from ..core import earth
 from ..core.kernels import cholesky_lower
 from ..core.kernels import quat_to_dcm as _q2dcm
+from ..filters import policy
 from ..filters import sr_kernels as srk
-from ..filters.federated import _cov, _fuse, _lockout, drift_threshold
-from ..filters.kf import _joseph_update, _propagate
+from ..filters.federated import drift_threshold, fuse_information, kept_cov, lockout_step
+from ..filters.kf import joseph_update, propagate_cov
 from ..filters.square_root import NOISE_Q, NOISE_R, REASONS, not_psd
-from ..filters.ukf import _predict_moments, _sigma_points, _update
+from ..filters.ukf import predict_moments, sigma_points, sigma_update
 from ..ins import error_model as em
-from ..ins.error_model import _interval, _transition, white_qd
-from ..ins.strapdown import _correct, compensate
-from ..ins.strapdown import _run as _strapdown_run
+from ..ins.error_model import interval_model, propagate_points, white_qd
+from ..ins.strapdown import compensate, correct_state, mechanize
 from ..sensors.measurement import RowModel, bias_columns, row_jacobian, row_predict, row_residual
 from .record import Growing, InnovationRecord, Record
 
@@ -178,7 +178,7 @@ def _local_update(fam_u, sr, x, P, c, Wm, Wc, cm, kinds, lla, vel, C, omega, lev
         if sr:
             x1, Sn, Sm, ni, code = srk.sr_kf_update(x, P, H, r, Rs)
             return x1, Sn, r, Sm, ni, _sr_code(code, ni)
-        x1, Pn, Sm, ni, ok = _joseph_update(x, P, H, r, R)
+        x1, Pn, Sm, ni, ok = joseph_update(x, P, H, r, R)
         return x1, Pn, r, Sm, ni, 0 if ok else 4
     if sr:
         Sg, _ = srk.ukf_points(x, P, math.sqrt(c))
@@ -187,13 +187,13 @@ def _local_update(fam_u, sr, x, P, c, Wm, Wc, cm, kinds, lla, vel, C, omega, lev
         _biased_rows(bias, Sg, Z)
         x1, Sn, Sm, ni, code, r = srk.sr_ukf_update(Z, P, Wm[1], cm, x, y, Rs)
         return x1, Sn, r, Sm, ni, _sr_code(code, ni)
-    Sg = _sigma_points(x, P, c)
+    Sg = sigma_points(x, P, c)
     if Sg.shape[0] == 0:
         return x, P, y, R, np.nan, 7
     Z = np.empty((Sg.shape[0], d))
     row_predict(kinds, lla, vel, C, omega, lever, Sg, Z)
     _biased_rows(bias, Sg, Z)
-    x1, Pn, r, Sm, ni, ok = _update(Sg, Z, Wm, Wc, x, P, y, R)
+    x1, Pn, r, Sm, ni, ok = sigma_update(Sg, Z, Wm, Wc, x, P, y, R)
     return x1, Pn, r, Sm, ni, 0 if ok and math.isfinite(ni) else 4
 
 
@@ -255,29 +255,25 @@ def run_epochs(k0, n_ep, state, comp, xa, decay, scale, dtheta, dv, h_ref, gains
         b = e * n_per
         compensate(dtheta[b:b + n_per], dv[b:b + n_per], dt, comp, xa, isg, isa, dth, dvc)
         s0 = state.copy()
-        _strapdown_run(state, dth, dvc, dt, h_ref[b:b + n_per], gains, rq, rv, rp)
+        mechanize(state, dth, dvc, dt, h_ref[b:b + n_per], gains, rq, rv, rp)
         if not math.isfinite(state.sum()):
             return 1, k, -1
-        params, Cm, Phi, Qd0 = _interval(s0, state, dvc.sum(axis=0), dth.sum(axis=0), T, k1g,
+        params, Cm, Phi, Qd0 = interval_model(s0, state, dvc.sum(axis=0), dth.sum(axis=0), T, k1g,
                                          k2g, itg, ita, noise, scale)
         for j in range(18, n):  # the optional totals follow their mean
             xa[j] *= decay[j]
         Qd = Qd0
         Qw = Qd0
         Qrec = Qd0
-        if q_step > 0.0:
+        if q_step > 0.0:  # the fused prior's (FederatedFilter.q_scale_fused)
             Qw = white_qd(Phi, noise, T, scale)
-            inv = 0.0
-            for f in range(nf):
-                inv += beta[f] / math.exp(qlog[f])
-            if inv > 0.0:  # the fused prior's scale (FederatedFilter.q_scale_fused)
-                Qrec = Qd0 + (1.0 / inv - 1.0) * Qw
+            Qrec = Qd0 + (policy.fused_q_scale(beta, qlog) - 1.0) * Qw
         Lq0 = np.empty((0, 0))  # the factor of Qd0 (square-root filters; once)
         for f in range(nf):
             q_scale = 1.0 / beta[f]
             adapted = q_step > 0.0 and qlog[f] > 0.0
             if adapted:  # the adapted white noise (adapt_q)
-                Qd = Qd0 + (math.exp(qlog[f]) - 1.0) * Qw
+                Qd = policy.adapted_qd(Qd0, Qw, qlog[f])
             else:
                 Qd = Qd0
             if sr[f]:  # the factor (SquareRootKalmanFilter / SquareRootSigma.predict)
@@ -291,31 +287,31 @@ def run_epochs(k0, n_ep, state, comp, xa, decay, scale, dtheta, dv, h_ref, gains
                     Lq = Lq0
                 sq = math.sqrt(q_scale)
                 if fam[f, 0] == 0:
-                    x1 = _transition(X[f].copy().reshape(1, n), T, nsub, params, Cm, scale)[0]
+                    x1 = propagate_points(X[f].copy().reshape(1, n), T, nsub, params, Cm, scale)[0]
                     Sn, ok = srk.sr_propagate(Phi, P[f], Lq, sq)
                     if not ok or not math.isfinite(x1.sum()):
                         return 3, k, f
                 else:
                     Xs, _ = srk.ukf_points(X[f], P[f], math.sqrt(c[f]))
                     x1, Sn, code = srk.sr_sigma_predict(
-                        _transition(Xs, T, nsub, params, Cm, scale), Wm[f], Wc[f], Lq, sq)
+                        propagate_points(Xs, T, nsub, params, Cm, scale), Wm[f], Wc[f], Lq, sq)
                     if code != srk.OK:
                         return 9 if code == srk.DOWNDATE else 3, k, f
                 X[f] = x1
                 P[f] = Sn
             elif fam[f, 0] == 0:  # Kalman: the mean through the nonlinear model
-                x1 = _transition(X[f].copy().reshape(1, n), T, nsub, params, Cm, scale)[0]
-                Pn, ok = _propagate(Phi, P[f], Qd, q_scale)
+                x1 = propagate_points(X[f].copy().reshape(1, n), T, nsub, params, Cm, scale)[0]
+                Pn, ok = propagate_cov(Phi, P[f], Qd, q_scale)
                 if not ok or not math.isfinite(x1.sum()):
                     return 3, k, f
                 X[f] = x1
                 P[f] = Pn
             else:
-                S = _sigma_points(X[f], P[f], c[f])
+                S = sigma_points(X[f], P[f], c[f])
                 if S.shape[0] == 0:
                     return 2, k, f
                 Q = Qd if q_scale == 1.0 else q_scale * Qd
-                x1, Pn, ok = _predict_moments(_transition(S, T, nsub, params, Cm, scale),
+                x1, Pn, ok = predict_moments(propagate_points(S, T, nsub, params, Cm, scale),
                                               Wm[f], Wc[f], Q)
                 if not ok:
                     return 3, k, f
@@ -335,9 +331,7 @@ def run_epochs(k0, n_ep, state, comp, xa, decay, scale, dtheta, dv, h_ref, gains
             _nav_buffers(lla, vel, state[7:10], state[4:7])
             if s_how[sn] == 1:
                 t_log = m_t[m]
-                tk0 = t0 + T * (k - 1)
-                jj = min(max(int(round((m_t[m] - tk0) / dt)), 0), n_per)
-                lag = tk0 + jj * dt - m_t[m]
+                jj, lag = policy.validity_sample(m_t[m], t0 + T * (k - 1), dt, n_per)
                 if jj == 0:
                     _nav_buffers(lla, vel, s0[7:10], s0[4:7])
                     for j in range(4):
@@ -367,19 +361,12 @@ def run_epochs(k0, n_ep, state, comp, xa, decay, scale, dtheta, dv, h_ref, gains
                 return code, k, f
             # chi-square fault detection (FederatedFilter.update)
             th = thr[f, d]
-            gate = np.inf
-            if not math.isnan(th):
-                if passes[f] + 1 < recovery:
-                    gate = -1.0
-                    passes[f] = passes[f] + 1 if ni <= th else 0
-                else:
-                    gate = th
-            accepted = not (ni > gate)
-            if not math.isnan(th) and gate != -1.0:
-                passes[f] = recovery if accepted else 0
+            gate = policy.fdi_gate(th, passes[f], recovery)
+            accepted = policy.is_accepted(ni, gate)
+            passes[f] = policy.fdi_passes(th, gate, passes[f], recovery, ni)
             out_re[m, 2] = 0.0
             if lk_pos[f] and lk_hold > 0.0:  # the lockout guard (FederatedFilter._readmit)
-                s_in, t_start = _lockout(f, t_log, accepted, ni, r, Sm, R, thr_drift[f, d],
+                s_in, t_start = lockout_step(f, t_log, accepted, ni, r, Sm, R, thr_drift[f, d],
                                          lk_hold, lk_pos, lk_state, lk_r0, lk_S0, lk_tpos)
                 if s_in > 0.0:
                     P_saved = P.copy()
@@ -393,7 +380,7 @@ def run_epochs(k0, n_ep, state, comp, xa, decay, scale, dtheta, dv, h_ref, gains
                         out_re[m, 0], out_re[m, 1], out_re[m, 2] = t_start, ni, s_in
                         x1, Pn, r, Sm, ni, accepted = x2, P2, r2, S2, n2, True
                         passes[f] = recovery
-                        _lockout(f, t_log, True, ni, r, Sm, R, thr_drift[f, d], lk_hold,
+                        lockout_step(f, t_log, True, ni, r, Sm, R, thr_drift[f, d], lk_hold,
                                  lk_pos, lk_state, lk_r0, lk_S0, lk_tpos)
                     else:
                         P[:] = P_saved
@@ -405,7 +392,7 @@ def run_epochs(k0, n_ep, state, comp, xa, decay, scale, dtheta, dv, h_ref, gains
                 X[f] = x1
                 P[f] = Pn
                 if q_step > 0.0:
-                    qlog[f] = min(max(qlog[f] + q_step * (ni / d - 1.0), 0.0), q_logmax)
+                    qlog[f] = policy.adapt_qlog(qlog[f], q_step, ni, d, q_logmax)
             out_nis[m] = ni
             out_acc[m] = 1.0 if accepted else 0.0
             out_thr[m] = th
@@ -428,14 +415,12 @@ def run_epochs(k0, n_ep, state, comp, xa, decay, scale, dtheta, dv, h_ref, gains
                     if sr[f]:
                         Ps[f] = srk.factor_product(P[f])
             Sg = Ps[0]  # (unused here: numba types Sg the same on both branches)
-            xg, Pg, traces, bad = _fuse(X, Ps)
+            xg, Pg, traces, bad = fuse_information(X, Ps)
         if bad >= 0:
             return 6, k, bad
         out_P[e] = Pg
         if sharing == 2:
-            s_tr = traces.sum()
-            for f in range(nf):
-                beta[f] = 1.0 * traces[f] / s_tr
+            beta[:] = policy.adaptive_shares(traces)
         for f in range(nf):
             X[f] = xg - xg  # reset to the fused estimate, then its feedback (zero)
             if all_sr:
@@ -449,7 +434,7 @@ def run_epochs(k0, n_ep, state, comp, xa, decay, scale, dtheta, dv, h_ref, gains
                 P[f] = Pg / beta[f]
             out_beta[e, f] = beta[f]
         dx = xg * scale
-        _correct(state, dx[0:3], dx[3:6], dx[6:9])
+        correct_state(state, dx[0:3], dx[3:6], dx[6:9])
         for j in range(3):
             comp[j] += dx[9 + j] + dx[12 + j]
             comp[3 + j] += dx[15 + j]
@@ -496,10 +481,10 @@ class CompiledLoop:
         self.X = np.array([f.x for f in filters])
         #: per filter its covariance, or its lower factor S when ``sr``
         self.sr = np.array([f.form == "square_root" for f in filters], dtype=np.bool_)
-        self.P = np.array([_cov(f) for f in filters])
+        self.P = np.array([kept_cov(f) for f in filters])
         self.beta = np.array([fed.beta[k] for k in self.names])
         self.passes = np.array([fed._passes.get(k, 0) for k in self.names], dtype=np.int64)
-        self.fam = np.array([FAMILIES[type_name(f)] for f in filters], dtype=np.int64)
+        self.fam = np.array([FAMILIES[f.kind] for f in filters], dtype=np.int64)
         n_sig = 2 * n + 1
         self.c = np.ones(nf)
         self.Wm = np.zeros((nf, n_sig))
@@ -684,8 +669,3 @@ class CompiledLoop:
                         m.name, float(lg[j, 0]), out_r[j, :d].copy(), out_S[j, :d, :d].copy(),
                         m.R[m_idx[j]], float(out_bm[j]), bool(lg[j, 5])))
         self.k = k1
-
-
-def type_name(f) -> str:
-    """A filter's registry name (``kf local 'gnss'`` -> ``kf``)."""
-    return f.name.split(" ", 1)[0]

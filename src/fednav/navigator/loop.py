@@ -36,7 +36,7 @@ import numpy as np
 import scipy.linalg
 
 from ..core import earth
-from ..filters import FederatedFilter, FilterError, LinearModel, make_filter
+from ..filters import FederatedFilter, FilterError, LinearModel, make_filter, policy
 from ..ins import error_model as em
 from ..ins.states import CORE, StateLayout
 from ..ins.strapdown import STATE_LLA, STATE_Q, STATE_VEL, compensate, quat_to_dcm_nb
@@ -342,8 +342,7 @@ class PythonLoop:
         tk = self.t_epoch(k)
         t = m.t[i]
         if m.how == "interpolate" and rows is not None:
-            j = min(max(int(round((t - self.t_epoch(k - 1)) / self.dt)), 0), self.n_per)
-            lag = self.t_epoch(k - 1) + j * self.dt - t
+            j, lag = policy.validity_sample(t, self.t_epoch(k - 1), self.dt, self.n_per)
             q, v, p = rows
             vel = v[j]
             nav = NavSnapshot(earth.move_enu(p[j], -lag * vel), vel, quat_to_dcm_nb(q[j]),

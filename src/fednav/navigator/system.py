@@ -101,7 +101,7 @@ class FilterConfig(_Model):
     fix) has been isolated this long, the most consistent one is re-admitted with an
     inflated covariance if its innovations drifted beyond what the filter's covariance
     allows — a filter too confident of its IMU figures, not a sensor fault
-    (:func:`fednav.filters.federated._lockout`; None: never).  ``period_s``: the filter
+    (:func:`fednav.filters.federated.lockout_step`; None: never).  ``period_s``: the filter
     epoch (default: every IMU sample for a navigator, the GNSS period for ``fednav
     process``; scenarios state it).
     ``form``: how every filter keeps its covariance — ``standard`` (the covariance
