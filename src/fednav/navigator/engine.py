@@ -9,6 +9,16 @@ rows its sensor's model describes).  Nothing in an epoch goes back to the interp
 so a Monte Carlo run and a recorded file cost the same per epoch; the epochs of a stream
 are run as they become ready, with the same operations as in one batch.
 
+:func:`run_epochs` is a sequence of named stages over typed records (numba named tuples,
+:data:`Ins`, :data:`Bank`, :data:`Rules`, :data:`Sensors`, ...): :func:`mechanize_interval`,
+:func:`interval_errors` and :func:`time_update`, :func:`apply_measurement` per measurement
+(:func:`ins_at_validity`, the local update, the gate, :func:`lockout_guard`),
+:func:`fuse_reset`, :func:`feed_back`, :func:`record_epoch`.  The stages are inlined into
+it by numba (``inline="always"``: one compiled function, as quick to compile as one
+written whole).  What the federated filter decides — the chi-square gate and recovery,
+the Q adaptation, sharing, the sample nearest a time of validity — is
+:mod:`fednav.filters.policy`, which the Python federated filter calls too.
+
 A system runs here when every part has a compiled form (:func:`why_not_compiled` says
 which does not): local filters of the Kalman (``kf``, ``ekf``), unscented (``ukf``) or
 simplified unscented (``sukf``) family in either form, per filter (``form:
@@ -24,6 +34,7 @@ both on the same data and finds them equal.
 from __future__ import annotations
 
 import math
+from collections import namedtuple
 
 import numba
 import numpy as np
@@ -146,27 +157,75 @@ def _biased_rows(bias, X, Z):
                 Z[i, r] -= X[i, bias[r]]
 
 
+#: The INS and its error model, flown in place: ``state`` (the INS), ``comp`` (gyro and
+#: accelerometer compensation), ``xa`` (the optional error states' totals, SI,
+#: :mod:`fednav.ins.states`; their ``decay`` per epoch; the states' filter units
+#: ``scale``), the baro loop's ``gains``, ``cst`` = [dt, T, t0, k1, k2, 1/tau_g, 1/tau_a,
+#: q_step, ln max q scale], the error model's ``noise`` vector, ``nsub`` sub-steps of
+#: the error propagation and ``n_per`` IMU samples per epoch.
+Ins = namedtuple("Ins", "state comp xa decay scale gains cst noise nsub n_per")
+#: The filters (locals, then the master): estimates ``X``, covariances ``P`` (the lower
+#: factor ``S``, ``P = S S'``, of a filter ``sr[f]`` in the square-root form), sharing
+#: factors ``beta``, ln process-noise scales ``qlog`` (adapted in place), FDI ``passes``,
+#: ``fam`` (nf, 2) each filter's time/measurement-update family (:data:`FAMILIES`) and its
+#: unscented constants ``c``, ``Wm``, ``Wc``, ``cm`` (``sum Wc - 2``).
+Bank = namedtuple("Bank", "X P beta qlog passes fam sr c Wm Wc cm")
+#: Fault detection, sharing and the lockout guard: ``thr`` (nf, 7) each filter's
+#: chi-square threshold by dof (NaN: no detection), ``recovery``, ``sharing`` (0 equal,
+#: 1 fixed, 2 adaptive), ``thr_drift`` (nf, 7) and ``lk_*`` the lockout guard's drift
+#: thresholds, position sources, hold time and state
+#: (:class:`fednav.filters.federated.Lockout`).
+Rules = namedtuple("Rules", "thr recovery sharing thr_drift lk_pos lk_hold lk_state lk_r0 "
+                            "lk_S0 lk_tpos")
+#: Per aiding sensor: its local filter, how its delay is met (:data:`HOWS`), dimension,
+#: the rows of its model (kinds, value index), its geometry ((S, 4, 3): the lever arm in
+#: its axes, then its mounting ``C_s^b``, :attr:`~fednav.sensors.measurement.RowModel.
+#: geometry`), whether it is linear and its rows' bias columns (:func:`_biased_rows`).
+Sensors = namedtuple("Sensors", "filter how dim kinds zi geom linear bias")
+#: The measurements of a run of epochs in the order they are applied: epoch index,
+#: sensor, time of validity [s], value, noise covariance (filter units).
+Batch = namedtuple("Batch", "epoch sens t z R")
+#: The IMU data of a run of epochs: increments and baro heights, ``n_per`` per epoch.
+Imu = namedtuple("Imu", "dtheta dv h_ref")
+#: Outputs per epoch (``Phi``, ``Qd``, ``dx`` and ``rows`` of zero length: not kept).
+EpochOut = namedtuple("EpochOut", "states P beta Phi Qd dx rows")
+#: Outputs per measurement: NIS, accepted, threshold, the time logged, (of zero length
+#: unless asked for) residual, its covariance and the filter's share; ``re`` (M, 3):
+#: lockout start, NIS before and inflation of a re-admission, inflation 0 where none.
+MeasOut = namedtuple("MeasOut", "nis acc thr tlog r S bm re")
+#: One interval as the mechanization flew it: compensated increments, attitude, velocity
+#: and position after each sample, the mean rate [rad/s]; buffers for the INS a
+#: measurement compares with (position, velocity, attitude quaternion).
+Interval = namedtuple("Interval", "dth dvc rq rv rp omega lla vel q")
+#: The INS a measurement's rows compare with, in the sensor's axes: position, velocity,
+#: attitude ``C M``, rate ``M' omega``.
+View = namedtuple("View", "lla vel C omega")
+
+
 @numba.njit(cache=True)
-def _local_update(fam_u, sr, x, P, c, Wm, Wc, cm, kinds, lla, vel, C, omega, lever, linear,
-                  bias, y, R):
-    """Measurement update of one local filter (``fam_u`` 0 Kalman, Joseph form; 1
-    unscented; ``sr``: ``P`` is the lower factor ``S`` and the square-root kernels update
-    it, :mod:`fednav.filters.square_root`; ``bias``: the rows' sensor-bias columns,
-    :func:`_biased_rows`): (x, P or S, residual, its covariance, NIS, failure code 0 / 4 /
-    7 / 8 / 10 / 11 / 13)."""
+def _local_update(bank, f, sensors, sn, view, y, R):
+    """Measurement update of local filter ``f`` with a measurement of sensor ``sn``
+    (residual ``y`` against the INS ``view``, covariance ``R``): Kalman (Joseph form) or
+    unscented by its family; a factored filter (``bank.sr[f]``: ``P`` is its lower factor
+    ``S``) through the square-root kernels, :mod:`fednav.filters.square_root`; the rows'
+    sensor-bias columns, :func:`_biased_rows`.  Returns (x, P or S, residual, its
+    covariance, NIS, failure code 0 / 4 / 7 / 8 / 10 / 11 / 13)."""
+    x, P, sr = bank.X[f], bank.P[f], bank.sr[f]
     d, n = y.shape[0], x.shape[0]
+    kinds, lever, bias = sensors.kinds[sn, :d], sensors.geom[sn, 0], sensors.bias[sn, :d]
+    lla, vel, C, omega = view.lla, view.vel, view.C, view.omega
     Rs = R
     if sr:
         Rs, ok = srk.psd_sqrt(R)
         if not ok:
             return x, P, y, R, np.nan, 13
-    if fam_u == 0:
+    if bank.fam[f, 1] == 0:
         H = np.zeros((d, n))
         row_jacobian(kinds, lla, vel, C, omega, lever, H)
         for rb in range(d):
             if bias[rb] >= 0:
                 H[rb, bias[rb]] = -1.0
-        if linear:
+        if sensors.linear[sn]:
             yhat = H @ x
         else:
             Z = np.empty((1, d))
@@ -181,281 +240,346 @@ def _local_update(fam_u, sr, x, P, c, Wm, Wc, cm, kinds, lla, vel, C, omega, lev
         x1, Pn, Sm, ni, ok = joseph_update(x, P, H, r, R)
         return x1, Pn, r, Sm, ni, 0 if ok else 4
     if sr:
-        Sg, _ = srk.ukf_points(x, P, math.sqrt(c))
+        Sg, _ = srk.ukf_points(x, P, math.sqrt(bank.c[f]))
         Z = np.empty((Sg.shape[0], d))
         row_predict(kinds, lla, vel, C, omega, lever, Sg, Z)
         _biased_rows(bias, Sg, Z)
-        x1, Sn, Sm, ni, code, r = srk.sr_ukf_update(Z, P, Wm[1], cm, x, y, Rs)
+        x1, Sn, Sm, ni, code, r = srk.sr_ukf_update(Z, P, bank.Wm[f][1], bank.cm[f], x, y,
+                                                    Rs)
         return x1, Sn, r, Sm, ni, _sr_code(code, ni)
-    Sg = sigma_points(x, P, c)
+    Sg = sigma_points(x, P, bank.c[f])
     if Sg.shape[0] == 0:
         return x, P, y, R, np.nan, 7
     Z = np.empty((Sg.shape[0], d))
     row_predict(kinds, lla, vel, C, omega, lever, Sg, Z)
     _biased_rows(bias, Sg, Z)
-    x1, Pn, r, Sm, ni, ok = sigma_update(Sg, Z, Wm, Wc, x, P, y, R)
+    x1, Pn, r, Sm, ni, ok = sigma_update(Sg, Z, bank.Wm[f], bank.Wc[f], x, P, y, R)
     return x1, Pn, r, Sm, ni, 0 if ok and math.isfinite(ni) else 4
 
 
-@numba.njit(cache=True)
-def run_epochs(k0, n_ep, state, comp, xa, decay, scale, dtheta, dv, h_ref, gains, cst, noise,
-               nsub, n_per, X, P, beta, qlog, passes, fam, sr, c, Wm, Wc, cm, thr, recovery,
-               sharing, thr_drift, lk_pos, lk_hold, lk_state, lk_r0, lk_S0, lk_tpos,
-               m_epoch, m_sens, m_t, m_z, m_R, s_filter, s_how, s_dim, s_kinds, s_zi,
-               s_geom, s_linear, s_bias, out_states, out_P, out_beta, out_Phi, out_Qd, out_dx,
-               out_rows, out_nis, out_acc, out_r, out_S, out_bm, out_thr, out_tlog, out_re):
-    """Fly epochs ``k0 + 1 .. k0 + n_ep`` (1-based) in place on ``state`` (the INS),
-    ``comp`` (gyro and accelerometer compensation), ``xa`` (the optional error states'
-    totals, SI, :mod:`fednav.ins.states`: their ``decay`` per epoch, the states' filter
-    units ``scale``) and the filters ``X``, ``P``, ``beta``,
-    ``passes`` (locals, then the master); ``P[f]`` is the lower factor ``S`` (``P = S
-    S'``) of a filter ``sr[f]`` in the square-root form, flown with the kernels of
-    :mod:`fednav.filters.sr_kernels` as :mod:`fednav.filters.square_root` flies them.
+@numba.njit(cache=True, inline="always")
+def mechanize_interval(ins, imu, e, iv):
+    """Stage 1, mechanize: the IMU samples of epoch ``e`` (0-based in the run) compensated
+    and flown by the strapdown, ``iv`` filled (:data:`Interval`).  Returns the INS at the
+    interval's start."""
+    n_per, dt = ins.n_per, ins.cst[0]
+    b = e * n_per
+    compensate(imu.dtheta[b:b + n_per], imu.dv[b:b + n_per], dt, ins.comp, ins.xa,
+               int(ins.noise[7]), int(ins.noise[8]), iv.dth, iv.dvc)
+    s0 = ins.state.copy()
+    mechanize(ins.state, iv.dth, iv.dvc, dt, imu.h_ref[b:b + n_per], ins.gains, iv.rq, iv.rv,
+              iv.rp)
+    for j in range(3):
+        iv.omega[j] = iv.dth[:, j].sum() / ins.cst[1]
+    return s0
 
-    ``cst`` = [dt, T, t0, k1, k2, 1/tau_g, 1/tau_a, q_step, ln max q scale]; ``qlog``
-    each filter's ln process-noise scale (adapted in place when ``q_step`` > 0, as
-    :meth:`fednav.filters.federated.FederatedFilter.adapt_q`); ``dtheta``, ``dv``, ``h_ref``: the
-    epochs' IMU increments and baro heights; ``fam`` (nf, 2) each filter's time/
-    measurement-update family; ``c``, ``Wm``, ``Wc``, ``cm`` (``sum Wc - 2``) its
-    unscented constants; ``thr``
-    (nf, 7) its chi-square threshold by dof (NaN: no detection); ``sharing`` 0 equal,
-    1 fixed, 2 adaptive.  ``thr_drift`` (nf, 7), ``lk_*``: the lockout guard's drift
-    test thresholds, position sources, hold time and state
-    (:class:`fednav.filters.federated.Lockout`).  ``m_*``: the epochs' measurements
-    in the order they are applied (epoch index, sensor, time of validity, z, R); ``s_*``:
-    per sensor its local filter, how, dimension, the rows of its model, its geometry
-    (``s_geom`` (S, 4, 3): the lever arm in its axes, then its mounting ``C_s^b``,
-    :attr:`~fednav.sensors.measurement.RowModel.geometry`), whether it is linear and its
-    rows' bias columns (:func:`_biased_rows`).
-    Outputs per epoch and per measurement (``out_rows`` of zero length:
-    no IMU-rate rows; ``out_re`` (M, 3): lockout start, NIS before and inflation of a
-    re-admission, inflation 0 where none).  Returns (failure code, epoch, filter); code 0
-    when all flew."""
-    dt, T, t0 = cst[0], cst[1], cst[2]
-    k1g, k2g, itg, ita = cst[3], cst[4], cst[5], cst[6]
-    q_step, q_logmax = cst[7], cst[8]
-    nf, n = X.shape
-    isg, isa = int(noise[7]), int(noise[8])
-    rows_on = out_rows.shape[0] > 0
-    dth = np.empty((n_per, 3))
-    dvc = np.empty((n_per, 3))
-    rq = np.empty((n_per, 4))
-    rv = np.empty((n_per, 3))
-    rp = np.empty((n_per, 3))
-    lla = np.empty(3)
-    vel = np.empty(3)
-    omega = np.empty(3)
-    row_q = np.empty(4)
+
+@numba.njit(cache=True, inline="always")
+def interval_errors(ins, bank, s0, iv):
+    """Stage 2a, the error model of the interval from ``s0`` to the INS now: (its
+    nonlinear transition's ``params`` and ``Cm``, ``Phi``, ``Qd``, the white part ``Qw``
+    of ``Qd`` when Q adapts, the fused prior's ``Qd`` the record keeps); the optional
+    states' totals decayed to their mean."""
+    T, q_step = ins.cst[1], ins.cst[7]
+    params, Cm, Phi, Qd0 = interval_model(s0, ins.state, iv.dvc.sum(axis=0),
+                                          iv.dth.sum(axis=0), T, ins.cst[3], ins.cst[4],
+                                          ins.cst[5], ins.cst[6], ins.noise, ins.scale)
+    for j in range(18, ins.xa.shape[0]):  # the optional totals follow their mean
+        ins.xa[j] *= ins.decay[j]
+    Qw = Qd0
+    Qrec = Qd0
+    if q_step > 0.0:  # the fused prior's (FederatedFilter.q_scale_fused)
+        Qw = white_qd(Phi, ins.noise, T, ins.scale)
+        Qrec = Qd0 + (policy.fused_q_scale(bank.beta, bank.qlog) - 1.0) * Qw
+    return params, Cm, Phi, Qd0, Qw, Qrec
+
+
+@numba.njit(cache=True, inline="always")
+def time_update(ins, bank, Phi, Qd0, Qw, params, Cm):
+    """Stage 2b, time update: every filter over the interval (``Phi``, ``Qd0``, its white
+    part ``Qw``; ``params``, ``Cm`` the nonlinear transition,
+    :func:`interval_errors`), each with its share ``Qd / beta`` and its adapted noise
+    (:func:`fednav.filters.policy.adapted_qd`).  Returns (failure code, filter)."""
+    T, q_step = ins.cst[1], ins.cst[7]
+    nf, n = bank.X.shape
+    Lq0 = np.empty((0, 0))  # the factor of Qd0 (square-root filters; once)
+    for f in range(nf):
+        q_scale = 1.0 / bank.beta[f]
+        adapted = q_step > 0.0 and bank.qlog[f] > 0.0
+        Qd = policy.adapted_qd(Qd0, Qw, bank.qlog[f]) if adapted else Qd0
+        if bank.sr[f]:  # the factor (SquareRootKalmanFilter / SquareRootSigma.predict)
+            if adapted or Lq0.shape[0] == 0:
+                Lq, ok = srk.psd_sqrt(Qd)
+                if not ok:
+                    return 12, f
+                if not adapted:
+                    Lq0 = Lq
+            else:
+                Lq = Lq0
+            sq = math.sqrt(q_scale)
+            if bank.fam[f, 0] == 0:
+                x1 = propagate_points(bank.X[f].copy().reshape(1, n), T, ins.nsub, params, Cm,
+                                      ins.scale)[0]
+                Sn, ok = srk.sr_propagate(Phi, bank.P[f], Lq, sq)
+                if not ok or not math.isfinite(x1.sum()):
+                    return 3, f
+            else:
+                Xs, _ = srk.ukf_points(bank.X[f], bank.P[f], math.sqrt(bank.c[f]))
+                x1, Sn, code = srk.sr_sigma_predict(
+                    propagate_points(Xs, T, ins.nsub, params, Cm, ins.scale), bank.Wm[f],
+                    bank.Wc[f], Lq, sq)
+                if code != srk.OK:
+                    return 9 if code == srk.DOWNDATE else 3, f
+            bank.X[f] = x1
+            bank.P[f] = Sn
+        elif bank.fam[f, 0] == 0:  # Kalman: the mean through the nonlinear model
+            x1 = propagate_points(bank.X[f].copy().reshape(1, n), T, ins.nsub, params, Cm,
+                                  ins.scale)[0]
+            Pn, ok = propagate_cov(Phi, bank.P[f], Qd, q_scale)
+            if not ok or not math.isfinite(x1.sum()):
+                return 3, f
+            bank.X[f] = x1
+            bank.P[f] = Pn
+        else:
+            S = sigma_points(bank.X[f], bank.P[f], bank.c[f])
+            if S.shape[0] == 0:
+                return 2, f
+            Q = Qd if q_scale == 1.0 else q_scale * Qd
+            x1, Pn, ok = predict_moments(propagate_points(S, T, ins.nsub, params, Cm,
+                                                          ins.scale), bank.Wm[f], bank.Wc[f],
+                                         Q)
+            if not ok:
+                return 3, f
+            bank.X[f] = x1
+            bank.P[f] = Pn
+    return 0, -1
+
+
+@numba.njit(cache=True, inline="always")
+def ins_at_validity(ins, iv, s0, how, t, k):
+    """Stage 3a, the INS a measurement of time of validity ``t`` [s] compares with, into
+    ``iv.lla``, ``iv.vel``: at epoch ``k`` (``how`` 0), or at the interval's sample nearest
+    ``t`` moved back along its velocity by the lag left (``how`` 1,
+    :func:`fednav.filters.policy.validity_sample`).  Returns its attitude ``C_b^n`` and
+    the time the measurement is logged at [s]."""
+    dt, T, t0 = ins.cst[0], ins.cst[1], ins.cst[2]
+    lla, vel = iv.lla, iv.vel
+    if how != 1:
+        _nav_buffers(lla, vel, ins.state[7:10], ins.state[4:7])
+        return _q2dcm(ins.state[0:4]), t0 + T * k
+    jj, lag = policy.validity_sample(t, t0 + T * (k - 1), dt, ins.n_per)
+    if jj == 0:
+        _nav_buffers(lla, vel, s0[7:10], s0[4:7])
+        for j in range(4):
+            iv.q[j] = s0[j]
+    else:
+        _nav_buffers(lla, vel, iv.rp[jj - 1], iv.rv[jj - 1])
+        for j in range(4):
+            iv.q[j] = iv.rq[jj - 1, j]
+    lla[0], lla[1], lla[2] = earth.moved_nb(lla[0], lla[1], lla[2], -lag * vel[0],
+                                            -lag * vel[1], -lag * vel[2])
+    return _q2dcm(iv.q), t
+
+
+@numba.njit(cache=True, inline="always")
+def lockout_guard(bank, rules, sensors, sn, view, y, R, t_log, tested):
+    """Stage 3c, the lockout guard (:func:`fednav.filters.federated.lockout_step`, the
+    Python loop's too) on measurement ``y`` (covariance ``R``) of sensor ``sn``, ``tested``
+    = (x, P, r, S, NIS, accepted) as the local update and the gate left it.  When the
+    guard re-admits, every filter's covariance is inflated and the update made again.
+    Returns ``tested`` as it then stands, the inflation (0: none) and the lockout's
+    start [s]."""
+    x1, Pn, r, Sm, ni, accepted = tested
+    f = sensors.filter[sn]
+    d = y.shape[0]
+    thr_drift = rules.thr_drift[f, d]
+    s_in, t_start = lockout_step(f, t_log, accepted, ni, r, Sm, R, thr_drift, rules.lk_hold,
+                                 rules.lk_pos, rules.lk_state, rules.lk_r0, rules.lk_S0,
+                                 rules.lk_tpos)
+    if s_in > 0.0:
+        P_saved = bank.P.copy()
+        for g in range(bank.X.shape[0]):  # (Filter.inflate: a factor by sqrt(s))
+            bank.P[g] = bank.P[g] * (math.sqrt(s_in) if bank.sr[g] else s_in)
+        x2, P2, r2, S2, n2, code = _local_update(bank, f, sensors, sn, view, y, R)
+        if code == 0 and not n2 > rules.thr[f, d] and (bank.sr[f] or (
+                math.isfinite(x2.sum() + P2.sum()) and cholesky_lower(P2)[1])):
+            lockout_step(f, t_log, True, n2, r2, S2, R, thr_drift, rules.lk_hold,
+                         rules.lk_pos, rules.lk_state, rules.lk_r0, rules.lk_S0, rules.lk_tpos)
+            return (x2, P2, r2, S2, n2, True), s_in, t_start
+        bank.P[:] = P_saved
+    return (x1, Pn, r, Sm, ni, accepted), 0.0, t_start
+
+
+@numba.njit(cache=True, inline="always")
+def apply_measurement(m, k, ins, iv, s0, bank, rules, sensors, batch, mo):
+    """Stage 3, measurement update: measurement ``m`` of the batch (epoch ``k``) — its
+    residual against the INS at its time of validity in its sensor's axes (the sensor's
+    bias estimate taken out), its local filter's update, the chi-square test
+    (:func:`fednav.filters.policy.fdi_gate`, the Python federated filter's rule), the
+    lockout guard, the Q adaptation; ``mo`` filled.  Returns (failure code, filter)."""
+    sn = batch.sens[m]
+    f, d = sensors.filter[sn], sensors.dim[sn]
+    C, t_log = ins_at_validity(ins, iv, s0, sensors.how[sn], batch.t[m], k)
+    # the INS as the sensor sees it: its axes' attitude C M, the rate in them
+    # (sensors.measurement.sensor_frame)
+    C, om = _sensor_frame(C, iv.omega, sensors.geom[sn])
+    view = View(iv.lla, iv.vel, C, om)
+    bias = sensors.bias[sn, :d]
+    y = np.empty(d)
+    row_residual(sensors.kinds[sn, :d], sensors.zi[sn, :d], iv.lla, iv.vel, C, om,
+                 batch.z[m], sensors.geom[sn, 0], y)
+    for rb in range(d):  # the sensor's bias estimate taken out of its value
+        if bias[rb] >= 0:
+            y[rb] += ins.xa[bias[rb]]
+    R = batch.R[m, :d, :d].copy()
+    x1, Pn, r, Sm, ni, code = _local_update(bank, f, sensors, sn, view, y, R)
+    if code:
+        return code, f
+    th = rules.thr[f, d]
+    gate = policy.fdi_gate(th, bank.passes[f], rules.recovery)
+    accepted = policy.is_accepted(ni, gate)
+    bank.passes[f] = policy.fdi_passes(th, gate, bank.passes[f], rules.recovery, ni)
+    mo.re[m, 2] = 0.0
+    if rules.lk_pos[f] and rules.lk_hold > 0.0:
+        tested, s_in, t_start = lockout_guard(bank, rules, sensors, sn, view, y, R, t_log,
+                                              (x1, Pn, r, Sm, ni, accepted))
+        if s_in > 0.0:  # re-admitted
+            mo.re[m, 0], mo.re[m, 1], mo.re[m, 2] = t_start, ni, s_in
+            x1, Pn, r, Sm, ni, accepted = tested
+            bank.passes[f] = rules.recovery
+    if accepted:  # (a factor's kernel checked it already)
+        if not bank.sr[f] and not math.isfinite(x1.sum() + Pn.sum()):
+            return 8, f
+        if not bank.sr[f] and not cholesky_lower(Pn)[1]:
+            return 5, f
+        bank.X[f] = x1
+        bank.P[f] = Pn
+        if ins.cst[7] > 0.0:
+            bank.qlog[f] = policy.adapt_qlog(bank.qlog[f], ins.cst[7], ni, d, ins.cst[8])
+    mo.nis[m] = ni
+    mo.acc[m] = 1.0 if accepted else 0.0
+    mo.thr[m] = th
+    mo.tlog[m] = t_log
+    if mo.r.shape[0] > 0:  # the innovations themselves, when asked for
+        mo.r[m, :d] = r
+        mo.S[m, :d, :d] = Sm
+        mo.bm[m] = bank.beta[f]
+    return 0, -1
+
+
+@numba.njit(cache=True, inline="always")
+def fuse_reset(bank, sharing, out_P):
+    """Stage 4, fusion and reset: every filter factored, the square-root information
+    fusion, else the covariances (``S S'`` of the factored ones) fused
+    (:meth:`~fednav.filters.federated.FederatedFilter.fuse`); the fused covariance into
+    ``out_P``; adaptive sharing (:func:`fednav.filters.policy.adaptive_shares`); each
+    filter reset to the fused estimate with ``P_g / beta``.  Returns (failure code,
+    filter, the fused estimate)."""
+    nf = bank.X.shape[0]
+    all_sr = bank.sr.all()
+    if all_sr:
+        xg, Sg, traces, bad = srk.sr_fuse(bank.X, bank.P)
+        Pg = srk.factor_product(Sg)
+    else:
+        Ps = bank.P
+        if bank.sr.any():
+            Ps = bank.P.copy()
+            for f in range(nf):
+                if bank.sr[f]:
+                    Ps[f] = srk.factor_product(bank.P[f])
+        Sg = Ps[0]  # (unused here: numba types Sg the same on both branches)
+        xg, Pg, traces, bad = fuse_information(bank.X, Ps)
+    if bad >= 0:
+        return 6, bad, xg
+    out_P[:] = Pg
+    if sharing == 2:
+        bank.beta[:] = policy.adaptive_shares(traces)
+    for f in range(nf):
+        bank.X[f] = xg - xg  # reset to the fused estimate, then its feedback (zero)
+        if all_sr:
+            bank.P[f] = Sg / math.sqrt(bank.beta[f])
+        elif bank.sr[f]:  # the factor of P_g / beta (SquareRootForm.P's setter)
+            L, ok = cholesky_lower(Pg / bank.beta[f])
+            if not ok:
+                return 14, f, xg
+            bank.P[f] = L
+        else:
+            bank.P[f] = Pg / bank.beta[f]
+    return 0, -1, xg
+
+
+@numba.njit(cache=True, inline="always")
+def feed_back(ins, xg):
+    """Stage 5, feedback: the fused error estimate ``xg`` (filter units) corrects the INS,
+    the sensors' compensation and the optional states' totals."""
+    dx = xg * ins.scale
+    correct_state(ins.state, dx[0:3], dx[3:6], dx[6:9])
+    for j in range(3):
+        ins.comp[j] += dx[9 + j] + dx[12 + j]
+        ins.comp[3 + j] += dx[15 + j]
+    for j in range(18, dx.shape[0]):
+        ins.xa[j] += dx[j]
+
+
+@numba.njit(cache=True, inline="always")
+def record_epoch(e, ins, iv, bank, Phi, Qrec, xg, eo):
+    """Stage 6, the record of epoch ``e``: the INS after the feedback, the sharing
+    factors, the interval's model and fused estimate (when kept) and its IMU-rate rows
+    (when kept; the epoch's row after the feedback)."""
+    eo.states[e] = ins.state
+    eo.beta[e] = bank.beta
+    if eo.Phi.shape[0] > 0:
+        eo.Phi[e] = Phi
+        eo.Qd[e] = Qrec
+        eo.dx[e] = xg
+    if eo.rows.shape[0] > 0:
+        n_per, dt = ins.n_per, ins.cst[0]
+        r0 = e * n_per
+        for i in range(n_per):
+            for j in range(4):
+                eo.rows[r0 + i, j] = iv.rq[i, j]
+            for j in range(3):
+                eo.rows[r0 + i, 4 + j] = iv.rv[i, j]
+                eo.rows[r0 + i, 7 + j] = iv.rp[i, j]
+                eo.rows[r0 + i, 10 + j] = iv.dth[i, j] / dt
+        for j in range(10):  # the epoch row: after the feedback
+            eo.rows[r0 + n_per - 1, j] = ins.state[j]
+
+
+@numba.njit(cache=True)
+def run_epochs(k0, n_ep, ins, imu, bank, rules, sensors, batch, eo, mo):
+    """Fly epochs ``k0 + 1 .. k0 + n_ep`` (1-based) in place on the INS ``ins`` and the
+    filters ``bank`` with the IMU data ``imu`` and the measurements ``batch`` (records:
+    :data:`Ins`, :data:`Imu`, :data:`Bank`, :data:`Rules`, :data:`Sensors`,
+    :data:`Batch`), the outputs into ``eo`` and ``mo`` (:data:`EpochOut`,
+    :data:`MeasOut`).  Each epoch: mechanize, the error model and time update, each of
+    its measurements, fusion and reset, feedback, record.  Returns (failure code
+    (:data:`FAILURES`), epoch, filter); code 0 when all flew."""
+    n_per = ins.n_per
+    iv = Interval(np.empty((n_per, 3)), np.empty((n_per, 3)), np.empty((n_per, 4)),
+                  np.empty((n_per, 3)), np.empty((n_per, 3)), np.empty(3), np.empty(3),
+                  np.empty(3), np.empty(4))
     m = 0
-    n_meas = m_epoch.shape[0]
-    all_sr = sr.all()
-    any_sr = sr.any()
+    n_meas = batch.epoch.shape[0]
     for e in range(n_ep):
         k = k0 + 1 + e
-        b = e * n_per
-        compensate(dtheta[b:b + n_per], dv[b:b + n_per], dt, comp, xa, isg, isa, dth, dvc)
-        s0 = state.copy()
-        mechanize(state, dth, dvc, dt, h_ref[b:b + n_per], gains, rq, rv, rp)
-        if not math.isfinite(state.sum()):
+        s0 = mechanize_interval(ins, imu, e, iv)
+        if not math.isfinite(ins.state.sum()):
             return 1, k, -1
-        params, Cm, Phi, Qd0 = interval_model(s0, state, dvc.sum(axis=0), dth.sum(axis=0), T, k1g,
-                                         k2g, itg, ita, noise, scale)
-        for j in range(18, n):  # the optional totals follow their mean
-            xa[j] *= decay[j]
-        Qd = Qd0
-        Qw = Qd0
-        Qrec = Qd0
-        if q_step > 0.0:  # the fused prior's (FederatedFilter.q_scale_fused)
-            Qw = white_qd(Phi, noise, T, scale)
-            Qrec = Qd0 + (policy.fused_q_scale(beta, qlog) - 1.0) * Qw
-        Lq0 = np.empty((0, 0))  # the factor of Qd0 (square-root filters; once)
-        for f in range(nf):
-            q_scale = 1.0 / beta[f]
-            adapted = q_step > 0.0 and qlog[f] > 0.0
-            if adapted:  # the adapted white noise (adapt_q)
-                Qd = policy.adapted_qd(Qd0, Qw, qlog[f])
-            else:
-                Qd = Qd0
-            if sr[f]:  # the factor (SquareRootKalmanFilter / SquareRootSigma.predict)
-                if adapted or Lq0.shape[0] == 0:
-                    Lq, ok = srk.psd_sqrt(Qd)
-                    if not ok:
-                        return 12, k, f
-                    if not adapted:
-                        Lq0 = Lq
-                else:
-                    Lq = Lq0
-                sq = math.sqrt(q_scale)
-                if fam[f, 0] == 0:
-                    x1 = propagate_points(X[f].copy().reshape(1, n), T, nsub, params, Cm, scale)[0]
-                    Sn, ok = srk.sr_propagate(Phi, P[f], Lq, sq)
-                    if not ok or not math.isfinite(x1.sum()):
-                        return 3, k, f
-                else:
-                    Xs, _ = srk.ukf_points(X[f], P[f], math.sqrt(c[f]))
-                    x1, Sn, code = srk.sr_sigma_predict(
-                        propagate_points(Xs, T, nsub, params, Cm, scale), Wm[f], Wc[f], Lq, sq)
-                    if code != srk.OK:
-                        return 9 if code == srk.DOWNDATE else 3, k, f
-                X[f] = x1
-                P[f] = Sn
-            elif fam[f, 0] == 0:  # Kalman: the mean through the nonlinear model
-                x1 = propagate_points(X[f].copy().reshape(1, n), T, nsub, params, Cm, scale)[0]
-                Pn, ok = propagate_cov(Phi, P[f], Qd, q_scale)
-                if not ok or not math.isfinite(x1.sum()):
-                    return 3, k, f
-                X[f] = x1
-                P[f] = Pn
-            else:
-                S = sigma_points(X[f], P[f], c[f])
-                if S.shape[0] == 0:
-                    return 2, k, f
-                Q = Qd if q_scale == 1.0 else q_scale * Qd
-                x1, Pn, ok = predict_moments(propagate_points(S, T, nsub, params, Cm, scale),
-                                              Wm[f], Wc[f], Q)
-                if not ok:
-                    return 3, k, f
-                X[f] = x1
-                P[f] = Pn
-        for j in range(3):
-            omega[j] = dth[:, j].sum() / T
-        C_ep = _q2dcm(state[0:4])
-        while m < n_meas and m_epoch[m] == k:
-            sn = m_sens[m]
-            f = s_filter[sn]
-            d = s_dim[sn]
-            # the INS the residual compares with: at the epoch, or at the sample nearest
-            # the time of validity moved by the remaining lag
-            C = C_ep
-            t_log = t0 + T * k
-            _nav_buffers(lla, vel, state[7:10], state[4:7])
-            if s_how[sn] == 1:
-                t_log = m_t[m]
-                jj, lag = policy.validity_sample(m_t[m], t0 + T * (k - 1), dt, n_per)
-                if jj == 0:
-                    _nav_buffers(lla, vel, s0[7:10], s0[4:7])
-                    for j in range(4):
-                        row_q[j] = s0[j]
-                else:
-                    _nav_buffers(lla, vel, rp[jj - 1], rv[jj - 1])
-                    for j in range(4):
-                        row_q[j] = rq[jj - 1, j]
-                lla[0], lla[1], lla[2] = earth.moved_nb(
-                    lla[0], lla[1], lla[2], -lag * vel[0], -lag * vel[1], -lag * vel[2])
-                C = _q2dcm(row_q)
-            kinds, zi, lever = s_kinds[sn, :d], s_zi[sn, :d], s_geom[sn, 0]
-            # the INS as the sensor sees it: its axes' attitude C M, the rate in them
-            # (sensors.measurement.sensor_frame)
-            C, om = _sensor_frame(C, omega, s_geom[sn])
-            bias = s_bias[sn, :d]
-            y = np.empty(d)
-            row_residual(kinds, zi, lla, vel, C, om, m_z[m], lever, y)
-            for rb in range(d):  # the sensor's bias estimate taken out of its value
-                if bias[rb] >= 0:
-                    y[rb] += xa[bias[rb]]
-            R = m_R[m, :d, :d].copy()
-            x1, Pn, r, Sm, ni, code = _local_update(fam[f, 1], sr[f], X[f], P[f], c[f], Wm[f],
-                                                    Wc[f], cm[f], kinds, lla, vel, C, om,
-                                                    lever, s_linear[sn], bias, y, R)
+        params, Cm, Phi, Qd0, Qw, Qrec = interval_errors(ins, bank, s0, iv)
+        code, f = time_update(ins, bank, Phi, Qd0, Qw, params, Cm)
+        if code:
+            return code, k, f
+        while m < n_meas and batch.epoch[m] == k:
+            code, f = apply_measurement(m, k, ins, iv, s0, bank, rules, sensors, batch, mo)
             if code:
                 return code, k, f
-            # chi-square fault detection (FederatedFilter.update)
-            th = thr[f, d]
-            gate = policy.fdi_gate(th, passes[f], recovery)
-            accepted = policy.is_accepted(ni, gate)
-            passes[f] = policy.fdi_passes(th, gate, passes[f], recovery, ni)
-            out_re[m, 2] = 0.0
-            if lk_pos[f] and lk_hold > 0.0:  # the lockout guard (FederatedFilter._readmit)
-                s_in, t_start = lockout_step(f, t_log, accepted, ni, r, Sm, R, thr_drift[f, d],
-                                         lk_hold, lk_pos, lk_state, lk_r0, lk_S0, lk_tpos)
-                if s_in > 0.0:
-                    P_saved = P.copy()
-                    for g in range(nf):  # (Filter.inflate: a factor by sqrt(s))
-                        P[g] = P[g] * (math.sqrt(s_in) if sr[g] else s_in)
-                    x2, P2, r2, S2, n2, code = _local_update(
-                        fam[f, 1], sr[f], X[f], P[f], c[f], Wm[f], Wc[f], cm[f], kinds, lla,
-                        vel, C, om, lever, s_linear[sn], bias, y, R)
-                    if code == 0 and not n2 > th and (sr[f] or (
-                            math.isfinite(x2.sum() + P2.sum()) and cholesky_lower(P2)[1])):
-                        out_re[m, 0], out_re[m, 1], out_re[m, 2] = t_start, ni, s_in
-                        x1, Pn, r, Sm, ni, accepted = x2, P2, r2, S2, n2, True
-                        passes[f] = recovery
-                        lockout_step(f, t_log, True, ni, r, Sm, R, thr_drift[f, d], lk_hold,
-                                 lk_pos, lk_state, lk_r0, lk_S0, lk_tpos)
-                    else:
-                        P[:] = P_saved
-            if accepted:  # (a factor's kernel checked it already)
-                if not sr[f] and not math.isfinite(x1.sum() + Pn.sum()):
-                    return 8, k, f
-                if not sr[f] and not cholesky_lower(Pn)[1]:
-                    return 5, k, f
-                X[f] = x1
-                P[f] = Pn
-                if q_step > 0.0:
-                    qlog[f] = policy.adapt_qlog(qlog[f], q_step, ni, d, q_logmax)
-            out_nis[m] = ni
-            out_acc[m] = 1.0 if accepted else 0.0
-            out_thr[m] = th
-            out_tlog[m] = t_log
-            if out_r.shape[0] > 0:  # the innovations themselves, when asked for
-                out_r[m, :d] = r
-                out_S[m, :d, :d] = Sm
-                out_bm[m] = beta[f]
             m += 1
-        # every filter factored: the square-root information fusion; else the
-        # covariances (S S' of the factored ones) fused (FederatedFilter.fuse)
-        if all_sr:
-            xg, Sg, traces, bad = srk.sr_fuse(X, P)
-            Pg = srk.factor_product(Sg)
-        else:
-            Ps = P
-            if any_sr:
-                Ps = P.copy()
-                for f in range(nf):
-                    if sr[f]:
-                        Ps[f] = srk.factor_product(P[f])
-            Sg = Ps[0]  # (unused here: numba types Sg the same on both branches)
-            xg, Pg, traces, bad = fuse_information(X, Ps)
-        if bad >= 0:
-            return 6, k, bad
-        out_P[e] = Pg
-        if sharing == 2:
-            beta[:] = policy.adaptive_shares(traces)
-        for f in range(nf):
-            X[f] = xg - xg  # reset to the fused estimate, then its feedback (zero)
-            if all_sr:
-                P[f] = Sg / math.sqrt(beta[f])
-            elif sr[f]:  # the factor of P_g / beta (SquareRootForm.P's setter)
-                L, ok = cholesky_lower(Pg / beta[f])
-                if not ok:
-                    return 14, k, f
-                P[f] = L
-            else:
-                P[f] = Pg / beta[f]
-            out_beta[e, f] = beta[f]
-        dx = xg * scale
-        correct_state(state, dx[0:3], dx[3:6], dx[6:9])
-        for j in range(3):
-            comp[j] += dx[9 + j] + dx[12 + j]
-            comp[3 + j] += dx[15 + j]
-        for j in range(18, n):
-            xa[j] += dx[j]
-        out_states[e] = state
-        if out_Phi.shape[0] > 0:
-            out_Phi[e] = Phi
-            out_Qd[e] = Qrec
-            out_dx[e] = xg
-        if rows_on:
-            r0 = e * n_per
-            for i in range(n_per):
-                for j in range(4):
-                    out_rows[r0 + i, j] = rq[i, j]
-                for j in range(3):
-                    out_rows[r0 + i, 4 + j] = rv[i, j]
-                    out_rows[r0 + i, 7 + j] = rp[i, j]
-                    out_rows[r0 + i, 10 + j] = dth[i, j] / dt
-            for j in range(10):  # the epoch row: after the feedback
-                out_rows[r0 + n_per - 1, j] = state[j]
+        code, f, xg = fuse_reset(bank, rules.sharing, eo.P[e])
+        if code:
+            return code, k, f
+        feed_back(ins, xg)
+        record_epoch(e, ins, iv, bank, Phi, Qrec, xg, eo)
     return 0, -1, -1
 
 
@@ -511,19 +635,18 @@ class CompiledLoop:
             if not isinstance(m.model, RowModel):
                 raise ValueError(f"sensor '{m.name}': its model is not a row model")
         S = len(meas)
-        self.s_filter = np.array([self.names.index(m.name) for m in meas], dtype=np.int64)
-        self.s_how = np.array([HOWS[m.how] for m in meas], dtype=np.int64)
-        self.s_dim = np.array([m.model.dim for m in meas], dtype=np.int64)
-        self.s_kinds = np.zeros((S, 6), dtype=np.int64)
-        self.s_zi = np.zeros((S, 6), dtype=np.int64)
+        kinds, zi = np.zeros((S, 6), dtype=np.int64), np.zeros((S, 6), dtype=np.int64)
+        bias = np.full((S, 6), -1, dtype=np.int64)
         for j, m in enumerate(meas):
-            self.s_kinds[j, :m.model.dim] = m.model.kinds
-            self.s_zi[j, :m.model.dim] = m.model.zindex
-        self.s_geom = np.array([m.model.geometry for m in meas]).reshape(S, 4, 3)
-        self.s_linear = np.array([m.model.linear for m in meas], dtype=np.bool_)
-        self.s_bias = np.full((S, 6), -1, dtype=np.int64)
-        for j, m in enumerate(meas):
-            self.s_bias[j, :m.model.dim] = bias_columns(core.layout, m.model)
+            kinds[j, :m.model.dim] = m.model.kinds
+            zi[j, :m.model.dim] = m.model.zindex
+            bias[j, :m.model.dim] = bias_columns(core.layout, m.model)
+        self.sensors = Sensors(
+            np.array([self.names.index(m.name) for m in meas], dtype=np.int64),
+            np.array([HOWS[m.how] for m in meas], dtype=np.int64),
+            np.array([m.model.dim for m in meas], dtype=np.int64), kinds, zi,
+            np.array([m.model.geometry for m in meas]).reshape(S, 4, 3),
+            np.array([m.model.linear for m in meas], dtype=np.bool_), bias)
         self.comp = np.r_[core.comp_g, core.comp_a]
         self.xa = core.xa  # (flown in place)
         self.decay = core.layout.decay(self.T)
@@ -620,19 +743,18 @@ class CompiledLoop:
             out_r, out_S, out_bm = self._none_inn
         out_re = np.zeros((max(M, 1), 3))
         lk = self.lockout
-        code, k, f = run_epochs(
-            k0, n_ep, self.core.state, self.comp, self.xa, self.decay, self.scale, dtheta, dv,
-            h_ref, self.gains,
-            self.cst, self.noise_vec, self.core.nsub, self.n_per, self.X, self.P, self.beta,
-            self.qlog, self.passes, self.fam, self.sr, self.c, self.Wm, self.Wc, self.cm,
-            self.thr, self.recovery,
-            self.sharing, self.thr_drift, lk.pos, lk.hold, lk.state, lk.r0, lk.S0, lk.t_pos,
-            m_epoch, m_sens, m_t, m_z, m_R, self.s_filter, self.s_how,
-            self.s_dim, self.s_kinds, self.s_zi, self.s_geom, self.s_linear, self.s_bias,
-            rec.states.a[e0:e0 + n_ep],
-            rec.P.a[e0:e0 + n_ep], rec.beta.a[e0 - 1:e0 - 1 + n_ep], out_Phi, out_Qd,
-            out_dx, out_rows, lg[:, 2], lg[:, 5], out_r, out_S, out_bm, lg[:, 4], lg[:, 0],
-            out_re)
+        core = self.core
+        ins = Ins(core.state, self.comp, self.xa, self.decay, self.scale, self.gains, self.cst,
+                  self.noise_vec, core.nsub, self.n_per)
+        bank = Bank(self.X, self.P, self.beta, self.qlog, self.passes, self.fam, self.sr,
+                    self.c, self.Wm, self.Wc, self.cm)
+        rules = Rules(self.thr, self.recovery, self.sharing, self.thr_drift, lk.pos, lk.hold,
+                      lk.state, lk.r0, lk.S0, lk.t_pos)
+        eo = EpochOut(rec.states.a[e0:e0 + n_ep], rec.P.a[e0:e0 + n_ep],
+                      rec.beta.a[e0 - 1:e0 - 1 + n_ep], out_Phi, out_Qd, out_dx, out_rows)
+        mo = MeasOut(lg[:, 2], lg[:, 5], lg[:, 4], lg[:, 0], out_r, out_S, out_bm, out_re)
+        code, k, f = run_epochs(k0, n_ep, ins, Imu(dtheta, dv, h_ref), bank, rules,
+                                self.sensors, Batch(m_epoch, m_sens, m_t, m_z, m_R), eo, mo)
         if code:
             phase, why = FAILURES[code]
             if code == 1:
@@ -655,8 +777,8 @@ class CompiledLoop:
             rec.rows.n += n_rows
         self.Pg = rec.P.a[rec.P.n - 1]
         if M:
-            lg[:M, 1] = self.s_filter[m_sens]
-            lg[:M, 3] = self.s_dim[m_sens]
+            lg[:M, 1] = self.sensors.filter[m_sens]
+            lg[:M, 3] = self.sensors.dim[m_sens]
             for j in np.flatnonzero(out_re[:M, 2] > 0.0).tolist():  # re-admissions (few)
                 lk.episode(int(lg[j, 1]), out_re[j, 0], lg[j, 0], out_re[j, 1], out_re[j, 2],
                            lg[j, 2], int(lg[j, 3]))
