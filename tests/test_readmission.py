@@ -16,7 +16,7 @@ from fednav import System
 from fednav.core import earth
 from fednav.filters import FederatedFilter, KalmanFilter
 from fednav.filters.base import FunctionModel, FunctionProcess
-from fednav.filters.federated import READMIT_ALPHA, drift_threshold, lockout_step
+from fednav.filters.federated import READMIT_ALPHA, LockoutState, drift_threshold, lockout_step
 from fednav.navigator.health import readmission_warnings
 from fednav.navigator.system import FilterConfig
 from fednav.process import process
@@ -46,7 +46,7 @@ def test_kernel_waits_for_the_hold_then_needs_a_drift():
     S, R = np.eye(2) * 2.0, np.eye(2)
     thr = drift_threshold(2, 0.001)
     call = lambda t, r, acc=False: lockout_step(0, t, acc, float(r @ r / 2.0), r, S, R,  # noqa
-                                            thr, 5.0, pos, st, r0, S0, tp)
+                                            thr, LockoutState(pos, 5.0, st, r0, S0, tp))
     assert call(0.0, np.zeros(2), True)[0] == 0.0 and tp[0] == 0.0
     jump = np.array([40.0, 0.0])
     assert call(1.0, jump)[0] == 0.0 and st[0, 0] == 1.0  # the reference of the run
@@ -58,8 +58,9 @@ def test_kernel_waits_for_the_hold_then_needs_a_drift():
     M = s * (S - R) + R
     assert r @ np.linalg.solve(M, r) == pytest.approx(2.0, rel=1e-9)  # NIS = m after
     # not a position source, or the guard off: never
-    assert lockout_step(1, 9.0, False, 1e6, r, S, R, thr, 5.0, pos, st, r0, S0, tp)[0] == 0.0
-    assert lockout_step(0, 9.0, False, 1e6, r, S, R, thr, np.nan, pos, st, r0, S0, tp)[0] == 0.0
+    lk = LockoutState(pos, 5.0, st, r0, S0, tp)
+    assert lockout_step(1, 9.0, False, 1e6, r, S, R, thr, lk)[0] == 0.0
+    assert lockout_step(0, 9.0, False, 1e6, r, S, R, thr, lk._replace(hold=np.nan))[0] == 0.0
     assert drift_threshold(2, 0.001) == pytest.approx(-2 * np.log(READMIT_ALPHA), rel=1e-6)
     assert drift_threshold(2, 1e-9) > drift_threshold(2, 0.001)  # never looser than FDI
 
@@ -70,12 +71,13 @@ def test_kernel_readmits_the_most_consistent_source():
     S, R = np.eye(2), np.full((2, 2), np.nan)  # (R unknown: s = NIS / m)
     thr = drift_threshold(2, 0.001)
     for f, size in ((0, 10.0), (1, 3.0)):
-        lockout_step(f, 0.0, False, size**2, np.array([size, 0.0]), S, R, thr, 5.0, pos, st,
-                 r0, S0, tp)
+        lockout_step(f, 0.0, False, size**2, np.array([size, 0.0]), S, R, thr,
+                     LockoutState(pos, 5.0, st, r0, S0, tp))
     r = np.array([10.0, 60.0])  # source 0 drifted, but source 1 is more consistent
-    assert lockout_step(0, 6.0, False, r @ r, r, S, R, thr, 5.0, pos, st, r0, S0, tp)[0] == 0.0
+    lk = LockoutState(pos, 5.0, st, r0, S0, tp)
+    assert lockout_step(0, 6.0, False, r @ r, r, S, R, thr, lk)[0] == 0.0
     r1 = np.array([3.0, 40.0])
-    s, _ = lockout_step(1, 6.0, False, r1 @ r1, r1, S, R, thr, 5.0, pos, st, r0, S0, tp)
+    s, _ = lockout_step(1, 6.0, False, r1 @ r1, r1, S, R, thr, lk)
     assert s == pytest.approx(r1 @ r1 / 2.0)
 
 

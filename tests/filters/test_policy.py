@@ -94,3 +94,15 @@ def test_the_sample_nearest_the_time_of_validity(t, j, lag):
     the interval, and its time minus the time of validity."""
     jj, lg = policy.validity_sample(t, 10.0, 0.01, 10)
     assert jj == j and lg == pytest.approx(lag, abs=1e-12)
+
+
+@pytest.mark.parametrize("module", ["navigator/engine.py", "filters/policy.py",
+                                    "filters/federated.py"])
+def test_the_compiled_functions_take_records_not_dozens_of_arrays(module):
+    """The engine's cycle is named stages over typed records: no compiled function of the
+    engine, the rules or the federated filter takes more than 10 parameters."""
+    for node in ast.walk(ast.parse((SRC / module).read_text())):
+        if isinstance(node, ast.FunctionDef) and any(
+                "njit" in ast.unparse(d) for d in node.decorator_list):
+            n = len(node.args.args)
+            assert n <= 10, f"{module}: {node.name} takes {n} parameters"

@@ -57,6 +57,7 @@ from __future__ import annotations
 import copy
 import functools
 import math
+from collections import namedtuple
 
 import numba
 import numpy as np
@@ -165,8 +166,17 @@ def _inflation(r, S, R, nis):
     return max(math.exp(hi), 1.0)
 
 
+#: The lockout guard's settings and state (:func:`lockout_step`): ``pos`` (nf,) which
+#: filters are position sources; ``hold`` [s] ``fdi_readmit_s`` (NaN: never re-admit);
+#: ``state`` (nf, 3) per filter the start [s] of its current run of isolated measurements
+#: (NaN: none), its ``m`` and the NIS/dof of its latest isolated measurement; ``r0`` (nf,
+#: w), ``S0`` (nf, w, w) the residual and covariance of the first of that run; ``t_pos``
+#: (1,) the time [s] of the last accepted position measurement.
+LockoutState = namedtuple("LockoutState", "pos hold state r0 S0 t_pos")
+
+
 @numba.njit(cache=True)
-def lockout_step(f, t, accepted, nis, r, S, R, thr_drift, hold, pos, state, r0, S0, t_pos):
+def lockout_step(f, t, accepted, nis, r, S, R, thr_drift, lk):
     """One local measurement through the guard against locking out the last position
     source (the same function in the Python loop and the compiled engine).
 
@@ -174,18 +184,14 @@ def lockout_step(f, t, accepted, nis, r, S, R, thr_drift, hold, pos, state, r0, 
     the chi-square test decided; ``nis`` = ``r' S^-1 r`` with ``r`` (m,) and ``S`` (m, m)
     its residual and covariance, ``R`` the measurement's noise covariance (filter units;
     not finite where the model makes its own); ``thr_drift``: the drift test's threshold
-    for ``m`` (:func:`drift_threshold`; NaN: no detection); ``hold`` [s]:
-    ``fdi_readmit_s`` (NaN: never re-admit); ``pos`` (nf,): which filters are position
-    sources.  State, updated in place: ``state`` (nf, 3) per filter the start [s] of its
-    current run of isolated measurements (NaN: none), its ``m`` and the NIS/dof of its
-    latest isolated measurement; ``r0`` (nf, w), ``S0`` (nf, w, w) the residual and
-    covariance of the first of that run; ``t_pos`` (1,) the time [s] of the last accepted
-    position measurement.
+    for ``m`` (:func:`drift_threshold`; NaN: no detection); ``lk``: the guard's settings
+    and state (:data:`LockoutState`, its arrays updated in place).
 
     Returns ``(s, t_start)``: ``s`` > 1 the factor by which to inflate every filter's
     covariance to re-admit this measurement (0: no) — the factor that gives the residual
     seen its expected statistic ``m`` (:func:`_inflation`) — and ``t_start`` [s] when the
     lockout began."""
+    pos, hold, state, r0, S0, t_pos = lk
     if not pos[f]:
         return 0.0, np.nan
     m = r.shape[0]
@@ -234,6 +240,11 @@ class Lockout:
         self.t_pos = np.array([-np.inf])
         self.episodes: list[dict] = []
 
+    def arrays(self) -> LockoutState:
+        """The settings and state as :func:`lockout_step` takes them (the arrays
+        themselves: updated in place)."""
+        return LockoutState(self.pos, self.hold, self.state, self.r0, self.S0, self.t_pos)
+
     @property
     def on(self) -> bool:
         return bool(self.pos.any()) and self.hold > 0.0
@@ -254,7 +265,7 @@ class Lockout:
         R = (np.ascontiguousarray(R).reshape(len(r), len(r))
              if R is not None and R.size == len(r) ** 2 else np.full_like(S, np.nan))
         return lockout_step(f, float(t), bool(accepted), float(nis), r, S, R, float(thr_drift),
-                        self.hold, self.pos, self.state, self.r0, self.S0, self.t_pos)
+                            self.arrays())
 
     def episode(self, f: int, t_start: float, t: float, nis_before: float, s: float,
                 nis_after: float, dof: int) -> dict:
@@ -361,7 +372,7 @@ class FederatedFilter:
         if fdi_recovery < 1:
             raise ValueError(f"fdi_recovery must be >= 1, got {fdi_recovery}")
         self.fdi_recovery = fdi_recovery
-        self._passes = dict.fromkeys(self.locals, fdi_recovery)  # consecutive passes
+        self.passes = dict.fromkeys(self.locals, fdi_recovery)  # consecutive passes
         if fdi_readmit_s is not None and not fdi_readmit_s > 0.0:
             raise ValueError(f"fdi_readmit_s must be positive, got {fdi_readmit_s}")
         #: the guard against isolating every position source for good: ``positions``
@@ -463,10 +474,10 @@ class FederatedFilter:
             R = np.asarray(R, dtype=float) / share
         # the gate (none, the threshold, or -1 while recovering: test only) and the
         # passes after the test (policy.fdi_gate, fdi_passes: the engine's rules too)
-        gate = policy.fdi_gate(thr, self._passes[local], self.fdi_recovery)
+        gate = policy.fdi_gate(thr, self.passes[local], self.fdi_recovery)
         inn = f.update(y, model, nav, R, gate=None if gate == np.inf else gate * share
                        if gate > 0.0 else gate)
-        self._passes[local] = policy.fdi_passes(thr, gate, self._passes[local],
+        self.passes[local] = policy.fdi_passes(thr, gate, self.passes[local],
                                                 self.fdi_recovery, inn.nis / share)
         if readmit and self.lockout.on:
             inn = self._readmit(local, f, y, model, nav, R, t, thr, inn)
@@ -499,7 +510,7 @@ class FederatedFilter:
                 g.x = x
                 _set_cov(g, P)
             return inn
-        self._passes[local] = self.fdi_recovery
+        self.passes[local] = self.fdi_recovery
         lk.track(i, t, True, new.nis, new.r, new.S, R, thr_drift)
         lk.episode(i, t_start, t, inn.nis, s, new.nis, len(new.r))
         return new
@@ -544,7 +555,7 @@ class FederatedFilter:
         """Everything the filter carries from epoch to epoch (for re-running from the past,
         :meth:`restore`); the log keeps its entries up to this point."""
         return ([(f.x.copy(), kept_cov(f).copy(), f.step) for f in self.filters.values()],
-                self.x.copy(), self.P.copy(), dict(self.beta), dict(self._passes),
+                self.x.copy(), self.P.copy(), dict(self.beta), dict(self.passes),
                 len(self.log), dict(self.qlog), self.lockout.snapshot())
 
     def restore(self, snap: tuple) -> None:
@@ -556,7 +567,7 @@ class FederatedFilter:
             f.x, f.step = x.copy(), step
             _set_cov(f, P.copy())
         self.x, self.P = self.x.copy(), self.P.copy()
-        self.beta, self._passes = dict(beta), dict(passes)
+        self.beta, self.passes = dict(beta), dict(passes)
         del self.log[n_log:]
 
     def feedback(self) -> np.ndarray:

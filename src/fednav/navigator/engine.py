@@ -172,11 +172,9 @@ Ins = namedtuple("Ins", "state comp xa decay scale gains cst noise nsub n_per")
 Bank = namedtuple("Bank", "X P beta qlog passes fam sr c Wm Wc cm")
 #: Fault detection, sharing and the lockout guard: ``thr`` (nf, 7) each filter's
 #: chi-square threshold by dof (NaN: no detection), ``recovery``, ``sharing`` (0 equal,
-#: 1 fixed, 2 adaptive), ``thr_drift`` (nf, 7) and ``lk_*`` the lockout guard's drift
-#: thresholds, position sources, hold time and state
-#: (:class:`fednav.filters.federated.Lockout`).
-Rules = namedtuple("Rules", "thr recovery sharing thr_drift lk_pos lk_hold lk_state lk_r0 "
-                            "lk_S0 lk_tpos")
+#: 1 fixed, 2 adaptive), ``thr_drift`` (nf, 7) the lockout guard's drift thresholds and
+#: ``lk`` its settings and state (:data:`fednav.filters.federated.LockoutState`).
+Rules = namedtuple("Rules", "thr recovery sharing thr_drift lk")
 #: Per aiding sensor: its local filter, how its delay is met (:data:`HOWS`), dimension,
 #: the rows of its model (kinds, value index), its geometry ((S, 4, 3): the lever arm in
 #: its axes, then its mounting ``C_s^b``, :attr:`~fednav.sensors.measurement.RowModel.
@@ -393,9 +391,7 @@ def lockout_guard(bank, rules, sensors, sn, view, y, R, t_log, tested):
     f = sensors.filter[sn]
     d = y.shape[0]
     thr_drift = rules.thr_drift[f, d]
-    s_in, t_start = lockout_step(f, t_log, accepted, ni, r, Sm, R, thr_drift, rules.lk_hold,
-                                 rules.lk_pos, rules.lk_state, rules.lk_r0, rules.lk_S0,
-                                 rules.lk_tpos)
+    s_in, t_start = lockout_step(f, t_log, accepted, ni, r, Sm, R, thr_drift, rules.lk)
     if s_in > 0.0:
         P_saved = bank.P.copy()
         for g in range(bank.X.shape[0]):  # (Filter.inflate: a factor by sqrt(s))
@@ -403,8 +399,7 @@ def lockout_guard(bank, rules, sensors, sn, view, y, R, t_log, tested):
         x2, P2, r2, S2, n2, code = _local_update(bank, f, sensors, sn, view, y, R)
         if code == 0 and not n2 > rules.thr[f, d] and (bank.sr[f] or (
                 math.isfinite(x2.sum() + P2.sum()) and cholesky_lower(P2)[1])):
-            lockout_step(f, t_log, True, n2, r2, S2, R, thr_drift, rules.lk_hold,
-                         rules.lk_pos, rules.lk_state, rules.lk_r0, rules.lk_S0, rules.lk_tpos)
+            lockout_step(f, t_log, True, n2, r2, S2, R, thr_drift, rules.lk)
             return (x2, P2, r2, S2, n2, True), s_in, t_start
         bank.P[:] = P_saved
     return (x1, Pn, r, Sm, ni, accepted), 0.0, t_start
@@ -440,7 +435,7 @@ def apply_measurement(m, k, ins, iv, s0, bank, rules, sensors, batch, mo):
     accepted = policy.is_accepted(ni, gate)
     bank.passes[f] = policy.fdi_passes(th, gate, bank.passes[f], rules.recovery, ni)
     mo.re[m, 2] = 0.0
-    if rules.lk_pos[f] and rules.lk_hold > 0.0:
+    if rules.lk.pos[f] and rules.lk.hold > 0.0:
         tested, s_in, t_start = lockout_guard(bank, rules, sensors, sn, view, y, R, t_log,
                                               (x1, Pn, r, Sm, ni, accepted))
         if s_in > 0.0:  # re-admitted
@@ -607,7 +602,7 @@ class CompiledLoop:
         self.sr = np.array([f.form == "square_root" for f in filters], dtype=np.bool_)
         self.P = np.array([kept_cov(f) for f in filters])
         self.beta = np.array([fed.beta[k] for k in self.names])
-        self.passes = np.array([fed._passes.get(k, 0) for k in self.names], dtype=np.int64)
+        self.passes = np.array([fed.passes.get(k, 0) for k in self.names], dtype=np.int64)
         self.fam = np.array([FAMILIES[f.kind] for f in filters], dtype=np.int64)
         n_sig = 2 * n + 1
         self.c = np.ones(nf)
@@ -748,8 +743,7 @@ class CompiledLoop:
                   self.noise_vec, core.nsub, self.n_per)
         bank = Bank(self.X, self.P, self.beta, self.qlog, self.passes, self.fam, self.sr,
                     self.c, self.Wm, self.Wc, self.cm)
-        rules = Rules(self.thr, self.recovery, self.sharing, self.thr_drift, lk.pos, lk.hold,
-                      lk.state, lk.r0, lk.S0, lk.t_pos)
+        rules = Rules(self.thr, self.recovery, self.sharing, self.thr_drift, lk.arrays())
         eo = EpochOut(rec.states.a[e0:e0 + n_ep], rec.P.a[e0:e0 + n_ep],
                       rec.beta.a[e0 - 1:e0 - 1 + n_ep], out_Phi, out_Qd, out_dx, out_rows)
         mo = MeasOut(lg[:, 2], lg[:, 5], lg[:, 4], lg[:, 0], out_r, out_S, out_bm, out_re)
