@@ -6,7 +6,7 @@ the measurement rows, the strapdown, the filters' updates — would load stale m
 after one of those modules changed while its own file did not (a ``git pull`` on an
 editable install), and compute with the old code silently.  fednav therefore points
 numba's cache at a folder named by a hash of all its sources, so that any change of any
-module compiles afresh (once, ~20-40 s) and an unchanged tree reuses its kernels.  The
+module compiles afresh (once, a minute or two) and an unchanged tree reuses its kernels.  The
 folder lives under the user's cache (``$XDG_CACHE_HOME/fednav/kernels`` or
 ``~/.cache/fednav/kernels``); the few most recently used versions are kept.  A
 ``NUMBA_CACHE_DIR`` set by the user is respected.
@@ -72,7 +72,7 @@ def _prune(root: Path) -> None:
 
 #: What a command says on stderr before numba compiles fednav's kernels (a cold cache: a
 #: fresh install, or sources that changed since the last run).
-NOTICE = "compiling fast kernels once (~20 s)"
+NOTICE = "compiling fast kernels once (a minute or two)"
 
 
 class _Watch:

@@ -142,21 +142,16 @@ def stuck_axes(t, gyro, accel, runs, t_gnss, vel_gnss) -> list[str]:
     return out
 
 
-@numba.njit(cache=True)
 def _percentile(x, d, p, floor=np.inf):
     """The ``p``-th percentile of ``x / d`` (``d`` > 0) as ``np.percentile`` (linear)
     gives it; inf where it is at least ``floor`` (to within 1e-15: no more samples below
-    it than the percentile's rank, counted without the selection)."""
+    it than the percentile's rank, counted without the selection).  numpy's own
+    selection (called once per recording: compiling it cost ~10 s of a first run)."""
     n = len(x)
     v = (n - 1) * (p / 100.0)
     k = int(np.floor(v))
     if 0 <= v < n - 1 and floor < np.inf:
-        lim = floor * d
-        below = 0
-        for i in range(n):
-            if x[i] < lim:
-                below += 1
-        if below <= k:
+        if np.count_nonzero(x < floor * d) <= k:
             return np.inf
     y = x / d
     if np.isnan(y).any():
@@ -166,7 +161,7 @@ def _percentile(x, d, p, floor=np.inf):
     if v < 0:
         return y.min()
     part = np.partition(y, k)
-    lo, hi = part[k], part[k + 1:].min()
+    lo, hi = float(part[k]), float(part[k + 1:].min())
     g = v - k
     return hi - (hi - lo) * (1.0 - g) if g >= 0.5 else lo + (hi - lo) * g
 
