@@ -82,6 +82,64 @@ def test_fault_free_runs_raise_no_alert_and_bound_the_error(tmp_path):
             assert 0 < r[f"integrity.{axis}.median_error"] < r[f"integrity.{axis}.median_level"]
 
 
+MIXED = [{"sensor": "gnss", "kind": "spoofing", "start_s": {"between": [80, 120]},
+          "duration_s": 60, "size_sigma": {"between": [20, 40]}, "share": 0.45},
+         {"sensor": "sar", "kind": "false_match", "start_s": {"between": [80, 120]},
+          "duration_s": 1000, "size_sigma": {"between": [8, 12]}, "share": 0.45}]
+
+
+def test_alternative_faults_are_drawn_by_their_shares(tmp_path):
+    """Faults with a share are alternatives: each run draws at most one of them, in
+    proportion to the shares (the rest fault-free), with the same parameters as when
+    drawn alone; a design without shares draws as before."""
+    from fednav.sim.runs import FAULT_STREAM
+
+    scn = load_scenario(_design(tmp_path, MIXED))
+    got = [scn.draw_faults(np.random.default_rng([s, FAULT_STREAM])) for s in range(600)]
+    assert all(len(f) <= 1 for f in got)
+    kinds = [f[0].kind if f else "" for f in got]
+    for k in ("spoofing", "false_match"):
+        assert abs(kinds.count(k) / 600 - 0.45) < 0.06
+    assert abs(kinds.count("") / 600 - 0.10) < 0.04
+    alone = load_scenario(_design(tmp_path, [dict(MIXED[0], share=None)], "alone"))
+    for s, f in enumerate(got[:50]):
+        if f and f[0].kind == "spoofing":  # its parameters do not depend on the choice
+            g = alone.draw_faults(np.random.default_rng([s, FAULT_STREAM]))[0]
+            assert (g.start, g.size_sigma, g.bearing) == (f[0].start, f[0].size_sigma,
+                                                          f[0].bearing)
+    with pytest.raises(ValueError, match="add up to 1.2"):
+        load_scenario(_design(tmp_path, [dict(MIXED[0], share=0.6), dict(MIXED[1],
+                                                                        share=0.6)], "bad"))
+
+
+def test_a_mixed_campaign_reports_each_fault_type_and_size(tmp_path):
+    """A design that draws a GNSS spoofing ramp or a SAR false match per run: each run's
+    row names its fault's kind and size, and the summary gives detection and exclusion
+    per fault type, per size bin, and the fault-free runs' false alerts."""
+    scn = load_scenario(_design(tmp_path, MIXED))
+    rows = []
+    for seed in range(6):
+        r, _, _ = one_run((scn, seed, 200.0))
+        rows += r
+    kinds = {r.get("integrity.fault_kind", "") for r in rows}
+    assert {"spoofing", "false_match"} <= kinds
+    for r in rows:
+        if r.get("integrity.fault_kind"):
+            assert r["integrity.faults_drawn"] == 1
+            lo, hi = (20, 40) if r["integrity.fault_kind"] == "spoofing" else (8, 12)
+            assert lo <= r["integrity.fault_size_sigma"] <= hi
+    s = ig.summarize(rows, [], [MODE], scn.integrity)[MODE]
+    by = s["faults"]["by_type"]
+    assert set(by) <= {"gnss spoofing", "sar false_match"} and len(by) == 2
+    for t in by.values():
+        assert sum(b["runs"] for b in t["by_size"]) == t["runs"] > 0
+        assert t["detected"] == t["runs"]  # every one of these faults is found
+    n_free = sum(1 for r in rows if not r.get("integrity.fault_kind"))
+    assert s.get("fault_free", {"runs": 0})["runs"] == n_free
+    text = "\n".join(ig.integrity_lines({MODE: s}))
+    assert "faults (gnss spoofing)" in text and "faults (sar false_match)" in text
+
+
 def test_a_mode_with_one_tested_sensor_has_no_levels(tmp_path):
     d = yaml.safe_load(EXAMPLE.read_text())
     d["modes"] = [{"name": "SINS/GNSS", "aiding": ["gnss"]}, d["modes"][0]]

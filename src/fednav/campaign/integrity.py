@@ -128,9 +128,11 @@ def _errors_and_levels(full, res: IntegrityResult) -> dict[str, tuple]:
 def run_row(full, res: IntegrityResult, faults=()) -> tuple[dict, StanfordCounts]:
     """One mode's run: ``integrity.<axis>.<region>`` epoch counts, median level and
     error, the largest error/level; the first detection's time and its candidate; with
-    the run's drawn ``faults`` (:class:`~fednav.sensors.faults.Fault`), for the first
-    one: its sensor and start, whether a test tripped after it started, how long after,
-    and whether the candidate was that sensor.  And the run's :class:`StanfordCounts`."""
+    the run's drawn ``faults`` (:class:`~fednav.sensors.faults.Fault`), for the one that
+    began first: its sensor, kind, size [sigma] and start, whether a test tripped after it
+    started, how long after, whether the candidate was that sensor and whether it was
+    excluded; and how many faults the run drew (two at once are not protected against,
+    :data:`NOT_PROTECTED`).  And the run's :class:`StanfordCounts`."""
     cfg = res.config
     row: dict = {}
     counts = {}
@@ -157,10 +159,13 @@ def run_row(full, res: IntegrityResult, faults=()) -> tuple[dict, StanfordCounts
     row["integrity.candidate"] = res.candidates(trip)[0] if trip is not None else ""
     row["integrity.excluded"] = ex[1] if ex else ""
     row["integrity.excluded_s"] = ex[0] if ex else float("nan")
+    row["integrity.faults_drawn"] = len(faults)
     if faults:
-        f = faults[0]
+        f = min(faults, key=lambda x: x.start)
         after = np.flatnonzero(hit & (res.t >= f.start))
         row["integrity.fault_sensor"] = f.sensor
+        row["integrity.fault_kind"] = f.kind
+        row["integrity.fault_size_sigma"] = float(np.max(np.abs(f.size_sigma)))
         row["integrity.fault_start_s"] = float(f.start)
         row["integrity.fault_detected"] = int(len(after) > 0)
         row["integrity.time_to_detect_s"] = (float(res.t[after[0]] - f.start) if len(after)
@@ -242,23 +247,59 @@ def summarize(rows: list[dict], counts: list[dict], modes: list[str], cfg) -> di
             s["axes"][axis] = a
         s["runs_detected"] = int(sum(r["integrity.detected"] for r in mr))
         faulty = [r for r in mr if r.get("integrity.fault_sensor")]
+        free = [r for r in mr if not r.get("integrity.fault_sensor")]
+        if faulty and free:  # (alternative faults with shares below 1: false-alert runs)
+            s["fault_free"] = {"runs": len(free), "tripped": int(sum(
+                r["integrity.detected"] for r in free))}
         if faulty:
-            det = [r for r in faulty if r["integrity.fault_detected"]]
-            s["faults"] = {
-                "runs": len(faulty),
-                "detected": len(det), "detection_rate": len(det) / len(faulty),
-                "identified": int(sum(r["integrity.fault_identified"] for r in faulty)),
-                "identification_rate": (sum(r["integrity.fault_identified"] for r in faulty)
-                                        / len(faulty)),
-                "excluded": int(sum(r.get("integrity.fault_excluded", 0) for r in faulty)),
-                "median_time_to_detect_s": (float(np.median(
-                    [r["integrity.time_to_detect_s"] for r in det])) if det else None),
-                "sensors": sorted({r["integrity.fault_sensor"] for r in faulty})}
+            s["faults"] = {**_fault_stats(faulty),
+                           "sensors": sorted({r["integrity.fault_sensor"] for r in faulty}),
+                           "runs_with_two_or_more": int(sum(
+                               (r.get("integrity.faults_drawn") or 1) > 1 for r in faulty)),
+                           "by_type": _by_type(faulty)}
         c = [x[m] for x in counts if m in x]
         s["_counts"] = {axis: np.sum([getattr(x, axis) for x in c], axis=0)
                         for axis, _, _ in AXES} if c else None
         s["not_protected"] = NOT_PROTECTED
         out[m] = s
+    return out
+
+
+def _fault_stats(rows: list[dict]) -> dict:
+    """Detection, identification (the faulty sensor named first) and exclusion of the
+    faults of ``rows`` (runs), with the median time to detect [s]."""
+    n = len(rows)
+    det = [r for r in rows if r["integrity.fault_detected"]]
+    ident = int(sum(r["integrity.fault_identified"] for r in rows))
+    excl = int(sum(r.get("integrity.fault_excluded", 0) for r in rows))
+    return {"runs": n, "detected": len(det), "detection_rate": len(det) / n,
+            "identified": ident, "identification_rate": ident / n,
+            "excluded": excl, "exclusion_rate": excl / n,
+            "median_time_to_detect_s": (float(np.median(
+                [r["integrity.time_to_detect_s"] for r in det])) if det else None)}
+
+
+def _by_type(rows: list[dict]) -> dict:
+    """:func:`_fault_stats` per fault type (``sensor kind``) and, within each, per size
+    (up to four bins of the drawn sizes [sigma], split at their quartiles)."""
+    out = {}
+    for key in sorted({f"{r['integrity.fault_sensor']} {r.get('integrity.fault_kind', '')}"
+                       .strip() for r in rows}):
+        rs = [r for r in rows if f"{r['integrity.fault_sensor']} "
+              f"{r.get('integrity.fault_kind', '')}".strip() == key]
+        size = np.array([r.get("integrity.fault_size_sigma", np.nan) for r in rs], float)
+        t = {**_fault_stats(rs), "by_size": []}
+        if np.isfinite(size).all() and len(rs):
+            edges = np.unique(np.quantile(size, [0.0, 0.25, 0.5, 0.75, 1.0]))
+            if len(edges) == 1:
+                edges = np.r_[edges, edges]
+            for i, (lo, hi) in enumerate(zip(edges[:-1], edges[1:], strict=True)):
+                inside = (size >= lo) & ((size <= hi) if i == len(edges) - 2 else (size < hi))
+                b = [r for r, k in zip(rs, inside, strict=True) if k]
+                if b:
+                    t["by_size"].append({"size_sigma": [float(lo), float(hi)],
+                                         **_fault_stats(b)})
+        out[key] = t
     return out
 
 
@@ -308,12 +349,25 @@ def integrity_lines(integrity: dict) -> list[str]:
             lines.append(text)
         f = s.get("faults")
         if f:
-            ttd = f["median_time_to_detect_s"]
-            lines.append(f"  faults ({', '.join(f['sensors'])}): detected in {f['detected']} "
-                         f"of {f['runs']} runs, the faulty sensor named first in "
-                         f"{f['identified']} and excluded in {f['excluded']}"
-                         + (f", median {ttd:.1f} s after the fault began"
-                            if ttd is not None else ""))
+            for key, t in f.get("by_type", {"": f}).items():
+                ttd = t["median_time_to_detect_s"]
+                what = key or ", ".join(f["sensors"])
+                lines.append(f"  faults ({what}): detected in {t['detected']} of {t['runs']} "
+                             f"runs, the faulty sensor named first in {t['identified']} and "
+                             f"excluded in {t['excluded']}"
+                             + (f", median {ttd:.1f} s after the fault began"
+                                if ttd is not None else ""))
+                for b in t.get("by_size", []) if len(t.get("by_size", [])) > 1 else []:
+                    lo, hi = b["size_sigma"]
+                    lines.append(f"    size {lo:.3g}-{hi:.3g} sigma: detected "
+                                 f"{b['detected']}/{b['runs']}, excluded {b['excluded']}")
+            if f.get("runs_with_two_or_more"):
+                lines.append(f"  {f['runs_with_two_or_more']} runs drew two or more faults "
+                             f"(not protected against; counted by the first to begin)")
+            if s.get("fault_free"):
+                ff = s["fault_free"]
+                lines.append(f"  fault-free runs: tests tripped in {ff['tripped']} of "
+                             f"{ff['runs']} (false alerts)")
         else:
             lines.append(f"  tests tripped in {s['runs_detected']} of {s['runs']} runs "
                          f"(no fault drawn: false alerts)")

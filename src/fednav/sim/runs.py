@@ -84,7 +84,7 @@ def make_run_data(scn: Scenario, seed: int, max_time: float | None = None) -> Ru
     series = {}
     # (the faults' draws from a stream of their own: the noise is the same without them)
     frng = np.random.default_rng([seed, FAULT_STREAM])
-    faults = [f.fault(frng) for f in scn.faults]
+    faults = scn.draw_faults(frng)
     for name in SENSORS:  # registry order: the order of the draws
         cfg = scn.sensors.get(name)
         if cfg is not None:

@@ -112,7 +112,10 @@ class FaultConfig(_Model):
     duration and size may each be ``{between: [low, high]}``, drawn per run; the
     direction of a false match or a spoofing pull and the signs of a misidentification are
     always drawn per run — from a stream of their own, so the runs' noise is the same with
-    or without faults."""
+    or without faults.  ``share`` (0 < share <= 1): the fraction of runs that draw this
+    fault — the faults with a share are alternatives, each run draws at most one of them
+    (with shares summing to less than 1, the other runs are fault-free: false-alert runs);
+    a fault without one is injected in every run."""
 
     sensor: str
     start_s: float | Between
@@ -122,6 +125,7 @@ class FaultConfig(_Model):
     kind: Literal["step", "ramp", "drift", "burst", "false_match", "misidentification",
                   "spoofing"] = "step"
     components: list[int] | None = None
+    share: float | None = Field(default=None, gt=0.0, le=1.0)
 
     @field_validator("sensor")
     @classmethod
@@ -275,6 +279,29 @@ class Scenario(System):
         if self.filter.period_s is None:
             raise ValueError("filter.period_s: a scenario states its filter period")
         return self
+
+    @model_validator(mode="after")
+    def _shares_add_up(self):
+        total = sum(f.share for f in self.faults if f.share is not None)
+        if total > 1.0 + 1e-9:
+            raise ValueError(f"faults: the shares of the alternative faults add up to "
+                             f"{total:g}; each run draws at most one of them (at most 1)")
+        return self
+
+    def draw_faults(self, rng: np.random.Generator) -> list:
+        """The faults of one run (:class:`~fednav.sensors.faults.Fault`), drawn from
+        ``rng`` (the run's fault stream): every fault's parameters in order, then — when
+        some faults have a ``share`` — which one of those alternatives the run takes (or
+        none), so that a fault's parameters do not depend on the choice."""
+        faults = [f.fault(rng) for f in self.faults]
+        alt = [i for i, f in enumerate(self.faults) if f.share is not None]
+        if not alt:
+            return faults
+        u = rng.uniform()
+        edges = np.cumsum([self.faults[i].share for i in alt])
+        k = int(np.searchsorted(edges, u, side="right"))
+        chosen = alt[k] if k < len(alt) else None
+        return [f for i, f in enumerate(faults) if i not in alt or i == chosen]
 
     @model_validator(mode="after")
     def _constraint_needs_air_data(self):
