@@ -46,7 +46,15 @@ def test_reproduce_summary_shape_and_fault_experiment(short, tmp_path, report_co
     assert set(cell) == {"max", "min", "std"} and set(cell["std"]) == {"ours", "ci95", "paper"}
     assert cell["std"]["paper"] == 2.27
     fault = s["tables"]["fault"]["rows"]
-    assert set(fault) == {"isolated", "not_isolated"}
+    assert set(fault) == {"isolated", "not_isolated", "separation"}
+    # solution separation beside the chi-square FDI: the step detected, its levels (huge:
+    # without the GNSS only the star sensor is left, which fixes no position) bound the
+    # error, and with two tested sensors no candidate can be confirmed: no exclusion
+    sep = fault["separation"]
+    assert np.isfinite(sep["detect_delay_s"]["ours"]) and sep["detected_fraction"]["ours"] > 0
+    assert sep["misleading_epochs"]["ours"] == 0 and sep["isolated_fraction"]["ours"] == 0
+    assert sep["hpl_median_m"]["ours"] > sep["pos_err_rms_fault_window_m"]["ours"]
+    assert "hpl_median_m" not in fault["isolated"]
     iso, non = fault["isolated"], fault["not_isolated"]
     for c in ("detect_delay_s", "false_alarm_rate", "pos_err_rms_fault_window_m"):
         assert c in iso and c in non
