@@ -429,6 +429,9 @@ def _columns_vars(prefix: str, columns: dict, n: int, data: dict, meta: dict) ->
             data[name] = ((dim,), vals.astype(float))
             continue
         kinds = {type(v).__name__ for v in vals if v is not None}
+        absent = [i for i, v in enumerate(vals) if v is None]
+        if absent:  # (rows without the key: left out of them again when read)
+            meta.setdefault("absent", {})[c] = absent
         if kinds <= {"str"}:
             types[c] = "str"
             data[name] = ((dim,), np.array(["" if v is None else v for v in vals],
@@ -442,10 +445,16 @@ def _columns_vars(prefix: str, columns: dict, n: int, data: dict, meta: dict) ->
 
 
 def _table_from(ds, prefix: str, meta: dict) -> list[dict]:
+    """The rows of :func:`_table_vars`: a key a row did not have (rows of different kinds
+    in one table, e.g. paper 003's fault cases; ``meta["absent"]``, or an integer or
+    boolean cell stored as NaN) is left out of it again."""
     conv = {"str": str, "int": lambda v: int(v), "bool": lambda v: bool(v), "float": float}
-    cols = [(c, ds[f"{prefix}_c{j}"].values, conv[meta["types"][c]])
+    absent = {c: set(ix) for c, ix in meta.get("absent", {}).items()}
+    cols = [(c, ds[f"{prefix}_c{j}"].values, conv[meta["types"][c]],
+             meta["types"][c] in ("int", "bool"), absent.get(c, ()))
             for j, c in enumerate(meta["columns"])]
-    return [{c: f(v[i]) for c, v, f in cols} for i in range(meta["n"])]
+    return [{c: f(v[i]) for c, v, f, whole, out in cols
+             if i not in out and not (whole and v[i] != v[i])} for i in range(meta["n"])]
 
 
 def _frame_from(ds, prefix: str, meta: dict):
