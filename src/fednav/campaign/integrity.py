@@ -282,14 +282,15 @@ def _fault_stats(rows: list[dict]) -> dict:
 def _by_type(rows: list[dict]) -> dict:
     """:func:`_fault_stats` per fault type (``sensor kind``) and, within each, per size
     (up to four bins of the drawn sizes [sigma], split at their quartiles)."""
+    def kind(r):
+        return f"{r['integrity.fault_sensor']} {r.get('integrity.fault_kind', '')}".strip()
+
     out = {}
-    for key in sorted({f"{r['integrity.fault_sensor']} {r.get('integrity.fault_kind', '')}"
-                       .strip() for r in rows}):
-        rs = [r for r in rows if f"{r['integrity.fault_sensor']} "
-              f"{r.get('integrity.fault_kind', '')}".strip() == key]
+    for key in sorted({kind(r) for r in rows}):
+        rs = [r for r in rows if kind(r) == key]
         size = np.array([r.get("integrity.fault_size_sigma", np.nan) for r in rs], float)
         t = {**_fault_stats(rs), "by_size": []}
-        if np.isfinite(size).all() and len(rs):
+        if np.isfinite(size).all():
             edges = np.unique(np.quantile(size, [0.0, 0.25, 0.5, 0.75, 1.0]))
             if len(edges) == 1:
                 edges = np.r_[edges, edges]
@@ -349,15 +350,14 @@ def integrity_lines(integrity: dict) -> list[str]:
             lines.append(text)
         f = s.get("faults")
         if f:
-            for key, t in f.get("by_type", {"": f}).items():
+            for key, t in f["by_type"].items():
                 ttd = t["median_time_to_detect_s"]
-                what = key or ", ".join(f["sensors"])
-                lines.append(f"  faults ({what}): detected in {t['detected']} of {t['runs']} "
+                lines.append(f"  faults ({key}): detected in {t['detected']} of {t['runs']} "
                              f"runs, the faulty sensor named first in {t['identified']} and "
                              f"excluded in {t['excluded']}"
                              + (f", median {ttd:.1f} s after the fault began"
                                 if ttd is not None else ""))
-                for b in t.get("by_size", []) if len(t.get("by_size", [])) > 1 else []:
+                for b in t["by_size"] if len(t["by_size"]) > 1 else []:
                     lo, hi = b["size_sigma"]
                     lines.append(f"    size {lo:.3g}-{hi:.3g} sigma: detected "
                                  f"{b['detected']}/{b['runs']}, excluded {b['excluded']}")

@@ -475,8 +475,7 @@ class FederatedFilter:
         # the gate (none, the threshold, or -1 while recovering: test only) and the
         # passes after the test (policy.fdi_gate, fdi_passes: the engine's rules too)
         gate = policy.fdi_gate(thr, self.passes[local], self.fdi_recovery)
-        inn = f.update(y, model, nav, R, gate=None if gate == np.inf else gate * share
-                       if gate > 0.0 else gate)
+        inn = f.update(y, model, nav, R, gate=None if math.isinf(gate) else gate * share)
         self.passes[local] = policy.fdi_passes(thr, gate, self.passes[local],
                                                 self.fdi_recovery, inn.nis / share)
         if readmit and self.lockout.on:

@@ -315,10 +315,17 @@ def solution_separation(full, subs: dict, cfg: IntegrityConfig | None = None
     s0 = np.column_stack([full.sigma[:, 6:9], full.sigma_euler[:, 2]])
     sk = np.stack([np.column_stack([subs[k].sigma[:, 6:9], subs[k].sigma_euler[:, 2]])
                    for k in names])
-    d = np.stack([np.column_stack([llh_difference_enu(*subs[k].lla.T, *full.lla.T),
-                                   wrap_pi(subs[k].euler[:, 2] - full.euler[:, 2])])
+    d = np.stack([separations(subs[k].lla, subs[k].euler[:, 2], full.lla, full.euler[:, 2])
                   for k in names])
     return separation(full.t, d, s0, sk, names, cfg)
+
+
+def separations(sub_lla, sub_heading, lla, heading) -> np.ndarray:
+    """A sub-solution minus the all-sensor solution (N, 4): east, north, up [m] and heading
+    [rad], from positions (N, 3) (latitude, longitude [rad], height [m]) and headings (N,)
+    [rad]."""
+    return np.column_stack([llh_difference_enu(*np.asarray(sub_lla).T, *np.asarray(lla).T),
+                            wrap_pi(np.asarray(sub_heading) - np.asarray(heading))])
 
 
 def separation(t, d, s0, sk, names: list[str], cfg: IntegrityConfig | None = None

@@ -18,9 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.attitude import wrap_pi
-from ..core.earth import llh_difference_enu
-from .integrity import IntegrityConfig, separation, tested_sensors
+from .integrity import IntegrityConfig, separation, separations, tested_sensors
 from .navigator import Navigator, Snapshot
 
 
@@ -80,10 +78,8 @@ class IntegrityNavigator:
         s0 = self.full.solution()
         subs = {k: nav.solution() for k, nav in self.bank.items()}
         names = list(subs)
-        d = np.stack([np.concatenate([
-            llh_difference_enu(*(np.asarray(subs[k].lla)[:, None]),
-                               *(np.asarray(s0.lla)[:, None]))[0],
-            [wrap_pi(subs[k].euler[2] - s0.euler[2])]])[None] for k in names])
+        d = np.stack([separations(np.asarray(subs[k].lla)[None], subs[k].euler[2:3],
+                                  np.asarray(s0.lla)[None], s0.euler[2:3]) for k in names])
         sig0 = np.concatenate([s0.sigma[6:9], s0.sigma[2:3]])[None]
         sk = np.stack([np.concatenate([subs[k].sigma[6:9], subs[k].sigma[2:3]])[None]
                        for k in names])
