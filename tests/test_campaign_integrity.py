@@ -107,6 +107,11 @@ def test_alternative_faults_are_drawn_by_their_shares(tmp_path):
             g = alone.draw_faults(np.random.default_rng([s, FAULT_STREAM]))[0]
             assert (g.start, g.size_sigma, g.bearing) == (f[0].start, f[0].size_sigma,
                                                           f[0].bearing)
+    from fednav.sim.scenario import FaultExperimentConfig
+
+    with pytest.raises(ValueError, match="fault_experiment.fault: share"):
+        FaultExperimentConfig(duration_s=100, mode="m", fault=dict(
+            sensor="gnss", start_s=10, end_s=20, size_sigma=5, share=0.5))
     with pytest.raises(ValueError, match="add up to 1.2"):
         load_scenario(_design(tmp_path, [dict(MIXED[0], share=0.6), dict(MIXED[1],
                                                                         share=0.6)], "bad"))

@@ -255,6 +255,13 @@ class FaultExperimentConfig(_Model):
                              "end_s), not drawn per run")
         return self
 
+    @model_validator(mode="after")
+    def _in_every_run(self):
+        if self.fault.share is not None:
+            raise ValueError("fault_experiment.fault: share: the fault experiment injects its "
+                             "fault in every run (share is for a design's alternative faults)")
+        return self
+
 
 class Scenario(System):
     """A paper's experiment or a user's design (``fednav run``): the system description
