@@ -80,7 +80,7 @@ def test_a_time_offset_is_found_and_its_correction_closes_the_loop(drive, late):
 
 
 def test_offset_estimate_on_clean_data_is_zero_within_its_sigma(drive, clean):
-    tau, s = pl.imu_gnss_offset(clean.forward, drive.imu, drive.gnss)
+    tau, s = pl.imu_fix_offset(clean.forward, drive.imu, drive.gnss)
     assert abs(tau) <= max(3 * s, 0.011) and s < 0.03
 
 
@@ -88,7 +88,7 @@ def test_a_height_in_another_unit_is_seen_where_the_road_climbs(drive, hills):
     said = run(hills, cr.scale_gnss("lla", 2, 0.1)).warnings
     assert any("GNSS height changes 0.1" in w for w in said), said
     # a level drive cannot tell (documented): the check stays silent rather than guess
-    assert pl.gnss_scale_check(cr.scale_gnss("lla", 2, 0.1).apply(drive.imu,
+    assert pl.fix_scale_check(cr.scale_gnss("lla", 2, 0.1).apply(drive.imu,
                                                                     drive.gnss)[1]) == []
 
 

@@ -114,7 +114,7 @@ def test_ignoring_the_lever_arm_costs_accuracy(flight, result):
 
 
 def test_coarse_heading_from_the_gnss_course(flight):
-    from fednav.process.run import gnss_course
+    from fednav.process.run import fix_course as gnss_course
 
     _, gnss, ref = flight
     assert units.to_deg(gnss_course(gnss, 1.0)) == pytest.approx(45.0, abs=2.0)

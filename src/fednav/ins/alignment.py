@@ -129,15 +129,15 @@ def level_in_motion(f_body, f_level) -> np.ndarray:
     return np.array([x[0], x[1], 0.0])
 
 
-def static_span(t_gnss, vel_gnss, t_imu0: float, t_imu=None, still=None) -> float:
+def static_span(t_fix, vel_fix, t_imu0: float, t_imu=None, still=None) -> float:
     """Length [s] of the static period at the start: from ``t_imu0`` to 1 s before the
     first GNSS epoch moving faster than :data:`MOVING_SPEED` (0 if moving at once; the
     whole GNSS span if it never moves) — and, given the IMU's stand-still flags ``still``
     at ``t_imu`` (:func:`fednav.ins.stops.stationary`), no later than the first sample
     that moves."""
-    speed = np.hypot(vel_gnss[:, 0], vel_gnss[:, 1])
+    speed = np.hypot(vel_fix[:, 0], vel_fix[:, 1])
     moving = np.flatnonzero(speed > MOVING_SPEED)
-    end = t_gnss[moving[0]] - STATIC_MARGIN if len(moving) else t_gnss[-1]
+    end = t_fix[moving[0]] - STATIC_MARGIN if len(moving) else t_fix[-1]
     if still is not None:
         after = np.flatnonzero(~np.asarray(still) & (np.asarray(t_imu) >= t_imu0))
         if len(after):
@@ -145,13 +145,13 @@ def static_span(t_gnss, vel_gnss, t_imu0: float, t_imu=None, still=None) -> floa
     return max(0.0, float(end - t_imu0))
 
 
-def mean_acceleration(t_gnss, vel_gnss, sigma_v, ta: float, tb: float):
+def mean_acceleration(t_fix, vel_fix, sigma_v, ta: float, tb: float):
     """Mean ENU acceleration [m/s^2] over ``[ta, tb]`` from the GNSS velocity there
     (interpolated; the mean of any acceleration history is ``(v_b - v_a) / T``), its
     1-sigma per axis [m/s^2] (``sqrt(2) sigma_v / T``) and the course [rad] at ``tb``
     (None where the speed is within 3 sigma of zero)."""
-    va = np.array([np.interp(ta, t_gnss, vel_gnss[:, j]) for j in range(3)])
-    vb = np.array([np.interp(tb, t_gnss, vel_gnss[:, j]) for j in range(3)])
+    va = np.array([np.interp(ta, t_fix, vel_fix[:, j]) for j in range(3)])
+    vb = np.array([np.interp(tb, t_fix, vel_fix[:, j]) for j in range(3)])
     s = np.asarray(sigma_v, dtype=float)
     T = max(tb - ta, 1e-9)
     sig = np.sqrt(2.0) * s / T
@@ -160,12 +160,12 @@ def mean_acceleration(t_gnss, vel_gnss, sigma_v, ta: float, tb: float):
     return (vb - va) / T, sig, course
 
 
-def _horizontal_sigma(gnss, idx) -> np.ndarray:
+def _horizontal_sigma(fixes, idx) -> np.ndarray:
     """1-sigma [m/s] of the horizontal GNSS velocity at epochs ``idx`` (the larger of east
     and north; per fix when the file gives one)."""
-    if getattr(gnss, "sigma_rows", None) is not None:
-        return np.max(gnss.sigma_rows[idx, 3:5], axis=1)
-    return np.full(len(idx), float(np.max(np.asarray(gnss.sigma_vel, dtype=float)[:2])))
+    if getattr(fixes, "sigma_rows", None) is not None:
+        return np.max(fixes.sigma_rows[idx, 3:5], axis=1)
+    return np.full(len(idx), float(np.max(np.asarray(fixes.sigma_vel, dtype=float)[:2])))
 
 
 @dataclass
@@ -183,7 +183,7 @@ class CourseHeading:
     follows: bool
 
 
-def heading_from_course(t_imu, gyro, up_b, gyro_bias, t_gnss, vel_gnss, t0: float,
+def heading_from_course(t_imu, gyro, up_b, gyro_bias, t_fix, vel_fix, t0: float,
                         sigma_v=0.05, lever=(0.0, 0.0, 0.0), gyro_bias_sigma: float = 0.0,
                         gyro_arw: float = 0.0, floor: float = units.deg(1.0),
                         decorrelation_s: float = COURSE_DECORRELATION_S,
@@ -213,34 +213,34 @@ def heading_from_course(t_imu, gyro, up_b, gyro_bias, t_gnss, vel_gnss, t0: floa
     (weights 1 / course variance) as far as the mean's sigma falls (at most ``n_fix``);
     the sigma is inflated by the consistency test's scatter where it exceeds 1.  Returns
     None when no epoch qualifies."""
-    speed = np.hypot(vel_gnss[:, 0], vel_gnss[:, 1])
+    speed = np.hypot(vel_fix[:, 0], vel_fix[:, 1])
     sv = np.broadcast_to(np.asarray(sigma_v, dtype=float), speed.shape)
     with np.errstate(divide="ignore"):
         sc = sv / speed
-    ok = np.flatnonzero((speed > MOVING_SPEED) & (sc <= MAX_COURSE_SIGMA) & (t_gnss >= t0)
-                        & (t_gnss <= t_imu[-1]))
+    ok = np.flatnonzero((speed > MOVING_SPEED) & (sc <= MAX_COURSE_SIGMA) & (t_fix >= t0)
+                        & (t_fix <= t_imu[-1]))
     if len(ok) == 0:
         return None
     # One epoch (the least course sigma) per decorrelation time.
-    bins = np.floor((t_gnss[ok] - t0) / max(decorrelation_s, 1e-9)).astype(np.int64)
+    bins = np.floor((t_fix[ok] - t0) / max(decorrelation_s, 1e-9)).astype(np.int64)
     order = np.lexsort((sc[ok], bins))
     first = np.r_[True, np.diff(bins[order]) != 0]
     ok = np.sort(ok[order[first]])
     w_c = gyro - gyro_bias
     # Heading rate = -(yaw rate about up); integrate from t0 (rectangle rule per sample).
     dpsi = -np.concatenate([[0.0], np.cumsum((w_c @ up_b)[:-1] * np.diff(t_imu))])
-    w = np.column_stack([np.interp(t_gnss[ok], t_imu, w_c[:, j]) for j in range(3)])
+    w = np.column_stack([np.interp(t_fix[ok], t_imu, w_c[:, j]) for j in range(3)])
     side = np.cross(w, np.asarray(lever, dtype=float)) @ np.cross(
         np.array([0.0, 1.0, 0.0]), up_b)  # (w x l) along the body's level right axis
     slip = np.arcsin(np.clip(side / speed[ok], -1.0, 1.0))
-    course = np.arctan2(vel_gnss[ok, 0], vel_gnss[ok, 1]) - slip
-    back = course - (np.interp(t_gnss[ok], t_imu, dpsi) - np.interp(t0, t_imu, dpsi))
+    course = np.arctan2(vel_fix[ok, 0], vel_fix[ok, 1]) - slip
+    back = course - (np.interp(t_fix[ok], t_imu, dpsi) - np.interp(t0, t_imu, dpsi))
     if turned is not None:  # north's own turn from t0 to each epoch
         turned = np.asarray(turned, dtype=float)
-        back = back - (turned[ok] - np.interp(t0, t_gnss, turned))
+        back = back - (turned[ok] - np.interp(t0, t_fix, turned))
 
     # Consistency: a straight line in time through the first TEST_SPAN_S of epochs.
-    tt = t_gnss[ok] - t0
+    tt = t_fix[ok] - t0
     m = tt <= tt[0] + TEST_SPAN_S
     scatter, follows = 0.0, True
     if m.sum() >= 5:
@@ -265,11 +265,11 @@ def heading_from_course(t_imu, gyro, up_b, gyro_bias, t_gnss, vel_gnss, t0: floa
     mean = float(np.angle(np.sum(wt * np.exp(1j * back[pick]))))
     s_course = np.sqrt(1.0 / wt.sum()) * np.sqrt(max(1.0, scatter))
     sigma = float(np.hypot(s_course, np.sqrt(total[best] - 1.0 / info[best])))
-    return CourseHeading(mean % (2 * np.pi), sigma, float(t_gnss[ok][pick[0]]), scatter,
+    return CourseHeading(mean % (2 * np.pi), sigma, float(t_fix[ok][pick[0]]), scatter,
                          follows)
 
 
-def align(imu, gnss, t0: float, i0: int, dt: float, gyro_arw: float, accel_noise: float,
+def align(imu, fixes, t0: float, i0: int, dt: float, gyro_arw: float, accel_noise: float,
           accel_bias_sigma: float, file_euler=None, file_sigma=None,
           coarse_seconds: float = 1.0, heading_override: float | None = None,
           heading_floor: float = units.deg(1.0), gyro_bias_sigma: float = 0.0,
@@ -287,55 +287,55 @@ def align(imu, gnss, t0: float, i0: int, dt: float, gyro_arw: float, accel_noise
     warnings: list[str] = []
     still = stationary(imu.gyro[i0:], imu.accel[i0:], dt, gyro_arw, accel_noise,
                        gyro_bias_sigma)
-    T_static = (static_span(gnss.t, gnss.vel, t0, imu.t[i0:], still)
-                if gnss.vel is not None else 0.0)
+    T_static = (static_span(fixes.t, fixes.vel, t0, imu.t[i0:], still)
+                if fixes.vel is not None else 0.0)
     static = T_static >= MIN_STATIC
-    lat = float(gnss.lla[0, 0])
-    g = earth.gravity(lat, float(gnss.lla[0, 2]))
+    lat = float(fixes.lla[0, 0])
+    g = earth.gravity(lat, float(fixes.lla[0, 2]))
     w_ie = earth.earth_rate(lat)
-    sv = np.asarray(gnss.sigma_vel, dtype=float)
+    sv = np.asarray(fixes.sigma_vel, dtype=float)
     n_static = max(1, int(round(T_static / dt)))
     w_mean = imu.gyro[i0:i0 + n_static].mean(axis=0)
     carry_sigma = gyro_arw / np.sqrt(T_static) if static else gyro_bias_sigma
-    turned = None if gnss.vel is None else earth.north_turn(gnss.t, gnss.lla, gnss.vel)
+    turned = None if fixes.vel is None else earth.north_turn(fixes.t, fixes.lla, fixes.vel)
 
     def course(euler):
         """The heading from the GNSS course, the gyro integrated about the up axis of
         the tilt ``euler`` (less the static gyro mean's bias)."""
-        if gnss.vel is None or heading_override is not None:
+        if fixes.vel is None or heading_override is not None:
             return None
         up_b = att.euler_to_dcm(np.r_[euler[:2], 0.0])[2]  # body components of ENU up
         w_bias = w_mean - up_b * w_ie[2] if static else np.zeros(3)
-        return heading_from_course(imu.t, imu.gyro, up_b, w_bias, gnss.t, gnss.vel, t0,
-                                   _horizontal_sigma(gnss, np.arange(len(gnss.t))),
-                                   gnss.lever, carry_sigma, gyro_arw, heading_floor,
+        return heading_from_course(imu.t, imu.gyro, up_b, w_bias, fixes.t, fixes.vel, t0,
+                                   _horizontal_sigma(fixes, np.arange(len(fixes.t))),
+                                   fixes.lever, carry_sigma, gyro_arw, heading_floor,
                                    velocity_decorrelation_s, turned=turned)
 
     # The course first, on a provisional tilt: whether it follows the gyro decides if
     # it may orient the acceleration of an in-motion levelling.
     n1 = max(1, int(round(max(coarse_seconds, T_static) / dt)))
     hc = course(coarse_level(imu.accel[i0:i0 + n1].mean(axis=0)))
-    if gnss.vel is not None:  # the mean acceleration over the first seconds
-        period = float(np.median(np.diff(gnss.t))) if len(gnss.t) > 1 else 1.0
+    if fixes.vel is not None:  # the mean acceleration over the first seconds
+        period = float(np.median(np.diff(fixes.t))) if len(fixes.t) > 1 else 1.0
         T = max(LEVEL_SECONDS, LEVEL_EPOCHS * period)
-        n = max(1, int(round((min(t0 + T, float(gnss.t[-1]), float(imu.t[-1])) - t0) / dt)))
+        n = max(1, int(round((min(t0 + T, float(fixes.t[-1]), float(imu.t[-1])) - t0) / dt)))
         T = n * dt
-        a, s_a, heading_at_T = mean_acceleration(gnss.t, gnss.vel, sv, t0, t0 + T)
+        a, s_a, heading_at_T = mean_acceleration(fixes.t, fixes.vel, sv, t0, t0 + T)
         # the specific force also holds the Coriolis and transport terms of the ENU
         # velocity's rate, (2 w_ie + w_en) x v (0.036 m/s^2, 0.2 deg of roll, at 250 m/s
         # and 45 deg; 0.6 m/s^2 near the pole): their mean over the window, from each
         # fix's (near a pole v turns by degrees within it)
-        cor = np.cross(2.0 * earth.earth_rate(gnss.lla[:, 0])
-                       + earth.transport_rate(gnss.lla[:, 0], gnss.lla[:, 2], gnss.vel),
-                       gnss.vel)
+        cor = np.cross(2.0 * earth.earth_rate(fixes.lla[:, 0])
+                       + earth.transport_rate(fixes.lla[:, 0], fixes.lla[:, 2], fixes.vel),
+                       fixes.vel)
         tw = np.linspace(t0, t0 + T, 101)
-        a = a + np.array([np.interp(tw, gnss.t, cor[:, j]).mean() for j in range(3)])
+        a = a + np.array([np.interp(tw, fixes.t, cor[:, j]).mean() for j in range(3)])
         a_h = float(np.hypot(a[0], a[1]))
     if static:
         euler = coarse_level(imu.accel[i0:i0 + n_static].mean(axis=0))
         tilt_sigma = np.hypot(accel_bias_sigma / g, accel_noise / np.sqrt(T_static) / g)
         report["levelling"] = f"static {T_static:.1f} s"
-    elif gnss.vel is not None and (hc is None or hc.follows):
+    elif fixes.vel is not None and (hc is None or hc.follows):
         # In motion: the mean specific force over the first seconds is the mean
         # acceleration (from the GNSS velocity) plus the gravity reaction, the
         # acceleration turned into the vehicle's frame by its course.
@@ -359,7 +359,7 @@ def align(imu, gnss, t0: float, i0: int, dt: float, gyro_arw: float, accel_noise
         # Levelled as if not accelerating: the acceleration the GNSS shows is the error.
         n = max(1, int(round(coarse_seconds / dt)))
         euler = coarse_level(imu.accel[i0:i0 + n].mean(axis=0))
-        tilt_sigma = (units.deg(2.0) if gnss.vel is None else
+        tilt_sigma = (units.deg(2.0) if fixes.vel is None else
                       float(np.sqrt((a_h / g) ** 2 + (max(s_a[:2]) / g) ** 2
                                     + (accel_bias_sigma / g) ** 2)))
         report["levelling"] = f"coarse {coarse_seconds:g} s (no static start)"

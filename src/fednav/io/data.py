@@ -7,7 +7,7 @@ Frames: body right-forward-up, navigation ENU; positions geodetic ``[lat, lon, h
 from __future__ import annotations
 
 import copy
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import ClassVar, Protocol, runtime_checkable
 
@@ -424,6 +424,12 @@ class SensorData:
     #: squared; None: ``sigma``
     cov: np.ndarray | None = None
 
+    def adjusted(self, section) -> SensorData:
+        """The recording as its section corrects it (no correction here: a sensor whose
+        section corrects its file, the GNSS's or the velocity sensor's, has a data class
+        of its own, :data:`RECORDINGS`)."""
+        return self
+
 
 @reads_old_sigma_pos
 @dataclass
@@ -451,6 +457,9 @@ class GnssData:
     sigma_rows: np.ndarray | None = None
     #: when each fix reached the navigator [s] (None: at its time of validity)
     t_arrival: np.ndarray | None = None
+    #: its registered sensor (:class:`Series`): the GNSS, or another sensor whose
+    #: fixes start a recording (``SensorSpec.fixes``)
+    name: str = "gnss"
 
     def __post_init__(self):
         t = _as_float(self.source, "t", self.t, (-1,))
@@ -474,7 +483,7 @@ class GnssData:
         check_rows(self.source, len(t), t_arrival=ta)
         keep, n = screen_rows(self.source, "GNSS", t, {"lla": lla, "vel": vel, "sigma": sig,
                                                        "t_arrival": ta}, insane)
-        self.quality["gnss_epochs_skipped"] = n
+        self.quality[f"{self.name}_epochs_skipped"] = n
         self.t = check_time(self.source, t[keep])
         self.t_arrival = check_arrival(self.source, self.t, None if ta is None else ta[keep])
         self.lla = None if lla is None else lla[keep]
@@ -495,8 +504,6 @@ class GnssData:
                 self.vel is not None and np.any(self.sigma_vel <= 0)):
             raise DataError(f"{self.source}: GNSS standard deviations must be positive")
 
-    #: its registered sensor (:class:`Series`)
-    name: ClassVar[str] = "gnss"
     cov: ClassVar[None] = None
 
     @property
@@ -537,9 +544,43 @@ class GnssData:
         out = cls(d.source, d.t, lla, vel, np.broadcast_to(np.asarray(
             sigma_pos_enu, dtype=float), (3,)).copy(), np.broadcast_to(np.asarray(
                 sigma_vel, dtype=float), (3,)).copy(), np.asarray(lever, dtype=float),
-            sigma_rows=sig, t_arrival=d.t_arrival)
+            sigma_rows=sig, t_arrival=d.t_arrival, name=d.name)
         out.quality = {**d.quality, **out.quality}
         return out
+
+    @classmethod
+    def for_section(cls, d: Series, section) -> GnssData:
+        """:meth:`from_series` with the figures of ``section`` (a
+        :class:`~fednav.sensors.GnssConfig`; 5 m and 0.1 m/s where it has none)."""
+        return cls.from_series(
+            d, 5.0 if section.sigma_pos_enu_m is None else section.sigma_pos_enu_m,
+            0.1 if section.sigma_vel_mps is None else section.sigma_vel_mps,
+            section.lever())
+
+    def adjusted(self, section) -> GnssData:
+        """The fixes as ``section`` corrects them: its ``time_offset_s`` added to the
+        stamps (and arrival times) and its ``velocity_latency_s`` taken out of the
+        velocities (the velocity stamped ``t`` is the one of ``t - L``: the velocity of
+        ``t`` is the one stamped ``t + L``, interpolated between fixes, held at the
+        last)."""
+        out = self
+        if section.time_offset_s:
+            out = _again(out, t=out.t + section.time_offset_s,
+                         t_arrival=_shifted(out.t_arrival, section.time_offset_s))
+        if out.vel is not None and section.velocity_latency_s:
+            L = section.velocity_latency_s
+            out = _again(out, vel=np.column_stack([np.interp(out.t + L, out.t, out.vel[:, j])
+                                                   for j in range(3)]))
+        return out
+
+    def flown(self, section) -> GnssData:
+        """The fixes as the navigator flies them with ``section`` (its effective settings,
+        :meth:`~fednav.sensors.spec.SensorConfig.for_recording`): corrected
+        (:meth:`adjusted`), with its lever arm and 1-sigma."""
+        return replace(self.adjusted(section), quality={},
+                       lever=np.asarray(section.lever_m, dtype=float),
+                       sigma_pos_enu=np.asarray(section.sigma_pos_enu_m, dtype=float),
+                       sigma_vel=np.asarray(section.sigma_vel_mps, dtype=float))
 
     def position_velocity(self, window_s: float) -> tuple[np.ndarray, np.ndarray]:
         """ENU velocity [m/s] at each fix from the positions alone: their difference
@@ -563,6 +604,24 @@ class GnssData:
         sigma = np.full(len(t), np.inf)
         sigma[ok] = np.hypot(s[hi[ok]], s[lo[ok]]) / span[ok]
         return vel, sigma
+
+
+#: The data of a sensor whose fixes start a recording (``SensorSpec.fixes``: the
+#: GNSS), as the processing layers name them.
+FixData = GnssData
+
+
+def _again(data, **changes):
+    """``data`` with ``changes``, re-checked by its constructor, keeping its first
+    counts (``quality``)."""
+    quality = dict(data.quality)
+    out = replace(data, quality={}, **changes)
+    out.quality = quality
+    return out
+
+
+def _shifted(ta, dt):
+    return None if ta is None else ta + dt
 
 
 @dataclass
@@ -610,6 +669,30 @@ class VelocityData:
         out.quality = {**d.quality, **out.quality}
         return out
 
+    @classmethod
+    def for_section(cls, d: Series, section) -> VelocityData:
+        """:meth:`from_series` with the lever arm of ``section`` (a
+        :class:`~fednav.sensors.VelocityConfig`)."""
+        return cls.from_series(d, section.lever())
+
+    def adjusted(self, section) -> VelocityData:
+        """The measurements as ``section`` corrects them: its axis order (``axes``: file
+        column ``i`` holds the ENU component ``axes[i]``, sign included), its 1-sigma
+        ``sigma_mps`` for every row, its ``time_offset_s`` added to the stamps."""
+        vel, cov = self.vel, self.cov
+        if tuple(section.axes) != ("E", "N", "U"):  # v_enu = M v_file
+            M = np.zeros((3, 3))
+            for i, a in enumerate(section.axes):
+                M["ENU".index(a.lstrip("+-").upper()), i] = -1.0 if a.startswith("-") else 1.0
+            vel = vel @ M.T
+            cov = M @ cov @ M.T
+        if section.sigma_mps is not None:
+            cov = np.broadcast_to(np.diag(np.square(section.sigma_mps)), cov.shape).copy()
+        if section.time_offset_s or vel is not self.vel or cov is not self.cov:
+            return _again(self, t=self.t + section.time_offset_s, vel=vel, cov=cov,
+                          t_arrival=_shifted(self.t_arrival, section.time_offset_s))
+        return self
+
     def __post_init__(self):
         t = _as_float(self.source, "t", self.t, (-1,))
         vel = _as_float(self.source, "vel", self.vel, (-1, 3))
@@ -632,6 +715,22 @@ class VelocityData:
         self.t = check_time(self.source, t[keep])
         self.vel, self.cov = vel[keep], cov[keep]
         self.t_arrival = check_arrival(self.source, self.t, None if ta is None else ta[keep])
+
+
+#: The sensors whose recordings have a data class of their own (the figures and lever
+#: arm of their section for rows without their own, their section's corrections:
+#: ``for_section``, ``adjusted``); any other sensor's recording is a :class:`SensorData`.
+RECORDINGS: dict[str, type] = {"gnss": GnssData, "velocity": VelocityData}
+
+
+def as_recording(d: Series, section) -> Series:
+    """``d`` as its sensor's recording (:data:`RECORDINGS`; a sensor whose fixes start a
+    recording, ``SensorSpec.fixes``, as :data:`FixData`) with the figures of its
+    ``section`` (the system's, or the section's defaults) where its rows have none."""
+    from ..sensors import registry
+
+    cls = RECORDINGS.get(d.name) or (FixData if registry.spec(d.name).fixes else None)
+    return d if cls is None else cls.for_section(d, section)
 
 
 @dataclass

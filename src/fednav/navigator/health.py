@@ -334,7 +334,7 @@ def band_warnings(fdi: list | dict, band=(0.5, 2.0), rows: dict | None = None,
     return out
 
 
-def run_health(fdi: list, imu=None, gnss=None, solution=None, figures: dict | None = None,
+def run_health(fdi: list, imu=None, fixes=None, solution=None, figures: dict | None = None,
                force: bool = True, seen: list | None = None, band=None,
                rows: dict | None = None, constraints=(),
                blame: str | None = None, imu_preset: bool = True,
@@ -343,13 +343,13 @@ def run_health(fdi: list, imu=None, gnss=None, solution=None, figures: dict | No
     windows' NIS/dof per local filter, long isolations (from the FDI log ``fdi``), the
     NIS/dof band per local filter and row group (``band``, ``rows``, ``constraints``,
     ``means``: :func:`band_warnings`, ``imu_preset``: the IMU figures a grade's; ``blame``: the
-    leave-one-out culprit, named in a refusal),
-    and,
-    with the data, the plausibility checks of :mod:`fednav.navigator.plausibility` —
-    stuck axes, gravity and Earth rate at rest and the solution's levelling there (needs
-    ``imu`` (:class:`~fednav.io.data.ImuData`), ``gnss`` with velocities and the IMU's SI
-    ``figures``), the GNSS residuals' bias per axis and time offset (needs the forward
-    ``solution`` at the IMU rate).  ``force=False`` makes a run NIS/dof beyond
+    leave-one-out culprit, named in a refusal), and, with the data, the plausibility
+    checks of :mod:`fednav.navigator.plausibility` — stuck axes, gravity and Earth rate
+    at rest and the solution's levelling there (needs ``imu``
+    (:class:`~fednav.io.data.ImuData`), ``fixes`` (the recording of the sensor whose
+    fixes start a run, the GNSS's) with velocities and the IMU's SI ``figures``), the
+    fixes' residuals' bias per axis and time offset (needs the forward ``solution`` at
+    the IMU rate).  ``force=False`` makes a run NIS/dof beyond
     :data:`NIS_REFUSE` a :class:`DataError` (``seen``: the input checks' warnings, the
     first named in it)."""
     from ..ins import stops
@@ -359,24 +359,24 @@ def run_health(fdi: list, imu=None, gnss=None, solution=None, figures: dict | No
     run = nis_check(log, force, seen, blame)  # (the refusal; its warnings without a band)
     out = isolation_warnings(log) + (run if band is None else band_warnings(
         log, band, rows, constraints, imu_preset, means)) + window_nis(log)
-    if imu is None or gnss is None:
+    if imu is None or fixes is None:
         return out
     t = imu.t
     dt = float(pl.median_step(t)) if len(t) > 1 else 1.0
-    out += pl.gnss_scale_check(gnss)
-    if gnss.vel is not None:
+    out += pl.fix_scale_check(fixes)
+    if fixes.vel is not None:
         runs, scatter = pl.imu_pass(t, imu.gyro, imu.accel, max(2, int(round(
             stops.WINDOW_S / dt))), pl.STUCK_S)
-        out += pl.stuck_axes(t, imu.gyro, imu.accel, runs, gnss.t, gnss.vel)
+        out += pl.stuck_axes(t, imu.gyro, imu.accel, runs, fixes.t, fixes.vel)
         if figures:
             spans = pl.rest_spans(t, scatter, dt, float(figures.get(
-                "accel_vrw_mps_sqrt_s") or 1e-3), gnss.t, gnss.vel, gnss.sigma_vel)
-            lla = gnss.lla[0] if gnss.lla is not None else np.zeros(3)
+                "accel_vrw_mps_sqrt_s") or 1e-3), fixes.t, fixes.vel, fixes.sigma_vel)
+            lla = fixes.lla[0] if fixes.lla is not None else np.zeros(3)
             out += pl.at_rest(t, imu.gyro, imu.accel, spans, lla, figures, solution)
     if solution is not None:
-        out += pl.residual_checks(pl.gnss_residuals(solution, gnss), gnss.source)
+        out += pl.residual_checks(pl.fix_residuals(solution, fixes), fixes.source)
         if not any("time offset" in w for w in (seen or [])):  # the course check's
-            out += pl.offset_check(solution, imu, gnss)
+            out += pl.offset_check(solution, imu, fixes)
     return out
 
 

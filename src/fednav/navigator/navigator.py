@@ -41,9 +41,8 @@ from ..filters import FederatedFilter, KalmanFilter
 from ..ins import error_model as em
 from ..ins.states import CORE, StateLayout, with_optional
 from ..ins.strapdown import STATE_LLA, STATE_Q, STATE_VEL, Strapdown
-from ..ins.total_state import GnssTotal, StarTotal
 from ..io.data import UNIFORM_TOLERANCE
-from ..sensors.registry import SENSORS
+from ..sensors.registry import SENSORS, total_models
 from .engine import CompiledLoop, why_not_compiled
 from .loop import (
     ErrorStateCore,
@@ -204,8 +203,9 @@ class LateMeasurementWarning(UserWarning):
     at a later epoch than its time of validity's (said once per sensor and navigator)."""
 
 
-#: Measurement models of the total-state navigator, by sensor.
-TOTAL_MODELS = {"gnss": GnssTotal(), "star": StarTotal()}
+#: Measurement models of the total-state navigator, by sensor (each sensor's
+#: ``SensorSpec.total``; kept for 0.1's name).
+TOTAL_MODELS = total_models()
 
 
 @dataclass
@@ -527,26 +527,27 @@ class NavResult:
             return centralized_consistency(self.fdi, self.innovations)
         return consistency(self.fdi)
 
-    def health(self, imu=None, gnss=None, figures: dict | None = None,
+    def health(self, imu=None, fixes=None, figures: dict | None = None,
                band=(0.5, 2.0)) -> list[str]:
         """The health monitor's warnings about the run (never a refusal).
 
         From its fault-detection log: the run's NIS/dof per local filter outside
         ``band`` (and, with innovations recorded, each row kind's), the sliding windows'
         NIS/dof and long isolations (:func:`fednav.navigator.health.run_health`).  With
-        the data fed, also stuck axes and the GNSS positions against their velocities;
+        the data fed, also stuck axes and the fixes' positions against their velocities;
         with the IMU's figures, gravity, Earth rate and levelling at rest; with IMU-rate
-        rows and covariances recorded, the GNSS residuals' bias per axis and the
-        GNSS-IMU time offset by correlation.
+        rows and covariances recorded, the fixes' residuals' bias per axis and their
+        time offset from the IMU by correlation.
 
         Parameters
         ----------
         imu : ImuData, optional
             The IMU data fed (:class:`fednav.io.ImuData`: SI units, body
             right-forward-up).
-        gnss : GnssData, optional
-            The GNSS data fed (:class:`fednav.io.GnssData`: lat/lon [rad], h [m], ENU
-            velocity [m/s]).
+        fixes : GnssData, optional
+            The position fixes fed (the GNSS's, or any sensor registered as giving
+            fixes; :class:`fednav.io.GnssData`: lat/lon [rad], h [m], ENU velocity
+            [m/s]).
         figures : dict, optional
             The IMU's noise figures in SI units by ``imu:`` key (``gyro_arw_rad_sqrt_s``
             ...), for the checks at rest.
@@ -564,7 +565,7 @@ class NavResult:
                and len(self.states) > 1 else None)
         rows = row_nis(self.innovations, self.row_kinds) if self.innovations else None
         means = local_nis(self.innovations) if self.innovations else None
-        return (run_health(self.fdi, imu, gnss, sol, figures, band=band, rows=rows,
+        return (run_health(self.fdi, imu, fixes, sol, figures, band=band, rows=rows,
                            constraints=self.constraints, means=means)
                 + readmission_warnings(self.readmissions))
 
@@ -683,10 +684,10 @@ class Navigator:
         self._snaps: dict[int, tuple] = {}  # epoch -> loop snapshot (recompute)
         for a in self.aiding:
             cfg = system.sensors[a]
-            if total and a not in TOTAL_MODELS:
+            if total and SENSORS[a].total is None:
                 raise ValueError(f"the total-state navigator has no model of sensor '{a}' "
-                                 f"(it has {', '.join(TOTAL_MODELS)})")
-            model = (TOTAL_MODELS[a] if total else sensor_model(system, a)) \
+                                 f"(it has {', '.join(total_models())})")
+            model = (SENSORS[a].total if total else sensor_model(system, a)) \
                 if mechanization is None else mechanization.models[a]
             self._meas[a] = Meas(a, model, cfg.timing.delay_compensation, cfg.timing,
                                  SENSORS[a].angles)
@@ -1570,7 +1571,7 @@ class Navigator:
         return tuple(a for a in self.aiding
                      if SENSORS[a].pseudo or SENSORS[a].detector is not None)
 
-    def health(self, imu=None, gnss=None, figures: dict | None = None) -> list[str]:
+    def health(self, imu=None, fixes=None, figures: dict | None = None) -> list[str]:
         """The health monitor's warnings now (:meth:`NavResult.health` of
         :meth:`result`, with the system's ``health.nis_band``), each also said once
         through Python's ``warnings`` module (:class:`HealthWarning`) — what a stream
@@ -1580,8 +1581,8 @@ class Navigator:
         ----------
         imu : ImuData, optional
             The IMU data fed (:class:`fednav.io.ImuData`), for the checks on the data.
-        gnss : GnssData, optional
-            The GNSS data fed (:class:`fednav.io.GnssData`).
+        fixes : GnssData, optional
+            The position fixes fed (:class:`fednav.io.GnssData`).
         figures : dict, optional
             The IMU's noise figures in SI units by ``imu:`` key, for the checks at rest.
 
@@ -1592,7 +1593,7 @@ class Navigator:
         """
         import warnings
 
-        out = self.result().health(imu, gnss, figures, band=self.system.health.nis_band)
+        out = self.result().health(imu, fixes, figures, band=self.system.health.nis_band)
         said = self.__dict__.setdefault("_health_said", set())
         for w in out:
             key = w.split(":")[0][:60]  # (the same check on the same sensor: said once)

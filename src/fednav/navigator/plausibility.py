@@ -13,9 +13,9 @@ corruptions the filter absorbs without large innovations.
 - **GNSS residuals**: the GNSS fixes minus the solution just before each update, per axis,
   normalised by their predicted sigma: a mean (bias) beyond :data:`BIAS_LIMIT` sigma on an
   axis.
-- **GNSS positions vs their velocities' integral** (:func:`gnss_scale_check`): a position
+- **GNSS positions vs their velocities' integral** (:func:`fix_scale_check`): a position
   axis in another unit.
-- **GNSS-IMU time offset** (:func:`imu_gnss_offset`): the GNSS velocity's changes
+- **GNSS-IMU time offset** (:func:`imu_fix_offset`): the GNSS velocity's changes
   correlated with the IMU's.
 
 Thresholds hold several sigmas of each statistic (false alarms on the clean data of the
@@ -119,20 +119,20 @@ def imu_pass(t, gyro, accel, W, stuck_s):
     return runs, stops.window_scatter(accel, W)
 
 
-def stuck_axes(t, gyro, accel, runs, t_gnss, vel_gnss) -> list[str]:
+def stuck_axes(t, gyro, accel, runs, t_fix, vel_fix) -> list[str]:
     """Warnings for IMU axes constant for more than :data:`STUCK_S` while the GNSS speed
-    (``vel_gnss`` [m/s] at ``t_gnss`` [s]) says the vehicle moves (above 1 m/s over most
+    (``vel_fix`` [m/s] at ``t_fix`` [s]) says the vehicle moves (above 1 m/s over most
     of the run) and another axis of the same triad changes; ``runs`` the long constant
     runs of :func:`imu_pass`."""
     out = []
-    fast = (np.linalg.norm(vel_gnss, axis=1) > 1.0).astype(float) if len(runs) else None
+    fast = (np.linalg.norm(vel_fix, axis=1) > 1.0).astype(float) if len(runs) else None
     for j in range(6):
         name, a = ("gyro", gyro) if j < 3 else ("accel", accel)
         for s, e in runs[runs[:, 0] == j, 1:]:
             seg = np.delete(a[s:e + 1], j % 3, axis=1)
             tt = t[s:e + 1]
-            moving = np.interp(tt, t_gnss, fast) > 0.5
-            moving &= (tt >= t_gnss[0]) & (tt <= t_gnss[-1])
+            moving = np.interp(tt, t_fix, fast) > 0.5
+            moving &= (tt >= t_fix[0]) & (tt <= t_fix[-1])
             # (an ideal simulated IMU on a steady path is constant on every axis)
             if moving.mean() > 0.5 and np.any(seg != seg[0]):
                 out.append(f"IMU {name} {'xyz'[j % 3]} reads {a[s, j % 3]:.6g} unchanged from "
@@ -174,25 +174,25 @@ def _chi2_ppf(p: float, dof: int) -> float:
 
 
 @numba.njit(cache=True)
-def _rest_runs(t, scatter, sa2, thr, t_gnss, slow_g, min_s):
+def _rest_runs(t, scatter, sa2, thr, t_fix, slow_g, min_s):
     """Spans (K, 2) [s] of consecutive samples still (``scatter / sa2 <= thr``), slow
-    (``slow_g`` 1.0 or 0.0 at ``t_gnss``, interpolated, above 0.999) and within the GNSS
+    (``slow_g`` 1.0 or 0.0 at ``t_fix``, interpolated, above 0.999) and within the GNSS
     times, lasting at least ``min_s``."""
-    n, m = len(t), len(t_gnss)
+    n, m = len(t), len(t_fix)
     out = []
     a = -1
     j = 0
     for i in range(n + 1):
-        ok = (i < n and t[i] >= t_gnss[0] and t[i] <= t_gnss[-1]
+        ok = (i < n and t[i] >= t_fix[0] and t[i] <= t_fix[-1]
               and scatter[i] / sa2 <= thr)
-        if ok:  # slow: np.interp's value there (bracket t_gnss[j] <= t < t_gnss[j + 1])
-            while j < m - 1 and t_gnss[j + 1] <= t[i]:
+        if ok:  # slow: np.interp's value there (bracket t_fix[j] <= t < t_fix[j + 1])
+            while j < m - 1 and t_fix[j + 1] <= t[i]:
                 j += 1
-            if j == m - 1 or t_gnss[j] == t[i]:
+            if j == m - 1 or t_fix[j] == t[i]:
                 ok = slow_g[j] > 0.999
             else:
-                slope = (slow_g[j + 1] - slow_g[j]) / (t_gnss[j + 1] - t_gnss[j])
-                ok = slope * (t[i] - t_gnss[j]) + slow_g[j] > 0.999
+                slope = (slow_g[j + 1] - slow_g[j]) / (t_fix[j + 1] - t_fix[j])
+                ok = slope * (t[i] - t_fix[j]) + slow_g[j] > 0.999
         if ok and a < 0:
             a = i
         elif not ok and a >= 0:
@@ -205,7 +205,7 @@ def _rest_runs(t, scatter, sa2, thr, t_gnss, slow_g, min_s):
     return spans
 
 
-def rest_spans(t, scatter, dt, accel_vrw, t_gnss, vel_gnss, sigma_v) -> list[tuple[float,
+def rest_spans(t, scatter, dt, accel_vrw, t_fix, vel_fix, sigma_v) -> list[tuple[float,
                                                                                 float]]:
     """Spans ``(start, end)`` [s] at rest: the GNSS speed below :data:`REST_SPEED` (and 3
     sigma of its velocity) and the accelerometers still for :data:`REST_S`: the SHOE
@@ -213,9 +213,9 @@ def rest_spans(t, scatter, dt, accel_vrw, t_gnss, vel_gnss, sigma_v) -> list[tup
     gyros left out: a corrupted gyro must not hide a stop) on ``scatter``
     (:func:`imu_pass`, period ``dt`` [s], white noise ``accel_vrw`` [m/s/sqrt(s)])."""
     n = len(t)
-    if vel_gnss is None or len(t_gnss) < 3 or n == 0:
+    if vel_fix is None or len(t_fix) < 3 or n == 0:
         return []
-    speed = np.linalg.norm(vel_gnss, axis=1)
+    speed = np.linalg.norm(vel_fix, axis=1)
     slow_g = speed < max(REST_SPEED, 3.0 * float(np.max(sigma_v)))
     # stationary's noise floor at rest: the figure's, unless the recording's quietest
     # windows are less than half as noisy
@@ -228,7 +228,7 @@ def rest_spans(t, scatter, dt, accel_vrw, t_gnss, vel_gnss, sigma_v) -> list[tup
                         0.5 * sa2 * ratio * (1.0 + 1e-9)) / ratio
     sa2 = stops.rest_variance(quiet, sa2, 1e-24)
     thr = _chi2_ppf(1.0 - stops.ALPHA, 3 * (cnt - 1) + 3 * cnt)
-    spans = _rest_runs(t, scatter, sa2, thr, t_gnss, slow_g.astype(float), REST_S)
+    spans = _rest_runs(t, scatter, sa2, thr, t_fix, slow_g.astype(float), REST_S)
     return [(float(a), float(b)) for a, b in spans]
 
 
@@ -384,34 +384,34 @@ def _mean_and_sigma(z):
     return mean, se
 
 
-def gnss_residuals(solution, gnss) -> dict | None:
+def fix_residuals(solution, fixes) -> dict | None:
     """GNSS fixes minus the forward ``solution`` just before each update (its row before
     the fix's time, moved to the antenna), per ENU axis, and their predicted sigma
     (the fix's and the solution's, independent): ``{"t", "dp", "sp", "dv", "sv"}`` (fix
     times [s], position residuals [m], velocity residuals [m/s] and their sigmas); None
     without usable fixes."""
     t = solution.t
-    inside = (gnss.t > t[0]) & (gnss.t <= t[-1])
+    inside = (fixes.t > t[0]) & (fixes.t <= t[-1])
     if inside.sum() < 10:
         return None
-    tg = gnss.t[inside]
+    tg = fixes.t[inside]
     k = np.clip(np.searchsorted(t, tg, side="left") - 1, 0, len(t) - 1)
     lla, vel = _antenna_rows(k, solution.lla, solution.vel, solution.euler, solution.omega,
-                             np.asarray(gnss.lever, dtype=float))
+                             np.asarray(fixes.lever, dtype=float))
     out = {"t": tg}
-    rows = gnss.sigma_rows[inside] if gnss.sigma_rows is not None else None
-    if gnss.lla is not None:
-        g = gnss.lla[inside]
+    rows = fixes.sigma_rows[inside] if fixes.sigma_rows is not None else None
+    if fixes.lla is not None:
+        g = fixes.lla[inside]
         d = earth.llh_difference_enu(g[:, 0], g[:, 1], g[:, 2], lla[:, 0], lla[:, 1],
                                      lla[:, 2])
         sr = (rows[:, [1, 0, 2]] if rows is not None
-              else np.asarray(gnss.sigma_pos_enu, dtype=float)[None, :])
+              else np.asarray(fixes.sigma_pos_enu, dtype=float)[None, :])
         # (the row is one sample before the fix: its velocity carries it to the fix)
         out["dp"], out["sp"] = _with_sigma(d, -vel, tg - t[k], sr, solution.sigma, k, 6)
-    if gnss.vel is not None:
+    if fixes.vel is not None:
         sr = (rows[:, 3:6] if rows is not None
-              else np.asarray(gnss.sigma_vel, dtype=float)[None, :])
-        out["dv"], out["sv"] = _with_sigma(gnss.vel[inside], -vel, np.ones(len(tg)), sr,
+              else np.asarray(fixes.sigma_vel, dtype=float)[None, :])
+        out["dv"], out["sv"] = _with_sigma(fixes.vel[inside], -vel, np.ones(len(tg)), sr,
                                            solution.sigma, k, 3)
     return out
 
@@ -616,7 +616,7 @@ def _offset_misfit(t, V, tg, k, j, dvg, lags):
     return cost
 
 
-def imu_gnss_offset(solution, imu, gnss, window_s: float = OFFSET_WINDOW_S,
+def imu_fix_offset(solution, imu, fixes, window_s: float = OFFSET_WINDOW_S,
                     search_s: float = OFFSET_SEARCH_S) -> tuple[float, float] | None:
     """The GNSS-IMU time offset [s] (how much later than their time of validity the GNSS
     fixes are stamped) and its 1-sigma, by correlation of the GNSS velocity's changes with
@@ -627,12 +627,12 @@ def imu_gnss_offset(solution, imu, gnss, window_s: float = OFFSET_WINDOW_S,
     constant part).  None without GNSS velocities, with too little acceleration change
     to see a lag (a constant-velocity run), or where the best lag's misfit is more than
     :data:`EXPLAINED` of the GNSS changes' scatter."""
-    if gnss.vel is None or len(solution.t) < 10:
+    if fixes.vel is None or len(solution.t) < 10:
         return None
     t = solution.t
     V = _antenna_velocity(t, imu.t, imu.accel, solution.lla, solution.euler,
-                          solution.omega, np.asarray(gnss.lever, dtype=float))
-    tg = gnss.t
+                          solution.omega, np.asarray(fixes.lever, dtype=float))
+    tg = fixes.t
     period = median_step(tg) if len(tg) > 1 else np.inf
     m = max(1, int(round(window_s / period)))
     k = np.arange(m, len(tg))
@@ -642,7 +642,7 @@ def imu_gnss_offset(solution, imu, gnss, window_s: float = OFFSET_WINDOW_S,
     k, j = k[ok], j[ok]
     if len(k) < 20:
         return None
-    dvg = gnss.vel[k] - gnss.vel[j]
+    dvg = fixes.vel[k] - fixes.vel[j]
 
     def misfit(lags):
         return _offset_misfit(t, V, tg, k, j, dvg, np.asarray(lags, dtype=float))
@@ -671,16 +671,16 @@ def imu_gnss_offset(solution, imu, gnss, window_s: float = OFFSET_WINDOW_S,
     return tau, float(np.sqrt(2.0 * s2 / curv * m))
 
 
-def offset_check(solution, imu, gnss) -> list[str]:
-    """A warning when :func:`imu_gnss_offset` finds an offset beyond
+def offset_check(solution, imu, fixes) -> list[str]:
+    """A warning when :func:`imu_fix_offset` finds an offset beyond
     :data:`OFFSET_LIMIT_S` and 5 of its sigmas."""
-    est = imu_gnss_offset(solution, imu, gnss)
+    est = imu_fix_offset(solution, imu, fixes)
     if est is None:
         return []
     tau, s = est
     if abs(tau) > OFFSET_LIMIT_S and abs(tau) > 5.0 * s:
         when = "after" if tau > 0 else "before"
-        return [f"{gnss.source}: the GNSS velocity's changes match the IMU's best with the "
+        return [f"{fixes.source}: the GNSS velocity's changes match the IMU's best with the "
                 f"fixes stamped {abs(tau):.2f} s {when} their time of validity (+-{s:.2f} s, "
                 f"by correlation): a GNSS-IMU time offset (sensors.gnss.time_offset_s: "
                 f"{-tau:.2f} corrects it), or a velocity latency"]
@@ -694,7 +694,7 @@ SCALE_CHUNK_S = 60.0
 SCALE_LIMIT = 0.2
 
 
-def gnss_scale_check(gnss) -> list[str]:
+def fix_scale_check(fixes) -> list[str]:
     """Warnings for GNSS position axes (east, north, up) that do not follow the integral
     of the GNSS velocity: the least-squares slope of the positions on the integral (an
     offset per :data:`SCALE_CHUNK_S` stretch) off 1 by more than :data:`SCALE_LIMIT` and
@@ -702,21 +702,21 @@ def gnss_scale_check(gnss) -> list[str]:
     height in km or feet, positions in another unit, or a velocity axis in another unit or
     sign.  Along an axis the run hardly travels (the integral's travel within 10 times its
     own noise's) nothing is said."""
-    if gnss.lla is None or gnss.vel is None or len(gnss.t) < 10:
+    if fixes.lla is None or fixes.vel is None or len(fixes.t) < 10:
         return []
-    lla = gnss.lla
+    lla = fixes.lla
     # the positions as their fix-to-fix displacements summed (each in its local ENU
     # axes, as the velocity is: one origin far away bends east and north near a pole)
     step = earth.llh_difference_enu(lla[1:, 0], lla[1:, 1], lla[1:, 2], lla[:-1, 0],
                                     lla[:-1, 1], lla[:-1, 2])
-    told, slopes, sigmas = _scale_fit(gnss.t, gnss.vel, step, SCALE_CHUNK_S,
-                                      np.asarray(gnss.sigma_vel, dtype=float))
+    told, slopes, sigmas = _scale_fit(fixes.t, fixes.vel, step, SCALE_CHUNK_S,
+                                      np.asarray(fixes.sigma_vel, dtype=float))
     out = []
     names = ("east", "north", "height")
     for a in range(3):
         slope, sig = float(slopes[a]), float(sigmas[a])
         if told[a] and abs(slope - 1.0) > SCALE_LIMIT and abs(slope - 1.0) > 5.0 * sig:
-            out.append(f"{gnss.source}: the GNSS {names[a]} changes {slope:.3g} times as "
+            out.append(f"{fixes.source}: the GNSS {names[a]} changes {slope:.3g} times as "
                        f"much as its velocity's integral says (+-{sig:.2g}): a {names[a]} "
                        f"in another unit (km, feet, radians), or that velocity axis in "
                        f"another unit or sign")
@@ -725,7 +725,7 @@ def gnss_scale_check(gnss) -> list[str]:
 
 @numba.njit(cache=True)
 def _scale_fit(t, vel, step, chunk_s, sigma_vel):
-    """:func:`gnss_scale_check`'s fit per ENU axis: the GNSS velocity's integral (by
+    """:func:`fix_scale_check`'s fit per ENU axis: the GNSS velocity's integral (by
     trapezoids, ``vel`` at ``t``) and the summed position ``step`` s (K-1, 3) [m], each
     centred on its mean per ``chunk_s`` stretch; returns whether the integral's travel
     tells (its scatter beyond 100 times its own noise's), the slope of the positions on
@@ -786,7 +786,7 @@ def _scale_fit(t, vel, step, chunk_s, sigma_vel):
 
 
 def residual_checks(res: dict | None, source: str) -> list[str]:
-    """Per-axis bias and time-offset warnings from :func:`gnss_residuals`."""
+    """Per-axis bias and time-offset warnings from :func:`fix_residuals`."""
     out = []
     if res is None:
         return out
@@ -808,5 +808,5 @@ def residual_checks(res: dict | None, source: str) -> list[str]:
     return out
 
 
-__all__ = ["at_rest", "gnss_residuals", "gnss_scale_check", "imu_gnss_offset", "imu_pass",
+__all__ = ["at_rest", "fix_residuals", "fix_scale_check", "imu_fix_offset", "imu_pass",
            "median_step", "offset_check", "residual_checks", "rest_spans", "stuck_axes"]

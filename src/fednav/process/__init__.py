@@ -10,14 +10,16 @@ from .run import (
     adjust_sensors,
     check_units,
     errors_against,
-    gnss_course,
-    gnss_z,
+    fix_course,
+    fix_z,
     imu_figures,
     prepare,
     process,
     rmse,
 )
 
+gnss_course, gnss_z = fix_course, fix_z  # (0.1's names)
+
 __all__ = ["InnovationRecord", "ProcessConfig", "ProcessResult", "Solution",
-           "adjust_sensors", "check_units", "errors_against", "gnss_course", "gnss_z",
-           "imu_figures", "prepare", "process", "rmse"]
+           "adjust_sensors", "check_units", "errors_against", "fix_course", "fix_z",
+           "gnss_course", "gnss_z", "imu_figures", "prepare", "process", "rmse"]

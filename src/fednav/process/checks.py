@@ -17,7 +17,7 @@ from pydantic import BaseModel
 
 from ..core import earth
 from ..core import mounting as mt
-from ..io.data import DataError, GnssData, ImuData
+from ..io.data import DataError, FixData, ImuData
 from ..sensors import registry
 from ..sensors.imu import FIGURES
 
@@ -30,19 +30,19 @@ GRAVITY_REFUSE_DEG = 45.0
 FORWARD_FIT, FORWARD_DECLARED = 0.7, 0.3
 
 
-def _track_correlation(imu: ImuData, gnss: GnssData | None, R) -> np.ndarray | None:
+def _track_correlation(imu: ImuData, fixes: FixData | None, R) -> np.ndarray | None:
     """How the vehicle's speeding up and slowing down follows each horizontal body axis
     of the data turned by ``R`` (a candidate mounting, relative to the data as read):
     the correlations [right, forward] of the GNSS along-track acceleration (the speed's
     rate over fixes at least 1 s apart, above 2 m/s) with the body specific force
     averaged over the same intervals; None without GNSS velocities that vary."""
-    if gnss is None or gnss.vel is None or len(gnss.t) < 10:
+    if fixes is None or fixes.vel is None or len(fixes.t) < 10:
         return None
     # the first fix at or after each whole second from the first (a fix-to-fix rate of
     # 5 Hz fixes is mostly noise)
-    grid = gnss.t[0] + np.arange(int((gnss.t[-1] - gnss.t[0]) // 1.0) + 1)
-    keep = np.unique(np.searchsorted(gnss.t, grid - 1e-9))
-    tg, vg = gnss.t[keep], gnss.vel[keep]
+    grid = fixes.t[0] + np.arange(int((fixes.t[-1] - fixes.t[0]) // 1.0) + 1)
+    keep = np.unique(np.searchsorted(fixes.t, grid - 1e-9))
+    tg, vg = fixes.t[keep], fixes.vel[keep]
     inside = (tg >= imu.t[0]) & (tg <= imu.t[-1])
     tg, vg = tg[inside], vg[inside]
     if len(tg) < 10:
@@ -154,7 +154,7 @@ def mounted_imu(imu: ImuData, mounting) -> ImuData:
     return imu.remount(mounting)
 
 
-def check_mounting(imu: ImuData, gnss: GnssData | None = None) -> list[str]:
+def check_mounting(imu: ImuData, fixes: FixData | None = None) -> list[str]:
     """Refuse IMU data whose declared axes gravity contradicts, naming the mounting that
     fits; warn when the vehicle speeds up along another axis than the declared forward
     one.
@@ -186,7 +186,7 @@ def check_mounting(imu: ImuData, gnss: GnssData | None = None) -> list[str]:
             GRAVITY_REFUSE_DEG))]
         scored = []
         for R in cands:
-            r = _track_correlation(imu, gnss, R)
+            r = _track_correlation(imu, fixes, R)
             fits_forward = r is not None and r[1] > FORWARD_FIT
             turn = float(np.degrees(np.arccos(np.clip((np.trace(R) - 1) / 2, -1, 1))))
             scored.append((not fits_forward, turn, R))
@@ -200,17 +200,19 @@ def check_mounting(imu: ImuData, gnss: GnssData | None = None) -> list[str]:
             f"{imu.source}: the accelerometers read gravity along the body's {sign}{axis} "
             f"axis ({angle:.0f} deg from up), so the IMU's axes are not mounted as declared "
             f"(imu.mounting: {name}); imu.mounting: {fit} fits the data"
-            + ("" if forward_known else " (its forward axis is a guess: the GNSS speed "
-                                        "did not vary enough to tell)"))
-    r = _track_correlation(imu, gnss, np.eye(3))
+            + ("" if forward_known else f" (its forward axis is a guess: the "
+                                        f"{registry.label(fixes.name)} speed did not vary "
+                                        f"enough to tell)"))
+    r = _track_correlation(imu, fixes, np.eye(3))
     if r is not None and abs(r[0]) > FORWARD_FIT and abs(r[1]) < FORWARD_DECLARED:
         s = 1.0 if r[0] > 0 else -1.0  # the data's +-right axis is the forward one:
         R = np.array([[0.0, -s, 0.0], [s, 0.0, 0.0], [0.0, 0.0, 1.0]])  # a quarter turn
         fit = mt.letters_of(R @ declared) or "a rotation about up"
         warnings.append(
             f"{imu.source}: the vehicle speeds up and slows down along the body's "
-            f"{'+' if s > 0 else '-'}right axis (correlation {abs(r[0]):.2f} with the GNSS "
-            f"along-track acceleration, {abs(r[1]):.2f} along forward): the IMU's axes "
+            f"{'+' if s > 0 else '-'}right axis (correlation {abs(r[0]):.2f} with the "
+            f"{registry.label(fixes.name)} along-track acceleration, {abs(r[1]):.2f} "
+            f"along forward): the IMU's axes "
             f"turned about up from the declared mounting ({name})? imu.mounting: {fit} "
             f"fits (an aircraft or a boat that crabs may do this)")
     return warnings
@@ -227,20 +229,20 @@ OFFSET_SEARCH_S = 30.0
 OFFSET_WARN_S = 0.3
 
 
-def time_offset(imu: ImuData, gnss: GnssData, step: float = 0.01) -> float | None:
+def time_offset(imu: ImuData, fixes: FixData, step: float = 0.01) -> float | None:
     """The GNSS-IMU time offset [s] the data show, to add to the GNSS time stamps (as
-    ``sensors.gnss.time_offset_s``): the shift of the GNSS course that best matches the
+    ``sensors.<name>.time_offset_s``): the shift of the GNSS course that best matches the
     heading the gyro integrates (about the mean specific force's axis, at rest "up"),
     searched over +-:data:`OFFSET_SEARCH_S` in ``step`` s — None when the vehicle turns
     too little while moving (less than 30 deg of course change above 2 m/s) for the
     offset to be observable."""
-    if gnss.vel is None or len(gnss.t) < 10:
+    if fixes.vel is None or len(fixes.t) < 10:
         return None
-    speed = np.hypot(gnss.vel[:, 0], gnss.vel[:, 1])
+    speed = np.hypot(fixes.vel[:, 0], fixes.vel[:, 1])
     moving = speed > 2.0
     if moving.sum() < 10:
         return None
-    tg = gnss.t[moving]
+    tg = fixes.t[moving]
     up = np.mean(imu.accel, axis=0)
     up /= max(np.linalg.norm(up), 1e-12)
     dt = imu.period()
@@ -249,7 +251,7 @@ def time_offset(imu: ImuData, gnss: GnssData, step: float = 0.01) -> float | Non
     # The course unwrapped within each stretch of moving fixes; across a gap (an outage,
     # a stop) its turns are unseen, so each stretch takes the 2 pi branch nearest the
     # gyro's heading (unwrapped across a 300 deg turn in an outage it read 25 s offset)
-    course = np.arctan2(gnss.vel[moving, 0], gnss.vel[moving, 1])
+    course = np.arctan2(fixes.vel[moving, 0], fixes.vel[moving, 1])
     cuts = np.flatnonzero(np.diff(tg) > 2.0) + 1
     h0 = np.interp(tg, imu.t, heading)
     offset = None  # (the gyro heading's unknown start against the course: the first
@@ -259,10 +261,10 @@ def time_offset(imu: ImuData, gnss: GnssData, step: float = 0.01) -> float | Non
         d = float(np.median(h0[a:b] - c))
         offset = d if offset is None else offset
         course[a:b] = c + 2 * np.pi * np.round((d - offset) / (2 * np.pi))
-    if gnss.lla is not None:
+    if fixes.lla is not None:
         # the course is measured from north, which turns while the gyro sees none of it
         # (near the pole a false offset of 30 s)
-        course = course - earth.north_turn(gnss.t, gnss.lla, gnss.vel)[moving]
+        course = course - earth.north_turn(fixes.t, fixes.lla, fixes.vel)[moving]
     if np.ptp(course) < np.radians(30.0):
         return None
     x = tg - tg.mean()
@@ -293,7 +295,7 @@ def time_offset(imu: ImuData, gnss: GnssData, step: float = 0.01) -> float | Non
 LATENCY_WARN_S = 0.05
 
 
-def velocity_latency(gnss: GnssData) -> tuple[float, float] | None:
+def velocity_latency(fixes: FixData) -> tuple[float, float] | None:
     """How much older than its stamp the GNSS velocity is [s], and the estimate's 1-sigma,
     from the positions: the velocity of position differences over about 1 s
     (``v_p(t) = (p(t + h) - p(t - h)) / 2h``, valid at ``t``) minus the reported velocity
@@ -301,13 +303,13 @@ def velocity_latency(gnss: GnssData) -> tuple[float, float] | None:
     so ``L`` is the least-squares slope of that difference on ``a`` over the horizontal
     components.  None without positions and velocities, or with too little acceleration
     (the slope's sigma above 0.1 s)."""
-    if gnss.lla is None or gnss.vel is None or len(gnss.t) < 20:
+    if fixes.lla is None or fixes.vel is None or len(fixes.t) < 20:
         return None
-    t = gnss.t
+    t = fixes.t
     period = float(np.median(np.diff(t)))
     k = max(1, int(round(0.5 / period)))
-    d = earth.llh_difference_enu(gnss.lla[:, 0], gnss.lla[:, 1], gnss.lla[:, 2],
-                                 gnss.lla[0, 0], gnss.lla[0, 1], gnss.lla[0, 2])
+    d = earth.llh_difference_enu(fixes.lla[:, 0], fixes.lla[:, 1], fixes.lla[:, 2],
+                                 fixes.lla[0, 0], fixes.lla[0, 1], fixes.lla[0, 2])
     i = np.arange(k, len(t) - k)
     span = t[i + k] - t[i - k]
     ok = np.abs(span - 2 * k * period) < 0.25 * period  # no gap inside
@@ -315,8 +317,8 @@ def velocity_latency(gnss: GnssData) -> tuple[float, float] | None:
     if len(i) < 10:
         return None
     vp = (d[i + k, :2] - d[i - k, :2]) / span[:, None]
-    a = (gnss.vel[i + k, :2] - gnss.vel[i - k, :2]) / span[:, None]
-    r = vp - gnss.vel[i, :2]
+    a = (fixes.vel[i + k, :2] - fixes.vel[i - k, :2]) / span[:, None]
+    r = vp - fixes.vel[i, :2]
     aa = float(np.sum(a * a))
     if aa <= 0.0:
         return None
@@ -330,7 +332,7 @@ def velocity_latency(gnss: GnssData) -> tuple[float, float] | None:
     return L, sigma
 
 
-def check_units(imu: ImuData, gnss: GnssData | None) -> list[str]:
+def check_units(imu: ImuData, fixes: FixData | None) -> list[str]:
     """Refuse IMU data in the wrong unit; warn about GNSS positions that look like radians.
 
     * accelerometer: the median specific-force magnitude of a vehicle on or near the
@@ -348,17 +350,17 @@ def check_units(imu: ImuData, gnss: GnssData | None) -> list[str]:
     if 0.5 < fmag < 1.5:
         raise DataError(f"{imu.source}: median specific force {fmag:.3f}: looks like g; "
                         f"fednav expects m/s^2")
-    if gnss is None:
+    if fixes is None:
         return warnings
-    if gnss.vel is not None and len(gnss.t) > 5:
+    if fixes.vel is not None and len(fixes.t) > 5:
         up = np.mean(imu.accel, axis=0)
         up /= max(np.linalg.norm(up), 1e-12)
         # GNSS epochs at least 1 s apart: the course rate of 5 Hz fixes is mostly noise
         keep = [0]
-        for i in range(1, len(gnss.t)):
-            if gnss.t[i] - gnss.t[keep[-1]] >= 1.0 - 1e-9:
+        for i in range(1, len(fixes.t)):
+            if fixes.t[i] - fixes.t[keep[-1]] >= 1.0 - 1e-9:
                 keep.append(i)
-        tg, vg = gnss.t[keep], gnss.vel[keep]
+        tg, vg = fixes.t[keep], fixes.vel[keep]
         speed = np.hypot(vg[:, 0], vg[:, 1])
         course = np.unwrap(np.arctan2(vg[:, 0], vg[:, 1]))
         dt = np.diff(tg)
@@ -372,13 +374,14 @@ def check_units(imu: ImuData, gnss: GnssData | None) -> list[str]:
             c, g = c_rate[turning], g_rate[turning]
             slope = float(c @ g / (c @ c))
             if 20.0 < abs(slope) < 200.0:
-                raise DataError(f"{imu.source}: gyro rates are {slope:.1f} x the GNSS course "
-                                f"rate while turning: looks like deg/s; fednav expects rad/s")
-    if gnss.lla is None:
+                raise DataError(f"{imu.source}: gyro rates are {slope:.1f} x the "
+                                f"{registry.label(fixes.name)} course rate while turning: "
+                                f"looks like deg/s; fednav expects rad/s")
+    if fixes.lla is None:
         return warnings
-    lat, lon = np.degrees(gnss.lla[:, 0]), np.degrees(gnss.lla[:, 1])
+    lat, lon = np.degrees(fixes.lla[:, 0]), np.degrees(fixes.lla[:, 1])
     if np.all(np.abs(lat) < 1.6) and np.all(np.abs(lon) < 3.2):
-        warnings.append(f"{gnss.source}: every position lies within 1.6 deg of latitude 0 and "
+        warnings.append(f"{fixes.source}: every position lies within 1.6 deg of latitude 0 and "
                         f"3.2 deg of longitude 0: latitude/longitude in radians where "
                         f"degrees are expected?")
     return warnings
@@ -389,29 +392,32 @@ def check_units(imu: ImuData, gnss: GnssData | None) -> list[str]:
 MAX_IMU_PERIOD_S = 1.0
 
 
-def check_gnss_timing(imu: ImuData, gnss: GnssData | None) -> tuple[list[str], dict]:
-    """The GNSS's clock against the IMU's: a time offset between the two
+def check_fix_timing(imu: ImuData, fixes: FixData | None) -> tuple[list[str], dict]:
+    """The fixes' clock (the GNSS's) against the IMU's: a time offset between the two
     (:func:`time_offset`) and a lag of the receiver's velocity behind its positions
-    (:func:`velocity_latency`), each in the data quality (``gnss_time_offset_seen_s``,
-    ``gnss_velocity_latency_seen_s`` [s]) and a warning naming the key that corrects it
-    when it exceeds what the data can tell apart.  Returns (warnings, quality)."""
+    (:func:`velocity_latency`), each in the data quality (``<name>_time_offset_seen_s``,
+    ``<name>_velocity_latency_seen_s`` [s], ``<name>`` the fix sensor's) and a warning
+    naming the key that corrects it when it exceeds what the data can tell apart.
+    Returns (warnings, quality)."""
     warnings, quality = [], {}
-    if gnss is None:
+    if fixes is None:
         return warnings, quality
-    off = time_offset(imu, gnss)
+    off = time_offset(imu, fixes)
     if off is not None:
-        quality["gnss_time_offset_seen_s"] = round(off, 2)
-        if abs(off) > max(OFFSET_WARN_S, 0.5 * float(np.median(np.diff(gnss.t)))):
-            warnings.append(f"{gnss.source}: the GNSS course matches the gyro's heading "
-                            f"best with the GNSS time stamps moved by {off:+.2f} s: a "
+        quality[f"{fixes.name}_time_offset_seen_s"] = round(off, 2)
+        if abs(off) > max(OFFSET_WARN_S, 0.5 * float(np.median(np.diff(fixes.t)))):
+            who = registry.label(fixes.name)
+            warnings.append(f"{fixes.source}: the {who} course matches the gyro's heading "
+                            f"best with the {who} time stamps moved by {off:+.2f} s: a "
                             f"time offset between the receiver's and the IMU's clock "
-                            f"(UTC vs GPS time: 18 s)? sensors.gnss.time_offset_s "
+                            f"(UTC vs GPS time: 18 s)? sensors.{fixes.name}.time_offset_s "
                             f"corrects it")
-    lat = velocity_latency(gnss)
+    lat = velocity_latency(fixes)
     if lat is not None:
-        quality["gnss_velocity_latency_seen_s"] = round(lat[0], 3)
+        quality[f"{fixes.name}_velocity_latency_seen_s"] = round(lat[0], 3)
         if abs(lat[0]) > max(LATENCY_WARN_S, 3.0 * lat[1]):
-            warnings.append(f"{gnss.source}: the GNSS velocity lags its positions by "
+            warnings.append(f"{fixes.source}: the {registry.label(fixes.name)} velocity lags "
+                            f"its positions by "
                             f"{lat[0]:+.3f} s (+-{lat[1]:.3f} s, from the positions' "
-                            f"differences): sensors.gnss.velocity_latency_s corrects it")
+                            f"differences): sensors.{fixes.name}.velocity_latency_s corrects it")
     return warnings, quality

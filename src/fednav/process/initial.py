@@ -13,22 +13,22 @@ from ..core import attitude as att
 from ..core import earth, units
 from ..ins import error_model as em
 from ..ins.alignment import Alignment, align, coarse_level
-from ..io.data import DataError, GnssData, ImuData
+from ..io.data import DataError, FixData, ImuData
 from ..navigator.system import System
 
 
-def gnss_course(gnss: GnssData, seconds: float, min_speed: float = 0.5) -> float | None:
+def fix_course(fixes: FixData, seconds: float, min_speed: float = 0.5) -> float | None:
     """Mean course over ground [rad, from north toward east] over the first ``seconds``
     of GNSS velocity, or None when the vehicle is slower than ``min_speed`` [m/s]."""
-    if gnss.vel is None:
+    if fixes.vel is None:
         return None
-    v = gnss.vel[gnss.t <= gnss.t[0] + seconds, :2].mean(axis=0)
+    v = fixes.vel[fixes.t <= fixes.t[0] + seconds, :2].mean(axis=0)
     if np.hypot(*v) < min_speed:
         return None
     return float(np.arctan2(v[0], v[1]) % (2 * np.pi))
 
 
-def attitude_at_start(imu: ImuData, gnss: GnssData, system: System, t0: float, i0: int,
+def attitude_at_start(imu: ImuData, fixes: FixData, system: System, t0: float, i0: int,
                       dt: float, noise: em.ImuNoiseModel, accel_bias_sigma: float,
                       gyro_bias_sigma: float, decorrelation_s: float = 1.0) -> Alignment:
     """The attitude at ``t0`` (IMU sample ``i0``, period ``dt`` [s]) and its 1-sigma, by
@@ -40,7 +40,7 @@ def attitude_at_start(imu: ImuData, gnss: GnssData, system: System, t0: float, i
     heading = (None if cfg.coarse_heading_deg is None
                else float(units.deg(cfg.coarse_heading_deg)))
     if cfg.initial_attitude == "align":
-        a = align(imu, gnss, t0, i0, dt, noise.gyro_arw, noise.accel_vrw, accel_bias_sigma,
+        a = align(imu, fixes, t0, i0, dt, noise.gyro_arw, noise.accel_vrw, accel_bias_sigma,
                   imu.initial_euler, imu.initial_euler_sigma if sig is None else sig,
                   cfg.coarse_seconds, heading, gyro_bias_sigma=gyro_bias_sigma,
                   velocity_decorrelation_s=decorrelation_s)
@@ -55,7 +55,7 @@ def attitude_at_start(imu: ImuData, gnss: GnssData, system: System, t0: float, i
     else:
         n = max(1, int(round(cfg.coarse_seconds / dt)))
         if heading is None:
-            heading = gnss_course(gnss, cfg.coarse_seconds) or 0.0
+            heading = fix_course(fixes, cfg.coarse_seconds) or 0.0
         euler = coarse_level(imu.accel[i0:i0 + n].mean(axis=0), heading)
         how = f"coarse {cfg.coarse_seconds:g} s"
     if sig is None:
@@ -86,14 +86,14 @@ def start_covariance(al: Alignment, sig_vel, sig_pos_enu, gb: float, ab: float,
 VELOCITY_WINDOW_S = 2.0
 
 
-def position_velocity(gnss: GnssData) -> tuple[np.ndarray, np.ndarray]:
+def position_velocity(fixes: FixData) -> tuple[np.ndarray, np.ndarray]:
     """ENU velocity [m/s] of position-only fixes and its 1-sigma, for the alignment's
     course and the initial velocity (:meth:`GnssData.position_velocity` over +-
     :data:`VELOCITY_WINDOW_S`)."""
-    return gnss.position_velocity(VELOCITY_WINDOW_S)
+    return fixes.position_velocity(VELOCITY_WINDOW_S)
 
 
-def start_at_first_fix(imu: ImuData, gnss: GnssData, section, system: System, t0: float,
+def start_at_first_fix(imu: ImuData, fixes: FixData, section, system: System, t0: float,
                        i0: int, dt: float, noise: em.ImuNoiseModel, accel_bias_sigma: float,
                        gyro_bias_sigma: float):
     """The start of a run without an ``initial:`` section: the first GNSS fix moved from
@@ -104,21 +104,21 @@ def start_at_first_fix(imu: ImuData, gnss: GnssData, section, system: System, t0
     P0 in filter units)."""
     lever = np.asarray(section.lever_m, dtype=float)
     sig_vel = np.asarray(section.sigma_vel_mps, dtype=float)
-    gnss_v = replace(gnss, lever=lever, sigma_vel=sig_vel, quality={})
+    fixes_v = replace(fixes, lever=lever, sigma_vel=sig_vel, quality={})
     sig_vel0, decorrelation = sig_vel, 1.0
-    if gnss.vel is None:  # the alignment's course from the positions' differences
-        v, s_v = position_velocity(gnss)
+    if fixes.vel is None:  # the alignment's course from the positions' differences
+        v, s_v = position_velocity(fixes)
         if not np.isfinite(s_v[0]):
-            raise DataError(f"{gnss.source}: one position-only fix: no initial "
+            raise DataError(f"{fixes.source}: one position-only fix: no initial "
                             f"velocity; give the initial state (initial:)")
         sig_vel0 = np.full(3, s_v[0])
         rows = np.column_stack([np.ones((len(v), 3)), np.repeat(
             np.minimum(s_v, 1e6)[:, None], 3, axis=1)])
-        gnss_v = replace(gnss_v, vel=v, sigma_vel=sig_vel0, quality={}, sigma_rows=rows)
+        fixes_v = replace(fixes_v, vel=v, sigma_vel=sig_vel0, quality={}, sigma_rows=rows)
         decorrelation = 2.0 * VELOCITY_WINDOW_S  # (neighbours share their fixes)
-    al = attitude_at_start(imu, gnss_v, system, t0, i0, dt, noise, accel_bias_sigma,
+    al = attitude_at_start(imu, fixes_v, system, t0, i0, dt, noise, accel_bias_sigma,
                            gyro_bias_sigma, decorrelation)
-    lla0 = earth.move_enu(gnss.lla[0], -(att.euler_to_dcm(al.euler) @ lever))
+    lla0 = earth.move_enu(fixes.lla[0], -(att.euler_to_dcm(al.euler) @ lever))
     P0 = start_covariance(al, sig_vel0, np.asarray(section.sigma_pos_enu_m, dtype=float),
                           gyro_bias_sigma, accel_bias_sigma, noise)
-    return al, lla0, gnss_v.vel[0], P0
+    return al, lla0, fixes_v.vel[0], P0

@@ -275,14 +275,14 @@ def _level_of(sol: Solution, row: int, j: int) -> np.ndarray | None:
                        "heading PL": "heading_pl_deg"}[_LEVEL_NAMES[(row, j)]]]
 
 
-def errors_figure(res: ProcessResult, ref: Reference, gnss=None, title: str = ""):
+def errors_figure(res: ProcessResult, ref: Reference, fixes=None, title: str = ""):
     """``errors.png`` as a :class:`~matplotlib.figure.Figure`: east, north, up position
     [m], velocity [m/s] and (with a reference attitude) pitch, roll, yaw [deg] errors of
     the forward (and smoothed) solution against ``ref``, each with its filter's +-3 sigma
     at the filter epochs (the smoothed one's from the RTS covariance; over more than 500
     epochs their upper envelope, :func:`fednav.core.plots.envelope`), the protection
     levels when integrity was asked for (HPL on east and north, VPL on up, the
-    heading's on yaw), GNSS outages (``gnss``'s gaps) shaded, one legend beside the axes."""
+    heading's on yaw), GNSS outages (``fixes``' gaps) shaded, one legend beside the axes."""
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
@@ -292,7 +292,7 @@ def errors_figure(res: ProcessResult, ref: Reference, gnss=None, title: str = ""
     rows = 3 if "yaw_rad" in errs[0] else 2
     fig, axes = plots.new_figure(rows, 3, figsize=(15, 3.0 * rows + 0.9), sharex=True)
     styles = plots.mode_styles([s.label for s in sols])
-    outages = plots.gaps(gnss.t) if gnss is not None and gnss.t is not None else []
+    outages = plots.gaps(fixes.t) if fixes is not None and fixes.t is not None else []
     sigmas = [epoch_sigma(s) for s in sols]
     for i, panels in enumerate(_PANELS[:rows]):
         unit = _UNITS[i]
@@ -349,7 +349,7 @@ def errors_figure(res: ProcessResult, ref: Reference, gnss=None, title: str = ""
     return fig
 
 
-def plot_errors(res: ProcessResult, ref: Reference, path: Path, gnss=None,
+def plot_errors(res: ProcessResult, ref: Reference, path: Path, fixes=None,
                 title: str = "") -> Path:
     """Plot the solution's errors against a reference (``errors.png`` of ``fednav
     process``; :func:`errors_figure`).
@@ -366,7 +366,7 @@ def plot_errors(res: ProcessResult, ref: Reference, path: Path, gnss=None,
         velocity [m/s]).
     path : str or Path
         The image file to write (its suffix picks the format: ``.png``, ``.pdf``, ...).
-    gnss : GnssData, optional
+    fixes : GnssData, optional
         The GNSS data, to shade its outages (gaps in its time stamps [s]).
     title : str
         The figure's title.
@@ -376,7 +376,7 @@ def plot_errors(res: ProcessResult, ref: Reference, path: Path, gnss=None,
     Path
         The file written.
     """
-    return plots.save(errors_figure(res, ref, gnss, title), path)
+    return plots.save(errors_figure(res, ref, fixes, title), path)
 
 
 def write_errors(res: ProcessResult, ref: Reference, path: Path,
@@ -442,7 +442,7 @@ def _zoom_window(res: ProcessResult, ref: Reference | None, outages):
     return "first 30 s", f.t <= f.t[0] + 30.0, 5.0
 
 
-def track_figure(res: ProcessResult, gnss, ref: Reference | None):
+def track_figure(res: ProcessResult, fixes, ref: Reference | None):
     """``track.png`` as a :class:`~matplotlib.figure.Figure`: east/north [m] from the
     first GNSS fix — GNSS fixes, the forward and smoothed solutions and the reference,
     start and end marked, GNSS outages (gaps over 3 median periods) in red on the forward
@@ -453,8 +453,8 @@ def track_figure(res: ProcessResult, gnss, ref: Reference | None):
 
     from ..core import earth
 
-    fixes = gnss is not None and gnss.lla is not None
-    o = gnss.lla[0] if fixes else res.forward.lla[0]
+    has_fixes = fixes is not None and fixes.lla is not None
+    o = fixes.lla[0] if has_fixes else res.forward.lla[0]
 
     def en(lla):
         d = earth.llh_difference_enu(lla[:, 0], lla[:, 1], lla[:, 2], o[0], o[1], o[2])
@@ -466,15 +466,15 @@ def track_figure(res: ProcessResult, gnss, ref: Reference | None):
     ax = fig.add_axes((0.06, 0.08, 0.5, 0.84))
     zax = fig.add_axes((0.63, 0.4, 0.34, 0.52))
     f = res.forward
-    outages = plots.gaps(gnss.t) if gnss is not None and len(gnss.t) > 1 else []
+    outages = plots.gaps(fixes.t) if fixes is not None and len(fixes.t) > 1 else []
     what, zoom, least = _zoom_window(res, ref, outages)
     if not zoom.any():  # (an outage outside the solution's span)
         what, zoom, least = "first 30 s", f.t <= f.t[0] + 30.0, 5.0
     styles = plots.mode_styles([s.label for s in (res.forward, res.smoothed) if s is not None])
     # what both panels draw, in east/north once: (x, y, format, keywords)
     under, over = [], []
-    if fixes:
-        under.append((*en(gnss.lla), ".", dict(ms=2.5, color="0.55", alpha=0.6,
+    if has_fixes:
+        under.append((*en(fixes.lla), ".", dict(ms=2.5, color="0.55", alpha=0.6,
                                                label="GNSS fixes")))
     if ref is not None:
         under.append((*en(ref.lla[_thin(len(ref.t))]), "k-", dict(lw=2.2, alpha=0.3,
@@ -528,7 +528,7 @@ def track_figure(res: ProcessResult, gnss, ref: Reference | None):
     ax.plot(ce, cn, "o", ms=16, mfc="none", mec="tab:purple", mew=1.2, zorder=6)
     ax.annotate("zoom", (ce, cn), color="tab:purple", fontsize=9, xytext=(10, -14),
                 textcoords="offset points")
-    ax.set_title(f"Track from the first {'GNSS fix' if fixes else 'solution row'} "
+    ax.set_title(f"Track from the first {'GNSS fix' if has_fixes else 'solution row'} "
                  f"({(f.t[-1] - f.t[0]):.0f} s)", fontsize=11)
     h, lab = ax.get_legend_handles_labels()
     fig.legend(h, lab, loc="upper left", bbox_to_anchor=(0.63, 0.31), ncol=2, fontsize=9,
@@ -536,7 +536,7 @@ def track_figure(res: ProcessResult, gnss, ref: Reference | None):
     return fig
 
 
-def plot_track(res: ProcessResult, gnss, ref: Reference | None, path: Path) -> Path:
+def plot_track(res: ProcessResult, fixes, ref: Reference | None, path: Path) -> Path:
     """Plot the track (``track.png`` of ``fednav process``; :func:`track_figure`).
 
     East and north [m] from the first GNSS fix: the GNSS fixes, the forward and smoothed
@@ -547,7 +547,7 @@ def plot_track(res: ProcessResult, gnss, ref: Reference | None, path: Path) -> P
     ----------
     res : ProcessResult
         What :func:`fednav.process_data` gave.
-    gnss : GnssData or None
+    fixes : GnssData or None
         The GNSS fixes (lat/lon [rad], h [m]).
     ref : Reference or None
         The reference trajectory (lat/lon [rad], h [m]).
@@ -559,7 +559,7 @@ def plot_track(res: ProcessResult, gnss, ref: Reference | None, path: Path) -> P
     Path
         The file written.
     """
-    return plots.save(track_figure(res, gnss, ref), path)
+    return plots.save(track_figure(res, fixes, ref), path)
 
 
 #: the files :func:`write` may write into its folder (``errors_NAME.*`` besides)
@@ -577,7 +577,7 @@ def would_overwrite(out: Path, path: Path) -> bool:
 
 
 def write(out: Path, res: ProcessResult, ref: Reference | None, inputs: dict,
-          output_rate: float | str | None = None, gnss=None,
+          output_rate: float | str | None = None, fixes=None,
           others: dict | None = None, fmt: str = "csv") -> list[Path]:
     """Write the solution file(s) at ``output_rate`` (:func:`decimate`: by default
     :data:`DEFAULT_OUTPUT_RATE_HZ`; ``"imu"`` every IMU sample), in ``fmt`` (``csv`` or
@@ -592,29 +592,29 @@ def write(out: Path, res: ProcessResult, ref: Reference | None, inputs: dict,
     out.mkdir(parents=True, exist_ok=True)
     _MEMO = {}
     try:
-        return _write(out, res, ref, inputs, output_rate, gnss, others, fmt)
+        return _write(out, res, ref, inputs, output_rate, fixes, others, fmt)
     finally:
         _MEMO = None
 
 
-def _write(out, res, ref, inputs, output_rate, gnss, others, fmt) -> list[Path]:
+def _write(out, res, ref, inputs, output_rate, fixes, others, fmt) -> list[Path]:
     files = []
     for name, sol in (("solution", res.forward), ("solution_smoothed", res.smoothed)):
         if sol is not None:
             files.append(write_solution(out / f"{name}.{fmt}", decimate(sol, output_rate)))
-    if res.gnss_flown is not None:  # (the outages withheld: the plots shade them)
-        gnss = res.gnss_flown
-    files.append(plot_track(res, gnss, ref, out / "track.png"))
+    if res.fixes_flown is not None:  # (the outages withheld: the plots shade them)
+        fixes = res.fixes_flown
+    files.append(plot_track(res, fixes, ref, out / "track.png"))
     if ref is not None:
         files.append(write_errors(res, ref, out / "errors.csv", output_rate))
-        files.append(plot_errors(res, ref, out / "errors.png", gnss))
+        files.append(plot_errors(res, ref, out / "errors.png", fixes))
         if res.integrity is not None:
             from .stanford import plot_run
 
             files.append(plot_run(res, _errors(res.forward, ref), out / "stanford.png"))
     for name, other in (others or {}).items():
         files.append(write_errors(res, other, out / f"errors_{name}.csv", output_rate))
-        files.append(plot_errors(res, other, out / f"errors_{name}.png", gnss,
+        files.append(plot_errors(res, other, out / f"errors_{name}.png", fixes,
                                  f"against {other.source}"))
     s = summary(res, ref, inputs, others)
     p = out / "summary.json"

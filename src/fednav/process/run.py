@@ -18,14 +18,23 @@ import functools
 import time
 import warnings
 from collections.abc import Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 from pydantic import ValidationError
 
 from ..core import units
 from ..ins.alignment import UNKNOWN_HEADING_SIGMA, Alignment
-from ..io.data import DataError, GnssData, ImuData, SensorData, Series, VelocityData
+from ..io.data import (
+    RECORDINGS,
+    DataError,
+    FixData,
+    ImuData,
+    SensorData,
+    Series,
+    VelocityData,
+    as_recording,
+)
 from ..navigator.health import (
     centralized_consistency,
     local_nis,
@@ -50,7 +59,7 @@ from ..navigator.system import (
     sensor_model,
 )
 from ..navigator.system import imu_figures as _imu_figures
-from ..sensors import GnssConfig, VelocityConfig, registry
+from ..sensors import registry
 from ..sensors.imu import FIGURES
 from . import outages
 from .checks import (  # noqa: F401  (fednav.process.run's names of 0.2)
@@ -58,7 +67,7 @@ from .checks import (  # noqa: F401  (fednav.process.run's names of 0.2)
     MAX_IMU_PERIOD_S,
     OFFSET_SEARCH_S,
     OFFSET_WARN_S,
-    check_gnss_timing,
+    check_fix_timing,
     check_mounting,
     check_units,
     ignored_keys,
@@ -68,10 +77,10 @@ from .checks import (  # noqa: F401  (fednav.process.run's names of 0.2)
 )
 from .culprit import culprit
 from .evaluation import RENAMED_ERRORS, errors_against, rmse  # noqa: F401
-from .initial import (  # noqa: F401  (gnss_course: fednav.process.run's name of 0.2)
+from .initial import (  # noqa: F401  (fednav.process.run's names of 0.2)
     VELOCITY_WINDOW_S,
     attitude_at_start,
-    gnss_course,
+    fix_course,
     position_velocity,
     start_at_first_fix,
     start_covariance,
@@ -93,7 +102,7 @@ def old_layout(*old: str):
             second = args[0] if args else kwargs.get("gnss")
             third = args[1] if len(args) > 1 else None
             if not ("gnss" in kwargs or "velocity" in kwargs
-                    or isinstance(second, (GnssData, VelocityData))
+                    or isinstance(second, (FixData, VelocityData))
                     or isinstance(third, VelocityData)
                     or (len(args) > 2 and isinstance(args[2], System))
                     or (len(args) >= 2 and args[0] is None and args[1] is None
@@ -117,12 +126,15 @@ def old_layout(*old: str):
     return wrap
 
 
-def _gnss_cfg(cfg: System) -> GnssConfig:
-    return cfg.sensors.gnss or GnssConfig()
-
-
-def _velocity_cfg(cfg: System) -> VelocityConfig:
-    return cfg.sensors.velocity or VelocityConfig()
+def own_section(name: str, cfg: System):
+    """The system's section of sensor ``name``, else the section's defaults (None when
+    the section has no defaults: it needs its noise)."""
+    if name in cfg.sensors:
+        return cfg.sensors[name]
+    try:
+        return registry.spec(name).config()
+    except ValidationError:
+        return None
 
 
 @dataclass
@@ -162,8 +174,10 @@ class ProcessResult:
         Per sensor with ``outages_s`` in the system description, its windows
         ``[start, end)`` [s] whose measurements were withheld from the filter
         (:mod:`fednav.process.outages`; ``summary.json`` scores the errors inside them).
-    gnss_flown : GnssData or None
-        The GNSS fixes the filter was given (those outside the outages).
+    fixes_flown : GnssData or None
+        The fixes (of the sensor that starts the recording, the GNSS:
+        :func:`fednav.sensors.registry.fix_sensor`) the filter was given (those outside
+        the outages).
     integrity : IntegrityResult or None
         With the system's ``integrity:``, the protection levels [m, rad], tests and
         exclusions of every row (:class:`fednav.navigator.integrity.IntegrityResult`;
@@ -181,53 +195,27 @@ class ProcessResult:
     alignment: dict = field(default_factory=dict)
     optional_states: dict = field(default_factory=dict)
     outages: dict = field(default_factory=dict)
-    gnss_flown: GnssData | None = None
+    fixes_flown: FixData | None = None
     consistency: dict = field(default_factory=dict)
     #: the protection levels, tests and exclusions (the system's ``integrity:``;
     #: :class:`fednav.navigator.integrity.IntegrityResult`), else None
     integrity: object = None
 
+    @property
+    def gnss_flown(self) -> FixData | None:
+        """Deprecated: :attr:`fixes_flown`."""
+        warnings.warn("ProcessResult.gnss_flown is now ProcessResult.fixes_flown: read "
+                      "for one more release", FutureWarning, stacklevel=2)
+        return self.fixes_flown
 
-def adjust_sensors(gnss: GnssData, velocity: VelocityData | None, cfg: System):
-    """The system description's sensor corrections applied: time offsets, the velocity
-    sensor's axis order and its 1-sigma (``sensors.gnss``, ``sensors.velocity``).
+
+def adjust_sensors(fixes: FixData, velocity: VelocityData | None, cfg: System):
+    """fednav 0.1's: the system description's corrections of the GNSS and the velocity
+    sensor (:meth:`fednav.io.GnssData.adjusted`, :meth:`fednav.io.VelocityData.adjusted`:
+    time offsets, the velocity latency, the velocity sensor's axis order and 1-sigma).
     Returns new data objects."""
-    def again(data, **changes):  # re-checked by the constructor; keep the first counts
-        quality = dict(data.quality)
-        out = replace(data, quality={}, **changes)
-        out.quality = quality
-        return out
-
-    gc, vc = _gnss_cfg(cfg), _velocity_cfg(cfg)
-    def shifted(ta, dt):
-        return None if ta is None else ta + dt
-
-    if gnss is not None and gc.time_offset_s:
-        gnss = again(gnss, t=gnss.t + gc.time_offset_s,
-                     t_arrival=shifted(gnss.t_arrival, gc.time_offset_s))
-    if gnss is not None and gnss.vel is not None and gc.velocity_latency_s:
-        # the velocity stamped t is the one of t - L: the velocity of t is the one
-        # stamped t + L (interpolated between fixes; held at the last)
-        L = gc.velocity_latency_s
-        vel = np.column_stack([np.interp(gnss.t + L, gnss.t, gnss.vel[:, j])
-                               for j in range(3)])
-        gnss = again(gnss, vel=vel)
-    if velocity is None:
-        return gnss, None
-    vel, cov = velocity.vel, velocity.cov
-    if tuple(vc.axes) != ("E", "N", "U"):
-        # file column i holds the ENU component axes[i] (sign s_i): v_enu = M v_file
-        M = np.zeros((3, 3))
-        for i, a in enumerate(vc.axes):
-            M["ENU".index(a.lstrip("+-").upper()), i] = -1.0 if a.startswith("-") else 1.0
-        vel = vel @ M.T
-        cov = M @ cov @ M.T
-    if vc.sigma_mps is not None:
-        cov = np.broadcast_to(np.diag(np.square(vc.sigma_mps)), cov.shape).copy()
-    if vc.time_offset_s or vel is not velocity.vel or cov is not velocity.cov:
-        velocity = again(velocity, t=velocity.t + vc.time_offset_s, vel=vel, cov=cov,
-                         t_arrival=shifted(velocity.t_arrival, vc.time_offset_s))
-    return gnss, velocity
+    return tuple(None if d is None else d.adjusted(own_section(d.name, cfg))
+                 for d in (fixes, velocity))
 
 
 def imu_figures(imu: ImuData, cfg: System) -> dict[str, float | None]:
@@ -457,7 +445,7 @@ def samples_within(interval: float, dt: float) -> int:
     return max(1, int(round(interval / dt)))
 
 
-def epoch_drift(cfg: System, gnss: GnssData | None, T: float, dt: float, n_cycles: int,
+def epoch_drift(cfg: System, fixes: FixData | None, T: float, dt: float, n_cycles: int,
                 quality: dict) -> list[str]:
     """A warning when the filter epochs — a whole number of IMU samples, ``T`` [s] by the
     IMU's stamps — drift against fixes taken every GNSS period by more than one IMU
@@ -465,9 +453,9 @@ def epoch_drift(cfg: System, gnss: GnssData | None, T: float, dt: float, n_cycle
     its nominal rate): each fix then waits a varying part of an epoch for its update, and
     the solution between a fix and its epoch is the prediction.  Records the drift in
     ``quality["epoch_drift_s"]``."""
-    if cfg.filter.period_s is not None or gnss is None or len(gnss.t) < 2:
+    if cfg.filter.period_s is not None or fixes is None or len(fixes.t) < 2:
         return []
-    p = float(np.median(np.diff(gnss.t)))
+    p = float(np.median(np.diff(fixes.t)))
     drift = abs(T - p) * n_cycles
     if drift <= dt:
         return []
@@ -480,13 +468,13 @@ def epoch_drift(cfg: System, gnss: GnssData | None, T: float, dt: float, n_cycle
             f"fix interval (e.g. {n * dt:.6g} s, {n} IMU samples) to bound the wait"]
 
 
-def _period(cfg: System, gnss: GnssData | None, others: dict) -> float:
+def _period(cfg: System, fixes: FixData | None, others: dict) -> float:
     """The filter epoch: the system's, else the GNSS period, else the shortest median
     period of the other aiding sensors' data."""
     if cfg.filter.period_s is not None:
         return cfg.filter.period_s
-    if gnss is not None and len(gnss.t) > 1:
-        return float(np.median(np.diff(gnss.t)))
+    if fixes is not None and len(fixes.t) > 1:
+        return float(np.median(np.diff(fixes.t)))
     periods = [float(np.median(np.diff(d.t))) for d in others.values()
                if len(d.t) > 1 and registry.spec(d.name).aiding]
     if not periods:
@@ -569,15 +557,17 @@ def prepare(imu: ImuData, sensors: Mapping[str, Series] | None = None,
     emptied = [f"{d.source}: every {n} measurement lies inside sensors.{n}.outages_s "
                f"(not used)" for n, d in others.items() if not len(d.t)]
     others = {n: d for n, d in others.items() if len(d.t)}
-    gnss, velocity = others.pop("gnss", None), others.pop("velocity", None)
+    fix_name = registry.fix_sensor(others)  # (the GNSS: what starts the run)
+    fixes = others.get(fix_name)
     if cfg.filter.state == "total" and (cfg.smoother or cfg.output_rate_hz):
         raise DataError("filter.state: total — the total-state navigator's solution is at "
                         "its filter epochs (no IMU-rate rows to smooth or thin)")
     init = cfg.initial
-    if init is None and (gnss is None or gnss.lla is None):
-        raise DataError("the initial position: no GNSS positions to start from; give the "
-                        "initial state in the system description (initial: lat_deg, "
-                        "lon_deg, h_m, vel_mps, euler_deg, sigma)")
+    if init is None and (fixes is None or fixes.lla is None):
+        raise DataError(f"the initial position: no "
+                        f"{registry.label(fix_name or registry.fix_sensor())} positions to "
+                        f"start from; give the initial state in the system description "
+                        f"(initial: lat_deg, lon_deg, h_m, vel_mps, euler_deg, sigma)")
     imu = mounted_imu(imu, cfg.imu.mounting)
     dt = imu.period()
     if dt > MAX_IMU_PERIOD_S:
@@ -585,11 +575,12 @@ def prepare(imu: ImuData, sensors: Mapping[str, Series] | None = None,
                         f"milliseconds (fednav expects seconds)? A strapdown IMU samples at "
                         f"{1 / MAX_IMU_PERIOD_S:g} Hz or faster")
     cfg, assumed = with_imu_figures(imu, cfg)
-    gnss, velocity = adjust_sensors(gnss, velocity, cfg)
-    warnings, quality_extra = check_gnss_timing(imu, gnss)
-    warnings[:0] = emptied + assumed + check_units(imu, gnss) + check_mounting(imu, gnss)
+    others = {n: d.adjusted(own_section(n, cfg)) for n, d in others.items()}
+    fixes = others.get(fix_name)
+    warnings, quality_extra = check_fix_timing(imu, fixes)
+    warnings[:0] = emptied + assumed + check_units(imu, fixes) + check_mounting(imu, fixes)
     unused = ignored_keys(cfg)
-    period = _period(cfg, gnss, others)
+    period = _period(cfg, fixes, others)
     n_per = max(1, int(round(period / dt)))
     T = n_per * dt
     if init is not None and init.t_s is not None:
@@ -604,26 +595,28 @@ def prepare(imu: ImuData, sensors: Mapping[str, Series] | None = None,
             init = init.model_copy(update={"t_s": float(imu.t[j])})
             t0 = init.t_s
     else:
-        t0 = imu.t[0] if gnss is None or init is not None else max(imu.t[0], gnss.t[0])
+        t0 = imu.t[0] if fixes is None or init is not None else max(imu.t[0], fixes.t[0])
     # the first IMU sample at or after t0 (the first GNSS fix): the epoch grid t0 + k T
     # then lies at or just after the fixes' stamps — from the nearest sample, which can
     # lie just before, every fix waited a whole filter period for its epoch
     i0 = int(np.searchsorted(imu.t, t0 - stamp_tolerance(float(t0))))
     n_cycles = (len(imu.t) - 1 - i0) // n_per
-    warnings += epoch_drift(cfg, gnss, T, dt, n_cycles, quality_extra)
+    warnings += epoch_drift(cfg, fixes, T, dt, n_cycles, quality_extra)
     span = float(imu.t[-1] - imu.t[0])
     if T > span:
         raise DataError(f"filter.period_s = {T:g} s is longer than the IMU data "
                         f"({span:g} s)")
     if n_cycles < 1:
-        what = "the GNSS data" if gnss is not None else "the initial time"
+        what = (f"the {registry.label(fix_name)} data" if fixes is not None
+                else "the initial time")
         raise DataError(f"{imu.source}: IMU data does not overlap {what} by one filter "
                         f"period ({T:g} s)")
-    if gnss is not None and not np.any((gnss.t >= imu.t[i0]) & (gnss.t <= imu.t[-1])):
-        raise DataError(f"{gnss.source}: no GNSS fix within the IMU data's time span "
-                        f"(GNSS {gnss.t[0]:.6g}..{gnss.t[-1]:.6g} s, IMU {imu.t[i0]:.6g}.."
-                        f"{imu.t[-1]:.6g} s): the two in different time bases (Unix time, "
-                        f"GPS seconds of the week, milliseconds)?")
+    if fixes is not None and not np.any((fixes.t >= imu.t[i0]) & (fixes.t <= imu.t[-1])):
+        who = registry.label(fix_name)
+        raise DataError(f"{fixes.source}: no {who} fix within the IMU data's time span "
+                        f"({who} {fixes.t[0]:.6g}..{fixes.t[-1]:.6g} s, IMU "
+                        f"{imu.t[i0]:.6g}..{imu.t[-1]:.6g} s): the two in different time "
+                        f"bases (Unix time, GPS seconds of the week, milliseconds)?")
     noise, gb, ab = imu_noise_model(cfg, dt, imu.errors)
     for name in cfg.sensors:  # constraints the vehicle always obeys, detected stops
         spec = registry.spec(name)
@@ -634,7 +627,7 @@ def prepare(imu: ImuData, sensors: Mapping[str, Series] | None = None,
                                             outages.windows_of(cfg, name), name)
         elif spec.detector is not None:
             t_nav = init.t_s if init is not None and init.t_s is not None else imu.t[i0]
-            found = spec.detector(imu, gnss, cfg.sensors[name], noise, gb, T, float(t_nav))
+            found = spec.detector(imu, fixes, cfg.sensors[name], noise, gb, T, float(t_nav))
             t_det, sig = found if isinstance(found, tuple) else (found, None)
             t_det = np.asarray(t_det, dtype=float)
             quality_extra[f"{name}_epochs_detected"] = len(t_det)
@@ -651,22 +644,20 @@ def prepare(imu: ImuData, sensors: Mapping[str, Series] | None = None,
         calibrate = registry.spec(name).calibrate
         if calibrate is not None:
             section = cfg.sensors[name] if name in cfg.sensors else None
-            others[name], q, w = calibrate(d, gnss, section)
+            others[name], q, w = calibrate(d, fixes, section)
             quality_extra.update(q)
             warnings += w
 
     # Every recorded sensor's section as it flies its data (what the section leaves to
     # the file taken from it: the GNSS's lever arm and noise, a sensor's period), and its
-    # series as the navigator takes it, in one order: GNSS, velocity sensor, the others.
-    recorded = {n: d for n, d in (("gnss", gnss), ("velocity", velocity)) if d is not None}
-    recorded.update(others)
+    # series as the navigator takes it, in one order: the fixes (GNSS), the others.
+    recorded = ({} if fixes is None else {fix_name: fixes}) | others
     sensors = {name: _section(d, cfg) for name, d in recorded.items()}
     series = {name: _plain(d) for name, d in recorded.items()}
-    if cfg.filter.state == "total" and "gnss" in sensors \
-            and sensors["gnss"].measures != "position_velocity":
-        raise DataError(f"{gnss.source}: filter.state: total — the total-state navigator's "
-                        f"GNSS model needs positions and velocities; the file has "
-                        f"{sensors['gnss'].measures.replace('_', ' and ')} only")
+    for name, sc in sensors.items():
+        why = sc.total_state_refusal() if cfg.filter.state == "total" else None
+        if why:
+            raise DataError(f"{recorded[name].source}: filter.state: total — {why}")
 
     # Initial state: the description's, else the first GNSS fix (antenna moved to the
     # IMU), its velocity and the alignment's attitude.
@@ -679,7 +670,7 @@ def prepare(imu: ImuData, sensors: Mapping[str, Series] | None = None,
                        report={"levelling": "initial", "heading": "initial"})
         gyro_bias = None
     else:
-        al, lla0, vel0, P0 = start_at_first_fix(imu, gnss, sensors["gnss"], cfg, t0, i0, dt,
+        al, lla0, vel0, P0 = start_at_first_fix(imu, fixes, sensors[fix_name], cfg, t0, i0, dt,
                                                 noise, ab, gb)
         euler0, gyro_bias = al.euler, al.gyro_bias
     warnings += al.warnings
@@ -738,10 +729,9 @@ def prepare(imu: ImuData, sensors: Mapping[str, Series] | None = None,
 
 def recordings(sensors: Mapping[str, Series] | None, cfg: System) -> dict[str, Series]:
     """The recordings by registered name, checked (an unknown name, or a series given
-    under another sensor's name, is one line); the GNSS and velocity-sensor series of any
-    reader as :class:`~fednav.io.GnssData` and :class:`~fednav.io.VelocityData` (the
-    section's figures for rows without their own noise, its lever arm); a name given
-    None is left out."""
+    under another sensor's name, is one line); a sensor's series of any reader as its
+    recording (:func:`fednav.io.data.as_recording`: the section's figures for rows
+    without their own noise, its lever arm); a name given None is left out."""
     out = {}
     for name, d in (sensors or {}).items():
         if d is None:  # (a sensor without data: left out)
@@ -754,16 +744,9 @@ def recordings(sensors: Mapping[str, Series] | None, cfg: System) -> dict[str, S
                             f"series (fednav.io.read_sensor_csv, read_gnss_csv ...)")
         if d.name != name:
             raise DataError(f"{d.source}: {d.name} data given as sensor '{name}'")
-        if not isinstance(d, (SensorData, GnssData, VelocityData)):
+        if not isinstance(d, (SensorData, *RECORDINGS.values())):
             d = _plain(d)  # (a simulated series: one sigma for every row, as rows)
-        if name == "gnss":
-            gc = _gnss_cfg(cfg)
-            d = GnssData.from_series(d, 5.0 if gc.sigma_pos_enu_m is None
-                                     else gc.sigma_pos_enu_m, 0.1 if gc.sigma_vel_mps is None
-                                     else gc.sigma_vel_mps, gc.lever())
-        elif name == "velocity":
-            d = VelocityData.from_series(d, _velocity_cfg(cfg).lever())
-        out[name] = d
+        out[name] = as_recording(d, own_section(name, cfg))
     return out
 
 
@@ -774,17 +757,13 @@ def withheld_inputs(cfg: System, sensors: dict[str, Series]) -> dict[str, Series
             for n, d in sensors.items()}
 
 
-def flown_gnss(gnss: GnssData | None, system: System) -> GnssData | None:
-    """The GNSS data as the navigator flew them (``system``: a :class:`Prepared`'s): the
-    configured time offset and velocity latency applied, the effective lever arm and
-    sigmas."""
-    if gnss is None or "gnss" not in system.sensors:
+def flown_fixes(fixes: FixData | None, system: System) -> FixData | None:
+    """The fixes (the GNSS's) as the navigator flew them (``system``: a
+    :class:`Prepared`'s; :meth:`fednav.io.GnssData.flown`): the configured corrections
+    applied, the effective lever arm and sigmas."""
+    if fixes is None or fixes.name not in system.sensors:
         return None
-    g = system.sensors.gnss
-    flown = adjust_sensors(gnss, None, system)[0]
-    return replace(flown, quality={}, lever=np.asarray(g.lever_m, dtype=float),
-                   sigma_pos_enu=np.asarray(g.sigma_pos_enu_m, dtype=float),
-                   sigma_vel=np.asarray(g.sigma_vel_mps, dtype=float))
+    return fixes.flown(system.sensors[fixes.name])
 
 
 @old_layout("cfg", "smooth", "innovations", "sensors", "force")
@@ -834,7 +813,7 @@ def process(imu: ImuData, sensors: Mapping[str, Series], cfg: System | None = No
     cfg = cfg or System()
     imu = mounted_imu(imu, cfg.imu.mounting)
     sensors = withheld_inputs(cfg, recordings(sensors, cfg))
-    gnss = sensors.get("gnss")
+    fixes = sensors.get(registry.fix_sensor(sensors))
     prep = prepare(imu, sensors, cfg)
     nav = prep.feed(prep.navigator(record_rows=True, record_covariance=True,
                                    innovations=True))
@@ -846,7 +825,7 @@ def process(imu: ImuData, sensors: Mapping[str, Series], cfg: System | None = No
     res.consistency = centralized_consistency(res.forward.fdi, out.innovations)
     means = {k: v["nis_per_dof"] for k, v in res.consistency.items()}
     blame = culprit(prep, means, band, constraints)
-    res.warnings += run_health(res.forward.fdi, imu, flown_gnss(gnss, prep.system),
+    res.warnings += run_health(res.forward.fdi, imu, flown_fixes(fixes, prep.system),
                                res.forward, imu_figures(imu, prep.system), force,
                                list(res.warnings), band,
                                row_nis(out.innovations, nav.row_kinds), constraints, blame,
@@ -865,7 +844,7 @@ def process(imu: ImuData, sensors: Mapping[str, Series], cfg: System | None = No
                                                          prep.system.integrity)
         res.warnings += said
     res.outages = {n: w for n in prep.system.sensors if (w := outages.windows_of(cfg, n))}
-    res.gnss_flown = gnss
+    res.fixes_flown = fixes
     res.run_time_s = time.perf_counter() - t_start
     if innovations is not None:
         innovations.extend(out.innovations)
@@ -897,8 +876,8 @@ def solution(res, prep: Prepared, smooth: bool = False) -> ProcessResult:
                          list(prep.warnings), prep.alignment.report)
 
 
-def gnss_z(gnss: GnssData, i: int) -> np.ndarray:
+def fix_z(fixes: FixData, i: int) -> np.ndarray:
     """GNSS fix ``i`` as the measurement vector ``[lat, lon, h, vE, vN, vU]``."""
-    return np.concatenate((gnss.lla[i], gnss.vel[i]))
+    return np.concatenate((fixes.lla[i], fixes.vel[i]))
 
 

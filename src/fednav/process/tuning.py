@@ -65,17 +65,16 @@ import numpy as np
 
 from ..core import attitude, earth
 from ..core.config import ConfigError
-from ..io.data import DataError, GnssData, ImuData, VelocityData
+from ..io.data import DataError, FixData, ImuData, VelocityData
 from ..navigator.health import centralized_S
 from ..navigator.system import System, _translate_legacy
-from ..sensors import GnssConfig, VelocityConfig
-from ..sensors.gnss import renamed_neu_keys
+from ..sensors import registry
 from ..sensors.imu import FIGURES
 from .run import (
     InnovationRecord,
-    adjust_sensors,
     imu_figures,
     old_layout,
+    own_section,
     process,
     recordings,
     with_imu_figures,
@@ -94,11 +93,25 @@ WHITE_KEYS = {"gyro_arw_rad_sqrt_s": "gyro_white_deg_h",
               "accel_vrw_mps_sqrt_s": "accel_white_ug"}
 #: IMU figures tune never changes (one data set holds one draw of a turn-on bias).
 KEPT_KEYS = ("gyro_bias_radps", "accel_bias_mps2", "gyro_tau_s", "accel_tau_s")
-#: Sensor sigmas tune may estimate, by their config key.
-SENSOR_KEYS = ("sensors.gnss.sigma_pos_enu_m", "sensors.gnss.sigma_vel_mps",
-               "sensors.velocity.sigma_mps")
-#: Old spellings of sensor keys (read with a FutureWarning for one more release).
-OLD_SENSOR_KEYS = {"sensors.gnss.sigma_pos_m": "sensors.gnss.sigma_pos_enu_m"}
+
+
+def sensor_keys() -> tuple[str, ...]:
+    """The sensor sigmas tune may estimate, by their config key (each registered
+    sensor's ``SensorSpec.tuned``: the GNSS's position and velocity, the velocity
+    sensor's)."""
+    return tuple(f"sensors.{n}.{k}" for n, s in registry.SENSORS.items() for k in s.tuned)
+
+
+def old_sensor_keys() -> dict[str, str]:
+    """Old spellings of those keys -> today's (each section's ``old_keys``; read with a
+    FutureWarning for one more release)."""
+    return {f"sensors.{n}.{o}": f"sensors.{n}.{k}" for n, s in registry.SENSORS.items()
+            for o, k in s.config.old_keys.items() if k in s.tuned}
+
+
+#: The sensor sigmas tune may estimate and their old spellings (fednav 0.2's names;
+#: :func:`sensor_keys`, :func:`old_sensor_keys` follow the registry).
+SENSOR_KEYS, OLD_SENSOR_KEYS = sensor_keys(), old_sensor_keys()
 #: The band of NIS/dof a consistent filter's held-back innovations fall in.
 NIS_BAND = (0.5, 2.0)
 #: ln of the likelihood-search step (a factor 3).
@@ -173,8 +186,12 @@ class TuneResult:
     drift_after: list[float] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
     fixed: set[str] = field(default_factory=set)
-    #: the GNSS lever arm of the file where the base config has none (written with it)
+    #: the antenna lever arm of the fixes' file where the base config has none (written
+    #: with it)
     lever_from_file: tuple | None = None
+    #: the sensor whose fixes the figures were fitted to (None: the registry's,
+    #: :func:`~fednav.sensors.registry.fix_sensor`)
+    fix_sensor: str | None = None
 
     def summary(self) -> list[str]:
         """The before -> after lines the command prints and the config's header holds."""
@@ -287,40 +304,42 @@ def evaluate(imu: ImuData, sensors: dict, cfg: System,
     return innovation_statistics(inns, blocks)
 
 
-def withheld(gnss: GnssData, windows) -> GnssData:
-    """``gnss`` without the fixes inside the ``windows`` ((start, end) s)."""
-    out = np.zeros(len(gnss.t), dtype=bool)
+def withheld(fixes: FixData, windows) -> FixData:
+    """``fixes`` without those inside the ``windows`` ((start, end) s)."""
+    out = np.zeros(len(fixes.t), dtype=bool)
     for a, b in windows:
-        out |= (gnss.t >= a) & (gnss.t <= b)
+        out |= (fixes.t >= a) & (fixes.t <= b)
     keep = ~out
 
     def sub(a):
         return None if a is None else a[keep]
 
-    g = replace(gnss, t=gnss.t[keep], lla=sub(gnss.lla), vel=sub(gnss.vel),
-                sigma_rows=sub(gnss.sigma_rows), t_arrival=sub(gnss.t_arrival), quality={})
-    g.quality = dict(gnss.quality)
+    g = replace(fixes, t=fixes.t[keep], lla=sub(fixes.lla), vel=sub(fixes.vel),
+                sigma_rows=sub(fixes.sigma_rows), t_arrival=sub(fixes.t_arrival), quality={})
+    g.quality = dict(fixes.quality)
     return g
 
 
 def outage_drift(imu: ImuData, sensors: dict, cfg: System, windows) -> list[float]:
-    """Process ``sensors`` (series by registered name) with the GNSS fixes of ``windows``
-    withheld; the horizontal distance [m] of the solution (moved to the antenna) from
-    the last withheld fix of each window."""
-    gnss = sensors["gnss"]
-    res = process(imu, {**sensors, "gnss": withheld(gnss, windows)}, cfg, force=True)
+    """Process ``sensors`` (series by registered name) with the fixes (the GNSS's:
+    :func:`~fednav.sensors.registry.fix_sensor`) of ``windows`` withheld; the horizontal
+    distance [m] of the solution (moved to the antenna) from the last withheld fix of
+    each window."""
+    fx = registry.fix_sensor(sensors)
+    fixes = sensors[fx]
+    res = process(imu, {**sensors, fx: withheld(fixes, windows)}, cfg, force=True)
     sol = res.forward
-    gc = cfg.sensors.gnss or GnssConfig()
-    lever = np.asarray(gc.lever_m if gc.lever_m is not None else gnss.lever, dtype=float)
+    fc = own_section(fx, cfg)
+    lever = np.asarray(fc.lever_m if fc.lever_m is not None else fixes.lever, dtype=float)
     out = []
     for a, b in windows:
-        inside = np.flatnonzero((gnss.t >= a) & (gnss.t <= b))
+        inside = np.flatnonzero((fixes.t >= a) & (fixes.t <= b))
         j = inside[-1]
-        i = int(np.clip(np.searchsorted(sol.t, gnss.t[j]), 0, len(sol.t) - 1))
+        i = int(np.clip(np.searchsorted(sol.t, fixes.t[j]), 0, len(sol.t) - 1))
         lla, _ = earth.lever_arm_point(sol.lla[i], sol.vel[i],
                                        attitude.euler_to_dcm(sol.euler[i]), sol.omega[i],
                                        lever)
-        fix = gnss.lla[j]
+        fix = fixes.lla[j]
         d = earth.llh_difference_enu(lla[0], lla[1], lla[2], fix[0], fix[1], fix[2])
         out.append(float(np.hypot(d[0], d[1])))
     return out
@@ -352,9 +371,10 @@ def _starting_imu(imu: ImuData, base: System, notes: list) -> dict[str, float]:
 def fixed_keys(names) -> set[str]:
     """The figures ``names`` marks as fixed, by their SI key (``imu:`` keys, in any of
     their spellings, with or without ``imu.``; ``imu`` for all of them) or sensor key
-    (``sensors.gnss.sigma_pos_enu_m``, ``gnss.sigma_vel_mps``, ``velocity.sigma_mps``;
-    ``gnss``, ``velocity`` for a sensor's every sigma; the old ``sigma_pos_m`` with a
-    ``FutureWarning``).  A :class:`ConfigError` names one that is none of these."""
+    (:func:`sensor_keys`, with or without ``sensors.``: ``sensors.gnss.sigma_pos_enu_m``,
+    ``gnss.sigma_vel_mps``, ``velocity.sigma_mps``; a sensor's name for its every sigma;
+    the old spellings of :func:`old_sensor_keys` with a ``FutureWarning``).  A
+    :class:`ConfigError` names one that is none of these."""
     import warnings
 
     alias = {}
@@ -364,13 +384,14 @@ def fixed_keys(names) -> set[str]:
     alias["imu"] = {si for _, _, si in FIGURES.values()}
     for white, si in ((v, k) for k, v in WHITE_KEYS.items()):
         alias[white] = {si}
-    for key in SENSOR_KEYS:
+    keys, renamed = sensor_keys(), old_sensor_keys()
+    whole = list(dict.fromkeys(key.split(".")[1] for key in keys))
+    for key in keys:
         alias[key] = {key}
         alias[key.removeprefix("sensors.")] = {key}
-    for old, new in OLD_SENSOR_KEYS.items():
+        alias.setdefault(key.split(".")[1], set()).add(key)
+    for old, new in renamed.items():
         alias[old] = alias[old.removeprefix("sensors.")] = {new}
-    alias["gnss"] = set(SENSOR_KEYS[:2])
-    alias["velocity"] = {SENSOR_KEYS[2]}
     out: set[str] = set()
     for n in names or ():
         k = str(n).strip()
@@ -378,28 +399,27 @@ def fixed_keys(names) -> set[str]:
         if k not in alias:
             raise ConfigError(f"--fix {n}: not a figure tune estimates; give an imu: key "
                               f"(e.g. gyro_arw_deg_sqrt_h, accel_markov_mps2; 'imu' for all), "
-                              f"sensors.gnss.sigma_pos_enu_m, sensors.gnss.sigma_vel_mps, "
-                              f"sensors.velocity.sigma_mps, 'gnss' or 'velocity'")
+                              f"{', '.join(keys)}, or {' or '.join(map(repr, whole))}")
         old = "sensors." + k.removeprefix("sensors.")
-        if old in OLD_SENSOR_KEYS:
-            warnings.warn(f"--fix {n}: the key is now {OLD_SENSOR_KEYS[old]} (read for one "
+        if old in renamed:
+            warnings.warn(f"--fix {n}: the key is now {renamed[old]} (read for one "
                           f"more release)", FutureWarning, stacklevel=2)
         out |= alias[k]
     return out
 
 
-def _split(gnss: GnssData, velocity: VelocityData | None, block_s: float, n_out: int,
+def _split(fixes: FixData, velocity: VelocityData | None, block_s: float, n_out: int,
            outage_s: float) -> tuple[Blocks, list[tuple[float, float]]]:
     """The blocks (at least four over the aiding data) and the outage windows: one in
     the middle of each of ``n_out`` held-back blocks spread over the run, of at most half
     a block, where there are GNSS positions to withhold."""
-    ts = [d.t for d in (gnss, velocity) if d is not None and len(d.t)]
+    ts = [d.t for d in (fixes, velocity) if d is not None and len(d.t)]
     t0 = float(min(t[0] for t in ts))
     t1 = float(max(t[-1] for t in ts))
     length = float(min(block_s, (t1 - t0) / 4.0)) if t1 > t0 else block_s
     blocks = Blocks(t0, length)
     windows: list[tuple[float, float]] = []
-    if gnss is not None and gnss.lla is not None and n_out > 0:
+    if fixes is not None and fixes.lla is not None and n_out > 0:
         odd = [k for k in range(1, int((t1 - t0) // length) + 1, 2)
                if t0 + (k + 1) * length <= t1 + 1e-9]
         pick = sorted({int(round(x)) for x in np.linspace(0, len(odd) - 1, min(n_out,
@@ -408,7 +428,7 @@ def _split(gnss: GnssData, velocity: VelocityData | None, block_s: float, n_out:
         for p in pick if odd else []:
             mid = t0 + (odd[p] + 0.5) * length
             a, b = mid - 0.5 * w, mid + 0.5 * w
-            if np.count_nonzero((gnss.t >= a) & (gnss.t <= b)):
+            if np.count_nonzero((fixes.t >= a) & (fixes.t <= b)):
                 windows.append((a, b))
     return blocks, windows
 
@@ -448,69 +468,73 @@ def tune(imu: ImuData, sensors: dict, base: System | None = None, matching_passe
     velocity file's sigma are seen without it); ``block_s``: the length of the fitted
     and held-back blocks [s]; ``outages`` windows of ``outage_s`` [s] withheld to measure
     the drift.  ``progress(text)`` is called before each filter run.  ``sensors``: every
-    sensor's series by registered name (GNSS needed; the velocity sensor's sigma is
-    tuned too, the other sensors fly with their sections' figures)."""
+    sensor's series by registered name (the fixes of the sensor that starts a run
+    needed, the GNSS's; the sigma of another sensor tune estimates, the velocity
+    sensor's, is tuned too; the other sensors fly with their sections' figures)."""
     t_start = time.perf_counter()
     base = base or System()
     recs = recordings(sensors, base)
-    gnss, velocity = recs.get("gnss"), recs.get("velocity")
-    if gnss is None or gnss.lla is None:
-        raise DataError("fednav tune: needs GNSS positions (sensors['gnss']): the figures "
-                        "are fitted to their innovations")
+    fx = registry.fix_sensor(recs)
+    vn = next((n for n in recs if n != fx and registry.spec(n).tuned), None)
+    fixes, velocity = recs.get(fx), recs.get(vn)
+    if fixes is None or fixes.lla is None:
+        who = registry.fix_sensor()
+        raise DataError(f"fednav tune: needs {registry.label(who)} positions "
+                        f"(sensors['{who}']): the figures are fitted to their innovations")
     notes: list[str] = []
     warns: list[str] = []
     runs = 0
     dt = imu.period()
-    gc = base.sensors.gnss or GnssConfig()
-    vc = base.sensors.velocity or VelocityConfig()
+    fc, vc = own_section(fx, base), None if vn is None else own_section(vn, base)
+    # the keys of the fix sensor's position and velocity sigma, the velocity sensor's
+    k_pos, k_vel = (f"sensors.{fx}.{k}" for k in registry.spec(fx).tuned)
+    k_v = None if vn is None else f"sensors.{vn}.{registry.spec(vn).tuned[0]}"
     fixed = fixed_keys(fixed)
-    if gc.lever_m is None and not np.any(gnss.lever):
-        warns.append("no GNSS antenna lever arm is set (sensors.gnss.lever_m, nor in the "
-                     "file): the figures are estimated for an antenna at the IMU — a lever "
-                     "arm left out is absorbed into them; give it in the base config, and "
-                     "process with a config that has it")
-    blocks, windows = _split(gnss, velocity, block_s, outages, outage_s)
+    if fc.lever_m is None and not np.any(fixes.lever):
+        warns.append(f"no {registry.label(fx)} antenna lever arm is set (sensors.{fx}.lever_m, "
+                     f"nor in the file): the figures are estimated for an antenna at the "
+                     f"IMU — a lever arm left out is absorbed into them; give it in the base "
+                     f"config, and process with a config that has it")
+    blocks, windows = _split(fixes, velocity, block_s, outages, outage_s)
     # -- the sensor sigmas: which are given (kept unless tune_sensors), which are free
     from_file = set(sigma_from_file or ())
-    rows = gnss.sigma_rows is not None
-    given = {"sensors.gnss.sigma_pos_enu_m": gc.sigma_pos_enu_m is not None or rows
-             or "gnss" in from_file,
-             "sensors.gnss.sigma_vel_mps": gc.sigma_vel_mps is not None or rows
-             or "gnss" in from_file,
-             "sensors.velocity.sigma_mps": velocity is not None}
-    free = {k: k not in fixed and (tune_sensors or not given[k]) for k in SENSOR_KEYS}
+    rows = fixes.sigma_rows is not None
+    given = {k_pos: fc.sigma_pos_enu_m is not None or rows or fx in from_file,
+             k_vel: fc.sigma_vel_mps is not None or rows or fx in from_file}
+    if k_v is not None:
+        given[k_v] = True
+    free = {k: k not in fixed and (tune_sensors or not v) for k, v in given.items()}
     if rows and tune_sensors:
-        free["sensors.gnss.sigma_pos_enu_m"] = free["sensors.gnss.sigma_vel_mps"] = False
-        notes.append(f"{gnss.source} gives each fix's 1-sigma, which processing uses over "
-                     f"the config's: the GNSS sigmas are kept")
-    # Sensor noise variances in the order of the residuals: GNSS [E, N, U] m, [E, N, U]
+        free[k_pos] = free[k_vel] = False
+        notes.append(f"{fixes.source} gives each fix's 1-sigma, which processing uses over "
+                     f"the config's: the {registry.label(fx)} sigmas are kept")
+    # Sensor noise variances in the order of the residuals: fixes [E, N, U] m, [E, N, U]
     # m/s (the components the file has); velocity sensor [E, N, U] m/s.
-    _, v_adj = adjust_sensors(gnss, velocity, base)
-    pos0 = np.broadcast_to(np.asarray(gnss.sigma_pos_enu if gc.sigma_pos_enu_m is None
-                                      else gc.sigma_pos_enu_m, dtype=float), (3,))
-    vel0 = np.broadcast_to(np.asarray(gnss.sigma_vel if gc.sigma_vel_mps is None
-                                      else gc.sigma_vel_mps, dtype=float), (3,))
-    r_gnss = np.r_[pos0, vel0] ** 2
-    has = np.r_[np.full(3, gnss.lla is not None and gc.measures != "velocity"),
-                np.full(3, gnss.vel is not None and gc.measures != "position")]
-    free_g = np.r_[np.full(3, free["sensors.gnss.sigma_pos_enu_m"]),
-                   np.full(3, free["sensors.gnss.sigma_vel_mps"])] & has
+    v_adj = None if velocity is None else velocity.adjusted(vc)
+    pos0 = np.broadcast_to(np.asarray(fixes.sigma_pos_enu if fc.sigma_pos_enu_m is None
+                                      else fc.sigma_pos_enu_m, dtype=float), (3,))
+    vel0 = np.broadcast_to(np.asarray(fixes.sigma_vel if fc.sigma_vel_mps is None
+                                      else fc.sigma_vel_mps, dtype=float), (3,))
+    r_fix = np.r_[pos0, vel0] ** 2
+    has = np.r_[np.full(3, fixes.lla is not None and fc.measures != "velocity"),
+                np.full(3, fixes.vel is not None and fc.measures != "position")]
+    free_g = np.r_[np.full(3, free[k_pos]), np.full(3, free[k_vel])] & has
     r_vel = None
     if velocity is not None:
         r_vel = np.square(vc.sigma_mps) if vc.sigma_mps is not None \
             else np.median(np.diagonal(v_adj.cov, axis1=1, axis2=2), axis=0)
-    start_r = (r_gnss.copy(), None if r_vel is None else r_vel.copy())
-    free_v = velocity is not None and free["sensors.velocity.sigma_mps"]
+    start_r = (r_fix.copy(), None if r_vel is None else r_vel.copy())
+    free_v = velocity is not None and free[k_v]
     # -- floors: what the data's own scatter supports
     floor_g = np.zeros(6)
-    if gnss.lla is not None:
-        ll = gnss.lla
+    if fixes.lla is not None:
+        ll = fixes.lla
         floor_g[:3] = scatter(earth.llh_difference_enu(ll[:, 0], ll[:, 1], ll[:, 2], ll[0, 0],
                                                        ll[0, 1], ll[0, 2]), 3)
-    if gnss.vel is not None:
-        floor_g[3:] = scatter(gnss.vel, 2)
+    if fixes.vel is not None:
+        floor_g[3:] = scatter(fixes.vel, 2)
     floor_v = None if velocity is None else scatter(v_adj.vel, 2)
-    period = base.filter.period_s or (float(np.median(np.diff(gnss.t))) if len(gnss.t) > 1
+    period = base.filter.period_s or (float(np.median(np.diff(fixes.t))) if len(fixes.t) > 1
                                       else dt)
     n_per = max(1, int(round(period / dt)))
     floor_imu = {"gyro_arw_rad_sqrt_s": white_noise_floor(imu.gyro, dt, n_per),
@@ -530,16 +554,16 @@ def tune(imu: ImuData, sensors: dict, base: System | None = None, matching_passe
             if si in update:
                 update[white] = None
         sensors = {}
-        if base.sensors.gnss is not None or np.any(free_g):
+        if fx in base.sensors or np.any(free_g):
             sd = np.sqrt(rg)
             up = {}
-            if free["sensors.gnss.sigma_pos_enu_m"] and has[0]:
+            if free[k_pos] and has[0]:
                 up["sigma_pos_enu_m"] = tuple(map(float, sd[:3]))
-            if free["sensors.gnss.sigma_vel_mps"] and has[3]:
+            if free[k_vel] and has[3]:
                 up["sigma_vel_mps"] = tuple(map(float, sd[3:]))
-            sensors["gnss"] = gc.model_copy(update=up)
+            sensors[fx] = fc.model_copy(update=up)
         if free_v:
-            sensors["velocity"] = vc.model_copy(update={
+            sensors[vn] = vc.model_copy(update={
                 "sigma_mps": tuple(map(float, np.sqrt(rv)))})
         return base.model_copy(update={
             "imu": base.imu.model_copy(update=update),
@@ -556,19 +580,19 @@ def tune(imu: ImuData, sensors: dict, base: System | None = None, matching_passe
         """Covariance matching of the free sensor variances on the fitted blocks, never
         below the floor (nor below 1e-3 of the current value: one pass cannot zero a
         variance)."""
-        if "gnss" in ev.matched and np.any(free_g):
+        if fx in ev.matched and np.any(free_g):
             m = np.full(6, np.nan)
-            m[has] = ev.matched["gnss"]
+            m[has] = ev.matched[fx]
             rg = np.where(free_g, np.maximum.reduce([m, floor_g ** 2, 1e-3 * rg]), rg)
-        if free_v and "velocity" in ev.matched:
-            rv = np.maximum.reduce([ev.matched["velocity"], floor_v ** 2, 1e-3 * rv])
+        if free_v and vn in ev.matched:
+            rv = np.maximum.reduce([ev.matched[vn], floor_v ** 2, 1e-3 * rv])
         return rg, rv
 
     start_imu = _starting_imu(imu, base, notes)
     fig_imu = dict(start_imu)
     figures: list[Figure] = []
     # The untuned config: the base's figures as they are (the file's, else generic).
-    before = run(start_imu, r_gnss, r_vel, "untuned figures")
+    before = run(start_imu, r_fix, r_vel, "untuned figures")
     # 1. The white noise: from the sample scatter where no one gave it; a figure given
     # below the floor starts at the floor.
     raised = {}
@@ -584,10 +608,10 @@ def tune(imu: ImuData, sensors: dict, base: System | None = None, matching_passe
     ev = before
     if np.any(free_g) or free_v:
         for p in range(matching_passes):
-            r_gnss, r_vel = match(r_gnss, r_vel, ev)
-            ev = run(fig_imu, r_gnss, r_vel, f"covariance matching {p + 1}")
+            r_fix, r_vel = match(r_fix, r_vel, ev)
+            ev = run(fig_imu, r_fix, r_vel, f"covariance matching {p + 1}")
     elif fig_imu != start_imu:
-        ev = run(fig_imu, r_gnss, r_vel, "white noise at its floor")
+        ev = run(fig_imu, r_fix, r_vel, "white noise at its floor")
     # 3. IMU process noise by the likelihood, one figure at a time.
     for key in LIKELIHOOD_KEYS:
         floor = floor_imu.get(key)
@@ -599,32 +623,34 @@ def tune(imu: ImuData, sensors: dict, base: System | None = None, matching_passe
             continue
         origin = ("raised to the sample-scatter floor" if key in raised else
                   "sample scatter" if fig_imu[key] != start_imu[key] else "start")
-        ev, figure = _search(key, fig_imu, ev, lambda f, what: run(f, r_gnss, r_vel, what),
+        ev, figure = _search(key, fig_imu, ev, lambda f, what: run(f, r_fix, r_vel, what),
                              origin, floor)
         figure.start = start_imu[key]
         figure.floor = floor
         figures.append(figure)
     # 4. The sensor noise again, with the process noise found.
     if np.any(free_g) or free_v:
-        r_gnss, r_vel = match(r_gnss, r_vel, ev)
-        ev = run(fig_imu, r_gnss, r_vel, "covariance matching, final")
+        r_fix, r_vel = match(r_fix, r_vel, ev)
+        ev = run(fig_imu, r_fix, r_vel, "covariance matching, final")
     tuned = ev
-    sd0, sd = np.sqrt(start_r[0]), np.sqrt(r_gnss)
+    sd0, sd = np.sqrt(start_r[0]), np.sqrt(r_fix)
     fl = floor_g
     sensors = []
     if has[0]:
-        sensors.append(("sensors.gnss.sigma_pos_enu_m", sd0[:3], sd[:3], fl[:3]))
+        sensors.append((k_pos, sd0[:3], sd[:3], fl[:3]))
     if has[3]:
-        sensors.append(("sensors.gnss.sigma_vel_mps", sd0[3:], sd[3:], fl[3:]))
+        sensors.append((k_vel, sd0[3:], sd[3:], fl[3:]))
     if r_vel is not None:
-        sensors.append(("sensors.velocity.sigma_mps", np.sqrt(start_r[1]), np.sqrt(r_vel),
+        sensors.append((k_v, np.sqrt(start_r[1]), np.sqrt(r_vel),
                         floor_v))
     for key, s0, s1, f in sensors:
-        who = "the base config" if _in_config(gc, vc, key) else "the file"
+        _, name, k = key.split(".")
+        who = "the base config" if getattr(own_section(name, base), k) is not None \
+            else "the file"
         how = ("kept: marked fixed" if key in fixed else
                "innovation covariance matching on the fitted blocks, floored at the "
                "scatter of the data" if free[key] else
-               f"kept: {who} gives it" + ("" if rows and key.startswith("sensors.gnss")
+               f"kept: {who} gives it" + ("" if rows and name == fx
                                           else " (--tune-sensors estimates it)"))
         figures.append(Figure(key, [float(x) for x in s0], [float(x) for x in s1], how,
                               [float(x) for x in f]))
@@ -633,7 +659,7 @@ def tune(imu: ImuData, sensors: dict, base: System | None = None, matching_passe
                               "kept: marked fixed" if key in fixed else
                               "kept: one data set holds one draw of it, not its spread"))
     # 5. Acceptance on the held-back blocks.
-    tuned_cfg = config(fig_imu, r_gnss, r_vel)
+    tuned_cfg = config(fig_imu, r_fix, r_vel)
     start_cfg = config(start_imu, *start_r)
     why = worse(tuned, before)
     accepted = why is None
@@ -673,17 +699,12 @@ def tune(imu: ImuData, sensors: dict, base: System | None = None, matching_passe
                 f"only the state at each outage's start differs)"
                 + ("; sensor sigmas matched to time-correlated errors make the filter "
                    "follow them (keep the given ones: no --tune-sensors)"
-                   if any(free[k] for k in SENSOR_KEYS) else ""))
-    lever = (tuple(map(float, gnss.lever)) if gc.lever_m is None and np.any(gnss.lever)
+                   if np.any(free_g) or free_v else ""))
+    lever = (tuple(map(float, fixes.lever)) if fc.lever_m is None and np.any(fixes.lever)
              else None)
     return TuneResult(tuned_cfg if accepted else start_cfg, figures, before, after, runs,
                       time.perf_counter() - t_start, notes, accepted, tuned, blocks,
-                      windows, drift_before, drift_after, warns, fixed, lever)
-
-
-def _in_config(gc: GnssConfig, vc: VelocityConfig, key: str) -> bool:
-    section, name = key.split(".")[1:]
-    return getattr(gc if section == "gnss" else vc, name) is not None
+                      windows, drift_before, drift_after, warns, fixed, lever, fx)
 
 
 def _search(key: str, fig_imu: dict, ev: Evaluation, run, origin: str,
@@ -756,8 +777,10 @@ def config_yaml(res: TuneResult, base: dict | None = None, header: str = "") -> 
         warnings.simplefilter("ignore", FutureWarning)
         data = _translate_legacy(dict(base or {}))
         old = data.get("sensors")
-        if isinstance(old, dict) and isinstance(old.get("gnss"), dict):
-            data["sensors"] = {**old, "gnss": renamed_neu_keys(old["gnss"], "sensors.gnss")}
+        if isinstance(old, dict):
+            data["sensors"] = {n: registry.spec(n).config.renamed_keys(v, f"sensors.{n}")
+                               if n in registry.SENSORS and isinstance(v, dict) else v
+                               for n, v in old.items()}
     c = res.config
     imu = dict(data.get("imu") or {})
     changed = {f.key.removeprefix("imu.") for f in res.figures
@@ -779,10 +802,11 @@ def config_yaml(res: TuneResult, base: dict | None = None, header: str = "") -> 
         _, name, k = key.split(".")
         v = getattr(c.sensors.get(name), k)
         sensors.setdefault(name, {})[k] = [float(f"{x:.6g}") for x in v]
-    gc = c.sensors.gnss
-    if (gc is None or gc.lever_m is None) and res.lever_from_file is not None:
-        sensors.setdefault("gnss", {})["lever_m"] = [float(f"{x:.6g}")
-                                                     for x in res.lever_from_file]
+    fx = res.fix_sensor or registry.fix_sensor()
+    fc = c.sensors[fx] if fx in c.sensors else None
+    if (fc is None or fc.lever_m is None) and res.lever_from_file is not None:
+        sensors.setdefault(fx, {})["lever_m"] = [float(f"{x:.6g}")
+                                                 for x in res.lever_from_file]
     if sensors:
         data["sensors"] = sensors
     lines = [f"# {line}" for line in header.splitlines()]

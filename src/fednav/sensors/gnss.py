@@ -22,6 +22,7 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from ..core.errors import DataError
+from ..ins.total_state import GnssTotal
 from .base import MeasurementSeries, flight_times, position_noise_to_llh
 from .measurement import POS_E, POS_N, POS_U, VEL_E, VEL_N, VEL_U, RowModel
 from .spec import Column, SensorConfig, SensorSpec
@@ -183,10 +184,19 @@ class GnssConfig(SensorConfig):
     #: what the local filter uses (None: what the data hold; both in a simulation)
     measures: Literal["position_velocity", "position", "velocity"] | None = None
 
+    #: old spellings of its keys -> today's (read, reordered, with a FutureWarning)
+    old_keys: ClassVar[dict[str, str]] = NEU_KEYS
+
     @model_validator(mode="before")
     @classmethod
     def _renamed(cls, data):
-        return renamed_neu_keys(data, "sensors.gnss")
+        return cls.renamed_keys(data)
+
+    @classmethod
+    def renamed_keys(cls, data, where: str = "sensors.gnss"):
+        """A section's mapping with its old [north, east, up] keys in today's places
+        (:func:`renamed_neu_keys`)."""
+        return renamed_neu_keys(data, where, cls.old_keys)
 
     def sensor(self) -> Gnss:
         from ..core.config import ConfigError
@@ -224,6 +234,13 @@ class GnssConfig(SensorConfig):
             "sigma_vel_mps": three(self.sigma_vel_mps, getattr(data, "sigma_vel", 0.1)),
             "measures": self.measures or has})
 
+    def total_state_refusal(self) -> str | None:
+        """The total-state model needs positions and velocities."""
+        if self.measures in (None, "position_velocity"):
+            return None
+        return (f"the total-state navigator's GNSS model needs positions and velocities; "
+                f"the file has {self.measures.replace('_', ' and ')} only")
+
     def sigma(self) -> np.ndarray | None:
         """1-sigma of ``z``: ``[north m, east m, up m, vE, vN, vU m/s]`` (None when the
         data's are to be used)."""
@@ -243,4 +260,5 @@ SPEC = SensorSpec(
              Column("lon_deg", _DEG, sigma=("sigma_east_m", 1.0)),
              Column("h_m", sigma=("sigma_up_m", 1.0)),
              Column("vE_mps"), Column("vN_mps"), Column("vU_mps")),
-    latlon=(0, 1), height=2)
+    latlon=(0, 1), height=2, fixes=True, total=GnssTotal(),
+    label="GNSS", tuned=("sigma_pos_enu_m", "sigma_vel_mps"))

@@ -53,6 +53,25 @@ def spec(name: str) -> SensorSpec:
                          f"{', '.join(sorted(SENSORS))}") from None
 
 
+def fix_sensor(names=None) -> str | None:
+    """The first of ``names`` (default: every registered sensor) whose fixes start a
+    recording (:attr:`SensorSpec.fixes`: the GNSS), or None."""
+    return next((n for n in (SENSORS if names is None else names)
+                 if n in SENSORS and SENSORS[n].fixes), None)
+
+
+def label(name: str | None) -> str:
+    """How messages name sensor ``name`` (its spec's ``label``, else the name; None:
+    the sensor whose fixes start a run, :func:`fix_sensor`)."""
+    name = fix_sensor() if name is None else name
+    return (SENSORS[name].label or name) if name in SENSORS else str(name)
+
+
+def total_models() -> dict:
+    """The total-state navigator's measurement model of each sensor that has one."""
+    return {n: s.total for n, s in SENSORS.items() if s.total is not None}
+
+
 def check_names(values, what: str = "sensor", aiding: bool = False) -> list[str]:
     """``values`` (sensor names) checked against the registry."""
     ok = names(True) if aiding else list(SENSORS)

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from abc import abstractmethod
 from dataclasses import dataclass, replace
+from typing import ClassVar
 
 import numpy as np
 from pydantic import Field, field_validator
@@ -43,6 +44,10 @@ class SensorConfig(_Model):
     refuses it (:meth:`SensorSpec.check_geometry`).  A sensor's section gives its
     simulator (``sensor``) and measurement model (``model``)."""
 
+    #: old spellings of the section's keys -> today's, read for one more release
+    #: (:meth:`renamed_keys`)
+    old_keys: ClassVar[dict[str, str]] = {}
+
     period_s: float | None = Field(default=None, gt=0.0)
     timing: TimingConfig = TimingConfig()
     outages_s: list[tuple[float, float]] = []
@@ -53,6 +58,12 @@ class SensorConfig(_Model):
     @classmethod
     def _mounting(cls, v):
         return mounting.validate(v)
+
+    @classmethod
+    def renamed_keys(cls, data, where: str = "sensors.<name>"):
+        """A section's mapping with its :attr:`old_keys` in today's places (``where``:
+        the section's place, for the warning); as it is here."""
+        return data
 
     def lever(self) -> np.ndarray:
         """The lever arm [m] (body right-forward-up; zeros when none is set)."""
@@ -104,6 +115,11 @@ class SensorConfig(_Model):
         if self.period_s is None and len(data.t) > 1:
             return self.model_copy(update={"period_s": float(np.median(np.diff(data.t)))})
         return self
+
+    def total_state_refusal(self) -> str | None:
+        """Why this section, as it flies a recording (:meth:`for_recording`), cannot
+        fly in the total-state navigator (``filter.state: total``); None: it can."""
+        return None
 
     def simulate(self, truth, rng, name: str = "sensor"):
         """The sensor's measurements over the flight, with their timing."""
@@ -199,6 +215,22 @@ class SensorSpec:
     #: a model that is not rows but reads the attitude in the sensor's axes (the
     #: magnetometer): its ``mounting`` acts (:func:`~fednav.sensors.measurement.mounted`)
     mountable: bool = False
+    #: the sensor gives fixes in the layout ``lat, lon [rad], h [m], vE, vN, vU [m/s]``
+    #: of its antenna (position, velocity or both per row) from which a recording
+    #: starts: without an ``initial:`` section the first fix is the initial position,
+    #: its velocity's course the alignment's heading, its period the filter epoch, and
+    #: the input checks (time offset, units, IMU axes) test the IMU against it
+    #: (:func:`~fednav.sensors.registry.fix_sensor`)
+    fixes: bool = False
+    #: how messages name the sensor ("GNSS"); default: its name
+    label: str = ""
+    #: the section's 1-sigma keys ``fednav tune`` estimates from the data (its
+    #: innovation covariance matching): the fix sensor's position and velocity, the
+    #: velocity sensor's
+    tuned: tuple[str, ...] = ()
+    #: the sensor's model in the total-state navigator (:mod:`fednav.ins.total_state`);
+    #: None: it cannot fly there
+    total: object = None
 
     @property
     def fixes_position(self) -> bool:

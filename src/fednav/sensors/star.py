@@ -16,6 +16,7 @@ from pydantic import Field
 from ..core import units
 from ..core.attitude import dcm_to_euler, quat_to_dcm, wrap_2pi
 from ..core.units import ARCMIN
+from ..ins.total_state import StarTotal
 from .base import MeasurementSeries, flight_times
 from .measurement import HEADING, PITCH, ROLL, RowModel
 from .spec import Column, SensorConfig, SensorSpec
@@ -81,4 +82,5 @@ SPEC = SensorSpec(
              Column("roll_deg", _DEG, sigma=("sigma_roll_arcsec", _ARCSEC)),
              Column("heading_deg", _DEG, wrap_2pi=True,
                     sigma=("sigma_heading_arcsec", _ARCSEC))),
-    angles=(0, 1, 2), alternative=(("qw", "qx", "qy", "qz"), euler_of_quaternion))
+    angles=(0, 1, 2), alternative=(("qw", "qx", "qy", "qz"), euler_of_quaternion),
+    total=StarTotal())

@@ -112,4 +112,5 @@ class VelocityConfig(SensorConfig):
 
 SPEC = SensorSpec("velocity", "velocity sensor (visual odometry, DVL ...): ENU velocity "
                   "at its lever arm", VelocityConfig, VelocityENU,
-                  columns=(Column("vE_mps"), Column("vN_mps"), Column("vU_mps")))
+                  columns=(Column("vE_mps"), Column("vN_mps"), Column("vU_mps")),
+                  tuned=("sigma_mps",))
