@@ -85,10 +85,10 @@ def test_offset_estimate_on_clean_data_is_zero_within_its_sigma(drive, clean):
 
 
 def test_a_height_in_another_unit_is_seen_where_the_road_climbs(drive, hills):
-    said = run(hills, cr.scale_gnss("lla", 2, 0.1)).warnings
+    said = run(hills, cr.scale_fixes("lla", 2, 0.1)).warnings
     assert any("GNSS height changes 0.1" in w for w in said), said
     # a level drive cannot tell (documented): the check stays silent rather than guess
-    assert pl.fix_scale_check(cr.scale_gnss("lla", 2, 0.1).apply(drive.imu,
+    assert pl.fix_scale_check(cr.scale_fixes("lla", 2, 0.1).apply(drive.imu,
                                                                     drive.gnss)[1]) == []
 
 
@@ -141,11 +141,11 @@ corruption = st.one_of(
     st.builds(cr.scale_imu, st.sampled_from(["gyro", "accel"]),
               st.sampled_from([None, 0, 1, 2]),
               st.floats(-3, 3).filter(lambda x: abs(x) > 0.05).map(lambda x: 10.0**x)),
-    st.builds(cr.scale_gnss, st.just("vel"), st.sampled_from([None, 0, 1, 2]),
+    st.builds(cr.scale_fixes, st.just("vel"), st.sampled_from([None, 0, 1, 2]),
               st.floats(-3, 3).filter(lambda x: abs(x) > 0.05).map(lambda x: 10.0**x)),
     st.builds(cr.permute_imu, st.sampled_from(["gyro", "accel"]),
               st.permutations([0, 1, 2]).map(tuple).filter(lambda p: p != (0, 1, 2))),
-    st.builds(cr.permute_gnss_velocity,
+    st.builds(cr.permute_fix_velocity,
               st.permutations([0, 1, 2]).map(tuple).filter(lambda p: p != (0, 1, 2))),
     st.builds(cr.time_offset, st.floats(-20.0, 20.0).filter(lambda x: abs(x) > 0.06)),
     st.builds(cr.time_base, st.sampled_from(["imu", "gnss"]), st.sampled_from([1e3, 1e-3])),

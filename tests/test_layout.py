@@ -127,3 +127,71 @@ def test_names_users_imported_from_0_1_modules_still_import():
             m = importlib.import_module(mod)
             missing = [a for a in attrs if not hasattr(m, a)]
             assert not missing, (mod, missing)
+
+
+#: The only places outside ``sensors/`` and ``io/`` whose code names a sensor of the
+#: registry as the GNSS, each with why; everywhere else the GNSS is the sensor whose
+#: fixes start a run (``SensorSpec.fixes``, ``registry.fix_sensor``) or one entry of the
+#: registry among the others.
+GNSS_NAMED = {
+    "cli.py": "the command line's --gnss file options and the formats its readers take",
+    "process/kfgins.py": "KF-GINS's configuration and GNSS file, translated",
+    "process/gnss_ins_sim.py": "gnss-ins-sim's output folder, translated",
+    "process/flight_log.py": "a PX4 log's receiver figures, translated",
+    "sim/dataset.py": "the car-drive dataset generator: writes the receiver's file in "
+                      "fednav's and the peers' formats (NaveGo gnss.mat, KF-GINS gnss.txt) "
+                      "from draws of its own (seeded datasets stay the same)",
+    "sim/drives.py": "the test drives built on that generator (Drive.gnss)",
+    "campaign/certify.py": "the certificate's setup of every registered sensor",
+    "campaign/certify_truth.py": "the certificate's independent generator: every sensor's "
+                                 "measurement written again, on purpose",
+    "ins/states.py": "the gnss_markov error state (its key in filter.states)",
+    "ins/total_state.py": "the total-state navigator's GNSS model (SensorSpec.total)",
+    "launch": "paper 001's own launch-frame GNSS model",
+    "scenarios": "the papers' own systems",
+}
+#: fednav 0.1's names, kept for one more release (the old call layouts included).
+OLD_GNSS_NAMES = {"gnss_course", "gnss_z", "gnss_flown", "GnssConfig", "read_gnss_csv"}
+
+
+def _names_gnss(path: Path) -> list[tuple[int, str]]:
+    """(line, name) of each code reference to the GNSS in a module: identifiers,
+    attributes, arguments, definitions and keys (strings without spaces); docstrings,
+    comments and messages are prose."""
+    tree = ast.parse(path.read_text())
+    shims = set()  # the bodies of fednav 0.1's call layouts and deprecated properties
+    for node in ast.walk(tree):
+        if isinstance(node, ast.FunctionDef):
+            doc = ast.get_docstring(node) or ""
+            if doc.startswith("Deprecated") or "fednav 0.1's" in doc:
+                shims |= {id(n) for n in ast.walk(node)}
+    found = []
+    for node in ast.walk(tree):
+        if id(node) in shims:
+            continue
+        name = (node.id if isinstance(node, ast.Name) else
+                node.attr if isinstance(node, ast.Attribute) else
+                node.arg if isinstance(node, ast.arg) else
+                node.name if isinstance(node, (ast.FunctionDef, ast.ClassDef)) else
+                node.asname or node.name if isinstance(node, ast.alias) else
+                node.value if isinstance(node, ast.Constant) and isinstance(node.value, str)
+                and " " not in node.value else None)
+        if name and "gnss" in name.lower() and name not in OLD_GNSS_NAMES:
+            found.append((node.lineno, name))
+    return found
+
+
+def test_the_gnss_is_named_only_where_a_format_or_a_paper_needs_it():
+    """Issue 38's one route: GNSS and the velocity sensor are ordinary registry entries.
+    What processing takes from the GNSS it takes from the sensor whose fixes start a run
+    (tests/test_fix_sensor.py flies the same run under another name)."""
+    bad = {}
+    for path in sorted(PKG.rglob("*.py")):
+        rel = path.relative_to(PKG).as_posix()
+        if rel.split("/")[0] in ("sensors", "io") or rel in GNSS_NAMED \
+                or rel.split("/")[0] in GNSS_NAMED:
+            continue
+        if found := _names_gnss(path):
+            bad[rel] = found[:3]
+    assert not bad, bad
+    assert all((PKG / p).exists() or (PKG / f"{p}.py").exists() for p in GNSS_NAMED)

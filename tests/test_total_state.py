@@ -4,7 +4,8 @@ import pytest
 from fednav.core import attitude as att
 from fednav.core import units
 from fednav.ins.strapdown import Strapdown
-from fednav.ins.total_state import StarTotal, attitude_innovation, boxminus, boxplus
+from fednav.ins.total_state import attitude_innovation, boxminus, boxplus
+from fednav.sensors.star import StarTotal
 
 
 def ins_at(euler, lla=(0.5, 2.0, 100.0), vel=(10.0, 20.0, 1.0)):

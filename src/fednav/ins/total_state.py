@@ -29,8 +29,9 @@ flown through the same strapdown kernel over the interval (one coarse step with 
 interval's summed increments, minus its IMU error ``b + db + w``); the central point is
 flown the same way, and only the deviations ``chi_i [-] chi_0`` are kept and re-applied
 around the full-rate INS.  The coarse step's own (common-mode) error therefore cancels.
-Measurement updates are linear on the tangent space (the simplified UKF), see
-:class:`GnssTotal` and :class:`StarTotal`.
+Measurement updates are linear on the tangent space (the simplified UKF), by each
+sensor's total-state model (its ``SensorSpec.total``: ``fednav.sensors.gnss.GnssTotal``,
+``fednav.sensors.star.StarTotal``).
 """
 
 from __future__ import annotations
@@ -42,15 +43,12 @@ from ..core import attitude as att
 from ..core import earth
 from ..core.kernels import (
     cholesky_lower,
-    dcm_to_rotvec,
-    euler_to_dcm,
     quat_mul,
-    quat_to_dcm,
     quat_to_rotvec,
     rotvec_to_quat,
 )
 from .error_model import SCALE
-from .strapdown import STATE_Q, STATE_VEL, Strapdown, mechanize
+from .strapdown import Strapdown, mechanize
 
 N_NAV = 9
 N_BIAS = 6
@@ -253,67 +251,3 @@ class TotalStateUKF:
         # keep the velocity history used by the strapdown's midpoint extrapolation
         self.ins.state[16:19] += d[3:6] * TSCALE[3:6]
         self.b += d[N_NAV:N_STATE] * BSCALE
-
-
-class GnssTotal:
-    """GNSS on the total state: residual ``GNSS [-] X`` = [dv (3), dp ENU (3)] (filter
-    units); linear ``H = [0 I 0]``."""
-
-    kind = "gnss"
-    dim = 6
-    H = np.hstack([np.zeros((6, 3)), np.eye(6), np.zeros((6, N_BIAS))])
-
-    def residual(self, state, z) -> np.ndarray:
-        lat, lon, h = state[7], state[8], state[9]
-        rm, rn = earth.radii_nb(lat)
-        v = state[STATE_VEL]
-        return np.array([z[3] - v[0], z[4] - v[1], z[5] - v[2],
-                         earth.wrap_lon(z[1] - lon) * (rn + h) * np.cos(lat),
-                         (z[0] - lat) * (rm + h),
-                         z[2] - h]) / TSCALE[3:9]
-
-    def R(self, sigma) -> np.ndarray:
-        s = np.asarray(sigma, dtype=float)  # [north, east, up m, vE, vN, vU] as z
-        return np.diag(s[[3, 4, 5, 1, 0, 2]] ** 2)
-
-    def terms(self, state, z, sigma) -> tuple[np.ndarray, np.ndarray]:
-        return self.residual(state, z), self.R(sigma)
-
-
-@numba.njit(cache=True)
-def _star_terms(q_est, z, sigma, unit):
-    """Residual log(C_star C_est') and its covariance from Euler-angle noise ``sigma``
-    (both in units of ``unit`` radians)."""
-    C_est = quat_to_dcm(q_est)
-    M = euler_to_dcm(z[0], z[1], z[2]) @ C_est.T
-    r = np.empty(3)
-    dcm_to_rotvec(M, r)
-    # Euler angles of the estimate and d(Euler)/d(phi) (attitude.euler_error_jacobian).
-    th = np.arcsin(min(1.0, max(-1.0, C_est[2, 1])))
-    psi = np.arctan2(C_est[0, 1], C_est[1, 1])
-    s, c, ct, tt = np.sin(psi), np.cos(psi), np.cos(th), np.tan(th)
-    J = np.array([[-c, s, 0.0], [-s / ct, -c / ct, 0.0], [-tt * s, -tt * c, 1.0]])
-    Ji = np.linalg.inv(J)
-    Re = np.diag((sigma / unit) ** 2)
-    return r / unit, Ji @ Re @ Ji.T
-
-
-class StarTotal:
-    """Star sensor on the total state: residual = ``log(C_star C_est')`` (arc-minutes);
-    ``H = [I 0 0]``.  The Euler-angle noise of the sensor maps to the rotation space with
-    the inverse of :func:`~fednav.core.attitude.euler_error_jacobian`."""
-
-    kind = "star"
-    dim = 3
-    H = np.hstack([np.eye(3), np.zeros((3, 6 + N_BIAS))])
-
-    def terms(self, state, z, sigma) -> tuple[np.ndarray, np.ndarray]:
-        """(residual, R) at once (one compiled call)."""
-        return _star_terms(np.ascontiguousarray(state[STATE_Q]), np.asarray(z, dtype=float),
-                           np.asarray(sigma, dtype=float), TSCALE[0])
-
-    def residual(self, state, z) -> np.ndarray:
-        return self.terms(state, z, np.ones(3))[0]
-
-    def R_at(self, state, sigma) -> np.ndarray:
-        return self.terms(state, att.quat_to_euler(state[STATE_Q]), sigma)[1]

@@ -663,8 +663,10 @@ class Navigator:
         self._late_ok: dict[str, float] = {}
         self._used: dict[str, np.ndarray | None] = {}
         self._mech = mechanization
-        baro = system.sensors.baro
-        loop = baro.loop() if baro is not None else None
+        roles = system.roles()
+        #: the sensor whose heights damp the vertical channel (the barometer), if any
+        self._damper = roles.get("damping")
+        loop = None if self._damper is None else system.sensors[self._damper].loop()
         if mechanization is None:
             self.ins = Strapdown(np.asarray(initial.lla, dtype=float),
                                  np.asarray(initial.vel, dtype=float),
@@ -699,9 +701,10 @@ class Navigator:
                              if hasattr(model, "zindex") else None if mechanization
                              is not None else np.arange(self._widths(a, None)[0]))
         self._constraint = None
-        if system.constraint == "wind":
-            cfg = system.sensors.airdata
-            self._constraint = Meas("airdata", cfg.measurement_model(), "none", cfg.timing)
+        if "constraint" in roles:  # (air data, for the wind constraint)
+            cfg = system.sensors[roles["constraint"]]
+            self._constraint = Meas(roles["constraint"], cfg.measurement_model(), "none",
+                                    cfg.timing)
         if mechanization is not None:
             if engine == "compiled":
                 raise ValueError(f"the compiled engine cannot run {mechanization.name}")
@@ -736,12 +739,8 @@ class Navigator:
                 fdi_recovery=f.fdi_recovery, fdi_readmit_s=f.fdi_readmit_s,
                 positions=position_sources(self.aiding))
         else:
-            baro_q = 0.0
-            if baro is not None and baro.damping_loop:
-                if baro.period_s is None:
-                    raise ValueError("sensors.baro.period_s: the damping loop's noise needs "
-                                     "the barometer's period")
-                baro_q = baro.sigma_m**2 * baro.period_s
+            baro_q = (0.0 if self._damper is None
+                      else system.sensors[self._damper].damping_noise())
             layout = self.layout
             core = ErrorStateCore(self.ins, noise, self.T, f.substeps, baro_q, *comp0, layout)
             central = f.architecture == "centralized"
@@ -967,7 +966,7 @@ class Navigator:
                 self.add_measurements(sensor, [t], z.reshape(1, -1), R=R[None],
                                       t_arrival=[ta])
                 return
-            if sensor == "baro" and self._damping:  # (as add_measurements: kept if late)
+            if sensor == self._damper and self._damping:  # (as add_measurements: kept if late)
                 self._baro_heights(np.array([t]), z[:1])
             k = int(epoch_at(ta, self.t0, self.T))
             h = self._late_ok[sensor]
@@ -1024,7 +1023,7 @@ class Navigator:
             else:
                 sigma = np.sqrt(np.diagonal(cov, axis1=1, axis2=2))
         if m is None:
-            if self._constraint is not None and sensor == "airdata":
+            if self._constraint is not None and sensor == self._constraint.name:
                 m = self._constraint
             elif sensor not in SENSORS:
                 raise ValueError(f"unknown sensor '{sensor}'; registered: "
@@ -1034,7 +1033,7 @@ class Navigator:
             return  # (a sensor that delivered nothing: a stop detector before any stop)
         ta = t if t_arrival is None else np.asarray(t_arrival, dtype=float).ravel()
         z = self._check_measurements(sensor, m, t, z, sigma, R, ta)
-        if sensor == "baro" and self._damping:
+        if sensor == self._damper and self._damping:
             self._baro_heights(t, z[:, 0])
         if m is None:
             return  # configured but not aiding (a baro that only damps, say)

@@ -34,7 +34,6 @@ from ..core.config import _Model, nested_error, read_mapping, validate
 from ..filters.registry import FILTERS
 from ..ins.error_model import ImuNoiseModel
 from ..ins.states import CORE, StateLayout
-from ..sensors.gnss import neu_to_enu
 from ..sensors.imu import ImuConfig
 from ..sensors.registry import SENSORS, SensorSet, check_names
 from .integrity import IntegrityConfig
@@ -267,35 +266,41 @@ class InitialConfig(_Model):
 FILE_KEYS = ("imu", "reference")
 
 
-#: Keys of the flat processing config of fednav 0.1 -> their place in a system description.
+#: Keys of the flat processing config of fednav 0.1 -> their place in a system
+#: description, but for the sensors' (each section's ``flat_keys``: :func:`legacy_keys`).
 LEGACY_KEYS = {
     "period_s": ("filter", "period_s"), "substeps": ("filter", "substeps"),
     "fdi_alpha": ("filter", "fdi_alpha"), "fdi_recovery": ("filter", "fdi_recovery"),
-    "gnss_sigma_pos_m": ("sensors", "gnss", "sigma_pos_enu_m"),
-    "gnss_sigma_vel_mps": ("sensors", "gnss", "sigma_vel_mps"),
-    "gnss_lever_m": ("sensors", "gnss", "lever_m"),
-    "gnss_time_offset_s": ("sensors", "gnss", "time_offset_s"),
-    "velocity_time_offset_s": ("sensors", "velocity", "time_offset_s"),
-    "velocity_axes": ("sensors", "velocity", "axes"),
-    "velocity_sigma_mps": ("sensors", "velocity", "sigma_mps"),
     "imu_max_bridge_s": ("imu", "max_bridge_s"),
     "initial_attitude": ("alignment", "initial_attitude"),
     "initial_attitude_sigma_deg": ("alignment", "initial_attitude_sigma_deg"),
     "coarse_heading_deg": ("alignment", "coarse_heading_deg"),
     "coarse_seconds": ("alignment", "coarse_seconds"),
 }
-#: Legacy keys whose vector order changed: the conversion and what the warning says.
-LEGACY_ORDER = {"gnss_sigma_pos_m": (neu_to_enu, "[north, east, up] -> [east, north, up]")}
+
+
+def legacy_keys() -> tuple[dict[str, tuple], dict[str, tuple]]:
+    """Every key of fednav 0.1's flat processing config -> its place in a system
+    description, and those whose value is converted -> (the conversion, what the
+    warning says of it)."""
+    keys, order = dict(LEGACY_KEYS), {}
+    for name, spec in SENSORS.items():
+        for flat, (key, *conversion) in spec.config.flat_keys.items():
+            keys[flat] = ("sensors", name, key)
+            if conversion:
+                order[flat] = tuple(conversion)
+    return keys, order
 
 
 def _translate_legacy(data: dict) -> dict:
     """A flat fednav 0.1 processing config rewritten as a system description."""
-    old = [k for k in data if k in LEGACY_KEYS]
+    keys, order = legacy_keys()
+    old = [k for k in data if k in keys]
     if not old:
         return data
     out = dict(data)
     for k in old:
-        *path, leaf = LEGACY_KEYS[k]
+        *path, leaf = keys[k]
         d = out
         for p in path:
             if not isinstance(d.get(p) or {}, dict):
@@ -304,13 +309,13 @@ def _translate_legacy(data: dict) -> dict:
             d = d[p]
         else:
             if leaf in d:
-                raise ValueError(f"'{k}' and '{'.'.join(LEGACY_KEYS[k])}' are the same "
+                raise ValueError(f"'{k}' and '{'.'.join(keys[k])}' are the same "
                                  f"setting; give it once")
             v = out.pop(k)
-            d[leaf] = LEGACY_ORDER[k][0](v) if k in LEGACY_ORDER else v
+            d[leaf] = order[k][0](v) if k in order else v
     warnings.warn("processing-config keys of fednav 0.1 (" + ", ".join(
-        f"{k} -> {'.'.join(LEGACY_KEYS[k])}"
-        + (f", reordered {LEGACY_ORDER[k][1]}" if k in LEGACY_ORDER else "")
+        f"{k} -> {'.'.join(keys[k])}"
+        + (f", reordered {order[k][1]}" if k in order else "")
         for k in old) + ") are read for one more release", FutureWarning, stacklevel=2)
     return out
 
@@ -440,6 +445,18 @@ class System(_Model):
         if self.filter.states:
             state_layout(self, validating=True)  # (one line naming the key a state lacks)
         return self
+
+    def roles(self) -> dict[str, str]:
+        """The sensor that plays each role besides aiding: each section's
+        :meth:`~fednav.sensors.spec.SensorConfig.roles`.
+
+        Returns
+        -------
+        dict of str to str
+            Role -> the sensor's registered name (``{"damping": "baro", "constraint":
+            "airdata"}`` when both fly).
+        """
+        return {r: n for n in self.sensors for r in self.sensors[n].roles(self)}
 
     def aiding_sensors(self, available=None) -> list[str]:
         """The sensors that feed the filter.

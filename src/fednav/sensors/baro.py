@@ -67,6 +67,14 @@ class BaroConfig(SensorConfig):
         """The damping loop of the INS vertical channel, when ``damping_loop``."""
         return {"damping": "sensors.baro.damping_loop"} if self.damping_loop else {}
 
+    def damping_noise(self) -> float:
+        """The damping loop's height noise as white process noise [m^2 s]: ``sigma_m^2``
+        times the period."""
+        if self.period_s is None:
+            raise ValueError("sensors.baro.period_s: the damping loop's noise needs the "
+                             "barometer's period")
+        return self.sigma_m**2 * self.period_s
+
     def loop(self) -> BaroLoop | None:
         if not self.damping_loop:
             return None

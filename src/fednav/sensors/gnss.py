@@ -21,8 +21,10 @@ from typing import ClassVar, Literal
 import numpy as np
 from pydantic import Field, model_validator
 
+from ..core import earth
 from ..core.errors import DataError
-from ..ins.total_state import GnssTotal
+from ..ins.strapdown import STATE_VEL
+from ..ins.total_state import N_BIAS, TSCALE
 from .base import MeasurementSeries, flight_times, position_noise_to_llh
 from .measurement import POS_E, POS_N, POS_U, VEL_E, VEL_N, VEL_U, RowModel
 from .spec import Column, SensorConfig, SensorSpec
@@ -186,6 +188,11 @@ class GnssConfig(SensorConfig):
 
     #: old spellings of its keys -> today's (read, reordered, with a FutureWarning)
     old_keys: ClassVar[dict[str, str]] = NEU_KEYS
+    flat_keys: ClassVar[dict[str, tuple]] = {
+        "gnss_sigma_pos_m": ("sigma_pos_enu_m", neu_to_enu,
+                             "[north, east, up] -> [east, north, up]"),
+        "gnss_sigma_vel_mps": ("sigma_vel_mps",), "gnss_lever_m": ("lever_m",),
+        "gnss_time_offset_s": ("time_offset_s",)}
 
     @model_validator(mode="before")
     @classmethod
@@ -254,6 +261,31 @@ class GnssConfig(SensorConfig):
 
 
 _DEG = float(np.radians(1.0))
+class GnssTotal:
+    """GNSS on the total state: residual ``GNSS [-] X`` = [dv (3), dp ENU (3)] (filter
+    units); linear ``H = [0 I 0]``."""
+
+    kind = "gnss"
+    dim = 6
+    H = np.hstack([np.zeros((6, 3)), np.eye(6), np.zeros((6, N_BIAS))])
+
+    def residual(self, state, z) -> np.ndarray:
+        lat, lon, h = state[7], state[8], state[9]
+        rm, rn = earth.radii_nb(lat)
+        v = state[STATE_VEL]
+        return np.array([z[3] - v[0], z[4] - v[1], z[5] - v[2],
+                         earth.wrap_lon(z[1] - lon) * (rn + h) * np.cos(lat),
+                         (z[0] - lat) * (rm + h),
+                         z[2] - h]) / TSCALE[3:9]
+
+    def R(self, sigma) -> np.ndarray:
+        s = np.asarray(sigma, dtype=float)  # [north, east, up m, vE, vN, vU] as z
+        return np.diag(s[[3, 4, 5, 1, 0, 2]] ** 2)
+
+    def terms(self, state, z, sigma) -> tuple[np.ndarray, np.ndarray]:
+        return self.residual(state, z), self.R(sigma)
+
+
 SPEC = SensorSpec(
     "gnss", "GNSS receiver: position and ENU velocity of its antenna", GnssConfig, GnssPosVel,
     columns=(Column("lat_deg", _DEG, sigma=("sigma_north_m", 1.0)),

@@ -47,6 +47,10 @@ class SensorConfig(_Model):
     #: old spellings of the section's keys -> today's, read for one more release
     #: (:meth:`renamed_keys`)
     old_keys: ClassVar[dict[str, str]] = {}
+    #: keys of fednav 0.1's flat processing config -> (this section's key[, the
+    #: conversion of the value, what the warning says of it]), read for one more release
+    #: (:func:`fednav.navigator.system.legacy_keys`)
+    flat_keys: ClassVar[dict[str, tuple]] = {}
 
     period_s: float | None = Field(default=None, gt=0.0)
     timing: TimingConfig = TimingConfig()

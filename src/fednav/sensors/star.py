@@ -10,13 +10,18 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 from pydantic import Field
 
+from ..core import attitude as att
 from ..core import units
 from ..core.attitude import dcm_to_euler, quat_to_dcm, wrap_2pi
+from ..core.kernels import dcm_to_rotvec, euler_to_dcm
+from ..core.kernels import quat_to_dcm as quat_to_dcm_nb
 from ..core.units import ARCMIN
-from ..ins.total_state import StarTotal
+from ..ins.strapdown import STATE_Q
+from ..ins.total_state import N_BIAS, TSCALE
 from .base import MeasurementSeries, flight_times
 from .measurement import HEADING, PITCH, ROLL, RowModel
 from .spec import Column, SensorConfig, SensorSpec
@@ -75,6 +80,45 @@ def euler_of_quaternion(q) -> np.ndarray:
 
 _DEG = float(units.deg(1.0))
 _ARCSEC = float(units.arcsec(1.0))
+@numba.njit(cache=True)
+def _star_terms(q_est, z, sigma, unit):
+    """Residual log(C_star C_est') and its covariance from Euler-angle noise ``sigma``
+    (both in units of ``unit`` radians)."""
+    C_est = quat_to_dcm_nb(q_est)
+    M = euler_to_dcm(z[0], z[1], z[2]) @ C_est.T
+    r = np.empty(3)
+    dcm_to_rotvec(M, r)
+    # Euler angles of the estimate and d(Euler)/d(phi) (attitude.euler_error_jacobian).
+    th = np.arcsin(min(1.0, max(-1.0, C_est[2, 1])))
+    psi = np.arctan2(C_est[0, 1], C_est[1, 1])
+    s, c, ct, tt = np.sin(psi), np.cos(psi), np.cos(th), np.tan(th)
+    J = np.array([[-c, s, 0.0], [-s / ct, -c / ct, 0.0], [-tt * s, -tt * c, 1.0]])
+    Ji = np.linalg.inv(J)
+    Re = np.diag((sigma / unit) ** 2)
+    return r / unit, Ji @ Re @ Ji.T
+
+
+class StarTotal:
+    """Star sensor on the total state: residual = ``log(C_star C_est')`` (arc-minutes);
+    ``H = [I 0 0]``.  The Euler-angle noise of the sensor maps to the rotation space with
+    the inverse of :func:`~fednav.core.attitude.euler_error_jacobian`."""
+
+    kind = "star"
+    dim = 3
+    H = np.hstack([np.eye(3), np.zeros((3, 6 + N_BIAS))])
+
+    def terms(self, state, z, sigma) -> tuple[np.ndarray, np.ndarray]:
+        """(residual, R) at once (one compiled call)."""
+        return _star_terms(np.ascontiguousarray(state[STATE_Q]), np.asarray(z, dtype=float),
+                           np.asarray(sigma, dtype=float), TSCALE[0])
+
+    def residual(self, state, z) -> np.ndarray:
+        return self.terms(state, z, np.ones(3))[0]
+
+    def R_at(self, state, sigma) -> np.ndarray:
+        return self.terms(state, att.quat_to_euler(state[STATE_Q]), sigma)[1]
+
+
 SPEC = SensorSpec(
     "star", "star sensor (CNS): attitude as Euler angles [pitch, roll, heading]",
     StarConfig, StarAttitude,

@@ -64,6 +64,10 @@ class VelocityConfig(SensorConfig):
     drift), which the optional ``velocity_markov`` error state (``filter.states``)
     estimates; the sigma is then the whole error's and R its white part."""
 
+    flat_keys: ClassVar[dict[str, tuple]] = {
+        "velocity_time_offset_s": ("time_offset_s",), "velocity_axes": ("axes",),
+        "velocity_sigma_mps": ("sigma_mps",)}
+
     sigma_mps: _V3 | None = None
     axes: tuple[str, str, str] = ("E", "N", "U")
     time_offset_s: float = 0.0

@@ -30,20 +30,16 @@ from ..core import units
 from ..io.csvdata import INCREMENT_COLUMNS, write_csv
 from ..io.sensorfile import write_sensor_csv
 from ..navigator.system import missing_figures
-from .runs import make_run_data
+from .runs import feed_order, make_run_data
 from .scenario import ModeConfig, Scenario
 
 
 def fed_sensors(scn: Scenario, mode: ModeConfig) -> list[str]:
-    """The sensors the navigator of ``mode`` is fed: its aiding sensors, a barometer
-    (its damping loop) and air data for the wind constraint (as
-    :func:`fednav.sim.runs.run_mode` feeds them)."""
-    feed = list(mode.aiding)
-    if "baro" in scn.sensors and "baro" not in feed:
-        feed.append("baro")
-    if mode.constraint is not None and "airdata" not in feed:
-        feed.append("airdata")
-    return feed
+    """The sensors the navigator of ``mode`` is fed: its aiding sensors and those with
+    another role in its system (a barometer's damping loop, air data for the wind
+    constraint: :meth:`fednav.navigator.system.System.roles`), as
+    :func:`fednav.sim.runs.run_mode` feeds them."""
+    return feed_order(mode.aiding, scn.system_for(mode))
 
 
 def find_mode(scn: Scenario, name: str | None) -> ModeConfig:

@@ -108,9 +108,10 @@ def recorded(tr: Trajectory, rng: np.random.Generator, imu_errors: bool = True,
     2e-4 m/s/sqrt(s); drawn from ``rng`` when ``imu_errors``, else ideal, its figures
     given either way; the initial attitude 0.05/-0.05/0.2 deg off with its sigma) and
     1 Hz GNSS fixes with 1 m noise (drawn in ECEF along the local ENU axes) and 0.05 m/s,
-    the longitudes in 0..360 deg with ``lon_0_360``.  Returns ``(ImuData, GnssData)``."""
+    the longitudes in 0..360 deg with ``lon_0_360``.  Returns ``(ImuData, FixData)``
+    (the GNSS's fixes)."""
     from ..core import units
-    from ..io.data import GnssData, ImuData, ImuErrors
+    from ..io.data import FixData, ImuData, ImuErrors
     from ..sensors import ImuErrors as SimImuErrors
     from ..sensors import corrupt_imu
 
@@ -134,4 +135,5 @@ def recorded(tr: Trajectory, rng: np.random.Generator, imu_errors: bool = True,
     if lon_0_360:
         lla[:, 1] %= 2 * np.pi
     vel = g["vel"] + 0.05 * rng.standard_normal((len(tg), 3))
-    return imu, GnssData("sim-gnss", tg, lla, vel, np.ones(3), np.full(3, 0.05), np.zeros(3))
+    return imu, FixData("great-circle fixes", tg, lla, vel, np.ones(3), np.full(3, 0.05),
+                        np.zeros(3))

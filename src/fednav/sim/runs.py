@@ -72,6 +72,14 @@ class RunResult:
 FAULT_STREAM = 0xFA17
 
 
+def feed_order(aiding, system) -> list[str]:
+    """The sensors a navigator of ``system`` is fed, in order: the ``aiding`` ones, then
+    those with another role in it (:meth:`fednav.navigator.system.System.roles`: a
+    barometer's damping loop, air data for the wind constraint)."""
+    return list(aiding) + [n for n in dict.fromkeys(system.roles().values())
+                           if n not in aiding]
+
+
 def make_run_data(scn: Scenario, seed: int, max_time: float | None = None) -> RunData:
     """Draw the IMU errors, sensor noise and initial errors of run ``seed``."""
     truth = scn.trajectory(max_time)
@@ -138,15 +146,16 @@ def run_mode(scn: Scenario, aiding: list[str], data: RunData, mode: str = "",
         if a not in data.series:
             raise ValueError(f"scenario {scn.name}: mode '{mode}' uses sensor '{a}' which the "
                              f"scenario does not configure")
-    if constraint is not None and "airdata" not in data.series:
-        raise ValueError(f"scenario {scn.name}: the wind constraint needs sensors.airdata")
     system = scn.system_for(ModeConfig(name=mode or "mode", aiding=list(aiding),
                                        filter=filter_type, delay_compensation=delay,
                                        constraint=constraint))
+    feed = feed_order(aiding, system)
+    need = system.roles().get("constraint")
+    if need is not None and need not in data.series:
+        raise ValueError(f"scenario {scn.name}: the {constraint} constraint needs "
+                         f"sensors.{need}")
     nav = Navigator(system, _initial_state(scn, truth, data), dt, record_rows=False,
                     record_covariance=False, innovations=innovations)
-    feed = list(aiding) + ["baro"] * ("baro" not in aiding) + ["airdata"] * (
-        constraint is not None)
     for a in feed:
         if a in data.series:
             nav.add_series(data.series[a])
