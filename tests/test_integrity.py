@@ -191,6 +191,7 @@ def test_the_stream_gives_levels_that_bound_the_error(drive):
     for s in snaps[2:]:
         lv = s.levels
         assert lv["alert"] is False and lv["tripped_s"] is None and lv["test_ratio"] < 1
+        assert lv["excluded"] is None
         k = np.searchsorted(ref.t, s.t)
         e = np.asarray(earth.llh_difference_enu(*s.lla, *ref.lla[k]))
         assert np.hypot(e[0], e[1]) < lv["hpl_m"] and abs(e[2]) < lv["vpl_m"]
@@ -209,12 +210,37 @@ def test_the_stream_alerts_on_a_gnss_ramp(drive):
                                             "baro": baro}, _cfg()))
     tripped = [s for s in snaps if s.levels["tripped_s"] is not None]
     assert tripped and 120.0 < tripped[0].levels["tripped_s"] < 150.0
-    assert all(s.levels["alert"] for s in tripped)
+    assert all(s.levels["alert"] or s.levels["excluded"] == "gnss" for s in tripped)
     # (the sub-solution that separates most: here the one without the barometer, which
     # then follows the ramped GNSS height fully — a candidate, not an identification;
     # the velocity sensor sees no height)
     assert tripped[0].levels["candidate"] in ("gnss", "baro")
     assert all(s.levels["alert"] is False for s in snaps if s.t < 120.0)
+
+
+def test_the_stream_excludes_the_faulty_sensor(drive):
+    """Exclusion in the stream: a 0.1 m/s GNSS height ramp from 120 s trips a test; the
+    GNSS is excluded once the solution without it is the only one its own bank (the
+    pair navigators) agrees with; from then on the output is that solution, near the
+    truth and inside its levels — the sensor the batch excludes, tens of seconds
+    after the ramp began, as the batch."""
+    from fednav.process.run import prepare
+
+    imu, gnss, vel, baro, ref = drive
+    sensors = {"gnss": _ramp(gnss, 0.1), "velocity": vel, "baro": baro}
+    nav, snaps = _stream_levels(prepare(imu, sensors, _cfg()))
+    assert len(nav.bank) == 3 and len(nav.pairs) == 3
+    out = [s for s in snaps if s.levels["excluded"] is not None]
+    assert out and {s.levels["excluded"] for s in out} == {"gnss"} == {nav.excluded}
+    t_ex = out[0].levels["excluded_s"]
+    batch = summary(process(imu, sensors, _cfg()), ref, {})["integrity"]["exclusions"]
+    assert [e["sensor"] for e in batch] == ["gnss"]
+    assert 120.0 < t_ex < 180.0 and abs(t_ex - batch[0]["t_s"]) < 30.0
+    assert all(s.levels["excluded"] is None for s in snaps if s.t < 120.0)
+    for s in out:
+        e = np.asarray(earth.llh_difference_enu(*s.lla, *ref.lla[np.searchsorted(ref.t,
+                                                                                  s.t)]))
+        assert abs(e[2]) < min(1.0, s.levels["vpl_m"]) and not s.levels["alert"]
 
 
 def test_the_stream_refuses_one_sensor(drive):
