@@ -20,6 +20,7 @@ from fednav.navigator.integrity import (
     q_inverse,
     separation_threshold,
 )
+from fednav.navigator.navigator import HealthWarning
 from fednav.process import process
 from fednav.process.output import solution_columns, summary
 
@@ -206,8 +207,9 @@ def test_the_stream_alerts_on_a_gnss_ramp(drive):
     from fednav.process.run import prepare
 
     imu, gnss, vel, baro, _ = drive
-    _, snaps = _stream_levels(prepare(imu, {"gnss": _ramp(gnss, 0.5), "velocity": vel,
-                                            "baro": baro}, _cfg()))
+    with pytest.warns(HealthWarning, match="'gnss' excluded"):  # (then excluded)
+        _, snaps = _stream_levels(prepare(imu, {"gnss": _ramp(gnss, 0.5), "velocity": vel,
+                                                "baro": baro}, _cfg()))
     tripped = [s for s in snaps if s.levels["tripped_s"] is not None]
     assert tripped and 120.0 < tripped[0].levels["tripped_s"] < 150.0
     assert all(s.levels["alert"] or s.levels["excluded"] == "gnss" for s in tripped)
@@ -228,7 +230,8 @@ def test_the_stream_excludes_the_faulty_sensor(drive):
 
     imu, gnss, vel, baro, ref = drive
     sensors = {"gnss": _ramp(gnss, 0.1), "velocity": vel, "baro": baro}
-    nav, snaps = _stream_levels(prepare(imu, sensors, _cfg()))
+    with pytest.warns(HealthWarning, match="'gnss' excluded at"):
+        nav, snaps = _stream_levels(prepare(imu, sensors, _cfg()))
     assert len(nav.bank) == 3 and len(nav.pairs) == 3
     out = [s for s in snaps if s.levels["excluded"] is not None]
     assert out and {s.levels["excluded"] for s in out} == {"gnss"} == {nav.excluded}

@@ -27,12 +27,13 @@ and alerts.  Cost: 1 + n navigators, and n (n - 1) / 2 more with n >= 3 tested s
 
 from __future__ import annotations
 
+import warnings
 from itertools import combinations
 
 import numpy as np
 
 from .integrity import IntegrityConfig, separation, separations, tested_sensors
-from .navigator import Navigator, Snapshot
+from .navigator import HealthWarning, Navigator, Snapshot
 
 
 class IntegrityNavigator:
@@ -115,7 +116,9 @@ class IntegrityNavigator:
         separates most: the first to try excluding), ``alert`` (a level above its alert
         limit, or a test tripped and no exclusion passed; after an exclusion, the
         excluded solution's own), ``tripped_s`` (when a test first tripped, else None),
-        ``excluded`` (the sensor excluded, else None) and ``excluded_s`` (when)."""
+        ``excluded`` (the sensor excluded, else None) and ``excluded_s`` (when; said
+        once through Python's ``warnings`` module, a
+        :class:`~fednav.navigator.navigator.HealthWarning`)."""
         s0 = self.full.solution()
         subs = {k: nav.solution() for k, nav in self.bank.items()}
         r = self._test(s0, subs)
@@ -127,6 +130,11 @@ class IntegrityNavigator:
                        if float(self._test(subs[k], self._own(k)).test_ratio[0]) <= 1.0]
             if len(passing) == 1:  # (one sub-solution consistent with its own bank)
                 self.excluded, self._excluded_s = passing[0], float(s0.t)
+                warnings.warn(f"integrity: '{self.excluded}' excluded at {s0.t:.3f} s (a "
+                              f"solution separation test tripped at {self._tripped:.3f} s; "
+                              f"the solution without it is the only one its own tests "
+                              f"pass): from now on the output is the one without it",
+                              HealthWarning, stacklevel=2)
         out, alert = s0, bool(r.alert[0] or self._tripped is not None)
         if self.excluded is not None:
             out = subs[self.excluded]
