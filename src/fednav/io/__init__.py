@@ -20,6 +20,7 @@ from .navego import (
     read_navego_visual,
 )
 from .nmea import read_nmea
+from .rinex import Ephemerides, RinexObs, read_rinex_nav, read_rinex_obs
 from .rosbag import BagRecording, read_rosbag
 from .rtklib import read_rtklib_pos
 from .sensorfile import SensorData, read_sensor_csv, write_sensor_csv
@@ -34,6 +35,7 @@ __all__ = [
     "SensorData", "read_ubx", "read_ubx_imu", "read_ubx_odometer",
     "write_sensor_csv", "UlogRecording", "read_ulog",
     "BagRecording", "read_rosbag",
+    "Ephemerides", "RinexObs", "read_rinex_nav", "read_rinex_obs",
     "GnssInsSimRecording", "read_gnss_ins_sim",
     "read_kfgins_gnss", "read_kfgins_imu", "read_kfgins_nav", "write_kfgins_nav",
 ]
