@@ -30,7 +30,7 @@ import numpy as np
 from fednav.io.data import DataError
 from fednav.navigator.health import run_health
 from fednav.process import errors_against, process
-from fednav.process.run import flown_gnss, imu_figures, prepare
+from fednav.process.run import flown_fixes, imu_figures, prepare
 from fednav.sim.corruptions import families
 from fednav.sim.drives import ADIS16405, ADIS16488, car_drive
 
@@ -90,7 +90,7 @@ def monitor_cost(d, repeats: int = 7) -> tuple[float, float]:
     (:func:`run_health` as ``process`` calls it: GNSS as flown, the forward solution and
     the IMU figures), each the least of ``repeats`` runs (a busy machine only adds)."""
     prep = prepare(d.imu, {"gnss": d.gnss}, d.system)
-    gnss, figures = flown_gnss(d.gnss, prep.system), imu_figures(d.imu, prep.system)
+    gnss, figures = flown_fixes(d.gnss, prep.system), imu_figures(d.imu, prep.system)
     runs, mons = [], []
     for _ in range(repeats):
         t0 = time.perf_counter()

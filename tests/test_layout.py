@@ -146,12 +146,12 @@ GNSS_NAMED = {
     "campaign/certify_truth.py": "the certificate's independent generator: every sensor's "
                                  "measurement written again, on purpose",
     "ins/states.py": "the gnss_markov error state (its key in filter.states)",
-    "ins/total_state.py": "the total-state navigator's GNSS model (SensorSpec.total)",
     "launch": "paper 001's own launch-frame GNSS model",
     "scenarios": "the papers' own systems",
 }
 #: fednav 0.1's names, kept for one more release (the old call layouts included).
-OLD_GNSS_NAMES = {"gnss_course", "gnss_z", "gnss_flown", "GnssConfig", "read_gnss_csv"}
+OLD_GNSS_NAMES = {"gnss_course", "gnss_z", "gnss_flown", "flown_gnss", "check_gnss_timing",
+                  "GnssConfig", "read_gnss_csv"}
 
 
 def _names_gnss(path: Path) -> list[tuple[int, str]]:

@@ -84,6 +84,17 @@ def test_fewer_than_four_satellites_give_nan():
     assert np.isnan(s.xyz[1]).all() and np.isfinite(s.xyz[[0, 2]]).all()
 
 
+def test_a_satellite_without_a_usable_ephemeris_drops_out():
+    t = 2.0e9 + np.arange(0.0, 300.0, 30.0)
+    eph = _constellation(float(t[0]))
+    rx = earth.llh_to_ecef(np.radians(35.0), np.radians(139.0), 50.0)
+    pr = _pseudoranges(eph, rx, t, 0.0)
+    seen = int(np.flatnonzero(np.isfinite(pr[0]))[0])
+    eph.elements["health"][seen] = 1.0  # (unhealthy: its record is not used)
+    s = single_point(t, pr, eph.sv, eph, l1_only=False, iono=False, tropo=False)
+    assert np.abs(s.xyz - rx).max() < 1e-3 and np.isnan(s.residuals[:, seen]).all()
+
+
 def test_the_troposphere_grows_toward_the_horizon():
     el = np.radians([90.0, 30.0, 10.0])
     d = saastamoinen(np.radians(35.0), 50.0, el)

@@ -36,6 +36,7 @@ from ..core import earth, kernels, units
 from ..core.kernels import dcm_of_sincos
 from ..ins import stops
 from ..ins.alignment import coarse_level
+from ..sensors.registry import label
 
 #: An IMU axis unchanged for this long [s] while the vehicle moves is stuck.
 STUCK_S = 2.0
@@ -680,10 +681,12 @@ def offset_check(solution, imu, fixes) -> list[str]:
     tau, s = est
     if abs(tau) > OFFSET_LIMIT_S and abs(tau) > 5.0 * s:
         when = "after" if tau > 0 else "before"
-        return [f"{fixes.source}: the GNSS velocity's changes match the IMU's best with the "
-                f"fixes stamped {abs(tau):.2f} s {when} their time of validity (+-{s:.2f} s, "
-                f"by correlation): a GNSS-IMU time offset (sensors.gnss.time_offset_s: "
-                f"{-tau:.2f} corrects it), or a velocity latency"]
+        who = label(fixes.name)
+        return [f"{fixes.source}: the {who} velocity's changes match the IMU's best with "
+                f"the fixes stamped {abs(tau):.2f} s {when} their time of validity "
+                f"(+-{s:.2f} s, by correlation): a {who}-IMU time offset "
+                f"(sensors.{fixes.name}.time_offset_s: {-tau:.2f} corrects it), or a "
+                f"velocity latency"]
     return []
 
 
@@ -716,7 +719,8 @@ def fix_scale_check(fixes) -> list[str]:
     for a in range(3):
         slope, sig = float(slopes[a]), float(sigmas[a])
         if told[a] and abs(slope - 1.0) > SCALE_LIMIT and abs(slope - 1.0) > 5.0 * sig:
-            out.append(f"{fixes.source}: the GNSS {names[a]} changes {slope:.3g} times as "
+            out.append(f"{fixes.source}: the {label(fixes.name)} {names[a]} changes "
+                       f"{slope:.3g} times as "
                        f"much as its velocity's integral says (+-{sig:.2g}): a {names[a]} "
                        f"in another unit (km, feet, radians), or that velocity axis in "
                        f"another unit or sign")

@@ -201,7 +201,8 @@ def check_mounting(imu: ImuData, fixes: FixData | None = None) -> list[str]:
             f"axis ({angle:.0f} deg from up), so the IMU's axes are not mounted as declared "
             f"(imu.mounting: {name}); imu.mounting: {fit} fits the data"
             + ("" if forward_known else f" (its forward axis is a guess: the "
-                                        f"{registry.label(fixes.name)} speed did not vary "
+                                        f"{registry.label(getattr(fixes, 'name', None))} "
+                                        f"speed did not vary "
                                         f"enough to tell)"))
     r = _track_correlation(imu, fixes, np.eye(3))
     if r is not None and abs(r[0]) > FORWARD_FIT and abs(r[1]) < FORWARD_DECLARED:

@@ -89,6 +89,8 @@ from .initial import (  # noqa: F401  (fednav.process.run's names of 0.2)
 #: The processing config of fednav 0.1 is a system description now (one schema); the
 #: old name is kept for one release.
 ProcessConfig = System
+#: fednav.process.run's names of 0.2 (the fixes were the GNSS's by name), kept.
+check_gnss_timing, gnss_course = check_fix_timing, fix_course
 
 
 def old_layout(*old: str):
@@ -881,3 +883,5 @@ def fix_z(fixes: FixData, i: int) -> np.ndarray:
     return np.concatenate((fixes.lla[i], fixes.vel[i]))
 
 
+#: fednav.process.run's names of 0.2, kept.
+gnss_z, flown_gnss = fix_z, flown_fixes

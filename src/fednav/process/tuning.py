@@ -399,7 +399,8 @@ def fixed_keys(names) -> set[str]:
         if k not in alias:
             raise ConfigError(f"--fix {n}: not a figure tune estimates; give an imu: key "
                               f"(e.g. gyro_arw_deg_sqrt_h, accel_markov_mps2; 'imu' for all), "
-                              f"{', '.join(keys)}, or {' or '.join(map(repr, whole))}")
+                              f"{', '.join(keys)}, or a sensor's name for all of its "
+                              f"sigmas ({', '.join(map(repr, whole))})")
         old = "sensors." + k.removeprefix("sensors.")
         if old in renamed:
             warnings.warn(f"--fix {n}: the key is now {renamed[old]} (read for one "
@@ -475,7 +476,8 @@ def tune(imu: ImuData, sensors: dict, base: System | None = None, matching_passe
     base = base or System()
     recs = recordings(sensors, base)
     fx = registry.fix_sensor(recs)
-    vn = next((n for n in recs if n != fx and registry.spec(n).tuned), None)
+    vn = next((n for n in recs if registry.spec(n).tuned and not registry.spec(n).fixes),
+              None)
     fixes, velocity = recs.get(fx), recs.get(vn)
     if fixes is None or fixes.lla is None:
         who = registry.fix_sensor()

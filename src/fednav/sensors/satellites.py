@@ -241,6 +241,8 @@ def single_point(t, pr, sv, eph, *, l1_only: bool = True, iono: bool = True,
         w = np.where(np.isfinite(model), w, 0.0)
         H = np.concatenate([-los / np.where(rho > 0, rho, 1.0)[..., None],
                             np.ones((N, M, 1))], axis=-1)
+        # (a satellite without a usable ephemeris is NaN: zero rows, not NaN, in the sums)
+        H = np.where((w > 0)[..., None], H, 0.0)
         v = np.where(w > 0, pr - model, 0.0)
         Hw = H * w[..., None]
         A = np.einsum("nmi,nmj->nij", Hw, H) + 1e-9 * np.eye(4)
