@@ -103,10 +103,10 @@ class IntegrityNavigator:
                        for k in names])
         return separation(np.array([s0.t]), d, sig0, sk, names, self.config)
 
-    def _own(self, k: str) -> dict[str, Snapshot]:
-        """The snapshots of ``k``'s own bank: the pair navigators without ``k`` and one
-        more tested sensor."""
-        return {j: self.pairs[frozenset((k, j))].solution() for j in self.sensors if j != k}
+    def _own(self, k: str, pairs: dict) -> dict[str, Snapshot]:
+        """The snapshots of ``k``'s own bank among the pair navigators' snapshots
+        ``pairs``: those without ``k`` and one more tested sensor."""
+        return {j: pairs[frozenset((k, j))] for j in self.sensors if j != k}
 
     def solution(self) -> Snapshot:
         """The output :meth:`Navigator.solution` — the all-sensor one, or after an
@@ -125,9 +125,11 @@ class IntegrityNavigator:
         ratio = float(r.test_ratio[0])
         if ratio > 1.0 and self._tripped is None:
             self._tripped = float(s0.t)
+        pairs = ({} if self._tripped is None else  # (each pair's snapshot once)
+                 {p: nav.solution() for p, nav in self.pairs.items()})
         if self._tripped is not None and self.excluded is None and self.pairs:
-            passing = [k for k in self.sensors
-                       if float(self._test(subs[k], self._own(k)).test_ratio[0]) <= 1.0]
+            passing = [k for k in self.sensors if float(
+                self._test(subs[k], self._own(k, pairs)).test_ratio[0]) <= 1.0]
             if len(passing) == 1:  # (one sub-solution consistent with its own bank)
                 self.excluded, self._excluded_s = passing[0], float(s0.t)
                 warnings.warn(f"integrity: '{self.excluded}' excluded at {s0.t:.3f} s (a "
@@ -138,7 +140,7 @@ class IntegrityNavigator:
         out, alert = s0, bool(r.alert[0] or self._tripped is not None)
         if self.excluded is not None:
             out = subs[self.excluded]
-            r = self._test(out, self._own(self.excluded))
+            r = self._test(out, self._own(self.excluded, pairs))
             ratio = float(r.test_ratio[0])
             if ratio > 1.0 and self._own_tripped is None:
                 self._own_tripped = float(out.t)

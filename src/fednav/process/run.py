@@ -409,17 +409,14 @@ def _section(data: Series, cfg: System):
     said, and what the section leaves to the data taken from them
     (:meth:`~fednav.sensors.spec.SensorConfig.for_recording`)."""
     spec = registry.spec(data.name)
-    sc = cfg.sensors[data.name] if data.name in cfg.sensors else None
-    if sc is None:
-        try:
-            sc = spec.config()
-        except ValidationError:
-            if data.sigma is None:
-                raise DataError(f"{data.source}: the system description needs a "
-                                f"'sensors.{data.name}' section (its noise) to use this "
-                                f"file, or the file each row's 1-sigma") from None
-            # each row gives its noise: the section's other settings at their defaults
-            sc = spec.config.model_construct()
+    sc = own_section(data.name, cfg)
+    if sc is None:  # (the section's defaults do not suffice: it needs its noise)
+        if data.sigma is None:
+            raise DataError(f"{data.source}: the system description needs a "
+                            f"'sensors.{data.name}' section (its noise) to use this "
+                            f"file, or the file each row's 1-sigma")
+        # each row gives its noise: the section's other settings at their defaults
+        sc = spec.config.model_construct()
     for j in data.absent:  # a column the file leaves out: the section says so
         if spec.columns[j].absent:
             sc = sc.model_copy(update=spec.columns[j].absent)
