@@ -303,7 +303,7 @@ def test_scale_factors_are_gauss_markov_as_kfgins_models_them(tmp_path, drive):
     cfg = write_folder(tmp_path / "d", drive, seconds=20.0)
     system = System.model_validate(translate(cfg).system)
     layout = state_layout(system)
-    blocks = {name: (sigma, tau) for name, sigma, tau in layout.blocks}
+    blocks = {name: (sigma, tau) for name, sigma, tau, _ in layout.blocks}
     assert blocks["gyro_scale"] == ((1e-3,) * 3, 3600.0)
     assert blocks["accel_scale"] == ((1e-3,) * 3, 3600.0)
     text = yaml.safe_load(cfg.read_text())
@@ -312,6 +312,6 @@ def test_scale_factors_are_gauss_markov_as_kfgins_models_them(tmp_path, drive):
     cfg.write_text(yaml.safe_dump(text))
     tr = translate(cfg)
     layout = state_layout(System.model_validate(tr.system))
-    blocks = {name: (sigma, tau) for name, sigma, tau in layout.blocks}
+    blocks = {name: (sigma, tau) for name, sigma, tau, _ in layout.blocks}
     assert blocks["gyro_scale"] == ((5e-4,) * 3, float("inf"))
     assert tr.fate("imunoise.gsstd").detail.startswith("zero: the gyro scale factors")

@@ -161,6 +161,14 @@ SETUP: dict[str, SensorSetup] = {
     "nhc": SensorSetup({"sigma_mps": [0.05, 0.05]}, {"vel_ru": (0.05, 0.05)}, ("land",),
                        (0.1, 0.2)),
     "zaru": SensorSetup({"sigma_radps": ZARU_SIGMA}, {}, ("land",), (0.1,), True, False),
+    # (the clock's densities: a TCXO's, fednav.sensors.gnss_raw.CLOCKS, as S_f, S_g)
+    "gnss_raw": SensorSetup({"sigma_pseudorange_m": 3.0, "sigma_range_rate_mps": 0.1,
+                             "elevation_mask_deg": 0.0, "clock_bias_sigma_m": 1000.0,
+                             "clock_drift_sigma_mps": 10.0},
+                            {"pr": 3.0, "rr": 0.1, "clock0": (1000.0, 10.0),
+                             "clock": (1e-19 * 299792458.0**2,
+                                       4e-20 * math.pi**2 * 299792458.0**2)},
+                            ("land", "air")),
     "airdata": SensorSetup({"sigma_airspeed_mps": 0.3, "wind_sigma_mps": 0.3},
                            {"airspeed": 0.3, "wind": 0.3}, ("air",), latency=False),
 }
@@ -541,9 +549,12 @@ def _nis(mode: Mode, system, res) -> dict:
             sel = np.arange(len(r)) if rows is None else np.asarray(rows)
             v = r[sel]
             x = float(v @ np.linalg.solve(S[np.ix_(sel, sel)], v))
-            acc = out.setdefault(f"{rec.local}.{grp}", [0.0, 0, len(sel)])
+            # (a model that is not rows may have as many rows as its measurement holds,
+            # raw GNSS satellites: counted per degree of freedom)
+            acc = out.setdefault(f"{rec.local}.{grp}", [0.0, 0, 1 if rows is None
+                                                        else len(sel)])
             acc[0] += x
-            acc[1] += 1
+            acc[1] += len(sel) if rows is None else 1
     if mode.constraint is not None:  # the constraint's updates, in the fault log
         # (logged scaled to the whole measurement: FederatedFilter.update's share)
         dof = 2

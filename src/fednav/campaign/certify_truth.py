@@ -546,4 +546,61 @@ def measure(name: str, truth: Truth, idx, lever, M, sigma: dict,
         n = noise(sigma["airspeed"], sigma["wind"], sigma["wind"])
         return np.column_stack([np.linalg.norm(air, axis=1) + n[:, 0],
                                 truth.wind[idx, :2] + n[:, 1:]])
+    if name == "gnss_raw":
+        return raw_gnss(truth, idx, lever, sigma, rng)
     raise ValueError(f"certificate: no measurement equation for sensor '{name}'")
+
+
+#: The raw GNSS sky of the certificate: satellites at these azimuths and elevations
+#: [deg] seen from the trajectory's start, 20 200 km away, each moving at 3 km/s along
+#: its own fixed direction (straight lines: the model takes each satellite's position and
+#: velocity from the measurement, so any motion serves; none of fednav's orbit code).
+RAW_SKY_DEG = ((10.0, 75.0), (70.0, 35.0), (135.0, 20.0), (190.0, 50.0), (250.0, 15.0),
+               (300.0, 40.0), (340.0, 25.0), (100.0, 60.0))
+RAW_FIELDS = 11  # number, x, y, z, vx, vy, vz, pseudorange, range rate, their 1-sigma
+RAW_SLOTS = 14
+
+
+def raw_gnss(truth: Truth, idx, lever, sigma: dict, rng) -> np.ndarray:
+    """fednav's raw GNSS layout (:mod:`fednav.sensors.gnss_raw`: slots of number, ECEF
+    position and velocity, pseudorange, range rate, 1-sigma of both; NaN slots after)
+    from the truth at the antenna ``lever``: ``|r_s - r| + cb`` and ``u . (v_s - v) +
+    cd`` with the receiver clock's two-state random walk (densities ``sigma["clock"]``
+    = (S_f, S_g); start drawn from ``sigma["clock0"]`` (bias [m], drift [m/s])) and
+    white noise ``sigma["pr"]`` [m], ``sigma["rr"]`` [m/s]."""
+    pt = truth.point(lever)
+    lla, vel = pt["lla"][idx], pt["vel"][idx]
+    t = truth.t[idx]
+    r = geodetic_to_ecef(lla)
+    v = np.einsum("nij,nj->ni", c_n_e(lla[:, 0], lla[:, 1]), vel)
+    r0 = geodetic_to_ecef(truth.lla[:1])[0]
+    C0 = c_n_e(truth.lla[0, 0], truth.lla[0, 1])
+    az, el = np.radians(np.array(RAW_SKY_DEG)).T
+    los = np.column_stack([np.sin(az) * np.cos(el), np.cos(az) * np.cos(el), np.sin(el)])
+    p0 = r0 + 2.02e7 * los @ C0.T
+    along = np.cross(los, [0.0, 0.0, 1.0]) + 0.3 * np.cross(los, [1.0, 0.0, 0.0])
+    vs = 3000.0 * (along / np.linalg.norm(along, axis=1)[:, None]) @ C0.T
+    sf, sg = sigma["clock"]
+    x = rng.standard_normal(2) * np.asarray(sigma["clock0"], dtype=float)
+    clk = np.empty((len(t), 2))
+    for i in range(len(t)):
+        d = t[i] - (t[i - 1] if i else t[0])
+        if d > 0.0:
+            Q = np.array([[sf * d + sg * d**3 / 3, sg * d**2 / 2], [sg * d**2 / 2, sg * d]])
+            x = np.array([x[0] + d * x[1], x[1]]) + np.linalg.cholesky(Q) @ \
+                rng.standard_normal(2)
+        clk[i] = x
+    z = np.full((len(t), RAW_SLOTS, RAW_FIELDS), np.nan)
+    n = len(RAW_SKY_DEG)
+    for i in range(len(t)):
+        ps = p0 + vs * (t[i] - truth.t[0])
+        d = ps - r[i]
+        rho = np.linalg.norm(d, axis=1)
+        u = d / rho[:, None]
+        z[i, :n, 0] = np.arange(1, n + 1)
+        z[i, :n, 1:4], z[i, :n, 4:7] = ps, vs
+        z[i, :n, 7] = rho + clk[i, 0] + rng.standard_normal(n) * sigma["pr"]
+        z[i, :n, 8] = (np.einsum("ij,ij->i", u, vs - v[i]) + clk[i, 1]
+                       + rng.standard_normal(n) * sigma["rr"])
+        z[i, :n, 9], z[i, :n, 10] = sigma["pr"], sigma["rr"]
+    return z.reshape(len(t), -1)

@@ -388,6 +388,9 @@ class FederatedFilter:
         self._thresholds: dict[tuple, float] = {}
         #: One entry per local measurement: t, local, statistic, dof, threshold, isolated.
         self.log: list[tuple] = []
+        #: One entry per unit of a measurement left out (:meth:`_exclude`): t, local,
+        #: unit (a satellite's number), the statistic without it.
+        self.excluded: list[tuple] = []
         if reset:
             for k, f in self.filters.items():
                 f.x = self.x.copy()
@@ -476,6 +479,9 @@ class FederatedFilter:
         # passes after the test (policy.fdi_gate, fdi_passes: the engine's rules too)
         gate = policy.fdi_gate(thr, self.passes[local], self.fdi_recovery)
         inn = f.update(y, model, nav, R, gate=None if math.isinf(gate) else gate * share)
+        if not inn.accepted and getattr(model, "groups", None) is not None:
+            inn = self._exclude(local, f, y, model, nav, R, t, inn)
+            dof, thr = len(inn.r), self.threshold(len(inn.r), local)
         self.passes[local] = policy.fdi_passes(thr, gate, self.passes[local],
                                                 self.fdi_recovery, inn.nis / share)
         if readmit and self.lockout.on:
@@ -485,6 +491,40 @@ class FederatedFilter:
         if self.q_step and inn.accepted:
             self.qlog[local] = policy.adapt_qlog(self.qlog[local], self.q_step, nis, dof,
                                                  self.q_logmax)
+        return inn
+
+    def _exclude(self, local, f, y, model, nav, R, t, inn):
+        """A measurement of several units (a raw GNSS epoch's satellites: ``model.groups``,
+        the unit of each row) that failed its test, with one unit left out: of the units
+        whose removal passes the test of the rows left (the innovation's own ``S``
+        restricted to them — the same prior, no second prediction), the one that leaves
+        the smallest statistic, and the update made with the rows left (logged in
+        :attr:`excluded`); ``inn`` itself when no single unit explains the failure or the
+        measurement is one unit.  Fault detection and exclusion of one satellite, not the
+        receiver (RAIM's leave-one-out, on the filter's predicted innovation)."""
+        groups = np.asarray(model.groups)
+        units = np.unique(groups)
+        if len(units) < 2:
+            return inn
+        r, S = np.asarray(inn.r, dtype=float), np.asarray(inn.S, dtype=float)
+        best = None
+        for u in units:
+            keep = groups != u
+            rk = r[keep]
+            stat = float(rk @ np.linalg.solve(S[np.ix_(keep, keep)], rk))
+            if stat <= self.threshold(int(keep.sum()), local) and (
+                    best is None or stat < best[0]):
+                best = (stat, u, keep)
+        if best is None:
+            return inn
+        stat, u, keep = best
+        rows = np.flatnonzero(keep)
+        new = f.update(np.asarray(y, dtype=float)[rows], model.subset(keep), nav,
+                       np.asarray(R, dtype=float)[np.ix_(rows, rows)],
+                       gate=self.threshold(len(rows), local))
+        if new.accepted:
+            self.excluded.append((t, local, int(u), stat))
+            return new
         return inn
 
     def _readmit(self, local, f, y, model, nav, R, t, thr, inn):
@@ -555,7 +595,8 @@ class FederatedFilter:
         :meth:`restore`); the log keeps its entries up to this point."""
         return ([(f.x.copy(), kept_cov(f).copy(), f.step) for f in self.filters.values()],
                 self.x.copy(), self.P.copy(), dict(self.beta), dict(self.passes),
-                len(self.log), dict(self.qlog), self.lockout.snapshot())
+                (len(self.log), len(self.excluded)), dict(self.qlog),
+                self.lockout.snapshot())
 
     def restore(self, snap: tuple) -> None:
         """Return to a :meth:`snapshot` (log entries made since are dropped)."""
@@ -567,7 +608,8 @@ class FederatedFilter:
             _set_cov(f, P.copy())
         self.x, self.P = self.x.copy(), self.P.copy()
         self.beta, self.passes = dict(beta), dict(passes)
-        del self.log[n_log:]
+        del self.log[n_log[0]:]
+        del self.excluded[n_log[1]:]
 
     def feedback(self) -> np.ndarray:
         """Hand the fused error estimate to the navigation system and zero it in the filters.

@@ -279,8 +279,11 @@ def _rates(x, E, p, C0, k0, cs, out):
             out[9 + j, i] = 0.0
             out[12 + j, i] = -itg * x[12 + j, i]
             out[15 + j, i] = -ita * x[15 + j, i]
-        for j in range(18, n):  # the optional states: Gauss-Markov or constant
+        for j in range(18, n):  # the optional states: Gauss-Markov, constant or driven
             out[j, i] = -p[23 + j - 18] * x[j, i]
+            drv = int(p[23 + n - 18 + j - 18])
+            if drv >= 0:
+                out[j, i] += x[drv, i]
 
 
 @numba.njit(cache=True)
@@ -331,7 +334,7 @@ def propagate_points(X, T, nsub, p, C0, scale):
 @numba.njit(cache=True)
 def _F(p, C):
     """Continuous linear error dynamics F (SI) at the nominal ``p`` (see ``_rates``)."""
-    m = p.shape[0] - 23  # optional states
+    m = (p.shape[0] - 23) // 2  # optional states (1/tau, driver column each)
     lat, h = p[0], p[1]
     ve, vn, vu = p[2], p[3], p[4]
     fe, fn, fu = p[5], p[6], p[7]
@@ -401,6 +404,9 @@ def _F(p, C):
             F[3:6, isa + j] = C[:, j] * p[18 + j]
     for k in range(m):
         F[18 + k, 18 + k] = -p[23 + k]
+        drv = int(p[23 + m + k])
+        if drv >= 0:
+            F[18 + k, drv] = 1.0
     return F
 
 
@@ -410,7 +416,7 @@ def _Qc(p, C, q):
     baro noise density, gyro bias random walk, accel bias random walk, then the layout's
     :meth:`~fednav.ins.states.StateLayout.model_vector`]."""
     k1, k2, itg, ita = p[10], p[11], p[12], p[13]
-    m = (q.shape[0] - 9) // 2
+    m = (q.shape[0] - 9) // 3
     Q = np.zeros((18 + m, 18 + m))
     Q[0:3, 0:3] = q[0] ** 2 * (C @ C.T)
     Q[3:6, 3:6] = q[1] ** 2 * (C @ C.T)
@@ -603,9 +609,10 @@ def interval_process(s0, s1, dv_sum, T: float, noise: ImuNoiseModel, baro_gains=
 @numba.njit(cache=True)
 def _layout_part(noise):
     """The part of the noise vector (:func:`model_constants`) the nominal point carries:
-    the optional scale-factor blocks' starts and every optional state's 1/tau."""
-    m = (noise.shape[0] - 9) // 2
-    return noise[7:9 + m].copy()
+    the optional scale-factor blocks' starts, every optional state's 1/tau and driver
+    column."""
+    m = (noise.shape[0] - 9) // 3
+    return np.concatenate((noise[7:9 + m], noise[9 + 2 * m:]))
 
 
 @numba.njit(cache=True)

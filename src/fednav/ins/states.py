@@ -8,6 +8,8 @@ A system description selects them (``filter.states``); each is a block of three:
                                    time (first-order Gauss–Markov), ENU
     velocity_markov  vbE vbN vbU   the velocity sensor's error (visual  [m/s]
                                    odometry, DVL) likewise, ENU
+    clock         cb cd            receiver clock bias and drift, as    [m, m/s]
+                                   range (c dt) and range rate
 
 in this order after state 17 when present (KF-GINS's 21-state model is the 18 with the
 two scale-factor blocks).  The bracket is the filter unit (see
@@ -26,7 +28,15 @@ it does the biases; ``b_hat`` follows its mean dynamics (decays by ``exp(-T / ta
 between epochs.
 
 Each block is a first-order Gauss–Markov process of stationary 1-sigma ``sigma`` (also
-its P0) and correlation time ``tau`` (``inf``: a random constant, no process noise).
+its P0) and correlation time ``tau`` (``inf``: a random constant, no process noise), or
+given its own white-noise densities ``qc`` (then a random walk when ``tau`` is ``inf``).
+A state may integrate another of its block (:attr:`Block.drives`): the receiver clock's
+bias is the integral of its drift, ``d(cb)/dt = cd + w_b``, ``d(cd)/dt = w_d``, whose
+densities are those of the two-state clock model (Brown and Hwang, ch. 9: ``S_f = h0 / 2
+c^2``, ``S_g = 2 pi^2 h_-2 c^2``); its totals then follow the mean dynamics
+``cb += T cd`` between epochs (:meth:`StateLayout.transition`).  A sensor whose
+measurement needs a block names it (its model's ``own_block``, the raw GNSS's clock) and
+the block joins the layout whenever the sensor aids.
 """
 
 from __future__ import annotations
@@ -43,11 +53,14 @@ class Block(NamedTuple):
     ``error_states``: name + suffix, values in filter units), its ``axes`` and its unit
     ``label``."""
 
-    states: tuple[str, str, str]
+    states: tuple[str, ...]
     unit: float
     suffix: str
     axes: str
     label: str
+    #: pairs (i, j) of the block's states: state i's rate includes state j (the clock's
+    #: bias integrates its drift)
+    drives: tuple = ()
 
 
 #: The optional blocks, in state order.  A sensor whose error a block models names it
@@ -57,22 +70,27 @@ BLOCKS = {"gyro_scale": Block(("sg_x", "sg_y", "sg_z"), 1e-6, "ppm", "x/y/z", "p
           "gnss_markov": Block(("gnss_bE", "gnss_bN", "gnss_bU"), 1.0, "enu_m", "E/N/U",
                                "m"),
           "velocity_markov": Block(("vel_bE", "vel_bN", "vel_bU"), 1.0, "enu_mps", "E/N/U",
-                                   "m/s")}
+                                   "m/s"),
+          "clock": Block(("clk_b", "clk_d"), 1.0, "m_mps", "bias/drift", "m, m/s",
+                         drives=((0, 1),))}
 #: The 18 core states.
 N_CORE = 18
 
 
 @dataclass(frozen=True)
 class StateLayout:
-    """The error state's optional blocks: ``blocks`` = ((name, sigma (3,) SI, tau [s]),
-    ...) in :data:`BLOCKS` order.  The empty layout is the 18-state model."""
+    """The error state's optional blocks: ``blocks`` = ((name, sigma SI, tau [s], qc
+    SI), ...) in :data:`BLOCKS` order, one sigma and one white-noise density ``qc`` per
+    state of the block.  The empty layout is the 18-state model."""
 
     blocks: tuple = ()
 
     @classmethod
     def of(cls, blocks: dict) -> StateLayout:
-        """From ``{name: (sigma, tau)}`` (sigma one value or per axis, SI; tau [s], inf
-        for a random constant), ordered as :data:`BLOCKS`."""
+        """From ``{name: (sigma, tau)}`` or ``{name: (sigma, tau, qc)}`` (sigma and qc one
+        value or per state, SI; tau [s], inf for a random constant or, with ``qc``, a
+        random walk; qc default: the Gauss–Markov process's ``2 sigma^2 / tau``), ordered
+        as :data:`BLOCKS`."""
         for k in blocks:
             if k not in BLOCKS:
                 raise ValueError(f"unknown optional error state '{k}'; known: "
@@ -80,11 +98,17 @@ class StateLayout:
         out = []
         for k in BLOCKS:
             if k in blocks:
-                sigma, tau = blocks[k]
-                sigma = tuple(float(s) for s in np.broadcast_to(np.asarray(sigma, float), 3))
-                if min(sigma) < 0.0 or not float(tau) > 0.0:
+                sigma, tau, *qc = blocks[k]
+                m = len(BLOCKS[k].states)
+                sigma = tuple(float(s) for s in np.broadcast_to(np.asarray(sigma, float), m))
+                tau = float(tau)
+                if min(sigma) < 0.0 or not tau > 0.0:
                     raise ValueError(f"optional error state '{k}': sigma >= 0 and tau > 0")
-                out.append((k, sigma, float(tau)))
+                qc = (np.broadcast_to(np.asarray(qc[0], float), m) if qc else
+                      [0.0 if np.isinf(tau) else 2.0 * s * s / tau for s in sigma])
+                if min(qc) < 0.0:
+                    raise ValueError(f"optional error state '{k}': qc >= 0")
+                out.append((k, sigma, tau, tuple(float(q) for q in qc)))
         return cls(tuple(out))
 
     @property
@@ -95,14 +119,20 @@ class StateLayout:
     @property
     def n(self) -> int:
         """Number of error states."""
-        return N_CORE + 3 * len(self.blocks)
+        return N_CORE + sum(len(b[1]) for b in self.blocks)
 
     def start(self, name: str) -> int:
         """Column of block ``name``'s first state; -1 when it is not in the layout."""
-        for i, b in enumerate(self.blocks):
+        i = N_CORE
+        for b in self.blocks:
             if b[0] == name:
-                return N_CORE + 3 * i
+                return i
+            i += len(b[1])
         return -1
+
+    def size(self, name: str) -> int:
+        """How many states block ``name`` has."""
+        return len(BLOCKS[name].states)
 
     def state_names(self, core: tuple) -> tuple[str, ...]:
         """``core`` (the 18 names) and every optional state's."""
@@ -110,19 +140,36 @@ class StateLayout:
 
     def scale(self, core: np.ndarray) -> np.ndarray:
         """SI value of one filter unit per state (``core``: the 18 states')."""
-        return np.r_[core, [BLOCKS[b[0]].unit for b in self.blocks for _ in range(3)]]
+        return np.r_[core, [BLOCKS[b[0]].unit for b in self.blocks for _ in b[1]]]
 
     def _per_state(self, f) -> np.ndarray:
         return np.array([f(s, b[2]) for b in self.blocks for s in b[1]], dtype=float)
 
+    def drivers(self) -> np.ndarray:
+        """Per optional state, the column of the state its rate integrates (-1: none;
+        :attr:`Block.drives`)."""
+        out = []
+        for b in self.blocks:
+            i0, drv = self.start(b[0]), [-1] * len(b[1])
+            for i, j in BLOCKS[b[0]].drives:
+                drv[i] = i0 + j
+            out += drv
+        return np.array(out, dtype=float)
+
+    @property
+    def coupled(self) -> bool:
+        """Whether a state integrates another (:meth:`drivers`): the totals then follow
+        :meth:`transition`, not :meth:`decay` alone."""
+        return bool((self.drivers() >= 0).any())
+
     def model_vector(self) -> np.ndarray:
         """What the compiled model reads of the layout: ``[start of gyro_scale, start of
-        accel_scale, 1/tau per optional state..., Qc diagonal per optional state...]``
-        (starts -1 when absent; SI)."""
+        accel_scale, 1/tau per optional state..., Qc diagonal per optional state...,
+        driver column per optional state...]`` (starts and drivers -1 when absent; SI)."""
         itau = self._per_state(lambda s, t: 0.0 if np.isinf(t) else 1.0 / t)
-        qc = self._per_state(lambda s, t: 0.0 if np.isinf(t) else 2.0 * s * s / t)
+        qc = np.array([q for b in self.blocks for q in b[3]], dtype=float)
         return np.r_[float(self.start("gyro_scale")), float(self.start("accel_scale")),
-                     itau, qc]
+                     itau, qc, self.drivers()]
 
     def sigma(self) -> np.ndarray:
         """1-sigma of every optional state (SI): their P0."""
@@ -133,6 +180,19 @@ class StateLayout:
         for random constants): how the totals kept beside the INS follow their mean."""
         itau = self._per_state(lambda s, t: 0.0 if np.isinf(t) else 1.0 / t)
         return np.r_[np.ones(N_CORE), np.exp(-T * itau)]
+
+    def transition(self, T: float) -> np.ndarray:
+        """The optional states' mean transition over ``T`` [s], ``expm(F_opt T)`` (m, m):
+        :meth:`decay`'s diagonal, and a driven state's integral of its driver (the clock's
+        ``cb += T cd``)."""
+        import scipy.linalg
+
+        m = self.n - N_CORE
+        F = np.diag(-self._per_state(lambda s, t: 0.0 if np.isinf(t) else 1.0 / t))
+        for i, j in enumerate(self.drivers().astype(int)):
+            if j >= 0:
+                F[i, j - N_CORE] = 1.0
+        return scipy.linalg.expm(F * T) if m else np.zeros((0, 0))
 
 
 #: The 18-state model.
@@ -150,7 +210,7 @@ def with_optional(P0, layout: StateLayout) -> np.ndarray:
     if P0.shape != (N_CORE, N_CORE):
         raise ValueError(f"P0 is {P0.shape[0]}x{P0.shape[1]}; the error state has {n} "
                          f"states ({N_CORE} and {', '.join(layout.names) or 'no others'})")
-    units = np.array([BLOCKS[b[0]].unit for b in layout.blocks for _ in range(3)])
+    units = np.array([BLOCKS[b[0]].unit for b in layout.blocks for _ in b[1]])
     out = np.zeros((n, n))
     out[:N_CORE, :N_CORE] = P0
     sd = np.maximum(layout.sigma() / units, 1e-6)

@@ -53,6 +53,7 @@ from ..ins.error_model import interval_model, propagate_points, white_qd
 from ..ins.strapdown import compensate, correct_state, mechanize
 from ..sensors.measurement import RowModel, bias_columns, row_jacobian, row_predict, row_residual
 from .record import Growing, InnovationRecord, Record
+from .system import state_layout
 
 #: Filter families the engine runs: the filter registry's names -> (time update,
 #: measurement update) 0 Kalman (linear covariance, nonlinear mean) / 1 unscented.
@@ -88,6 +89,8 @@ def why_not_compiled(system, sensors: list, specs: dict) -> str | None:
         return "federation without reset"
     if system.constraint is not None:
         return f"the {system.constraint} constraint"
+    if state_layout(system).coupled:
+        return "optional states that integrate one another (the receiver clock)"
     types = {f.type_of(a) for a in sensors} | ({f.type} if f.master else set())
     for t in sorted(types):
         if t not in FAMILIES:

@@ -38,7 +38,7 @@ import scipy.linalg
 from ..core import earth
 from ..filters import FederatedFilter, FilterError, LinearModel, make_filter, policy
 from ..ins import error_model as em
-from ..ins.states import CORE, StateLayout
+from ..ins.states import CORE, N_CORE, StateLayout
 from ..ins.strapdown import STATE_LLA, STATE_Q, STATE_VEL, compensate, quat_to_dcm_nb
 from ..sensors import NavSnapshot, StackedModel, WindConstraint
 from ..sensors.delays import InsIncrements, curve_fit_value
@@ -168,7 +168,7 @@ class ErrorStateCore:
         self.layout, self.n = layout, layout.n
         self.scale = layout.scale(em.SCALE)
         self.xa = np.zeros(self.n)
-        self._decay = layout.decay(self.T)
+        self._transition = layout.transition(self.T)
         self._models = {}
 
     @property
@@ -194,7 +194,8 @@ class ErrorStateCore:
         proc = em.interval_process(s0, self.ins.state, dvc.sum(axis=0), self.T, self.noise,
                                    self.baro_gains, self.baro_q, self.nsub,
                                    dth.sum(axis=0), self.layout)
-        self.xa *= self._decay
+        if len(self._transition):  # the optional totals follow their mean dynamics
+            self.xa[N_CORE:] = self._transition @ self.xa[N_CORE:]
         fed.predict(proc)
         rows = None
         if record:
@@ -210,6 +211,9 @@ class ErrorStateCore:
         """(residual, model, nav, R) of measurement ``i`` of sensor ``m`` against ``nav``
         (the model over every error state: :class:`~fednav.sensors.measurement.
         BiasedModel` when the layout has optional states)."""
+        if hasattr(m.model, "bind"):  # rows that depend on the measurement (gnss_raw)
+            model = m.model.bind(m.z[i], nav, self.layout, self.xa)
+            return model.residual(nav, m.z[i]), model, nav, model.R
         model = self._models.get(m.name)
         if model is None:
             model = self._models[m.name] = self.model_of(m.model)
@@ -401,17 +405,22 @@ class PythonLoop:
                 for m, i in todo:
                     nav_i, _, _ = self._nav_at(m, i, k, rows, omega)
                     y, model, _, R = core.measure(m, i, nav_i)
+                    if not len(y):
+                        continue  # (no satellite above the mask)
                     if m.how == "curve_fit":
                         y = model.residual(nav_i, self._z(m, i, k))
                     ys.append(y)
                     models.append(model)
                     Rs.append(R)
-                fed.update("central", np.concatenate(ys), StackedModel(models), nav,
-                           scipy.linalg.block_diag(*Rs), t=tk)
+                if ys:
+                    fed.update("central", np.concatenate(ys), StackedModel(models), nav,
+                               scipy.linalg.block_diag(*Rs), t=tk)
             else:
                 for m, i in todo:
                     nav_r, nav_h, t = self._nav_at(m, i, k, rows, omega)
                     y, model, nav, R = core.measure(m, i, nav_r)
+                    if not len(y):
+                        continue  # (no satellite above the mask)
                     nav = nav_h if nav is not None else None
                     if m.how == "curve_fit":
                         y = model.residual(nav_r, self._z(m, i, k))

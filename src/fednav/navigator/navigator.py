@@ -473,6 +473,10 @@ class NavResult:
     constraints : tuple of str
         The aiding sensors [-] whose sigma is a softness (ZUPT, NHC, ZARU): judged on
         the high side of the NIS band only.
+    excluded : list of tuple
+        One per unit of a measurement that fault detection left out while the rest was
+        used (a raw GNSS epoch's faulty satellite): (time [s], local filter, unit — the
+        satellite's number —, the chi-square statistic of the rows kept).
     """
 
     t: np.ndarray
@@ -494,6 +498,7 @@ class NavResult:
     optional: dict = field(default_factory=dict)
     row_kinds: dict = field(default_factory=dict)
     constraints: tuple = ()
+    excluded: list = field(default_factory=list)
 
     @cached_property
     def _imu_rate(self):
@@ -1562,7 +1567,8 @@ class Navigator:
                          r.dx.view if cov else None, rows, dict(self.quality), self.engine,
                          self.dt, self.system.smoother,
                          [dict(e) for e in self.loop.fed.readmissions], self.layout,
-                         self._optional(), self.row_kinds, self._constraints())
+                         self._optional(), self.row_kinds, self._constraints(),
+                         list(getattr(self.loop.fed, "excluded", [])))
 
     def _constraints(self) -> tuple:
         """The aiding sensors that are constraints (their sigma a softness: ZUPT, NHC,
@@ -1609,5 +1615,5 @@ class Navigator:
         P = self.loop.fused_P()
         sd = np.sqrt(np.diagonal(P)) * lay.scale(em.SCALE)
         xa = self.loop.xa
-        return {name: {"estimate": xa[i:i + 3].copy(), "sigma": sd[i:i + 3].copy()}
-                for name in lay.names for i in [lay.start(name)]}
+        return {name: {"estimate": xa[i:i + m].copy(), "sigma": sd[i:i + m].copy()}
+                for name in lay.names for i, m in [(lay.start(name), lay.size(name))]}

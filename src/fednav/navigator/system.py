@@ -540,7 +540,14 @@ def state_layout(system: System, validating: bool = False) -> StateLayout:
             raise nested_error(path, message)
         raise ConfigError(f"key '{'.'.join(path)}': {message}")
 
-    states = system.filter.states
+    states = list(system.filter.states)
+    own = {}  # the blocks an aiding sensor's measurement needs (its model's own_block)
+    for sensor in system.aiding_sensors():
+        block = getattr(SENSORS[sensor].model, "own_block", None) \
+            if sensor in SENSORS else None
+        if block is not None and sensor in system.sensors:
+            own[block] = system.sensors[sensor].block_figures()
+    states += [b for b in own if b not in states]
     if not states:
         return CORE
     if system.filter.state == "total":
@@ -567,7 +574,11 @@ def state_layout(system: System, validating: bool = False) -> StateLayout:
         if not (s > 0.0).all():
             fail(["sensors", sensor, key], "a Gauss-Markov sigma is positive")
         blocks[block] = (s, float(c.markov_tau_s))
-    return StateLayout.of(blocks)
+    for block in states:
+        if block not in blocks and block not in own:
+            fail(["filter", "states"], f"{block} is the state of a sensor's measurement: "
+                                       f"it joins when that sensor aids")
+    return StateLayout.of({**blocks, **own})
 
 
 def sensor_model(system: System, name: str, section=None):

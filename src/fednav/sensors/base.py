@@ -42,6 +42,11 @@ class MeasurementSeries:
             raise ValueError(f"{self.kind}: measurement times must be strictly increasing")
         if self.z.shape[0] != len(self.t):
             raise ValueError(f"{self.kind}: {len(self.t)} times but {self.z.shape[0]} values")
+        self._check_values()
+
+    def _check_values(self) -> None:
+        """Every value finite (a series whose measurements leave some out says so here,
+        e.g. the raw GNSS's empty satellite slots)."""
         if not np.all(np.isfinite(self.z)):
             raise ValueError(f"{self.kind}: non-finite measurement values")
 

@@ -204,6 +204,8 @@ def mounted(model, lever, M):
         model.lever = _v(np.asarray(lever, dtype=float).reshape(3))
         model.mount = None if M is None else _v(M)
         return model
+    if getattr(model, "takes_lever", False):  # a point's model of its own (gnss_raw)
+        model.lever = _v(np.asarray(lever, dtype=float).reshape(3))
     return model if M is None else Mounted(model, M)
 
 

@@ -16,7 +16,7 @@ from pydantic import ValidationError
 from pydantic_core import core_schema
 
 from ..core.config import nested_error, nested_validation_error
-from . import airdata, baro, bodyvel, gnss, mag, sar, sarvel, star, velocity, zaru
+from . import airdata, baro, bodyvel, gnss, gnss_raw, mag, sar, sarvel, star, velocity, zaru
 from .spec import SensorConfig, SensorSpec
 
 #: name -> spec of every registered sensor, in the order a simulation draws their noise
@@ -24,6 +24,7 @@ from .spec import SensorConfig, SensorSpec
 SENSORS: dict[str, SensorSpec] = {s.name: s for s in (
     star.SPEC, sar.SPEC, gnss.SPEC, baro.SPEC, sarvel.SPEC, airdata.SPEC, velocity.SPEC,
     bodyvel.ODOMETER, bodyvel.DVL, bodyvel.ZUPT, mag.SPEC, bodyvel.NHC, zaru.SPEC,
+    gnss_raw.SPEC,
 )}
 
 
@@ -86,7 +87,7 @@ def markdown_table() -> str:
     rows = ["| sensor | what it measures | file columns (after `t_s`) | local filter | "
             "compiled |", "|---|---|---|---|---|"]
     for s in SENSORS.values():
-        cols = ", ".join(f"`{c.name}`" for c in s.columns)
+        cols = s.columns_doc or ", ".join(f"`{c.name}`" for c in s.columns)
         rows.append(f"| `{s.name}` | {s.summary} | {cols} | "
                     f"{'yes' if s.aiding else 'no (constraint)'} | "
                     f"{'yes' if s.compiled else 'Python loop'} |")

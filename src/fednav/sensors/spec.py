@@ -235,6 +235,9 @@ class SensorSpec:
     #: the sensor's model in the total-state navigator (:mod:`fednav.ins.total_state`);
     #: None: it cannot fly there
     total: object = None
+    #: how the docs name a file layout too long to list column by column (the raw
+    #: GNSS's satellite slots); default: the columns
+    columns_doc: str = ""
 
     @property
     def fixes_position(self) -> bool:
@@ -256,7 +259,8 @@ class SensorSpec:
         magnetometer's); neither on a sensor measured from the IMU itself (ZARU)."""
         kinds = {k for k, _ in getattr(self.model, "rows", ())}
         row = issubclass(self.model, RowModel)
-        lever_ok = row and any(k <= VEL_U or BVEL_R <= k < RATE_X for k in kinds)
+        lever_ok = (row and any(k <= VEL_U or BVEL_R <= k < RATE_X for k in kinds)) or \
+            getattr(self.model, "takes_lever", False)
         mount_ok = (not row and self.mountable) or any(
             PITCH <= k <= HEADING or BVEL_R <= k < RATE_X for k in kinds)
         if cfg.lever_m is not None and any(cfg.lever_m) and not lever_ok:

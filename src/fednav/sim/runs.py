@@ -66,6 +66,10 @@ class RunResult:
     #: per local filter, the mean NIS/dof against the centralized filter's innovation
     #: covariance (:func:`fednav.navigator.health.local_nis`; run with ``innovations``)
     nis: dict[str, float] | None = None
+    #: units fault detection left out of a measurement whose rest it used (a raw GNSS
+    #: epoch's satellite): (t [s], local filter, unit, statistic) (:attr:`fednav.
+    #: navigator.NavResult.excluded`)
+    excluded: list = field(default_factory=list)
 
 
 #: The second word of the seed of a run's fault draws (``[seed, FAULT_STREAM]``).
@@ -167,6 +171,7 @@ def run_mode(scn: Scenario, aiding: list[str], data: RunData, mode: str = "",
         sigma = np.full((K, em.N_STATES), np.nan)
         return _result(scn, truth, n_per, res.states[1:], mode, sigma, {}, None)
     out = _result(scn, truth, n_per, res.states[1:], mode, res.sigma[1:], res.beta, res.fdi)
+    out.excluded = list(res.excluded)
     if innovations:
         from ..navigator.health import local_nis
 

@@ -1,0 +1,469 @@
+"""Raw GNSS: each satellite's pseudorange and Doppler as measurements (tightly coupled).
+
+Section ``sensors.gnss_raw``.  Where a loosely coupled filter takes the receiver's fix
+(:mod:`fednav.sensors.gnss`), and has nothing below four satellites, this sensor takes one
+pseudorange row and one range-rate row per satellite, so every satellite the receiver
+still tracks aids — one, two or three of them included — and fault detection can exclude
+one satellite rather than the receiver (:meth:`fednav.filters.federated.FederatedFilter.
+update`'s leave-one-out over :attr:`BoundRanges.groups`).
+
+**The measurement carries its satellites.**  One measurement (one epoch of the receiver)
+is ``z`` of :data:`SLOTS` slots of :data:`FIELDS` values each: the satellite's number,
+its ECEF position [m] and velocity [m/s] at transmission, already turned by the Earth's
+rotation during the signal's transit into the ECEF frame of reception time, the
+pseudorange [m] with the satellite clock, group delay, ionosphere and troposphere
+removed, the range rate [m/s] (``-lambda`` times the Doppler, the satellite clock drift
+removed), and the 1-sigma of both (NaN: the section's ``sigma_*`` scaled by elevation).
+An empty slot is NaN.  The reader of a recording (RINEX, u-blox) builds these with the
+broadcast ephemeris (:mod:`fednav.sensors.satellites`); the simulator with its
+constellation.  The model itself is geometry alone, so one compiled-free model serves
+both.
+
+**Model** (ECEF; ``r``, ``v`` the antenna's position and velocity — the INS's moved by
+the lever arm, :func:`fednav.core.earth.lever_arm_point` — ``u = (r_s - r) / rho`` the
+line of sight, ``cb``, ``cd`` the receiver clock's bias [m] and drift [m/s], the error
+states of the ``clock`` block (:mod:`fednav.ins.states`), whose totals the navigator keeps
+beside the INS)::
+
+    pseudorange   rho_hat  = |r_s - r| + cb
+    range rate    rhod_hat = u . (v_s - v) + cd
+
+Residual ``INS-derived - measured``; with the error state (``dp`` = INS - true in ENU
+metres, ``dv`` likewise, ``dcb`` = true - estimated clock, :mod:`fednav.ins.states`)::
+
+    d(rho)  = -u_n . dp_ant - dcb
+    d(rhod) = -u_n . dv_ant - ((w - rhod u) / rho)_n . dp_ant - dcd,  w = v_s - v
+
+(``_n``: in ENU; ``dp_ant``, ``dv_ant`` the antenna's errors, the lever arm's attitude
+coupling included as the position and velocity rows of
+:mod:`fednav.sensors.measurement` have it).  ``tests/test_gnss_raw.py`` checks ``H``
+against finite differences of the range model.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import ClassVar, Literal
+
+import numpy as np
+from pydantic import Field, field_validator
+
+from ..core import earth, units
+from ..core.config import simulation_only
+from ..ins.error_model import N_STATES
+from .base import MeasurementSeries, flight_times
+from .measurement import (
+    POS_E,
+    POS_N,
+    POS_U,
+    VEL_E,
+    VEL_N,
+    VEL_U,
+    NavSnapshot,
+    row_jacobian,
+    sensor_frame,
+)
+from .satellites import GM, OMEGA_E
+from .satellites import C as LIGHT
+from .spec import Column, SensorConfig, SensorSpec
+
+#: The values of one satellite's slot of ``z``.
+FIELDS = ("prn", "x_m", "y_m", "z_m", "vx_mps", "vy_mps", "vz_mps", "pr_m", "rr_mps",
+          "sigma_pr_m", "sigma_rr_mps")
+(PRN, SX, SY, SZ, SVX, SVY, SVZ, PR, RR, SPR, SRR) = range(len(FIELDS))
+#: Satellites one measurement holds at most (GPS above a 5 deg mask: 8 to 13).
+SLOTS = 14
+WIDTH = SLOTS * len(FIELDS)
+
+#: Receiver clocks' Allan-variance coefficients (h0, h_-2) [s, 1/s] (Brown and Hwang,
+#: table 9.1): a temperature-compensated and an oven-controlled crystal oscillator.
+CLOCKS = {"tcxo": (2e-19, 2e-20), "ocxo": (2e-25, 6e-25)}
+
+
+def slots(z) -> np.ndarray:
+    """One measurement's ``z`` as (:data:`SLOTS`, :data:`FIELDS`) rows."""
+    return np.asarray(z, dtype=float).reshape(SLOTS, len(FIELDS))
+
+
+def pack(rows) -> np.ndarray:
+    """Satellite rows (n <= SLOTS, len(FIELDS)) as one measurement's ``z`` (NaN slots
+    after them)."""
+    rows = np.asarray(rows, dtype=float).reshape(-1, len(FIELDS))
+    if len(rows) > SLOTS:
+        raise ValueError(f"gnss_raw: {len(rows)} satellites in one epoch; a measurement "
+                         f"holds {SLOTS} (keep the highest)")
+    out = np.full((SLOTS, len(FIELDS)), np.nan)
+    out[:len(rows)] = rows
+    return out.ravel()
+
+
+def elevation_sigma(sigma_zenith, el):
+    """1-sigma at elevation ``el`` [rad] of a ranging error of 1-sigma ``sigma_zenith``
+    at the zenith: ``sigma sqrt((1 + 1 / sin^2 el) / 2)`` (RTKLIB's weighting, equal
+    parts constant and elevation-dependent)."""
+    s = np.sin(np.maximum(el, np.radians(1.0)))
+    return sigma_zenith * np.sqrt(0.5 * (1.0 + 1.0 / (s * s)))
+
+
+def _antenna(nav: NavSnapshot, lever, frame: bool = False):
+    """ECEF position and velocity of the antenna and C_n^e there; with ``frame`` also
+    d(C_n^e v)/d(east, north) [1/s] (3, 2): how the ECEF velocity of a fixed ENU velocity
+    turns with the local frame as the position moves (a term of 1e-6 per second)."""
+    lla, vel = np.asarray(nav.lla, dtype=float), np.asarray(nav.vel, dtype=float)
+    C = np.asarray(nav.C, dtype=float)
+    if np.any(lever):
+        omega = np.zeros(3) if nav.omega_b is None else np.asarray(nav.omega_b, float)
+        lla, vel = earth.lever_arm_point(lla, vel, C, omega, lever)
+    Cne = earth.enu_to_ecef(lla[0], lla[1])
+    out = earth.llh_to_ecef(*lla), Cne @ vel, Cne
+    if not frame:
+        return out
+    sl, cl = np.sin(lla[0]), np.cos(lla[0])
+    so, co = np.sin(lla[1]), np.cos(lla[1])
+    d_lat = np.array([[0, -cl * co, -sl * co], [0, -cl * so, -sl * so], [0, -sl, cl]])
+    d_lon = np.array([[-co, sl * so, -cl * so], [-so, -sl * co, cl * co], [0, 0, 0]])
+    rm, rn = earth.radii(lla[0])
+    return out + (np.column_stack([d_lon @ vel / ((rn + lla[2]) * cl),
+                                   d_lat @ vel / (rm + lla[2])]),)
+
+
+class BoundRanges:
+    """The rows of one measurement (see the module docstring) over an error state of
+    ``n`` columns whose clock bias and drift are columns ``ic``, ``ic + 1``, with the
+    clock totals ``clock`` = (cb, cd) [m, m/s]: ``dim`` rows, pseudoranges of the
+    satellites first, then their range rates; ``groups`` the satellite of each row;
+    ``R`` their noise [m^2, (m/s)^2]."""
+
+    linear = True
+
+    def __init__(self, sat, lever, n: int, ic: int, clock, R, groups, use_rr):
+        self.sat, self.lever, self.n, self.ic = sat, lever, int(n), int(ic)
+        self.clock = np.asarray(clock, dtype=float)
+        self.R = R
+        self.groups = groups
+        self.use_rr = use_rr
+        self.dim = len(groups)
+
+    def _geometry(self, nav: NavSnapshot):
+        r, v, Cne, turn = _antenna(nav, self.lever, frame=True)
+        d = self.sat[:, SX:SZ + 1] - r
+        rho = np.linalg.norm(d, axis=1)
+        u = d / rho[:, None]
+        w = self.sat[:, SVX:SVZ + 1] - v
+        rhod = np.einsum("ij,ij->i", u, w)
+        return rho, u, w, rhod, Cne, turn
+
+    def residual(self, nav: NavSnapshot, z=None) -> np.ndarray:
+        rho, u, w, rhod, _, _ = self._geometry(nav)
+        pr = rho + self.clock[0] - self.sat[:, PR]
+        rr = rhod + self.clock[1] - self.sat[:, RR]
+        return np.r_[pr, rr[self.use_rr]]
+
+    def H(self, nav: NavSnapshot) -> np.ndarray:
+        rho, u, w, rhod, Cne, turn = self._geometry(nav)
+        C, omega = sensor_frame(np.asarray(nav.C, dtype=float), np.zeros(3) if
+                                nav.omega_b is None else np.asarray(nav.omega_b, float),
+                                None)
+        J = np.zeros((6, N_STATES))  # antenna position (E, N, U) and velocity errors
+        kinds = np.array([POS_E, POS_N, POS_U, VEL_E, VEL_N, VEL_U], dtype=np.int64)
+        row_jacobian(kinds, np.asarray(nav.lla, float), np.asarray(nav.vel, float), C,
+                     omega, np.ascontiguousarray(self.lever, dtype=float), J)
+        un = u @ Cne  # line of sight in ENU
+        gn = ((w - rhod[:, None] * u) / rho[:, None]) @ Cne
+        gn[:, :2] += u @ turn  # (the antenna's ECEF velocity turns with its frame)
+        m = len(rho)
+        H = np.zeros((self.dim, self.n))
+        H[:m, :N_STATES] = -un @ J[:3]
+        H[:m, self.ic] = -1.0
+        k = np.flatnonzero(self.use_rr)
+        H[m:, :N_STATES] = -un[k] @ J[3:] - gn[k] @ J[:3]
+        H[m:, self.ic + 1] = -1.0
+        return H
+
+    def h(self, X, nav: NavSnapshot) -> np.ndarray:
+        return np.atleast_2d(X) @ self.H(nav).T
+
+    def subset(self, keep) -> BoundRanges:
+        """These rows less those not in ``keep`` (a satellite's two rows go together when
+        ``keep`` comes from :attr:`groups`)."""
+        keep = np.asarray(keep, dtype=bool)
+        m = len(self.sat)
+        k_pr = keep[:m]
+        k_rr = np.zeros(m, dtype=bool)
+        k_rr[np.flatnonzero(self.use_rr)] = keep[m:]
+        sat, use_rr = self.sat[k_pr], (k_rr & k_pr)[k_pr]
+        rows = np.flatnonzero(keep)
+        return BoundRanges(sat, self.lever, self.n, self.ic, self.clock,
+                           self.R[np.ix_(rows, rows)], self.groups[rows], use_rr)
+
+
+class SatelliteRanges:
+    """The raw GNSS measurement model (module docstring): :meth:`bind` gives the rows of
+    one measurement — how many depends on the satellites it holds — over the filter's
+    error state with its ``clock`` block (:attr:`own_block`).  ``sigma_pr``,
+    ``sigma_rr``: the zenith 1-sigma of a pseudorange [m] and a range rate [m/s] for
+    satellites whose slot gives none; ``mask``: the elevation mask [rad]."""
+
+    kind = "gnss_raw"
+    #: the optional error-state block the measurement needs (:mod:`fednav.ins.states`)
+    own_block = "clock"
+    #: the antenna's lever arm acts (:func:`fednav.sensors.measurement.mounted`)
+    takes_lever = True
+    #: no fixed component of ``z`` must be finite (empty slots are NaN)
+    zindex = np.zeros(0, dtype=np.int64)
+    linear = True
+
+    def __init__(self, sigma_pr: float = 3.0, sigma_rr: float = 0.1,
+                 mask: float = float(units.deg(10.0))):
+        self.sigma_pr, self.sigma_rr, self.mask = float(sigma_pr), float(sigma_rr), mask
+        self.lever = np.zeros(3)
+
+    def satellites(self, z, nav: NavSnapshot | None = None) -> np.ndarray:
+        """The satellite rows of ``z`` with a pseudorange (above the mask at ``nav``,
+        when given), with their 1-sigma filled in."""
+        s = slots(z)
+        s = s[np.isfinite(s[:, PRN]) & np.isfinite(s[:, PR])].copy()
+        if nav is not None and len(s):
+            r, _, Cne = _antenna(nav, self.lever)
+            d = s[:, SX:SZ + 1] - r
+            up = (d @ Cne)[:, 2] / np.linalg.norm(d, axis=1)
+            el = np.arcsin(np.clip(up, -1.0, 1.0))
+            s = s[el >= self.mask]
+            el = el[el >= self.mask]
+            for col, sig in ((SPR, self.sigma_pr), (SRR, self.sigma_rr)):
+                miss = ~np.isfinite(s[:, col])
+                s[miss, col] = elevation_sigma(sig, el[miss])
+        return s
+
+    def bind(self, z, nav: NavSnapshot, layout, xa) -> BoundRanges:
+        """The rows of measurement ``z`` against the INS ``nav``, over the error state of
+        ``layout`` (:class:`~fednav.ins.states.StateLayout`) with the clock totals in
+        ``xa`` (read now)."""
+        ic = layout.start(self.own_block)
+        if ic < 0:
+            raise ValueError("gnss_raw: the error state has no clock block (the navigator "
+                             "adds it when gnss_raw aids)")
+        sat = self.satellites(z, nav)
+        use_rr = np.isfinite(sat[:, RR])
+        prn = sat[:, PRN].astype(np.int64)
+        R = np.diag(np.r_[sat[:, SPR], sat[use_rr, SRR]] ** 2)
+        return BoundRanges(sat, self.lever, layout.n, ic, xa[ic:ic + 2].copy(), R,
+                           np.r_[prn, prn[use_rr]], use_rr)
+
+
+
+# ---------------------------------------------------------------------------- simulation
+#: GPS's nominal orbit: semi-major axis [m] and inclination (IS-GPS-200, the almanac's).
+GPS_A = 26_559_700.0
+GPS_I = np.radians(55.0)
+
+
+def walker(t, n_planes: int = 6, per_plane: int = 5, phasing: int = 1,
+           epoch_deg: float = 0.0):
+    """A Walker delta constellation of GPS's orbits (circular, 55 deg, 26 560 km) at
+    times ``t`` [s]: ECEF positions and velocities (N, S, 3) [m, m/s] of its
+    ``n_planes * per_plane`` satellites (numbered 1..S).  ``epoch_deg`` turns the whole
+    constellation along its orbits (another geometry of the sky)."""
+    t = np.atleast_1d(np.asarray(t, dtype=float))
+    n = np.sqrt(GM / GPS_A**3)
+    S = n_planes * per_plane
+    k = np.arange(S)
+    plane, slot = k // per_plane, k % per_plane
+    raan = 2 * np.pi * plane / n_planes
+    m0 = (2 * np.pi * slot / per_plane + 2 * np.pi * phasing * plane / S
+          + np.radians(epoch_deg))
+    u = m0[None, :] + n * t[:, None]  # argument of latitude
+    lon = raan[None, :] - OMEGA_E * t[:, None]  # node's longitude in the Earth frame
+    cu, su = np.cos(u), np.sin(u)
+    cO, sO = np.cos(lon), np.sin(lon)
+    ci, si = np.cos(GPS_I), np.sin(GPS_I)
+    pos = GPS_A * np.stack([cu * cO - su * ci * sO, cu * sO + su * ci * cO, su * si], -1)
+    # inertial velocity, then less the Earth's rotation (w x r)
+    du = -su * n, cu * n
+    vel = GPS_A * np.stack([du[0] * cO - du[1] * ci * sO, du[0] * sO + du[1] * ci * cO,
+                            du[1] * si], -1)
+    vel = vel + OMEGA_E * np.stack([pos[..., 1], -pos[..., 0], np.zeros_like(pos[..., 0])],
+                                   -1)
+    return pos, vel
+
+
+def clock_walk(t, h0: float, hm2: float, bias0: float, drift0: float, rng):
+    """A receiver clock's bias [m] and drift [m/s] at times ``t`` [s]: the two-state model
+    (white frequency noise ``S_f = h0 / 2 c^2``, random-walk frequency ``S_g = 2 pi^2
+    h_-2 c^2``) discretised exactly between samples."""
+    sf, sg = h0 / 2 * LIGHT**2, 2 * np.pi**2 * hm2 * LIGHT**2
+    out = np.empty((len(t), 2))
+    x = np.array([bias0, drift0])
+    prev = t[0] if len(t) else 0.0
+    for i, ti in enumerate(t):
+        d = ti - prev
+        if d > 0:
+            Q = np.array([[sf * d + sg * d**3 / 3, sg * d**2 / 2], [sg * d**2 / 2, sg * d]])
+            x = np.array([x[0] + d * x[1], x[1]]) + np.linalg.cholesky(
+                Q + 1e-30 * np.eye(2)) @ rng.standard_normal(2)
+        out[i] = x
+        prev = ti
+    return out
+
+
+class SatelliteSeries(MeasurementSeries):
+    """Raw GNSS measurements: a satellite's slot is NaN where the epoch lacks it."""
+
+    def _check_values(self) -> None:
+        s = self.z.reshape(len(self.z), SLOTS, len(FIELDS))
+        have = np.isfinite(s[:, :, PRN])
+        bad = have & ~np.isfinite(s[:, :, SX:RR]).all(axis=2) if len(s) else have
+        if len(s) and (~have.any(axis=1)).any():
+            raise ValueError(f"gnss_raw: the epoch at t = {self.t[np.argmin(have.any(1))]} s "
+                             f"has no satellite")
+        if bad.any():
+            raise ValueError(f"gnss_raw: a satellite's position, velocity or pseudorange is "
+                             f"NaN at t = {self.t[np.argmax(bad.any(axis=1))]} s")
+
+
+@dataclass(frozen=True)
+class RawReceiver:
+    """A receiver tracking a constellation (:func:`walker`): every ``period`` [s] the
+    pseudorange and range rate of each satellite above ``mask`` [rad] (at most
+    :data:`SLOTS`, the highest), with white noise of zenith 1-sigma ``sigma_pr`` [m],
+    ``sigma_rr`` [m/s] scaled by elevation (:func:`elevation_sigma`), a multipath-like
+    first-order Gauss–Markov error per satellite (``multipath`` [m], ``multipath_tau``
+    [s]; 0: none), and the receiver clock (:func:`clock_walk`; ``clock`` = h0, h_-2,
+    initial bias [m], drift [m/s]).  ``limits`` = ((start, end, n), ...): within
+    ``[start, end)`` only the ``n`` highest satellites (jamming, masking; 0: none)."""
+
+    period: float
+    sigma_pr: float
+    sigma_rr: float
+    mask: float
+    clock: tuple
+    constellation: tuple = (6, 5, 1, 0.0)
+    multipath: float = 0.0
+    multipath_tau: float = 60.0
+    limits: tuple = ()
+    t0: float = 0.0
+
+    def simulate(self, truth, rng: np.random.Generator, t=None,
+                 t_avail=None) -> MeasurementSeries:
+        t = flight_times(truth, self.period, t)
+        tr = truth.at(t)
+        lla, vel = tr["lla"], tr["vel"]
+        r = earth.llh_to_ecef(lla[:, 0], lla[:, 1], lla[:, 2])
+        Cne = earth.enu_to_ecef(lla[:, 0], lla[:, 1])
+        v = np.einsum("nij,nj->ni", Cne, vel)
+        pos, svel = walker(t + self.t0, *self.constellation)
+        d = pos - r[:, None, :]
+        rho = np.linalg.norm(d, axis=2)
+        u = d / rho[..., None]
+        el = np.arcsin(np.einsum("nsi,ni->ns", u, Cne[:, :, 2]))
+        rhod = np.einsum("nsi,nsi->ns", u, svel - v[:, None, :])
+        h0, hm2, b0, d0 = self.clock
+        clk = clock_walk(t, h0, hm2, b0, d0, rng)
+        S = pos.shape[1]
+        spr, srr = elevation_sigma(self.sigma_pr, el), elevation_sigma(self.sigma_rr, el)
+        e_pr = rng.standard_normal(rho.shape) * spr
+        e_rr = rng.standard_normal(rho.shape) * srr
+        if self.multipath > 0.0:
+            mp = np.empty_like(rho)
+            mp[0] = rng.standard_normal(S) * self.multipath
+            a = np.exp(-np.diff(t, prepend=t[0]) / self.multipath_tau)
+            for i in range(1, len(t)):
+                mp[i] = a[i] * mp[i - 1] + np.sqrt(1 - a[i] ** 2) * self.multipath * \
+                    rng.standard_normal(S)
+            e_pr = e_pr + mp
+        pr = rho + clk[:, :1] + e_pr
+        rr = rhod + clk[:, 1:] + e_rr
+        z = np.full((len(t), WIDTH), np.nan)
+        for i in range(len(t)):
+            seen = np.flatnonzero(el[i] >= self.mask)
+            n = SLOTS
+            for a, b, k in self.limits:
+                if a <= t[i] < b:
+                    n = min(n, int(k))
+            seen = seen[np.argsort(-el[i, seen])][:n]
+            seen.sort()
+            rows = np.column_stack([seen + 1.0, pos[i, seen], svel[i, seen], pr[i, seen],
+                                    rr[i, seen], spr[i, seen], srr[i, seen]])
+            z[i] = pack(rows)
+        keep = np.isfinite(z[:, PRN])  # (an epoch without satellites is no measurement)
+        return SatelliteSeries("gnss_raw", t[keep], z[keep],
+                                 np.array([self.sigma_pr, self.sigma_rr]),
+                                 None if t_avail is None else t_avail[keep])
+
+
+class GnssRawConfig(SensorConfig):
+    """Raw GNSS (module docstring): ``sigma_pseudorange_m``, ``sigma_range_rate_mps``
+    (zenith 1-sigma, for satellites whose data give none; scaled by elevation),
+    ``elevation_mask_deg``, the receiver ``clock`` (``tcxo``, ``ocxo`` or ``[h0, h_-2]``,
+    its Allan-variance coefficients: the clock states' process noise), the clock's initial
+    1-sigma ``clock_bias_sigma_m``, ``clock_drift_sigma_mps``.  Simulation only: the
+    ``constellation`` (Walker planes, satellites per plane, phasing, ``epoch_deg``),
+    ``multipath_sigma_m`` and ``multipath_tau_s``, the initial clock ``clock_bias_m`` and
+    ``clock_drift_mps``, and ``satellites_s`` — windows ``[start_s, end_s, n]`` with only
+    the ``n`` highest satellites (jamming, an urban canyon; 0: none)."""
+
+    KIND: ClassVar[str] = "gnss_raw"
+
+    sigma_pseudorange_m: float = Field(default=3.0, gt=0.0)
+    sigma_range_rate_mps: float = Field(default=0.1, gt=0.0)
+    elevation_mask_deg: float = Field(default=10.0, ge=0.0, lt=90.0)
+    clock: Literal["tcxo", "ocxo"] | tuple[float, float] = "tcxo"
+    clock_bias_sigma_m: float = Field(default=3.0e5, gt=0.0)
+    clock_drift_sigma_mps: float = Field(default=100.0, gt=0.0)
+    constellation: tuple[int, int, int, float] = Field(
+        default=(6, 5, 1, 0.0), json_schema_extra=simulation_only("a simulated sky"))
+    multipath_sigma_m: float = Field(default=0.0, ge=0.0,
+                                     json_schema_extra=simulation_only("simulated error"))
+    multipath_tau_s: float = Field(default=60.0, gt=0.0,
+                                   json_schema_extra=simulation_only("simulated error"))
+    clock_bias_m: float = Field(default=1.0e4, json_schema_extra=simulation_only(
+        "the simulated clock's start"))
+    clock_drift_mps: float = Field(default=5.0, json_schema_extra=simulation_only(
+        "the simulated clock's start"))
+    satellites_s: list[tuple[float, float, int]] = Field(
+        default=[], json_schema_extra=simulation_only("simulated loss of satellites"))
+
+    @field_validator("satellites_s")
+    @classmethod
+    def _limits(cls, v):
+        for a, b, n in v:
+            if not b > a or n < 0:
+                raise ValueError(f"a window [start_s, end_s, n] ends after it starts and "
+                                 f"keeps n >= 0 satellites, got [{a}, {b}, {n}]")
+        return v
+
+    def h_coefficients(self) -> tuple[float, float]:
+        """The clock's (h0, h_-2)."""
+        return CLOCKS[self.clock] if isinstance(self.clock, str) else tuple(self.clock)
+
+    def block_figures(self) -> tuple:
+        """The ``clock`` block's (1-sigma, tau, qc) (:meth:`fednav.ins.states.StateLayout.
+        of`): the initial 1-sigma, a random walk, the densities ``S_f``, ``S_g``."""
+        h0, hm2 = self.h_coefficients()
+        return ((self.clock_bias_sigma_m, self.clock_drift_sigma_mps), np.inf,
+                (h0 / 2 * LIGHT**2, 2 * np.pi**2 * hm2 * LIGHT**2))
+
+    def sensor(self) -> RawReceiver:
+        h0, hm2 = self.h_coefficients()
+        return RawReceiver(self.period_s, self.sigma_pseudorange_m, self.sigma_range_rate_mps,
+                           float(units.deg(self.elevation_mask_deg)),
+                           (h0, hm2, self.clock_bias_m, self.clock_drift_mps),
+                           tuple(self.constellation), self.multipath_sigma_m,
+                           self.multipath_tau_s, tuple(tuple(w) for w in self.satellites_s))
+
+    def model(self) -> SatelliteRanges:
+        return SatelliteRanges(self.sigma_pseudorange_m, self.sigma_range_rate_mps,
+                               float(units.deg(self.elevation_mask_deg)))
+
+    def sigma(self) -> np.ndarray:
+        """Zenith 1-sigma of a pseudorange [m] and a range rate [m/s] (each satellite's
+        own, from its slot or its elevation, is what the rows take)."""
+        return np.array([self.sigma_pseudorange_m, self.sigma_range_rate_mps])
+
+
+SPEC = SensorSpec(
+    "gnss_raw", "GNSS pseudorange and Doppler of each satellite (tightly coupled; receiver "
+                "clock states)", GnssRawConfig, SatelliteRanges,
+    columns=tuple(Column(f"s{k:02d}_{f}") for k in range(SLOTS) for f in FIELDS),
+    label="raw GNSS",
+    columns_doc=f"{SLOTS} satellite slots `sNN_`: " + ", ".join(f"`{f}`" for f in FIELDS))

@@ -1,0 +1,253 @@
+"""Raw GNSS (tightly coupled): the pseudorange and range-rate rows against finite
+differences of the range model, the receiver clock's states, the simulated sky, and
+the navigator flying satellites — fewer than four included — with one faulty satellite
+excluded rather than the receiver."""
+
+import numpy as np
+import pytest
+
+from fednav.core import attitude as att
+from fednav.core import earth, units
+from fednav.core.config import ConfigError
+from fednav.ins import error_model as em
+from fednav.ins.states import N_CORE, StateLayout
+from fednav.sensors.gnss_raw import (
+    FIELDS,
+    PR,
+    PRN,
+    RR,
+    SLOTS,
+    GnssRawConfig,
+    SatelliteRanges,
+    pack,
+    walker,
+)
+from fednav.sensors.measurement import NavSnapshot
+from fednav.sensors.satellites import GM, OMEGA_E
+
+LLA = np.array([units.deg(47.4), units.deg(8.55), 480.0])
+LEVER = np.array([0.4, -1.1, 1.3])
+CLOCK = (3.0e5, 100.0)
+
+
+def _layout():
+    return StateLayout.of({"gyro_scale": (1e-3, np.inf),
+                           "clock": (CLOCK, np.inf, (0.01, 0.04))})
+
+
+def _sky(t=1000.0, nav=None):
+    """The satellites above 10 deg at ``t`` as one measurement (true ranges from the
+    antenna of ``nav``, clock 1234 m and 3 m/s)."""
+    pos, vel = walker(t)
+    pos, vel = pos[0], vel[0]
+    r = earth.llh_to_ecef(*LLA)
+    u = (pos - r) / np.linalg.norm(pos - r, axis=1)[:, None]
+    up = u @ earth.enu_to_ecef(LLA[0], LLA[1])[:, 2]
+    seen = np.flatnonzero(up > np.sin(units.deg(10.0)))
+    rows = np.full((len(seen), len(FIELDS)), np.nan)
+    rows[:, PRN] = seen + 1
+    rows[:, 1:4], rows[:, 4:7] = pos[seen], vel[seen]
+    rows[:, PR], rows[:, RR] = 2.2e7, 100.0  # (the residual is what the tests read)
+    return pack(rows), seen
+
+
+def _nav(lla=LLA, vel=(12.0, -5.0, 0.3), euler=(0.05, -0.02, 1.1), omega=(0.01, -0.02, 0.2)):
+    return NavSnapshot(np.asarray(lla, float), np.asarray(vel, float),
+                       att.euler_to_dcm(np.asarray(euler, float)), np.asarray(omega, float))
+
+
+def test_walker_sky_is_gps_like():
+    """Radius and speed of GPS's orbits, velocity the derivative of position (in the
+    Earth frame), and 6 to 12 satellites above 10 deg at mid-latitude all day (30 satellites,
+    as GPS has 31)."""
+    t = np.arange(0.0, 86400.0, 600.0)
+    pos, vel = walker(t)
+    np.testing.assert_allclose(np.linalg.norm(pos, axis=2), 26_559_700.0, rtol=1e-12)
+    inertial = vel + OMEGA_E * np.stack([-pos[..., 1], pos[..., 0], 0 * pos[..., 0]], -1)
+    np.testing.assert_allclose(np.linalg.norm(inertial, axis=2),
+                               np.sqrt(GM / 26_559_700.0), rtol=1e-9)
+    p1, _ = walker(t + 0.5)
+    p0, _ = walker(t - 0.5)
+    np.testing.assert_allclose(p1 - p0, vel, atol=1e-3)
+    r = earth.llh_to_ecef(*LLA)
+    up = earth.enu_to_ecef(LLA[0], LLA[1])[:, 2]
+    n = (((pos - r) @ up) / np.linalg.norm(pos - r, axis=2) > np.sin(units.deg(10.0))).sum(1)
+    assert 6 <= n.min() and n.max() <= 12
+
+
+def _perturbed(nav, dx):
+    """The INS with error ``dx`` (filter units: the 18 states) added: position moved by
+    dp (ENU m), velocity by dv, attitude exp(-[phi x]) C."""
+    lla = earth.move_enu(nav.lla, dx[6:9])
+    C = att.apply_misalignment(nav.C, dx[0:3] * em.SCALE[0:3])
+    return NavSnapshot(lla, nav.vel + dx[3:6], C, nav.omega_b)
+
+
+def test_rows_are_the_derivative_of_the_range_model():
+    """H of the pseudorange and range-rate rows (lever arm, attitude, clock) against
+    central differences of the residual."""
+    model = SatelliteRanges()
+    model.lever = LEVER
+    z, seen = _sky()
+    lay = _layout()
+    xa = np.zeros(lay.n)
+    ic = lay.start("clock")
+    xa[ic:ic + 2] = 1234.0, 3.0
+    nav = _nav()
+    b = model.bind(z, nav, lay, xa)
+    assert b.dim == 2 * len(seen) and set(b.groups) == set(seen + 1)
+    H = b.H(nav)
+    steps = {0: 2.0, 1: 2.0, 2: 2.0, 3: 0.05, 4: 0.05, 5: 0.05, 6: 5.0, 7: 5.0, 8: 5.0}
+    for j, h in steps.items():
+        e = np.zeros(em.N_STATES)
+        e[j] = h
+        fd = (b.residual(_perturbed(nav, e)) - b.residual(_perturbed(nav, -e))) / (2 * h)
+        np.testing.assert_allclose(H[:, j], fd, atol=2e-6, err_msg=f"column {j}")
+    assert not H[:, 9:ic].any()
+    # the clock: the residual is INS + estimate - measured; its error (true - estimated)
+    # enters with -1
+    assert (H[:len(seen), ic] == -1.0).all() and (H[len(seen):, ic + 1] == -1.0).all()
+    xb = xa.copy()
+    xb[ic] += 1.0
+    xb[ic + 1] += 0.5
+    d = model.bind(z, nav, lay, xb).residual(nav) - b.residual(nav)
+    np.testing.assert_allclose(d, np.r_[np.ones(len(seen)), 0.5 * np.ones(len(seen))])
+    np.testing.assert_allclose(b.h(np.eye(lay.n)[:3], nav), H[:, :3].T[:3].reshape(3, -1))
+
+
+def test_the_mask_and_the_empty_slots_leave_rows_out():
+    model = SatelliteRanges(mask=units.deg(30.0))
+    z, seen = _sky()
+    b = model.bind(z, _nav(), _layout(), np.zeros(_layout().n))
+    assert 0 < len(b.sat) < len(seen)
+    assert np.isnan(z.reshape(SLOTS, -1)[len(seen):]).all()
+    # a satellite without Doppler has its pseudorange row only
+    s = z.reshape(SLOTS, -1).copy()
+    s[0, RR] = np.nan
+    b = SatelliteRanges().bind(s.ravel(), _nav(), _layout(), np.zeros(_layout().n))
+    assert b.dim == 2 * len(seen) - 1
+
+
+def test_the_clock_block_integrates_its_drift():
+    """cb' = cd: F couples them, Phi carries T, the totals follow cb += T cd, and the
+    nonlinear propagation agrees with Phi."""
+    lay = _layout()
+    ic = lay.start("clock")
+    assert lay.n == N_CORE + 5 and ic == 21 and lay.coupled
+    np.testing.assert_allclose(lay.transition(2.0), [[1, 0, 0, 0, 0], [0, 1, 0, 0, 0],
+                                                    [0, 0, 1, 0, 0], [0, 0, 0, 1, 2.0],
+                                                    [0, 0, 0, 0, 1]], atol=1e-12)
+    nom = em.Nominal(lat=LLA[0], h=LLA[2], vel=np.array([12.0, -5.0, 0.3]),
+                     C=att.euler_to_dcm([0.05, -0.02, 1.1]), fn=np.array([0.2, 0.1, 9.8]))
+    p = em.ErrorProcess(nom, 1.0, em.ImuNoiseModel(), nsub=10, layout=lay)
+    assert p.Phi[ic, ic + 1] == pytest.approx(1.0, rel=1e-12)
+    assert p.Phi[ic + 1, ic] == 0.0
+    x = np.zeros(lay.n)
+    x[ic:ic + 2] = 10.0, 2.0
+    np.testing.assert_allclose(p.transition(x[None])[0][ic:ic + 2], [12.0, 2.0], rtol=1e-9)
+    # white frequency and random-walk frequency noise (trapezoid: S_g T^3 / 2)
+    np.testing.assert_allclose(p.Qd[ic:ic + 2, ic:ic + 2],
+                               [[0.01 + 0.04 / 2, 0.02], [0.02, 0.04]], rtol=1e-9)
+
+
+def test_clock_states_come_with_the_sensor():
+    from fednav import load_system
+    from fednav.navigator.system import state_layout
+
+    s = load_system({"sensors": {"gnss_raw": {"clock": "ocxo"}}})
+    lay = state_layout(s)
+    assert lay.names == ("clock",)
+    sf, sg = GnssRawConfig(clock="ocxo").block_figures()[2]
+    assert lay.blocks[0][3] == (sf, sg) and sf < 1e-7
+    with pytest.raises(ConfigError, match="clock is the state of a sensor"):
+        state_layout(load_system({"filter": {"states": ["clock"]}}))
+
+
+# ------------------------------------------------------------------ the navigator
+DESIGN = """
+name: tight-test
+start: {lat_deg: 47.40, lon_deg: 8.55, h_m: 500.0, speed_mps: 15.0, heading_deg: 60.0}
+imu_period_s: 0.02
+segments:
+  - {name: street, duration_s: 100}
+  - {name: turn, duration_s: 10, heading_rate_deg_s: 9.0}
+  - {name: street, duration_s: 190}
+imu:
+  random_bias: true
+  gyro_bias_deg_h: 50.0
+  gyro_markov_deg_h: 5.0
+  gyro_markov_tau_s: 300.0
+  gyro_arw_deg_sqrt_h: 0.3
+  accel_bias_ug: 1000.0
+  accel_markov_ug: 50.0
+  accel_markov_tau_s: 300.0
+  accel_vrw_ug_sqrt_hz: 100.0
+sensors:
+  gnss: {sigma_pos_enu_m: [2.0, 2.0, 4.0], sigma_vel_mps: 0.1, period_s: 1.0,
+         outages_s: [[150.0, 300.0]]}
+  gnss_raw: {period_s: 1.0, satellites_s: [[150.0, 300.0, 2]]}
+filter: {type: kf, period_s: 1.0, fdi_alpha: 0.001}
+initial_errors: {attitude_arcsec: [300.0, 300.0, 1800.0], velocity_mps: 0.1, position_m: 3.0}
+modes:
+  - {name: loose, aiding: [gnss]}
+  - {name: tight, aiding: [gnss_raw]}
+"""
+
+
+@pytest.fixture(scope="module")
+def flown(tmp_path_factory):
+    from fednav.sim.runs import make_run_data, run_mode
+    from fednav.sim.scenario import load_scenario
+
+    path = tmp_path_factory.mktemp("tight") / "design.yaml"
+    path.write_text(DESIGN)
+    scn = load_scenario(path)
+    data = make_run_data(scn, 4)
+    out = {m: run_mode(scn, [m], data, m) for m in ("gnss", "gnss_raw")}
+    return scn, data, out
+
+
+def _horizontal(res, a, b):
+    k = (res.t >= a) & (res.t < b)
+    return float(np.sqrt(np.mean(np.sum(res.pos[k, :2] ** 2, axis=1))))
+
+
+def test_two_satellites_beat_none_and_the_full_sky_agrees(flown):
+    scn, data, out = flown
+    loose, tight = out["gnss"], out["gnss_raw"]
+    # 150-300 s: the loose filter has no fix, the tight one two satellites
+    n = np.isfinite(data.series["gnss_raw"].z.reshape(-1, SLOTS, len(FIELDS))[:, :, 0]).sum(1)
+    t = data.series["gnss_raw"].t
+    assert (n[(t >= 150) & (t < 300)] == 2).all() and n[t < 150].min() >= 5
+    assert _horizontal(tight, 150, 300) < 0.75 * _horizontal(loose, 150, 300)
+    # before the outage both see the whole sky: the same answer within their sigma
+    k = (tight.t > 30) & (tight.t < 150)
+    d = np.abs(tight.pos[k] - loose.pos[k])
+    assert (d < 3 * np.hypot(tight.sigma[k, 6:9], loose.sigma[k, 6:9])).mean() > 0.95
+    # consistent: the rows' NIS per degree of freedom in its band
+    f = tight.fdi[tight.fdi.local == "gnss_raw"]
+    assert 0.7 < f.statistic.sum() / f.dof.sum() < 1.4
+
+
+def test_a_faulty_satellite_is_excluded_not_the_receiver(flown):
+    from dataclasses import replace
+
+    from fednav.sim.runs import run_mode
+
+    scn, data, out = flown
+    s = data.series["gnss_raw"]
+    z = s.z.reshape(len(s.t), SLOTS, len(FIELDS)).copy()
+    bad = int(z[0, 2, PRN])
+    hit = (s.t >= 60) & (s.t < 120) & (z[:, :, PRN] == bad).any(axis=1)
+    for i in np.flatnonzero(hit):
+        j = int(np.flatnonzero(z[i, :, PRN] == bad)[0])
+        z[i, j, PR] += 60.0  # a 60 m step on one satellite (20 sigma)
+    series = dict(data.series, gnss_raw=replace(s, z=z.reshape(len(s.t), -1)))
+    res = run_mode(scn, ["gnss_raw"], replace(data, series=series), "fault")
+    excluded = [e for e in res.excluded if e[1] == "gnss_raw"]
+    assert {e[2] for e in excluded} == {bad}
+    assert len(excluded) >= 0.9 * hit.sum()
+    clean = out["gnss_raw"]
+    k = (res.t >= 60) & (res.t < 120)
+    assert _horizontal(res, 60, 120) < 1.5 * _horizontal(clean, 60, 120) + 0.5
+    assert np.isfinite(res.pos[k]).all() and not res.fdi.isolated.any()
