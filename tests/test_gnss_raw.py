@@ -3,6 +3,8 @@ differences of the range model, the receiver clock's states, the simulated sky, 
 the navigator flying satellites — fewer than four included — with one faulty satellite
 excluded rather than the receiver."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -251,3 +253,60 @@ def test_a_faulty_satellite_is_excluded_not_the_receiver(flown):
     k = (res.t >= 60) & (res.t < 120)
     assert _horizontal(res, 60, 120) < 1.5 * _horizontal(clean, 60, 120) + 0.5
     assert np.isfinite(res.pos[k]).all() and not res.fdi.isolated.any()
+
+
+# ------------------------------------------------------------- a receiver's files
+def test_observations_give_rows_that_vanish_at_the_receiver():
+    """Light-time pseudoranges and their Dopplers of a synthetic broadcast constellation
+    (tests/test_satellites.py's): the rows at the true position, the true clock in the
+    totals, are zero to a centimetre and 3 mm/s (3 % of a Doppler's 1-sigma)."""
+    from test_satellites import _constellation, _pseudoranges
+
+    from fednav.sensors.gnss_raw import from_observations
+    from fednav.sensors.satellites import C, F_L1
+
+    t = 2.0e9 + np.arange(0.0, 300.0, 30.0)
+    eph = _constellation(float(t[0]))
+    lla = np.array([np.radians(35.0), np.radians(139.0), 50.0])
+    rx = earth.llh_to_ecef(*lla)
+    pr = _pseudoranges(eph, rx, t, 1234.5)
+    dop = -(_pseudoranges(eph, rx, t + 0.5, 1234.5)
+            - _pseudoranges(eph, rx, t - 0.5, 1234.5)) / (C / F_L1)
+    tt, z, used = from_observations(t, pr, dop, eph.sv, eph, iono=False, tropo=False,
+                                    mask_deg=0.0)
+    assert len(tt) == len(t) and (used == np.isfinite(pr).sum(axis=1)).all()
+    lay = _layout()
+    xa = np.zeros(lay.n)
+    xa[lay.start("clock")] = 1234.5
+    nav = NavSnapshot(lla, np.zeros(3), np.eye(3))
+    for zi, n in zip(z, used, strict=True):
+        y = SatelliteRanges(mask=0.0).bind(zi, nav, lay, xa).residual(nav)
+        assert len(y) == 2 * n
+        assert np.abs(y[:n]).max() < 0.01 and np.abs(y[n:]).max() < 3e-3
+
+
+STATIC = Path(__file__).resolve().parents[2] / "shared" / "data" / "rinex-static"
+
+
+@pytest.mark.skipif(not STATIC.is_dir(), reason="needs ../shared/data")
+@pytest.mark.parametrize("station", ["0759", "3040"])
+def test_real_pseudoranges_at_the_station(station):
+    """A real receiver's files (GSI station, 1 h at 30 s): at the station's surveyed
+    position, with each epoch's clock taken out (the median), the corrected pseudoranges
+    agree to about a metre (0.85 and 1.06 m RMS)."""
+    from fednav.io.rinex import read_raw_gnss, read_rinex_obs
+
+    obs = read_rinex_obs(STATIC / f"{station}0920.05o")
+    s = read_raw_gnss(STATIC / f"{station}0920.05o", STATIC / f"{station}0920.05n")
+    assert s.name == "gnss_raw" and len(s.t) == 120
+    assert s.quality["gnss_raw_satellites_mean"] > 5 and not s.quality["gnss_raw_doppler"]
+    nav = NavSnapshot(earth.ecef_to_llh(obs.approx_xyz), np.zeros(3), np.eye(3))
+    lay = _layout()
+    res = []
+    for z in s.z:
+        b = SatelliteRanges().bind(z, nav, lay, np.zeros(lay.n))
+        y = b.residual(nav)
+        assert len(y) == len(b.sat)  # (no Doppler in these files: pseudoranges only)
+        res.append(y - np.median(y))
+    rms = float(np.sqrt(np.mean(np.concatenate(res) ** 2)))
+    assert 0.3 < rms < 1.5

@@ -180,3 +180,39 @@ def read_rinex_nav(path) -> Ephemerides:
 
 __all__ = ["Ephemerides", "GPS_EPOCH", "RinexObs", "WEEK_S", "gps_seconds", "read_rinex_nav",
            "read_rinex_obs"]
+
+
+def read_raw_gnss(obs_path, nav_path, *, mask_deg: float = 10.0, t0: float | None = None):
+    """A receiver's RINEX observation and navigation files as the raw GNSS sensor's
+    series (``gnss_raw``, :func:`fednav.sensors.gnss_raw.from_observations`): every
+    epoch's GPS satellites above ``mask_deg`` [deg] with their L1 C/A pseudorange and,
+    where the file has it, Doppler (``D1``/``D1C``), C/N0 (``S1``/``S1C``) weighting.
+
+    Times are GPS time [s] since the GPS epoch, less ``t0`` when given (the IMU
+    recording's own zero in GPS time, so both share one clock).
+
+    Raises
+    ------
+    DataError
+        One line: a file missing or unreadable, no L1 pseudorange, or no epoch with four
+        satellites to place the receiver.
+    """
+    from ..sensors.gnss_raw import from_observations
+    from .data import SensorData
+
+    obs, eph = read_rinex_obs(obs_path), read_rinex_nav(nav_path)
+    pr = obs.code("C1", "C1C")
+    dop = next((obs.obs[c] for c in ("D1", "D1C") if c in obs.obs), None)
+    cn0 = next((obs.obs[c] for c in ("S1", "S1C") if c in obs.obs), None)
+    sv = np.array([s for s in obs.sv])
+    try:
+        t, z, used = from_observations(obs.t, pr, dop, sv, eph, mask_deg=mask_deg, cn0=cn0)
+    except ValueError as e:
+        raise DataError(f"{obs_path}: {e}") from None
+    return SensorData("gnss_raw", f"{obs_path} + {nav_path}",
+                      t - (0.0 if t0 is None else float(t0)), z,
+                      quality={"gnss_raw_epochs": int(len(t)),
+                               "gnss_raw_epochs_without_satellites": int(len(obs.t) - len(t)),
+                               "gnss_raw_satellites_mean": float(np.mean(used)) if len(used)
+                               else 0.0,
+                               "gnss_raw_doppler": dop is not None})

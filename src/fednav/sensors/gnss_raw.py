@@ -252,6 +252,92 @@ class SatelliteRanges:
 
 
 
+# ------------------------------------------------------------------ a receiver's files
+def from_observations(t, pr, doppler, sv, eph, *, mask_deg: float = 10.0,
+                      iono: bool = True, tropo: bool = True, cn0=None,
+                      sigma_pr: float = 3.0, sigma_rr: float = 0.1):
+    """Raw GNSS measurements (``z`` (N, :data:`WIDTH`)) from a receiver's observations.
+
+    ``t`` (N,) receive times, GPS time [s]; ``pr`` (N, M) L1 C/A pseudoranges [m];
+    ``doppler`` (N, M) L1 Dopplers [Hz] (positive approaching, RINEX's sign; None or NaN:
+    no range-rate row); ``sv`` (M,) the satellites' ids in ``eph`` (GPS broadcast
+    ephemerides, :func:`fednav.io.rinex.read_rinex_nav`); ``cn0`` (N, M) [dB-Hz],
+    optional: each satellite's 1-sigma is then written, the zenith ``sigma_pr`` [m] and
+    ``sigma_rr`` [m/s] scaled by elevation (:func:`elevation_sigma`) and by
+    ``10^((45 - C/N0) / 20)`` below 45 dB-Hz (without ``cn0`` it is left NaN: the
+    section's figures by elevation).
+
+    Per epoch and satellite (:mod:`fednav.sensors.satellites`): the transmit time from
+    the pseudorange and the satellite clock, the satellite's position, velocity, clock
+    offset (relativistic term and ``TGD`` included) and drift there, turned by the
+    Earth's rotation during the transit; the pseudorange less the satellite clock,
+    Klobuchar's ionosphere and Saastamoinen's troposphere (both at the single-point
+    position of the epoch, or the nearest epoch that has one: they change by centimetres
+    over hundreds of metres); the range rate ``-lambda_L1 D`` plus the satellite's clock
+    drift.  Satellites below ``mask_deg`` [deg] there, or without a usable ephemeris, are
+    left out; an epoch keeps the :data:`SLOTS` highest.  Returns ``(t, z, used)``: the
+    epochs with a satellite, their ``z``, and the satellites each kept (N,).
+    """
+    from .satellites import (F_L1, azimuth_elevation, klobuchar, nearest_ephemeris,
+                             saastamoinen, satellite_states, single_point)
+
+    t = np.asarray(t, dtype=float)
+    pr = np.asarray(pr, dtype=float)
+    N, M = pr.shape
+    dop = np.full_like(pr, np.nan) if doppler is None else np.asarray(doppler, dtype=float)
+    spp = single_point(t, pr, sv, eph, iono=iono, tropo=tropo, mask_deg=mask_deg)
+    good = np.flatnonzero(np.isfinite(spp.xyz[:, 0]))
+    if not len(good):
+        raise ValueError("gnss_raw: no epoch with four satellites to place the receiver "
+                         "for its ionosphere, troposphere and elevation mask")
+    near = good[np.clip(np.searchsorted(good, np.arange(N)), 0, len(good) - 1)]
+    rx = spp.xyz[near]
+    lla = earth.ecef_to_llh(rx)
+    idx = nearest_ephemeris(eph, np.asarray(sv), t)
+    tau = np.where(np.isfinite(pr), pr, 0.0) / LIGHT
+    t_tx = t[:, None] - tau
+    _, _, clk, _ = satellite_states(eph, idx, t_tx, True)
+    t_tx = t_tx - np.nan_to_num(clk)
+    pos, vel, clk, drift = satellite_states(eph, idx, t_tx, True)
+    th = OMEGA_E * np.linalg.norm(pos - rx[:, None, :], axis=-1) / LIGHT  # (transit)
+    c, s = np.cos(th), np.sin(th)
+
+    def turn(a):
+        return np.stack([c * a[..., 0] + s * a[..., 1], -s * a[..., 0] + c * a[..., 1],
+                         a[..., 2]], axis=-1)
+
+    pos, vel = turn(pos), turn(vel)
+    az, el = azimuth_elevation(lla[:, None, :], rx[:, None, :], pos)
+    corr = np.zeros((N, M))
+    if iono and eph.iono is not None:
+        corr += klobuchar(eph.iono, lla[:, None, 0], lla[:, None, 1], az, el,
+                          np.mod(t[:, None], 604800.0))
+    if tropo:
+        corr += saastamoinen(lla[:, None, 0], lla[:, None, 2], el)
+    prc = pr + LIGHT * clk - corr
+    rr = -LIGHT / F_L1 * dop + LIGHT * drift
+    ok = np.isfinite(prc) & np.isfinite(pos[..., 0]) & (el >= np.radians(mask_deg))
+    prn = np.array([int(str(v)[1:]) if str(v)[:1].isalpha() else int(v) for v in sv],
+                   dtype=float)
+    w = np.full((N, M), np.nan) if cn0 is None else \
+        10.0 ** ((45.0 - np.asarray(cn0, dtype=float)) / 20.0)
+    z = np.full((N, WIDTH), np.nan)
+    used = np.zeros(N, dtype=int)
+    for i in range(N):
+        k = np.flatnonzero(ok[i])
+        k = k[np.argsort(-el[i, k])][:SLOTS]
+        if not len(k):
+            continue
+        f = np.maximum(w[i, k], 1.0)  # (no better than the elevation's own figure)
+        rows = np.column_stack([prn[k], pos[i, k], vel[i, k], prc[i, k], rr[i, k],
+                                f * elevation_sigma(sigma_pr, el[i, k]),
+                                f * elevation_sigma(sigma_rr, el[i, k])])
+        z[i] = pack(rows)
+        used[i] = len(k)
+    keep = used > 0
+    return t[keep], z[keep], used[keep]
+
+
 # ---------------------------------------------------------------------------- simulation
 #: GPS's nominal orbit: semi-major axis [m] and inclination (IS-GPS-200, the almanac's).
 GPS_A = 26_559_700.0
