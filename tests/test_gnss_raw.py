@@ -263,7 +263,7 @@ def test_observations_give_rows_that_vanish_at_the_receiver():
     from test_satellites import _constellation, _pseudoranges
 
     from fednav.sensors.gnss_raw import from_observations
-    from fednav.sensors.satellites import C, F_L1
+    from fednav.sensors.satellites import F_L1, C
 
     t = 2.0e9 + np.arange(0.0, 300.0, 30.0)
     eph = _constellation(float(t[0]))

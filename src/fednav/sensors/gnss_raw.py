@@ -278,8 +278,15 @@ def from_observations(t, pr, doppler, sv, eph, *, mask_deg: float = 10.0,
     left out; an epoch keeps the :data:`SLOTS` highest.  Returns ``(t, z, used)``: the
     epochs with a satellite, their ``z``, and the satellites each kept (N,).
     """
-    from .satellites import (F_L1, azimuth_elevation, klobuchar, nearest_ephemeris,
-                             saastamoinen, satellite_states, single_point)
+    from .satellites import (
+        F_L1,
+        azimuth_elevation,
+        klobuchar,
+        nearest_ephemeris,
+        saastamoinen,
+        satellite_states,
+        single_point,
+    )
 
     t = np.asarray(t, dtype=float)
     pr = np.asarray(pr, dtype=float)
