@@ -20,11 +20,12 @@ from .navego import (
     read_navego_visual,
 )
 from .nmea import read_nmea
-from .rinex import Ephemerides, RinexObs, read_rinex_nav, read_rinex_obs
+from .rinex import Ephemerides, RinexObs, read_raw_gnss, read_rinex_nav, read_rinex_obs
 from .rosbag import BagRecording, read_rosbag
 from .rtklib import read_rtklib_pos
 from .sensorfile import SensorData, read_sensor_csv, write_sensor_csv
 from .ubx import read_ubx, read_ubx_imu, read_ubx_odometer
+from .ubx_raw import read_ubx_raw_gnss
 from .ulog import UlogRecording, read_ulog
 
 __all__ = [
@@ -35,7 +36,8 @@ __all__ = [
     "SensorData", "read_ubx", "read_ubx_imu", "read_ubx_odometer",
     "write_sensor_csv", "UlogRecording", "read_ulog",
     "BagRecording", "read_rosbag",
-    "Ephemerides", "RinexObs", "read_rinex_nav", "read_rinex_obs",
+    "Ephemerides", "RinexObs", "read_rinex_nav", "read_rinex_obs", "read_raw_gnss",
+    "read_ubx_raw_gnss",
     "GnssInsSimRecording", "read_gnss_ins_sim",
     "read_kfgins_gnss", "read_kfgins_imu", "read_kfgins_nav", "write_kfgins_nav",
 ]

@@ -178,10 +178,6 @@ def read_rinex_nav(path) -> Ephemerides:
                        None if iono is None else np.asarray(iono, dtype=float))
 
 
-__all__ = ["Ephemerides", "GPS_EPOCH", "RinexObs", "WEEK_S", "gps_seconds", "read_rinex_nav",
-           "read_rinex_obs"]
-
-
 def read_raw_gnss(obs_path, nav_path, *, mask_deg: float = 10.0, t0: float | None = None):
     """A receiver's RINEX observation and navigation files as the raw GNSS sensor's
     series (``gnss_raw``, :func:`fednav.sensors.gnss_raw.from_observations`): every
@@ -197,22 +193,35 @@ def read_raw_gnss(obs_path, nav_path, *, mask_deg: float = 10.0, t0: float | Non
         One line: a file missing or unreadable, no L1 pseudorange, or no epoch with four
         satellites to place the receiver.
     """
+    obs, eph = read_rinex_obs(obs_path), read_rinex_nav(nav_path)
+    dop = next((obs.obs[c] for c in ("D1", "D1C") if c in obs.obs), None)
+    cn0 = next((obs.obs[c] for c in ("S1", "S1C") if c in obs.obs), None)
+    return raw_series(f"{obs_path} + {nav_path}", obs.t, obs.code("C1", "C1C"), dop, cn0,
+                      obs.sv, eph, mask_deg=mask_deg, t0=t0)
+
+
+def raw_series(source: str, t, pr, dop, cn0, sv, eph, *, mask_deg: float = 10.0,
+               t0: float | None = None):
+    """The ``gnss_raw`` series of a receiver's observations ``t`` (N,) GPS time [s],
+    ``pr`` (N, M) L1 pseudoranges [m], ``dop`` (N, M) Dopplers [Hz] or None, ``cn0``
+    (N, M) [dB-Hz] or None, of satellites ``sv`` (M,) with ephemerides ``eph``
+    (:func:`fednav.sensors.gnss_raw.from_observations`); times less ``t0``.  What the
+    RINEX and the u-blox readers share."""
     from ..sensors.gnss_raw import from_observations
     from .data import SensorData
 
-    obs, eph = read_rinex_obs(obs_path), read_rinex_nav(nav_path)
-    pr = obs.code("C1", "C1C")
-    dop = next((obs.obs[c] for c in ("D1", "D1C") if c in obs.obs), None)
-    cn0 = next((obs.obs[c] for c in ("S1", "S1C") if c in obs.obs), None)
-    sv = np.array([s for s in obs.sv])
     try:
-        t, z, used = from_observations(obs.t, pr, dop, sv, eph, mask_deg=mask_deg, cn0=cn0)
+        tt, z, used = from_observations(t, pr, dop, np.asarray(sv), eph, mask_deg=mask_deg,
+                                         cn0=cn0)
     except ValueError as e:
-        raise DataError(f"{obs_path}: {e}") from None
-    return SensorData("gnss_raw", f"{obs_path} + {nav_path}",
-                      t - (0.0 if t0 is None else float(t0)), z,
-                      quality={"gnss_raw_epochs": int(len(t)),
-                               "gnss_raw_epochs_without_satellites": int(len(obs.t) - len(t)),
+        raise DataError(f"{source}: {e}") from None
+    return SensorData("gnss_raw", source, tt - (0.0 if t0 is None else float(t0)), z,
+                      quality={"gnss_raw_epochs": int(len(tt)),
+                               "gnss_raw_epochs_without_satellites": int(len(t) - len(tt)),
                                "gnss_raw_satellites_mean": float(np.mean(used)) if len(used)
                                else 0.0,
                                "gnss_raw_doppler": dop is not None})
+
+
+__all__ = ["Ephemerides", "GPS_EPOCH", "RinexObs", "WEEK_S", "gps_seconds", "raw_series",
+           "read_raw_gnss", "read_rinex_nav", "read_rinex_obs"]
