@@ -35,7 +35,7 @@ def _words(values: dict, which: int, tow: float, week: int, toc: float, toe: flo
     bits = 0x8B << 216  # TLM preamble
     bits |= (int(tow // 6) & 0x1FFFF) << (240 - 24 - 17)
     bits |= which << (240 - 43 - 3)
-    for name, first, width, signed, scale in LNAV_FIELDS[which]:
+    for name, first, width, _, scale in LNAV_FIELDS[which]:
         n = int(round(v[name] / scale))
         assert -(1 << (width - 1)) <= n < (1 << width), (name, n)
         bits |= (n & ((1 << width) - 1)) << (240 - first - width)
@@ -62,8 +62,7 @@ def test_subframes_decode_to_the_ephemeris():
     assert [subframe_id(sf[w]) for w in (1, 2, 3)] == [1, 2, 3]
     out = decode_lnav(sf[1], sf[2], sf[3], 2053)
     assert out["toe"] == out["toc"] == t0
-    for name, first, width, signed, scale in LNAV_FIELDS[1] + LNAV_FIELDS[2] + \
-            LNAV_FIELDS[3]:
+    for name, *_, scale in LNAV_FIELDS[1] + LNAV_FIELDS[2] + LNAV_FIELDS[3]:
         if name in out and name not in ("toc", "toe"):
             assert out[name] == pytest.approx(el[name], abs=scale), name
     # another issue of data in subframe 3: no ephemeris
