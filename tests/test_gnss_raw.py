@@ -163,6 +163,9 @@ def test_clock_states_come_with_the_sensor():
     assert lay.blocks[0][3] == (sf, sg) and sf < 1e-7
     with pytest.raises(ConfigError, match="clock is the state of a sensor"):
         state_layout(load_system({"filter": {"states": ["clock"]}}))
+    with pytest.raises(ConfigError, match="curve_fit extrapolates"):
+        load_system({"sensors": {"gnss_raw": {"timing": {
+            "latency_s": 0.2, "delay_compensation": "curve_fit"}}}})
 
 
 # ------------------------------------------------------------------ the navigator
@@ -231,7 +234,12 @@ def test_two_satellites_beat_none_and_the_full_sky_agrees(flown):
     assert 0.7 < f.statistic.sum() / f.dof.sum() < 1.4
 
 
-def test_a_faulty_satellite_is_excluded_not_the_receiver(flown):
+@pytest.mark.parametrize("aiding", [["gnss_raw"], ["gnss_raw", "gnss"]],
+                         ids=["alone", "federated"])
+def test_a_faulty_satellite_is_excluded_not_the_receiver(flown, aiding):
+    """A 60 m step on one satellite for a minute: that satellite is left out of its
+    epochs (alone, and as one local filter of a federation with the receiver's fixes),
+    the others used, no epoch isolated, the position as good as without the fault."""
     from dataclasses import replace
 
     from fednav.sim.runs import run_mode
@@ -245,11 +253,11 @@ def test_a_faulty_satellite_is_excluded_not_the_receiver(flown):
         j = int(np.flatnonzero(z[i, :, PRN] == bad)[0])
         z[i, j, PR] += 60.0  # a 60 m step on one satellite (20 sigma)
     series = dict(data.series, gnss_raw=replace(s, z=z.reshape(len(s.t), -1)))
-    res = run_mode(scn, ["gnss_raw"], replace(data, series=series), "fault")
+    res = run_mode(scn, aiding, replace(data, series=series), "fault")
     excluded = [e for e in res.excluded if e[1] == "gnss_raw"]
     assert {e[2] for e in excluded} == {bad}
     assert len(excluded) >= 0.9 * hit.sum()
-    clean = out["gnss_raw"]
+    clean = out["gnss_raw"] if len(aiding) == 1 else run_mode(scn, aiding, data, "clean")
     k = (res.t >= 60) & (res.t < 120)
     assert _horizontal(res, 60, 120) < 1.5 * _horizontal(clean, 60, 120) + 0.5
     assert np.isfinite(res.pos[k]).all() and not res.fdi.isolated.any()
@@ -310,3 +318,43 @@ def test_real_pseudoranges_at_the_station(station):
         res.append(y - np.median(y))
     rms = float(np.sqrt(np.mean(np.concatenate(res) ** 2)))
     assert 0.3 < rms < 1.5
+
+
+def test_the_contested_sky_example_flies_two_satellites():
+    """examples/contested-sky.yaml: loose against tight through the jamming, then star and
+    SAR beside the tight GNSS (its tables: docs/data-formats.md)."""
+    from fednav.sim.scenario import load_scenario
+
+    path = Path(__file__).resolve().parents[1] / "examples" / "contested-sky.yaml"
+    scn = load_scenario(path)
+    raw = scn.sensors["gnss_raw"]
+    assert raw.satellites_s == [(600.0, 1200.0, 2)]
+    assert scn.sensors["gnss"].outages_s == [(600.0, 1200.0)]
+    assert {a for m in scn.modes for a in m.aiding} == {"gnss", "gnss_raw", "star", "sar"}
+
+
+def test_rinex_written_by_fednav_reads_back(tmp_path):
+    """fednav's RINEX 2.11 writer and georinex's reader: the same epochs (GPS time, a
+    week rollover's week 2048 included), satellites and values to the format's
+    millimetre; an existing file is never overwritten."""
+    pytest.importorskip("georinex")
+    from fednav.io.data import DataError
+    from fednav.io.rinex import WEEK_S, read_rinex_obs, write_rinex_obs
+
+    rng = np.random.default_rng(3)
+    t = 2048 * WEEK_S - 60.0 + np.arange(0.0, 120.0, 30.0)  # across the 2019 rollover
+    sv = np.array([f"G{i:02d}" for i in (2, 5, 13, 24, 31)])
+    pr = 2.1e7 + rng.uniform(0.0, 4e6, (len(t), len(sv)))
+    pr[1, 2] = np.nan
+    dop = np.where(np.isfinite(pr), rng.normal(0.0, 2000.0, pr.shape), np.nan)
+    path = write_rinex_obs(tmp_path / "x.19o", t, sv, {"C1": pr, "D1": dop},
+                           approx_xyz=[-3976219.5, 3382372.6, 3652513.0])
+    o = read_rinex_obs(path)
+    np.testing.assert_array_equal(o.t, t)
+    assert list(o.sv) == list(sv)
+    np.testing.assert_allclose(o.obs["C1"], pr, atol=6e-4)
+    np.testing.assert_allclose(o.obs["D1"], dop, atol=6e-4)
+    assert np.isnan(o.obs["C1"][1, 2])
+    np.testing.assert_allclose(o.approx_xyz, [-3976219.5, 3382372.6, 3652513.0])
+    with pytest.raises(DataError, match="does not overwrite"):
+        write_rinex_obs(path, t, sv, {"C1": pr})

@@ -10,13 +10,18 @@ with none is one line.
 ``georinex`` (RINEX 2.x and 3.x, observation and navigation) was chosen over a reader
 of fednav's own: on the static stations of ``../shared/data/rinex-static`` (1 h at
 30 s, 11 and 12 satellites) it reads an observation file in 0.45 s and a navigation file in
-0.01 s.
+0.01 s; a day at 30 s (2 880 epochs of 10 satellites, 2 MB, written by
+:func:`write_rinex_obs`) in 0.17 s, 0.58x the time ``fednav process`` takes for the
+600 s car drive of ``examples/car-drive.yaml`` in the same run
+(``benchmarks/rinex_read.py``).  :func:`write_rinex_obs` writes RINEX 2.11 observation
+files (simulated receivers, tests).
 """
 
 from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass, field
+from datetime import UTC, datetime
 from pathlib import Path
 
 import numpy as np
@@ -223,5 +228,61 @@ def raw_series(source: str, t, pr, dop, cn0, sv, eph, *, mask_deg: float = 10.0,
                                "gnss_raw_doppler": dop is not None})
 
 
+def _calendar(t: float) -> tuple:
+    """(year, month, day, hour, minute, seconds) of GPS time ``t`` [s]."""
+    whole = np.floor(t)
+    d = (GPS_EPOCH + np.timedelta64(int(whole), "s")).astype("datetime64[s]").item()
+    return d.year, d.month, d.day, d.hour, d.minute, d.second + float(t - whole)
+
+
+def write_rinex_obs(path, t, sv, obs: dict, *, approx_xyz=None, marker: str = "FEDNAV",
+                    program: str = "fednav") -> Path:
+    """A RINEX 2.11 GPS observation file: epochs ``t`` (N,) GPS time [s], satellites
+    ``sv`` (M,) (``G01`` ...), ``obs`` code -> (N, M) values (``C1`` pseudorange [m],
+    ``D1`` Doppler [Hz], ``S1`` C/N0 [dB-Hz], ``L1`` phase [cycles]; NaN: not observed),
+    ``approx_xyz`` the antenna's position ECEF [m].  An existing file is never
+    overwritten (:class:`DataError`).  What :func:`read_rinex_obs` reads back."""
+    path = Path(path)
+    if path.exists():
+        raise DataError(f"{path}: exists; fednav does not overwrite a file")
+    t = np.asarray(t, dtype=float)
+    codes = list(obs)
+    vals = np.stack([np.asarray(obs[c], dtype=float) for c in codes], axis=-1)  # N, M, K
+
+    def h(text: str, label: str) -> str:
+        return f"{text:<60.60}{label:<20}\n"
+
+    now = datetime.now(UTC).strftime("%Y%m%d %H%M%S UTC")
+    xyz = np.zeros(3) if approx_xyz is None else np.asarray(approx_xyz, dtype=float)
+    y, mo, d, hh, mi, ss = _calendar(t[0])
+    types = f"{len(codes):6d}" + "".join(f"{c:>6}" for c in codes)
+    lines = [h(f"{2.11:9.2f}{'':11}{'OBSERVATION DATA':<20}{'G (GPS)':<20}",
+               "RINEX VERSION / TYPE"),
+             h(f"{program:<20}{'':20}{now:<20}", "PGM / RUN BY / DATE"),
+             h(marker, "MARKER NAME"),
+             h("".join(f"{v:14.4f}" for v in xyz), "APPROX POSITION XYZ"),
+             h(f"{0.0:14.4f}{0.0:14.4f}{0.0:14.4f}", "ANTENNA: DELTA H/E/N"),
+             h(f"{1:6d}{1:6d}", "WAVELENGTH FACT L1/2"), h(types, "# / TYPES OF OBSERV")]
+    if len(t) > 1:
+        lines.append(h(f"{float(np.median(np.diff(t))):10.4f}", "INTERVAL"))
+    lines += [h(f"{y:6d}{mo:6d}{d:6d}{hh:6d}{mi:6d}{ss:13.7f}     GPS", "TIME OF FIRST OBS"),
+              h("", "END OF HEADER")]
+    out = ["".join(lines)]
+    for i, ti in enumerate(t):
+        seen = np.flatnonzero(np.isfinite(vals[i]).any(axis=1))
+        y, mo, d, hh, mi, ss = _calendar(ti)
+        names = [str(sv[j]) for j in seen]
+        head = f" {y % 100:02d}{mo:3d}{d:3d}{hh:3d}{mi:3d}{ss:11.7f}  0{len(names):3d}"
+        out.append(head + "".join(names[:12]) + "\n")
+        for k in range(12, len(names), 12):
+            out.append(" " * 32 + "".join(names[k:k + 12]) + "\n")
+        for j in seen:
+            fields = ["" if not np.isfinite(v) else f"{v:14.3f}  " for v in vals[i, j]]
+            for k in range(0, len(fields), 5):
+                out.append("".join(f"{f:<16}" for f in fields[k:k + 5]).rstrip() + "\n")
+    path.write_text("".join(out))
+    return path
+
+
 __all__ = ["Ephemerides", "GPS_EPOCH", "RinexObs", "WEEK_S", "gps_seconds", "raw_series",
-           "read_raw_gnss", "read_rinex_nav", "read_rinex_obs"]
+           "read_raw_gnss", "read_rinex_nav", "read_rinex_obs", "write_rinex_obs"]

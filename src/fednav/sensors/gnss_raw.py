@@ -144,7 +144,16 @@ class BoundRanges:
         self.use_rr = use_rr
         self.dim = len(groups)
 
+    _cache: tuple = (None, None)
+
     def _geometry(self, nav: NavSnapshot):
+        if self._cache[0] is nav:  # (the residual and H of one update: one geometry)
+            return self._cache[1]
+        out = self._compute(nav)
+        self._cache = (nav, out)
+        return out
+
+    def _compute(self, nav: NavSnapshot):
         r, v, Cne, turn = _antenna(nav, self.lever, frame=True)
         d = self.sat[:, SX:SZ + 1] - r
         rho = np.linalg.norm(d, axis=1)
@@ -515,6 +524,16 @@ class GnssRawConfig(SensorConfig):
         "the simulated clock's start"))
     satellites_s: list[tuple[float, float, int]] = Field(
         default=[], json_schema_extra=simulation_only("simulated loss of satellites"))
+
+    @field_validator("timing")
+    @classmethod
+    def _timing(cls, v):
+        if v.delay_compensation == "curve_fit":
+            raise ValueError("delay_compensation: curve_fit extrapolates a measurement's "
+                             "values, and a raw GNSS epoch's satellites differ from one "
+                             "epoch to the next; use interpolate, ins_increment or "
+                             "recompute")
+        return v
 
     @field_validator("satellites_s")
     @classmethod
