@@ -115,6 +115,17 @@ def test_rows_are_the_derivative_of_the_range_model():
     d = model.bind(z, nav, lay, xb).residual(nav) - b.residual(nav)
     np.testing.assert_allclose(d, np.r_[np.ones(len(seen)), 0.5 * np.ones(len(seen))])
     np.testing.assert_allclose(b.h(np.eye(lay.n)[:3], nav), H[:, :3].T[:3].reshape(3, -1))
+    # a measurement valid dt before the epoch sees the clock there: cb + dt cd, and its
+    # error dcb + dt dcd
+    m = len(seen)
+    c = model.bind(z, nav, lay, xa, dt=-0.4)
+    np.testing.assert_allclose(c.residual(nav) - b.residual(nav),
+                               np.r_[np.full(m, -0.4 * 3.0), np.zeros(m)], atol=1e-9)
+    np.testing.assert_allclose(c.H(nav)[:m, ic + 1], 0.4)
+    np.testing.assert_array_equal(c.H(nav)[m:], H[m:])
+    sub = c.subset(c.groups != c.groups[0])
+    assert sub.dim == c.dim - 2 and sub.dt == c.dt
+    np.testing.assert_allclose(sub.residual(nav), np.delete(c.residual(nav), [0, m]))
 
 
 def test_the_mask_and_the_empty_slots_leave_rows_out():
@@ -253,7 +264,8 @@ def test_a_faulty_satellite_is_excluded_not_the_receiver(flown, aiding):
         j = int(np.flatnonzero(z[i, :, PRN] == bad)[0])
         z[i, j, PR] += 60.0  # a 60 m step on one satellite (20 sigma)
     series = dict(data.series, gnss_raw=replace(s, z=z.reshape(len(s.t), -1)))
-    res = run_mode(scn, aiding, replace(data, series=series), "fault")
+    res = run_mode(scn, aiding, replace(data, series=series), "fault", innovations=True)
+    assert 0.5 < res.nis["gnss_raw"] < 1.5  # (recorded with the rows kept)
     excluded = [e for e in res.excluded if e[1] == "gnss_raw"]
     assert {e[2] for e in excluded} == {bad}
     assert len(excluded) >= 0.9 * hit.sum()
@@ -358,3 +370,37 @@ def test_rinex_written_by_fednav_reads_back(tmp_path):
     np.testing.assert_allclose(o.approx_xyz, [-3976219.5, 3382372.6, 3652513.0])
     with pytest.raises(DataError, match="does not overwrite"):
         write_rinex_obs(path, t, sv, {"C1": pr})
+
+
+def test_bad_satellites_drop_out_and_the_file_round_trips(tmp_path, flown):
+    """A satellite with a NaN velocity or a non-positive 1-sigma gives no row (never a
+    NaN residual); the sensor's CSV file (NaN in its empty slots) reads back to the same
+    measurements."""
+    from fednav.io.sensorfile import read_sensor_csv, write_sensor_csv
+
+    z, seen = _sky()
+    s = z.reshape(SLOTS, -1).copy()
+    s[0, 4] = np.nan       # velocity
+    s[1, 9] = -1.0         # pseudorange 1-sigma
+    s[2, 10] = 0.0         # range-rate 1-sigma: pseudorange row only
+    b = SatelliteRanges().bind(s.ravel(), _nav(), _layout(), np.zeros(_layout().n))
+    assert b.dim == 2 * (len(seen) - 2) - 1 and np.isfinite(b.residual(_nav())).all()
+    assert not np.isnan(z.reshape(SLOTS, -1)[0, 4])  # (the caller's z untouched)
+    series = flown[1].series["gnss_raw"]
+    path = write_sensor_csv(tmp_path / "gnss_raw.csv", series, sigma=True)
+    back = read_sensor_csv("gnss_raw", path)
+    np.testing.assert_array_equal(back.t, series.t)
+    np.testing.assert_array_equal(np.isnan(back.z), np.isnan(series.z))
+    np.testing.assert_allclose(back.z, series.z, rtol=1e-15)
+
+
+@pytest.mark.parametrize("ftype", ["aekf", "raukf"])
+def test_adaptive_filters_keep_r_per_satellite(flown, ftype):
+    """Sage–Husa R adapted per satellite and row kind: the satellites change (8 to 2 and
+    back) without a shape error, and the tight run stays near the KF's."""
+    from fednav.sim.runs import run_mode
+
+    scn, data, out = flown
+    res = run_mode(scn, ["gnss_raw"], data, ftype, filter_type=ftype)
+    assert np.isfinite(res.pos).all()
+    assert _horizontal(res, 30, 150) < 3 * _horizontal(out["gnss_raw"], 30, 150) + 1.0

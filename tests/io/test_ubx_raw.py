@@ -81,6 +81,15 @@ def test_the_ten_bit_week_is_resolved_by_the_rawx_week(sf_week, rawx_week, want)
     assert decode_lnav(*sf, rawx_week)["toe"] == want * WEEK_S
 
 
+def test_an_ephemeris_for_next_week_sent_on_saturday_takes_next_week():
+    """Subframes sent 6 s before the week's end whose toe and toc are the next week's
+    start (0 s of week): toe and toc land in the next week (RTKLIB's handover rule)."""
+    el = _elements(_constellation(0.0), 1)
+    sf = [lnav_subframes(_words(el, w, WEEK_S - 6.0, 2100, 0.0, 0.0)) for w in (1, 2, 3)]
+    out = decode_lnav(*sf, 2100)
+    assert out["toe"] == out["toc"] == 2101 * WEEK_S
+
+
 def _log(path, t, pr, dop, eph, with_sfrbx=True):
     """RXM-SFRBX subframes 1-3 of every satellite, then one RXM-RAWX per epoch."""
     week = int(t[0] // WEEK_S)

@@ -115,6 +115,31 @@ class _SageHusa:
         return R
 
 
+def adapt_r(sh: _SageHusa, model, R, r, HPHt) -> np.ndarray:
+    """Sage–Husa's R for one measurement of ``model``: one estimate per measurement type
+    (its ``kind``), or, for a model whose rows differ from one measurement to the next
+    (``row_keys``: a raw GNSS epoch's satellites), one per row's key, on its diagonal."""
+    keys = getattr(model, "row_keys", None)
+    if keys is None:
+        return sh.adapt(getattr(model, "kind", type(model).__name__), R, r, HPHt)
+    R = np.array(R, dtype=float)
+    out = R.copy()
+    for i, k in enumerate(keys):
+        out[i, i] = sh.adapt(k, R[i:i + 1, i:i + 1], r[i:i + 1], HPHt[i:i + 1, i:i + 1])[0, 0]
+    return out
+
+
+def current_r(sh: _SageHusa, model, R) -> np.ndarray:
+    """The current R estimate of :func:`adapt_r` without adapting it."""
+    keys = getattr(model, "row_keys", None)
+    if keys is None:
+        return sh.current(getattr(model, "kind", type(model).__name__), R)
+    out = np.array(R, dtype=float)
+    for i, k in enumerate(keys):
+        out[i, i] = sh.current(k, out[i:i + 1, i:i + 1])[0, 0]
+    return out
+
+
 class _ProcessWithQ:
     """A process model with its noise replaced by the current estimate."""
 
@@ -173,8 +198,7 @@ class SageHusaEKF(QAdaptation, KalmanFilter):
     def update(self, y, model, nav=None, R=None, gate: float | None = None) -> Innovation:
         H = np.asarray(model.H(nav), dtype=float)
         r = np.asarray(y, dtype=float) - model.h(self.x[None], nav)[0]
-        key = getattr(model, "kind", type(model).__name__)
-        Ra = self.sh.adapt(key, R, r, self._hph(H)) if self.adapt_r else R
+        Ra = adapt_r(self.sh, model, R, r, self._hph(H)) if self.adapt_r else R
         inn = super().update(y, model, nav, Ra, gate)
         if inn.accepted:
             self._adapt_q_after_update()
@@ -200,13 +224,12 @@ class RobustAdaptiveUKF(QAdaptation, UnscentedKalmanFilter):
         dZ = Z - z_hat
         Pzz0 = (dZ * self.Wc[:, None]).T @ dZ
         r = np.asarray(y, dtype=float) - z_hat
-        key = getattr(model, "kind", type(model).__name__)
-        Rc = self.sh.current(key, R)
+        Rc = current_r(self.sh, model, R)
         v = np.abs(r) / np.sqrt(np.diag(Pzz0 + Rc))
         w = igg3_weights(v, self.k0, self.k1)
         # Adapt R on the raw innovation unless it holds an outlier (a truncated innovation
         # would bias R low, then down-weight ever more: the two must not feed each other).
-        Ra = self.sh.adapt(key, R, r, Pzz0) if v.max() <= self.k1 else Rc
+        Ra = adapt_r(self.sh, model, R, r, Pzz0) if v.max() <= self.k1 else Rc
         s = 1.0 / np.sqrt(w)
         # (the points and their predicted measurements drawn above: not drawn again)
         inn = self._sigma_update(X, np.ascontiguousarray(Z, dtype=float), y,

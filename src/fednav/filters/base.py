@@ -39,6 +39,9 @@ class Innovation(NamedTuple):
     S: np.ndarray
     nis: float
     accepted: bool = True
+    #: the rows of the measurement the update used when fault detection left a unit out
+    #: (:meth:`fednav.filters.federated.FederatedFilter.update`); None: every row
+    rows: np.ndarray | None = None
 
 
 @dataclass

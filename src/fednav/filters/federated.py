@@ -479,7 +479,8 @@ class FederatedFilter:
         # passes after the test (policy.fdi_gate, fdi_passes: the engine's rules too)
         gate = policy.fdi_gate(thr, self.passes[local], self.fdi_recovery)
         inn = f.update(y, model, nav, R, gate=None if math.isinf(gate) else gate * share)
-        if not inn.accepted and getattr(model, "groups", None) is not None:
+        if (not inn.accepted and 0.0 <= gate < math.inf  # (a failed test, not recovery)
+                and getattr(model, "groups", None) is not None):
             inn = self._exclude(local, f, y, model, nav, R, t, inn)
             dof, thr = len(inn.r), self.threshold(len(inn.r), local)
         self.passes[local] = policy.fdi_passes(thr, gate, self.passes[local],
@@ -524,7 +525,7 @@ class FederatedFilter:
                        gate=self.threshold(len(rows), local))
         if new.accepted:
             self.excluded.append((t, local, int(u), stat))
-            return new
+            return new._replace(rows=rows)
         return inn
 
     def _readmit(self, local, f, y, model, nav, R, t, thr, inn):

@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .adaptive import QAdaptation, _SageHusa
+from .adaptive import QAdaptation, _SageHusa, adapt_r
 from .base import Filter, Innovation, chol
 from .sparse_grid import sparse_grid
 from .ukf import UnscentedKalmanFilter
@@ -86,8 +86,7 @@ class AdaptiveSparseGridFilter(QAdaptation, SparseGridFilter):
         dZ = Z - z_hat
         Pzz0 = (dZ * self.Wc[:, None]).T @ dZ
         y = np.asarray(y, dtype=float)
-        key = getattr(model, "kind", type(model).__name__)
-        Ra = self.sh.adapt(key, R, y - z_hat, Pzz0)
+        Ra = adapt_r(self.sh, model, R, y - z_hat, Pzz0)
         # The UKF update with the points and predicted measurements already at hand.
         inn = self._sigma_update(X, Z, y, Ra, gate)
         if inn.accepted:

@@ -8,13 +8,14 @@ are GPS time in seconds since the GPS epoch (1980-01-06 00:00:00, no leap second
 with none is one line.
 
 ``georinex`` (RINEX 2.x and 3.x, observation and navigation) was chosen over a reader
-of fednav's own: on the static stations of ``../shared/data/rinex-static`` (1 h at
-30 s, 11 and 12 satellites) it reads an observation file in 0.45 s and a navigation file in
-0.01 s; a day at 30 s (2 880 epochs of 10 satellites, 2 MB, written by
-:func:`write_rinex_obs`) in 0.17 s, 0.58x the time ``fednav process`` takes for the
-600 s car drive of ``examples/car-drive.yaml`` in the same run
-(``benchmarks/rinex_read.py``).  :func:`write_rinex_obs` writes RINEX 2.11 observation
-files (simulated receivers, tests).
+of fednav's own: on the static stations of ``../shared/data/rinex-static`` (1 h at 30 s,
+11 and 12 satellites) it reads an observation file in 0.02 s and a navigation file in
+0.01 s (the first read of a process also imports georinex and xarray: 0.4 s); a day at
+30 s (2 880 epochs of 10 satellites, 2 MB, written by :func:`write_rinex_obs`) in
+0.17 s, 0.58x the time ``fednav process`` takes for the 600 s car drive of
+``examples/car-drive.yaml`` in the same run (``benchmarks/rinex_read.py``).
+:func:`write_rinex_obs` writes RINEX 2.11 observation files (simulated receivers,
+tests).
 """
 
 from __future__ import annotations
@@ -247,6 +248,12 @@ def write_rinex_obs(path, t, sv, obs: dict, *, approx_xyz=None, marker: str = "F
         raise DataError(f"{path}: exists; fednav does not overwrite a file")
     t = np.asarray(t, dtype=float)
     codes = list(obs)
+    if not 0 < len(codes) <= 9:
+        raise DataError(f"{path}: RINEX 2.11's header line holds 1 to 9 observation types, "
+                        f"got {len(codes)}")
+    sv = [f"G{int(v):02d}" if not str(v)[:1].isalpha() else str(v) for v in sv]
+    if any(len(v) != 3 for v in sv):
+        raise DataError(f"{path}: satellites are written as a letter and two digits (G05)")
     vals = np.stack([np.asarray(obs[c], dtype=float) for c in codes], axis=-1)  # N, M, K
 
     def h(text: str, label: str) -> str:
@@ -259,12 +266,14 @@ def write_rinex_obs(path, t, sv, obs: dict, *, approx_xyz=None, marker: str = "F
     lines = [h(f"{2.11:9.2f}{'':11}{'OBSERVATION DATA':<20}{'G (GPS)':<20}",
                "RINEX VERSION / TYPE"),
              h(f"{program:<20}{'':20}{now:<20}", "PGM / RUN BY / DATE"),
-             h(marker, "MARKER NAME"),
+             h(marker, "MARKER NAME"), h(f"{'':20}{program:<40}", "OBSERVER / AGENCY"),
+             h(f"{'':20}{program + ' simulated':<20}", "REC # / TYPE / VERS"),
+             h("", "ANT # / TYPE"),
              h("".join(f"{v:14.4f}" for v in xyz), "APPROX POSITION XYZ"),
              h(f"{0.0:14.4f}{0.0:14.4f}{0.0:14.4f}", "ANTENNA: DELTA H/E/N"),
              h(f"{1:6d}{1:6d}", "WAVELENGTH FACT L1/2"), h(types, "# / TYPES OF OBSERV")]
     if len(t) > 1:
-        lines.append(h(f"{float(np.median(np.diff(t))):10.4f}", "INTERVAL"))
+        lines.append(h(f"{float(np.median(np.diff(t))):10.3f}", "INTERVAL"))
     lines += [h(f"{y:6d}{mo:6d}{d:6d}{hh:6d}{mi:6d}{ss:13.7f}     GPS", "TIME OF FIRST OBS"),
               h("", "END OF HEADER")]
     out = ["".join(lines)]

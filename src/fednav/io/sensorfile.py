@@ -99,7 +99,8 @@ def read_sensor_csv(name: str, path) -> SensorData:
     if ARRIVAL in have:
         ta = df[ARRIVAL].to_numpy(float)
     used = [j for j in range(z.shape[1]) if j not in absent]
-    ok = np.isfinite(z[:, used]).all(axis=1) & np.isfinite(t)
+    ok = np.isfinite(t) if spec.sparse else np.isfinite(z[:, used]).all(axis=1) & \
+        np.isfinite(t)
     if spec.valid is not None:
         with np.errstate(invalid="ignore"):
             ok &= spec.valid(z)
@@ -152,8 +153,9 @@ def write_sensor_csv(path, series, sigma: bool = False) -> Path:
         cols[c.name] = series.z[:, j] / c.to_si
     if series.t_avail is not None and np.any(series.t_avail != series.t):
         cols[ARRIVAL] = series.t_avail
-    if sigma:
-        s = np.broadcast_to(np.asarray(series.sigma, dtype=float), series.z.shape)
+    sg = np.asarray(series.sigma, dtype=float)
+    if sigma and sg.shape[-1:] == series.z.shape[-1:]:  # (a sensor whose z holds its own
+        s = np.broadcast_to(sg, series.z.shape)        # 1-sigma, the raw GNSS: none)
         for j, c in enumerate(columns):
             name, to_si = c.sigma_column
             cols[name] = s[:, j] / to_si

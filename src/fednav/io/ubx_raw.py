@@ -13,9 +13,12 @@ bits 29..0 (24 data bits, then 6 parity; the data bits as transmitted, not inver
 :func:`lnav_subframes` unpacks the data bits and :func:`decode_lnav` turns subframes 1, 2
 and 3 of one issue of data into an ephemeris (IS-GPS-200 20.3.3.3 and 20.3.3.4: the scale
 factors below, semicircles times ``GPS_PI`` in radians; the 10-bit week resolved with the
-RAWX week, which does not roll over).  Parity is not checked (the receiver decodes the
-words it outputs).  A log without a complete ephemeris of a satellite it measures is
-refused naming the satellites, unless a RINEX navigation file is given beside it.
+RAWX week, which does not roll over; toe and toc a week on when more than half a week
+from the subframe's time of week).  Parity is not checked (the receiver decodes the words
+it outputs).  Only L1 C/A subframes are read (``sigId`` 0: an F9's L2C CNAV messages are
+skipped).  A log from which no measured satellite's ephemeris can be decoded is refused
+in one line, unless a RINEX navigation file is given beside it; satellites without one
+drop out (``quality["ubx_satellites_without_ephemeris"]``).
 """
 
 from __future__ import annotations
@@ -87,8 +90,13 @@ def decode_lnav(sf1: int, sf2: int, sf3: int, week: int) -> dict[str, float] | N
     wk = int(a["week"]) + 1024 * round((week - int(a["week"])) / 1024)
     el = {k: v for d in (a, b, c) for k, v in d.items()
           if k not in ("week", "iodc_hi", "iodc_lo", "iode", "toc", "toe")}
-    el["toc"] = wk * WEEK_S + a["toc"]
-    el["toe"] = wk * WEEK_S + b["toe"]
+    # toe and toc in the week of transmission, moved a week when more than half a week
+    # from the subframe's time of week (an ephemeris sent late on Saturday for the next
+    # week's start; RTKLIB's handover rule)
+    tow = _field(sf1, 24, 17, False) * 6.0
+    for key, v in (("toc", a["toc"]), ("toe", b["toe"])):
+        shift = WEEK_S if v - tow < -WEEK_S / 2 else -WEEK_S if v - tow > WEEK_S / 2 else 0
+        el[key] = wk * WEEK_S + v + shift
     return el
 
 
@@ -127,7 +135,9 @@ def _read(path: Path):
                         float(getattr(m, f"cno_{i:02d}")))
             elif name == "RXM-SFRBX":
                 counts[name] += 1
-                if int(m.gnssId) != 0 or int(m.numWords) != 10:
+                # (GPS L1 C/A LNAV only: an F9's L2C CNAV messages are GPS too)
+                if int(m.gnssId) != 0 or int(getattr(m, "sigId", 0)) != 0 or \
+                        int(m.numWords) != 10:
                     continue
                 sv = int(m.svId)
                 bits = lnav_subframes([getattr(m, f"dwrd_{i:02d}") for i in range(1, 11)])
@@ -198,6 +208,8 @@ def read_ubx_raw_gnss(path, *, nav=None, mask_deg: float = 10.0, t0: float | Non
                      ephem, mask_deg=mask_deg, t0=t0)
     out.quality.update({f"ubx_{k.lower().replace('-', '_')}": v for k, v in counts.items()})
     out.quality["ubx_ephemerides"] = len(eph)
+    if nav is None:
+        out.quality["ubx_satellites_without_ephemeris"] = [f"G{sv:02d}" for sv in missing]
     return out
 
 

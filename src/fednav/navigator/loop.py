@@ -207,12 +207,14 @@ class ErrorStateCore:
         ins = self.ins
         return NavSnapshot(ins.lla, ins.vel, ins.dcm, omega)
 
-    def measure(self, m: Meas, i: int, nav: NavSnapshot | None):
+    def measure(self, m: Meas, i: int, nav: NavSnapshot | None, dt: float = 0.0):
         """(residual, model, nav, R) of measurement ``i`` of sensor ``m`` against ``nav``
         (the model over every error state: :class:`~fednav.sensors.measurement.
-        BiasedModel` when the layout has optional states)."""
+        BiasedModel` when the layout has optional states); ``dt`` [s]: the time ``nav``
+        refers to less the epoch's (a model whose rows read an optional state's total at
+        that time, the raw GNSS's clock)."""
         if hasattr(m.model, "bind"):  # rows that depend on the measurement (gnss_raw)
-            model = m.model.bind(m.z[i], nav, self.layout, self.xa)
+            model = m.model.bind(m.z[i], nav, self.layout, self.xa, dt)
             return model.residual(nav, m.z[i]), model, nav, model.R
         model = self._models.get(m.name)
         if model is None:
@@ -261,7 +263,7 @@ class TotalStateCore:
         ins = self.ins
         return NavSnapshot(ins.lla, ins.vel, ins.dcm, omega)
 
-    def measure(self, m: Meas, i: int, nav):
+    def measure(self, m: Meas, i: int, nav, dt: float = 0.0):
         y, R = m.model.terms(self.ins.state, m.z[i], m.sigma[i])
         return y, LinearModel(m.model.H), None, R
 
@@ -369,6 +371,14 @@ class PythonLoop:
         return curve_fit_value(t[known], z[known], self.t_epoch(k), tm.curve_fit_degree,
                                tm.curve_fit_points, m.angles)
 
+    def _dt(self, m: Meas, i: int, k: int) -> float:
+        """The time the residual of measurement ``i`` compares the INS at, less epoch
+        ``k``'s [s]: its time of validity for the strategies that move the INS there
+        (interpolate, ins_increment, recompute), else 0 (the epoch's)."""
+        if m.how in ("interpolate", "ins_increment", "recompute"):
+            return float(m.t[i]) - self.t_epoch(k)
+        return 0.0
+
     def _interval_rows(self, block):
         """Rows 0..n_per of the interval: its start (after the last feedback) and the
         mechanization's samples."""
@@ -404,7 +414,7 @@ class PythonLoop:
                 nav = core.nav(omega)  # H at the epoch
                 for m, i in todo:
                     nav_i, _, _ = self._nav_at(m, i, k, rows, omega)
-                    y, model, _, R = core.measure(m, i, nav_i)
+                    y, model, _, R = core.measure(m, i, nav_i, self._dt(m, i, k))
                     if not len(y):
                         continue  # (no satellite above the mask)
                     if m.how == "curve_fit":
@@ -418,7 +428,7 @@ class PythonLoop:
             else:
                 for m, i in todo:
                     nav_r, nav_h, t = self._nav_at(m, i, k, rows, omega)
-                    y, model, nav, R = core.measure(m, i, nav_r)
+                    y, model, nav, R = core.measure(m, i, nav_r, self._dt(m, i, k))
                     if not len(y):
                         continue  # (no satellite above the mask)
                     nav = nav_h if nav is not None else None
@@ -426,6 +436,8 @@ class PythonLoop:
                         y = model.residual(nav_r, self._z(m, i, k))
                     inn = fed.update(m.name, y, model, nav, R, t=t)
                     if self.innovations:
+                        if inn.rows is not None:  # (a unit left out: the rows kept)
+                            R = np.asarray(R)[np.ix_(inn.rows, inn.rows)]
                         self.rec.innovations.append(InnovationRecord(
                             m.name, float(t), inn.r, inn.S, R, fed.beta[m.name],
                             inn.accepted))

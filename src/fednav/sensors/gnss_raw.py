@@ -85,6 +85,13 @@ def slots(z) -> np.ndarray:
     return np.asarray(z, dtype=float).reshape(SLOTS, len(FIELDS))
 
 
+def has_satellite(z) -> np.ndarray:
+    """Rows of ``z`` (N, :data:`WIDTH`) holding at least one whole satellite (number,
+    position, velocity, pseudorange)."""
+    s = np.asarray(z, dtype=float).reshape(len(z), SLOTS, len(FIELDS))
+    return np.isfinite(s[:, :, PRN:PR + 1]).all(axis=2).any(axis=1)
+
+
 def pack(rows) -> np.ndarray:
     """Satellite rows (n <= SLOTS, len(FIELDS)) as one measurement's ``z`` (NaN slots
     after them)."""
@@ -136,13 +143,25 @@ class BoundRanges:
 
     linear = True
 
-    def __init__(self, sat, lever, n: int, ic: int, clock, R, groups, use_rr):
+    def __init__(self, sat, lever, n: int, ic: int, clock, R, groups, use_rr,
+                 dt: float = 0.0):
         self.sat, self.lever, self.n, self.ic = sat, lever, int(n), int(ic)
-        self.clock = np.asarray(clock, dtype=float)
+        self.dt = float(dt)
+        clock = np.asarray(clock, dtype=float)
+        # (the clock at the measurement's time: the totals' cb + dt cd)
+        self.clock = np.array([clock[0] + self.dt * clock[1], clock[1]])
         self.R = R
         self.groups = groups
         self.use_rr = use_rr
         self.dim = len(groups)
+
+    @property
+    def row_keys(self) -> list:
+        """A key per row, the same for the same satellite's same kind of row from one
+        measurement to the next (what an adaptive filter keeps its R estimate under)."""
+        m = len(self.sat)
+        return ([("gnss_raw.pr", int(g)) for g in self.groups[:m]]
+                + [("gnss_raw.rr", int(g)) for g in self.groups[m:]])
 
     _cache: tuple = (None, None)
 
@@ -184,6 +203,7 @@ class BoundRanges:
         H = np.zeros((self.dim, self.n))
         H[:m, :N_STATES] = -un @ J[:3]
         H[:m, self.ic] = -1.0
+        H[:m, self.ic + 1] = -self.dt  # (the bias at t: its error dcb + dt dcd)
         k = np.flatnonzero(self.use_rr)
         H[m:, :N_STATES] = -un[k] @ J[3:] - gn[k] @ J[:3]
         H[m:, self.ic + 1] = -1.0
@@ -202,8 +222,9 @@ class BoundRanges:
         k_rr[np.flatnonzero(self.use_rr)] = keep[m:]
         sat, use_rr = self.sat[k_pr], (k_rr & k_pr)[k_pr]
         rows = np.flatnonzero(keep)
-        return BoundRanges(sat, self.lever, self.n, self.ic, self.clock,
-                           self.R[np.ix_(rows, rows)], self.groups[rows], use_rr)
+        return BoundRanges(sat, self.lever, self.n, self.ic,
+                           (self.clock[0] - self.dt * self.clock[1], self.clock[1]),
+                           self.R[np.ix_(rows, rows)], self.groups[rows], use_rr, self.dt)
 
 
 class SatelliteRanges:
@@ -230,8 +251,14 @@ class SatelliteRanges:
     def satellites(self, z, nav: NavSnapshot | None = None) -> np.ndarray:
         """The satellite rows of ``z`` with a pseudorange (above the mask at ``nav``,
         when given), with their 1-sigma filled in."""
-        s = slots(z)
-        s = s[np.isfinite(s[:, PRN]) & np.isfinite(s[:, PR])].copy()
+        s = slots(z).copy()
+        # (a satellite needs its number, position, velocity and pseudorange; a 1-sigma it
+        # gives is positive)
+        ok = np.isfinite(s[:, PRN:PR + 1]).all(axis=1)
+        with np.errstate(invalid="ignore"):
+            ok &= ~(s[:, SPR] <= 0.0)
+            s[s[:, SRR] <= 0.0, RR] = np.nan
+        s = s[ok]
         if nav is not None and len(s):
             r, _, Cne = _antenna(nav, self.lever)
             d = s[:, SX:SZ + 1] - r
@@ -244,10 +271,12 @@ class SatelliteRanges:
                 s[miss, col] = elevation_sigma(sig, el[miss])
         return s
 
-    def bind(self, z, nav: NavSnapshot, layout, xa) -> BoundRanges:
+    def bind(self, z, nav: NavSnapshot, layout, xa, dt: float = 0.0) -> BoundRanges:
         """The rows of measurement ``z`` against the INS ``nav``, over the error state of
         ``layout`` (:class:`~fednav.ins.states.StateLayout`) with the clock totals in
-        ``xa`` (read now)."""
+        ``xa`` (read now) — totals of the filter epoch, ``dt`` [s] after which the
+        measurement is valid (negative: before; the rows take the clock there, ``cb + dt
+        cd``, and its error ``dcb + dt dcd``)."""
         ic = layout.start(self.own_block)
         if ic < 0:
             raise ValueError("gnss_raw: the error state has no clock block (the navigator "
@@ -257,7 +286,7 @@ class SatelliteRanges:
         prn = sat[:, PRN].astype(np.int64)
         R = np.diag(np.r_[sat[:, SPR], sat[use_rr, SRR]] ** 2)
         return BoundRanges(sat, self.lever, layout.n, ic, xa[ic:ic + 2].copy(), R,
-                           np.r_[prn, prn[use_rr]], use_rr)
+                           np.r_[prn, prn[use_rr]], use_rr, dt)
 
 
 
@@ -306,7 +335,10 @@ def from_observations(t, pr, doppler, sv, eph, *, mask_deg: float = 10.0,
     if not len(good):
         raise ValueError("gnss_raw: no epoch with four satellites to place the receiver "
                          "for its ionosphere, troposphere and elevation mask")
-    near = good[np.clip(np.searchsorted(good, np.arange(N)), 0, len(good) - 1)]
+    j = np.clip(np.searchsorted(good, np.arange(N)), 1, max(len(good) - 1, 1))
+    before, after = good[np.maximum(j - 1, 0)], good[np.minimum(j, len(good) - 1)]
+    near = np.where(np.abs(after - np.arange(N)) < np.abs(np.arange(N) - before), after,
+                    before)
     rx = spp.xyz[near]
     lla = earth.ecef_to_llh(rx)
     idx = nearest_ephemeris(eph, np.asarray(sv), t)
@@ -525,6 +557,13 @@ class GnssRawConfig(SensorConfig):
     satellites_s: list[tuple[float, float, int]] = Field(
         default=[], json_schema_extra=simulation_only("simulated loss of satellites"))
 
+    @field_validator("clock")
+    @classmethod
+    def _clock(cls, v):
+        if not isinstance(v, str) and (v[0] < 0.0 or v[1] < 0.0):
+            raise ValueError(f"the clock's [h0, h_-2] are non-negative, got {list(v)}")
+        return v
+
     @field_validator("timing")
     @classmethod
     def _timing(cls, v):
@@ -577,5 +616,5 @@ SPEC = SensorSpec(
     "gnss_raw", "GNSS pseudorange and Doppler of each satellite (tightly coupled; receiver "
                 "clock states)", GnssRawConfig, SatelliteRanges,
     columns=tuple(Column(f"s{k:02d}_{f}") for k in range(SLOTS) for f in FIELDS),
-    label="raw GNSS",
+    label="raw GNSS", sparse=True, valid=has_satellite,
     columns_doc=f"{SLOTS} satellite slots `sNN_`: " + ", ".join(f"`{f}`" for f in FIELDS))

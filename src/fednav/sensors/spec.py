@@ -238,6 +238,9 @@ class SensorSpec:
     #: how the docs name a file layout too long to list column by column (the raw
     #: GNSS's satellite slots); default: the columns
     columns_doc: str = ""
+    #: a row's values may be NaN where the measurement has nothing (the raw GNSS's empty
+    #: satellite slots): its file's rows are kept by ``valid`` alone
+    sparse: bool = False
 
     @property
     def fixes_position(self) -> bool:
