@@ -836,6 +836,17 @@ def process(imu: ImuData, sensors: Mapping[str, Series], cfg: System | None = No
         res.data_quality["q_scale_final"] = {k: round(v, 3)
                                              for k, v in nav.loop.q_scales().items()}
     res.optional_states = out.optional
+    for name in prep.system.aiding_sensors(prep.series):  # (a sensor's own figures)
+        rep = registry.spec(name).report
+        if rep is not None:
+            res.data_quality[f"{name}_geometry"] = rep(prep.series[name], res.forward)
+    if out.excluded:  # units fault detection left out of a measurement (satellites)
+        counts: dict = {}
+        for _, local, unit, _ in out.excluded:
+            key = f"{local}_excluded"
+            counts.setdefault(key, {})
+            counts[key][str(unit)] = counts[key].get(str(unit), 0) + 1
+        res.data_quality.update(counts)
     if prep.system.integrity is not None:
         from .integrity import run_integrity
 

@@ -386,6 +386,48 @@ def from_observations(t, pr, doppler, sv, eph, *, mask_deg: float = 10.0,
     return t[keep], z[keep], used[keep]
 
 
+def geometry(z, lla, mask: float = float(units.deg(10.0))):
+    """Satellites above ``mask`` [rad] and their DOP per measurement: ``z`` (N,
+    :data:`WIDTH`) seen from ``lla`` (N, 3) [rad, rad, m] (the solution at each
+    measurement's time).  Returns ``(n, pdop, hdop, vdop)`` (N,) each (DOP NaN below four
+    satellites; a receiver clock per epoch)."""
+    z = np.asarray(z, dtype=float).reshape(len(z), SLOTS, len(FIELDS))
+    lla = np.asarray(lla, dtype=float)
+    r = earth.llh_to_ecef(lla[:, 0], lla[:, 1], lla[:, 2])
+    Cne = earth.enu_to_ecef(lla[:, 0], lla[:, 1])
+    d = z[:, :, SX:SZ + 1] - r[:, None, :]
+    u = np.einsum("nsi,nij->nsj", d / np.linalg.norm(d, axis=2)[..., None], Cne)  # ENU
+    ok = np.isfinite(z[:, :, PRN]) & np.isfinite(u).all(axis=2) & (
+        np.arcsin(np.clip(np.nan_to_num(u[..., 2], nan=-1.0), -1, 1)) >= mask)
+    G = np.concatenate([-u, np.ones(u.shape[:2] + (1,))], axis=2)
+    G = np.where(ok[..., None], G, 0.0)
+    n = ok.sum(axis=1)
+    dop = np.full((len(z), 3), np.nan)
+    four = n >= 4
+    if four.any():
+        Q = np.linalg.inv(np.einsum("nsi,nsj->nij", G[four], G[four]))
+        q = np.diagonal(Q, axis1=1, axis2=2)
+        dop[four] = np.sqrt(np.column_stack([q[:, :3].sum(1), q[:, :2].sum(1), q[:, 2]]))
+    return n, dop[:, 0], dop[:, 1], dop[:, 2]
+
+
+def report(series, solution) -> dict:
+    """What ``summary.json`` says of a raw GNSS recording flown against ``solution``
+    (:class:`fednav.navigator.Solution`): satellites above the mask per epoch (mean,
+    least, epochs with fewer than four) and PDOP / HDOP (median, largest)."""
+    t = np.asarray(series.t, dtype=float)
+    lla = np.column_stack([np.interp(t, solution.t, solution.lla[:, i]) for i in range(3)])
+    n, pdop, hdop, _ = geometry(series.z, lla)
+    out = {"epochs": int(len(t)), "satellites_mean": round(float(np.mean(n)), 2) if len(n)
+           else 0.0, "satellites_min": int(n.min()) if len(n) else 0,
+           "epochs_below_four": int((n < 4).sum())}
+    for name, v in (("pdop", pdop), ("hdop", hdop)):
+        f = v[np.isfinite(v)]
+        out[f"{name}_median"] = round(float(np.median(f)), 2) if len(f) else None
+        out[f"{name}_max"] = round(float(f.max()), 2) if len(f) else None
+    return out
+
+
 # ---------------------------------------------------------------------------- simulation
 #: GPS's nominal orbit: semi-major axis [m] and inclination (IS-GPS-200, the almanac's).
 GPS_A = 26_559_700.0
@@ -616,5 +658,5 @@ SPEC = SensorSpec(
     "gnss_raw", "GNSS pseudorange and Doppler of each satellite (tightly coupled; receiver "
                 "clock states)", GnssRawConfig, SatelliteRanges,
     columns=tuple(Column(f"s{k:02d}_{f}") for k in range(SLOTS) for f in FIELDS),
-    label="raw GNSS", sparse=True, valid=has_satellite,
+    label="raw GNSS", sparse=True, valid=has_satellite, report=report,
     columns_doc=f"{SLOTS} satellite slots `sNN_`: " + ", ".join(f"`{f}`" for f in FIELDS))

@@ -241,6 +241,9 @@ class SensorSpec:
     #: a row's values may be NaN where the measurement has nothing (the raw GNSS's empty
     #: satellite slots): its file's rows are kept by ``valid`` alone
     sparse: bool = False
+    #: recorded data: a function ``(series, solution) -> dict`` of what ``summary.json``
+    #: says of the sensor's recording as flown (the raw GNSS: satellites, DOP)
+    report: object = None
 
     @property
     def fixes_position(self) -> bool:
