@@ -404,3 +404,30 @@ def test_adaptive_filters_keep_r_per_satellite(flown, ftype):
     res = run_mode(scn, ["gnss_raw"], data, ftype, filter_type=ftype)
     assert np.isfinite(res.pos).all()
     assert _horizontal(res, 30, 150) < 3 * _horizontal(out["gnss_raw"], 30, 150) + 1.0
+
+
+def test_a_receivers_file_is_read_by_its_name(tmp_path):
+    """fednav process --gnss_raw FILE: fednav's CSV, a RINEX observation file with its
+    navigation file beside it (found by name; refused in one line naming those tried when
+    none is), a u-blox log by its suffix."""
+    from fednav.io.data import DataError
+    from fednav.io.rinex import is_observation_file, navigation_beside, write_rinex_obs
+    from fednav.io.sensorfile import read_sensor_file
+
+    assert is_observation_file("0759.05o") and is_observation_file("X.OBS")
+    assert is_observation_file("ABMF00GLP_R_20220010000_01D_30S_MO.rnx")
+    assert not is_observation_file("0759.05n") and not is_observation_file("raw.csv")
+    obs = write_rinex_obs(tmp_path / "site0920.05o", np.array([1.1e9]), ["G01"],
+                          {"C1": np.array([[2.2e7]])})
+    with pytest.raises(DataError, match=r"no navigation file beside it \(tried "
+                                        r"site0920.05n, site0920.05N"):
+        read_sensor_file("gnss_raw", obs)
+    (tmp_path / "site0920.05N").write_text("")
+    assert navigation_beside(obs).name == "site0920.05N"
+    with pytest.raises(DataError, match="no RXM-RAWX"):
+        (tmp_path / "raw.ubx").write_bytes(b"")
+        read_sensor_file("gnss_raw", tmp_path / "raw.ubx")
+    if STATIC.is_dir():
+        s = read_sensor_file("gnss_raw", STATIC / "07590920.05o")
+        assert s.name == "gnss_raw" and len(s.t) == 120
+        assert s.t[0] == 1316 * 604800.0 + 518400.0  # (GPS week 1316, Saturday 00:00)

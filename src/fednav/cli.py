@@ -703,10 +703,10 @@ def _csv_reader(imu: Path | None, gnss: Path | None, velocity: Path | None,
             read_nmea,
             read_reference_csv,
             read_rtklib_pos,
-            read_sensor_csv,
             read_ubx,
             read_velocity_csv,
         )
+        from .io.sensorfile import read_sensor_file
 
         base = Path(config).parent if config is not None else Path(".")
         listed = {k: base / v for k, v in cfg.files.items()}
@@ -738,7 +738,7 @@ def _csv_reader(imu: Path | None, gnss: Path | None, velocity: Path | None,
         return {"imu": read_imu_csv(paths["imu"], cfg.imu.max_bridge_s, cfg.imu.mounting),
                 "sensors": {"gnss": g, "velocity": None if vel is None
                             else read_velocity_csv(vel),
-                            **{n: read_sensor_csv(n, f) for n, f in others.items()}},
+                            **{n: read_sensor_file(n, f) for n, f in others.items()}},
                 "ref": None if paths["reference"] is None
                 else read_reference_csv(paths["reference"]),
                 "paths": {k: v for k, v in {**paths, **others, "velocity": vel}.items()
@@ -764,8 +764,10 @@ def _sensor_file_options(*exclude: str):
             if name in exclude:
                 continue
             spec = registry.spec(name)
-            cols = ", ".join(["t_s"] + [c.name for c in spec.columns])
-            help_ = escape(f"{spec.summary}: CSV {cols} [, t_arrival_s]")
+            cols = ", ".join(["t_s"] + ([spec.columns_doc] if spec.columns_doc else
+                                        [c.name for c in spec.columns]))
+            help_ = escape(f"{spec.summary}: CSV {cols} [, t_arrival_s]"
+                           + (f"; or {spec.files_doc}" if spec.files_doc else ""))
             params.append(inspect.Parameter(
                 name, inspect.Parameter.KEYWORD_ONLY, annotation=Optional[Path],  # noqa: UP045
                 default=typer.Option(None, f"--{name}", help=help_)))

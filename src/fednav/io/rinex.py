@@ -20,6 +20,7 @@ tests).
 
 from __future__ import annotations
 
+import re
 import warnings
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
@@ -206,6 +207,49 @@ def read_raw_gnss(obs_path, nav_path, *, mask_deg: float = 10.0, t0: float | Non
                       obs.sv, eph, mask_deg=mask_deg, t0=t0)
 
 
+def is_observation_file(path) -> bool:
+    """Whether ``path``'s name is a RINEX observation file's: ``.YYo`` (RINEX 2),
+    ``.obs``, or a RINEX 3 long name ending ``_MO.rnx`` (``.crx`` not read)."""
+    name = Path(path).name
+    return bool(re.search(r"\.\d\d[oO]$", name) or name.lower().endswith(".obs")
+                or re.search(r"_[A-Z]O\.rnx$", name))
+
+
+def navigation_beside(path) -> Path:
+    """The navigation file beside observation file ``path``: ``.YYn`` (``N``, ``p``,
+    ``P``) for ``.YYo``, ``.nav`` for ``.obs``, ``_GN.rnx`` / ``_MN.rnx`` for
+    ``_MO.rnx``; a one-line :class:`DataError` naming those tried when none is there."""
+    p = Path(path)
+    name = p.name
+    tries = []
+    m = re.search(r"\.(\d\d)[oO]$", name)
+    if m:
+        tries = [name[:-1] + c for c in "nNpP"]
+    elif name.lower().endswith(".obs"):
+        tries = [name[:-4] + ".nav", name[:-4] + ".NAV"]
+    elif re.search(r"_[A-Z]O\.rnx$", name):
+        tries = [re.sub(r"_[A-Z]O\.rnx$", f"_{c}N.rnx", name) for c in "GM"]
+    for n in tries:
+        if (p.parent / n).is_file():
+            return p.parent / n
+    raise DataError(f"{path}: no navigation file beside it (tried {', '.join(tries) or '-'}"
+                    f"); the raw GNSS needs the broadcast ephemerides")
+
+
+def read_raw_gnss_file(path, t0: float | None = None):
+    """The raw GNSS series of a receiver's file (what ``fednav process --gnss_raw FILE``
+    reads): a u-blox ``.ubx`` raw log (:func:`fednav.io.ubx_raw.read_ubx_raw_gnss`) or a
+    RINEX observation file with its navigation file beside it (:func:`read_raw_gnss`,
+    :func:`navigation_beside`); None for any other file (fednav's CSV)."""
+    if Path(path).suffix.lower() == ".ubx":
+        from .ubx_raw import read_ubx_raw_gnss
+
+        return read_ubx_raw_gnss(path, t0=t0)
+    if is_observation_file(path):
+        return read_raw_gnss(path, navigation_beside(path), t0=t0)
+    return None
+
+
 def raw_series(source: str, t, pr, dop, cn0, sv, eph, *, mask_deg: float = 10.0,
                t0: float | None = None):
     """The ``gnss_raw`` series of a receiver's observations ``t`` (N,) GPS time [s],
@@ -293,5 +337,6 @@ def write_rinex_obs(path, t, sv, obs: dict, *, approx_xyz=None, marker: str = "F
     return path
 
 
-__all__ = ["Ephemerides", "GPS_EPOCH", "RinexObs", "WEEK_S", "gps_seconds", "raw_series",
-           "read_raw_gnss", "read_rinex_nav", "read_rinex_obs", "write_rinex_obs"]
+__all__ = ["Ephemerides", "GPS_EPOCH", "RinexObs", "WEEK_S", "gps_seconds",
+           "is_observation_file", "navigation_beside", "raw_series", "read_raw_gnss",
+           "read_raw_gnss_file", "read_rinex_nav", "read_rinex_obs", "write_rinex_obs"]

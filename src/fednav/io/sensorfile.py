@@ -33,6 +33,25 @@ def sigma_columns(name: str) -> tuple[str, ...]:
     return tuple(dict.fromkeys(c.sigma_column[0] for c in registry.spec(name).columns))
 
 
+def read_sensor_file(name: str, path) -> SensorData:
+    """Sensor ``name``'s recording from ``path``: a file format of the sensor's own when
+    the file's name says so (:data:`OWN_FORMATS`: the raw GNSS's u-blox ``.ubx`` logs and
+    RINEX observation files), else fednav's CSV (:func:`read_sensor_csv`)."""
+    own = OWN_FORMATS.get(name)
+    out = own(path) if own is not None else None
+    return read_sensor_csv(name, path) if out is None else out
+
+
+def _raw_gnss_file(path):
+    from .rinex import read_raw_gnss_file
+
+    return read_raw_gnss_file(path)
+
+
+#: sensor -> a reader of its own file formats (the series, or None for fednav's CSV)
+OWN_FORMATS = {"gnss_raw": _raw_gnss_file}
+
+
 def read_sensor_csv(name: str, path) -> SensorData:
     """Read any registered sensor's CSV file (``docs/data-formats.md``).
 

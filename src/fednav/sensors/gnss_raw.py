@@ -416,8 +416,10 @@ def report(series, solution) -> dict:
     (:class:`fednav.navigator.Solution`): satellites above the mask per epoch (mean,
     least, epochs with fewer than four) and PDOP / HDOP (median, largest)."""
     t = np.asarray(series.t, dtype=float)
+    flown = (t >= solution.t[0]) & (t <= solution.t[-1])  # (those the solution covers)
+    t = t[flown]
     lla = np.column_stack([np.interp(t, solution.t, solution.lla[:, i]) for i in range(3)])
-    n, pdop, hdop, _ = geometry(series.z, lla)
+    n, pdop, hdop, _ = geometry(np.asarray(series.z)[flown], lla)
     out = {"epochs": int(len(t)), "satellites_mean": round(float(np.mean(n)), 2) if len(n)
            else 0.0, "satellites_min": int(n.min()) if len(n) else 0,
            "epochs_below_four": int((n < 4).sum())}
@@ -659,4 +661,6 @@ SPEC = SensorSpec(
                 "clock states)", GnssRawConfig, SatelliteRanges,
     columns=tuple(Column(f"s{k:02d}_{f}") for k in range(SLOTS) for f in FIELDS),
     label="raw GNSS", sparse=True, valid=has_satellite, report=report,
+    files_doc="a u-blox .ubx raw log (RXM-RAWX, RXM-SFRBX), a RINEX observation file with "
+              "its navigation file beside it (GPS time [s] since 1980-01-06)",
     columns_doc=f"{SLOTS} satellite slots `sNN_`: " + ", ".join(f"`{f}`" for f in FIELDS))

@@ -241,6 +241,9 @@ class SensorSpec:
     #: a row's values may be NaN where the measurement has nothing (the raw GNSS's empty
     #: satellite slots): its file's rows are kept by ``valid`` alone
     sparse: bool = False
+    #: the file formats of its own ``fednav process --NAME FILE`` also reads, for the
+    #: help (:data:`fednav.io.sensorfile.OWN_FORMATS` reads them)
+    files_doc: str = ""
     #: recorded data: a function ``(series, solution) -> dict`` of what ``summary.json``
     #: says of the sensor's recording as flown (the raw GNSS: satellites, DOP)
     report: object = None
