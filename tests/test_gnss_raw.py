@@ -38,8 +38,7 @@ def _layout():
 
 
 def _sky(t=1000.0, nav=None):
-    """The satellites above 10 deg at ``t`` as one measurement (true ranges from the
-    antenna of ``nav``, clock 1234 m and 3 m/s)."""
+    """The satellites above 10 deg at ``t`` as one measurement."""
     pos, vel = walker(t)
     pos, vel = pos[0], vel[0]
     r = earth.llh_to_ecef(*LLA)
@@ -49,7 +48,16 @@ def _sky(t=1000.0, nav=None):
     rows = np.full((len(seen), len(FIELDS)), np.nan)
     rows[:, PRN] = seen + 1
     rows[:, 1:4], rows[:, 4:7] = pos[seen], vel[seen]
-    rows[:, PR], rows[:, RR] = 2.2e7, 100.0  # (the residual is what the tests read)
+    # ranges from the antenna of ``nav`` (default: the IMU at LLA) with the clock 1234 m
+    # and 3 m/s, less a few metres (the residual is what the tests read)
+    from fednav.sensors.gnss_raw import _antenna
+
+    rx, vx, _ = _antenna(nav or _nav(), LEVER if nav is not None else np.zeros(3))
+    d = pos[seen] - rx
+    rho = np.linalg.norm(d, axis=1)
+    rows[:, PR] = rho + 1234.0 - 5.0 * np.sin(seen)
+    rows[:, RR] = np.einsum("ij,ij->i", d / rho[:, None], vel[seen] - vx) + 3.0 \
+        - 0.2 * np.cos(seen)
     return pack(rows), seen
 
 
@@ -90,7 +98,7 @@ def test_rows_are_the_derivative_of_the_range_model():
     central differences of the residual."""
     model = SatelliteRanges()
     model.lever = LEVER
-    z, seen = _sky()
+    z, seen = _sky(nav=_nav())
     lay = _layout()
     xa = np.zeros(lay.n)
     ic = lay.start("clock")
@@ -431,3 +439,24 @@ def test_a_receivers_file_is_read_by_its_name(tmp_path):
         s = read_sensor_file("gnss_raw", STATIC / "07590920.05o")
         assert s.name == "gnss_raw" and len(s.t) == 120
         assert s.t[0] == 1316 * 604800.0 + 518400.0  # (GPS week 1316, Saturday 00:00)
+
+
+def test_a_millisecond_clock_jump_moves_the_clock_not_the_position(flown):
+    """Receivers that keep their clock within a millisecond jump by 1 ms (300 km on every
+    pseudorange at once): the clock's total takes it, the position does not."""
+    from dataclasses import replace
+
+    from fednav.navigator.system import sensor_model  # noqa: F401  (the model's counter)
+    from fednav.sim.runs import run_mode
+
+    scn, data, out = flown
+    s = data.series["gnss_raw"]
+    z = s.z.reshape(len(s.t), SLOTS, len(FIELDS)).copy()
+    z[s.t >= 100.0, :, PR] += 299792.458  # (NaN slots stay NaN)
+    series = dict(data.series, gnss_raw=replace(s, z=z.reshape(len(s.t), -1)))
+    res = run_mode(scn, ["gnss_raw"], replace(data, series=series), "jump")
+    clean = out["gnss_raw"]
+    assert _horizontal(res, 100, 150) < 1.5 * _horizontal(clean, 100, 150) + 0.5
+    k = (res.t >= 100) & (res.t < 150)
+    assert np.abs(res.pos[k, 2]).max() < 3 * np.abs(clean.pos[k, 2]).max() + 1.0
+    assert not res.fdi.isolated.any()

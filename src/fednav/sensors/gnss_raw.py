@@ -75,6 +75,16 @@ FIELDS = ("prn", "x_m", "y_m", "z_m", "vx_mps", "vy_mps", "vz_mps", "pr_m", "rr_
 SLOTS = 14
 WIDTH = SLOTS * len(FIELDS)
 
+#: A pseudorange residual whose median over an epoch's satellites is larger than this [m]
+#: (3.3 us) is the receiver clock's jump (receivers that keep their bias within a
+#: millisecond jump by 1 ms, 300 km): the clock's total moves by it before the update
+#: (:meth:`SatelliteRanges.bind`); an INS this far off in height has no solution left.
+CLOCK_JUMP_M = 1000.0
+#: Likewise the clock's drift [m/s] from the median range-rate residual: a free-running
+#: crystal drifts by up to a few ppm (the GSI stations' receivers: +418 and -323 m/s),
+#: beyond the drift's 1-sigma at the start; past this the first epoch with Dopplers sets it.
+CLOCK_DRIFT_JUMP_MPS = 50.0
+
 #: Receiver clocks' Allan-variance coefficients (h0, h_-2) [s, 1/s] (Brown and Hwang,
 #: table 9.1): a temperature-compensated and an oven-controlled crystal oscillator.
 CLOCKS = {"tcxo": (2e-19, 2e-20), "ocxo": (2e-25, 6e-25)}
@@ -247,6 +257,8 @@ class SatelliteRanges:
                  mask: float = float(units.deg(10.0))):
         self.sigma_pr, self.sigma_rr, self.mask = float(sigma_pr), float(sigma_rr), mask
         self.lever = np.zeros(3)
+        #: how often :meth:`bind` moved the clock's total by a jump (:data:`CLOCK_JUMP_M`)
+        self.clock_resets = 0
 
     def satellites(self, z, nav: NavSnapshot | None = None) -> np.ndarray:
         """The satellite rows of ``z`` with a pseudorange (above the mask at ``nav``,
@@ -276,7 +288,11 @@ class SatelliteRanges:
         ``layout`` (:class:`~fednav.ins.states.StateLayout`) with the clock totals in
         ``xa`` (read now) — totals of the filter epoch, ``dt`` [s] after which the
         measurement is valid (negative: before; the rows take the clock there, ``cb + dt
-        cd``, and its error ``dcb + dt dcd``)."""
+        cd``, and its error ``dcb + dt dcd``).  When the median pseudorange residual
+        exceeds :data:`CLOCK_JUMP_M` the clock's total in ``xa`` moves by it first (a
+        receiver's millisecond clock jump, or the first epoch's bias), and the drift's by
+        the median range-rate residual beyond :data:`CLOCK_DRIFT_JUMP_MPS` (counted in
+        :attr:`clock_resets`)."""
         ic = layout.start(self.own_block)
         if ic < 0:
             raise ValueError("gnss_raw: the error state has no clock block (the navigator "
@@ -285,8 +301,24 @@ class SatelliteRanges:
         use_rr = np.isfinite(sat[:, RR])
         prn = sat[:, PRN].astype(np.int64)
         R = np.diag(np.r_[sat[:, SPR], sat[use_rr, SRR]] ** 2)
-        return BoundRanges(sat, self.lever, layout.n, ic, xa[ic:ic + 2].copy(), R,
-                           np.r_[prn, prn[use_rr]], use_rr, dt)
+        out = BoundRanges(sat, self.lever, layout.n, ic, xa[ic:ic + 2].copy(), R,
+                          np.r_[prn, prn[use_rr]], use_rr, dt)
+        if len(sat):
+            y = out.residual(nav)
+            jump = float(np.median(y[:len(sat)]))
+            drift = float(np.median(y[len(sat):])) if use_rr.any() else 0.0
+            moved = False
+            if abs(drift) > CLOCK_DRIFT_JUMP_MPS:  # (the first epoch's drift)
+                xa[ic + 1] -= drift
+                moved = True
+            if abs(jump) > CLOCK_JUMP_M:  # (the clock jumped, or the first epoch's bias)
+                xa[ic] -= jump
+                moved = True
+            if moved:
+                self.clock_resets += 1
+                out = BoundRanges(sat, self.lever, layout.n, ic, xa[ic:ic + 2].copy(), R,
+                                  np.r_[prn, prn[use_rr]], use_rr, dt)
+        return out
 
 
 
