@@ -1531,6 +1531,11 @@ class Navigator:
             var = (1.0 - ff) * np.diagonal(P[e - 1])[:9] + ff * np.diagonal(prior)
         return Snapshot(t, lla, vel, att.quat_to_euler(q), np.sqrt(var) * em.SCALE[:9])
 
+    @property
+    def models(self) -> dict:
+        """Each aiding sensor's measurement model as the navigator flies it, by name."""
+        return {a: m.model for a, m in self._meas.items()}
+
     def result(self) -> NavResult:
         """Process every complete epoch and return what the run produced.
 

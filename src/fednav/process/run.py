@@ -839,7 +839,8 @@ def process(imu: ImuData, sensors: Mapping[str, Series], cfg: System | None = No
     for name in prep.system.aiding_sensors(prep.series):  # (a sensor's own figures)
         rep = registry.spec(name).report
         if rep is not None:
-            res.data_quality[f"{name}_geometry"] = rep(prep.series[name], res.forward)
+            res.data_quality[f"{name}_geometry"] = rep(prep.series[name], res.forward,
+                                                       nav.models.get(name))
     if out.excluded:  # units fault detection left out of a measurement (satellites)
         counts: dict = {}
         for _, local, unit, _ in out.excluded:

@@ -443,10 +443,11 @@ def geometry(z, lla, mask: float = float(units.deg(10.0))):
     return n, dop[:, 0], dop[:, 1], dop[:, 2]
 
 
-def report(series, solution) -> dict:
+def report(series, solution, model=None) -> dict:
     """What ``summary.json`` says of a raw GNSS recording flown against ``solution``
     (:class:`fednav.navigator.Solution`): satellites above the mask per epoch (mean,
-    least, epochs with fewer than four) and PDOP / HDOP (median, largest)."""
+    least, epochs with fewer than four), PDOP / HDOP (median, largest) and how often
+    ``model`` (its :class:`SatelliteRanges`) moved the receiver clock's total by a jump."""
     t = np.asarray(series.t, dtype=float)
     flown = (t >= solution.t[0]) & (t <= solution.t[-1])  # (those the solution covers)
     t = t[flown]
@@ -459,6 +460,7 @@ def report(series, solution) -> dict:
         f = v[np.isfinite(v)]
         out[f"{name}_median"] = round(float(np.median(f)), 2) if len(f) else None
         out[f"{name}_max"] = round(float(f.max()), 2) if len(f) else None
+    out["clock_resets"] = int(getattr(model, "clock_resets", 0))
     return out
 
 

@@ -244,8 +244,9 @@ class SensorSpec:
     #: the file formats of its own ``fednav process --NAME FILE`` also reads, for the
     #: help (:data:`fednav.io.sensorfile.OWN_FORMATS` reads them)
     files_doc: str = ""
-    #: recorded data: a function ``(series, solution) -> dict`` of what ``summary.json``
-    #: says of the sensor's recording as flown (the raw GNSS: satellites, DOP)
+    #: recorded data: a function ``(series, solution, model) -> dict`` of what
+    #: ``summary.json`` says of the sensor's recording as flown by its measurement model
+    #: (the raw GNSS: satellites, DOP, clock resets)
     report: object = None
 
     @property
