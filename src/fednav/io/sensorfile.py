@@ -172,9 +172,11 @@ def write_sensor_csv(path, series, sigma: bool = False) -> Path:
         cols[c.name] = series.z[:, j] / c.to_si
     if series.t_avail is not None and np.any(series.t_avail != series.t):
         cols[ARRIVAL] = series.t_avail
-    sg = np.asarray(series.sigma, dtype=float)
-    if sigma and sg.shape[-1:] == series.z.shape[-1:]:  # (a sensor whose z holds its own
-        s = np.broadcast_to(sg, series.z.shape)        # 1-sigma, the raw GNSS: none)
+    try:  # (a sensor whose z holds its own 1-sigma, the raw GNSS's, has no columns)
+        s = np.broadcast_to(np.asarray(series.sigma, dtype=float), series.z.shape)
+    except ValueError:
+        sigma = False
+    if sigma:
         for j, c in enumerate(columns):
             name, to_si = c.sigma_column
             cols[name] = s[:, j] / to_si

@@ -187,7 +187,7 @@ class LaunchCore:
     def nav(self, omega=None):
         return None  # the launch models read the INS state itself
 
-    def measure(self, m, i: int, nav):
+    def measure(self, m, i: int, nav, dt: float = 0.0):
         return m.model.residual(self.ins.state, m.z[i]), m.model, None, m.R[i]
 
     def feed_back(self, fed) -> np.ndarray:

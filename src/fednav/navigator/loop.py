@@ -371,6 +371,15 @@ class PythonLoop:
         return curve_fit_value(t[known], z[known], self.t_epoch(k), tm.curve_fit_degree,
                                tm.curve_fit_points, m.angles)
 
+    def _measure(self, m: Meas, i: int, k: int, nav):
+        """The core's ``measure`` of measurement ``i``; a model whose rows depend on the
+        measurement (``bind``: the raw GNSS) also gets the time ``nav`` refers to less the
+        epoch's (:meth:`_dt`; a mechanization of one's own takes ``(m, i, nav)`` as
+        before)."""
+        if hasattr(m.model, "bind"):
+            return self.core.measure(m, i, nav, self._dt(m, i, k))
+        return self.core.measure(m, i, nav)
+
     def _dt(self, m: Meas, i: int, k: int) -> float:
         """The time the residual of measurement ``i`` compares the INS at, less epoch
         ``k``'s [s]: its time of validity for the strategies that move the INS there
@@ -414,7 +423,7 @@ class PythonLoop:
                 nav = core.nav(omega)  # H at the epoch
                 for m, i in todo:
                     nav_i, _, _ = self._nav_at(m, i, k, rows, omega)
-                    y, model, _, R = core.measure(m, i, nav_i, self._dt(m, i, k))
+                    y, model, _, R = self._measure(m, i, k, nav_i)
                     if not len(y):
                         continue  # (no satellite above the mask)
                     if m.how == "curve_fit":
@@ -428,7 +437,7 @@ class PythonLoop:
             else:
                 for m, i in todo:
                     nav_r, nav_h, t = self._nav_at(m, i, k, rows, omega)
-                    y, model, nav, R = core.measure(m, i, nav_r, self._dt(m, i, k))
+                    y, model, nav, R = self._measure(m, i, k, nav_r)
                     if not len(y):
                         continue  # (no satellite above the mask)
                     nav = nav_h if nav is not None else None
