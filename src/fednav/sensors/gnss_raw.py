@@ -63,7 +63,18 @@ from .measurement import (
     row_jacobian,
     sensor_frame,
 )
-from .satellites import GM, OMEGA_E
+from .satellites import (
+    F_L1,
+    GM,
+    OMEGA_E,
+    azimuth_elevation,
+    dilution,
+    klobuchar,
+    nearest_ephemeris,
+    saastamoinen,
+    satellite_states,
+    single_point,
+)
 from .satellites import C as LIGHT
 from .spec import Column, SensorConfig, SensorSpec
 
@@ -272,10 +283,8 @@ class SatelliteRanges:
             s[s[:, SRR] <= 0.0, RR] = np.nan
         s = s[ok]
         if nav is not None and len(s):
-            r, _, Cne = _antenna(nav, self.lever)
-            d = s[:, SX:SZ + 1] - r
-            up = (d @ Cne)[:, 2] / np.linalg.norm(d, axis=1)
-            el = np.arcsin(np.clip(up, -1.0, 1.0))
+            r, _, _ = _antenna(nav, self.lever)
+            _, el = azimuth_elevation(earth.ecef_to_llh(r), r, s[:, SX:SZ + 1])
             s = s[el >= self.mask]
             el = el[el >= self.mask]
             for col, sig in ((SPR, self.sigma_pr), (SRR, self.sigma_rr)):
@@ -348,16 +357,6 @@ def from_observations(t, pr, doppler, sv, eph, *, mask_deg: float = 10.0,
     left out; an epoch keeps the :data:`SLOTS` highest.  Returns ``(t, z, used)``: the
     epochs with a satellite, their ``z``, and the satellites each kept (N,).
     """
-    from .satellites import (
-        F_L1,
-        azimuth_elevation,
-        klobuchar,
-        nearest_ephemeris,
-        saastamoinen,
-        satellite_states,
-        single_point,
-    )
-
     t = np.asarray(t, dtype=float)
     pr = np.asarray(pr, dtype=float)
     N, M = pr.shape
@@ -426,21 +425,13 @@ def geometry(z, lla, mask: float = float(units.deg(10.0))):
     z = np.asarray(z, dtype=float).reshape(len(z), SLOTS, len(FIELDS))
     lla = np.asarray(lla, dtype=float)
     r = earth.llh_to_ecef(lla[:, 0], lla[:, 1], lla[:, 2])
-    Cne = earth.enu_to_ecef(lla[:, 0], lla[:, 1])
-    d = z[:, :, SX:SZ + 1] - r[:, None, :]
-    u = np.einsum("nsi,nij->nsj", d / np.linalg.norm(d, axis=2)[..., None], Cne)  # ENU
-    ok = np.isfinite(z[:, :, PRN]) & np.isfinite(u).all(axis=2) & (
-        np.arcsin(np.clip(np.nan_to_num(u[..., 2], nan=-1.0), -1, 1)) >= mask)
-    G = np.concatenate([-u, np.ones(u.shape[:2] + (1,))], axis=2)
-    G = np.where(ok[..., None], G, 0.0)
-    n = ok.sum(axis=1)
-    dop = np.full((len(z), 3), np.nan)
-    four = n >= 4
-    if four.any():
-        Q = np.linalg.inv(np.einsum("nsi,nsj->nij", G[four], G[four]))
-        q = np.diagonal(Q, axis1=1, axis2=2)
-        dop[four] = np.sqrt(np.column_stack([q[:, :3].sum(1), q[:, :2].sum(1), q[:, 2]]))
-    return n, dop[:, 0], dop[:, 1], dop[:, 2]
+    az, el = azimuth_elevation(lla[:, None, :], r[:, None, :], z[:, :, SX:SZ + 1])
+    with np.errstate(invalid="ignore"):
+        ok = np.isfinite(z[:, :, PRN]) & (el >= mask)
+    ce = np.cos(el)
+    G = np.stack([ce * np.sin(az), ce * np.cos(az), np.sin(el), np.ones_like(el)], axis=-1)
+    dop = dilution(np.where(ok[..., None], G, 0.0))
+    return ok.sum(axis=1), dop[:, 1], dop[:, 2], dop[:, 3]
 
 
 def report(series, solution, model=None) -> dict:
@@ -561,13 +552,12 @@ class RawReceiver:
         tr = truth.at(t)
         lla, vel = tr["lla"], tr["vel"]
         r = earth.llh_to_ecef(lla[:, 0], lla[:, 1], lla[:, 2])
-        Cne = earth.enu_to_ecef(lla[:, 0], lla[:, 1])
-        v = np.einsum("nij,nj->ni", Cne, vel)
+        v = np.einsum("nij,nj->ni", earth.enu_to_ecef(lla[:, 0], lla[:, 1]), vel)
         pos, svel = walker(t + self.t0, *self.constellation)
         d = pos - r[:, None, :]
         rho = np.linalg.norm(d, axis=2)
         u = d / rho[..., None]
-        el = np.arcsin(np.einsum("nsi,ni->ns", u, Cne[:, :, 2]))
+        _, el = azimuth_elevation(lla[:, None, :], r[:, None, :], pos)
         rhod = np.einsum("nsi,nsi->ns", u, svel - v[:, None, :])
         h0, hm2, b0, d0 = self.clock
         clk = clock_walk(t, h0, hm2, b0, d0, rng)

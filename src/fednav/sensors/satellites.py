@@ -175,6 +175,21 @@ class SinglePoint:
     residuals: np.ndarray
 
 
+def dilution(G) -> np.ndarray:
+    """GDOP, PDOP, HDOP, VDOP (N, 4) of geometry rows ``G`` (N, M, 4): per satellite the
+    line of sight's east, north, up components (any sign) and 1 for the receiver clock,
+    zero rows for satellites not used; NaN with fewer than four."""
+    G = np.asarray(G, dtype=float)
+    out = np.full((G.shape[0], 4), np.nan)
+    four = (np.abs(G).sum(axis=2) > 0).sum(axis=1) >= 4
+    if four.any():
+        q = np.diagonal(np.linalg.inv(np.einsum("nmi,nmj->nij", G[four], G[four])),
+                        axis1=1, axis2=2)
+        out[four] = np.sqrt(np.column_stack([q.sum(1), q[:, :3].sum(1), q[:, :2].sum(1),
+                                             q[:, 2]]))
+    return out
+
+
 def single_point(t, pr, sv, eph, *, l1_only: bool = True, iono: bool = True,
                  tropo: bool = True, mask_deg: float = 10.0, x0=None,
                  iterations: int = 10) -> SinglePoint:
@@ -254,21 +269,13 @@ def single_point(t, pr, sv, eph, *, l1_only: bool = True, iono: bool = True,
         if it and np.all(np.abs(dx[enough, :3]) < 1e-4):
             break
     used = (w > 0).sum(axis=1)
-    Q = np.full((N, 4, 4), np.nan)
-    G = np.einsum("nmi,nmj->nij", H * (w > 0)[..., None], H)
-    Q[enough] = np.linalg.inv(G[enough])
     lla = earth.ecef_to_llh(x[:, :3])
-    # DOP in the local frame (east, north, up, clock)
-    sl, cl, so, co = np.sin(lla[:, 0]), np.cos(lla[:, 0]), np.sin(lla[:, 1]), np.cos(lla[:, 1])
-    R = np.zeros((N, 4, 4))
-    R[:, 0, :3] = np.stack([-so, co, np.zeros(N)], axis=-1)
-    R[:, 1, :3] = np.stack([-sl * co, -sl * so, cl], axis=-1)
-    R[:, 2, :3] = np.stack([cl * co, cl * so, sl], axis=-1)
-    R[:, 3, 3] = 1.0
-    Ql = R @ Q @ np.swapaxes(R, 1, 2)
-    d = np.diagonal(Ql, axis1=1, axis2=2)
-    dop = np.stack([np.sqrt(d.sum(axis=1)), np.sqrt(d[:, :3].sum(axis=1)),
-                    np.sqrt(d[:, :2].sum(axis=1)), np.sqrt(d[:, 2])], axis=-1)
+    # the geometry rows in the local frame (east, north, up, clock) for the DOP
+    G = H * (w > 0)[..., None]
+    G[..., :3] = np.einsum("nmi,nij->nmj", G[..., :3], earth.enu_to_ecef(lla[:, 0],
+                                                                         lla[:, 1]))
+    dop = dilution(G)
+    dop[~enough] = np.nan
     bad = ~enough
     x[bad] = np.nan
     lla[bad] = np.nan
@@ -276,5 +283,6 @@ def single_point(t, pr, sv, eph, *, l1_only: bool = True, iono: bool = True,
     return SinglePoint(t, x[:, :3], lla, x[:, 3], dop, used, res)
 
 
-__all__ = ["C", "F_L1", "F_L2", "SinglePoint", "azimuth_elevation", "iono_free", "klobuchar",
+__all__ = ["C", "F_L1", "F_L2", "SinglePoint", "azimuth_elevation", "dilution", "iono_free",
+           "klobuchar",
            "nearest_ephemeris", "saastamoinen", "satellite_states", "single_point"]
