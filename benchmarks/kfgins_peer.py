@@ -645,12 +645,17 @@ def pin_fednav(work: Path) -> Path:
     return snap
 
 
+#: further options of every ``fednav process kfgins`` (``--noise``)
+FEDNAV_ARGS: list[str] = []
+
+
 def run_fednav(case: Case, out: Path) -> tuple[float, Path, str]:
     if out.exists():
         shutil.rmtree(out)
     t0 = time.perf_counter()
     r = subprocess.run([str(fednav_exe()), "process", "kfgins", str(case.folder), "--out",
-                        str(out)], capture_output=True, text=True, env=FEDNAV_ENV)
+                        str(out), *FEDNAV_ARGS], capture_output=True, text=True,
+                       env=FEDNAV_ENV)
     wall = time.perf_counter() - t0
     if r.returncode != 0:
         raise SystemExit(f"fednav process kfgins {case.folder} failed (exit "
@@ -815,7 +820,11 @@ def main() -> None:
     ap.add_argument("--no-pin", action="store_true",
                     help="run fednav from the checkout itself (default: from a copy of its "
                          "sources with its own kernel cache, pin_fednav)")
+    ap.add_argument("--noise", choices=("identify", "as-given"),
+                    help="fednav process's --noise (default: its own default)")
     args = ap.parse_args()
+    if args.noise:
+        FEDNAV_ARGS.extend(["--noise", args.noise])
     binary = kfgins_binary(args.kfgins)
     work = Path(args.work or tempfile.mkdtemp(prefix="kfgins-peer-"))
     work.mkdir(parents=True, exist_ok=True)

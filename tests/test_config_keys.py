@@ -99,6 +99,7 @@ WALK = {
     "health.nis_band": ("acts", [0.99, 1.01]),  # (the drive's NIS/dof lies outside it)
     "integrity": ("acts", {"alert_limit_horizontal_m": 40.0}),  # (levels in the summary)
     "smoother": ("acts", True),
+    "noise": ("acts", "as-given"),  # (the summary's noise entry goes)
     "output_rate_hz": ("acts", 2.0),
     "files": ("acts", "FILES"),  # (the velocity file named there, not by --velocity)
     "sensors": ("acts", None),  # (its sections: SECTION below)
@@ -202,6 +203,7 @@ def _run(drive: Path, out: Path, cfg: dict, velocity: bool = True):
     s = json.loads((out / "o" / "summary.json").read_text())
     s.pop("run_time_s")
     s.pop("inputs")
+    s.get("noise", {}).pop("cost_s", None)  # (a time, as run_time_s)
     sol = (out / "o" / "solution.csv").read_text()
     return r, (s, sol)
 

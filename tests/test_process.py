@@ -170,6 +170,15 @@ def test_cli_process_csv_end_to_end(tmp_path, flight):
         "up position")
     assert "RMSE smoothed against the reference" in res.output
     assert "north_m" not in res.output
+    # the IMU noise checked against the recording (fednav.process.identify): the true
+    # figures are consistent with it, flown as given, and it says so
+    n = s["noise"]
+    assert n["method"] == "em" and n["identified"] == n["prior"] and not n["accepted"]
+    assert "IMU noise: the given figures flown (every NIS/dof inside 0.5..2" in res.output
+    bad = CliRunner().invoke(app, ["process", "csv", "--imu", str(tmp_path / "imu.csv"),
+                                   "--gnss", str(tmp_path / "gnss.csv"), "--out",
+                                   str(tmp_path / "out2"), "--noise", "learn"])
+    assert bad.exit_code == 2 and "--noise learn: not identify or as-given" in bad.output
 
 
 @pytest.mark.parametrize(("cfg", "message"), [

@@ -418,9 +418,16 @@ def _simulate_writes(rel: Path) -> bool:
                                                     "kf-gins.yaml"))
 
 
+def _noise_option(cfg, noise: str):
+    """``cfg`` with ``--noise``'s choice (one line for a word it does not know)."""
+    if noise not in ("identify", "as-given"):
+        raise ValueError(f"--noise {noise}: not identify or as-given")
+    return cfg.model_copy(update={"noise": noise})
+
+
 def _run_process(read, imu, gnss, velocity, ref, smooth, out, config, output_rate,
                  files: dict | None = None, force: bool = False, fmt: str = "csv",
-                 export: str | None = None) -> None:
+                 export: str | None = None, noise: str | None = None) -> None:
     from .core.atomic import clear_results
     from .core.config import load_model
     from .navigator.system import System
@@ -448,6 +455,8 @@ def _run_process(read, imu, gnss, velocity, ref, smooth, out, config, output_rat
             rate = cfg.output_rate_hz
         data = read(cfg)
         cfg = data.get("system", cfg)  # (a reader that completes the description)
+        if noise is not None:
+            cfg = _noise_option(cfg, noise)
         # the files read (the options', else those the description lists)
         paths = {"imu": imu, "gnss": gnss, "velocity": velocity, **(files or {}),
                  "reference": ref, **data.get("paths", {})}
@@ -598,6 +607,11 @@ def _print_process(s: dict, compiled_s: float = 0.0) -> None:
     if q:
         console.print("data: " + ", ".join(f"{k.replace('_', ' ')} {v}" for k, v in q.items())
                       + " (docs/reliability.md)")
+    if s.get("noise"):
+        from .process.identify import noise_lines
+
+        for line in noise_lines(s["noise"]):
+            console.print(escape(line))
     for name, c in s["consistency"].items():
         console.print(f"  local '{name}': mean NIS/dof {c['nis_per_dof']:.2f}, isolated "
                       f"{100 * c['isolated_fraction']:.1f} % of {c['measurements']}")
@@ -788,6 +802,10 @@ _FORMAT = typer.Option("csv", "--format", help="solution file format: csv or par
                        "(needs pyarrow: the extra 'parquet' of fednav)")
 _FORCE = typer.Option(False, "--force", help="write the solution even when its innovations "
                       "say the data are wrong (mean NIS/dof above 100)")
+_NOISE = typer.Option(None, "--noise", help="identify: the IMU's process noise identified "
+                      "from the recording before the final pass (the given figures its "
+                      "prior and floor); as-given: flown as given; default: the config's "
+                      "noise:, else identify (docs/real-data.md)")
 _EXPORT = typer.Option(None, "--export", help="also write the solution as kml, gpx, geojson, "
                        "kfgins and/or rosbag (comma-separated; kml, gpx, geojson need the "
                        "extra 'export' of fednav, rosbag the extra 'formats')")
@@ -802,11 +820,12 @@ def process_navego(
     ref: Path = typer.Option(None, help="NaveGo reference .mat (for RMSE)"),
     smooth: bool = _SMOOTH, out: Path = _OUT, config: Path = _CONFIG,
     output_rate: str = _RATE, fmt: str = _FORMAT, force: bool = _FORCE,
+    noise: str = _NOISE,
     export: str = _EXPORT,
 ) -> None:
     """Loosely coupled INS/GNSS (+ visual velocity) on NaveGo .mat files."""
     _run_process(_navego_reader(imu, gnss, visual, ref), imu, gnss, visual, ref, smooth, out,
-                 config, output_rate, force=force, fmt=fmt, export=export)
+                 config, output_rate, force=force, noise=noise, fmt=fmt, export=export)
 
 
 @process_app.command("csv")
@@ -821,6 +840,7 @@ def process_csv(
     ref: Path = typer.Option(None, help="reference CSV (for RMSE and errors.csv)"),
     smooth: bool = _SMOOTH, out: Path = _OUT, config: Path = _CONFIG,
     output_rate: str = _RATE, fmt: str = _FORMAT, force: bool = _FORCE,
+    noise: str = _NOISE,
     export: str = _EXPORT, **files: Path,
 ) -> None:
     """The system described by --config (any registered sensors, local filters, fault
@@ -829,7 +849,7 @@ def process_csv(
     come from --config (or each row's sigma columns)."""
     files = {n: f for n, f in files.items() if f is not None}
     _run_process(_csv_reader(imu, gnss, velocity, ref, files, config), imu, gnss, velocity,
-                 ref, smooth, out, config, output_rate, files, force=force, fmt=fmt,
+                 ref, smooth, out, config, output_rate, files, force=force, noise=noise, fmt=fmt,
                  export=export)
 
 
@@ -844,6 +864,7 @@ def process_kfgins(
     config: Path = typer.Option(None, help="fednav system description YAML whose keys are "
                                            "laid over the translated configuration"),
     output_rate: str = _RATE, fmt: str = _FORMAT, force: bool = _FORCE,
+    noise: str = _NOISE,
     export: str = _EXPORT,
 ) -> None:
     """A KF-GINS user's data as they are: its IMU and GNSS text files and its kf-gins.yaml
@@ -871,7 +892,7 @@ def process_kfgins(
         return
     kinds = "kfgins" if not export else f"{export},kfgins"
     _run_process(_kfgins_reader(path), None, None, None, None, smooth, out, config,
-                 output_rate, force=force, fmt=fmt, export=kinds)
+                 output_rate, force=force, noise=noise, fmt=fmt, export=kinds)
 
 
 @process_app.command("ulog")
@@ -883,13 +904,14 @@ def process_ulog(
                                            "sensors aid (aiding:), filters; what it leaves "
                                            "out comes from the log"),
     output_rate: str = _RATE, fmt: str = _FORMAT, force: bool = _FORCE,
+    noise: str = _NOISE,
     export: str = _EXPORT,
 ) -> None:
     """A PX4 autopilot log (ULog, read with pyulog): its IMU, GNSS, barometer and
     magnetometer through the navigator, compared with PX4's own estimate (and the log's
     ground truth when it has one)."""
     _run_process(_ulog_reader(log), log, None, None, None, smooth, out, config,
-                 output_rate, force=force, fmt=fmt, export=export)
+                 output_rate, force=force, noise=noise, fmt=fmt, export=export)
 
 
 @process_app.command("rosbag")
@@ -915,6 +937,7 @@ def process_rosbag(
                                            "messages give no covariance, lever arms), "
                                            "filters"),
     output_rate: str = _RATE, fmt: str = _FORMAT, force: bool = _FORCE,
+    noise: str = _NOISE,
     export: str = _EXPORT,
 ) -> None:
     """A ROS 1 or ROS 2 bag (read with rosbags: no ROS install): its IMU, GNSS fixes and
@@ -930,7 +953,7 @@ def process_rosbag(
         topics[name.strip()] = value.strip() or None
     topics.update({k: v for k, v in (("imu", imu_topic), ("gnss", gnss_topic)) if v})
     _run_process(_rosbag_reader(bag, topics, time), bag, None, None, None, smooth, out,
-                 config, output_rate, force=force, fmt=fmt, export=export)
+                 config, output_rate, force=force, noise=noise, fmt=fmt, export=export)
 
 
 @process_app.command("gnss-ins-sim")
@@ -946,12 +969,13 @@ def process_gnss_ins_sim(
                                            "sensors.odometer to aid with them, filters; the "
                                            "GPS sigmas come from the folder"),
     output_rate: str = _RATE, fmt: str = _FORMAT, force: bool = _FORCE,
+    noise: str = _NOISE,
     export: str = _EXPORT,
 ) -> None:
     """A gnss-ins-sim (Aceinna) output folder: its IMU and GPS (NED, FRD, units from the
     headers) through the navigator, compared with the simulator's true trajectory."""
     _run_process(_gnss_ins_sim_reader(folder, run), None, None, None, None, smooth, out,
-                 config, output_rate, force=force, fmt=fmt, export=export)
+                 config, output_rate, force=force, noise=noise, fmt=fmt, export=export)
 
 
 tune_app = typer.Typer(no_args_is_help=True,

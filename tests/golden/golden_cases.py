@@ -244,6 +244,9 @@ def _solution(out: dict, prefix: str, sol, step: int) -> None:
 def _process_case(out: dict, prefix: str, imu, gnss, vel, ref, cfg, smooth: bool) -> None:
     from fednav.process.run import errors_against, process, rmse
 
+    # (the goldens pin the figures flown as given; fednav.process.identify's tests and
+    # docs/real-data.md cover the identified ones)
+    cfg = cfg.model_copy(update={"noise": "as-given"})
     res = process(imu, {"gnss": gnss, "velocity": vel}, cfg, smooth=smooth)
     _solution(out, f"{prefix}/forward", res.forward, 200)
     _put(out, f"{prefix}/epochs", res.epochs)

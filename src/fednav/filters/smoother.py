@@ -27,6 +27,39 @@ def rts_errors(P_post, Phi, Q, dx) -> tuple[np.ndarray, np.ndarray]:
     ``dx`` (N+1, n): the correction removed from the solution at epoch k (zero where
     nothing was measured).  Returns ``e`` (N+1, n) and ``Ps`` (N+1, n, n).
     """
+    e, Ps, _ = rts_smooth(P_post, Phi, Q, dx)
+    return e, Ps
+
+
+def noise_moments(P_post, Phi, Q, dx, rows=None) -> np.ndarray:
+    """The expected outer product of each interval's process noise given every
+    measurement (the E-step of Shumway & Stoffer's EM, 1982), ``W`` (N, n, n).
+
+    The noise of interval k -> k+1 is ``w_k = x-_{k+1} - Phi_{k+1} x+_k`` with the
+    smoothed errors ``x+_k = e_k`` and ``x-_{k+1} = e_{k+1} + dx_{k+1}`` and their lag-one
+    covariance ``Cov(x_{k+1}, x_k) = Ps_{k+1} A_k'``::
+
+        W_k = r r' + Ps_{k+1} - Ps_{k+1} A_k' Phi' - Phi A_k Ps_{k+1} + Phi Ps_k Phi'
+
+    with ``r = e_{k+1} + dx_{k+1} - Phi e_k``.  ``W_k`` set against ``Q_{k+1}`` tells how
+    much noise the data put where the model put ``Q`` (their ratio is 1 on average for a
+    right model).  Arguments as :func:`rts_errors`; ``rows`` (indices): only those rows
+    and columns of ``W`` (N, len(rows), len(rows)).  Filter units.
+    """
+    dx = np.asarray(dx, dtype=float)
+    e, Ps, A = rts_smooth(P_post, Phi, Q, dx)
+    Phi = np.asarray(Phi, dtype=float)[1:]
+    d = np.arange(Phi.shape[1]) if rows is None else np.asarray(rows)
+    Pd = Phi[:, d, :]
+    r = e[1:, d] + dx[1:, d] - np.einsum("kij,kj->ki", Pd, e[:-1])
+    C = Ps[1:][:, d, :] @ np.swapaxes(Pd @ A, 1, 2)
+    W = (r[:, :, None] * r[:, None, :] + Ps[1:][:, d][:, :, d] - C - np.swapaxes(C, 1, 2)
+         + Pd @ Ps[:-1] @ np.swapaxes(Pd, 1, 2))
+    return 0.5 * (W + np.swapaxes(W, 1, 2))
+
+
+def rts_smooth(P_post, Phi, Q, dx) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`rts_errors` with the smoother's gains ``A`` (N, n, n) beside."""
     P_post = np.asarray(P_post, dtype=float)
     Phi = np.asarray(Phi, dtype=float)
     Q = np.asarray(Q, dtype=float)
@@ -50,4 +83,4 @@ def rts_errors(P_post, Phi, Q, dx) -> tuple[np.ndarray, np.ndarray]:
         e[k] = A[k] @ (e[k + 1] + dx[k + 1])
         Pk = P_post[k] + A[k] @ (Ps[k + 1] - P_prior[k]) @ A[k].T
         Ps[k] = 0.5 * (Pk + Pk.T)
-    return e, Ps
+    return e, Ps, A

@@ -14,6 +14,7 @@ is made of::
     alignment:  how recorded data find the initial attitude
     integrity:  protection levels by solution separation (fednav.navigator.integrity)
     smoother:   also run the RTS smoother
+    noise:      identify the IMU's process noise from a recording (fednav process), or as-given
     output_rate_hz: solution rows per second of fednav process's files (default: 10 Hz)
 
 The papers' scenario files are a system description plus the flight and the experiment
@@ -373,6 +374,10 @@ class System(_Model):
         probability, the alert limits; None (default): no levels.
     smoother : bool
         Also run the RTS smoother.
+    noise : {"identify", "as-given"}
+        ``fednav process``: identify the IMU's process noise from the recording before
+        the final pass (:mod:`fednav.process.identify`; the given figures its prior and
+        floor) or fly the figures as given.
     output_rate_hz : float or {"imu", "filter"}, optional
         Solution rows per second of ``fednav process``'s files [Hz] when its
         ``--output-rate`` is not given (None: 10 Hz, at most the IMU rate); ``imu``:
@@ -392,6 +397,7 @@ class System(_Model):
     health: HealthConfig = HealthConfig()
     integrity: IntegrityConfig | None = None
     smoother: bool = False
+    noise: Literal["identify", "as-given"] = "identify"
     output_rate_hz: float | Literal["imu", "filter"] | None = None
 
     @field_validator("output_rate_hz", mode="before")

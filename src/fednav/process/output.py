@@ -167,6 +167,8 @@ def summary(res: ProcessResult, ref: Reference | None, inputs: dict,
                  "alignment": res.alignment}
     if res.optional_states:
         out["error_states"] = error_states(res.optional_states)
+    if res.noise is not None:
+        out["noise"] = res.noise.summary()
     if ref is not None:
         out["rmse"] = _rmse_block(res.forward, ref)
         if res.smoothed is not None:

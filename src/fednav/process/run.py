@@ -184,6 +184,10 @@ class ProcessResult:
         With the system's ``integrity:``, the protection levels [m, rad], tests and
         exclusions of every row (:class:`fednav.navigator.integrity.IntegrityResult`;
         ``forward`` is then the output after any exclusion).
+    noise : Identified or None
+        The IMU noise figures identified from the recording (prior -> identified,
+        NIS/dof before -> after; :mod:`fednav.process.identify`), None with the system's
+        ``noise: as-given``.
     """
 
     forward: Solution
@@ -202,6 +206,9 @@ class ProcessResult:
     #: the protection levels, tests and exclusions (the system's ``integrity:``;
     #: :class:`fednav.navigator.integrity.IntegrityResult`), else None
     integrity: object = None
+    #: the noise identification's report (:class:`fednav.process.identify.Identified`;
+    #: None with ``noise: as-given``)
+    noise: object = None
 
     @property
     def gnss_flown(self) -> FixData | None:
@@ -814,6 +821,11 @@ def process(imu: ImuData, sensors: Mapping[str, Series], cfg: System | None = No
     sensors = withheld_inputs(cfg, recordings(sensors, cfg))
     fixes = sensors.get(registry.fix_sensor(sensors))
     prep = prepare(imu, sensors, cfg)
+    noise = None
+    if prep.system.noise == "identify" and prep.system.filter.state == "error":
+        from .identify import identify
+
+        prep, noise = identify(imu, prep)
     nav = prep.feed(prep.navigator(record_rows=True, record_covariance=True,
                                    innovations=True))
     out = nav.result()
@@ -856,6 +868,7 @@ def process(imu: ImuData, sensors: Mapping[str, Series], cfg: System | None = No
         res.warnings += said
     res.outages = {n: w for n in prep.system.sensors if (w := outages.windows_of(cfg, n))}
     res.fixes_flown = fixes
+    res.noise = noise
     res.run_time_s = time.perf_counter() - t_start
     if innovations is not None:
         innovations.extend(out.innovations)

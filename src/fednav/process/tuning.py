@@ -267,30 +267,34 @@ def innovation_statistics(inns: list[InnovationRecord],
     nis, nis_held, matched = {}, {}, {}
     for local in dict.fromkeys(i.local for i in inns):
         mine = [i for i in inns if i.local == local]
-        r = np.array([i.r for i in mine])
-        R = np.array([i.R for i in mine])
-        beta = np.array([i.beta for i in mine])[:, None, None]
-        Sc = centralized_S([i.S for i in mine], R, beta)
-        L = np.linalg.cholesky(Sc)
-        w = np.linalg.solve(L, r[..., None])[..., 0]
-        q = np.einsum("ij,ij->i", w, w)
-        d = r.shape[1]
-        cap = _cap(d)
-        logdet = 2.0 * np.log(np.diagonal(L, axis1=1, axis2=2)).sum(axis=1)
-        each = -0.5 * (logdet + np.minimum(q, cap) + d * np.log(2 * np.pi))
-        held = (np.zeros(len(mine), dtype=bool) if blocks is None
-                else blocks.held([i.t for i in mine]))
-        fit = ~held
-        ll += float(np.sum(each[fit]))
-        ll_held += float(np.sum(each[held]))
-        if fit.any():
-            nis[local] = float(np.mean(q[fit]) / d)
-        if held.any():
-            nis_held[local] = float(np.mean(q[held]) / d)
-        use = np.array([i.accepted for i in mine]) & (q <= cap) & fit
-        if use.any():
-            hph = np.diagonal(Sc - R, axis1=1, axis2=2)
-            matched[local] = np.mean(r[use] ** 2, axis=0) - np.mean(hph[use], axis=0)
+        sums = np.zeros(4)  # q and dof over the fitted, then the held-back measurements
+        sizes = sorted({len(i.r) for i in mine})
+        for d in sizes:  # (a raw GNSS epoch's rows vary with its satellites)
+            same = [i for i in mine if len(i.r) == d]
+            r = np.array([i.r for i in same])
+            R = np.array([i.R for i in same])
+            beta = np.array([i.beta for i in same])[:, None, None]
+            Sc = centralized_S([i.S for i in same], R, beta)
+            L = np.linalg.cholesky(Sc)
+            w = np.linalg.solve(L, r[..., None])[..., 0]
+            q = np.einsum("ij,ij->i", w, w)
+            cap = _cap(d)
+            logdet = 2.0 * np.log(np.diagonal(L, axis1=1, axis2=2)).sum(axis=1)
+            each = -0.5 * (logdet + np.minimum(q, cap) + d * np.log(2 * np.pi))
+            held = (np.zeros(len(same), dtype=bool) if blocks is None
+                    else blocks.held([i.t for i in same]))
+            fit = ~held
+            ll += float(np.sum(each[fit]))
+            ll_held += float(np.sum(each[held]))
+            sums += [q[fit].sum(), d * fit.sum(), q[held].sum(), d * held.sum()]
+            use = np.array([i.accepted for i in same]) & (q <= cap) & fit
+            if use.any() and len(sizes) == 1:
+                hph = np.diagonal(Sc - R, axis1=1, axis2=2)
+                matched[local] = np.mean(r[use] ** 2, axis=0) - np.mean(hph[use], axis=0)
+        if sums[1]:
+            nis[local] = float(sums[0] / sums[1])
+        if sums[3]:
+            nis_held[local] = float(sums[2] / sums[3])
     return Evaluation(ll, nis, matched, ll_held if blocks is not None else float("nan"),
                       nis_held)
 
@@ -300,8 +304,15 @@ def evaluate(imu: ImuData, sensors: dict, cfg: System,
     """Run the forward filter with ``cfg`` on ``sensors`` (series by registered name) and
     sum up its innovations (all of them fitted without ``blocks``)."""
     inns: list[InnovationRecord] = []
-    process(imu, sensors, cfg, innovations=inns, force=True)  # (candidates may fit badly)
+    process(imu, sensors, as_given(cfg), innovations=inns,
+            force=True)  # (candidates may fit badly)
     return innovation_statistics(inns, blocks)
+
+
+def as_given(cfg: System) -> System:
+    """``cfg`` flown with its figures as they are (tune's candidates are not identified
+    again: :mod:`fednav.process.identify`)."""
+    return cfg.model_copy(update={"noise": "as-given"})
 
 
 def withheld(fixes: FixData, windows) -> FixData:
@@ -327,7 +338,7 @@ def outage_drift(imu: ImuData, sensors: dict, cfg: System, windows) -> list[floa
     each window."""
     fx = registry.fix_sensor(sensors)
     fixes = sensors[fx]
-    res = process(imu, {**sensors, fx: withheld(fixes, windows)}, cfg, force=True)
+    res = process(imu, {**sensors, fx: withheld(fixes, windows)}, as_given(cfg), force=True)
     sol = res.forward
     fc = own_section(fx, cfg)
     lever = np.asarray(fc.lever_m if fc.lever_m is not None else fixes.lever, dtype=float)
@@ -811,6 +822,7 @@ def config_yaml(res: TuneResult, base: dict | None = None, header: str = "") -> 
                                                  for x in res.lever_from_file]
     if sensors:
         data["sensors"] = sensors
+    data["noise"] = "as-given"  # (the figures tune chose, flown as they are)
     lines = [f"# {line}" for line in header.splitlines()]
     lines += [f"# {line}" for line in res.summary()]
     for f in res.figures:

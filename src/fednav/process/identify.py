@@ -1,0 +1,377 @@
+"""The IMU's process noise identified from the recording itself (``fednav process``'s
+default; ``--noise as-given`` keeps the figures as given).
+
+A datasheet's white noise and bias instability are a quiet bench's; on a vehicle,
+vibration makes a MEMS IMU's noise 10-70 times larger, and a filter flown with the
+datasheet's figures is overconfident (its innovations many times their predicted size).
+Offline, the whole recording is there before the final pass, so the figures of *this*
+IMU on *this* vehicle are estimated from it, with the given figures as prior and floor:
+
+1. **Only where the given figures fail.**  A first pass flies the given figures.  Unless
+   some local filter's mean NIS/dof lies above the health band (``health.nis_band``,
+   0.5..2: innovations larger than the figures allow), they are flown as given and the
+   report says why: a description the recording does not contradict is not re-tuned,
+   and one whose innovations are only *smaller* than predicted points at a sensor sigma
+   larger than its data's (a conservative receiver), not at the IMU — the given figures
+   are never lowered.
+2. **E-step.**  The forward filter and the RTS smoother over the recording give, for
+   every filter interval, the expected outer product of the process noise given every
+   measurement, ``W_k`` (:func:`fednav.filters.smoother.noise_moments`; Shumway &
+   Stoffer 1982), over the states the figures drive (attitude, velocity, the
+   Gauss–Markov biases).
+3. **M-step.**  The interval's noise is ``Q_k = sum_j s_j B_jk + rest_k``, each figure's
+   part ``B_jk`` discretized as the filter does (:func:`noise_parts`); the variance
+   factors ``s_j`` come from the expected likelihood's fixed point
+   (:func:`variance_factors`; each interval's ``W_k`` shrunk at the 99.9 % chi-square
+   point: a wrong fix does not set the figures).  Steps are taken in the logarithm,
+   accelerated by secant steps in EM's direction (at most :data:`ACCELERATION` times
+   EM's own step, :data:`MAX_STEP` per pass), until no figure's EM step exceeds
+   :data:`TOLERANCE` or after :data:`MAX_PASSES` passes.
+4. **Start and floor.**  A white noise starts at what the samples' own scatter supports
+   where that is more than given (:func:`scatter_figures`: the data's direct measure of
+   it), a bias instability at the given figure; no figure goes below the given one.
+   Correlation times and turn-on biases are kept.
+5. **Held back.**  The recording is cut into alternating 60 s blocks; only the even
+   ones' intervals are fitted, the odd ones score: the identified figures replace the
+   given ones only if the held-back innovations' log-likelihood does not fall by more
+   than the likelihood-ratio test's 95 % point and no sensor's held-back NIS/dof moves
+   further out of the band (:func:`fednav.process.tuning.worse`).
+
+The sensors' own sigmas (files, receivers, the system description) are kept.  What the
+navigator flies with is the identified figures; the report (:class:`Identified`) gives
+prior -> identified, NIS/dof before -> after and the cost.  Units: SI keys of the
+``imu:`` section (rad/sqrt(s), m/s/sqrt(s), rad/s, m/s^2).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from ..filters.smoother import noise_moments
+from ..io.data import ImuData
+from ..navigator.system import System
+
+#: Each identified figure (SI key of the ``imu:`` section) and the error-state block its
+#: noise drives (the 18 states of :mod:`fednav.ins.error_model`).
+BLOCKS = {"gyro_arw_rad_sqrt_s": slice(0, 3), "accel_vrw_mps_sqrt_s": slice(3, 6),
+          "gyro_markov_radps": slice(12, 15), "accel_markov_mps2": slice(15, 18)}
+#: the error states the identified figures drive (attitude, velocity, the Gauss–Markov
+#: biases); the others (position, the constant gyro bias, optional states) are left out
+DRIVEN = np.r_[0:6, 12:18]
+#: white-noise figures (floored at the samples' scatter when that is lower than given)
+WHITE = ("gyro_arw_rad_sqrt_s", "accel_vrw_mps_sqrt_s")
+#: their per-sample spellings, cleared when the density is set
+PER_SAMPLE = {"gyro_arw_rad_sqrt_s": "gyro_white_deg_h",
+              "accel_vrw_mps_sqrt_s": "accel_white_ug"}
+#: converged when no figure moves by more than this fraction in an iteration
+TOLERANCE = 0.03
+#: at most this many filter + smoother passes
+MAX_PASSES = 12
+#: held-back blocks [s] (as fednav tune's)
+BLOCK_S = 60.0
+#: chi-square point at which an interval's noise ratio is capped
+CAP_P = 0.999
+#: the most a figure moves in one pass (a factor)
+MAX_STEP = 10.0
+#: a secant step is at most this many times EM's own
+ACCELERATION = 4.0
+
+
+@dataclass
+class Identified:
+    """What the identification found: the ``prior`` and ``identified`` figures and their
+    ``floor`` (SI keys), whether the identified ones were ``accepted`` (else ``why``
+    not), the filter + smoother ``passes``, NIS/dof of every local filter before and
+    after (``nis_before``, ``nis_after``; all innovations) and the held-back
+    log-likelihood before and after, and the cost [s]."""
+
+    prior: dict[str, float]
+    identified: dict[str, float]
+    floor: dict[str, float]
+    accepted: bool
+    passes: int
+    nis_before: dict[str, float]
+    nis_after: dict[str, float]
+    loglik_held_before: float
+    loglik_held_after: float
+    cost_s: float
+    why: str = ""
+    history: list = field(default_factory=list)
+
+    @property
+    def flown(self) -> dict[str, float]:
+        """The figures the final pass flies with."""
+        return self.identified if self.accepted else self.prior
+
+    def lines(self) -> list[str]:
+        """The console's lines (:func:`noise_lines`)."""
+        return noise_lines(self.summary())
+
+    def summary(self) -> dict:
+        """``summary.json``'s ``noise`` entry."""
+        return {"method": "em", "accepted": self.accepted, "passes": self.passes,
+                "cost_s": round(self.cost_s, 3), "prior": self.prior,
+                "identified": self.identified, "floor": self.floor,
+                "nis_per_dof_before": self.nis_before, "nis_per_dof_after": self.nis_after,
+                "loglik_held_before": self.loglik_held_before,
+                "loglik_held_after": self.loglik_held_after,
+                **({"why_not": self.why} if not self.accepted else {})}
+
+
+def noise_lines(s: dict) -> list[str]:
+    """The console's lines of ``summary.json``'s ``noise`` entry: prior -> identified,
+    NIS/dof before -> after, and why the identified figures were not taken."""
+    figs = ", ".join(f"{k.split('_')[0]} {k.split('_')[1]} {s['prior'][k]:.3g} -> {v:.3g}"
+                     f" (x{v / s['prior'][k]:.3g})" for k, v in s["identified"].items())
+    nis = ", ".join(f"{k} {v:.2f} -> {s['nis_per_dof_after'].get(k, float('nan')):.2f}"
+                    for k, v in s["nis_per_dof_before"].items())
+    if not s["accepted"] and s["passes"] == 1:  # (consistent: nothing identified)
+        return [f"IMU noise: the given figures flown ({s['why_not']}: "
+                + ", ".join(f"{k} {v:.2f}" for k, v in s["nis_per_dof_before"].items())
+                + "; noise: as-given skips this check)"]
+    if s["accepted"]:
+        head = "IMU noise identified from the recording"
+    else:
+        head = "IMU noise identification not taken (the given figures are flown)"
+    out = [f"{head}, SI ({s['passes']} passes, {s['cost_s']:.1f} s; noise: as-given "
+           f"skips this): {figs}", f"  NIS/dof before -> after: {nis}"]
+    if not s["accepted"]:
+        out.append(f"  why: {s['why_not']}")
+    return out
+
+
+def with_figures(system: System, figures: dict[str, float]) -> System:
+    """``system`` with these IMU figures (SI keys) in its ``imu:`` section, their
+    engineering and per-sample spellings cleared."""
+    from ..sensors.imu import FIGURES
+
+    eng = {si: e for e, _, si in FIGURES.values()}
+    update = {}
+    for k, v in figures.items():
+        update.update({k: float(v), eng[k]: None})
+        if k in PER_SAMPLE:
+            update[PER_SAMPLE[k]] = None
+    return system.model_copy(update={"imu": system.imu.model_copy(update=update)})
+
+
+def given_figures(imu: ImuData, system: System) -> dict[str, float]:
+    """The figures the navigator flies with ``system`` (SI keys of :data:`BLOCKS`): the
+    system description's, else the file's, else the grade preset's; a per-sample white
+    figure as its density.  Figures that are zero or absent are left out (nothing to
+    scale)."""
+    from .run import imu_figures
+
+    f = imu_figures(imu, system)
+    dt = imu.period()
+    if system.imu.gyro_white_deg_h is not None:
+        f["gyro_arw_rad_sqrt_s"] = system.imu.arw(dt)
+    if system.imu.accel_white_ug is not None:
+        f["accel_vrw_mps_sqrt_s"] = system.imu.vrw(dt)
+    return {k: float(f[k]) for k in BLOCKS if f.get(k)}
+
+
+def correlation_times(imu: ImuData, system: System) -> dict[str, float]:
+    """The Gauss–Markov figures' correlation times [s] (inf: none), by figure."""
+    from .run import imu_figures
+
+    f = imu_figures(imu, system)
+    return {"gyro_markov_radps": float(f.get("gyro_tau_s") or np.inf),
+            "accel_markov_mps2": float(f.get("accel_tau_s") or np.inf)}
+
+
+def scatter_figures(imu: ImuData, n_per: int) -> dict[str, float]:
+    """The white-noise figures the samples' own scatter supports
+    (:func:`fednav.process.tuning.white_noise_floor`; SI keys)."""
+    from .tuning import white_noise_floor
+
+    dt = imu.period()
+    return {"gyro_arw_rad_sqrt_s": white_noise_floor(imu.gyro, dt, n_per),
+            "accel_vrw_mps_sqrt_s": white_noise_floor(imu.accel, dt, n_per)}
+
+
+def noise_parts(res, figures: dict[str, float], taus: dict[str, float]) -> np.ndarray:
+    """Each figure's part of every interval's discrete process noise, over the driven
+    states :data:`DRIVEN`: ``B`` (n_figures, N, d, d), filter units.  The continuous
+    density of figure j is ``Qc_j`` (white noise: its square on its three states; a
+    Gauss–Markov bias: ``2 sigma^2 / tau``), discretized as the filter does
+    (:func:`fednav.ins.error_model`'s trapezoid, ``(Phi Qc Phi' + Qc) T / 2``) with the
+    recorded transition ``Phi`` and the interval ``T``."""
+    from ..ins.error_model import SCALE
+
+    Phi = np.asarray(res.Phi)[1:][:, DRIVEN][:, :, DRIVEN]
+    T = np.diff(np.asarray(res.t, dtype=float))
+    scale = SCALE[DRIVEN]
+    out = []
+    for k, v in figures.items():
+        qc = np.zeros(len(DRIVEN))
+        on = np.isin(DRIVEN, np.arange(18)[BLOCKS[k]])
+        tau = taus.get(k)
+        qc[on] = v**2 if tau is None else (2.0 * v**2 / tau if np.isfinite(tau) else 0.0)
+        qc /= scale**2
+        PQ = Phi * qc[None, None, :]
+        out.append(0.5 * (PQ @ np.swapaxes(Phi, 1, 2) + np.diag(qc)[None]) * T[:, None, None])
+    return np.array(out)
+
+
+def variance_factors(res, figures: dict[str, float], taus: dict[str, float],
+                     fitted: np.ndarray) -> dict[str, float]:
+    """One EM step's factor on each figure's variance (module docstring, 2).
+
+    With ``Q_k = sum_j s_j B_jk + rest_k`` over the driven states (``B``:
+    :func:`noise_parts`, ``rest``: what the recorded ``Qd`` holds beside them — a
+    barometer loop, scale-factor states), the expected complete-data likelihood's
+    fixed point for each ``s_j`` at ``s = 1`` is::
+
+        s_j = sum_k tr(Q_k^-1 B_jk Q_k^-1 W_k) / sum_k tr(Q_k^-1 B_jk)
+
+    over the fitted intervals (Shumway & Stoffer's M-step for a covariance linear in
+    its parameters; each interval's ``W_k`` shrunk where ``tr(Q_k^-1 W_k) / d`` passes
+    the 99.9 % point of chi-square over d: a wrong fix or a bump the smoother meets does
+    not set the figures).
+    """
+    from ..core.stats import chi2_ppf
+
+    W = noise_moments(res.P, res.Phi, res.Qd, res.dx, DRIVEN)[fitted]
+    Qd = np.asarray(res.Qd)[1:][:, DRIVEN][:, :, DRIVEN][fitted]
+    B = noise_parts(res, figures, taus)[:, fitted]
+    live = np.diagonal(Qd, axis1=1, axis2=2).min(axis=0) > 0
+    if not live.all():  # (a block without noise: a figure of zero)
+        Qd, W, B = Qd[:, live][:, :, live], W[:, live][:, :, live], B[:, :, live][:, :, :, live]
+    d = Qd.shape[1]
+    Qi = np.linalg.inv(Qd)
+    ratio = np.trace(Qi @ W, axis1=1, axis2=2) / d
+    cap = float(chi2_ppf(CAP_P, d)) / d
+    W = W * np.minimum(1.0, cap / np.maximum(ratio, 1e-300))[:, None, None]
+    QiW = Qi @ W @ Qi
+    out = {}
+    for j, k in enumerate(figures):
+        den = float(np.sum(np.einsum("kij,kji->k", Qi, B[j])))
+        if den > 0:
+            out[k] = float(np.sum(np.einsum("kij,kji->k", QiW, B[j]))) / den
+    return out
+
+
+def identify(imu: ImuData, prep, progress=None):
+    """Identify the IMU's process noise on prepared data (module docstring).
+
+    Parameters
+    ----------
+    imu : ImuData
+        The IMU samples as processed (mounted), for the white noise's start.
+    prep : Prepared
+        :func:`fednav.process.run.prepare`'s result with the given figures.
+    progress : callable, optional
+        Called with a short text before each pass.
+
+    Returns
+    -------
+    (Prepared, Identified)
+        ``prep`` with the figures to fly (the identified ones if accepted) and the
+        report.
+    """
+    from .tuning import LR_95, Blocks, innovation_statistics, worse
+
+    t_start = time.perf_counter()
+    prior = given_figures(imu, prep.system)
+    seen = scatter_figures(imu, prep.n_per)
+    # never below the given figures; a white noise starts at what the samples' scatter
+    # supports (the data's direct measure of it) where that is more
+    floor = dict(prior)
+    start = {k: max(v, seen.get(k, v)) for k, v in prior.items()}
+    blocks = Blocks(float(prep.t[0]), BLOCK_S)
+
+    def run(figures):
+        p = replace(prep, system=with_figures(prep.system, figures))
+        out = p.feed(p.navigator(record_covariance=True, innovations=True)).result()
+        return p, out, innovation_statistics(out.innovations, blocks)
+
+    taus = correlation_times(imu, prep.system)
+
+    def gaps(figures, out) -> dict[str, float]:
+        """log of each figure's EM factor (half the log of its variance factor)."""
+        fitted = ~blocks.held(np.asarray(out.t)[1:])
+        sc = variance_factors(out, figures, taus, fitted)
+        return {k: 0.5 * float(np.log(sc[k])) for k in sc if sc[k] > 0}
+
+    # Each figure's EM factor g (log) against its log x: the fixed point g = 0 found by
+    # secant steps (plain EM creeps where the data say much more noise than given),
+    # the first step EM's own; every step at most MAX_STEP, never below the floor.
+    _, out0, before = run(prior)
+    nis0 = before_all(out0)
+    hi = prep.system.health.nis_band[1]
+    if not any(v > hi for v in nis0.values()):  # (nothing says the figures are too small)
+        rep = Identified(prior, dict(prior), floor, False, 1, nis0, nis0,
+                         before.loglik_held, before.loglik_held,
+                         time.perf_counter() - t_start, kept_because(nis0, prep.system))
+        return prep, rep
+    figs = dict(start)
+    out, passes, history = out0, 1, []
+    if start != prior:
+        _, out, _ = run(figs)
+        passes += 1
+    last: dict[str, tuple[float, float]] = {}
+    while passes < MAX_PASSES:
+        g = gaps(figs, out)
+        new = {}
+        for k, x in figs.items():
+            if k not in g:
+                new[k] = x
+                continue
+            lx, gk = np.log(x), g[k]
+            step = gk
+            if k in last and lx != last[k][0]:
+                slope = (gk - last[k][1]) / (lx - last[k][0])
+                if slope < 0:  # (the factor falls as the figure rises: a secant step,
+                    # in EM's direction and at most ACCELERATION times EM's step)
+                    step = float(np.clip(-gk / slope, min(gk, ACCELERATION * gk),
+                                         max(gk, ACCELERATION * gk)))
+            step = float(np.clip(step, -np.log(MAX_STEP), np.log(MAX_STEP)))
+            last[k] = (lx, gk)
+            new[k] = max(float(np.exp(lx + step)), floor[k])
+        done = all(abs(v) < np.log1p(TOLERANCE) or (v < 0 and figs[k] <= floor[k])
+                   for k, v in g.items())
+        if done:
+            break
+        if progress is not None:
+            progress(f"noise identification, pass {passes + 1}")
+        figs = new
+        history.append(dict(figs))
+        _, out, _ = run(figs)
+        passes += 1
+    after = innovation_statistics(out.innovations, blocks)
+    # the held-back blocks decide (fednav tune's rule), a fall of the likelihood within
+    # the likelihood-ratio test's 95 % point (one figure) taken as no fall
+    why = worse(replace(after, loglik_held=after.loglik_held + LR_95), before)
+    if why and after.loglik_held + LR_95 < before.loglik_held:
+        why = (f"held-back log-likelihood {before.loglik_held:.1f} -> "
+               f"{after.loglik_held:.1f}, down by more than {LR_95}")
+    accepted = why is None
+    rep = Identified(prior, figs, floor, accepted, passes, before_all(out0),
+                     before_all(out), before.loglik_held, after.loglik_held,
+                     time.perf_counter() - t_start, why or "", history)
+    chosen = replace(prep, system=with_figures(prep.system, rep.flown))
+    return chosen, rep
+
+
+def kept_because(nis: dict[str, float], system: System) -> str:
+    """Why the given figures are flown when no local filter's NIS/dof is above the
+    health band."""
+    lo, hi = system.health.nis_band
+    low = [k for k, v in nis.items() if v < lo]
+    if not low:
+        return (f"every NIS/dof inside {lo:g}..{hi:g}: the given figures are consistent "
+                f"with the recording")
+    return (f"NIS/dof of {', '.join(low)} below {lo:g} and none above {hi:g}: the given "
+            f"figures are never lowered (a sensor sigma larger than its data's is the "
+            f"likelier cause)")
+
+
+def before_all(out) -> dict[str, float]:
+    """Mean NIS/dof of every local filter over all its innovations."""
+    from .tuning import innovation_statistics
+
+    ev = innovation_statistics(out.innovations)
+    return {k: round(v, 3) for k, v in ev.nis_per_dof.items()}
