@@ -118,14 +118,14 @@ def test_identification_recovers_the_white_noise_from_figures_10x_too_small(nois
     from fednav.process.identify import identify
 
     imu, fixes, _, true = noisy_drive
-    _, rep = identify(imu, _prepared(imu, fixes, true, 0.1))
+    _, rep, _ = identify(imu, _prepared(imu, fixes, true, 0.1))
     assert rep.accepted, rep.why
     assert rep.nis_before["gnss"] > 2.0  # (the given figures were overconfident)
     for k in ("gyro_arw_rad_sqrt_s", "accel_vrw_mps_sqrt_s"):
         assert rep.identified[k] == pytest.approx(true["imu"][k], rel=0.2), k
     # no figure below the given one (the bias instabilities start there)
     assert all(rep.identified[k] >= rep.prior[k] for k in rep.prior)
-    assert 0.5 < rep.nis_after["gnss"] < 2.0
+    assert 0.5 < rep.nis_after["gnss"] < 2.0 and rep.converged
 
 
 def test_figures_10x_too_large_are_kept_and_said(noisy_drive):
@@ -136,8 +136,9 @@ def test_figures_10x_too_large_are_kept_and_said(noisy_drive):
 
     imu, fixes, _, true = noisy_drive
     prep = _prepared(imu, fixes, true, 10.0)
-    chosen, rep = identify(imu, prep)
+    chosen, rep, nav = identify(imu, prep)
     assert chosen is prep and not rep.accepted and rep.passes == 1
+    assert nav is not None  # (its first pass: the final one, taken as it is)
     assert rep.identified == rep.prior and rep.nis_before["gnss"] < 0.5
     assert "below 0.5" in rep.why and "never lowered" in rep.why
 
@@ -161,3 +162,38 @@ def test_figures_already_right_are_kept(tmp_path):
     for k in ("east_m", "north_m", "up_m", "ve_mps", "vn_mps", "vu_mps"):
         assert after[k] <= 1.02 * before[k], k
     assert runs["as-given"].noise is None
+
+
+def test_what_the_identification_does_not_take_is_said(noisy_drive, monkeypatch):
+    """Figures 10x too small, but a recording too short to hold a block back, an
+    adaptive local filter, or innovations beyond the refusal point without --force: the
+    given figures are flown and the report says why."""
+    from fednav.process.identify import identify
+
+    imu, fixes, _, true = noisy_drive
+    prep = _prepared(imu, fixes, true, 0.1)
+    short = type(imu)(imu.source, imu.t[:5000], imu.gyro[:5000], imu.accel[:5000],
+                      imu.errors)
+    from fednav.process.run import prepare
+
+    cut = prepare(short, {"gnss": fixes}, prep.system)
+    _, rep, _ = identify(short, cut)
+    assert not rep.accepted and "too short" in rep.why
+    adaptive = replace_filter(prep, "aekf")
+    _, rep, nav = identify(imu, adaptive)
+    assert not rep.accepted and "aekf" in rep.why and nav is None
+    import fednav.navigator.health as health
+
+    monkeypatch.setattr(health, "NIS_REFUSE", 3.0)  # (where process refuses the data)
+    _, rep, _ = identify(imu, prep)
+    assert not rep.accepted and "above 3" in rep.why and "--force" in rep.why
+    _, rep, _ = identify(imu, prep, force=True)
+    assert rep.accepted and rep.passes > 1
+
+
+def replace_filter(prep, kind: str):
+    from dataclasses import replace
+
+    s = prep.system
+    return replace(prep, system=s.model_copy(update={"filter": s.filter.model_copy(
+        update={"type": kind})}))

@@ -50,6 +50,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from ..core.errors import FednavError
 from ..filters.smoother import noise_moments
 from ..io.data import ImuData
 from ..navigator.system import System
@@ -61,11 +62,6 @@ BLOCKS = {"gyro_arw_rad_sqrt_s": slice(0, 3), "accel_vrw_mps_sqrt_s": slice(3, 6
 #: the error states the identified figures drive (attitude, velocity, the Gauss–Markov
 #: biases); the others (position, the constant gyro bias, optional states) are left out
 DRIVEN = np.r_[0:6, 12:18]
-#: white-noise figures (floored at the samples' scatter when that is lower than given)
-WHITE = ("gyro_arw_rad_sqrt_s", "accel_vrw_mps_sqrt_s")
-#: their per-sample spellings, cleared when the density is set
-PER_SAMPLE = {"gyro_arw_rad_sqrt_s": "gyro_white_deg_h",
-              "accel_vrw_mps_sqrt_s": "accel_white_ug"}
 #: converged when no figure moves by more than this fraction in an iteration
 TOLERANCE = 0.03
 #: at most this many filter + smoother passes
@@ -100,6 +96,11 @@ class Identified:
     cost_s: float
     why: str = ""
     history: list = field(default_factory=list)
+    #: whether the last pass's EM step moved no figure by more than TOLERANCE (False:
+    #: stopped at MAX_PASSES)
+    converged: bool = True
+    #: the identified white noises above the samples' own scatter (SI keys: the scatter)
+    above_scatter: dict = field(default_factory=dict)
 
     @property
     def flown(self) -> dict[str, float]:
@@ -113,6 +114,7 @@ class Identified:
     def summary(self) -> dict:
         """``summary.json``'s ``noise`` entry."""
         return {"method": "em", "accepted": self.accepted, "passes": self.passes,
+                "converged": self.converged, "above_scatter": self.above_scatter,
                 "cost_s": round(self.cost_s, 3), "prior": self.prior,
                 "identified": self.identified, "floor": self.floor,
                 "nis_per_dof_before": self.nis_before, "nis_per_dof_after": self.nis_after,
@@ -136,8 +138,16 @@ def noise_lines(s: dict) -> list[str]:
         head = "IMU noise identified from the recording"
     else:
         head = "IMU noise identification not taken (the given figures are flown)"
-    out = [f"{head}, SI ({s['passes']} passes, {s['cost_s']:.1f} s; noise: as-given "
-           f"skips this): {figs}", f"  NIS/dof before -> after: {nis}"]
+    out = [f"{head}, SI ({s['passes']} passes"
+           + ("" if s.get("converged", True) else ", stopped before converging")
+           + f", {s['cost_s']:.1f} s; noise: as-given skips this): {figs}",
+           f"  NIS/dof before -> after: {nis}"]
+    over = s.get("above_scatter") or {}
+    if s["accepted"] and over:
+        out.append("  above the samples' own scatter: " + ", ".join(
+            f"{k.split('_')[0]} {k.split('_')[1]} {s['identified'][k]:.3g} > {v:.3g}"
+            for k, v in over.items()) + " (filtered data, or errors that are not the "
+            "IMU's: a sensor sigma too small, a lever arm, a time offset)")
     if not s["accepted"]:
         out.append(f"  why: {s['why_not']}")
     return out
@@ -147,13 +157,14 @@ def with_figures(system: System, figures: dict[str, float]) -> System:
     """``system`` with these IMU figures (SI keys) in its ``imu:`` section, their
     engineering and per-sample spellings cleared."""
     from ..sensors.imu import FIGURES
+    from .tuning import WHITE_KEYS
 
     eng = {si: e for e, _, si in FIGURES.values()}
     update = {}
     for k, v in figures.items():
         update.update({k: float(v), eng[k]: None})
-        if k in PER_SAMPLE:
-            update[PER_SAMPLE[k]] = None
+        if k in WHITE_KEYS:  # (its per-sample spelling)
+            update[WHITE_KEYS[k]] = None
     return system.model_copy(update={"imu": system.imu.model_copy(update=update)})
 
 
@@ -254,7 +265,7 @@ def variance_factors(res, figures: dict[str, float], taus: dict[str, float],
     return out
 
 
-def identify(imu: ImuData, prep, progress=None):
+def identify(imu: ImuData, prep, progress=None, force: bool = False):
     """Identify the IMU's process noise on prepared data (module docstring).
 
     Parameters
@@ -265,14 +276,21 @@ def identify(imu: ImuData, prep, progress=None):
         :func:`fednav.process.run.prepare`'s result with the given figures.
     progress : callable, optional
         Called with a short text before each pass.
+    force : bool
+        Identify even when the given figures' innovations are above
+        :data:`~fednav.navigator.health.NIS_REFUSE` (``process --force``; otherwise
+        the data are more likely wrong than the figures, and ``process`` says so).
 
     Returns
     -------
-    (Prepared, Identified)
-        ``prep`` with the figures to fly (the identified ones if accepted) and the
-        report.
+    (Prepared, Identified, Navigator or None)
+        ``prep`` with the figures to fly (the identified ones if accepted), the report,
+        and the first pass's fed navigator when the given figures are kept (the final
+        pass: ``process`` takes it as it is).
     """
-    from .tuning import LR_95, Blocks, innovation_statistics, worse
+    from ..core.stats import chi2_ppf
+    from ..navigator.health import NIS_REFUSE
+    from .tuning import Blocks, innovation_statistics, worse
 
     t_start = time.perf_counter()
     prior = given_figures(imu, prep.system)
@@ -282,12 +300,45 @@ def identify(imu: ImuData, prep, progress=None):
     floor = dict(prior)
     start = {k: max(v, seen.get(k, v)) for k, v in prior.items()}
     blocks = Blocks(float(prep.t[0]), BLOCK_S)
+    system = prep.system
+    if system.filter.q_adaptation is not None:  # (the recorded Qd is not the model's)
+        system = system.model_copy(update={"filter": system.filter.model_copy(
+            update={"q_adaptation": None})})
 
-    def run(figures):
-        p = replace(prep, system=with_figures(prep.system, figures))
-        out = p.feed(p.navigator(record_covariance=True, innovations=True)).result()
-        return p, out, innovation_statistics(out.innovations, blocks)
+    def run(figures=None, rows=False):
+        """A pass with these figures (None: as given)."""
+        p = replace(prep, system=system if figures is None else with_figures(system,
+                                                                             figures))
+        nav = p.feed(p.navigator(record_rows=rows, record_covariance=True,
+                                 innovations=True))
+        out = nav.result()
+        return nav, out, innovation_statistics(out.innovations, blocks)
 
+    def kept(why, nis, ll, passes=1):
+        return Identified(prior, dict(prior), floor, False, passes, nis, nis, ll, ll,
+                          time.perf_counter() - t_start, why)
+
+    odd = sorted(set(local_types(prep.system)) & NOT_KALMAN)
+    if odd:
+        return prep, kept(f"local filter type {', '.join(odd)}: its covariance is not a "
+                          f"Kalman filter's (adapted or sampled), which the "
+                          f"identification needs", {}, float("nan")), None
+    nav0, out0, before = run(rows=prep.system.filter.q_adaptation is None)
+    reuse = nav0 if prep.system.filter.q_adaptation is None else None
+    nis0 = before_all(out0)
+    hi = prep.system.health.nis_band[1]
+    why = None
+    if not nis0:
+        why = "no innovations recorded (no aiding sensor, or a centralized filter)"
+    elif not any(v > hi for v in nis0.values()):  # (nothing says the figures are small)
+        why = kept_because(nis0, prep.system)
+    elif max(nis0.values()) > NIS_REFUSE and not force:
+        why = (f"NIS/dof above {NIS_REFUSE:g}: the data are more likely wrong than the "
+               f"figures (--force identifies)")
+    elif not before.nis_held:
+        why = f"too short to hold a {BLOCK_S:g} s block back (fitted and scored apart)"
+    if why is not None:
+        return prep, kept(why, nis0, before.loglik_held), reuse
     taus = correlation_times(imu, prep.system)
 
     def gaps(figures, out) -> dict[str, float]:
@@ -299,61 +350,73 @@ def identify(imu: ImuData, prep, progress=None):
     # Each figure's EM factor g (log) against its log x: the fixed point g = 0 found by
     # secant steps (plain EM creeps where the data say much more noise than given),
     # the first step EM's own; every step at most MAX_STEP, never below the floor.
-    _, out0, before = run(prior)
-    nis0 = before_all(out0)
-    hi = prep.system.health.nis_band[1]
-    if not any(v > hi for v in nis0.values()):  # (nothing says the figures are too small)
-        rep = Identified(prior, dict(prior), floor, False, 1, nis0, nis0,
-                         before.loglik_held, before.loglik_held,
-                         time.perf_counter() - t_start, kept_because(nis0, prep.system))
-        return prep, rep
     figs = dict(start)
-    out, passes, history = out0, 1, []
-    if start != prior:
-        _, out, _ = run(figs)
-        passes += 1
-    last: dict[str, tuple[float, float]] = {}
-    while passes < MAX_PASSES:
-        g = gaps(figs, out)
-        new = {}
-        for k, x in figs.items():
-            if k not in g:
-                new[k] = x
-                continue
-            lx, gk = np.log(x), g[k]
-            step = gk
-            if k in last and lx != last[k][0]:
-                slope = (gk - last[k][1]) / (lx - last[k][0])
-                if slope < 0:  # (the factor falls as the figure rises: a secant step,
-                    # in EM's direction and at most ACCELERATION times EM's step)
-                    step = float(np.clip(-gk / slope, min(gk, ACCELERATION * gk),
-                                         max(gk, ACCELERATION * gk)))
-            step = float(np.clip(step, -np.log(MAX_STEP), np.log(MAX_STEP)))
-            last[k] = (lx, gk)
-            new[k] = max(float(np.exp(lx + step)), floor[k])
-        done = all(abs(v) < np.log1p(TOLERANCE) or (v < 0 and figs[k] <= floor[k])
-                   for k, v in g.items())
-        if done:
-            break
-        if progress is not None:
-            progress(f"noise identification, pass {passes + 1}")
-        figs = new
-        history.append(dict(figs))
-        _, out, _ = run(figs)
-        passes += 1
+    out, passes, history, converged = out0, 1, [], False
+    try:
+        if start != prior:
+            _, out, _ = run(figs)
+            passes += 1
+        last: dict[str, tuple[float, float]] = {}
+        while passes < MAX_PASSES:
+            g = gaps(figs, out)
+            new = {}
+            for k, x in figs.items():
+                if k not in g:
+                    new[k] = x
+                    continue
+                lx, gk = np.log(x), g[k]
+                step = gk
+                if k in last and lx != last[k][0]:
+                    slope = (gk - last[k][1]) / (lx - last[k][0])
+                    if slope < 0:  # (the factor falls as the figure rises: a secant
+                        # step, in EM's direction, at most ACCELERATION times EM's)
+                        step = float(np.clip(-gk / slope, min(gk, ACCELERATION * gk),
+                                             max(gk, ACCELERATION * gk)))
+                step = float(np.clip(step, -np.log(MAX_STEP), np.log(MAX_STEP)))
+                last[k] = (lx, gk)
+                new[k] = max(float(np.exp(lx + step)), floor[k])
+            converged = all(abs(v) < np.log1p(TOLERANCE) or (v < 0 and figs[k] <= floor[k])
+                            for k, v in g.items())
+            if converged:
+                break
+            if progress is not None:
+                progress(f"noise identification, pass {passes + 1}")
+            figs = new
+            history.append(dict(figs))
+            _, out, _ = run(figs)
+            passes += 1
+    except (np.linalg.LinAlgError, FednavError) as e:  # (a pass the smoother cannot take)
+        return prep, kept(f"a pass failed ({e}): the given figures are flown", nis0,
+                          before.loglik_held, passes), reuse
     after = innovation_statistics(out.innovations, blocks)
-    # the held-back blocks decide (fednav tune's rule), a fall of the likelihood within
-    # the likelihood-ratio test's 95 % point (one figure) taken as no fall
-    why = worse(replace(after, loglik_held=after.loglik_held + LR_95), before)
-    if why and after.loglik_held + LR_95 < before.loglik_held:
+    # the held-back blocks decide (fednav tune's rule); a fall of their likelihood within
+    # the likelihood-ratio test's 95 % point (as many degrees of freedom as figures) is
+    # taken as no fall
+    lr = 0.5 * float(chi2_ppf(0.95, len(prior)))
+    why = worse(replace(after, loglik_held=after.loglik_held + lr), before)
+    if why and after.loglik_held + lr < before.loglik_held:
         why = (f"held-back log-likelihood {before.loglik_held:.1f} -> "
-               f"{after.loglik_held:.1f}, down by more than {LR_95}")
+               f"{after.loglik_held:.1f}, down by more than {lr:.3g}")
     accepted = why is None
-    rep = Identified(prior, figs, floor, accepted, passes, before_all(out0),
-                     before_all(out), before.loglik_held, after.loglik_held,
-                     time.perf_counter() - t_start, why or "", history)
-    chosen = replace(prep, system=with_figures(prep.system, rep.flown))
-    return chosen, rep
+    rep = Identified(prior, figs, floor, accepted, passes, nis0, before_all(out),
+                     before.loglik_held, after.loglik_held,
+                     time.perf_counter() - t_start, why or "", history, converged,
+                     {k: v for k, v in seen.items() if figs[k] > v and k in figs})
+    if not accepted:
+        return prep, rep, reuse
+    return replace(prep, system=with_figures(prep.system, rep.flown)), rep, None
+
+
+#: local filter types whose covariance the identification cannot take as a Kalman
+#: filter's: adapted online (Sage–Husa, robust adaptive, adaptive sparse-grid) or carried
+#: by samples (the particle filter)
+NOT_KALMAN = frozenset({"aekf", "raukf", "aasghqf", "pf"})
+
+
+def local_types(system: System) -> list[str]:
+    """Every local filter's type of ``system`` (the default and each ``locals`` one)."""
+    f = system.filter
+    return [f.type, *(c.type for c in f.locals.values() if c.type)]
 
 
 def kept_because(nis: dict[str, float], system: System) -> str:

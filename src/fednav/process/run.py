@@ -187,7 +187,8 @@ class ProcessResult:
     noise : Identified or None
         The IMU noise figures identified from the recording (prior -> identified,
         NIS/dof before -> after; :mod:`fednav.process.identify`), None with the system's
-        ``noise: as-given``.
+        ``noise: as-given`` and for the total-state navigator (``filter.state: total``,
+        which has no smoother to identify with).
     """
 
     forward: Solution
@@ -821,13 +822,14 @@ def process(imu: ImuData, sensors: Mapping[str, Series], cfg: System | None = No
     sensors = withheld_inputs(cfg, recordings(sensors, cfg))
     fixes = sensors.get(registry.fix_sensor(sensors))
     prep = prepare(imu, sensors, cfg)
-    noise = None
+    noise = nav = None
     if prep.system.noise == "identify" and prep.system.filter.state == "error":
         from .identify import identify
 
-        prep, noise = identify(imu, prep)
-    nav = prep.feed(prep.navigator(record_rows=True, record_covariance=True,
-                                   innovations=True))
+        prep, noise, nav = identify(imu, prep, force=force)  # (nav: its first pass, kept)
+    if nav is None:
+        nav = prep.feed(prep.navigator(record_rows=True, record_covariance=True,
+                                       innovations=True))
     out = nav.result()
     res = solution(out, prep, smooth)
     constraints = [n for n in prep.system.aiding
