@@ -16,6 +16,7 @@ removed from the stored solution.  All arrays in the filter's units.
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 
 
@@ -65,7 +66,6 @@ def rts_smooth(P_post, Phi, Q, dx) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     Q = np.asarray(Q, dtype=float)
     dx = np.asarray(dx, dtype=float)
     N = len(P_post) - 1
-    n = P_post.shape[1]
     P_prior = Phi[1:] @ P_post[:-1] @ np.swapaxes(Phi[1:], 1, 2) + Q[1:]
     P_prior = 0.5 * (P_prior + np.swapaxes(P_prior, 1, 2))
     # A_k = P+_k Phi' (P-)^-1  <=>  P- A_k' = Phi P+_k  (P- symmetric), batched.
@@ -75,7 +75,19 @@ def rts_smooth(P_post, Phi, Q, dx) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         bad = next(k for k in range(N) if np.linalg.eigvalsh(P_prior[k])[0] <= 0)
         raise np.linalg.LinAlgError(f"RTS smoother: predicted covariance at epoch {bad + 1} "
                                     f"is not positive definite") from None
-    A = np.swapaxes(np.linalg.solve(P_prior, Phi[1:] @ P_post[:-1]), 1, 2)
+    A = np.ascontiguousarray(np.swapaxes(np.linalg.solve(P_prior, Phi[1:] @ P_post[:-1]),
+                                         1, 2))
+    e, Ps = backward_nb(A, np.ascontiguousarray(P_post), np.ascontiguousarray(P_prior),
+                        np.ascontiguousarray(dx))
+    return e, Ps, A
+
+
+def backward(A, P_post, P_prior, dx):
+    """The RTS recursion from the last epoch back (module docstring): smoothed errors
+    ``e`` (N+1, n) and covariances ``Ps`` (N+1, n, n) from the gains ``A`` (N, n, n),
+    the a-posteriori and predicted covariances and the corrections fed back."""
+    N = P_post.shape[0] - 1
+    n = P_post.shape[1]
     e = np.zeros((N + 1, n))
     Ps = np.empty_like(P_post)
     Ps[N] = P_post[N]
@@ -83,4 +95,8 @@ def rts_smooth(P_post, Phi, Q, dx) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         e[k] = A[k] @ (e[k + 1] + dx[k + 1])
         Pk = P_post[k] + A[k] @ (Ps[k + 1] - P_prior[k]) @ A[k].T
         Ps[k] = 0.5 * (Pk + Pk.T)
-    return e, Ps, A
+    return e, Ps
+
+
+#: :func:`backward` compiled (one source)
+backward_nb = numba.njit(cache=True)(backward)
