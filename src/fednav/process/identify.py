@@ -54,6 +54,14 @@ from ..core.errors import FednavError
 from ..filters.smoother import noise_moments
 from ..io.data import ImuData
 from ..navigator.system import System
+from .tuning import (
+    Blocks,
+    flown_figures,
+    innovation_statistics,
+    white_noise_floor,
+    with_figures,
+    worse,
+)
 
 #: Each identified figure (SI key of the ``imu:`` section) and the error-state block its
 #: noise drives (the 18 states of :mod:`fednav.ins.error_model`).
@@ -153,42 +161,17 @@ def noise_lines(s: dict) -> list[str]:
     return out
 
 
-def with_figures(system: System, figures: dict[str, float]) -> System:
-    """``system`` with these IMU figures (SI keys) in its ``imu:`` section, their
-    engineering and per-sample spellings cleared."""
-    from ..sensors.imu import FIGURES
-    from .tuning import WHITE_KEYS
-
-    eng = {si: e for e, _, si in FIGURES.values()}
-    update = {}
-    for k, v in figures.items():
-        update.update({k: float(v), eng[k]: None})
-        if k in WHITE_KEYS:  # (its per-sample spelling)
-            update[WHITE_KEYS[k]] = None
-    return system.model_copy(update={"imu": system.imu.model_copy(update=update)})
-
-
 def given_figures(imu: ImuData, system: System) -> dict[str, float]:
-    """The figures the navigator flies with ``system`` (SI keys of :data:`BLOCKS`): the
-    system description's, else the file's, else the grade preset's; a per-sample white
-    figure as its density.  Figures that are zero or absent are left out (nothing to
-    scale)."""
-    from .run import imu_figures
-
-    f = imu_figures(imu, system)
-    dt = imu.period()
-    if system.imu.gyro_white_deg_h is not None:
-        f["gyro_arw_rad_sqrt_s"] = system.imu.arw(dt)
-    if system.imu.accel_white_ug is not None:
-        f["accel_vrw_mps_sqrt_s"] = system.imu.vrw(dt)
+    """The figures of :data:`BLOCKS` the navigator flies with ``system``
+    (:func:`fednav.process.tuning.flown_figures`, SI keys); those that are zero or
+    absent are left out (nothing to scale)."""
+    f = flown_figures(imu, system)
     return {k: float(f[k]) for k in BLOCKS if f.get(k)}
 
 
 def correlation_times(imu: ImuData, system: System) -> dict[str, float]:
     """The Gauss–Markov figures' correlation times [s] (inf: none), by figure."""
-    from .run import imu_figures
-
-    f = imu_figures(imu, system)
+    f = flown_figures(imu, system)
     return {"gyro_markov_radps": float(f.get("gyro_tau_s") or np.inf),
             "accel_markov_mps2": float(f.get("accel_tau_s") or np.inf)}
 
@@ -196,8 +179,6 @@ def correlation_times(imu: ImuData, system: System) -> dict[str, float]:
 def scatter_figures(imu: ImuData, n_per: int) -> dict[str, float]:
     """The white-noise figures the samples' own scatter supports
     (:func:`fednav.process.tuning.white_noise_floor`; SI keys)."""
-    from .tuning import white_noise_floor
-
     dt = imu.period()
     return {"gyro_arw_rad_sqrt_s": white_noise_floor(imu.gyro, dt, n_per),
             "accel_vrw_mps_sqrt_s": white_noise_floor(imu.accel, dt, n_per)}
@@ -290,7 +271,6 @@ def identify(imu: ImuData, prep, progress=None, force: bool = False):
     """
     from ..core.stats import chi2_ppf
     from ..navigator.health import NIS_REFUSE
-    from .tuning import Blocks, innovation_statistics, worse
 
     t_start = time.perf_counter()
     prior = given_figures(imu, prep.system)
@@ -311,8 +291,7 @@ def identify(imu: ImuData, prep, progress=None, force: bool = False):
                                                                              figures))
         nav = p.feed(p.navigator(record_rows=rows, record_covariance=True,
                                  innovations=True))
-        out = nav.result()
-        return nav, out, innovation_statistics(out.innovations, blocks)
+        return nav, nav.result()
 
     def kept(why, nis, ll, passes=1):
         return Identified(prior, dict(prior), floor, False, passes, nis, nis, ll, ll,
@@ -323,7 +302,8 @@ def identify(imu: ImuData, prep, progress=None, force: bool = False):
         return prep, kept(f"local filter type {', '.join(odd)}: its covariance is not a "
                           f"Kalman filter's (adapted or sampled), which the "
                           f"identification needs", {}, float("nan")), None
-    nav0, out0, before = run(rows=prep.system.filter.q_adaptation is None)
+    nav0, out0 = run(rows=prep.system.filter.q_adaptation is None)
+    before = innovation_statistics(out0.innovations, blocks)
     reuse = nav0 if prep.system.filter.q_adaptation is None else None
     nis0 = before_all(out0)
     hi = prep.system.health.nis_band[1]
@@ -354,7 +334,7 @@ def identify(imu: ImuData, prep, progress=None, force: bool = False):
     out, passes, history, converged = out0, 1, [], False
     try:
         if start != prior:
-            _, out, _ = run(figs)
+            _, out = run(figs)
             passes += 1
         last: dict[str, tuple[float, float]] = {}
         while passes < MAX_PASSES:
@@ -383,7 +363,7 @@ def identify(imu: ImuData, prep, progress=None, force: bool = False):
                 progress(f"noise identification, pass {passes + 1}")
             figs = new
             history.append(dict(figs))
-            _, out, _ = run(figs)
+            _, out = run(figs)
             passes += 1
     except (np.linalg.LinAlgError, FednavError) as e:  # (a pass the smoother cannot take)
         return prep, kept(f"a pass failed ({e}): the given figures are flown", nis0,
@@ -434,7 +414,5 @@ def kept_because(nis: dict[str, float], system: System) -> str:
 
 def before_all(out) -> dict[str, float]:
     """Mean NIS/dof of every local filter over all its innovations."""
-    from .tuning import innovation_statistics
-
     ev = innovation_statistics(out.innovations)
     return {k: round(v, 3) for k, v in ev.nis_per_dof.items()}

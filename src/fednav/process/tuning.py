@@ -356,6 +356,31 @@ def outage_drift(imu: ImuData, sensors: dict, cfg: System, windows) -> list[floa
     return out
 
 
+def flown_figures(imu: ImuData, system: System) -> dict[str, float | None]:
+    """Every IMU figure ``process`` flies with ``system`` (SI keys: the description's,
+    else the file's, else the grade preset's; None where none gives it), a per-sample
+    white figure as the density it adds up to."""
+    out = imu_figures(imu, system)
+    dt = imu.period()
+    if system.imu.gyro_white_deg_h is not None:  # a per-sample figure adds to the density
+        out["gyro_arw_rad_sqrt_s"] = system.imu.arw(dt)
+    if system.imu.accel_white_ug is not None:
+        out["accel_vrw_mps_sqrt_s"] = system.imu.vrw(dt)
+    return out
+
+
+def with_figures(system: System, figures: dict[str, float]) -> System:
+    """``system`` with these IMU figures (SI keys) in its ``imu:`` section, their
+    engineering and per-sample spellings cleared."""
+    eng = {si: e for e, _, si in FIGURES.values()}
+    update = {}
+    for k, v in figures.items():
+        update.update({k: float(v), eng[k]: None})
+        if k in WHITE_KEYS:  # (its per-sample spelling)
+            update[WHITE_KEYS[k]] = None
+    return system.model_copy(update={"imu": system.imu.model_copy(update=update)})
+
+
 def _starting_imu(imu: ImuData, base: System, notes: list) -> dict[str, float]:
     """The untuned IMU figures: what ``process`` flies with ``base`` (its figures, else the
     file's, else the grade preset it assumes when neither gives any), the generic MEMS
@@ -365,12 +390,7 @@ def _starting_imu(imu: ImuData, base: System, notes: list) -> dict[str, float]:
         notes.extend(assumed)
     except DataError:  # some figures given, not all: process would refuse; tune fills them
         pass
-    out = imu_figures(imu, base)
-    dt = imu.period()
-    if base.imu.gyro_white_deg_h is not None:  # a per-sample figure adds to the density
-        out["gyro_arw_rad_sqrt_s"] = base.imu.arw(dt)
-    if base.imu.accel_white_ug is not None:
-        out["accel_vrw_mps_sqrt_s"] = base.imu.vrw(dt)
+    out = flown_figures(imu, base)
     generic = [k for k, v in out.items() if v is None]
     if generic:
         out.update({k: MEMS_DEFAULTS[k] for k in generic})
@@ -559,13 +579,8 @@ def tune(imu: ImuData, sensors: dict, base: System | None = None, matching_passe
 
     def config(fig_imu, rg, rv):
         """``base`` with these IMU figures and sensor variances (residual order)."""
-        update = {}
-        for eng, _, si in FIGURES.values():
-            if si in fig_imu and not (si in fixed and given_imu[si] is not None):
-                update.update({si: float(fig_imu[si]), eng: None})
-        for si, white in WHITE_KEYS.items():
-            if si in update:
-                update[white] = None
+        tuned = with_figures(base, {si: v for si, v in fig_imu.items()
+                                    if not (si in fixed and given_imu[si] is not None)})
         sensors = {}
         if fx in base.sensors or np.any(free_g):
             sd = np.sqrt(rg)
@@ -578,8 +593,7 @@ def tune(imu: ImuData, sensors: dict, base: System | None = None, matching_passe
         if free_v:
             sensors[vn] = vc.model_copy(update={
                 "sigma_mps": tuple(map(float, np.sqrt(rv)))})
-        return base.model_copy(update={
-            "imu": base.imu.model_copy(update=update),
+        return tuned.model_copy(update={
             "sensors": base.sensors.replace(**sensors) if sensors else base.sensors})
 
     def run(fig_imu, rg, rv, what):
