@@ -215,3 +215,15 @@ def test_the_compiled_smoother_recursion_is_the_python_one():
     prior = Phi[1:] @ P[:-1] @ np.swapaxes(Phi[1:], 1, 2) + Q[1:]
     e2, Ps2 = sm.backward(A, P, 0.5 * (prior + np.swapaxes(prior, 1, 2)), dx)
     assert np.array_equal(e, e2) and np.array_equal(Ps, Ps2)
+
+
+def test_noise_identify_with_the_total_state_navigator_is_named():
+    """The total-state navigator has no smoother: a description that asks for the
+    identification there is told it does not act."""
+    from fednav import load_system
+    from fednav.process.checks import ignored_keys
+
+    said = ignored_keys(load_system({"noise": "identify", "filter": {"state": "total"}}))
+    assert any(k.startswith("noise (acts with filter.state: error") for k in said)
+    assert not any(k.startswith("noise") for k in ignored_keys(load_system({"noise":
+                                                                            "identify"})))
