@@ -2,10 +2,11 @@
 (docs/real-data.md, "Noise identified from the recording").
 
     python benchmarks/noise_identification.py [--only drive,gis,rover,car,px4]
-                                              [--work DIR]
+                                              [--work DIR] [--noise identify-all]
 
 Each dataset is processed twice with the same system description, ``noise: as-given``
-(the figures as given: fednav before identification) and ``noise: identify``, and scored
+(the figures as given: fednav before identification) and ``noise: identify`` (or the
+value of ``--noise``: ``identify-all`` identifies the sensors' sigmas too), and scored
 against its reference: RMSE per column (north/east/down or up [m], velocity [m/s]),
 forward and, where the dataset has it, smoothed; mean NIS/dof of every local filter; the
 identified figures (ratio to the given); the identification's cost against one forward +
@@ -40,13 +41,21 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+from fednav.process.identify import label as figure_label  # noqa: E402
+
 ROOT = Path(__file__).resolve().parents[1]
 SHARED = ROOT.parent / "shared" / "data"
 MODES = ("as-given", "identify")
+#: what the "identify" rows fly (``--noise``)
+IDENTIFY = {"identify": "identify"}
+
+
+def _noise(mode: str) -> str:
+    return IDENTIFY.get(mode, mode)
 
 
 def _with(cfg, mode):
-    return cfg.model_copy(update={"noise": mode})
+    return cfg.model_copy(update={"noise": _noise(mode)})
 
 
 def _timed_process(imu, sensors, cfg, smooth=True):
@@ -71,7 +80,7 @@ def _figures(res, base_s: float) -> str:
     if n is None:
         return ""
     taken = "" if n.accepted else f" NOT TAKEN ({n.why})"
-    return (", ".join(f"{k.split('_')[0]} {k.split('_')[1]} x{n.identified[k] / n.prior[k]:.3g}"
+    return (", ".join(f"{figure_label(k)} x{n.identified[k] / n.prior[k]:.3g}"
                       for k in n.identified)
             + f"; {n.passes} passes, {n.cost_s:.1f} s = {n.cost_s / base_s:.2f} x the as-given "
               f"forward + smoothed process" + taken)
@@ -80,7 +89,7 @@ def _figures(res, base_s: float) -> str:
 def _summary_figures(n) -> str:
     if not n:
         return ""
-    return "; " + ", ".join(f"{k.split('_')[0]} {k.split('_')[1]} x{v / n['prior'][k]:.3g}"
+    return "; " + ", ".join(f"{figure_label(k)} x{v / n['prior'][k]:.3g}"
                             for k, v in n["identified"].items()) + (
         "" if n["accepted"] else f" NOT TAKEN ({n['why_not']})")
 
@@ -262,7 +271,7 @@ def px4(work: Path) -> None:
     rows, notes = {}, []
     for mode in MODES:
         cfg = work / f"px4-{mode}.yaml"
-        cfg.write_text(yaml.safe_dump({"imu": flight.imu_config(), "noise": mode}))
+        cfg.write_text(yaml.safe_dump({"imu": flight.imu_config(), "noise": _noise(mode)}))
         out = work / f"px4-{mode}"
         pm.run_fednav(log, out, cfg)
         s = pm.score(pm.read_solution(out / "solution.csv"))
@@ -283,7 +292,10 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--only", help="comma-separated: " + ",".join(CASES))
     ap.add_argument("--work", help="working folder (default: a temporary one)")
+    ap.add_argument("--noise", default="identify", choices=("identify", "identify-all"),
+                    help="what the identified rows fly (default: identify)")
     args = ap.parse_args()
+    IDENTIFY["identify"] = args.noise
     work = Path(args.work or tempfile.mkdtemp(prefix="noise-id-"))
     work.mkdir(parents=True, exist_ok=True)
     for name in (args.only.split(",") if args.only else CASES):

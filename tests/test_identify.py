@@ -62,6 +62,67 @@ def test_the_smoother_moments_put_the_noise_where_it_is():
     assert q == pytest.approx(q_true, rel=0.1)
 
 
+def _closed_loop_position(q, r_true, r_model, n=4000, T=0.1, seed=5):
+    """A constant-velocity track, its position measured with noise ``r_true``, flown by
+    a closed-loop error filter written here that believes ``r_model``: what fednav's
+    navigator records (covariances, transitions, corrections, and each measurement's
+    innovation record with its ``H`` and epoch)."""
+    from types import SimpleNamespace
+
+    from fednav.navigator.record import InnovationRecord
+
+    rng = np.random.default_rng(seed)
+    Phi = np.array([[1.0, T], [0.0, 1.0]])
+    Q = q * np.array([[T**3 / 3, T**2 / 2], [T**2 / 2, T]])
+    L = np.linalg.cholesky(Q)
+    H = np.array([[1.0, 0.0]])
+    x, xh, P = np.zeros(2), np.zeros(2), np.eye(2)
+    Ps, Phis, Qs, dxs, inns = [P.copy()], [Phi], [Q], [np.zeros(2)], []
+    for k in range(1, n + 1):
+        x = Phi @ x + L @ rng.standard_normal(2)
+        xh = Phi @ xh
+        P = Phi @ P @ Phi.T + Q
+        # innovation against the prediction: H times its error (computed minus true)
+        nu = H @ xh - (x[0] + np.sqrt(r_true) * rng.standard_normal())
+        S = H @ P @ H.T + r_model
+        K = P @ H.T / S
+        err = (K @ nu).ravel()
+        xh = xh - err
+        P = (np.eye(2) - K @ H) @ P
+        Ps.append(P.copy())
+        Phis.append(Phi)
+        Qs.append(Q)
+        dxs.append(err)
+        inns.append(InnovationRecord("pos", k * T, nu, S, np.array([[r_model]]), 1.0,
+                                     True, H, k))
+    return SimpleNamespace(P=np.array(Ps), Phi=np.array(Phis), Qd=np.array(Qs),
+                           dx=np.array(dxs), innovations=inns)
+
+
+def test_the_smoothed_measurement_noise_is_where_it_is():
+    """EM's M-step for R (sigma_factors) on a closed-loop filter and data written in the
+    test: the variance factor is above 1 for a sigma 10x too small, below 1 for one 10x
+    too large, and its fixed point is the true R."""
+    from scipy.optimize import brentq
+
+    from fednav.filters.smoother import rts_smooth
+    from fednav.process.identify import SigmaPart, sigma_factors
+
+    q, r_true = 0.5, 0.04
+    parts = {"sensors.pos.sigma_m": SigmaPart("pos", 0, (0,), 1.0)}
+
+    def gap(log_r):
+        res = _closed_loop_position(q, r_true, float(np.exp(log_r)))
+        sm = rts_smooth(res.P, res.Phi, res.Qd, res.dx)
+        f = sigma_factors(res, sm, parts, lambda t: np.ones(len(t), dtype=bool))
+        return float(np.log(f["sensors.pos.sigma_m"]))
+
+    lo, hi = np.log(r_true / 100), np.log(r_true * 100)
+    assert gap(lo) > 0 > gap(hi)
+    r = float(np.exp(brentq(gap, lo, hi, xtol=1e-3)))
+    assert r == pytest.approx(r_true, rel=0.1)
+
+
 def _drive(tmp: Path, arw_deg_sqrt_h: float, vrw_ug: float, segments: int = 12,
            gnss: dict | None = None):
     """The first ``segments`` of examples/car-drive.yaml with an IMU of this white noise,
@@ -227,3 +288,68 @@ def test_noise_identify_with_the_total_state_navigator_is_named():
     assert any(k.startswith("noise (acts with filter.state: error") for k in said)
     assert not any(k.startswith("noise") for k in ignored_keys(load_system({"noise":
                                                                             "identify"})))
+
+
+def test_a_receiver_sigma_10x_too_small_is_identified(noisy_drive):
+    """A GNSS file without sigma columns, flown with position sigmas 10x too small (the
+    system description's; the IMU's figures right): the sigmas are identified within
+    20 %, the gyro's figure kept within 20 %, NIS/dof back in its band; a sigma given
+    by the file is not a figure to identify."""
+    import copy
+
+    from fednav import load_system
+    from fednav.process.identify import identify, sigma_parts
+    from fednav.process.run import prepare
+
+    imu, fixes, _, true = noisy_drive
+    assert fixes.sigma_rows is None
+    given = copy.deepcopy(true)
+    given["noise"] = "identify-all"
+    g = given["sensors"]["gnss"]
+    g["measures"] = "position"
+    g["sigma_pos_enu_m"] = [0.1 * v for v in g["sigma_pos_enu_m"]]
+    prep = prepare(imu, {"gnss": fixes}, load_system(given))
+    chosen, rep, _ = identify(imu, prep)
+    assert rep.accepted, rep.why
+    assert rep.nis_before["gnss"] > 10 and 0.5 < rep.nis_after["gnss"] < 2.0
+    east, north, up = true["sensors"]["gnss"]["sigma_pos_enu_m"]
+    for k, v in {"north_m": north, "east_m": east, "up_m": up}.items():
+        assert rep.identified[f"sensors.gnss.sigma_{k}"] == pytest.approx(v, rel=0.2), k
+        assert rep.prior[f"sensors.gnss.sigma_{k}"] == pytest.approx(0.1 * v)
+    assert rep.identified["gyro_arw_rad_sqrt_s"] == pytest.approx(
+        true["imu"]["gyro_arw_rad_sqrt_s"], rel=0.2)
+    # the final pass flies them: every fix with the identified sigmas
+    flown = chosen.series["gnss"].sigma
+    assert flown[0, 0] == pytest.approx(rep.identified["sensors.gnss.sigma_north_m"])
+    # a file's own sigmas are the receiver's: kept
+    own = fixes.with_sigma(np.full((len(fixes.t), 6), 0.002))
+    assert not sigma_parts(prepare(imu, {"gnss": own}, load_system(given)))
+    assert "gnss sigma_north_m" in "\n".join(rep.lines())
+    # the default identifies the IMU's figures alone
+    plain = prepare(imu, {"gnss": fixes}, load_system({**given, "noise": "identify"}))
+    _, rep, _ = identify(imu, plain)
+    assert not any(k.startswith("sensors.") for k in rep.prior)
+
+
+def test_innovation_records_carry_h_and_epoch_alike_in_both_engines(tmp_path):
+    """The rows' H and the epoch of every innovation record, from the compiled engine
+    and the Python loop alike (what the identification of R reads), with a lever arm
+    (H's attitude columns)."""
+    from test_process import make_flight
+
+    from fednav import load_system
+    from fednav.process.run import prepare
+
+    imu, gnss, _ = make_flight()
+    prep = prepare(imu, {"gnss": gnss}, load_system({"sensors": {"gnss": {
+        "lever_m": [0.3, 1.2, 0.8]}}}))
+    out = {e: prep.feed(prep.navigator(innovations=True, engine=e)).result()
+           for e in ("compiled", "python")}
+    a, b = out["compiled"].innovations, out["python"].innovations
+    assert len(a) == len(b) > 10
+    for x, y in zip(a, b, strict=True):
+        assert x.epoch == y.epoch > 0
+        np.testing.assert_allclose(x.H, y.H, rtol=1e-9, atol=1e-12)
+    assert np.abs(a[5].H[:, 0:3]).max() > 0  # (the lever arm's attitude coupling)
+    t_epoch = out["compiled"].t[a[5].epoch]
+    assert 0.0 <= t_epoch - a[5].t < prep.n_per * prep.dt + 1e-9

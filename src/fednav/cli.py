@@ -420,8 +420,8 @@ def _simulate_writes(rel: Path) -> bool:
 
 def _noise_option(cfg, noise: str):
     """``cfg`` with ``--noise``'s choice (one line for a word it does not know)."""
-    if noise not in ("identify", "as-given"):
-        raise ValueError(f"--noise {noise}: not identify or as-given")
+    if noise not in ("identify", "identify-all", "as-given"):
+        raise ValueError(f"--noise {noise}: not identify, identify-all or as-given")
     return cfg.model_copy(update={"noise": noise})
 
 
@@ -804,7 +804,8 @@ _FORCE = typer.Option(False, "--force", help="write the solution even when its i
                       "say the data are wrong (mean NIS/dof above 100)")
 _NOISE = typer.Option(None, "--noise", help="identify: the IMU's process noise identified "
                       "from the recording before the final pass (the given figures its "
-                      "prior and floor); as-given: flown as given; default: the config's "
+                      "prior and floor); identify-all: the sensors' sigmas that no file "
+                      "gives too; as-given: flown as given; default: the config's "
                       "noise:, else identify (docs/real-data.md)")
 _EXPORT = typer.Option(None, "--export", help="also write the solution as kml, gpx, geojson, "
                        "kfgins and/or rosbag (comma-separated; kml, gpx, geojson need the "

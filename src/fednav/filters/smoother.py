@@ -32,7 +32,7 @@ def rts_errors(P_post, Phi, Q, dx) -> tuple[np.ndarray, np.ndarray]:
     return e, Ps
 
 
-def noise_moments(P_post, Phi, Q, dx, rows=None) -> np.ndarray:
+def noise_moments(P_post, Phi, Q, dx, rows=None, smoothed=None) -> np.ndarray:
     """The expected outer product of each interval's process noise given every
     measurement (the E-step of Shumway & Stoffer's EM, 1982), ``W`` (N, n, n).
 
@@ -45,10 +45,11 @@ def noise_moments(P_post, Phi, Q, dx, rows=None) -> np.ndarray:
     with ``r = e_{k+1} + dx_{k+1} - Phi e_k``.  ``W_k`` set against ``Q_{k+1}`` tells how
     much noise the data put where the model put ``Q`` (their ratio is 1 on average for a
     right model).  Arguments as :func:`rts_errors`; ``rows`` (indices): only those rows
-    and columns of ``W`` (N, len(rows), len(rows)).  Filter units.
+    and columns of ``W`` (N, len(rows), len(rows)); ``smoothed``: :func:`rts_smooth`'s
+    result on these arguments when it is at hand.  Filter units.
     """
     dx = np.asarray(dx, dtype=float)
-    e, Ps, A = rts_smooth(P_post, Phi, Q, dx)
+    e, Ps, A = rts_smooth(P_post, Phi, Q, dx) if smoothed is None else smoothed
     Phi = np.asarray(Phi, dtype=float)[1:]
     d = np.arange(Phi.shape[1]) if rows is None else np.asarray(rows)
     Pd = Phi[:, d, :]

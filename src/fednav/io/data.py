@@ -424,6 +424,10 @@ class SensorData:
     #: squared; None: ``sigma``
     cov: np.ndarray | None = None
 
+    def with_sigma(self, sigma) -> SensorData:
+        """The recording with each row's 1-sigma ``sigma`` (N, m) [units of the series]."""
+        return replace(self, sigma=sigma)
+
     def adjusted(self, section) -> SensorData:
         """The recording as its section corrects it (no correction here: a sensor whose
         section corrects its file, the GNSS's or the velocity sensor's, has a data class
@@ -572,6 +576,10 @@ class GnssData:
             out = _again(out, vel=np.column_stack([np.interp(out.t + L, out.t, out.vel[:, j])
                                                    for j in range(3)]))
         return out
+
+    def with_sigma(self, sigma) -> GnssData:
+        """The fixes with each one's 1-sigma ``sigma`` (N, 6) (``sigma_rows``' order)."""
+        return _again(self, sigma_rows=sigma)
 
     def flown(self, section) -> GnssData:
         """The fixes as the navigator flies them with ``section`` (its effective settings,

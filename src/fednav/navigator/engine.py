@@ -193,7 +193,7 @@ EpochOut = namedtuple("EpochOut", "states P beta Phi Qd dx rows")
 #: Outputs per measurement: NIS, accepted, threshold, the time logged, (of zero length
 #: unless asked for) residual, its covariance and the filter's share; ``re`` (M, 3):
 #: lockout start, NIS before and inflation of a re-admission, inflation 0 where none.
-MeasOut = namedtuple("MeasOut", "nis acc thr tlog r S bm re")
+MeasOut = namedtuple("MeasOut", "nis acc thr tlog r S bm re H")
 #: One interval as the mechanization flew it: compensated increments, attitude, velocity
 #: and position after each sample, the mean rate [rad/s]; buffers for the INS a
 #: measurement compares with (position, velocity, attitude quaternion).
@@ -201,6 +201,20 @@ Interval = namedtuple("Interval", "dth dvc rq rv rp omega lla vel q")
 #: The INS a measurement's rows compare with, in the sensor's axes: position, velocity,
 #: attitude ``C M``, rate ``M' omega``.
 View = namedtuple("View", "lla vel C omega")
+
+
+@numba.njit(cache=True, inline="always")
+def rows_jacobian(sensors, sn, view, H):
+    """``H`` (d, n; zeroed by the caller) of sensor ``sn``'s rows against the INS
+    ``view``: :func:`~fednav.sensors.measurement.row_jacobian` at its lever arm, -1 on
+    each row's sensor-bias state."""
+    d = H.shape[0]
+    row_jacobian(sensors.kinds[sn, :d], view.lla, view.vel, view.C, view.omega,
+                 sensors.geom[sn, 0], H)
+    bias = sensors.bias[sn, :d]
+    for rb in range(d):
+        if bias[rb] >= 0:
+            H[rb, bias[rb]] = -1.0
 
 
 @numba.njit(cache=True)
@@ -222,10 +236,7 @@ def _local_update(bank, f, sensors, sn, view, y, R):
             return x, P, y, R, np.nan, 13
     if bank.fam[f, 1] == 0:
         H = np.zeros((d, n))
-        row_jacobian(kinds, lla, vel, C, omega, lever, H)
-        for rb in range(d):
-            if bias[rb] >= 0:
-                H[rb, bias[rb]] = -1.0
+        rows_jacobian(sensors, sn, view, H)
         if sensors.linear[sn]:
             yhat = H @ x
         else:
@@ -462,6 +473,7 @@ def apply_measurement(m, k, ins, iv, s0, bank, rules, sensors, batch, mo):
         mo.r[m, :d] = r
         mo.S[m, :d, :d] = Sm
         mo.bm[m] = bank.beta[f]
+        rows_jacobian(sensors, sn, view, mo.H[m, :d])
     return 0, -1
 
 
@@ -670,7 +682,8 @@ class CompiledLoop:
         self._outs = [r.states, r.P, r.beta] + ([r.Phi, r.Qd, r.dx] if record_cov else [])
         self._none_rows = np.empty((0, 13))
         self._none_cov = (np.empty((0, n, n)), np.empty((0, n, n)), np.empty((0, n)))
-        self._none_inn = (np.empty((0, 6)), np.empty((0, 6, 6)), np.empty(0))
+        self._none_inn = (np.empty((0, 6)), np.empty((0, 6, 6)), np.empty(0),
+                          np.empty((0, 6, n)))
 
     def q_scales(self) -> dict[str, float]:
         """Each filter's process-noise scale now (1: the figures')."""
@@ -737,8 +750,9 @@ class CompiledLoop:
         lg = log.a[j0:j0 + max(M, 2)]
         if self.innovations:
             out_r, out_S, out_bm = np.zeros((M, 6)), np.zeros((M, 6, 6)), np.empty(M)
+            out_H = np.zeros((M, 6, len(self.X[0])))
         else:
-            out_r, out_S, out_bm = self._none_inn
+            out_r, out_S, out_bm, out_H = self._none_inn
         out_re = np.zeros((max(M, 1), 3))
         lk = self.lockout
         core = self.core
@@ -749,7 +763,8 @@ class CompiledLoop:
         rules = Rules(self.thr, self.recovery, self.sharing, self.thr_drift, lk.arrays())
         eo = EpochOut(rec.states.a[e0:e0 + n_ep], rec.P.a[e0:e0 + n_ep],
                       rec.beta.a[e0 - 1:e0 - 1 + n_ep], out_Phi, out_Qd, out_dx, out_rows)
-        mo = MeasOut(lg[:, 2], lg[:, 5], lg[:, 4], lg[:, 0], out_r, out_S, out_bm, out_re)
+        mo = MeasOut(lg[:, 2], lg[:, 5], lg[:, 4], lg[:, 0], out_r, out_S, out_bm, out_re,
+                     out_H)
         code, k, f = run_epochs(k0, n_ep, ins, Imu(dtheta, dv, h_ref), bank, rules,
                                 self.sensors, Batch(m_epoch, m_sens, m_t, m_z, m_R), eo, mo)
         if code:
@@ -786,5 +801,6 @@ class CompiledLoop:
                     m = self.meas[m_sens[j]]
                     rec.innovations.append(InnovationRecord(
                         m.name, float(lg[j, 0]), out_r[j, :d].copy(), out_S[j, :d, :d].copy(),
-                        m.R[m_idx[j]], float(out_bm[j]), bool(lg[j, 5])))
+                        m.R[m_idx[j]], float(out_bm[j]), bool(lg[j, 5]),
+                        out_H[j, :d].copy(), int(m_epoch[j])))
         self.k = k1

@@ -275,6 +275,16 @@ class TotalStateCore:
 
 
 # ------------------------------------------------------------------------------ loop
+def _jacobian(model, nav, rows) -> np.ndarray | None:
+    """A measurement's ``H`` for its innovation record (the rows the update used); None
+    where its model has none at this snapshot (a sampled model)."""
+    try:
+        H = np.asarray(model.H(nav), dtype=float)
+    except (AttributeError, NotImplementedError, TypeError):
+        return None
+    return H if rows is None else H[rows]
+
+
 class PythonLoop:
     """The cycle of the module docstring over the filters of ``fed``.
 
@@ -449,7 +459,7 @@ class PythonLoop:
                             R = np.asarray(R)[np.ix_(inn.rows, inn.rows)]
                         self.rec.innovations.append(InnovationRecord(
                             m.name, float(t), inn.r, inn.S, R, fed.beta[m.name],
-                            inn.accepted))
+                            inn.accepted, _jacobian(model, nav, inn.rows), k))
         if self.constraint is not None:
             self._wind_constraint(k)
         dx = core.feed_back(fed)

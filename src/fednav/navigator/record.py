@@ -62,8 +62,9 @@ class InnovationRecord(NamedTuple):
     """One measurement's innovation: local filter ``local``, time ``t`` [s], residual ``r``
     and covariance ``S`` of the local filter, the measurement noise ``R`` and the local's
     information share ``beta`` (its covariance is ``P / beta``, so ``beta (S - R) + R`` is
-    the innovation covariance of the equivalent centralized filter), and whether the
-    update was applied."""
+    the innovation covariance of the equivalent centralized filter), whether the
+    update was applied, the rows' ``H`` (d, n; filter units) and the ``epoch`` whose
+    update took it (the index of :class:`Record`'s entries; None, -1: not known)."""
 
     local: str
     t: float
@@ -72,6 +73,8 @@ class InnovationRecord(NamedTuple):
     R: np.ndarray
     beta: float
     accepted: bool
+    H: np.ndarray | None = None
+    epoch: int = -1
 
 
 class Record:

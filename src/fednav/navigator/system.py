@@ -374,10 +374,11 @@ class System(_Model):
         probability, the alert limits; None (default): no levels.
     smoother : bool
         Also run the RTS smoother.
-    noise : {"identify", "as-given"}
+    noise : {"identify", "identify-all", "as-given"}
         ``fednav process``: identify the IMU's process noise from the recording before
         the final pass (:mod:`fednav.process.identify`; the given figures its prior and
-        floor) or fly the figures as given.
+        floor); ``identify-all``: the sensors' sigmas that no file gives as well (not the
+        default: docs/real-data.md has the evidence); or fly the figures as given.
     output_rate_hz : float or {"imu", "filter"}, optional
         Solution rows per second of ``fednav process``'s files [Hz] when its
         ``--output-rate`` is not given (None: 10 Hz, at most the IMU rate); ``imu``:
@@ -397,7 +398,7 @@ class System(_Model):
     health: HealthConfig = HealthConfig()
     integrity: IntegrityConfig | None = None
     smoother: bool = False
-    noise: Literal["identify", "as-given"] = "identify"
+    noise: Literal["identify", "identify-all", "as-given"] = "identify"
     output_rate_hz: float | Literal["imu", "filter"] | None = None
 
     @field_validator("output_rate_hz", mode="before")

@@ -131,7 +131,7 @@ def _conditional(cfg) -> list[str]:
     if f.fdi_alpha is None:
         out += [f"filter.{k} (acts with filter.fdi_alpha)"
                 for k in ("fdi_recovery", "fdi_readmit_s") if k in f.model_fields_set]
-    if "noise" in cfg.model_fields_set and cfg.noise == "identify" and f.state == "total":
+    if "noise" in cfg.model_fields_set and cfg.noise != "as-given" and f.state == "total":
         out.append("noise (acts with filter.state: error: the total-state navigator has "
                    "no smoother to identify with)")
     given = cfg.imu.model_fields_set

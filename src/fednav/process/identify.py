@@ -37,10 +37,22 @@ IMU on *this* vehicle are estimated from it, with the given figures as prior and
    than the likelihood-ratio test's 95 % point and no sensor's held-back NIS/dof moves
    further out of the band (:func:`fednav.process.tuning.worse`).
 
-The sensors' own sigmas (files, receivers, the system description) are kept.  What the
-navigator flies with is the identified figures; the report (:class:`Identified`) gives
-prior -> identified, NIS/dof before -> after and the cost.  Units: SI keys of the
-``imu:`` section (rad/sqrt(s), m/s/sqrt(s), rad/s, m/s^2).
+The sensors' sigmas are kept, except with ``noise: identify-all``: there the sigmas
+that no file gives (the system description's, for a receiver that reports none) are
+identified beside the IMU's figures (:func:`sigma_parts`), each row's expected noise
+outer product given every measurement, ``(nu - H x)(nu - H x)' + H Ps H'`` with the
+smoothed error ``x`` of the predicted solution, set against its R (:func:`sigma_factors`,
+EM's M-step for R), the given sigmas their floor.  It is not the default: EM creeps
+along the ridge where a measurement's white noise and the IMU's random walk explain
+the same innovations (a GNSS velocity sigma and the VRW, on simulated data: the
+likelihood is higher at the truth, but EM stops before it), and on the rover it made
+the velocity columns worse than identifying the IMU alone (docs/real-data.md).  A
+sigma the file gives (the receiver's own) is always kept.
+
+What the navigator flies with is the identified figures; the report
+(:class:`Identified`) gives prior -> identified, NIS/dof before -> after and the cost.
+Units: SI keys of the ``imu:`` section (rad/sqrt(s), m/s/sqrt(s), rad/s, m/s^2); a
+sensor's sigma, ``sensors.NAME.HEADER`` in the unit of its column's header.
 """
 
 from __future__ import annotations
@@ -51,7 +63,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..core.errors import FednavError
-from ..filters.smoother import noise_moments
+from ..filters.smoother import noise_moments, rts_smooth
 from ..io.data import ImuData
 from ..navigator.system import System
 from .tuning import (
@@ -134,7 +146,7 @@ class Identified:
 def noise_lines(s: dict) -> list[str]:
     """The console's lines of ``summary.json``'s ``noise`` entry: prior -> identified,
     NIS/dof before -> after, and why the identified figures were not taken."""
-    figs = ", ".join(f"{k.split('_')[0]} {k.split('_')[1]} {s['prior'][k]:.3g} -> {v:.3g}"
+    figs = ", ".join(f"{label(k)} {s['prior'][k]:.3g} -> {v:.3g}"
                      f" (x{v / s['prior'][k]:.3g})" for k, v in s["identified"].items())
     nis = ", ".join(f"{k} {v:.2f} -> {s['nis_per_dof_after'].get(k, float('nan')):.2f}"
                     for k, v in s["nis_per_dof_before"].items())
@@ -153,12 +165,19 @@ def noise_lines(s: dict) -> list[str]:
     over = s.get("above_scatter") or {}
     if s["accepted"] and over:
         out.append("  above the samples' own scatter: " + ", ".join(
-            f"{k.split('_')[0]} {k.split('_')[1]} {s['identified'][k]:.3g} > {v:.3g}"
+            f"{label(k)} {s['identified'][k]:.3g} > {v:.3g}"
             for k, v in over.items()) + " (filtered data, or errors that are not the "
             "IMU's: a sensor sigma too small, a lever arm, a time offset)")
     if not s["accepted"]:
         out.append(f"  why: {s['why_not']}")
     return out
+
+
+def label(key: str) -> str:
+    """A figure's short name on the console: ``gyro arw``, ``gnss sigma_north_m``."""
+    if key.startswith(SENSOR):
+        return key[len(SENSOR):].replace(".", " ", 1)
+    return " ".join(key.split("_")[:2])
 
 
 def given_figures(imu: ImuData, system: System) -> dict[str, float]:
@@ -182,6 +201,132 @@ def scatter_figures(imu: ImuData, n_per: int) -> dict[str, float]:
     dt = imu.period()
     return {"gyro_arw_rad_sqrt_s": white_noise_floor(imu.gyro, dt, n_per),
             "accel_vrw_mps_sqrt_s": white_noise_floor(imu.accel, dt, n_per)}
+
+
+#: the prefix of a sensor's 1-sigma among the figures (``sensors.NAME.HEADER``: the
+#: header of its 1-sigma column, the value in the header's unit)
+SENSOR = "sensors."
+
+
+@dataclass(frozen=True)
+class SigmaPart:
+    """A sensor 1-sigma the identification may raise: the sensor ``name``, the component
+    ``j`` of its series, the rows of its residual that component's noise enters
+    (``rows``), the figure's SI factor of its column's unit (``to_si``)."""
+
+    name: str
+    j: int
+    rows: tuple[int, ...]
+    to_si: float
+
+
+def sigma_parts(prep) -> dict[str, SigmaPart]:
+    """The sensors' 1-sigmas the identification may raise, by figure key
+    (``sensors.NAME.HEADER``): those of the aiding sensors whose series gives none of its
+    own (no ``sigma`` or ``cov`` per row: the system description's figure, a receiver
+    that reports none), and whose residual has a row for the component (found by
+    raising it in the sensor's model: a row whose R changes).  A model whose R mixes
+    components (a rotated mounting) gets one factor for all of them (the rows of all)."""
+    from ..navigator.system import sensor_model
+    from ..sensors import registry
+
+    out = {}
+    aiding = set(prep.system.aiding_sensors())
+    for name, d in prep.series.items():
+        if name not in aiding or d.sigma is not None or d.cov is not None:
+            continue
+        sig = prep.system.sensors[name].sigma()
+        if sig is None:
+            continue
+        sig = np.asarray(sig, dtype=float)
+        model = sensor_model(prep.system, name)
+        R0 = np.atleast_2d(model.R(sig))
+        cols = registry.spec(name).columns
+        parts = {}
+        for j in range(len(sig)):
+            if not sig[j] > 0 or j in d.absent:
+                continue
+            up = sig.copy()
+            up[j] *= 2.0
+            dR = np.abs(np.atleast_2d(model.R(up)) - R0)
+            rows = tuple(int(i) for i in np.flatnonzero(dR.max(axis=1) > 0))
+            if rows:
+                head, f = (cols[j].sigma_column if j < len(cols)
+                           else (f"sigma_{j}", 1.0))
+                parts[f"{SENSOR}{name}.{head}"] = SigmaPart(name, j, rows, f)
+        if not np.allclose(R0, np.diag(np.diag(R0))) or any(
+                len(p.rows) > 1 for p in parts.values()):
+            every = tuple(sorted({i for p in parts.values() for i in p.rows}))
+            parts = {k: replace(p, rows=every) for k, p in parts.items()}
+        out.update(parts)
+    return out
+
+
+def with_sigmas(prep, figures: dict[str, float], parts: dict[str, SigmaPart]):
+    """``prep`` whose series give every row the 1-sigmas of ``figures`` (keys of
+    ``parts``, in their headers' units; the section's for the other components)."""
+    series = dict(prep.series)
+    for name in {parts[k].name for k in figures if k in parts}:
+        sig = np.array(prep.system.sensors[name].sigma(), dtype=float)
+        for k, v in figures.items():
+            if k in parts and parts[k].name == name:
+                sig[parts[k].j] = v * parts[k].to_si
+        d = series[name]
+        series[name] = d.with_sigma(np.broadcast_to(sig, np.shape(d.z)))
+    return replace(prep, series=series)
+
+
+def given_sigmas(prep, parts: dict[str, SigmaPart]) -> dict[str, float]:
+    """The 1-sigmas of ``parts`` the system description gives (their headers' units)."""
+    return {k: float(prep.system.sensors[p.name].sigma()[p.j]) / p.to_si
+            for k, p in parts.items()}
+
+
+def sigma_factors(res, smoothed, parts: dict[str, SigmaPart], fitted) -> dict[str, float]:
+    """Each sensor 1-sigma's factor on its variance (EM's M-step for R; Shumway & Stoffer
+    1982), over the fitted innovations (``fitted``: a function of the times [s] -> which
+    are fitted).  A measurement taken at epoch k with rows ``H`` and innovation ``nu``
+    (against the predicted solution, whose smoothed error is ``x = e_k + dx_k`` with
+    covariance ``Ps_k``: ``smoothed``, :func:`~fednav.filters.smoother.rts_smooth` on
+    the pass ``res``) has the expected noise outer product given every measurement::
+
+        V = (nu - H x)(nu - H x)' + H Ps_k H'
+
+    and a row's factor is the mean of ``V_ii / R_ii``; a component's, the mean of its
+    rows'.  Each ``(nu - H x)(...)'`` is shrunk where its ``R``-normalized size passes
+    the 99.9 % chi-square point's ratio to the median (a wrong fix does not set the
+    figures, whatever the figures' scale).  Records without ``H`` are left out."""
+    from ..core.stats import chi2_ppf
+
+    e, Ps, _ = smoothed
+    dx = np.asarray(res.dx, dtype=float)
+    out = {}
+    for name in {p.name for p in parts.values()}:
+        recs = [r for r in res.innovations if r.local == name and r.H is not None
+                and r.epoch >= 0]
+        if not recs:
+            continue
+        d = max(len(r.r) for r in recs)
+        recs = [r for r in recs if len(r.r) == d]
+        recs = [r for r, f in zip(recs, fitted(np.array([r.t for r in recs])), strict=True)
+                if f]
+        if not recs:
+            continue
+        k = np.array([r.epoch for r in recs])
+        H = np.array([r.H for r in recs])
+        R = np.array([r.R for r in recs])
+        v = (np.array([r.r for r in recs])
+             - np.einsum("kij,kj->ki", H, e[k] + dx[k]))
+        size = np.einsum("ki,ki->k", v, np.linalg.solve(R, v[..., None])[..., 0])
+        cap = float(chi2_ppf(CAP_P, d) / chi2_ppf(0.5, d)) * float(np.median(size))
+        shrink = np.minimum(1.0, cap / np.maximum(size, 1e-300))
+        V = (shrink[:, None] * v**2
+             + np.einsum("kij,kjl,kil->ki", H, Ps[k], H))
+        row = np.mean(V / np.diagonal(R, axis1=1, axis2=2), axis=0)
+        for key, p in parts.items():
+            if p.name == name and max(p.rows) < d:
+                out[key] = float(np.mean(row[list(p.rows)]))
+    return out
 
 
 def noise_parts(res, figures: dict[str, float], taus: dict[str, float]) -> np.ndarray:
@@ -209,7 +354,7 @@ def noise_parts(res, figures: dict[str, float], taus: dict[str, float]) -> np.nd
 
 
 def variance_factors(res, figures: dict[str, float], taus: dict[str, float],
-                     fitted: np.ndarray) -> dict[str, float]:
+                     fitted: np.ndarray, smoothed=None) -> dict[str, float]:
     """One EM step's factor on each figure's variance (module docstring, 2).
 
     With ``Q_k = sum_j s_j B_jk + rest_k`` over the driven states (``B``:
@@ -222,11 +367,12 @@ def variance_factors(res, figures: dict[str, float], taus: dict[str, float],
     over the fitted intervals (Shumway & Stoffer's M-step for a covariance linear in
     its parameters; each interval's ``W_k`` shrunk where ``tr(Q_k^-1 W_k) / d`` passes
     the 99.9 % point of chi-square over d: a wrong fix or a bump the smoother meets does
-    not set the figures).
+    not set the figures).  ``smoothed``: :func:`~fednav.filters.smoother.rts_smooth`'s
+    result on ``res`` when it is at hand.
     """
     from ..core.stats import chi2_ppf
 
-    W = noise_moments(res.P, res.Phi, res.Qd, res.dx, DRIVEN)[fitted]
+    W = noise_moments(res.P, res.Phi, res.Qd, res.dx, DRIVEN, smoothed)[fitted]
     Qd = np.asarray(res.Qd)[1:][:, DRIVEN][:, :, DRIVEN][fitted]
     B = noise_parts(res, figures, taus)[:, fitted]
     live = np.diagonal(Qd, axis1=1, axis2=2).min(axis=0) > 0
@@ -273,7 +419,8 @@ def identify(imu: ImuData, prep, progress=None, force: bool = False):
     from ..navigator.health import NIS_REFUSE
 
     t_start = time.perf_counter()
-    prior = given_figures(imu, prep.system)
+    parts = sigma_parts(prep) if prep.system.noise == "identify-all" else {}
+    prior = {**given_figures(imu, prep.system), **given_sigmas(prep, parts)}
     seen = scatter_figures(imu, prep.n_per)
     # never below the given figures; a white noise starts at what the samples' scatter
     # supports (the data's direct measure of it) where that is more
@@ -287,8 +434,10 @@ def identify(imu: ImuData, prep, progress=None, force: bool = False):
 
     def run(figures=None, rows=False):
         """A pass with these figures (None: as given)."""
-        p = replace(prep, system=system if figures is None else with_figures(system,
-                                                                             figures))
+        p = replace(prep, system=system)
+        if figures is not None:
+            p = with_sigmas(replace(p, system=with_figures(system, imu_part(figures))),
+                            figures, parts)
         nav = p.feed(p.navigator(record_rows=rows, record_covariance=True,
                                  innovations=True))
         return nav, nav.result()
@@ -324,7 +473,9 @@ def identify(imu: ImuData, prep, progress=None, force: bool = False):
     def gaps(figures, out) -> dict[str, float]:
         """log of each figure's EM factor (half the log of its variance factor)."""
         fitted = ~blocks.held(np.asarray(out.t)[1:])
-        sc = variance_factors(out, figures, taus, fitted)
+        smoothed = rts_smooth(out.P, out.Phi, out.Qd, out.dx)
+        sc = variance_factors(out, imu_part(figures), taus, fitted, smoothed)
+        sc.update(sigma_factors(out, smoothed, parts, lambda t: ~blocks.held(t)))
         return {k: 0.5 * float(np.log(sc[k])) for k in sc if sc[k] > 0}
 
     # Each figure's EM factor g (log) against its log x: the fixed point g = 0 found by
@@ -384,7 +535,14 @@ def identify(imu: ImuData, prep, progress=None, force: bool = False):
                      {k: v for k, v in seen.items() if figs[k] > v and k in figs})
     if not accepted:
         return prep, rep, reuse
-    return replace(prep, system=with_figures(prep.system, rep.flown)), rep, None
+    flown = replace(prep, system=with_figures(prep.system, imu_part(rep.flown)))
+    raised = {k: v for k, v in rep.flown.items() if k in parts and v != prior[k]}
+    return with_sigmas(flown, raised, parts), rep, None
+
+
+def imu_part(figures: dict[str, float]) -> dict[str, float]:
+    """The IMU's figures among ``figures`` (the sensors' 1-sigmas left out)."""
+    return {k: v for k, v in figures.items() if not k.startswith(SENSOR)}
 
 
 #: local filter types whose covariance the identification cannot take as a Kalman

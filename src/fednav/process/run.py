@@ -823,7 +823,7 @@ def process(imu: ImuData, sensors: Mapping[str, Series], cfg: System | None = No
     fixes = sensors.get(registry.fix_sensor(sensors))
     prep = prepare(imu, sensors, cfg)
     noise = nav = None
-    if prep.system.noise == "identify" and prep.system.filter.state == "error":
+    if prep.system.noise != "as-given" and prep.system.filter.state == "error":
         from .identify import identify
 
         prep, noise, nav = identify(imu, prep, force=force)  # (nav: its first pass, kept)

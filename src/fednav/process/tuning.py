@@ -49,10 +49,10 @@ figures):
 Figures the user marks as fixed (``fixed``) are kept, whatever the data say; so are the
 lever arms, the options and the sensor sigmas that the files or the base config give
 (unless ``tune_sensors``).  Measurements that fault detection isolates (``fdi_alpha`` of
-the base config) are left out of the matching, and every measurement's ``nu' S^-1 nu`` is
-capped at its 99.9 % chi-square point in the likelihood, so a few outliers do not set the
-noise figures.  Units: SI (rad, m, s) as in the ``imu:`` section's SI keys
-(:class:`fednav.sensors.imu.ImuConfig`).
+the base config) are left out of the matching, and every measurement's ``nu' S^-1 nu``
+counts in the likelihood as itself up to its 99.9 % chi-square point and as its square
+root beyond (:func:`huber`), so a few outliers do not set the noise figures.  Units: SI
+(rad, m, s) as in the ``imu:`` section's SI keys (:class:`fednav.sensors.imu.ImuConfig`).
 """
 
 from __future__ import annotations
@@ -260,6 +260,16 @@ def _cap(dof: int) -> float:
     return float(chi2_ppf(_CAP_P, dof))
 
 
+def huber(q, cap: float):
+    """A measurement's statistic ``q`` as the likelihood counts it: itself up to ``cap``,
+    beyond it growing as its square root (Huber's loss on the normalized innovation's
+    size, ``2 sqrt(cap q) - cap``), so that a few outliers do not set the figures and a
+    filter whose innovations are all far larger than its covariance says is not scored
+    as if each were at the cap (a flat penalty would reward a covariance too small)."""
+    q = np.asarray(q, dtype=float)
+    return np.where(q <= cap, q, 2.0 * np.sqrt(cap * np.maximum(q, cap)) - cap)
+
+
 def innovation_statistics(inns: list[InnovationRecord],
                           blocks: Blocks | None = None) -> Evaluation:
     """Sum up one filter run's innovations, fitted blocks and held-back ones."""
@@ -280,7 +290,7 @@ def innovation_statistics(inns: list[InnovationRecord],
             q = np.einsum("ij,ij->i", w, w)
             cap = _cap(d)
             logdet = 2.0 * np.log(np.diagonal(L, axis1=1, axis2=2)).sum(axis=1)
-            each = -0.5 * (logdet + np.minimum(q, cap) + d * np.log(2 * np.pi))
+            each = -0.5 * (logdet + huber(q, cap) + d * np.log(2 * np.pi))
             held = (np.zeros(len(same), dtype=bool) if blocks is None
                     else blocks.held([i.t for i in same]))
             fit = ~held
