@@ -337,12 +337,13 @@ def test_zero_angular_rate_updates_at_detected_stops_hold_the_heading():
     assert np.sqrt(np.mean(yaw["zupt+zaru"])) < 0.85 * np.sqrt(np.mean(yaw["zupt"])), yaw
 
 
-def test_a_gnss_velocity_latency_is_seen_said_and_corrected():
-    """Issue 26: a receiver whose Doppler velocity lags its (RTK) positions by 0.1 s. The
-    positions' differences show the lag (estimated within 0.01 s), process warns naming
-    sensors.gnss.velocity_latency_s, and that setting removes the error it made (measured
-    forward vN/vE RMSE 0.043/0.034 -> 0.009/0.010 m/s, as on time; north 0.067 -> 0.011 m,
-    yaw 1.57 -> 0.36 deg)."""
+def test_a_gnss_velocity_latency_is_seen_said_and_taken_out():
+    """Issues 26, 40: a receiver whose Doppler velocity lags its (RTK) positions by 0.1 s.
+    The positions' differences show the lag (estimated within 0.01 s, with its sigma),
+    and by default process takes it out and says so, which removes the error the lag
+    made (measured forward vN/vE RMSE 0.043/0.034 m/s with the stamps kept,
+    ``velocity_latency_s: 0``, where the run then warns naming the key; 0.009/0.010
+    taken out, as on time); on time, nothing is taken out."""
     from fednav.process.run import velocity_latency
     from fednav.sim.drives import car_drive
 
@@ -355,15 +356,29 @@ def test_a_gnss_velocity_latency_is_seen_said_and_corrected():
     L, s = velocity_latency(lagged)
     assert L == pytest.approx(0.1, abs=0.01) and s < 0.02
     assert abs(velocity_latency(g)[0]) < 0.01
-    res = process(d.imu, {"gnss": lagged}, d.system)
-    assert res.data_quality["gnss_velocity_latency_seen_s"] == pytest.approx(0.1, abs=0.01)
-    assert any("velocity_latency_s" in w for w in res.warnings)
     base = d.system.model_dump(exclude_unset=True)
-    fixed = load_system({**base, "sensors": {"gnss": {**base["sensors"]["gnss"],
-                                                      "velocity_latency_s": 0.1}}})
-    before = rmse(errors_against(res.forward, d.reference))
-    after = rmse(errors_against(process(d.imu, {"gnss": lagged}, fixed).forward, d.reference))
+
+    def latency(v):
+        return load_system({**base, "sensors": {"gnss": {**base["sensors"]["gnss"],
+                                                         "velocity_latency_s": v}}})
+
+    res = process(d.imu, {"gnss": lagged}, d.system)
+    q = res.data_quality
+    assert q["gnss_velocity_latency_seen_s"] == pytest.approx(0.1, abs=0.01)
+    assert q["gnss_velocity_latency_applied_s"] == q["gnss_velocity_latency_seen_s"]
+    assert 0 < q["gnss_velocity_latency_sigma_s"] < 0.02
+    assert any("taken out" in w and "velocity_latency_s: 0" in w for w in res.warnings)
+    kept = process(d.imu, {"gnss": lagged}, latency(0.0))
+    assert any("velocity_latency_s corrects it" in w for w in kept.warnings)
+    before = rmse(errors_against(kept.forward, d.reference))
+    after = rmse(errors_against(res.forward, d.reference))
     assert after["vn_mps"] < 0.6 * before["vn_mps"] and after["ve_mps"] < 0.6 * before["ve_mps"]
+    given = rmse(errors_against(process(d.imu, {"gnss": lagged}, latency(0.1)).forward,
+                                d.reference))
+    assert after["vn_mps"] == pytest.approx(given["vn_mps"], rel=0.1)
+    on_time = process(d.imu, {"gnss": g}, d.system)
+    assert on_time.data_quality["gnss_velocity_latency_applied_s"] == 0.0
+    assert not any("lags" in w for w in on_time.warnings)
 
 
 def test_an_odometer_scale_factor_is_seen_said_and_estimated():

@@ -128,6 +128,33 @@ def old_layout(*old: str):
     return wrap
 
 
+def with_velocity_latency(cfg: System, name: str | None, fixes) -> tuple[System, dict,
+                                                                          list[str]]:
+    """``cfg`` with the fix sensor's ``velocity_latency_s`` resolved where its section
+    leaves it to the data (None): the latency :func:`velocity_latency` sees from the
+    positions when it is confident (positive, beyond :data:`LATENCY_WARN_S` and three
+    of its sigmas), else 0.  Returns the system, the data quality
+    (``<name>_velocity_latency_seen_s``, ``_sigma_s``, ``_applied_s`` [s]) and a line
+    saying what was taken out."""
+    sc = None if fixes is None else own_section(name, cfg)
+    if sc is None or getattr(sc, "velocity_latency_s", 0.0) is not None:
+        return cfg, {}, []
+    lat = velocity_latency(fixes)
+    take = lat is not None and lat[0] > max(LATENCY_WARN_S, 3.0 * lat[1])
+    applied = round(lat[0], 3) if take else 0.0
+    cfg = cfg.model_copy(update={"sensors": cfg.sensors.replace(**{name: sc.model_copy(
+        update={"velocity_latency_s": applied})})})
+    if lat is None:
+        return cfg, {}, []
+    quality = {f"{name}_velocity_latency_seen_s": round(lat[0], 3),
+               f"{name}_velocity_latency_sigma_s": round(lat[1], 3),
+               f"{name}_velocity_latency_applied_s": applied}
+    said = ([f"{fixes.source}: the {registry.label(name)} velocity lags its positions by "
+             f"{lat[0]:+.3f} s (+-{lat[1]:.3f} s, from the positions' differences): taken "
+             f"out (sensors.{name}.velocity_latency_s: 0 keeps the stamps)"] if take else [])
+    return cfg, quality, said
+
+
 def own_section(name: str, cfg: System):
     """The system's section of sensor ``name``, else the section's defaults (None when
     the section has no defaults: it needs its noise)."""
@@ -582,9 +609,12 @@ def prepare(imu: ImuData, sensors: Mapping[str, Series] | None = None,
                         f"milliseconds (fednav expects seconds)? A strapdown IMU samples at "
                         f"{1 / MAX_IMU_PERIOD_S:g} Hz or faster")
     cfg, assumed = with_imu_figures(imu, cfg)
+    cfg, latency, taken = with_velocity_latency(cfg, fix_name, fixes)
     others = {n: d.adjusted(own_section(n, cfg)) for n, d in others.items()}
     fixes = others.get(fix_name)
     warnings, quality_extra = check_fix_timing(imu, fixes)
+    quality_extra.update(latency)  # (what the stamps showed, before it was taken out)
+    warnings[:0] = taken
     warnings[:0] = emptied + assumed + check_units(imu, fixes) + check_mounting(imu, fixes)
     unused = ignored_keys(cfg)
     period = _period(cfg, fixes, others)

@@ -165,10 +165,12 @@ class GnssConfig(SensorConfig):
     m/s) — the data file's when left out —
     antenna ``lever_m`` from the IMU (body right-forward-up; the file's when left out),
     ``time_offset_s`` added to the file's time stamps, and ``velocity_latency_s``: how
-    much older than its stamp each velocity is (a receiver's Doppler velocity lagging its
-    position; ``fednav process`` reports the latency it sees as
-    ``gnss_velocity_latency_seen_s``).  The old key ``sigma_pos_m`` ([north, east, up])
-    is read as ``sigma_pos_enu_m``, reordered, with a ``FutureWarning``.
+    much older than its stamp each velocity is [s] (a receiver's Doppler velocity lagging
+    its position); None (default): the latency ``fednav process`` sees from the
+    positions (``gnss_velocity_latency_seen_s`` and its 1-sigma), taken out when it is
+    confident (beyond 0.05 s and three sigmas), else none; 0: the stamps as they are.
+    The old key ``sigma_pos_m`` ([north, east, up]) is read as ``sigma_pos_enu_m``,
+    reordered, with a ``FutureWarning``.
     ``markov_sigma_enu_m`` (one value or [east, north, up] m) and ``markov_tau_s`` [s]:
     the time-correlated part of the position error (first-order Gauss–Markov: RTK / PPP
     and multipath errors), which the optional ``gnss_markov`` error state
@@ -178,7 +180,7 @@ class GnssConfig(SensorConfig):
     sigma_pos_enu_m: float | _V3 | None = None
     sigma_vel_mps: float | _V3 | None = None
     time_offset_s: float = 0.0
-    velocity_latency_s: float = Field(default=0.0, ge=0.0, le=2.0)
+    velocity_latency_s: float | None = Field(default=None, ge=0.0, le=2.0)
     markov_sigma_enu_m: float | _V3 | None = None
     markov_tau_s: float | None = Field(default=None, gt=0.0)
     #: the key of the 1-sigma the model's Gauss-Markov state takes
