@@ -603,7 +603,10 @@ def _print_process(s: dict, compiled_s: float = 0.0) -> None:
 
     for w in s.get("warnings", []):
         console.print(f"[yellow]warning:[/] {escape(w)}")
-    q = {k: v for k, v in s.get("data_quality", {}).items() if v and not k.endswith("_seen_s")}
+    for w in s.get("hints", []):
+        console.print(f"[cyan]hint:[/] {escape(w)}")
+    q = {k: v for k, v in s.get("data_quality", {}).items()
+         if v and not k.endswith(("_seen_s", "_sigma_s"))}
     if q:
         console.print("data: " + ", ".join(f"{k.replace('_', ' ')} {v}" for k, v in q.items())
                       + " (docs/reliability.md)")

@@ -336,6 +336,45 @@ def velocity_latency(fixes: FixData) -> tuple[float, float] | None:
     return L, sigma
 
 
+#: moving: horizontally faster than this [m/s] (the wheeled-vehicle hint)
+WHEELED_SPEED_MPS = 3.0
+#: the hint needs at least this long moving [s]
+WHEELED_MIN_S = 60.0
+#: a velocity that stays along the IMU's forward axis within this RMS [m/s], sideways and
+#: vertically, while moving: a wheeled vehicle (the hint's threshold)
+WHEELED_RMS_MPS = 0.25
+
+
+def wheeled_hint(sol, system) -> list[str]:
+    """A hint (``ProcessResult.hints``) suggesting the non-holonomic constraint
+    (``sensors.nhc``) when the forward solution ``sol`` moves like a wheeled vehicle —
+    its velocity in body axes (right, forward, up at the IMU) stays along the forward
+    axis within
+    :data:`WHEELED_RMS_MPS` RMS sideways and vertically over at least
+    :data:`WHEELED_MIN_S` of motion faster than :data:`WHEELED_SPEED_MPS` — and the
+    system has no such constraint or body-velocity sensor.  On straight runs GNSS does
+    not see the heading; the constraint does (measured: docs/real-data.md, "A moving
+    start").  A drone's, a boat's or a pedestrian's velocity leaves the forward axis."""
+    from ..core import attitude as att
+
+    flown = set(system.sensors if system.aiding is None else system.aiding)
+    if {"nhc", "odometer", "dvl"} & flown or len(sol.t) < 2:
+        return []
+    vb = np.einsum("nji,nj->ni", att.euler_to_dcm(sol.euler), sol.vel)
+    moving = np.hypot(sol.vel[:, 0], sol.vel[:, 1]) > WHEELED_SPEED_MPS
+    dt = float(np.median(np.diff(sol.t)))
+    if moving.sum() * dt < WHEELED_MIN_S:
+        return []
+    side, up = (float(np.sqrt(np.mean(vb[moving, j] ** 2))) for j in (0, 2))
+    if max(side, up) > WHEELED_RMS_MPS:
+        return []
+    return [f"the vehicle's velocity stays along its forward axis (sideways {side:.2f}, "
+            f"vertical {up:.2f} m/s RMS over {moving.sum() * dt:.0f} s of motion): a "
+            f"wheeled vehicle? sensors.nhc (the non-holonomic constraint) makes its "
+            f"heading observable on straight runs, where GNSS does not (docs/real-data.md, "
+            f"\"A moving start\")"]
+
+
 def check_units(imu: ImuData, fixes: FixData | None) -> list[str]:
     """Refuse IMU data in the wrong unit; warn about GNSS positions that look like radians.
 

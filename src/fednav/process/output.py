@@ -163,6 +163,7 @@ def summary(res: ProcessResult, ref: Reference | None, inputs: dict,
         quality.update(ref.quality)
     out: dict = {"inputs": inputs, "run_time_s": res.run_time_s, "epochs": res.epochs,
                  "data_quality": quality, "warnings": list(res.warnings),
+                 "hints": list(res.hints),
                  "consistency": res.consistency or consistency(res.forward),
                  "alignment": res.alignment}
     if res.optional_states:

@@ -74,6 +74,7 @@ from .checks import (  # noqa: F401  (fednav.process.run's names of 0.2)
     mounted_imu,
     time_offset,
     velocity_latency,
+    wheeled_hint,
 )
 from .culprit import culprit
 from .evaluation import RENAMED_ERRORS, errors_against, rmse  # noqa: F401
@@ -216,6 +217,9 @@ class ProcessResult:
         NIS/dof before -> after; :mod:`fednav.process.identify`), None with the system's
         ``noise: as-given`` and for the total-state navigator (``filter.state: total``,
         which has no smoother to identify with).
+    hints : list of str
+        What the run suggests the description could add (one line each): nothing is
+        wrong without it (:func:`fednav.process.checks.wheeled_hint`).
     """
 
     forward: Solution
@@ -237,6 +241,8 @@ class ProcessResult:
     #: the noise identification's report (:class:`fednav.process.identify.Identified`;
     #: None with ``noise: as-given``)
     noise: object = None
+    #: what the run suggests the description could add (one line each)
+    hints: list = field(default_factory=list)
 
     @property
     def gnss_flown(self) -> FixData | None:
@@ -876,6 +882,7 @@ def process(imu: ImuData, sensors: Mapping[str, Series], cfg: System | None = No
     if blame:
         res.warnings.append(blame)
     res.warnings += readmission_warnings(out.readmissions)
+    res.hints += wheeled_hint(res.forward, prep.system)
     if prep.system.filter.q_adaptation is not None and hasattr(nav.loop, "q_scales"):
         res.data_quality["q_scale_final"] = {k: round(v, 3)
                                              for k, v in nav.loop.q_scales().items()}
