@@ -62,7 +62,7 @@ def test_the_smoother_moments_put_the_noise_where_it_is():
     assert q == pytest.approx(q_true, rel=0.1)
 
 
-def _closed_loop_position(q, r_true, r_model, n=4000, T=0.1, seed=5):
+def _closed_loop_position(q, r_true, r_model, n=4000, T=0.1, seed=5, every=1):
     """A constant-velocity track, its position measured with noise ``r_true``, flown by
     a closed-loop error filter written here that believes ``r_model``: what fednav's
     navigator records (covariances, transitions, corrections, and each measurement's
@@ -82,6 +82,12 @@ def _closed_loop_position(q, r_true, r_model, n=4000, T=0.1, seed=5):
         x = Phi @ x + L @ rng.standard_normal(2)
         xh = Phi @ xh
         P = Phi @ P @ Phi.T + Q
+        if k % every:  # (no measurement: nothing fed back)
+            Ps.append(P.copy())
+            Phis.append(Phi)
+            Qs.append(Q)
+            dxs.append(np.zeros(2))
+            continue
         # innovation against the prediction: H times its error (computed minus true)
         nu = H @ xh - (x[0] + np.sqrt(r_true) * rng.standard_normal())
         S = H @ P @ H.T + r_model
@@ -96,7 +102,7 @@ def _closed_loop_position(q, r_true, r_model, n=4000, T=0.1, seed=5):
         inns.append(InnovationRecord("pos", k * T, nu, S, np.array([[r_model]]), 1.0,
                                      True, H, k))
     return SimpleNamespace(P=np.array(Ps), Phi=np.array(Phis), Qd=np.array(Qs),
-                           dx=np.array(dxs), innovations=inns)
+                           dx=np.array(dxs), innovations=inns, t=T * np.arange(n + 1))
 
 
 def test_the_smoothed_measurement_noise_is_where_it_is():
@@ -121,6 +127,54 @@ def test_the_smoothed_measurement_noise_is_where_it_is():
     assert gap(lo) > 0 > gap(hi)
     r = float(np.exp(brentq(gap, lo, hi, xtol=1e-3)))
     assert r == pytest.approx(r_true, rel=0.1)
+
+
+def test_the_folded_chain_smooths_as_the_whole_one():
+    """EM runs on the chain folded to the epochs that took a measurement (a 10 Hz filter
+    under fixes every 0.5 s: a fifth of the epochs): its smoothed errors and covariances
+    at those epochs are the whole chain's, to rounding."""
+    from fednav.filters.smoother import rts_smooth
+    from fednav.process.identify import folded
+
+    res = _closed_loop_position(0.5, 0.04, 0.04, n=2000, every=5)
+    chain = folded(res)
+    assert len(chain.epochs) == 2000 // 5 + 1 and chain.epochs[-1] == 2000
+    e, Ps, _ = rts_smooth(res.P, res.Phi, res.Qd, res.dx)
+    ef, Psf, _ = rts_smooth(chain.P, chain.Phi, chain.Qd, chain.dx)
+    np.testing.assert_allclose(ef, e[chain.epochs], rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(Psf, Ps[chain.epochs], rtol=1e-9, atol=1e-15)
+
+
+def test_each_figures_folded_part_is_its_intervals_carried_to_the_end():
+    """noise_parts (rank-3 terms carried back from each group's end, the driven rows
+    only) equals each interval's whole discrete part (the filter's trapezoid) folded
+    with the whole transitions (fold), on random transitions and groups."""
+    from types import SimpleNamespace
+
+    from fednav.ins.error_model import SCALE
+    from fednav.process import identify as ident
+
+    rng = np.random.default_rng(0)
+    N, n = 60, 21
+    Phi = np.eye(n) + 0.05 * rng.standard_normal((N + 1, n, n))
+    t = np.cumsum(np.r_[0.0, rng.uniform(0.04, 0.06, N)])
+    ends = np.array([3, 4, 10, 11, 12, 30, 31, 45, 60])
+    figs = {"gyro_arw_rad_sqrt_s": 1e-3, "accel_vrw_mps_sqrt_s": 2e-2,
+            "gyro_markov_radps": 1e-5, "accel_markov_mps2": 1e-3}
+    taus = {"gyro_markov_radps": 300.0, "accel_markov_mps2": 200.0}
+    got = ident.noise_parts(SimpleNamespace(Phi=Phi, t=t),
+                            SimpleNamespace(epochs=np.r_[0, ends]), figs, taus)
+    T = np.r_[0.0, np.diff(t)]
+    D = ident.DRIVEN
+    for j, (k, v) in enumerate(figs.items()):
+        qc = np.zeros(n)
+        tau = taus.get(k)
+        qc[ident.BLOCKS[k]] = (v**2 if tau is None else 2 * v**2 / tau) / SCALE[
+            ident.BLOCKS[k]] ** 2
+        B = 0.5 * (Phi @ np.diag(qc) @ np.swapaxes(Phi, 1, 2) + np.diag(qc)) * T[:, None,
+                                                                                None]
+        want = ident.fold(Phi, B[:, None], ends)[1][1:, 0][:, D][:, :, D]
+        np.testing.assert_allclose(got[j], want, rtol=1e-12, atol=1e-14 * np.abs(want).max())
 
 
 def _drive(tmp: Path, arw_deg_sqrt_h: float, vrw_ug: float, segments: int = 12,

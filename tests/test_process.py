@@ -178,7 +178,8 @@ def test_cli_process_csv_end_to_end(tmp_path, flight):
     bad = CliRunner().invoke(app, ["process", "csv", "--imu", str(tmp_path / "imu.csv"),
                                    "--gnss", str(tmp_path / "gnss.csv"), "--out",
                                    str(tmp_path / "out2"), "--noise", "learn"])
-    assert bad.exit_code == 2 and "--noise learn: not identify, identify-all or as-given" in bad.output
+    assert bad.exit_code == 2
+    assert "--noise learn: not identify, identify-all or as-given" in bad.output
 
 
 @pytest.mark.parametrize(("cfg", "message"), [

@@ -282,7 +282,8 @@ def given_sigmas(prep, parts: dict[str, SigmaPart]) -> dict[str, float]:
             for k, p in parts.items()}
 
 
-def sigma_factors(res, smoothed, parts: dict[str, SigmaPart], fitted) -> dict[str, float]:
+def sigma_factors(res, smoothed, parts: dict[str, SigmaPart], fitted,
+                  chain: Chain | None = None) -> dict[str, float]:
     """Each sensor 1-sigma's factor on its variance (EM's M-step for R; Shumway & Stoffer
     1982), over the fitted innovations (``fitted``: a function of the times [s] -> which
     are fitted).  A measurement taken at epoch k with rows ``H`` and innovation ``nu``
@@ -295,11 +296,13 @@ def sigma_factors(res, smoothed, parts: dict[str, SigmaPart], fitted) -> dict[st
     and a row's factor is the mean of ``V_ii / R_ii``; a component's, the mean of its
     rows'.  Each ``(nu - H x)(...)'`` is shrunk where its ``R``-normalized size passes
     the 99.9 % chi-square point's ratio to the median (a wrong fix does not set the
-    figures, whatever the figures' scale).  Records without ``H`` are left out."""
+    figures, whatever the figures' scale).  Records without ``H`` are left out.
+    ``chain``: the folded chain ``smoothed`` is of (:func:`folded`; None: the record's
+    own epochs)."""
     from ..core.stats import chi2_ppf
 
     e, Ps, _ = smoothed
-    dx = np.asarray(res.dx, dtype=float)
+    dx = np.asarray(res.dx if chain is None else chain.dx, dtype=float)
     out = {}
     for name in {p.name for p in parts.values()}:
         recs = [r for r in res.innovations if r.local == name and r.H is not None
@@ -313,6 +316,8 @@ def sigma_factors(res, smoothed, parts: dict[str, SigmaPart], fitted) -> dict[st
         if not recs:
             continue
         k = np.array([r.epoch for r in recs])
+        if chain is not None:
+            k = chain.at(k)
         H = np.array([r.H for r in recs])
         R = np.array([r.R for r in recs])
         v = (np.array([r.r for r in recs])
@@ -329,38 +334,125 @@ def sigma_factors(res, smoothed, parts: dict[str, SigmaPart], fitted) -> dict[st
     return out
 
 
-def noise_parts(res, figures: dict[str, float], taus: dict[str, float]) -> np.ndarray:
-    """Each figure's part of every interval's discrete process noise, over the driven
-    states :data:`DRIVEN`: ``B`` (n_figures, N, d, d), filter units.  The continuous
-    density of figure j is ``Qc_j`` (white noise: its square on its three states; a
-    Gauss–Markov bias: ``2 sigma^2 / tau``), discretized as the filter does
-    (:func:`fednav.ins.error_model`'s trapezoid, ``(Phi Qc Phi' + Qc) T / 2``) with the
-    recorded transition ``Phi`` and the interval ``T``."""
+@dataclass(frozen=True)
+class Chain:
+    """A pass's recorded chain folded to the epochs that took a measurement.
+
+    Between two such epochs nothing is measured and nothing fed back, so the intervals
+    compose exactly: the folded transition is their product and the folded noise the
+    sum of each interval's carried to the end (:func:`fold`).  EM on the folded chain is
+    EM on the same likelihood, over a fraction of the epochs (a 20 Hz filter under 4 Hz
+    fixes: a fifth).  ``t`` [s], ``P``, ``Phi``, ``Qd``, ``dx`` as the record's (entry 0
+    the start; ``Phi``, ``Qd`` entry 0 unused), ``epochs`` their indices in the record."""
+
+    t: np.ndarray
+    P: np.ndarray
+    Phi: np.ndarray
+    Qd: np.ndarray
+    dx: np.ndarray
+    epochs: np.ndarray
+
+    def at(self, epochs) -> np.ndarray:
+        """The folded index of each recorded epoch that took a measurement."""
+        return np.searchsorted(self.epochs, np.asarray(epochs))
+
+
+def fold(Phi, M, ends) -> tuple[np.ndarray, np.ndarray]:
+    """The transitions ``Phi`` (N+1, n, n) and per-interval noises ``M`` (N+1, m, n, n:
+    m of them; entry k the interval k-1 -> k) composed over the groups of intervals
+    ending at the epochs ``ends`` (increasing, the last N; group g spans ``ends[g-1]``
+    -> ``ends[g]``): ``Phi_g = Phi_e ... Phi_s+1`` and ``M_g = sum_i (Phi_e ...
+    Phi_i+1) M_i (...)'``, (G+1, n, n) and (G+1, m, n, n) with entry 0 unused."""
+    Phi, M = np.asarray(Phi, dtype=float), np.asarray(M, dtype=float)
+    ends = np.asarray(ends)
+    starts = np.r_[0, ends[:-1]]
+    length = ends - starts
+    G, n = len(ends), Phi.shape[1]
+    A = np.zeros((G + 1, n, n))
+    A[1:] = np.eye(n)
+    acc = np.zeros((G + 1, *M.shape[1:]))
+    for j in range(int(length.max(initial=0))):  # (the j-th interval of every group)
+        g = np.flatnonzero(length > j) + 1
+        k = starts[g - 1] + 1 + j
+        F = Phi[k]
+        A[g] = F @ A[g]
+        acc[g] = F[:, None] @ acc[g] @ np.swapaxes(F, 1, 2)[:, None] + M[k]
+    return A, acc
+
+
+#: a correction fed back at an epoch counts when some state's exceeds this (filter
+#: units: arc-minutes, m/s, m, deg/h ...): the fusion leaves rounding (1e-17) elsewhere
+FED_BACK = 1e-9
+
+
+def folded(res) -> Chain:
+    """``res``'s recorded chain (a pass with ``record_covariance`` and ``innovations``)
+    folded to the epochs that took a measurement or fed a correction back
+    (:class:`Chain`)."""
+    dx = np.asarray(res.dx, dtype=float)
+    N = len(dx) - 1
+    took = {r.epoch for r in res.innovations if r.epoch > 0}
+    took.update((np.flatnonzero(np.abs(dx[1:]).max(axis=1) > FED_BACK) + 1).tolist())
+    ends = np.array(sorted(took | {N}), dtype=np.int64)
+    Phi, Qd = fold(res.Phi, np.asarray(res.Qd)[:, None], ends)
+    keep = np.r_[0, ends]
+    return Chain(np.asarray(res.t, dtype=float)[keep], np.asarray(res.P)[keep], Phi,
+                 Qd[:, 0], dx[keep], keep)
+
+
+def noise_parts(res, chain: Chain, figures: dict[str, float],
+                taus: dict[str, float]) -> np.ndarray:
+    """Each figure's part of every folded interval's discrete process noise, over the
+    driven states :data:`DRIVEN`: ``B`` (n_figures, G, d, d), filter units.  The
+    continuous density of figure j is ``Qc_j`` (white noise: its square on its three
+    states; a Gauss–Markov bias: ``2 sigma^2 / tau``), discretized as the filter does
+    (:func:`fednav.ins.error_model`'s trapezoid, ``(Phi Qc Phi' + Qc) T / 2``) with each
+    recorded transition ``Phi`` and interval ``T`` of ``res``, then folded as ``chain``
+    (:func:`fold`; the part a folded interval puts on the position is left out with the
+    position, as the recorded ``Qd``'s)."""
     from ..ins.error_model import SCALE
 
-    Phi = np.asarray(res.Phi)[1:][:, DRIVEN][:, :, DRIVEN]
-    T = np.diff(np.asarray(res.t, dtype=float))
-    scale = SCALE[DRIVEN]
-    out = []
+    Phi = np.asarray(res.Phi, dtype=float)
+    T = np.r_[0.0, np.diff(np.asarray(res.t, dtype=float))]
+    qcs = []
     for k, v in figures.items():
-        qc = np.zeros(len(DRIVEN))
-        on = np.isin(DRIVEN, np.arange(18)[BLOCKS[k]])
+        qc = np.zeros(Phi.shape[1])
         tau = taus.get(k)
-        qc[on] = v**2 if tau is None else (2.0 * v**2 / tau if np.isfinite(tau) else 0.0)
-        qc /= scale**2
-        PQ = Phi * qc[None, None, :]
-        out.append(0.5 * (PQ @ np.swapaxes(Phi, 1, 2) + np.diag(qc)[None]) * T[:, None, None])
-    return np.array(out)
+        qc[BLOCKS[k]] = (v**2 if tau is None else
+                         (2.0 * v**2 / tau if np.isfinite(tau) else 0.0)) / SCALE[BLOCKS[k]]**2
+        qcs.append(qc)
+    # Carried to its group's end by Psi_i = Phi_e ... Phi_i+1, interval i's part is
+    # T_i / 2 (Psi_i-1 Qc Psi_i-1' + Psi_i Qc Psi_i') with Psi_i-1 = Psi_i Phi_i: from
+    # each group's end back, rank-3 terms (Qc is diagonal on three states), the driven
+    # rows of Psi only
+    ends = chain.epochs[1:]
+    length = ends - np.r_[0, ends[:-1]]
+    d = len(DRIVEN)
+    Psi = np.broadcast_to(np.eye(Phi.shape[1])[DRIVEN], (len(ends), d, Phi.shape[1])).copy()
+    out = np.zeros((len(qcs), len(ends), d, d))
+    for r in range(int(length.max(initial=0))):
+        g = np.flatnonzero(length > r)
+        i = ends[g] - r
+        after = Psi[g]
+        before = after @ Phi[i]
+        for j, qc in enumerate(qcs):
+            on = qc > 0
+            a, b = after[:, :, on], before[:, :, on]
+            out[j, g] += (0.5 * T[i])[:, None, None] * (
+                (b * qc[on]) @ np.swapaxes(b, 1, 2) + (a * qc[on]) @ np.swapaxes(a, 1, 2))
+        Psi[g] = before
+    return out
 
 
-def variance_factors(res, figures: dict[str, float], taus: dict[str, float],
-                     fitted: np.ndarray, smoothed=None) -> dict[str, float]:
-    """One EM step's factor on each figure's variance (module docstring, 2).
+def variance_factors(chain: Chain, B: np.ndarray, names, fitted: np.ndarray,
+                     smoothed=None) -> dict[str, float]:
+    """One EM step's factor on each figure's variance (module docstring, 2), on the
+    folded ``chain`` with each figure's parts ``B`` (:func:`noise_parts`; ``names``: the
+    figures, in ``B``'s order).
 
-    With ``Q_k = sum_j s_j B_jk + rest_k`` over the driven states (``B``:
-    :func:`noise_parts`, ``rest``: what the recorded ``Qd`` holds beside them — a
-    barometer loop, scale-factor states), the expected complete-data likelihood's
-    fixed point for each ``s_j`` at ``s = 1`` is::
+    With ``Q_k = sum_j s_j B_jk + rest_k`` over the driven states (``rest``: what the
+    recorded ``Qd`` holds beside them — a barometer loop, scale-factor states), the
+    expected complete-data likelihood's fixed point for each ``s_j`` at ``s = 1`` is::
 
         s_j = sum_k tr(Q_k^-1 B_jk Q_k^-1 W_k) / sum_k tr(Q_k^-1 B_jk)
 
@@ -368,13 +460,13 @@ def variance_factors(res, figures: dict[str, float], taus: dict[str, float],
     its parameters; each interval's ``W_k`` shrunk where ``tr(Q_k^-1 W_k) / d`` passes
     the 99.9 % point of chi-square over d: a wrong fix or a bump the smoother meets does
     not set the figures).  ``smoothed``: :func:`~fednav.filters.smoother.rts_smooth`'s
-    result on ``res`` when it is at hand.
+    result on the chain when it is at hand.
     """
     from ..core.stats import chi2_ppf
 
-    W = noise_moments(res.P, res.Phi, res.Qd, res.dx, DRIVEN, smoothed)[fitted]
-    Qd = np.asarray(res.Qd)[1:][:, DRIVEN][:, :, DRIVEN][fitted]
-    B = noise_parts(res, figures, taus)[:, fitted]
+    W = noise_moments(chain.P, chain.Phi, chain.Qd, chain.dx, DRIVEN, smoothed)[fitted]
+    Qd = chain.Qd[1:][:, DRIVEN][:, :, DRIVEN][fitted]
+    B = B[:, fitted]
     live = np.diagonal(Qd, axis1=1, axis2=2).min(axis=0) > 0
     if not live.all():  # (a block without noise: a figure of zero)
         Qd, W, B = Qd[:, live][:, :, live], W[:, live][:, :, live], B[:, :, live][:, :, :, live]
@@ -385,7 +477,7 @@ def variance_factors(res, figures: dict[str, float], taus: dict[str, float],
     W = W * np.minimum(1.0, cap / np.maximum(ratio, 1e-300))[:, None, None]
     QiW = Qi @ W @ Qi
     out = {}
-    for j, k in enumerate(figures):
+    for j, k in enumerate(names):
         den = float(np.sum(np.einsum("kij,kji->k", Qi, B[j])))
         if den > 0:
             out[k] = float(np.sum(np.einsum("kij,kji->k", QiW, B[j]))) / den
@@ -412,8 +504,10 @@ def identify(imu: ImuData, prep, progress=None, force: bool = False):
     -------
     (Prepared, Identified, Navigator or None)
         ``prep`` with the figures to fly (the identified ones if accepted), the report,
-        and the first pass's fed navigator when the given figures are kept (the final
-        pass: ``process`` takes it as it is).
+        and the fed navigator of the pass that flew them — the first pass when the
+        given figures are kept, the last when the identified ones are (the final pass:
+        ``process`` takes it as it is); None with Q adaptation (the passes fly without
+        it) or when a pass failed.
     """
     from ..core.stats import chi2_ppf
     from ..navigator.health import NIS_REFUSE
@@ -432,7 +526,11 @@ def identify(imu: ImuData, prep, progress=None, force: bool = False):
         system = system.model_copy(update={"filter": system.filter.model_copy(
             update={"q_adaptation": None})})
 
-    def run(figures=None, rows=False):
+    # every pass records the rows when the final pass could be one of them (no Q
+    # adaptation, which the passes turn off): the last is then the final pass
+    rows = prep.system.filter.q_adaptation is None
+
+    def run(figures=None):
         """A pass with these figures (None: as given)."""
         p = replace(prep, system=system)
         if figures is not None:
@@ -451,9 +549,9 @@ def identify(imu: ImuData, prep, progress=None, force: bool = False):
         return prep, kept(f"local filter type {', '.join(odd)}: its covariance is not a "
                           f"Kalman filter's (adapted or sampled), which the "
                           f"identification needs", {}, float("nan")), None
-    nav0, out0 = run(rows=prep.system.filter.q_adaptation is None)
+    nav0, out0 = run()
     before = innovation_statistics(out0.innovations, blocks)
-    reuse = nav0 if prep.system.filter.q_adaptation is None else None
+    reuse = nav0 if rows else None
     nis0 = before_all(out0)
     hi = prep.system.health.nis_band[1]
     why = None
@@ -472,20 +570,23 @@ def identify(imu: ImuData, prep, progress=None, force: bool = False):
 
     def gaps(figures, out) -> dict[str, float]:
         """log of each figure's EM factor (half the log of its variance factor)."""
-        fitted = ~blocks.held(np.asarray(out.t)[1:])
-        smoothed = rts_smooth(out.P, out.Phi, out.Qd, out.dx)
-        sc = variance_factors(out, imu_part(figures), taus, fitted, smoothed)
-        sc.update(sigma_factors(out, smoothed, parts, lambda t: ~blocks.held(t)))
+        chain = folded(out)
+        fitted = ~blocks.held(chain.t[1:])
+        smoothed = rts_smooth(chain.P, chain.Phi, chain.Qd, chain.dx)
+        imu_figs = imu_part(figures)
+        sc = variance_factors(chain, noise_parts(out, chain, imu_figs, taus), imu_figs,
+                              fitted, smoothed)
+        sc.update(sigma_factors(out, smoothed, parts, lambda t: ~blocks.held(t), chain))
         return {k: 0.5 * float(np.log(sc[k])) for k in sc if sc[k] > 0}
 
     # Each figure's EM factor g (log) against its log x: the fixed point g = 0 found by
     # secant steps (plain EM creeps where the data say much more noise than given),
     # the first step EM's own; every step at most MAX_STEP, never below the floor.
     figs = dict(start)
-    out, passes, history, converged = out0, 1, [], False
+    nav, out, passes, history, converged = nav0, out0, 1, [], False
     try:
         if start != prior:
-            _, out = run(figs)
+            nav, out = run(figs)
             passes += 1
         last: dict[str, tuple[float, float]] = {}
         while passes < MAX_PASSES:
@@ -514,7 +615,7 @@ def identify(imu: ImuData, prep, progress=None, force: bool = False):
                 progress(f"noise identification, pass {passes + 1}")
             figs = new
             history.append(dict(figs))
-            _, out = run(figs)
+            nav, out = run(figs)
             passes += 1
     except (np.linalg.LinAlgError, FednavError) as e:  # (a pass the smoother cannot take)
         return prep, kept(f"a pass failed ({e}): the given figures are flown", nis0,
@@ -537,7 +638,7 @@ def identify(imu: ImuData, prep, progress=None, force: bool = False):
         return prep, rep, reuse
     flown = replace(prep, system=with_figures(prep.system, imu_part(rep.flown)))
     raised = {k: v for k, v in rep.flown.items() if k in parts and v != prior[k]}
-    return with_sigmas(flown, raised, parts), rep, None
+    return with_sigmas(flown, raised, parts), rep, nav if rows else None
 
 
 def imu_part(figures: dict[str, float]) -> dict[str, float]:

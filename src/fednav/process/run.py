@@ -862,7 +862,7 @@ def process(imu: ImuData, sensors: Mapping[str, Series], cfg: System | None = No
     if prep.system.noise != "as-given" and prep.system.filter.state == "error":
         from .identify import identify
 
-        prep, noise, nav = identify(imu, prep, force=force)  # (nav: its first pass, kept)
+        prep, noise, nav = identify(imu, prep, force=force)  # (nav: the final pass)
     if nav is None:
         nav = prep.feed(prep.navigator(record_rows=True, record_covariance=True,
                                        innovations=True))
