@@ -18,7 +18,10 @@ IMU on *this* vehicle are estimated from it, with the given figures as prior and
    every filter interval, the expected outer product of the process noise given every
    measurement, ``W_k`` (:func:`fednav.filters.smoother.noise_moments`; Shumway &
    Stoffer 1982), over the states the figures drive (attitude, velocity, the
-   Gauss–Markov biases).
+   Gauss–Markov biases), on the chain folded to the epochs that took a measurement
+   (:func:`folded`: between them nothing is measured or fed back, so the intervals
+   compose exactly, and a 20 Hz filter under 4 Hz fixes has a fifth of the epochs to
+   smooth).
 3. **M-step.**  The interval's noise is ``Q_k = sum_j s_j B_jk + rest_k``, each figure's
    part ``B_jk`` discretized as the filter does (:func:`noise_parts`); the variance
    factors ``s_j`` come from the expected likelihood's fixed point
