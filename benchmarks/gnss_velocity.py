@@ -93,7 +93,6 @@ def drive(work: Path) -> None:
     import kfgins_peer as kp
 
     from fednav.io import read_rtklib_pos
-    from fednav.io.navego import fednav_euler_to_navego
     from fednav.process.kfgins import read_kfgins
     from fednav.process.run import process, velocity_latency
 
@@ -116,16 +115,9 @@ def drive(work: Path) -> None:
     rows, errs, notes = {}, {}, []
     for way in WAYS:
         res = process(d["imu"], {**d["sensors"], "gnss": fixes}, _way(d["system"], way))
-        s = res.forward
-        roll, pitch, yaw = fednav_euler_to_navego(s.euler)
-        sol = {"t": s.t, "lat": s.lla[:, 0], "lon": s.lla[:, 1], "h": s.lla[:, 2],
-               "vn": s.vel[:, 1], "ve": s.vel[:, 0], "vd": -s.vel[:, 2],
-               "roll": np.degrees(roll), "pitch": np.degrees(pitch), "yaw": np.degrees(yaw)}
-        e, t = kp.errors(sol, case)
-        inside = ~kp.outside(t, case.windows)
-        for part, m in (("windows", inside), ("aided", ~inside)):
-            rows[f"{way} {part}"] = np.sqrt(np.nanmean(e[m][:, :6] ** 2, axis=0))
-            errs.setdefault(part, (t[m], {}))[1][way] = e[m][:, :6]
+        for part, (t, e) in kp.fednav_parts(res.forward, case).items():
+            rows[f"{way} {part}"] = np.sqrt(np.nanmean(e ** 2, axis=0))
+            errs.setdefault(part, (t, {}))[1][way] = e
         notes.append(_note(way, res))
     _print("real drive (rtklibexplorer drive_0708), forward, GNSS withheld in 11 x 15 s",
            ("N", "E", "D", "vN", "vE", "vD"), rows, errs, notes)

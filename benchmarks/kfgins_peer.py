@@ -692,6 +692,22 @@ def read_solution(path: Path) -> dict:
 COLS = ("N", "E", "D", "vN", "vE", "vD", "roll", "pitch", "yaw")
 
 
+def fednav_parts(s, case) -> dict:
+    """A fednav ``Solution``'s errors against ``case``'s reference (:func:`errors`) inside
+    its withheld windows and outside: ``{"windows": (t, e), "aided": (t, e)}``, ``e``
+    N/E/D [m] and vN/vE/vD [m/s]."""
+    from fednav.io.navego import fednav_euler_to_navego
+
+    roll, pitch, yaw = fednav_euler_to_navego(s.euler)
+    sol = {"t": s.t, "lat": s.lla[:, 0], "lon": s.lla[:, 1], "h": s.lla[:, 2],
+           "vn": s.vel[:, 1], "ve": s.vel[:, 0], "vd": -s.vel[:, 2],
+           "roll": np.degrees(roll), "pitch": np.degrees(pitch), "yaw": np.degrees(yaw)}
+    e, t = errors(sol, case)
+    inside = ~outside(t, case.windows)
+    return {part: (t[m], e[m][:, :6]) for part, m in (("windows", inside),
+                                                      ("aided", ~inside))}
+
+
 def errors(sol: dict, case: Case) -> tuple[np.ndarray, np.ndarray]:
     """The solution minus the reference at the reference's epochs from starttime on
     (interpolated in time; the solution taken to the reference's point): (n, 9) errors

@@ -141,23 +141,15 @@ def _kfgins_case(case) -> tuple[dict, list[str]]:
     """A kfgins_peer case through fednav's Python API, both modes."""
     import kfgins_peer as kp
 
-    from fednav.io.navego import fednav_euler_to_navego
     from fednav.process.kfgins import read_kfgins
 
     d = read_kfgins(case.folder)
     rows, notes, raw, walls = {}, [], {}, {}
     for mode in MODES:
         res, wall = _timed_process(d["imu"], d["sensors"], _with(d["system"], mode))
-        s = res.forward
-        roll, pitch, yaw = fednav_euler_to_navego(s.euler)
-        sol = {"t": s.t, "lat": s.lla[:, 0], "lon": s.lla[:, 1], "h": s.lla[:, 2],
-               "vn": s.vel[:, 1], "ve": s.vel[:, 0], "vd": -s.vel[:, 2],
-               "roll": np.degrees(roll), "pitch": np.degrees(pitch), "yaw": np.degrees(yaw)}
-        e, t = kp.errors(sol, case)
-        inside = ~kp.outside(t, case.windows)
-        for part, m in (("windows", inside), ("aided", ~inside)):
-            rows[f"{mode} {part}"] = np.sqrt(np.nanmean(e[m][:, :6] ** 2, axis=0))
-            raw.setdefault(part, [t[m]]).append(e[m][:, :6])
+        for part, (t, e) in kp.fednav_parts(res.forward, case).items():
+            rows[f"{mode} {part}"] = np.sqrt(np.nanmean(e ** 2, axis=0))
+            raw.setdefault(part, [t]).append(e)
         walls[mode] = wall
         notes.append(f"{mode}: NIS/dof {_nis(res)}; forward + smoothed {wall:.1f} s" + (
             f"; {_figures(res, walls['as-given'])}" if res.noise else ""))
