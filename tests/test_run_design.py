@@ -195,3 +195,25 @@ def test_a_designs_nis_is_the_centralized_filters():
         assert gate <= central + 1e-9, (local, gate, central)
     star_gate = np.mean([r["gate_nis_per_dof.star"] for r in rows])
     assert star_gate < 0.8
+
+
+def test_a_design_naming_a_recording_only_key_is_told(tmp_path):
+    """noise and output_rate_hz act on fednav process's recordings: a design that sets
+    them is told, in one line, that fednav run does not use them."""
+    import yaml
+
+    from fednav.campaign.design import Design
+
+    scn = yaml.safe_load((EXAMPLES / DESIGNS[1][0]).read_text())
+    path = tmp_path / "design.yaml"
+    path.write_text(yaml.safe_dump({**scn, "noise": "as-given", "output_rate_hz": 5}))
+    with pytest.warns(UserWarning, match=r"noise \(fednav process's noise identification"
+                                         r".*output_rate_hz .*not used by fednav run"):
+        Design().load_scenario(path)
+    plain = tmp_path / "plain.yaml"
+    plain.write_text(yaml.safe_dump(scn))
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        Design().load_scenario(plain)

@@ -44,6 +44,7 @@ import numpy as np
 
 from ..core import units
 from ..core.atomic import json_safe, save_figure, write_frame, write_json, write_text
+from ..core.config import recording_only_keys
 from ..sim.runs import make_run_data, run_all_modes
 from ..sim.scenario import Scenario, load_scenario
 from .evaluation import mean_ci95
@@ -219,6 +220,10 @@ class Design(Paper):
         if path is None:
             raise ValueError("a design needs its scenario file")
         scn = load_scenario(path)
+        unused = recording_only_keys(scn)
+        if unused:
+            warnings.warn(f"{path}: {', '.join(unused)}: not used by fednav run (a "
+                          f"simulated flight)", stacklevel=2)
         if scn.fault_experiment is not None:
             warnings.warn(f"{path}: fault_experiment is paper 003's second experiment; "
                           f"fednav run ignores it (faults: applies to every run)",

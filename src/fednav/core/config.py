@@ -31,6 +31,24 @@ def simulation_only(why: str) -> dict:
     return {"simulation_only": why}
 
 
+def recording_only(why: str) -> dict:
+    """A field's ``json_schema_extra`` saying that only processing a recording uses it
+    (``fednav process``), and what it acts on (``fednav run`` names such a key when a
+    design sets it: :meth:`fednav.campaign.design.Design.load_scenario`)."""
+    return {"recording_only": why}
+
+
+def recording_only_keys(model) -> list[str]:
+    """The top-level keys ``model`` sets that are :func:`recording_only`, each with what
+    it acts on."""
+    out = []
+    for key in sorted(model.model_fields_set):
+        extra = type(model).model_fields[key].json_schema_extra
+        if isinstance(extra, dict) and extra.get("recording_only"):
+            out.append(f"{key} ({extra['recording_only']})")
+    return out
+
+
 def nested_error(path: list, message: str) -> PydanticCustomError:
     """An error found inside a value that a validator checks by hand (a section whose
     keys depend on a registry): reported as ``key 'outer.path': message``."""

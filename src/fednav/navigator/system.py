@@ -31,7 +31,7 @@ from typing import Literal
 import numpy as np
 from pydantic import Field, field_validator, model_validator
 
-from ..core.config import _Model, nested_error, read_mapping, validate
+from ..core.config import _Model, nested_error, read_mapping, recording_only, validate
 from ..filters.registry import FILTERS
 from ..ins.error_model import ImuNoiseModel
 from ..ins.states import CORE, StateLayout
@@ -398,8 +398,11 @@ class System(_Model):
     health: HealthConfig = HealthConfig()
     integrity: IntegrityConfig | None = None
     smoother: bool = False
-    noise: Literal["identify", "identify-all", "as-given"] = "identify"
-    output_rate_hz: float | Literal["imu", "filter"] | None = None
+    noise: Literal["identify", "identify-all", "as-given"] = Field(
+        "identify", json_schema_extra=recording_only(
+            "fednav process's noise identification from a recording"))
+    output_rate_hz: float | Literal["imu", "filter"] | None = Field(
+        None, json_schema_extra=recording_only("fednav process's solution files"))
 
     @field_validator("output_rate_hz", mode="before")
     @classmethod
