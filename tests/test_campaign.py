@@ -451,3 +451,33 @@ def test_a_folder_holding_more_runs_than_asked_says_so_and_reports_on_all(tmp_pa
     r = CliRunner().invoke(app, [*args, "--runs", "2", "--fresh"])
     assert r.exit_code == 0 and "more than --runs" not in r.output
     assert json.loads((out / "summary.json").read_text())["runs"] == 2
+
+
+def test_a_stop_inside_a_gc_callback_or_finalizer_is_sent_again():
+    """A signal whose handler runs inside a garbage-collector callback (Dask's GC
+    diagnostics) or a ``__del__``: Python would print and drop the exception the stop
+    raises there, so the stop is sent again once the stack is out of it."""
+    import gc
+    import sys
+
+    from fednav.cli import _in_c_callback
+
+    seen = []
+
+    def callback(phase, info):
+        if phase == "start":
+            seen.append(sys._getframe())
+
+    class Finalized:
+        def __del__(self):
+            seen.append(sys._getframe())
+
+    gc.callbacks.append(callback)
+    try:
+        gc.collect()
+        assert seen and _in_c_callback(seen[-1])
+    finally:
+        gc.callbacks.remove(callback)
+    Finalized()
+    assert _in_c_callback(seen[-1]) and seen[-1].f_code.co_name == "__del__"
+    assert not _in_c_callback(sys._getframe())

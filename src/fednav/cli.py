@@ -64,10 +64,19 @@ _RESEND_S = 0.02
 
 
 def _in_c_callback(frame) -> bool:
-    """Whether the interrupted Python stack runs inside one of :data:`C_CALLBACK_PACKAGES`."""
+    """Whether the interrupted Python stack runs inside one of :data:`C_CALLBACK_PACKAGES`
+    or inside code whose exceptions Python itself prints and drops: a garbage-collector
+    callback (``gc.callbacks``: Dask's GC diagnostics, in the scheduler this process
+    runs) or a finalizer (``__del__``). Raised there, the stop would be lost and a
+    traceback printed."""
+    import gc
+
+    dropped = {getattr(getattr(c, "__func__", c), "__code__", None) for c in gc.callbacks}
     while frame is not None:
-        parts = Path(frame.f_code.co_filename).parts
-        if any(p in parts for p in C_CALLBACK_PACKAGES):
+        code = frame.f_code
+        if code in dropped or code.co_name == "__del__":
+            return True
+        if any(p in Path(code.co_filename).parts for p in C_CALLBACK_PACKAGES):
             return True
         frame = frame.f_back
     return False
