@@ -275,13 +275,11 @@ class TotalStateCore:
 
 
 # ------------------------------------------------------------------------------ loop
-def _jacobian(model, nav, rows) -> np.ndarray | None:
-    """A measurement's ``H`` for its innovation record (the rows the update used); None
-    where its model has none at this snapshot (a sampled model)."""
-    try:
-        H = np.asarray(model.H(nav), dtype=float)
-    except (AttributeError, NotImplementedError, TypeError):
-        return None
+def _jacobian(model, nav, rows) -> np.ndarray:
+    """A measurement's ``H`` for its innovation record (the rows the update used): every
+    model the loop updates with has one (the total state's are wrapped as
+    :class:`~fednav.filters.base.LinearModel`), whatever the local filter's family."""
+    H = np.asarray(model.H(nav), dtype=float)
     return H if rows is None else H[rows]
 
 

@@ -64,7 +64,8 @@ class InnovationRecord(NamedTuple):
     information share ``beta`` (its covariance is ``P / beta``, so ``beta (S - R) + R`` is
     the innovation covariance of the equivalent centralized filter), whether the
     update was applied, the rows' ``H`` (d, n; filter units) and the ``epoch`` whose
-    update took it (the index of :class:`Record`'s entries; None, -1: not known)."""
+    update took it (the index of :class:`Record`'s entries); ``H`` None and ``epoch`` -1
+    in a record made elsewhere (a test's, an older pickle's)."""
 
     local: str
     t: float
