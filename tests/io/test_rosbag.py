@@ -113,13 +113,16 @@ class Bag:
 
     def write(self, path: Path, storage: str = "sqlite3") -> Path:
         """The bag at ``path`` (a ROS 2 folder, or ``path.bag`` for ROS 1); ``storage``
-        ``sqlite3``, ``mcap`` or ``mcap-zstd`` (MCAP with zstd-compressed chunks)."""
+        ``sqlite3``, ``mcap`` or ``mcap-zstd`` (MCAP with zstd-compressed chunks); for
+        ROS 1, ``bz2`` or ``lz4`` compress its chunks."""
         from rosbags.rosbag1 import Writer as Writer1
         from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer
 
         if self.ros1:
             path = path.with_suffix(".bag")
             writer = Writer1(path)
+            if storage in ("bz2", "lz4"):
+                writer.set_compression(getattr(Writer1.CompressionFormat, storage.upper()))
         else:
             writer = Writer(path, version=9, storage_plugin={
                 "sqlite3": StoragePlugin.SQLITE3, "mcap": StoragePlugin.MCAP,
@@ -204,8 +207,8 @@ def _drive_bag(drive, path: Path, storage="sqlite3", ros1=False) -> Path:
 
 
 @pytest.mark.parametrize("storage, ros1, decoding, reader", [
-    ("sqlite3", False, "sqlite3", "sqlite3"), ("mcap", False, "numpy", "mcap"),
-    ("mcap-zstd", False, "numpy", "mcap"), ("bag", True, "numpy", "rosbags")])
+    ("sqlite3", False, "numpy", "sqlite3"), ("mcap", False, "numpy", "mcap"),
+    ("mcap-zstd", False, "numpy", "mcap"), ("bag", True, "numpy", "ros1")])
 def test_a_bag_reads_as_the_same_samples_and_fixes_as_the_csv_files(drive, tmp_path,
                                                                      storage, ros1,
                                                                      decoding, reader):
@@ -442,11 +445,31 @@ def test_numpy_decoding_is_rosbags_deserialisation(ros1):
     for msgtype in LAYOUTS:
         datas = [ser(m, mt) for _, _, mt, m in b.msgs if mt == msgtype]
         lens = np.array([len(x) for x in datas])
-        assert len(set(lens)) > 1  # (the gather, not the slice, of decode)
+        assert len(set(lens)) > 1  # (messages of several lengths)
         got = decode(np.frombuffer(b"".join(datas), np.uint8), lens, msgtype, not ros1)
         want = _deserialised(deser, datas, msgtype)
         for k, v in want.items():
             np.testing.assert_array_equal(got[k].astype(float), v.astype(float), err_msg=k)
+
+
+def _same_messages_as_rosbags(m, path: Path) -> None:
+    """The messages ``m`` (:class:`fednav.io.mcap.Messages`) are those ``rosbags``' own
+    reader gives of the bag ``path``: per topic, the same bytes, bag times, order and
+    message type (3000 IMU messages)."""
+    from rosbags.highlevel import AnyReader
+
+    with AnyReader([path]) as r:
+        want = {}
+        for c, ns, data in r.messages():
+            want.setdefault(c.topic, []).append((ns, data))
+        types = {t: i.msgtype for t, i in r.topics.items()}
+    got = {}
+    for cid, (topic, msgtype, _) in m.channels.items():
+        assert msgtype == types[topic]
+        got[topic] = [(int(m.log_ns[i]), m.buf[m.offs[i]:m.offs[i] + m.lens[i]].tobytes())
+                      for i in np.flatnonzero(m.channel == cid)]
+    assert got.keys() == want.keys() and all(got[k] == want[k] for k in want)
+    assert len(got["/imu/data"]) == 3000
 
 
 @pytest.mark.parametrize("storage", ["mcap", "mcap-zstd"])
@@ -454,7 +477,6 @@ def test_mcap_index_is_rosbags_reading(tmp_path, storage):
     """fednav.io.mcap's walk of an MCAP file (chunks plain or zstd) finds every message
     of every channel with the bytes and log time ``rosbags``' own MCAP reader gives, in
     the same order per channel."""
-    from rosbags.highlevel import AnyReader
 
     from fednav.io import mcap
 
@@ -464,19 +486,78 @@ def test_mcap_index_is_rosbags_reading(tmp_path, storage):
     b.fix("/fix", tg, lla, np.tile([1.0, 1.0, 2.0], (len(tg), 1)))
     path = b.write(tmp_path / "b", storage)
     m = mcap.read(next(path.glob("*.mcap")))
-    with AnyReader([path]) as r:
-        want = {}
-        for c, ns, data in r.messages():
-            want.setdefault(c.topic, []).append((ns, data))
-        types = {t: i.msgtype for t, i in r.topics.items()}
-    got = {}
-    for cid, (topic, schema, enc) in m.channels.items():
-        rows = np.flatnonzero(m.channel == cid)
-        assert enc == "cdr" and schema == types[topic]
-        got[topic] = [(int(m.log_ns[i]), m.buf[m.offs[i]:m.offs[i] + m.lens[i]].tobytes())
-                      for i in rows]
-    assert got.keys() == want.keys() and all(got[k] == want[k] for k in want)
-    assert len(got["/imu/data"]) == 3000
+    assert {enc for _, _, enc in m.channels.values()} == {"cdr"}
+    _same_messages_as_rosbags(m, path)
+
+
+@pytest.mark.parametrize("compression", ["none", "bz2", "lz4"])
+def test_ros1_walk_is_rosbags_reading(tmp_path, compression):
+    """fednav.io.ros1bag's walk of a ROS 1 bag (chunks plain, bz2 or lz4) finds every
+    message of every connection with the bytes and bag time ``rosbags``' own reader
+    gives, in the same order per connection; the bag reads as ``rosbags`` reads it."""
+
+    from fednav.io import ros1bag
+
+    t, gyro, accel, tg, lla = _rest(n=3000)
+    b = Bag(True)
+    b.imu("/imu/data", t, gyro, accel, late=0.003)
+    b.fix("/fix", tg, lla, np.tile([1.0, 1.0, 2.0], (len(tg), 1)), late=0.04)
+    path = b.write(tmp_path / "b", compression)
+    _same_messages_as_rosbags(ros1bag.read(path)[0], path)
+    rec = read_rosbag(path)
+    assert rec.quality["storage_reader"] == "ros1"
+    _same_recording(rec, _any_reading(path))
+
+
+def test_a_ros1_bag_the_walk_cannot_read_falls_back_to_rosbags(tmp_path):
+    """A connection whose type is not the standard definition (its MD5 sum) is read by
+    ``rosbags`` with the bag's own definition; a bag whose records do not add up is
+    :class:`Ros1BagError` and then ``rosbags``' one-line refusal."""
+    from rosbags.rosbag1 import Writer
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+    from fednav.io import ros1bag
+
+    ts = get_typestore(Stores.EMPTY)  # (an Imu with a field more, under the same name)
+    for name, text in (("builtin_interfaces/msg/Time", "int32 sec\nuint32 nanosec"),
+                       ("std_msgs/msg/Header", "uint32 seq\ntime stamp\nstring frame_id"),
+                       ("geometry_msgs/msg/Vector3", "float64 x\nfloat64 y\nfloat64 z"),
+                       ("geometry_msgs/msg/Quaternion",
+                        "float64 x\nfloat64 y\nfloat64 z\nfloat64 w"),
+                       ("sensor_msgs/msg/Imu", "std_msgs/Header header\n"
+                        "geometry_msgs/Quaternion orientation\n"
+                        "float64[9] orientation_covariance\n"
+                        "geometry_msgs/Vector3 angular_velocity\n"
+                        "float64[9] angular_velocity_covariance\n"
+                        "geometry_msgs/Vector3 linear_acceleration\n"
+                        "float64[9] linear_acceleration_covariance\nfloat32 temperature")):
+        ts.register(get_types_from_msg(text, name))
+    T = ts.types
+    other = tmp_path / "other.bag"
+    with Writer(other) as w:
+        c = w.add_connection("/imu/data", "sensor_msgs/msg/Imu", typestore=ts)
+        for k in range(1, 401):
+            ns = (UNIX_T0 + k // 100) * 10**9 + (k % 100) * 10**7
+            m = T["sensor_msgs/msg/Imu"](
+                T["std_msgs/msg/Header"](0, T["builtin_interfaces/msg/Time"](
+                    ns // 10**9, ns % 10**9), "imu"), T["geometry_msgs/msg/Quaternion"](
+                    0.0, 0.0, 0.0, 1.0), np.zeros(9), T["geometry_msgs/msg/Vector3"](
+                    0.0, 0.0, 0.0), np.zeros(9), T["geometry_msgs/msg/Vector3"](
+                    0.0, 0.0, 9.8), np.zeros(9), 20.0)
+            w.write(c, ns, ts.serialize_ros1(m, "sensor_msgs/msg/Imu"))
+    rec = read_rosbag(other)
+    assert rec.quality["storage_reader"] == "rosbags" and len(rec.imu.t) == 400
+    assert rec.quality["decoding"] == {"/imu/data": "rosbags"}
+    np.testing.assert_array_equal(rec.imu.accel[:, 2], 9.8)
+    _, p = _bag(tmp_path, ros1=True)
+    data = p.read_bytes()
+    cut = tmp_path / "cut.bag"
+    cut.write_bytes(data[:len(data) // 2])
+    with pytest.raises(ros1bag.Ros1BagError, match="do not add up"):
+        ros1bag.read(cut)
+    with pytest.raises(DataError) as e:
+        read_rosbag(cut)
+    assert "\n" not in str(e.value) and str(cut) in str(e.value)
 
 
 def test_an_mcap_file_the_index_cannot_read_falls_back_to_rosbags(tmp_path):
@@ -497,6 +578,88 @@ def test_an_mcap_file_the_index_cannot_read_falls_back_to_rosbags(tmp_path):
     with pytest.raises(DataError) as e:
         read_rosbag(p)
     assert "\n" not in str(e.value)
+
+
+def _image(b: Bag, topic: str, t, size: int) -> None:
+    """Compressed images of ``size`` bytes (SQLite keeps most of each on overflow
+    pages)."""
+    for ti in t:
+        m = b.T["sensor_msgs/msg/CompressedImage"](b._header(ti, "cam"), "jpeg",
+                                                   np.full(size, 7, np.uint8))
+        b._add(topic, "sensor_msgs/msg/CompressedImage", ti, 0.001, m)
+
+
+def _any_reading(path: Path):
+    """The bag read by ``rosbags``' AnyReader alone (no fast path)."""
+    from fednav.io.rosbag import _AnyBag, _read
+
+    bag = _AnyBag(path)
+    try:
+        return _read(bag, {}, "header", 0.1, None)
+    finally:
+        bag.close()
+
+
+def _same_recording(a, b) -> None:
+    np.testing.assert_array_equal(a.imu.t, b.imu.t)
+    np.testing.assert_array_equal(a.imu.gyro, b.imu.gyro)
+    np.testing.assert_array_equal(a.imu.accel, b.imu.accel)
+    ga, gb = a.series["gnss"], b.series["gnss"]
+    np.testing.assert_array_equal(ga.t, gb.t)
+    np.testing.assert_array_equal(ga.lla, gb.lla)
+    np.testing.assert_array_equal(ga.t_arrival, gb.t_arrival)
+    assert a.quality["latency_s"] == b.quality["latency_s"]
+
+
+@pytest.mark.parametrize("storage", ["sqlite3", "mcap"])
+def test_a_bag_in_two_files_beside_images_reads_in_place(tmp_path, storage):
+    """A ROS 2 bag split into two storage files, an image topic beside the IMU and the
+    fixes (its 9 kB messages on SQLite's overflow pages, skipped), is read in place by the
+    storage's own path to what ``rosbags`` reads."""
+    import yaml
+
+    t, gyro, accel, tg, lla = _rest(n=1200)
+    halves = []
+    for k, part in enumerate((t < t[600], t >= t[600])):
+        b = Bag()
+        b.imu("/imu/data", t[part], gyro[part], accel[part] + 0.01 * k, late=0.002)
+        sel = (tg >= t[part][0]) & (tg <= t[part][-1])
+        b.fix("/fix", tg[sel], lla[sel], np.ones((sel.sum(), 3)), late=0.05)
+        _image(b, "/camera/compressed", t[part][::25], 9000)
+        halves.append(b.write(tmp_path / f"half{k}", storage))
+    split = tmp_path / "split"
+    split.mkdir()
+    files = [next(h.glob(f"*.{'db3' if storage == 'sqlite3' else 'mcap'}")) for h in halves]
+    meta = [yaml.safe_load((h / "metadata.yaml").read_text()) for h in halves]
+    info = meta[0]["rosbag2_bagfile_information"]
+    info["relative_file_paths"] = []
+    for k, f in enumerate(files):
+        name = f"split_{k}{f.suffix}"
+        (split / name).write_bytes(f.read_bytes())
+        info["relative_file_paths"].append(name)
+    info["files"] = []
+    for x, y in zip(info["topics_with_message_count"],
+                    meta[1]["rosbag2_bagfile_information"]["topics_with_message_count"],
+                    strict=True):
+        x["message_count"] += y["message_count"]
+    (split / "metadata.yaml").write_text(yaml.safe_dump(meta[0]))
+    rec = read_rosbag(split)
+    assert rec.quality["storage_reader"] == storage
+    assert len(rec.imu.t) == 1200 and rec.imu.accel[-1, 2] == pytest.approx(9.81, abs=0.02)
+    _same_recording(rec, _any_reading(split))
+
+
+def test_imu_messages_on_overflow_pages_are_read_by_rosbags(tmp_path):
+    """IMU messages longer than an SQLite leaf cell keeps (a 5000-character frame id)
+    leave the page reader for ``rosbags``, with the same result."""
+    t, gyro, accel, tg, lla = _rest(n=100)
+    b = Bag()
+    b.imu("/imu/data", t, gyro, accel, frame="x" * 5000)
+    b.fix("/fix", tg, lla, np.ones((len(tg), 3)))
+    p = b.write(tmp_path / "long", "sqlite3")
+    rec = read_rosbag(p)
+    assert rec.quality["storage_reader"] == "rosbags" and len(rec.imu.t) == 100
+    _same_recording(rec, read_rosbag(b.write(tmp_path / "long_mcap", "mcap")))
 
 
 # ------------------------------------------------------------------------ errors

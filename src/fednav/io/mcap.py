@@ -7,8 +7,8 @@ https://mcap.dev/spec).  Messages sit in Chunk records (their records back to ba
 uncompressed, zstd or lz4) or at the top level; Schema and Channel records say each
 channel's topic and message type.  :func:`read` walks the records with one compiled loop
 (:func:`_walk`) per chunk — the only sequential step — and reads each message's channel,
-log time and data span with numpy; :func:`gather` copies the spans of the messages wanted
-back to back.  ``rosbags`` reads the same file at ~3 us a message in Python generators
+log time and data span with numpy (the bag reader decodes the messages wanted in place).
+``rosbags`` reads the same file at ~3 us a message in Python generators
 (``benchmarks/rosbag_read.py --all-storages``).  What this module does not know (a
 compression other than zstd and lz4, records that do not add up) is a :class:`McapError`:
 the bag reader then falls back to ``rosbags``.
@@ -21,6 +21,8 @@ from pathlib import Path
 
 import numba
 import numpy as np
+
+from .data import file_bytes
 
 MAGIC = b"\x89MCAP0\r\n"
 OP_SCHEMA, OP_CHANNEL, OP_MESSAGE, OP_CHUNK = 0x03, 0x04, 0x05, 0x06
@@ -69,22 +71,6 @@ def _walk(buf, start, stop):
     return ops, offs, lens, channel, log_ns, p
 
 
-@numba.njit(cache=True)
-def _gather(buf, offs, lens):
-    out = np.empty(lens.sum(), np.uint8)
-    q = 0
-    for i in range(len(offs)):
-        o, n = offs[i], lens[i]
-        out[q:q + n] = buf[o:o + n]
-        q += n
-    return out
-
-
-def gather(buf: np.ndarray, offs: np.ndarray, lens: np.ndarray) -> np.ndarray:
-    """The spans ``buf[offs[i]:offs[i] + lens[i]]`` back to back (uint8)."""
-    return _gather(buf, np.asarray(offs, np.int64), np.asarray(lens, np.int64))
-
-
 @dataclass
 class Messages:
     """An MCAP file's messages: ``buf`` the records' bytes (chunks decompressed) and, per
@@ -122,9 +108,37 @@ def _decompressor(name: str):
     return DECOMPRESSORS[name]
 
 
+def chunk_regions(path: Path, data: np.ndarray, top: tuple, chunks: list, walk, error):
+    """The records of a file of chunks (MCAP, ROS 1 bags) by region: the top level's
+    (``top``, ``walk``'s result on ``data`` without its end) and each chunk's ``(start,
+    length, decompress or None, size)`` walked by ``walk(buf, start, stop)``; an
+    uncompressed chunk's records stay in ``data`` (no copy), decompressed ones follow it.
+    Returns ``[(buffer, where it starts in the joined buffer, *walked)]`` and the joined
+    buffer (``data``, then each decompressed chunk); a chunk whose records do not add up
+    is ``error``."""
+    regions, extra, size_so_far = [(data, 0, *top)], [], len(data)
+    for start, n, unpack, size in chunks:
+        if unpack is None:
+            *walked, r_end = walk(data, start, start + n)
+            if r_end != start + n:
+                raise error(f"{path}: a chunk's records do not add up")
+            regions.append((data, 0, *walked))
+            continue
+        records = np.frombuffer(unpack(data[start:start + n].tobytes()), np.uint8)
+        if len(records) != size:
+            raise error(f"{path}: a chunk decompressed to {len(records)} bytes, not {size}")
+        *walked, r_end = walk(records, 0, len(records))
+        if r_end != len(records):
+            raise error(f"{path}: a chunk's records do not add up")
+        regions.append((records, size_so_far, *walked))
+        extra.append(records)
+        size_so_far += len(records)
+    return regions, np.concatenate([data, *extra]) if extra else data
+
+
 def read(path: Path) -> Messages:
     """Every message of the MCAP file ``path`` (:class:`Messages`)."""
-    data = np.fromfile(path, np.uint8)
+    data = file_bytes(path)
     if len(data) < 2 * len(MAGIC) or data[:8].tobytes() != MAGIC:
         raise McapError(f"{path}: not an MCAP file")
     closed = data[-8:].tobytes() == MAGIC
@@ -132,11 +146,8 @@ def read(path: Path) -> Messages:
     *top, end = _walk(data, len(MAGIC), stop)
     if end != stop and closed:
         raise McapError(f"{path}: records do not add up to the file")
-    # the records of the top level and of each chunk: (buffer, where it starts in the
-    # message buffer, ops, offsets, lengths, channels, log times); an uncompressed
-    # chunk's records stay in ``data`` (no copy), decompressed ones follow it
     ops, offs, lens = top[0], top[1], top[2]
-    regions, extra, size_so_far = [(data, 0, *top)], [], len(data)
+    chunks = []
     for o, n in zip(offs[ops == OP_CHUNK].tolist(), lens[ops == OP_CHUNK].tolist(),
                     strict=True):
         head = data[o:o + min(n, 4096)].tobytes()
@@ -147,22 +158,9 @@ def read(path: Path) -> Messages:
         if start + rlen > o + n:
             raise McapError(f"{path}: a chunk's records run past it")
         unpack = _decompressor(compression)
-        if unpack is None:
-            *walked, r_end = _walk(data, start, start + rlen)
-            if r_end != start + rlen:
-                raise McapError(f"{path}: a chunk's records do not add up")
-            regions.append((data, 0, *walked))
-            continue
-        records = np.frombuffer(unpack(data[start:start + rlen].tobytes(), size), np.uint8)
-        if len(records) != size:
-            raise McapError(f"{path}: a chunk decompressed to {len(records)} bytes, "
-                            f"not {size}")
-        *walked, r_end = _walk(records, 0, len(records))
-        if r_end != len(records):
-            raise McapError(f"{path}: a chunk's records do not add up")
-        regions.append((records, size_so_far, *walked))
-        extra.append(records)
-        size_so_far += len(records)
+        chunks.append((start, rlen, None if unpack is None else
+                       (lambda b, f=unpack, size=size: f(b, size)), size))
+    regions, joined = chunk_regions(path, data, top, chunks, _walk, McapError)
     schemas, channels = {}, {}
     for buf, _, r_ops, r_offs, *_ in regions:
         for o in r_offs[r_ops == OP_SCHEMA].tolist():
@@ -178,7 +176,7 @@ def read(path: Path) -> Messages:
     m_lens = np.concatenate([ln[m] for _, m, _, ln, *_ in msg])
     if np.any(m_lens < MESSAGE_HEADER):
         raise McapError(f"{path}: a message record shorter than its header")
-    return Messages(np.concatenate([data, *extra]) if extra else data,
+    return Messages(joined,
                     np.concatenate([c[m] for _, m, _, _, c, _ in msg]),
                     np.concatenate([t[m] for _, m, _, _, _, t in msg]),
                     m_offs + MESSAGE_HEADER, m_lens - MESSAGE_HEADER,

@@ -1,9 +1,9 @@
 """ROS 1 and ROS 2 bags -> fednav data, read with ``rosbags`` (pure Python: no ROS install).
 
 A ROS 1 ``.bag`` file, a ROS 2 bag folder (``metadata.yaml`` with sqlite3 or MCAP storage)
-or a single ROS 2 ``.db3`` / ``.mcap`` file is opened with
-:class:`rosbags.highlevel.AnyReader`; the message types fednav reads and what they become
-are in :func:`read_rosbag`.
+or a single ROS 2 ``.db3`` / ``.mcap`` file is read in place (below) or, where that path
+cannot, opened with :class:`rosbags.highlevel.AnyReader`; the message types fednav reads
+and what they become are in :func:`read_rosbag`.
 
 ROS conventions (REP-103): body frames forward-left-up (FLU), world frames east-north-up
 (ENU), SI units, times as ``header.stamp`` (the time the data describe) beside the bag's
@@ -17,14 +17,16 @@ dates, well inside the IMU's checks (the export writes them back as the same ROS
 
 Speed: ``rosbags`` deserialises one message at a time in Python (about 10 us each).  The
 messages read here have a fixed layout after their header (and Odometry's
-``child_frame_id``), so their raw bytes are decoded with numpy for all messages at once
-(:func:`decode`), checked against ``rosbags``' own deserialisation of the first message
-(any difference: every message deserialised by ``rosbags``).  A ROS 2 bag folder with
-uncompressed sqlite3 storage is read with ``sqlite3`` itself (:class:`_SqliteBag`: the
-IMU's fields concatenated by SQLite, no Python object per message), one with MCAP storage
-with :mod:`fednav.io.mcap` (:class:`_McapBag`: the file's records walked by a compiled
-loop); every other bag through ``AnyReader``, one pass over its messages
-(``benchmarks/rosbag_read.py``).
+``child_frame_id``), so their raw bytes are decoded for all messages by one compiled pass
+(:func:`decode`, :mod:`fednav.io.rosmsg`), checked against ``rosbags``' own
+deserialisation of the first message (any difference: every message deserialised by
+``rosbags``), in place in the file's mapped bytes.  A ROS 2 bag folder with uncompressed
+sqlite3 storage is read from its database pages (:class:`_SqliteBag`,
+:mod:`fednav.io.sqlite_pages`: the ``messages`` table's rows walked by a compiled loop),
+one with MCAP storage by :mod:`fednav.io.mcap` (:class:`_McapBag`), a ROS 1 bag by
+:mod:`fednav.io.ros1bag` (:class:`_Ros1Bag`), each file's records walked by a compiled
+loop; every other bag, and what these cannot read, through ``AnyReader``, one pass over
+its messages (``benchmarks/rosbag_read.py``).
 """
 
 from __future__ import annotations
@@ -129,23 +131,18 @@ def _xyz(v):
     return (v.x, v.y, v.z)
 
 
-def _xyzw(q):
-    return (q.x, q.y, q.z, q.w)
-
-
 #: The fields after each message's ``header``: (name, little-endian type or "string",
-#: count, the values of a message ``rosbags`` deserialised).
+#: count, the values of a message ``rosbags`` deserialised; None for a field fednav does
+#: not read, skipped by its size).
 LAYOUTS = {
-    IMU: (("orientation", "f8", 4, lambda m: _xyzw(m.orientation)),
+    IMU: (("orientation", "f8", 4, None),
           ("orientation_covariance", "f8", 9, lambda m: m.orientation_covariance),
           ("angular_velocity", "f8", 3, lambda m: _xyz(m.angular_velocity)),
-          ("angular_velocity_covariance", "f8", 9,
-           lambda m: m.angular_velocity_covariance),
+          ("angular_velocity_covariance", "f8", 9, None),
           ("linear_acceleration", "f8", 3, lambda m: _xyz(m.linear_acceleration)),
-          ("linear_acceleration_covariance", "f8", 9,
-           lambda m: m.linear_acceleration_covariance)),
+          ("linear_acceleration_covariance", "f8", 9, None)),
     NAVSATFIX: (("status", "i1", 1, lambda m: (m.status.status,)),
-                ("service", "u2", 1, lambda m: (m.status.service,)),
+                ("service", "u2", 1, None),
                 ("latitude", "f8", 1, lambda m: (m.latitude,)),
                 ("longitude", "f8", 1, lambda m: (m.longitude,)),
                 ("altitude", "f8", 1, lambda m: (m.altitude,)),
@@ -153,18 +150,17 @@ LAYOUTS = {
                 ("position_covariance_type", "u1", 1,
                  lambda m: (m.position_covariance_type,))),
     TWIST: (("linear", "f8", 3, lambda m: _xyz(m.twist.twist.linear)),
-            ("angular", "f8", 3, lambda m: _xyz(m.twist.twist.angular)),
+            ("angular", "f8", 3, None),
             ("covariance", "f8", 36, lambda m: m.twist.covariance)),
     ODOMETRY: (("child_frame_id", "string", 0, None),
-               ("position", "f8", 3, lambda m: _xyz(m.pose.pose.position)),
-               ("orientation", "f8", 4, lambda m: _xyzw(m.pose.pose.orientation)),
-               ("pose_covariance", "f8", 36, lambda m: m.pose.covariance),
+               ("position", "f8", 3, None),
+               ("orientation", "f8", 4, None),
+               ("pose_covariance", "f8", 36, None),
                ("linear", "f8", 3, lambda m: _xyz(m.twist.twist.linear)),
-               ("angular", "f8", 3, lambda m: _xyz(m.twist.twist.angular)),
+               ("angular", "f8", 3, None),
                ("twist_covariance", "f8", 36, lambda m: m.twist.covariance)),
     MAGNETIC_FIELD: (("magnetic_field", "f8", 3, lambda m: _xyz(m.magnetic_field)),
-                     ("magnetic_field_covariance", "f8", 9,
-                      lambda m: m.magnetic_field_covariance)),
+                     ("magnetic_field_covariance", "f8", 9, None)),
     FLUID_PRESSURE: (("fluid_pressure", "f8", 1, lambda m: (m.fluid_pressure,)),
                      ("variance", "f8", 1, lambda m: (m.variance,))),
 }
@@ -184,15 +180,19 @@ class LayoutError(ValueError):
 
 
 class _Raw(NamedTuple):
-    """A topic's messages as stored: bag (receive) times [ns] (N,) or None, the raw
-    messages back to back ``buf`` (uint8) and their lengths ``lens`` (N,); or, for the
-    IMU of the sqlite3 path, ``buf`` the (N, 56) records of :data:`_IMU_SQL` and ``first``
-    one whole message, ``lens`` None."""
+    """A topic's messages as stored: bag (receive) times [ns] (N,), the bytes ``buf``
+    (uint8) holding the raw messages and their lengths ``lens`` (N,); the messages start
+    at ``starts`` (N,) in ``buf`` (the file's bytes, read in place), or lie back to back
+    (``starts`` None)."""
 
-    bag_ns: np.ndarray | None
+    bag_ns: np.ndarray
     buf: np.ndarray
-    lens: np.ndarray | None
-    first: bytes = b""
+    lens: np.ndarray
+    starts: np.ndarray | None = None
+
+    def at(self) -> np.ndarray:
+        """Where each message starts in ``buf``."""
+        return np.cumsum(self.lens) - self.lens if self.starts is None else self.starts
 
 
 def _raw(bag_ns, datas) -> _Raw:
@@ -202,67 +202,41 @@ def _raw(bag_ns, datas) -> _Raw:
                 lens)
 
 
-def _take(buf: np.ndarray, off: np.ndarray, rows: np.ndarray | None, dtype: np.dtype,
-          count: int) -> np.ndarray:
-    """``count`` values of ``dtype`` at byte offsets ``off`` (N,) of ``buf``: (N, count).
-    ``rows``: ``buf`` as (N, L) messages of one length, used (a view of ``buf``, no
-    copy) when every offset is the same distance into its message."""
-    k = dtype.itemsize * count
-    if rows is not None:
-        rel = off - np.arange(len(off)) * rows.shape[1]
-        if len(rel) and np.all(rel == rel[0]):
-            return rows[:, rel[0]:rel[0] + k].view(dtype)
-    return buf[off[:, None] + np.arange(k)].view(dtype)
+def decode(buf: np.ndarray, lens: np.ndarray, msgtype: str, ros2: bool,
+           starts: np.ndarray | None = None) -> dict[str, np.ndarray]:
+    """The fields fednav reads (those of :data:`LAYOUTS` with a getter) of raw messages
+    of type ``msgtype`` (one of :data:`LAYOUTS`) in ``buf`` (uint8; their lengths
+    ``lens``, their starts ``starts`` or back to back; ROS 2 CDR or ROS 1
+    serialisation), every message in one compiled pass (:func:`fednav.io.rosmsg.records`):
+    ``{name: (N, count) array}`` with the header's ``sec`` and ``nsec``.  Strings are
+    skipped by their length prefixes, and the fields not read by their sizes; CDR's
+    alignment (to each value's size, from the byte after the 4-byte encapsulation
+    header) is applied per message.  Raises :class:`LayoutError` when a message does not
+    match (big-endian CDR, a short or long message)."""
+    from . import rosmsg
 
-
-def decode(buf: np.ndarray, lens: np.ndarray, msgtype: str,
-           ros2: bool) -> dict[str, np.ndarray]:
-    """The fields of raw messages of type ``msgtype`` (one of :data:`LAYOUTS`) stored
-    back to back in ``buf`` (uint8; their lengths ``lens``; ROS 2 CDR or ROS 1
-    serialisation), every message at once: ``{name: (N, count) array}`` with the
-    header's ``sec`` and ``nsec``.  Strings are skipped by their length prefixes; CDR's
-    alignment (to each value's size, from the byte after the 4-byte encapsulation header)
-    is applied per message.  Raises :class:`LayoutError` when a message does not match
-    (big-endian CDR, a short or long message)."""
-    n = len(lens)
-    ends = np.cumsum(lens)
-    starts = ends - lens
-    rows = buf.reshape(n, -1) if n and np.all(lens == lens[0]) else None
-    if ros2:
-        if np.any(lens < 4) or np.any(buf[starts] != 0) or np.any(buf[starts + 1] != 1):
-            raise LayoutError(f"{msgtype}: not little-endian CDR")
-        origin = starts + 4
-    else:
-        origin = starts
-    off = origin.copy()
-    out = {}
-    for name, kind, count, _ in (_HEADER2 if ros2 else _HEADER1) + LAYOUTS[msgtype]:
-        if kind == "string":
-            if ros2:
-                off = origin + (off - origin + 3) // 4 * 4
-            if np.any(off + 4 > ends):
-                raise LayoutError(f"{msgtype}: messages end before {name}")
-            size = _take(buf, off, rows, np.dtype("<u4"), 1)[:, 0].astype(np.int64)
-            off = off + 4 + size
-            continue
-        dt = np.dtype("<" + kind)
-        if ros2:
-            off = origin + (off - origin + dt.itemsize - 1) // dt.itemsize * dt.itemsize
-        if np.any(off + dt.itemsize * count > ends):
-            raise LayoutError(f"{msgtype}: messages end before {name}")
-        out[name] = _take(buf, off, rows, dt, count)
-        off = off + dt.itemsize * count
-    rest = ends - off  # (CDR pads the end to 4 bytes)
-    if np.any(rest < 0) or np.any(rest > (3 if ros2 else 0)):
+    lens = np.asarray(lens, np.int64)
+    if starts is None:
+        starts = np.cumsum(lens) - lens
+    layout = (_HEADER2 if ros2 else _HEADER1) + LAYOUTS[msgtype]
+    views, _, code, f = rosmsg.records(
+        buf, starts, lens, ros2, [(None if kind == "string" else np.dtype("<" + kind),
+                                   count, get is not None)
+                                  for _, kind, count, get in layout])
+    if code == rosmsg.NOT_CDR_LE:
+        raise LayoutError(f"{msgtype}: not little-endian CDR")
+    if code == rosmsg.ENDS_BEFORE:
+        raise LayoutError(f"{msgtype}: messages end before {layout[f][0]}")
+    if code == rosmsg.LONGER:
         raise LayoutError(f"{msgtype}: messages longer than the type's fields")
-    return out
+    return {name: v for (name, *_), v in zip(layout, views, strict=True) if v is not None}
 
 
-def _messages(raw: _Raw) -> list[bytes]:
-    """Each raw message of ``raw`` as bytes."""
-    ends = np.cumsum(raw.lens)
-    data = raw.buf.tobytes()
-    return [data[e - n:e] for e, n in zip(ends.tolist(), raw.lens.tolist(), strict=True)]
+def _messages(raw: _Raw, first: int | None = None) -> list[bytes]:
+    """Each raw message of ``raw`` (or its ``first`` ones) as bytes."""
+    return [raw.buf[a:a + n].tobytes() for a, n in zip(raw.at()[:first].tolist(),
+                                                       raw.lens[:first].tolist(),
+                                                       strict=True)]
 
 
 def _deserialised(deserialize, datas, msgtype: str) -> dict[str, np.ndarray]:
@@ -287,57 +261,16 @@ def _same(a: dict, b: dict) -> bool:
                for k in a if k in b)
 
 
-#: The bytes of an Imu message the sqlite3 path takes, by SQL ``substr``: the stamp
-#: (8 after the 4-byte CDR encapsulation), angular_velocity and linear_acceleration (24
-#: each, at fixed distances from the end: only doubles follow the frame_id, and the CDR
-#: body ends 8-aligned, so without padding).  (SQLite's time grows with the bytes
-#: concatenated: the encapsulation is checked on one whole message.)
-_IMU_SQL = "substr(data, 5, 8) || substr(data, -192, 24) || substr(data, -96, 24)"
-_IMU_RECORD = 56
-
-
-def _records(bag, raw: _Raw) -> dict[str, np.ndarray] | None:
-    """The IMU fields of the sqlite3 path's records (``sec``, ``nsec``,
-    ``angular_velocity``, ``linear_acceleration``, and the first message's
-    ``orientation_covariance``); None when a whole message is not little-endian CDR or
-    the records disagree with ``rosbags``' deserialisation of it."""
-    r = raw.buf
-    if raw.first[:2] != b"\x00\x01":
-        return None
-    d = {"sec": r[:, 0:4].copy().view("<i4"), "nsec": r[:, 4:8].copy().view("<u4"),
-         "angular_velocity": r[:, 8:32].copy().view("<f8"),
-         "linear_acceleration": r[:, 32:56].copy().view("<f8")}
-    try:
-        m = _deserialised(bag.deserialize, [raw.first], IMU)
-    except Exception:  # (rosbags' errors: read the whole messages instead)
-        return None
-    same = np.flatnonzero((d["sec"][:, 0] == m["sec"][0, 0])
-                          & (d["nsec"][:, 0] == m["nsec"][0, 0]))
-    if not len(same) or not all(np.array_equal(d[k][same[0]], m[k][0], equal_nan=True)
-                                for k in ("angular_velocity", "linear_acceleration")):
-        return None
-    d["orientation_covariance"] = m["orientation_covariance"]
-    return d
-
-
 def _fields(bag, topic: str, msgtype: str, raw: _Raw) -> dict[str, np.ndarray]:
     """The decoded fields of a topic's messages (:func:`decode`, checked against
     ``rosbags``' deserialisation of the first message; any difference: every message
     deserialised by ``rosbags``).  ``bag.decoding[topic]`` says which way."""
-    if raw.lens is None:
-        if not len(raw.buf):
-            return {}
-        d = _records(bag, raw)
-        if d is not None:
-            bag.decoding[topic] = "sqlite3"
-            return d
-        raw = bag.load({topic: msgtype})[topic]  # (the whole messages)
     if not len(raw.lens):
         return {}
     try:
-        ref = _deserialised(bag.deserialize, [raw.buf[:raw.lens[0]].tobytes()], msgtype)
+        ref = _deserialised(bag.deserialize, _messages(raw, 1), msgtype)
         try:
-            out = decode(raw.buf, raw.lens, msgtype, bag.ros2)
+            out = decode(raw.buf, raw.lens, msgtype, bag.ros2, raw.starts)
             if not _same(out, ref):
                 raise LayoutError(f"{msgtype}: numpy and rosbags decodings differ")
             bag.decoding[topic] = "numpy"
@@ -393,10 +326,9 @@ class _AnyBag:
     def deserialize(self, data: bytes, msgtype: str):
         return self.reader.deserialize(data, msgtype)
 
-    def load(self, wanted: dict[str, str], imu: str | None = None,
-             imu_bag_time: bool = True) -> dict[str, _Raw]:
+    def load(self, wanted: dict[str, str]) -> dict[str, _Raw]:
         """The raw messages of the topics ``wanted`` {topic: message type}, in one pass
-        over the bag (``imu``, ``imu_bag_time``: the sqlite3 path's)."""
+        over the bag."""
         conns = [c for t, m in wanted.items() for c in self.info[t].connections
                  if c.msgtype == m]
         got: dict[str, tuple[list, list]] = {t: ([], []) for t in wanted}
@@ -411,17 +343,18 @@ class _AnyBag:
 
 
 class _SqliteBag:
-    """A ROS 2 bag folder with uncompressed sqlite3 storage, read with ``sqlite3``
-    itself: topics and counts from ``metadata.yaml``, the messages of the topics wanted
-    in one SQL scan per storage file (the IMU's 56 bytes a message, :data:`_IMU_SQL`,
-    and the other topics' messages concatenated by SQLite: no Python object per
-    message).
+    """A ROS 2 bag folder with uncompressed sqlite3 storage, its ``messages`` table read
+    from the file's pages (:mod:`fednav.io.sqlite_pages`: one compiled loop over the
+    rows, the messages decoded in place; no Python object per message).  Topics and
+    counts from ``metadata.yaml``, topic ids from the ``topics`` table.
     (``AnyReader`` counts each topic's messages with a join when it opens a sqlite3 bag:
     more time than the whole read here.)  Messages deserialised with ``rosbags``'
     standard types."""
 
     ros2 = True
     reader_name = "sqlite3"
+    #: the ``messages`` table's columns as rosbag2 writes them
+    COLUMNS = ["id", "topic_id", "timestamp", "data"]
 
     def __init__(self, path: Path, files: list[Path], info: dict):
         self.path, self.src, self.files, self.decoding = path, str(path), files, {}
@@ -445,88 +378,61 @@ class _SqliteBag:
     def deserialize(self, data: bytes, msgtype: str):
         return _standard_types().deserialize_cdr(data, msgtype)
 
-    def load(self, wanted: dict[str, str], imu: str | None = None,
-             imu_bag_time: bool = True) -> dict[str, _Raw]:
-        """The raw messages of the topics ``wanted`` {topic: message type}: ``imu``'s as
-        :data:`_IMU_SQL` records (with their bag times when ``imu_bag_time``)."""
+    def load(self, wanted: dict[str, str]) -> dict[str, _Raw]:
+        """The raw messages of the topics ``wanted`` {topic: message type}, in place in
+        each storage file's bytes."""
         import sqlite3
 
-        parts: dict[str, list] = {t: [] for t in wanted}
-        try:
-            for f in self.files:
+        from . import sqlite_pages as sp
+
+        parts: dict[str, list[_Raw]] = {t: [] for t in wanted}
+        for f in self.files:
+            try:
+                table = sp.read_table(f, "messages")
                 con = sqlite3.connect(f"{f.resolve().as_uri()}?mode=ro&immutable=1",
                                       uri=True)
-                con.text_factory = bytes
                 try:
-                    self._scan(con, wanted, imu, imu_bag_time, parts)
+                    ids = dict(con.execute("SELECT name, id FROM topics").fetchall())
+                    types = dict(con.execute("SELECT name, type FROM topics").fetchall())
                 finally:
                     con.close()
-        except sqlite3.Error as e:
-            raise _NoFastPath(_one_line(e)) from None
-        out = {}
-        for t, ps in parts.items():
-            if t == imu:
-                first = next((p[2] for p in ps if p[2]), b"")
-                out[t] = _Raw(np.concatenate([p[0] for p in ps]) if imu_bag_time and ps
-                              else None,
-                              np.concatenate([p[1] for p in ps]) if ps
-                              else np.zeros((0, _IMU_RECORD), np.uint8), None, first)
-            else:
-                out[t] = ps[0] if len(ps) == 1 else _raw(
-                    np.concatenate([p.bag_ns for p in ps] or [np.zeros(0, np.int64)]),
-                    [d for p in ps for d in _messages(p)])
-        return out
-
-    @staticmethod
-    def _scan(con, wanted: dict, imu, imu_bag_time: bool, parts: dict) -> None:
-        """One storage file's messages of the topics ``wanted`` into ``parts``: per
-        topic, a :class:`_Raw` (the IMU: its :data:`_IMU_SQL` records, with bag times or
-        None, and one whole message).  One scan of the messages table (it has no index
-        on the topic), each topic's rows concatenated by SQLite in aggregate FILTERs:
-        the IMU's records, the other topics' whole messages with their lengths."""
-        ids = {}
-        for t, m in wanted.items():
-            for (tid,) in con.execute("SELECT id FROM topics WHERE name = ? AND type = ?",
-                                      (t, m)).fetchall():
-                ids[int(tid)] = t
-        if not ids:
-            return
-        cols = []
-        for tid, t in ids.items():
-            only = f"FILTER (WHERE topic_id = {tid})"
-            cols += [f"count(*) {only}", f"group_concat(timestamp) {only}"
-                     if t != imu or imu_bag_time else "NULL"]
-            cols += ([f"group_concat({_IMU_SQL}, '') {only}"] if t == imu else
-                     [f"group_concat(data, '') {only}", f"group_concat(length(data)) {only}"])
-        row = con.execute(f"SELECT {', '.join(cols)} FROM messages WHERE topic_id IN "
-                          f"({', '.join(map(str, ids))})").fetchone()
-        i = 0
-        for tid, t in ids.items():
-            n, stamps, blob = row[i:i + 3]
-            lens = None if t == imu else row[i + 3]
-            i += 3 if t == imu else 4
-            if not n:
-                continue
-            ns = None if stamps is None else _integers(stamps, n, f"{t}: time stamps")
-            if t != imu:
-                lens = _integers(lens, n, f"{t}: message lengths")
-                if int(lens.sum()) != len(blob or b""):
-                    raise _NoFastPath(f"{t}: the messages do not add up to their lengths")
-                parts[t].append(_Raw(ns, np.frombuffer(blob, np.uint8), lens))
-                continue
-            if blob is None or len(blob) != _IMU_RECORD * n:
-                raise _NoFastPath(f"{t}: messages too short for {IMU}")
-            first = con.execute("SELECT data FROM messages WHERE topic_id = ? LIMIT 1",
-                                (tid,)).fetchone()[0]
-            parts[t].append((ns, np.frombuffer(blob, np.uint8).reshape(n, _IMU_RECORD),
-                             first))
+            except (sp.SqliteFormatError, sqlite3.Error) as e:
+                raise _NoFastPath(_one_line(e)) from None
+            if table.columns != self.COLUMNS:
+                raise _NoFastPath(f"{f}: messages columns {table.columns}")
+            k, v = table.kind, table.value
+            for t, msgtype in wanted.items():
+                if t not in ids or types[t] != msgtype:
+                    continue
+                rows = np.flatnonzero((v[:, 1] == ids[t]) & (k[:, 1] == sp.INTEGER))
+                if not len(rows):
+                    continue
+                if (np.any(k[rows, 2] != sp.INTEGER) or np.any(k[rows, 3] != sp.BLOB)
+                        or np.any(v[rows, 3] == sp.ON_OVERFLOW)):
+                    raise _NoFastPath(f"{f}: {t}: messages not as rosbag2 writes them")
+                parts[t].append(_Raw(v[rows, 2], table.buf, table.size[rows, 3],
+                                     v[rows, 3]))
+        return _joined(parts)
 
 
-def _integers(text: bytes, n: int, what: str) -> np.ndarray:
-    """``n`` comma-separated integers (an SQLite ``group_concat``) as int64."""
-    out = np.fromstring(text, dtype=np.int64, sep=",")
-    if len(out) != n:
-        raise _NoFastPath(f"{what}: {len(out)} for {n} messages")
+def _joined(parts: dict[str, list[_Raw]]) -> dict[str, _Raw]:
+    """Each topic's messages of several files as one :class:`_Raw` (the buffers of more
+    than one file joined; none: empty)."""
+    out = {}
+    for t, ps in parts.items():
+        if len(ps) == 1:
+            out[t] = ps[0]
+            continue
+        if not ps:
+            out[t] = _Raw(np.zeros(0, np.int64), np.zeros(0, np.uint8),
+                          np.zeros(0, np.int64))
+            continue
+        bufs = list({id(p.buf): p.buf for p in ps}.values())
+        base = dict(zip((id(b) for b in bufs),
+                        np.cumsum([0] + [len(b) for b in bufs[:-1]]).tolist(), strict=True))
+        out[t] = _Raw(np.concatenate([p.bag_ns for p in ps]), np.concatenate(bufs),
+                      np.concatenate([p.lens for p in ps]),
+                      np.concatenate([p.at() + base[id(p.buf)] for p in ps]))
     return out
 
 
@@ -569,10 +475,9 @@ class _McapBag(_SqliteBag):
         found = _ros2_folder(path, "mcap")
         return None if found is None else cls(path, *found)
 
-    def load(self, wanted: dict[str, str], imu: str | None = None,
-             imu_bag_time: bool = True) -> dict[str, _Raw]:
-        """The raw messages of the topics ``wanted`` {topic: message type} (``imu``,
-        ``imu_bag_time``: the sqlite3 path's, not needed here)."""
+    def load(self, wanted: dict[str, str]) -> dict[str, _Raw]:
+        """The raw messages of the topics ``wanted`` {topic: message type}, in place in
+        each file's records."""
         from . import mcap
 
         parts: dict[str, list[_Raw]] = {t: [] for t in wanted}
@@ -586,30 +491,81 @@ class _McapBag(_SqliteBag):
                        if topic == t and schema == msgtype and enc == "cdr"]
                 rows = np.flatnonzero(np.isin(m.channel, ids))
                 if len(rows):
-                    lens = m.lens[rows]
-                    parts[t].append(_Raw(m.log_ns[rows], mcap.gather(m.buf, m.offs[rows],
-                                                                     lens), lens))
-        empty = _Raw(np.zeros(0, np.int64), np.zeros(0, np.uint8), np.zeros(0, np.int64))
-        return {t: (ps[0] if len(ps) == 1 else empty if not ps else
-                    _Raw(np.concatenate([p.bag_ns for p in ps]),
-                         np.concatenate([p.buf for p in ps]),
-                         np.concatenate([p.lens for p in ps])))
-                for t, ps in parts.items()}
+                    parts[t].append(_Raw(m.log_ns[rows], m.buf, m.lens[rows],
+                                         m.offs[rows]))
+        return _joined(parts)
+
+
+class _Ros1Bag(_SqliteBag):
+    """A ROS 1 bag file read with :mod:`fednav.io.ros1bag`: the file read whole, its
+    records walked by a compiled loop, the messages decoded in place.  Topics and counts
+    from the walk; a connection whose type's MD5 sum is not the standard ROS 1 (Noetic)
+    definition's is left to ``rosbags`` (which reads the bag's own definitions)."""
+
+    ros2 = False
+    reader_name = "ros1"
+
+    def __init__(self, path: Path):
+        from rosbags.rosbag1.reader import normalize
+
+        from . import ros1bag
+
+        self.path, self.src, self.decoding = path, str(path), {}
+        try:
+            self.m, self.connections = ros1bag.read(path)
+        except (ros1bag.Ros1BagError, UnicodeError, ValueError) as e:
+            raise _NoFastPath(_one_line(e)) from None
+        self.topic_of = {c: normalize(topic) for c, (topic, _, _) in self.m.channels.items()}
+        counts = np.bincount(self.m.channel, minlength=max(self.m.channels, default=-1) + 1)
+        self.topics, self.counts = {}, {}
+        for c, (_, msgtype, _) in sorted(self.m.channels.items()):
+            t = self.topic_of[c]
+            self.topics.setdefault(t, msgtype)
+            self.counts[t] = self.counts.get(t, 0) + int(counts[c])
+        self.topics = dict(sorted(self.topics.items()))
+
+    @classmethod
+    def of(cls, path: Path) -> _Ros1Bag | None:
+        """The bag at ``path`` when it is a ROS 1 bag file, else None."""
+        from . import ros1bag
+
+        with open(path, "rb") as f:
+            return cls(path) if f.read(len(ros1bag.MAGIC)) == ros1bag.MAGIC else None
+
+    def deserialize(self, data: bytes, msgtype: str):
+        return _standard_types(1).deserialize_ros1(data, msgtype)
+
+    def load(self, wanted: dict[str, str]) -> dict[str, _Raw]:
+        """The raw messages of the topics ``wanted`` {topic: message type}, in place in
+        the file's bytes."""
+        m, out = self.m, {}
+        for t, msgtype in wanted.items():
+            ids = [c for c, (_, mt, _) in m.channels.items()
+                   if self.topic_of[c] == t and mt == msgtype]
+            md5 = _standard_types(1).generate_msgdef(msgtype, ros_version=1)[1]
+            if any(self.connections[c].get("md5sum", b"").decode("ascii", "replace") != md5
+                   for c in ids):
+                raise _NoFastPath(f"{t}: not the standard {msgtype} (its MD5 sum)")
+            rows = np.flatnonzero(np.isin(m.channel, ids))
+            out[t] = _Raw(m.log_ns[rows], m.buf, m.lens[rows], m.offs[rows])
+        return out
 
 
 @functools.cache
-def _standard_types():
-    """``rosbags``' typestore of the latest ROS 2 release's standard messages, made once
-    (a typestore generates each message type's deserialiser on first use)."""
+def _standard_types(ros: int = 2):
+    """``rosbags``' typestore of the standard messages of the latest ROS 2 release (or
+    of ROS 1 Noetic: ``ros`` 1), made once (a typestore generates each message type's
+    deserialiser on first use)."""
     from rosbags.typesys import Stores, get_typestore
 
-    return get_typestore(Stores.LATEST)
+    return get_typestore(Stores.LATEST if ros == 2 else Stores.ROS1_NOETIC)
 
 
 class _NoFastPath(Exception):
-    """A bag the sqlite3 or MCAP path cannot read (an SQLite without aggregate filters,
-    another schema, concatenations that do not add up; an MCAP file :mod:`fednav.io.mcap`
-    does not know): read with ``AnyReader`` instead."""
+    """A bag the sqlite3, MCAP or ROS 1 path cannot read (a database file or schema
+    :mod:`fednav.io.sqlite_pages` does not read, messages on overflow pages; an MCAP file
+    :mod:`fednav.io.mcap` does not know; a ROS 1 bag :mod:`fednav.io.ros1bag` does not
+    know, a message type not the standard one): read with ``AnyReader`` instead."""
 
 
 def _ns(sec, nsec) -> np.ndarray:
@@ -848,7 +804,7 @@ def _read(bag, given: dict, time: str, max_bridge_s: float, mounting) -> BagReco
             f" (no topic of that type; topics: {', '.join(bag.topics) or 'none'})"))
     quality.update({f"{n}_topic": t for n, t in chosen.items() if t is not None})
     wanted = {t: TYPES[n] for n, t in chosen.items() if t is not None}
-    raws = bag.load(wanted, imu_topic, time == "bag")
+    raws = bag.load(wanted)
     got = {}
     for name, topic in chosen.items():
         if topic is not None:
@@ -942,11 +898,12 @@ def read_rosbag(path, *, topics: dict[str, str] | None = None, time: str = "head
         ``gnss_epochs_skipped``; ``velocity_epochs_skipped``; ``baro_offset_m`` [m];
         ``rows_dropped`` {topic: repeated or zero stamps}; ``latency_s`` {topic: median
         receive time minus stamp [s]}; ``stamp_after_bag_time`` {topic: messages stamped
-        after they were received}; ``decoding`` {topic: "sqlite3", "numpy" or
-        "rosbags"}; ``storage_reader`` what read the bag's storage: "sqlite3" (a ROS 2
-        sqlite3 folder), "mcap" (a ROS 2 MCAP folder, :mod:`fednav.io.mcap`) or
-        "rosbags" (``AnyReader``: ROS 1 bags, compressed or other ROS 2 bags, and what
-        the first two could not read).
+        after they were received}; ``decoding`` {topic: "numpy" or "rosbags"};
+        ``storage_reader`` what read the bag's storage: "sqlite3" (a ROS 2 sqlite3
+        folder, :mod:`fednav.io.sqlite_pages`), "mcap" (a ROS 2 MCAP folder,
+        :mod:`fednav.io.mcap`), "ros1" (a ROS 1 bag, :mod:`fednav.io.ros1bag`) or
+        "rosbags" (``AnyReader``: compressed or single-file ROS 2 bags, and what the
+        first three could not read).
 
     Raises
     ------
@@ -967,12 +924,13 @@ def read_rosbag(path, *, topics: dict[str, str] | None = None, time: str = "head
     import_for(path, "rosbags", "ROS bag")
     if not path.exists():
         raise DataError(f"ROS bag {path}: not found")
-    fast = (_SqliteBag.of(path) or _McapBag.of(path)) if path.is_dir() else None
-    if fast is not None:
-        try:
+    try:
+        fast = ((_SqliteBag.of(path) or _McapBag.of(path)) if path.is_dir() else
+                _Ros1Bag.of(path))
+        if fast is not None:
             return _read(fast, given, time, max_bridge_s, mounting)
-        except _NoFastPath:
-            pass  # (read with AnyReader)
+    except _NoFastPath:
+        pass  # (read with AnyReader)
     bag = _AnyBag(path)
     try:
         return _read(bag, given, time, max_bridge_s, mounting)
