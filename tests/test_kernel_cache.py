@@ -41,3 +41,46 @@ def test_old_versions_are_pruned(tmp_path):
         os.utime(tmp_path / f"v{i}", (t, t))
     _kernel_cache._prune(tmp_path)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["v2", "v3", "v4", "v5"]
+
+
+def test_the_command_line_starts_without_the_sensors_once_it_remembers_their_options(
+        tmp_path):
+    """``fednav.cli`` builds one ``--NAME FILE`` option per registered sensor: the first
+    process of a source tree imports the registry (and numba) for them and remembers
+    them in its kernel folder; later ones start without (``fednav process --help`` ~0.3 s
+    against ~0.7 s), with the same help as the registry gives live."""
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    env.update(XDG_CACHE_HOME=str(tmp_path), COLUMNS="200")
+    code = ("import sys, fednav.cli; print(sorted(m for m in ('numba', 'fednav.sensors', "
+            "'pydantic') if m in sys.modules))")
+
+    def run(*args, **more):
+        return subprocess.run([sys.executable, *args], env={**env, **more},
+                              capture_output=True, text=True, check=True).stdout.strip()
+
+    assert run("-c", code) == "['fednav.sensors', 'numba', 'pydantic']"  # (the first)
+    assert run("-c", code) == "[]"
+    remembered = run("-m", "fednav", "process", "csv", "--help")
+    live = run("-m", "fednav", "process", "csv", "--help",
+               NUMBA_CACHE_DIR=str(tmp_path / "mine"))  # (no folder of fednav's: live)
+    assert remembered == live and "--baro" in live and "--gnss_raw" in live
+
+
+def test_a_sensor_registered_before_the_options_are_built_gets_its_option():
+    """With the registry imported (a plug-in registered a sensor), the options are the
+    registry's, not the remembered ones."""
+    import dataclasses
+    import inspect
+
+    from fednav import cli
+    from fednav.sensors import registry
+
+    registry.register(dataclasses.replace(registry.spec("baro"), name="plugin_baro"))
+    try:
+        def command(**files):
+            pass
+
+        names = inspect.signature(cli._sensor_file_options("gnss")(command)).parameters
+    finally:
+        registry.unregister("plugin_baro")
+    assert "plugin_baro" in names and "baro" in names and "gnss" not in names

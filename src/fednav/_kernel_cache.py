@@ -21,6 +21,9 @@ from pathlib import Path
 
 #: How many source versions' kernel folders are kept.
 KEEP = 4
+#: The folder :func:`install` chose for this source tree (None: not installed, the
+#: user's ``NUMBA_CACHE_DIR``, or none could be made).
+FOLDER: Path | None = None
 
 
 def source_hash(root: Path) -> str:
@@ -41,6 +44,7 @@ def install(version: str) -> Path | None:
     """Set numba's cache folder for this source tree (before any kernel is compiled or
     loaded); returns it, or None when the user set ``NUMBA_CACHE_DIR`` or no cache
     folder can be made (numba then keeps its default)."""
+    global FOLDER
     if os.environ.get("NUMBA_CACHE_DIR"):
         return None
     folder = cache_root() / f"{version}-{source_hash(Path(__file__).parent)}"
@@ -55,7 +59,32 @@ def install(version: str) -> Path | None:
     if "numba" in sys.modules:  # (imported already: tell its config too)
         sys.modules["numba"].config.CACHE_DIR = str(folder)
     _prune(folder.parent)
+    FOLDER = folder
     return folder
+
+
+def remembered(name: str, make):
+    """``make()`` (a JSON value), kept in this source tree's folder as ``name`` and read
+    back by later processes: what the same sources always give, which start-up would
+    otherwise import half the package for (the command line's sensor options).  Without
+    a folder (:data:`FOLDER` None) or a readable file: ``make()``."""
+    import json
+
+    path = None if FOLDER is None else FOLDER / name
+    if path is not None and path.is_file():
+        try:
+            return json.loads(path.read_text())
+        except (OSError, ValueError):
+            pass
+    value = make()
+    if path is not None:
+        tmp = path.with_name(f".{name}.{os.getpid()}.tmp")
+        try:
+            tmp.write_text(json.dumps(value))
+            os.replace(tmp, path)
+        except OSError:
+            tmp.unlink(missing_ok=True)
+    return value
 
 
 def _prune(root: Path) -> None:

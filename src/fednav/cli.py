@@ -772,28 +772,44 @@ def _csv_reader(imu: Path | None, gnss: Path | None, velocity: Path | None,
     return read
 
 
-def _sensor_file_options(*exclude: str):
-    """Give a command that takes ``**files`` one ``--NAME FILE`` option per registered
-    sensor but ``exclude`` (from the sensor registry: a new sensor gets its option)."""
-    import inspect
-    from typing import Optional
-
+def _sensor_option_helps() -> list[list[str]]:
+    """[name, help] of each registered sensor's ``--NAME FILE`` option."""
     from rich.markup import escape
 
     from .sensors import registry
+
+    out = []
+    for name in registry.names():
+        spec = registry.spec(name)
+        cols = ", ".join(["t_s"] + ([spec.columns_doc] if spec.columns_doc else
+                                    [c.name for c in spec.columns]))
+        out.append([name, escape(f"{spec.summary}: CSV {cols} [, t_arrival_s]"
+                                 + (f"; or {spec.files_doc}" if spec.files_doc else ""))])
+    return out
+
+
+def _sensor_file_options(*exclude: str):
+    """Give a command that takes ``**files`` one ``--NAME FILE`` option per registered
+    sensor but ``exclude`` (from the sensor registry: a new sensor gets its option).
+    The options are remembered per source tree (:func:`_kernel_cache.remembered`), so
+    that the command line starts without importing the sensors (and numba) when the
+    registry is not imported yet: a plug-in that registered a sensor before is seen."""
+    import inspect
+    import sys
+    from typing import Optional
+
+    if "fednav.sensors.registry" in sys.modules:
+        helps = _sensor_option_helps()
+    else:
+        helps = _kernel_cache.remembered("cli-sensor-options.json", _sensor_option_helps)
 
     def add(command):
         sig = inspect.signature(command)
         params = [p for p in sig.parameters.values() if p.kind != p.VAR_KEYWORD]
         ann = dict(command.__annotations__)
-        for name in registry.names():
+        for name, help_ in helps:
             if name in exclude:
                 continue
-            spec = registry.spec(name)
-            cols = ", ".join(["t_s"] + ([spec.columns_doc] if spec.columns_doc else
-                                        [c.name for c in spec.columns]))
-            help_ = escape(f"{spec.summary}: CSV {cols} [, t_arrival_s]"
-                           + (f"; or {spec.files_doc}" if spec.files_doc else ""))
             params.append(inspect.Parameter(
                 name, inspect.Parameter.KEYWORD_ONLY, annotation=Optional[Path],  # noqa: UP045
                 default=typer.Option(None, f"--{name}", help=help_)))
