@@ -488,3 +488,30 @@ def test_fednav_process_flies_a_simulated_raw_receiver(tmp_path):
     assert geo["clock_resets"] == 1  # (the first epoch's bias, 10 km in the simulation)
     assert 0.7 < s["consistency"]["gnss_raw"]["nis_per_dof"] < 1.4
     assert s["error_states"]["clock_m_mps"]["estimate"][1] != 0.0
+    assert (out / "processed" / "gnss_raw.png").stat().st_size > 10_000
+
+
+def test_the_figure_shows_satellites_dop_and_exclusions(flown):
+    """gnss_raw.png: the satellites above the mask per epoch (those fault detection
+    excluded marked, with their ids), the epochs below four shaded, PDOP and HDOP."""
+    from types import SimpleNamespace
+
+    from fednav.sensors.gnss_raw import figure, geometry
+
+    scn, data, _ = flown
+    s = data.series["gnss_raw"]
+    tr = scn.trajectory().at(s.t)
+    sol = SimpleNamespace(t=s.t, lla=tr["lla"])
+    fig = figure(s, sol, [(50.0, "gnss_raw", 7, 99.0), (80.0, "gnss_raw", 3, 50.0)])
+    a, b = fig.axes
+    n, pdop, hdop, _ = geometry(s.z, tr["lla"])
+    line = a.get_lines()[0]
+    np.testing.assert_array_equal(line.get_ydata(), n)
+    marks = [ln for ln in a.get_lines() if ln.get_marker() == "x"]
+    assert len(marks) == 1 and list(marks[0].get_xdata()) == [50.0, 80.0]
+    assert [t.get_text() for t in a.texts] == ["7", "3"]
+    assert len(a.patches) == 1  # (the two-satellite window shaded)
+    assert a.patches[0].get_x() == pytest.approx(150.0, abs=1.0)
+    np.testing.assert_array_equal(b.get_lines()[0].get_ydata(), pdop)
+    np.testing.assert_array_equal(b.get_lines()[1].get_ydata(), hdop)
+    assert np.isnan(pdop[(s.t > 151) & (s.t < 299)]).all()

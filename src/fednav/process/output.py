@@ -615,6 +615,8 @@ def _write(out, res, ref, inputs, output_rate, fixes, others, fmt) -> list[Path]
             from .stanford import plot_run
 
             files.append(plot_run(res, _errors(res.forward, ref), out / "stanford.png"))
+    for name, draw in res.figures.items():  # (a sensor's own: the raw GNSS's satellites)
+        files.append(plots.save(draw(), out / f"{name}.png"))
     for name, other in (others or {}).items():
         files.append(write_errors(res, other, out / f"errors_{name}.csv", output_rate))
         files.append(plot_errors(res, other, out / f"errors_{name}.png", fixes,

@@ -220,6 +220,10 @@ class ProcessResult:
     hints : list of str
         What the run suggests the description could add (one line each): nothing is
         wrong without it (:func:`fednav.process.checks.wheeled_hint`).
+    figures : dict
+        Per sensor with a figure of its own recording (:attr:`fednav.sensors.spec.
+        SensorSpec.figure`: the raw GNSS's satellites, DOP and exclusions), a function
+        of no argument that draws it (``fednav process`` writes ``NAME.png``).
     """
 
     forward: Solution
@@ -243,6 +247,8 @@ class ProcessResult:
     noise: object = None
     #: what the run suggests the description could add (one line each)
     hints: list = field(default_factory=list)
+    #: per sensor with a figure of its own, a function drawing it (``NAME.png``)
+    figures: dict = field(default_factory=dict)
 
     @property
     def gnss_flown(self) -> FixData | None:
@@ -888,10 +894,14 @@ def process(imu: ImuData, sensors: Mapping[str, Series], cfg: System | None = No
                                              for k, v in nav.loop.q_scales().items()}
     res.optional_states = out.optional
     for name in prep.system.aiding_sensors(prep.series):  # (a sensor's own figures)
-        rep = registry.spec(name).report
-        if rep is not None:
-            res.data_quality[f"{name}_geometry"] = rep(prep.series[name], res.forward,
-                                                       nav.models.get(name))
+        spec = registry.spec(name)
+        if spec.report is not None:
+            res.data_quality[f"{name}_geometry"] = spec.report(
+                prep.series[name], res.forward, nav.models.get(name))
+        if spec.figure is not None:
+            res.figures[name] = functools.partial(
+                spec.figure, prep.series[name], res.forward,
+                [e for e in out.excluded if e[1] == name])
     if out.excluded:  # units fault detection left out of a measurement (satellites)
         counts: dict = {}
         for _, local, unit, _ in out.excluded:

@@ -455,6 +455,51 @@ def report(series, solution, model=None) -> dict:
     return out
 
 
+def figure(series, solution, excluded=()):
+    """``gnss_raw.png`` of ``fednav process`` as a :class:`~matplotlib.figure.Figure`:
+    the satellites above the mask at each epoch the solution covers (the satellites
+    fault detection ``excluded`` — ``(t, local filter, satellite id, statistic)`` —
+    marked at their epochs, with their ids), and the PDOP and HDOP (NaN below four
+    satellites: the epochs with fewer shaded), against time [s]."""
+    from ..core import plots
+
+    t = np.asarray(series.t, dtype=float)
+    flown = (t >= solution.t[0]) & (t <= solution.t[-1])
+    t = t[flown]
+    lla = np.column_stack([np.interp(t, solution.t, solution.lla[:, i]) for i in range(3)])
+    n, pdop, hdop, _ = geometry(np.asarray(series.z)[flown], lla)
+    fig, axes = plots.new_figure(2, 1, figsize=(11, 6.5), sharex=True)
+    a, b = axes[0, 0], axes[1, 0]
+    a.step(t, n, where="post", color="C0", label="above the mask")
+    edges = np.flatnonzero(np.diff(np.r_[0, (n < 4).astype(int), 0]))
+    few = [(t[i], t[min(j, len(t) - 1)]) for i, j in zip(edges[::2], edges[1::2],
+                                                          strict=True)]
+    for ax in (a, b):
+        plots.shade_spans(ax, few)
+    if len(excluded):
+        te = np.array([float(e[0]) for e in excluded])
+        a.plot(te, np.interp(te, t, n), "x", color="C3", ms=8,
+               label=f"excluded by fault detection ({len(te)})")
+        for k, e in enumerate(excluded[:20]):
+            a.annotate(f"{int(e[2])}", (te[k], np.interp(te[k], t, n)), fontsize=7,
+                       xytext=(3, 3), textcoords="offset points", color="C3")
+    a.axhline(4, color="0.5", lw=0.8, ls=":")
+    a.set_ylabel("satellites")
+    a.set_ylim(0, max(5, int(n.max(initial=0)) + 1))
+    a.set_title("raw GNSS: satellites and dilution of precision (fewer than four shaded)")
+    b.plot(t, pdop, color="C1", label="PDOP")
+    b.plot(t, hdop, color="C2", label="HDOP")
+    b.set_ylabel("DOP")
+    fin = np.concatenate([pdop[np.isfinite(pdop)], [1.0]])
+    b.set_ylim(0, min(20.0, 1.1 * float(np.percentile(fin, 99))) + 0.5)
+    b.set_xlabel("time [s]")
+    for ax in (a, b):
+        ax.grid(True, alpha=0.3)
+        ax.legend(loc="upper right", fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
 # ---------------------------------------------------------------------------- simulation
 #: GPS's nominal orbit: semi-major axis [m] and inclination (IS-GPS-200, the almanac's).
 GPS_A = 26_559_700.0
@@ -684,7 +729,7 @@ SPEC = SensorSpec(
     "gnss_raw", "GNSS pseudorange and Doppler of each satellite (tightly coupled; receiver "
                 "clock states)", GnssRawConfig, SatelliteRanges,
     columns=tuple(Column(f"s{k:02d}_{f}") for k in range(SLOTS) for f in FIELDS),
-    label="raw GNSS", sparse=True, valid=has_satellite, report=report,
+    label="raw GNSS", sparse=True, valid=has_satellite, report=report, figure=figure,
     files_doc="a u-blox .ubx raw log (RXM-RAWX, RXM-SFRBX), a RINEX observation file with "
               "its navigation file beside it (GPS time [s] since 1980-01-06)",
     columns_doc=f"{SLOTS} satellite slots `sNN_`: " + ", ".join(f"`{f}`" for f in FIELDS))

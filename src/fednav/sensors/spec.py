@@ -248,6 +248,11 @@ class SensorSpec:
     #: ``summary.json`` says of the sensor's recording as flown by its measurement model
     #: (the raw GNSS: satellites, DOP, clock resets)
     report: object = None
+    #: recorded data: a function ``(series, solution, excluded) -> Figure`` drawing the
+    #: sensor's recording as flown (``excluded``: the units fault detection left out,
+    #: ``(t, local filter, unit, statistic)``; the raw GNSS: satellites, DOP,
+    #: exclusions), written as ``NAME.png`` by ``fednav process``
+    figure: object = None
 
     @property
     def fixes_position(self) -> bool:
