@@ -85,6 +85,56 @@ def test_walker_sky_is_gps_like():
     assert 6 <= n.min() and n.max() <= 12
 
 
+def test_the_walker_sky_as_broadcast_ephemerides_is_the_walker_sky():
+    """walker_ephemerides: IS-GPS-200's orbit model of its records gives walker()'s
+    positions to a millimetre and velocities to 1 mm/s, across records and a week's end."""
+    from fednav.sensors.gnss_raw import START_GPS_S, walker_ephemerides
+    from fednav.sensors.satellites import WEEK_S, nearest_ephemeris, satellite_states
+
+    for start in (START_GPS_S, 2401 * WEEK_S - 5000.0):
+        eph = walker_ephemerides(start, start + 20000.0)
+        sv = np.array([f"G{i:02d}" for i in range(1, 31)])
+        t = start + np.arange(0.0, 20000.0, 700.0)
+        pos, vel, clk, _ = satellite_states(eph, nearest_ephemeris(eph, sv, t),
+                                            np.broadcast_to(t[:, None], (len(t), 30)))
+        p0, v0 = walker(t - start)
+        assert np.abs(pos - p0).max() < 1e-3 and np.abs(vel - v0).max() < 1e-3
+        assert np.all(clk == 0.0)
+
+
+def test_the_simulated_pseudoranges_solve_the_light_time_equation():
+    """A receiver at rest with no noise and no clock: its pseudoranges are the light
+    time solved apart (tests/test_satellites.py) to a millimetre, its satellites where
+    they transmitted, turned by the Earth's rotation; its range rates the satellites'
+    velocities along the line of sight (the receiver still)."""
+    from types import SimpleNamespace
+
+    from test_satellites import _pseudoranges
+
+    from fednav.sensors.gnss_raw import START_GPS_S, RawReceiver, walker_ephemerides
+
+    lla = np.array([np.radians(35.0), np.radians(139.0), 50.0])
+    truth = SimpleNamespace(t=np.array([0.0, 600.0]), at=lambda t: {
+        "lla": np.tile(lla, (len(t), 1)), "vel": np.zeros((len(t), 3))})
+    rx = RawReceiver(30.0, 1e-12, 1e-12, float(units.deg(5.0)), (0.0, 0.0, 0.0, 0.0))
+    s = rx.simulate(truth, np.random.default_rng(0))
+    z = s.z.reshape(len(s.t), SLOTS, len(FIELDS))
+    eph = walker_ephemerides(START_GPS_S, START_GPS_S)  # (one record a satellite)
+    r = earth.llh_to_ecef(*lla)
+    pr = _pseudoranges(eph, r, s.t + START_GPS_S, 0.0)
+    got = 0
+    for i in range(len(s.t)):
+        for j in np.flatnonzero(np.isfinite(z[i, :, PRN])):
+            k = int(z[i, j, PRN]) - 1
+            if np.isfinite(pr[i, k]):
+                assert abs(z[i, j, PR] - pr[i, k]) < 1e-3
+                got += 1
+            d = z[i, j, 1:4] - r
+            u = d / np.linalg.norm(d)
+            assert abs(z[i, j, RR] - u @ z[i, j, 4:7]) < 1e-6
+    assert got >= 5 * len(s.t)
+
+
 def _perturbed(nav, dx):
     """The INS with error ``dx`` (filter units: the 18 states) added: position moved by
     dp (ENU m), velocity by dv, attitude exp(-[phi x]) C."""
@@ -380,6 +430,69 @@ def test_rinex_written_by_fednav_reads_back(tmp_path):
         write_rinex_obs(path, t, sv, {"C1": pr})
 
 
+def test_rinex_navigation_written_by_fednav_reads_back(tmp_path):
+    """fednav's RINEX 2.11 navigation writer and georinex's reader: the Walker sky's
+    ephemerides (and, where ../shared has them, a real station's, with its Klobuchar
+    coefficients) give the same satellite positions and clocks to 0.1 mm / 1e-15 s."""
+    pytest.importorskip("georinex")
+    from fednav.io.data import DataError
+    from fednav.io.rinex import read_rinex_nav, write_rinex_nav
+    from fednav.sensors.gnss_raw import START_GPS_S, walker_ephemerides
+    from fednav.sensors.satellites import nearest_ephemeris, satellite_states
+
+    skies = [(walker_ephemerides(START_GPS_S, START_GPS_S + 10000.0), START_GPS_S)]
+    if STATIC.is_dir():
+        real = read_rinex_nav(STATIC / "07590920.05n")
+        skies.append((real, float(np.median(real.toe))))
+    for k, (eph, t0) in enumerate(skies):
+        back = read_rinex_nav(write_rinex_nav(tmp_path / f"{k}.nav", eph))
+        assert len(back.sv) == len(eph.sv)
+        assert (back.iono is None) == (eph.iono is None)
+        if eph.iono is not None:
+            np.testing.assert_allclose(back.iono, eph.iono, rtol=1e-4)
+        sv = np.unique(eph.sv)
+        t = t0 + np.arange(-3000.0, 3000.0, 600.0)
+        T = np.broadcast_to(t[:, None], (len(t), len(sv)))
+        a = satellite_states(eph, nearest_ephemeris(eph, sv, t), T)
+        b = satellite_states(back, nearest_ephemeris(back, sv, t), T)
+        ok = np.isfinite(a[0][..., 0])
+        assert ok.sum() > 10 and np.array_equal(ok, np.isfinite(b[0][..., 0]))
+        assert np.abs(a[0][ok] - b[0][ok]).max() < 1e-4
+        assert np.abs(a[2][ok] - b[2][ok]).max() < 1e-15
+    with pytest.raises(DataError, match="does not overwrite"):
+        write_rinex_nav(tmp_path / "0.nav", skies[0][0])
+
+
+def test_a_simulated_receiver_as_rinex_reads_back_to_its_measurements(tmp_path, flown):
+    """fednav simulate's RINEX of a raw receiver (the satellite clock, troposphere and
+    ionosphere put back into C1, the Doppler in Hz) read by the RINEX route (transit
+    time from the pseudorange, the corrections at the single-point position) gives the
+    simulated rows: the same satellites, positions within 0.3 m, pseudoranges 5 cm,
+    range rates 1 mm/s, times back on the simulation's clock (time_offset_s)."""
+    pytest.importorskip("georinex")
+    from fednav.io.data import SensorData
+    from fednav.io.rinex import read_raw_gnss_file, write_raw_receiver
+
+    scn, data, _ = flown
+    s = data.series["gnss_raw"]
+    section = scn.system_for(scn.modes[1]).sensors["gnss_raw"]
+    files, name, keys = write_raw_receiver(tmp_path, s, scn.trajectory(), section)
+    assert [f.name for f in files] == ["gnss_raw.obs", "gnss_raw.nav"] and name == files[0].name
+    got = read_raw_gnss_file(tmp_path / name)
+    got = SensorData.adjusted(got, section.model_copy(update=keys))
+    np.testing.assert_allclose(got.t, s.t, atol=1e-6)
+    a = s.z.reshape(len(s.t), SLOTS, len(FIELDS))
+    b = got.z.reshape(len(got.t), SLOTS, len(FIELDS))
+    for i in range(len(s.t)):
+        ka = {int(p): j for j, p in enumerate(a[i, :, PRN]) if np.isfinite(p)}
+        kb = {int(p): j for j, p in enumerate(b[i, :, PRN]) if np.isfinite(p)}
+        assert ka.keys() == kb.keys()
+        for prn, j in ka.items():
+            u, v = a[i, j], b[i, kb[prn]]
+            assert np.abs(u[1:4] - v[1:4]).max() < 0.3
+            assert abs(u[PR] - v[PR]) < 0.05 and abs(u[RR] - v[RR]) < 1e-3
+
+
 def test_bad_satellites_drop_out_and_the_file_round_trips(tmp_path, flown):
     """A satellite with a NaN velocity or a non-positive 1-sigma gives no row (never a
     NaN residual); the sensor's CSV file (NaN in its empty slots) reads back to the same
@@ -463,9 +576,10 @@ def test_a_millisecond_clock_jump_moves_the_clock_not_the_position(flown):
 
 
 def test_fednav_process_flies_a_simulated_raw_receiver(tmp_path):
-    """fednav simulate writes a design's raw GNSS as the sensor's CSV (empty slots NaN);
-    fednav process reads it back and reports the satellites, the DOP and the clock
-    (summary.json), its NIS in band."""
+    """fednav simulate writes a design's raw GNSS as a receiver's RINEX observation and
+    navigation files (named in system.yaml's files:, with the time offset back onto the
+    IMU's clock); fednav process reads them back and reports the satellites, the DOP and
+    the clock (summary.json, gnss_raw.png), its NIS in band."""
     import json
 
     from typer.testing import CliRunner
@@ -477,7 +591,8 @@ def test_fednav_process_flies_a_simulated_raw_receiver(tmp_path):
     r = CliRunner().invoke(app, ["simulate", str(design), "--mode", "INS/GNSS (tight)",
                                  "--max-time", "200", "--out", str(out)])
     assert r.exit_code == 0, r.output
-    assert (out / "gnss_raw.csv").is_file()
+    assert (out / "gnss_raw.obs").is_file() and (out / "gnss_raw.nav").is_file()
+    assert not (out / "gnss_raw.csv").exists()
     r = CliRunner().invoke(app, ["process", "csv", "--config", str(out / "system.yaml"),
                                  "--out", str(out / "processed")])
     assert r.exit_code == 0, r.output

@@ -437,10 +437,14 @@ class SensorData:
         return replace(self, sigma=sigma)
 
     def adjusted(self, section) -> SensorData:
-        """The recording as its section corrects it (no correction here: a sensor whose
-        section corrects its file, the GNSS's or the velocity sensor's, has a data class
-        of its own, :data:`RECORDINGS`)."""
-        return self
+        """The recording as its section corrects it: the section's ``time_offset_s`` [s]
+        (where it has one: the raw GNSS's) added to the time stamps; more corrections (the
+        GNSS's, the velocity sensor's) need a data class of their own
+        (:data:`RECORDINGS`)."""
+        dt = float(getattr(section, "time_offset_s", 0.0) or 0.0)
+        if not dt:
+            return self
+        return replace(self, t=self.t + dt, t_arrival=_shifted(self.t_arrival, dt))
 
 
 @reads_old_sigma_pos

@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import DataError
+from ..sensors.satellites import Ephemerides
 from .data import import_for
 
 #: The GPS epoch (GPS time 0).
@@ -64,30 +65,6 @@ class RinexObs:
                 return self.obs[n]
         raise DataError(f"{self.source}: none of the observation codes {', '.join(names)} "
                         f"(the file has {', '.join(self.obs) or 'none'})")
-
-
-@dataclass
-class Ephemerides:
-    """GPS broadcast ephemerides, one row per record: ``sv`` (K,), the clock epoch
-    ``toc`` and the ephemeris epoch ``toe`` in GPS time [s], the clock terms ``af0``
-    [s], ``af1`` [s/s], ``af2`` [s/s^2], ``tgd`` [s], ``health``, and the orbit's
-    ``sqrt_a`` [m^0.5], ``e``, ``i0``, ``omega0``, ``omega``, ``m0`` [rad], ``delta_n``,
-    ``omega_dot``, ``idot`` [rad/s], ``cuc``, ``cus``, ``cic``, ``cis`` [rad], ``crc``,
-    ``crs`` [m]; ``iono`` (8,) the Klobuchar alpha and beta of the header (None if
-    absent)."""
-
-    source: str
-    sv: np.ndarray
-    toc: np.ndarray
-    toe: np.ndarray
-    elements: dict[str, np.ndarray]
-    iono: np.ndarray | None = None
-
-    def __getattr__(self, name: str) -> np.ndarray:
-        try:
-            return self.__dict__["elements"][name]
-        except KeyError:
-            raise AttributeError(name) from None
 
 
 #: georinex's name of each ephemeris element.
@@ -337,6 +314,104 @@ def write_rinex_obs(path, t, sv, obs: dict, *, approx_xyz=None, marker: str = "F
     return path
 
 
+def write_rinex_nav(path, eph: Ephemerides, *, program: str = "fednav") -> Path:
+    """A RINEX 2.11 GPS navigation file of the broadcast ephemerides ``eph`` (one record
+    per row; its Klobuchar coefficients, where it has them, as ``ION ALPHA`` / ``ION
+    BETA``): what :func:`read_rinex_nav` reads back, and RTKLIB or any RINEX reader
+    takes.  An existing file is never overwritten (:class:`DataError`)."""
+    path = Path(path)
+    if path.exists():
+        raise DataError(f"{path}: exists; fednav does not overwrite a file")
+
+    def h(text: str, label: str) -> str:
+        return f"{text:<60.60}{label:<20}\n"
+
+    def d(*values) -> str:
+        return "".join(f"{float(v):19.12E}" for v in values)
+
+    now = datetime.now(UTC).strftime("%Y%m%d %H%M%S UTC")
+    out = [h(f"{2.11:9.2f}{'':11}{'N: GPS NAV DATA':<40}", "RINEX VERSION / TYPE"),
+           h(f"{program:<20}{'':20}{now:<20}", "PGM / RUN BY / DATE")]
+    if eph.iono is not None:
+        a, b = np.asarray(eph.iono[:4], dtype=float), np.asarray(eph.iono[4:8], dtype=float)
+        out += [h("  " + "".join(f"{v:12.4E}" for v in a), "ION ALPHA"),
+                h("  " + "".join(f"{v:12.4E}" for v in b), "ION BETA")]
+    out.append(h("", "END OF HEADER"))
+    g = eph.elements
+    for k in range(len(eph.sv)):
+        sv = str(eph.sv[k])
+        prn = int(sv[1:]) if sv[:1].isalpha() else int(sv)
+        y, mo, dd, hh, mi, ss = _calendar(float(eph.toc[k]))
+        week, sow = divmod(float(eph.toe[k]), WEEK_S)
+        iod = float(k % 256)
+        out.append(f"{prn:2d}{y % 100:3d}{mo:3d}{dd:3d}{hh:3d}{mi:3d}{ss:5.1f}"
+                   + d(g["af0"][k], g["af1"][k], g["af2"][k]) + "\n")
+        for row in ((iod, g["crs"][k], g["delta_n"][k], g["m0"][k]),
+                    (g["cuc"][k], g["e"][k], g["cus"][k], g["sqrt_a"][k]),
+                    (sow, g["cic"][k], g["omega0"][k], g["cis"][k]),
+                    (g["i0"][k], g["crc"][k], g["omega"][k], g["omega_dot"][k]),
+                    (g["idot"][k], 1.0, week, 0.0),
+                    (2.0, g["health"][k], g["tgd"][k], iod),
+                    (sow, 4.0)):
+            out.append("   " + d(*row) + "\n")
+    path.write_text("".join(out))
+    return path
+
+
+def write_raw_receiver(folder, series, truth, section) -> tuple[list[Path], str, dict]:
+    """A simulated raw receiver (``gnss_raw``: its series, the truth it flew, its system
+    section) as the files a real one gives: ``gnss_raw.obs`` (RINEX 2.11 observations in
+    GPS time: ``C1`` the L1 pseudorange with the satellite clock, the troposphere
+    (Saastamoinen at the true position) and the ionosphere (Klobuchar, where the
+    ephemerides carry coefficients) put back, what :func:`read_raw_gnss` takes out
+    again; ``D1`` the Doppler [Hz]) and ``gnss_raw.nav`` (the sky's broadcast
+    ephemerides, :func:`write_rinex_nav`).  Returns the files, the one to name in the
+    system description's ``files:`` and the section's keys that go with it
+    (``time_offset_s``: the files' GPS time back onto the simulation's clock)."""
+    from ..core import earth
+    from ..sensors.gnss_raw import FIELDS, PR, PRN, RR, SLOTS, SX, SZ
+    from ..sensors.satellites import (
+        F_L1,
+        C,
+        azimuth_elevation,
+        klobuchar,
+        nearest_ephemeris,
+        saastamoinen,
+        satellite_states,
+    )
+
+    folder = Path(folder)
+    receiver = section.sensor()
+    t = np.asarray(series.t, dtype=float)
+    eph = receiver.sky(float(t[-1]) if len(t) else 0.0)
+    start = float(receiver.start_gps_s)
+    z = np.asarray(series.z, dtype=float).reshape(len(t), SLOTS, len(FIELDS))
+    lla = truth.at(t)["lla"]
+    r = earth.llh_to_ecef(lla[:, 0], lla[:, 1], lla[:, 2])
+    prns = sorted({int(p) for p in z[:, :, PRN][np.isfinite(z[:, :, PRN])]})
+    sv = np.array([f"G{p:02d}" for p in prns])
+    col = {p: j for j, p in enumerate(prns)}
+    n = (len(t), len(prns))
+    pos, pr, rr = np.full((*n, 3), np.nan), np.full(n, np.nan), np.full(n, np.nan)
+    for i, j in zip(*np.nonzero(np.isfinite(z[:, :, PRN])), strict=True):
+        k = col[int(z[i, j, PRN])]
+        pos[i, k], pr[i, k], rr[i, k] = z[i, j, SX:SZ + 1], z[i, j, PR], z[i, j, RR]
+    gps = t + start
+    tau = np.linalg.norm(pos - r[:, None, :], axis=-1) / C
+    _, _, clk, drift = satellite_states(eph, nearest_ephemeris(eph, sv, gps),
+                                        gps[:, None] - np.nan_to_num(tau), True)
+    az, el = azimuth_elevation(lla[:, None, :], r[:, None, :], pos)
+    delay = saastamoinen(lla[:, None, 0], lla[:, None, 2], el)
+    if eph.iono is not None:
+        delay = delay + klobuchar(eph.iono, lla[:, None, 0], lla[:, None, 1], az, el,
+                                  np.mod(gps[:, None], WEEK_S))
+    obs = {"C1": pr - C * clk + delay, "D1": (C * drift - rr) * F_L1 / C}
+    files = [write_rinex_obs(folder / "gnss_raw.obs", gps, sv, obs, approx_xyz=r[0]),
+             write_rinex_nav(folder / "gnss_raw.nav", eph)]
+    return files, "gnss_raw.obs", {"time_offset_s": -start}
+
+
 __all__ = ["Ephemerides", "GPS_EPOCH", "RinexObs", "WEEK_S", "gps_seconds",
            "is_observation_file", "navigation_beside", "raw_series", "read_raw_gnss",
-           "read_raw_gnss_file", "read_rinex_nav", "read_rinex_obs", "write_rinex_obs"]
+           "read_raw_gnss_file", "read_rinex_nav", "read_rinex_obs", "write_raw_receiver",
+           "write_rinex_nav", "write_rinex_obs"]

@@ -52,6 +52,18 @@ def _raw_gnss_file(path):
 OWN_FORMATS = {"gnss_raw": _raw_gnss_file}
 
 
+def _raw_gnss_writer(folder, series, truth, section):
+    from .rinex import write_raw_receiver
+
+    return write_raw_receiver(folder, series, truth, section)
+
+
+#: sensor -> a writer of a simulated recording in the sensor's own file formats (what a
+#: real one gives: the raw receiver's RINEX), ``(folder, series, truth, section) ->
+#: (files, the file for files:, the section's keys)``; any other sensor: its CSV
+OWN_WRITERS = {"gnss_raw": _raw_gnss_writer}
+
+
 def read_sensor_csv(name: str, path) -> SensorData:
     """Read any registered sensor's CSV file (``docs/data-formats.md``).
 

@@ -67,6 +67,8 @@ from .satellites import (
     F_L1,
     GM,
     OMEGA_E,
+    WEEK_S,
+    Ephemerides,
     azimuth_elevation,
     dilution,
     klobuchar,
@@ -378,14 +380,8 @@ def from_observations(t, pr, doppler, sv, eph, *, mask_deg: float = 10.0,
     _, _, clk, _ = satellite_states(eph, idx, t_tx, True)
     t_tx = t_tx - np.nan_to_num(clk)
     pos, vel, clk, drift = satellite_states(eph, idx, t_tx, True)
-    th = OMEGA_E * np.linalg.norm(pos - rx[:, None, :], axis=-1) / LIGHT  # (transit)
-    c, s = np.cos(th), np.sin(th)
-
-    def turn(a):
-        return np.stack([c * a[..., 0] + s * a[..., 1], -s * a[..., 0] + c * a[..., 1],
-                         a[..., 2]], axis=-1)
-
-    pos, vel = turn(pos), turn(vel)
+    tau = np.linalg.norm(pos - rx[:, None, :], axis=-1) / LIGHT  # (transit)
+    pos, vel = earth_turned(pos, tau), earth_turned(vel, tau)
     az, el = azimuth_elevation(lla[:, None, :], rx[:, None, :], pos)
     corr = np.zeros((N, M))
     if iono and eph.iono is not None:
@@ -500,10 +496,44 @@ def figure(series, solution, excluded=()):
     return fig
 
 
+def earth_turned(a, tau):
+    """ECEF vectors ``a`` (..., 3) of the frame at a signal's transmission in the frame at
+    its reception ``tau`` [s] later (...,): turned by the Earth's rotation ``OMEGA_E tau``
+    about z (the Sagnac correction)."""
+    c, s = np.cos(OMEGA_E * tau), np.sin(OMEGA_E * tau)
+    return np.stack([c * a[..., 0] + s * a[..., 1], -s * a[..., 0] + c * a[..., 1],
+                     a[..., 2]], axis=-1)
+
+
+def light_time(eph, t, r, iterations: int = 3):
+    """What a receiver at ECEF ``r`` (N, 3) [m] sees at GPS times ``t`` (N,) [s] of every
+    satellite of ``eph`` (its ``sv`` in order of first record): the light-time equation
+    ``tau = |R(OMEGA_E tau) p(t - tau) - r| / c`` solved by iteration.  Returns the
+    satellites' ids (M,), and per epoch and satellite (N, M) their positions and
+    velocities at transmission in the frame at reception [m, m/s], their clock offsets
+    [s] and drifts [s/s] (relativistic term and TGD included: what an L1 pseudorange
+    carries) and the geometric ranges [m]; NaN where a satellite has no ephemeris within
+    2 h."""
+    sv = np.array(list(dict.fromkeys(np.asarray(eph.sv).tolist())))
+    idx = nearest_ephemeris(eph, sv, np.asarray(t, dtype=float))
+    tau = np.full(idx.shape, 0.075)
+    for _ in range(iterations + 1):
+        p, v, clk, drift = satellite_states(eph, idx, t[:, None] - tau, True)
+        pos = earth_turned(p, tau)
+        rho = np.linalg.norm(pos - r[:, None, :], axis=-1)
+        tau = np.where(np.isfinite(rho), rho / LIGHT, 0.075)
+    return sv, pos, earth_turned(v, tau), clk, drift, rho
+
+
 # ---------------------------------------------------------------------------- simulation
 #: GPS's nominal orbit: semi-major axis [m] and inclination (IS-GPS-200, the almanac's).
 GPS_A = 26_559_700.0
 GPS_I = np.radians(55.0)
+#: GPS time [s] of a simulation's zero by default: 2026-01-04 00:00:00 GPS (week 2400).
+START_GPS_S = 2400 * WEEK_S
+#: How long a broadcast ephemeris record of :func:`walker_ephemerides` is used [s]
+#: (GPS's: a new record every 2 h).
+RECORD_S = 7200.0
 
 
 def walker(t, n_planes: int = 6, per_plane: int = 5, phasing: int = 1,
@@ -533,6 +563,36 @@ def walker(t, n_planes: int = 6, per_plane: int = 5, phasing: int = 1,
     vel = vel + OMEGA_E * np.stack([pos[..., 1], -pos[..., 0], np.zeros_like(pos[..., 0])],
                                    -1)
     return pos, vel
+
+
+def walker_ephemerides(start: float, end: float, n_planes: int = 6, per_plane: int = 5,
+                       phasing: int = 1, epoch_deg: float = 0.0) -> Ephemerides:
+    """:func:`walker`'s constellation as GPS broadcast ephemerides from GPS time
+    ``start`` [s] (the walker's time zero) to ``end``: circular orbits (``e``, the
+    perturbation terms and the clocks zero), one record per satellite every
+    :data:`RECORD_S` (``toe`` = ``toc`` on that grid), so that
+    :func:`~fednav.sensors.satellites.satellite_states` at GPS time ``T`` gives
+    ``walker(T - start)`` and a RINEX navigation file carries the sky
+    (:func:`fednav.io.rinex.write_rinex_nav`).  No Klobuchar coefficients (the simulated
+    signal has no ionosphere)."""
+    S = n_planes * per_plane
+    k = np.arange(S)
+    plane, slot = k // per_plane, k % per_plane
+    raan = 2 * np.pi * plane / n_planes
+    m0 = (2 * np.pi * slot / per_plane + 2 * np.pi * phasing * plane / S
+          + np.radians(epoch_deg))
+    n = np.sqrt(GM / GPS_A**3)
+    toe = start + RECORD_S * np.arange(int(np.ceil(max(end - start, 0.0) / RECORD_S)) + 1)
+    toe_r, sat = np.repeat(toe, S), np.tile(k, len(toe))
+    z = np.zeros(len(sat))
+    el = {"sqrt_a": np.full(len(sat), np.sqrt(GPS_A)), "e": z, "i0": np.full(len(sat), GPS_I),
+          "omega0": np.mod(raan[sat] + OMEGA_E * (start - toe_r)
+                           + OMEGA_E * np.mod(toe_r, WEEK_S), 2 * np.pi),
+          "omega": z, "m0": np.mod(m0[sat] + n * (toe_r - start) + np.pi, 2 * np.pi) - np.pi,
+          **{k_: z for k_ in ("delta_n", "omega_dot", "idot", "cuc", "cus", "cic", "cis",
+                              "crc", "crs", "af0", "af1", "af2", "tgd", "health")}}
+    return Ephemerides("walker", np.array([f"G{i + 1:02d}" for i in sat]), toe_r, toe_r,
+                       {k_: v.copy() for k_, v in el.items()})
 
 
 def clock_walk(t, h0: float, hm2: float, bias0: float, drift0: float, rng):
@@ -571,9 +631,13 @@ class SatelliteSeries(MeasurementSeries):
 
 @dataclass(frozen=True)
 class RawReceiver:
-    """A receiver tracking a constellation (:func:`walker`): every ``period`` [s] the
-    pseudorange and range rate of each satellite above ``mask`` [rad] (at most
-    :data:`SLOTS`, the highest), with white noise of zenith 1-sigma ``sigma_pr`` [m],
+    """A receiver tracking a constellation (:func:`walker`'s, ``constellation`` = planes,
+    satellites per plane, phasing, ``epoch_deg``, as broadcast ephemerides:
+    :meth:`sky`) from GPS time ``start_gps_s`` [s] (the simulation's zero): every
+    ``period`` [s] the pseudorange and range rate of each satellite above ``mask`` [rad]
+    (at most :data:`SLOTS`, the highest) as the light reaches it (:func:`light_time`:
+    the satellite where it transmitted, turned by the Earth's rotation during the
+    transit), with white noise of zenith 1-sigma ``sigma_pr`` [m],
     ``sigma_rr`` [m/s] scaled by elevation (:func:`elevation_sigma`), a multipath-like
     first-order Gauss–Markov error per satellite (``multipath`` [m], ``multipath_tau``
     [s]; 0: none), and the receiver clock (:func:`clock_walk`; ``clock`` = h0, h_-2,
@@ -589,7 +653,13 @@ class RawReceiver:
     multipath: float = 0.0
     multipath_tau: float = 60.0
     limits: tuple = ()
-    t0: float = 0.0
+    start_gps_s: float = START_GPS_S
+
+    def sky(self, end: float) -> Ephemerides:
+        """The constellation's broadcast ephemerides over the simulation's ``[0, end]``
+        [s] (:func:`walker_ephemerides`)."""
+        return walker_ephemerides(self.start_gps_s, self.start_gps_s + end,
+                                  *self.constellation)
 
     def simulate(self, truth, rng: np.random.Generator, t=None,
                  t_avail=None) -> MeasurementSeries:
@@ -598,11 +668,12 @@ class RawReceiver:
         lla, vel = tr["lla"], tr["vel"]
         r = earth.llh_to_ecef(lla[:, 0], lla[:, 1], lla[:, 2])
         v = np.einsum("nij,nj->ni", earth.enu_to_ecef(lla[:, 0], lla[:, 1]), vel)
-        pos, svel = walker(t + self.t0, *self.constellation)
-        d = pos - r[:, None, :]
-        rho = np.linalg.norm(d, axis=2)
-        u = d / rho[..., None]
-        _, el = azimuth_elevation(lla[:, None, :], r[:, None, :], pos)
+        sv, pos, svel, _, _, rho = light_time(
+            self.sky(float(t[-1]) if len(t) else 0.0), t + self.start_gps_s, r)
+        prn = np.array([int(x[1:]) for x in sv], dtype=float)
+        u = (pos - r[:, None, :]) / rho[..., None]
+        with np.errstate(invalid="ignore"):
+            _, el = azimuth_elevation(lla[:, None, :], r[:, None, :], pos)
         rhod = np.einsum("nsi,nsi->ns", u, svel - v[:, None, :])
         h0, hm2, b0, d0 = self.clock
         clk = clock_walk(t, h0, hm2, b0, d0, rng)
@@ -622,14 +693,15 @@ class RawReceiver:
         rr = rhod + clk[:, 1:] + e_rr
         z = np.full((len(t), WIDTH), np.nan)
         for i in range(len(t)):
-            seen = np.flatnonzero(el[i] >= self.mask)
+            with np.errstate(invalid="ignore"):
+                seen = np.flatnonzero(el[i] >= self.mask)
             n = SLOTS
             for a, b, k in self.limits:
                 if a <= t[i] < b:
                     n = min(n, int(k))
             seen = seen[np.argsort(-el[i, seen])][:n]
             seen.sort()
-            rows = np.column_stack([seen + 1.0, pos[i, seen], svel[i, seen], pr[i, seen],
+            rows = np.column_stack([prn[seen], pos[i, seen], svel[i, seen], pr[i, seen],
                                     rr[i, seen], spr[i, seen], srr[i, seen]])
             z[i] = pack(rows)
         keep = np.isfinite(z[:, PRN])  # (an epoch without satellites is no measurement)
@@ -643,8 +715,11 @@ class GnssRawConfig(SensorConfig):
     (zenith 1-sigma, for satellites whose data give none; scaled by elevation),
     ``elevation_mask_deg``, the receiver ``clock`` (``tcxo``, ``ocxo`` or ``[h0, h_-2]``,
     its Allan-variance coefficients: the clock states' process noise), the clock's initial
-    1-sigma ``clock_bias_sigma_m``, ``clock_drift_sigma_mps``.  Simulation only: the
-    ``constellation`` (Walker planes, satellites per plane, phasing, ``epoch_deg``),
+    1-sigma ``clock_bias_sigma_m``, ``clock_drift_sigma_mps``, ``time_offset_s`` added to
+    a file's time stamps (a receiver's files are in GPS time [s]: minus the GPS time of
+    the IMU clock's zero).  Simulation only: the ``constellation`` (Walker planes,
+    satellites per plane, phasing, ``epoch_deg``), ``start_gps_s`` the GPS time of the
+    simulation's zero,
     ``multipath_sigma_m`` and ``multipath_tau_s``, the initial clock ``clock_bias_m`` and
     ``clock_drift_mps``, and ``satellites_s`` — windows ``[start_s, end_s, n]`` with only
     the ``n`` highest satellites (jamming, an urban canyon; 0: none)."""
@@ -657,6 +732,9 @@ class GnssRawConfig(SensorConfig):
     clock: Literal["tcxo", "ocxo"] | tuple[float, float] = "tcxo"
     clock_bias_sigma_m: float = Field(default=3.0e5, gt=0.0)
     clock_drift_sigma_mps: float = Field(default=100.0, gt=0.0)
+    time_offset_s: float = 0.0
+    start_gps_s: float = Field(default=START_GPS_S, ge=0.0, json_schema_extra=simulation_only(
+        "the simulated sky's time"))
     constellation: tuple[int, int, int, float] = Field(
         default=(6, 5, 1, 0.0), json_schema_extra=simulation_only("a simulated sky"))
     multipath_sigma_m: float = Field(default=0.0, ge=0.0,
@@ -713,7 +791,8 @@ class GnssRawConfig(SensorConfig):
                            float(units.deg(self.elevation_mask_deg)),
                            (h0, hm2, self.clock_bias_m, self.clock_drift_mps),
                            tuple(self.constellation), self.multipath_sigma_m,
-                           self.multipath_tau_s, tuple(tuple(w) for w in self.satellites_s))
+                           self.multipath_tau_s, tuple(tuple(w) for w in self.satellites_s),
+                           self.start_gps_s)
 
     def model(self) -> SatelliteRanges:
         return SatelliteRanges(self.sigma_pseudorange_m, self.sigma_range_rate_mps,

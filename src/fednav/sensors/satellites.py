@@ -38,6 +38,30 @@ F_L1, F_L2 = 1575.42e6, 1227.60e6
 WEEK_S = 604800.0
 
 
+@dataclass
+class Ephemerides:
+    """GPS broadcast ephemerides, one row per record: ``sv`` (K,), the clock epoch
+    ``toc`` and the ephemeris epoch ``toe`` in GPS time [s], the clock terms ``af0``
+    [s], ``af1`` [s/s], ``af2`` [s/s^2], ``tgd`` [s], ``health``, and the orbit's
+    ``sqrt_a`` [m^0.5], ``e``, ``i0``, ``omega0``, ``omega``, ``m0`` [rad], ``delta_n``,
+    ``omega_dot``, ``idot`` [rad/s], ``cuc``, ``cus``, ``cic``, ``cis`` [rad], ``crc``,
+    ``crs`` [m]; ``iono`` (8,) the Klobuchar alpha and beta of the header (None if
+    absent)."""
+
+    source: str
+    sv: np.ndarray
+    toc: np.ndarray
+    toe: np.ndarray
+    elements: dict[str, np.ndarray]
+    iono: np.ndarray | None = None
+
+    def __getattr__(self, name: str) -> np.ndarray:
+        try:
+            return self.__dict__["elements"][name]
+        except KeyError:
+            raise AttributeError(name) from None
+
+
 def nearest_ephemeris(eph, sv, t) -> np.ndarray:
     """Index of the record of each satellite ``sv`` (M,) nearest each time ``t`` (N,)
     [GPS s] among the healthy ones within 2 h of their ``toe`` (N, M; -1 where none)."""

@@ -9,7 +9,9 @@ random draws as :func:`fednav.sim.runs.make_run_data`, so ``fednav reproduce`` a
   right-forward-up), each row stamped at the end of its interval;
 * one file per sensor the mode's navigator is fed (its aiding sensors, a damping
   barometer, air data for the wind constraint), ``<sensor>.csv``, with each row's
-  1-sigma and, for delayed sensors, ``t_arrival_s``;
+  1-sigma and, for delayed sensors, ``t_arrival_s`` — or the files a real one gives,
+  where the sensor has a format of its own (:data:`fednav.io.sensorfile.OWN_WRITERS`:
+  the raw GNSS receiver's RINEX observation and navigation files);
 * ``reference.csv`` — the truth at every IMU sample, with attitude;
 * ``system.yaml`` — the system description of that mode (:meth:`Scenario.system_for`)
   with the run's initial state (``initial:``, the truth moved by the run's drawn initial
@@ -28,7 +30,7 @@ import numpy as np
 
 from ..core import units
 from ..io.csvdata import INCREMENT_COLUMNS, write_csv
-from ..io.sensorfile import write_sensor_csv
+from ..io.sensorfile import OWN_WRITERS, write_sensor_csv
 from ..navigator.system import missing_figures
 from .runs import feed_order, make_run_data
 from .scenario import ModeConfig, Scenario
@@ -56,10 +58,12 @@ def find_mode(scn: Scenario, name: str | None) -> ModeConfig:
                       f"{', '.join(m.name for m in scn.modes)}")
 
 
-def system_yaml(scn: Scenario, mode: ModeConfig, truth, data, files: dict[str, str]) -> dict:
+def system_yaml(scn: Scenario, mode: ModeConfig, truth, data, files: dict[str, str],
+                sections: dict[str, dict] | None = None) -> dict:
     """The system description of ``mode`` with the initial state of the run whose data
-    (:class:`~fednav.sim.runs.RunData`) are ``data`` and the files, as a mapping for YAML
-    (SI and degrees as the keys say)."""
+    (:class:`~fednav.sim.runs.RunData`) are ``data``, the files, and the keys
+    ``sections`` {sensor: {key: value}} that go with a file (a receiver's time offset),
+    as a mapping for YAML (SI and degrees as the keys say)."""
     from .runs import _initial_state
 
     init = _initial_state(scn, truth, data)
@@ -81,6 +85,8 @@ def system_yaml(scn: Scenario, mode: ModeConfig, truth, data, files: dict[str, s
         "sigma": {"attitude_arcsec": [float(v) for v in ie.attitude_arcsec],
                   "velocity_mps": float(ie.velocity_mps),
                   "position_m": [float(v) for v in pos]}}
+    for name, keys in (sections or {}).items():
+        out["sensors"][name].update(keys)
     out["files"] = dict(files)
     return out
 
@@ -104,9 +110,16 @@ def write_run(scn: Scenario, seed: int, mode: ModeConfig, out,
     for j, c in enumerate(INCREMENT_COLUMNS[3:]):
         cols[c] = data.dv[:m, j]
     files = [write_csv(out / "imu.csv", cols, significant=17)]
-    names = {"imu": "imu.csv"}
+    names, sections = {"imu": "imu.csv"}, {}
+    system = scn.system_for(mode)
     for name in fed_sensors(scn, mode):
         if name not in data.series:
+            continue
+        own = OWN_WRITERS.get(name)
+        if own is not None:
+            written, names[name], sections[name] = own(out, data.series[name], truth,
+                                                       system.sensors[name])
+            files += written
             continue
         files.append(write_sensor_csv(out / f"{name}.csv", data.series[name], sigma=True))
         names[name] = f"{name}.csv"
@@ -118,7 +131,7 @@ def write_run(scn: Scenario, seed: int, mode: ModeConfig, out,
         "roll_deg": deg(truth.euler[:, 1]), "heading_deg": deg(truth.euler[:, 2])},
         significant=17))
     names["reference"] = "reference.csv"
-    desc = system_yaml(scn, mode, truth, data, names)
+    desc = system_yaml(scn, mode, truth, data, names, sections)
     head = (f"# fednav process csv --config {out / 'system.yaml'}: scenario {scn.name}, "
             f"mode {mode.name}, run seed {seed}"
             + (f", first {max_time:g} s" if max_time is not None else "") + "\n")
