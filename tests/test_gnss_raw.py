@@ -493,6 +493,93 @@ def test_a_simulated_receiver_as_rinex_reads_back_to_its_measurements(tmp_path, 
             assert abs(u[PR] - v[PR]) < 0.05 and abs(u[RR] - v[RR]) < 1e-3
 
 
+def _sky_design(tmp_path, lla_deg, raw: str, last_s: float = 190.0) -> Path:
+    """DESIGN's drive at ``lla_deg`` (slow; its last street ``last_s`` long), its raw
+    receiver's section ``raw``."""
+    text = DESIGN.replace("{name: street, duration_s: 190}",
+                          f"{{name: street, duration_s: {last_s}}}")
+    text = text.replace("lat_deg: 47.40, lon_deg: 8.55, h_m: 500.0, speed_mps: 15.0",
+                        f"lat_deg: {lla_deg[0]}, lon_deg: {lla_deg[1]}, h_m: "
+                        f"{lla_deg[2]}, speed_mps: 1.0")
+    text = text.replace("gnss_raw: {period_s: 1.0, satellites_s: [[150.0, 300.0, 2]]}",
+                        f"gnss_raw: {raw}")
+    path = tmp_path / "design.yaml"
+    path.write_text(text)
+    return path
+
+
+def test_a_navigation_file_of_the_walker_sky_flies_the_walker_sky(tmp_path):
+    """navigation_file (relative to the design): the Walker sky written as a RINEX
+    navigation file and flown from it gives the Walker sky's rows (to the file's 12
+    digits); a missing file is one line when the simulation reads it."""
+    pytest.importorskip("georinex")
+    from fednav.io.rinex import write_rinex_nav
+    from fednav.sensors.gnss_raw import START_GPS_S, walker_ephemerides
+    from fednav.sim.runs import make_run_data
+    from fednav.sim.scenario import load_scenario
+
+    write_rinex_nav(tmp_path / "walker.26n", walker_ephemerides(START_GPS_S,
+                                                                START_GPS_S + 400.0))
+    runs = {}
+    for name, raw in (("walker", "{period_s: 1.0}"),
+                      ("file", "{period_s: 1.0, navigation_file: walker.26n}")):
+        (tmp_path / name).mkdir()
+        scn = load_scenario(_sky_design(tmp_path / name, (47.4, 8.55, 500.0), raw)
+                            if name == "walker" else
+                            _sky_design(tmp_path, (47.4, 8.55, 500.0), raw))
+        runs[name] = make_run_data(scn, 2, 200.0).series["gnss_raw"]
+    a, b = runs["walker"], runs["file"]
+    np.testing.assert_array_equal(a.t, b.t)
+    np.testing.assert_array_equal(np.isnan(a.z), np.isnan(b.z))
+    np.testing.assert_allclose(a.z, b.z, rtol=0, atol=2e-4, equal_nan=True)
+    from fednav.io.data import DataError
+
+    scn = load_scenario(_sky_design(tmp_path, (47.4, 8.55, 500.0),
+                                    "{period_s: 1.0, navigation_file: missing.26n}"))
+    with pytest.raises(DataError, match=r"missing.26n: no such file") as e:
+        make_run_data(scn, 2, 20.0)
+    assert "\n" not in str(e.value) and str(tmp_path / "missing.26n") in str(e.value)
+
+
+@pytest.mark.skipif(not STATIC.is_dir(), reason="needs ../shared/data")
+def test_a_sky_from_a_real_navigation_file_is_the_real_sky(tmp_path):
+    """A receiver simulated at station 0759 from its own broadcast navigation file sees
+    the satellites the station saw: above 10 deg, epoch by epoch over its hour, the same
+    ones but for those crossing the mask (at most one), and where they are the same the
+    same PDOP (the real sky's geometry)."""
+    from fednav.io.rinex import read_raw_gnss, read_rinex_obs
+    from fednav.sensors.gnss_raw import geometry
+    from fednav.sim.runs import make_run_data
+    from fednav.sim.scenario import load_scenario
+
+    obs = read_rinex_obs(STATIC / "07590920.05o")
+    lla = earth.ecef_to_llh(obs.approx_xyz)
+    nav = STATIC / "07590920.05n"
+    start = float(obs.t[0])
+    scn = load_scenario(_sky_design(tmp_path, (float(np.degrees(lla[0])),
+                                               float(np.degrees(lla[1])), float(lla[2])),
+                                    f"{{period_s: 30.0, navigation_file: {nav}, "
+                                    f"start_gps_s: {start}}}", 3370.0))
+    s = make_run_data(scn, 1).series["gnss_raw"]
+    assert len(s.t) >= 110
+    real = read_raw_gnss(STATIC / "07590920.05o", nav)
+    k = np.searchsorted(real.t, s.t + start)
+    assert np.allclose(real.t[k], s.t + start)
+    here = np.tile(lla, (len(s.t), 1))
+    _, pdop_sim, _, _ = geometry(s.z, here)
+    _, pdop_real, _, _ = geometry(real.z[k], here)
+
+    def prns(z):
+        z = z.reshape(len(z), SLOTS, len(FIELDS))
+        return [{int(p) for p in row[:, PRN] if np.isfinite(p)} for row in z]
+
+    sim, seen = prns(s.z), prns(real.z[k])
+    assert all(len(a ^ b) <= 1 for a, b in zip(sim, seen, strict=True))
+    same = np.array([a == b for a, b in zip(sim, seen, strict=True)])
+    assert same.mean() > 0.5
+    np.testing.assert_allclose(pdop_sim[same], pdop_real[same], rtol=1e-4)
+
+
 def test_bad_satellites_drop_out_and_the_file_round_trips(tmp_path, flown):
     """A satellite with a NaN velocity or a non-positive 1-sigma gives no row (never a
     NaN residual); the sensor's CSV file (NaN in its empty slots) reads back to the same

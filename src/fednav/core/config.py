@@ -143,11 +143,13 @@ def read_mapping(path: str | Path, what: str = "scenario") -> dict:
     return data
 
 
-def validate(data: dict, model: type[BaseModel], where: str):
+def validate(data: dict, model: type[BaseModel], where: str, folder: Path | None = None):
     """``data`` validated as ``model``; a :class:`ConfigError` of one line, ``where``
-    (the file, or what the mapping is) first, naming the key."""
+    (the file, or what the mapping is) first, naming the key.  ``folder``: the file's
+    (the validation context's ``folder``: what a path key is relative to)."""
     try:
-        return model.model_validate(data)
+        return model.model_validate(data, context=None if folder is None else
+                                    {"folder": Path(folder)})
     except ValidationError as e:
         # An unknown key is usually a misspelt one: report it before the "missing" it causes.
         errs = sorted(e.errors(), key=lambda x: x["type"] != "extra_forbidden")
@@ -158,4 +160,4 @@ def validate(data: dict, model: type[BaseModel], where: str):
 def load_model(path: str | Path, model: type[BaseModel], what: str = "scenario"):
     """Read a YAML file into the pydantic ``model`` (errors: :class:`ConfigError`, one line
     naming the file and the key)."""
-    return validate(read_mapping(path, what), model, f"{what} file {path}")
+    return validate(read_mapping(path, what), model, f"{what} file {path}", Path(path).parent)

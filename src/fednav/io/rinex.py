@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import DataError
+from ..sensors import satellites
 from ..sensors.satellites import Ephemerides
 from .data import import_for
 
@@ -410,6 +411,8 @@ def write_raw_receiver(folder, series, truth, section) -> tuple[list[Path], str,
              write_rinex_nav(folder / "gnss_raw.nav", eph)]
     return files, "gnss_raw.obs", {"time_offset_s": -start}
 
+
+satellites.NAVIGATION_READER = read_rinex_nav  # (the simulated sky from a real file)
 
 __all__ = ["Ephemerides", "GPS_EPOCH", "RinexObs", "WEEK_S", "gps_seconds",
            "is_observation_file", "navigation_beside", "raw_series", "read_raw_gnss",

@@ -43,10 +43,11 @@ against finite differences of the range model.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 from typing import ClassVar, Literal
 
 import numpy as np
-from pydantic import Field, field_validator
+from pydantic import Field, ValidationInfo, field_validator
 
 from ..core import earth, units
 from ..core.config import simulation_only
@@ -73,6 +74,7 @@ from .satellites import (
     dilution,
     klobuchar,
     nearest_ephemeris,
+    read_navigation,
     saastamoinen,
     satellite_states,
     single_point,
@@ -654,10 +656,14 @@ class RawReceiver:
     multipath_tau: float = 60.0
     limits: tuple = ()
     start_gps_s: float = START_GPS_S
+    navigation: str | None = None
 
     def sky(self, end: float) -> Ephemerides:
-        """The constellation's broadcast ephemerides over the simulation's ``[0, end]``
-        [s] (:func:`walker_ephemerides`)."""
+        """The sky's broadcast ephemerides over the simulation's ``[0, end]`` [s]: the
+        ``navigation`` file's (a real sky: :func:`~fednav.sensors.satellites.
+        read_navigation`), else the constellation's (:func:`walker_ephemerides`)."""
+        if self.navigation is not None:
+            return read_navigation(self.navigation)
         return walker_ephemerides(self.start_gps_s, self.start_gps_s + end,
                                   *self.constellation)
 
@@ -718,8 +724,10 @@ class GnssRawConfig(SensorConfig):
     1-sigma ``clock_bias_sigma_m``, ``clock_drift_sigma_mps``, ``time_offset_s`` added to
     a file's time stamps (a receiver's files are in GPS time [s]: minus the GPS time of
     the IMU clock's zero).  Simulation only: the ``constellation`` (Walker planes,
-    satellites per plane, phasing, ``epoch_deg``), ``start_gps_s`` the GPS time of the
-    simulation's zero,
+    satellites per plane, phasing, ``epoch_deg``) or a ``navigation_file`` (RINEX, its
+    path relative to the description's folder: its broadcast ephemerides are the sky, so
+    its geometry and DOP are real), ``start_gps_s`` the GPS time of the simulation's zero
+    (default: 2026-01-04 for the Walker sky, the file's first ephemeris epoch),
     ``multipath_sigma_m`` and ``multipath_tau_s``, the initial clock ``clock_bias_m`` and
     ``clock_drift_mps``, and ``satellites_s`` — windows ``[start_s, end_s, n]`` with only
     the ``n`` highest satellites (jamming, an urban canyon; 0: none)."""
@@ -733,8 +741,10 @@ class GnssRawConfig(SensorConfig):
     clock_bias_sigma_m: float = Field(default=3.0e5, gt=0.0)
     clock_drift_sigma_mps: float = Field(default=100.0, gt=0.0)
     time_offset_s: float = 0.0
-    start_gps_s: float = Field(default=START_GPS_S, ge=0.0, json_schema_extra=simulation_only(
+    start_gps_s: float | None = Field(default=None, ge=0.0, json_schema_extra=simulation_only(
         "the simulated sky's time"))
+    navigation_file: str | None = Field(default=None, json_schema_extra=simulation_only(
+        "a simulated sky"))
     constellation: tuple[int, int, int, float] = Field(
         default=(6, 5, 1, 0.0), json_schema_extra=simulation_only("a simulated sky"))
     multipath_sigma_m: float = Field(default=0.0, ge=0.0,
@@ -754,6 +764,16 @@ class GnssRawConfig(SensorConfig):
         if not isinstance(v, str) and (v[0] < 0.0 or v[1] < 0.0):
             raise ValueError(f"the clock's [h0, h_-2] are non-negative, got {list(v)}")
         return v
+
+    @field_validator("navigation_file")
+    @classmethod
+    def _navigation(cls, v, info: ValidationInfo):
+        if v is None:
+            return v
+        p = Path(v)  # (read when a simulation flies it: a processed copy needs it not)
+        if not p.is_absolute() and info.context and info.context.get("folder"):
+            p = info.context["folder"] / p
+        return str(p.resolve())
 
     @field_validator("timing")
     @classmethod
@@ -792,7 +812,17 @@ class GnssRawConfig(SensorConfig):
                            (h0, hm2, self.clock_bias_m, self.clock_drift_mps),
                            tuple(self.constellation), self.multipath_sigma_m,
                            self.multipath_tau_s, tuple(tuple(w) for w in self.satellites_s),
-                           self.start_gps_s)
+                           self.start_s(), self.navigation_file)
+
+    def start_s(self) -> float:
+        """GPS time of the simulation's zero [s]: ``start_gps_s``, else the navigation
+        file's first healthy ephemeris epoch (whole seconds), else :data:`START_GPS_S`."""
+        if self.start_gps_s is not None:
+            return float(self.start_gps_s)
+        if self.navigation_file is None:
+            return START_GPS_S
+        eph = read_navigation(self.navigation_file)
+        return float(np.ceil(np.min(eph.toe[eph.health == 0])))
 
     def model(self) -> SatelliteRanges:
         return SatelliteRanges(self.sigma_pseudorange_m, self.sigma_range_rate_mps,

@@ -135,7 +135,11 @@ class SensorSet(Mapping):
         return SensorSet({k: v for k, v in d.items() if v is not None})
 
     @classmethod
-    def validate(cls, value) -> SensorSet:
+    def validate(cls, value, info=None) -> SensorSet:
+        """``value`` (a mapping of sensor name -> its section) as a :class:`SensorSet`;
+        ``info``: pydantic's validation info, whose context (the description's
+        ``folder``) each section is validated with."""
+        context = getattr(info, "context", None)
         if isinstance(value, SensorSet):
             return value
         if value is None:
@@ -154,7 +158,7 @@ class SensorSet(Mapping):
                 out[name] = cfg
             else:
                 try:
-                    out[name] = model.model_validate(cfg)
+                    out[name] = model.model_validate(cfg, context=context)
                 except ValidationError as e:
                     raise nested_validation_error([name], e) from None
             why = SENSORS[name].check_geometry(out[name])
@@ -168,6 +172,6 @@ class SensorSet(Mapping):
 
     @classmethod
     def __get_pydantic_core_schema__(cls, source, handler):
-        return core_schema.no_info_plain_validator_function(
+        return core_schema.with_info_plain_validator_function(
             cls.validate, serialization=core_schema.plain_serializer_function_ser_schema(
                 lambda v: v.dump()))

@@ -19,6 +19,7 @@ and drops out of that epoch's solution.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -60,6 +61,22 @@ class Ephemerides:
             return self.__dict__["elements"][name]
         except KeyError:
             raise AttributeError(name) from None
+
+
+#: The reader of broadcast navigation files (``path -> Ephemerides``): set by
+#: :mod:`fednav.io.rinex` when it is imported (the file layer sits above the models;
+#: the simulation imports it), for :func:`read_navigation`.
+NAVIGATION_READER = None
+
+
+@functools.lru_cache(maxsize=8)
+def read_navigation(path: str) -> Ephemerides:
+    """The broadcast ephemerides of the navigation file ``path`` (RINEX), read once per
+    process by :data:`NAVIGATION_READER`."""
+    if NAVIGATION_READER is None:
+        raise ValueError(f"{path}: no reader of navigation files is loaded (fednav.io "
+                         f"registers RINEX's when imported)")
+    return NAVIGATION_READER(path)
 
 
 def nearest_ephemeris(eph, sv, t) -> np.ndarray:

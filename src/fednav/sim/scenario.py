@@ -346,6 +346,15 @@ class Scenario(System):
                       constraint=mode.constraint, filter=flt, integrity=self.integrity)
 
     @model_validator(mode="after")
+    def _navigation_reader(self):
+        # a sky simulated from a navigation file (a section's navigation_file) is read by
+        # the file layer's RINEX reader, which registers with the models when imported
+        # (imported here only then: the file layer costs 0.4 s of start-up)
+        if any(getattr(self.sensors[n], "navigation_file", None) for n in self.sensors):
+            from ..io import rinex  # noqa: F401
+        return self
+
+    @model_validator(mode="after")
     def _fault_experiment_needs_detection(self):
         if self.fault_experiment is not None and self.filter.fdi_alpha is None:
             raise ValueError("fault_experiment needs filter.fdi_alpha (the detection "
