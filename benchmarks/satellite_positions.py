@@ -2,8 +2,12 @@
 (:func:`fednav.sensors.satellites.satellite_states`) against a second implementation,
 gnss_lib_py's (Stanford NAV Lab, ``gnss_lib_py.utils.sv_models.find_sv_states``).
 
-    pip install gnss-lib-py   # (not a dependency of fednav: for this comparison only)
+    python -m venv /tmp/glp && . /tmp/glp/bin/activate && pip install -e . gnss-lib-py
     python benchmarks/satellite_positions.py [NAV ...]
+
+(gnss-lib-py is not a dependency of fednav: it pins older georinex and xarray, with which
+georinex no longer reads RINEX observation files under numpy 2 — a virtual environment
+of its own keeps fednav's.)
 
 Default: the two GSI stations' navigation files of ``../shared/data/rinex-static``.  Each
 record of a file is evaluated by both at times from 2 h before to 2 h after its ``toe``

@@ -52,7 +52,7 @@ def _sky(t=1000.0, nav=None):
     # and 3 m/s, less a few metres (the residual is what the tests read)
     from fednav.sensors.gnss_raw import _antenna
 
-    rx, vx, _ = _antenna(nav or _nav(), LEVER if nav is not None else np.zeros(3))
+    rx, vx, _, _ = _antenna(nav or _nav(), LEVER if nav is not None else np.zeros(3))
     d = pos[seen] - rx
     rho = np.linalg.norm(d, axis=1)
     rows[:, PR] = rho + 1234.0 - 5.0 * np.sin(seen)

@@ -138,16 +138,17 @@ def elevation_sigma(sigma_zenith, el):
 
 
 def _antenna(nav: NavSnapshot, lever, frame: bool = False):
-    """ECEF position and velocity of the antenna and C_n^e there; with ``frame`` also
-    d(C_n^e v)/d(east, north) [1/s] (3, 2): how the ECEF velocity of a fixed ENU velocity
-    turns with the local frame as the position moves (a term of 1e-6 per second)."""
+    """ECEF position and velocity of the antenna, C_n^e there and its latitude,
+    longitude and height; with ``frame`` also d(C_n^e v)/d(east, north) [1/s] (3, 2):
+    how the ECEF velocity of a fixed ENU velocity turns with the local frame as the
+    position moves (a term of 1e-6 per second)."""
     lla, vel = np.asarray(nav.lla, dtype=float), np.asarray(nav.vel, dtype=float)
-    C = np.asarray(nav.C, dtype=float)
     if np.any(lever):
         omega = np.zeros(3) if nav.omega_b is None else np.asarray(nav.omega_b, float)
-        lla, vel = earth.lever_arm_point(lla, vel, C, omega, lever)
+        lla, vel = earth.lever_arm_point(lla, vel, np.asarray(nav.C, dtype=float), omega,
+                                         lever)
     Cne = earth.enu_to_ecef(lla[0], lla[1])
-    out = earth.llh_to_ecef(*lla), Cne @ vel, Cne
+    out = earth.llh_to_ecef(*lla), Cne @ vel, Cne, lla
     if not frame:
         return out
     sl, cl = np.sin(lla[0]), np.cos(lla[0])
@@ -198,7 +199,7 @@ class BoundRanges:
         return out
 
     def _compute(self, nav: NavSnapshot):
-        r, v, Cne, turn = _antenna(nav, self.lever, frame=True)
+        r, v, Cne, _, turn = _antenna(nav, self.lever, frame=True)
         d = self.sat[:, SX:SZ + 1] - r
         rho = np.linalg.norm(d, axis=1)
         u = d / rho[:, None]
@@ -210,7 +211,7 @@ class BoundRanges:
         rho, u, w, rhod, _, _ = self._geometry(nav)
         pr = rho + self.clock[0] - self.sat[:, PR]
         rr = rhod + self.clock[1] - self.sat[:, RR]
-        return np.r_[pr, rr[self.use_rr]]
+        return np.concatenate([pr, rr[self.use_rr]])
 
     def H(self, nav: NavSnapshot) -> np.ndarray:
         rho, u, w, rhod, Cne, turn = self._geometry(nav)
@@ -287,8 +288,8 @@ class SatelliteRanges:
             s[s[:, SRR] <= 0.0, RR] = np.nan
         s = s[ok]
         if nav is not None and len(s):
-            r, _, _ = _antenna(nav, self.lever)
-            _, el = azimuth_elevation(earth.ecef_to_llh(r), r, s[:, SX:SZ + 1])
+            r, _, _, lla = _antenna(nav, self.lever)
+            _, el = azimuth_elevation(lla, r, s[:, SX:SZ + 1])
             s = s[el >= self.mask]
             el = el[el >= self.mask]
             for col, sig in ((SPR, self.sigma_pr), (SRR, self.sigma_rr)):
@@ -313,9 +314,10 @@ class SatelliteRanges:
         sat = self.satellites(z, nav)
         use_rr = np.isfinite(sat[:, RR])
         prn = sat[:, PRN].astype(np.int64)
-        R = np.diag(np.r_[sat[:, SPR], sat[use_rr, SRR]] ** 2)
-        out = BoundRanges(sat, self.lever, layout.n, ic, xa[ic:ic + 2].copy(), R,
-                          np.r_[prn, prn[use_rr]], use_rr, dt)
+        R = np.diag(np.concatenate([sat[:, SPR], sat[use_rr, SRR]]) ** 2)
+        groups = np.concatenate([prn, prn[use_rr]])
+        out = BoundRanges(sat, self.lever, layout.n, ic, xa[ic:ic + 2].copy(), R, groups,
+                          use_rr, dt)
         if len(sat):
             y = out.residual(nav)
             jump = float(np.median(y[:len(sat)]))
@@ -330,7 +332,7 @@ class SatelliteRanges:
             if moved:
                 self.clock_resets += 1
                 out = BoundRanges(sat, self.lever, layout.n, ic, xa[ic:ic + 2].copy(), R,
-                                  np.r_[prn, prn[use_rr]], use_rr, dt)
+                                  groups, use_rr, dt)
         return out
 
 
