@@ -540,6 +540,16 @@ START_GPS_S = 2400 * WEEK_S
 RECORD_S = 7200.0
 
 
+def _walker_slots(n_planes: int, per_plane: int, phasing: int, epoch_deg: float):
+    """Each satellite's right ascension of its node and argument of latitude at time zero
+    [rad] in a Walker delta constellation (planes, satellites per plane, phasing)."""
+    S = n_planes * per_plane
+    plane, slot = np.divmod(np.arange(S), per_plane)
+    return (2 * np.pi * plane / n_planes,
+            2 * np.pi * slot / per_plane + 2 * np.pi * phasing * plane / S
+            + np.radians(epoch_deg))
+
+
 def walker(t, n_planes: int = 6, per_plane: int = 5, phasing: int = 1,
            epoch_deg: float = 0.0):
     """A Walker delta constellation of GPS's orbits (circular, 55 deg, 26 560 km) at
@@ -548,12 +558,7 @@ def walker(t, n_planes: int = 6, per_plane: int = 5, phasing: int = 1,
     constellation along its orbits (another geometry of the sky)."""
     t = np.atleast_1d(np.asarray(t, dtype=float))
     n = np.sqrt(GM / GPS_A**3)
-    S = n_planes * per_plane
-    k = np.arange(S)
-    plane, slot = k // per_plane, k % per_plane
-    raan = 2 * np.pi * plane / n_planes
-    m0 = (2 * np.pi * slot / per_plane + 2 * np.pi * phasing * plane / S
-          + np.radians(epoch_deg))
+    raan, m0 = _walker_slots(n_planes, per_plane, phasing, epoch_deg)
     u = m0[None, :] + n * t[:, None]  # argument of latitude
     lon = raan[None, :] - OMEGA_E * t[:, None]  # node's longitude in the Earth frame
     cu, su = np.cos(u), np.sin(u)
@@ -579,12 +584,8 @@ def walker_ephemerides(start: float, end: float, n_planes: int = 6, per_plane: i
     ``walker(T - start)`` and a RINEX navigation file carries the sky
     (:func:`fednav.io.rinex.write_rinex_nav`).  No Klobuchar coefficients (the simulated
     signal has no ionosphere)."""
-    S = n_planes * per_plane
-    k = np.arange(S)
-    plane, slot = k // per_plane, k % per_plane
-    raan = 2 * np.pi * plane / n_planes
-    m0 = (2 * np.pi * slot / per_plane + 2 * np.pi * phasing * plane / S
-          + np.radians(epoch_deg))
+    raan, m0 = _walker_slots(n_planes, per_plane, phasing, epoch_deg)
+    S, k = len(raan), np.arange(len(raan))
     n = np.sqrt(GM / GPS_A**3)
     toe = start + RECORD_S * np.arange(int(np.ceil(max(end - start, 0.0) / RECORD_S)) + 1)
     toe_r, sat = np.repeat(toe, S), np.tile(k, len(toe))
