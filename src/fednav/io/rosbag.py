@@ -529,8 +529,12 @@ class _Ros1Bag(_SqliteBag):
         """The bag at ``path`` when it is a ROS 1 bag file, else None."""
         from . import ros1bag
 
-        with open(path, "rb") as f:
-            return cls(path) if f.read(len(ros1bag.MAGIC)) == ros1bag.MAGIC else None
+        try:
+            with open(path, "rb") as f:
+                magic = f.read(len(ros1bag.MAGIC))
+        except OSError:  # (rosbags' reader says why, in one line)
+            return None
+        return cls(path) if magic == ros1bag.MAGIC else None
 
     def deserialize(self, data: bytes, msgtype: str):
         return _standard_types(1).deserialize_ros1(data, msgtype)
