@@ -691,6 +691,59 @@ def test_fednav_process_flies_a_simulated_raw_receiver(tmp_path):
     assert 0.7 < s["consistency"]["gnss_raw"]["nis_per_dof"] < 1.4
     assert s["error_states"]["clock_m_mps"]["estimate"][1] != 0.0
     assert (out / "processed" / "gnss_raw.png").stat().st_size > 10_000
+    # without initial: the run starts from the receiver's own single-point solutions
+    import yaml
+
+    desc = yaml.safe_load((out / "system.yaml").read_text())
+    desc.pop("initial")
+    (out / "no-initial.yaml").write_text(yaml.safe_dump(desc))
+    r = CliRunner().invoke(app, ["process", "csv", "--config", str(out / "no-initial.yaml"),
+                                 "--out", str(out / "from-spp")])
+    assert r.exit_code == 0, r.output
+    s2 = json.loads((out / "from-spp" / "summary.json").read_text())
+    assert s2["alignment"]["heading"].startswith("GNSS course")
+    r1, r2 = s["rmse"], s2["rmse"]
+    assert r2["east_m"] < 2 * r1["east_m"] + 1.0 and r2["north_m"] < 2 * r1["north_m"] + 1.0
+
+
+def test_single_point_fixes_from_the_receivers_own_rows(flown):
+    """The single-point solutions a recording without fixes or initial: starts from: every
+    epoch with four satellites (none in the two-satellite window), scattered about the
+    truth by their stated 1-sigma (position 3.0/3.6/6.4 m RMS against 3.2/3.6/6.8 m,
+    velocity 0.12/0.12/0.22 m/s against 0.11/0.12/0.23)."""
+    from fednav.sensors.gnss_raw import single_point_fixes
+
+    scn, data, _ = flown
+    s = data.series["gnss_raw"]
+    section = scn.system_for(scn.modes[1]).sensors["gnss_raw"]
+    t, lla, vel, s_pos, s_vel = single_point_fixes(s, section)
+    n = np.isfinite(s.z.reshape(len(s.t), SLOTS, len(FIELDS))[:, :, PRN]).sum(axis=1)
+    np.testing.assert_array_equal(t, s.t[n >= 4])
+    tr = scn.trajectory().at(t)
+    e = np.asarray(earth.llh_difference_enu(*lla.T, *tr["lla"].T))
+    e = e if e.shape[-1] == 3 else e.T
+    # (their 1-sigma what they scatter by: the rows' 1-sigma through the DOP)
+    np.testing.assert_allclose(np.sqrt(np.mean(e**2, axis=0)), s_pos, rtol=0.3)
+    np.testing.assert_allclose(np.sqrt(np.mean((vel - tr["vel"]) ** 2, axis=0)), s_vel,
+                               rtol=0.3)
+    assert 1.0 < s_pos[0] < 6.0 and s_pos[2] > s_pos[0] and 0.02 < s_vel[0] < 0.5
+
+
+def test_a_start_from_fewer_than_four_satellites_is_one_line(flown):
+    """No epoch with four satellites and no initial: a one-line DataError saying so."""
+    from types import SimpleNamespace
+
+    from fednav.io.data import DataError
+    from fednav.process.run import _start_fixes
+
+    scn, data, _ = flown
+    s = data.series["gnss_raw"]
+    z = s.z.reshape(len(s.t), SLOTS, len(FIELDS)).copy()
+    z[:, 3:] = np.nan  # (three satellites at most)
+    few = SimpleNamespace(t=s.t, z=z.reshape(len(s.t), -1), source="rover.obs")
+    with pytest.raises(DataError, match="rover.obs: no epoch with four satellites") as e:
+        _start_fixes("gnss_raw", few, scn.system_for(scn.modes[1]))
+    assert "\n" not in str(e.value) and "initial:" in str(e.value)
 
 
 def test_the_figure_shows_satellites_dop_and_exclusions(flown):

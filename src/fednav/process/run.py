@@ -156,6 +156,24 @@ def with_velocity_latency(cfg: System, name: str | None, fixes) -> tuple[System,
     return cfg, quality, said
 
 
+def _start_fixes(name: str, d: Series, cfg: System):
+    """The fixes a run without a fix sensor's (and without ``initial:``) starts from,
+    sensor ``name``'s own solutions (:attr:`SensorSpec.start`: the raw GNSS's single-point
+    ones), with the section of the fix sensor's kind the start takes (their lever arm
+    and 1-sigma); a one-line :class:`DataError` when there is none."""
+    section = own_section(name, cfg)
+    t, lla, vel, s_pos, s_vel = registry.spec(name).start(d, section)
+    if not len(t):
+        raise DataError(f"{d.source}: no epoch with four satellites (pseudoranges and "
+                        f"range rates) to start from; give the initial state (initial:)")
+    lever = np.zeros(3) if section.lever_m is None else np.asarray(section.lever_m, float)
+    fixes = FixData(f"{d.source} (single-point solutions)", t, lla, vel, s_pos, s_vel, lever)
+    kind = registry.spec(registry.fix_sensor()).config
+    return fixes, kind.model_validate({"lever_m": lever.tolist(),
+                                       "sigma_pos_enu_m": s_pos.tolist(),
+                                       "sigma_vel_mps": s_vel.tolist()})
+
+
 def own_section(name: str, cfg: System):
     """The system's section of sensor ``name``, else the section's defaults (None when
     the section has no defaults: it needs its noise)."""
@@ -609,7 +627,10 @@ def prepare(imu: ImuData, sensors: Mapping[str, Series] | None = None,
         raise DataError("filter.state: total — the total-state navigator's solution is at "
                         "its filter epochs (no IMU-rate rows to smooth or thin)")
     init = cfg.initial
+    start_name = None  # (a sensor whose own solutions start the run: the raw GNSS's)
     if init is None and (fixes is None or fixes.lla is None):
+        start_name = registry.start_sensor(others)
+    if init is None and (fixes is None or fixes.lla is None) and start_name is None:
         raise DataError(f"the initial position: no "
                         f"{registry.label(fix_name or registry.fix_sensor())} positions to "
                         f"start from; give the initial state in the system description "
@@ -624,6 +645,8 @@ def prepare(imu: ImuData, sensors: Mapping[str, Series] | None = None,
     cfg, latency, taken = with_velocity_latency(cfg, fix_name, fixes)
     others = {n: d.adjusted(own_section(n, cfg)) for n, d in others.items()}
     fixes = others.get(fix_name)
+    start_fixes, start_section = (fixes, None) if start_name is None else \
+        _start_fixes(start_name, others[start_name], cfg)
     warnings, quality_extra = check_fix_timing(imu, fixes)
     quality_extra.update(latency)  # (what the stamps showed, before it was taken out)
     warnings[:0] = taken
@@ -644,7 +667,8 @@ def prepare(imu: ImuData, sensors: Mapping[str, Series] | None = None,
             init = init.model_copy(update={"t_s": float(imu.t[j])})
             t0 = init.t_s
     else:
-        t0 = imu.t[0] if fixes is None or init is not None else max(imu.t[0], fixes.t[0])
+        t0 = (imu.t[0] if start_fixes is None or init is not None
+              else max(imu.t[0], start_fixes.t[0]))
     # the first IMU sample at or after t0 (the first GNSS fix): the epoch grid t0 + k T
     # then lies at or just after the fixes' stamps — from the nearest sample, which can
     # lie just before, every fix waited a whole filter period for its epoch
@@ -719,8 +743,9 @@ def prepare(imu: ImuData, sensors: Mapping[str, Series] | None = None,
                        report={"levelling": "initial", "heading": "initial"})
         gyro_bias = None
     else:
-        al, lla0, vel0, P0 = start_at_first_fix(imu, fixes, sensors[fix_name], cfg, t0, i0, dt,
-                                                noise, ab, gb)
+        al, lla0, vel0, P0 = start_at_first_fix(
+            imu, start_fixes, sensors[fix_name] if start_section is None else start_section,
+            cfg, t0, i0, dt, noise, ab, gb)
         euler0, gyro_bias = al.euler, al.gyro_bias
     warnings += al.warnings
 

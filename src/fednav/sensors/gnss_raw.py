@@ -455,6 +455,63 @@ def report(series, solution, model=None) -> dict:
     return out
 
 
+def single_point_fixes(series, section):
+    """The receiver's single-point solutions from its own rows (what a recording without
+    a fix sensor and without ``initial:`` starts from): per epoch with four satellites or
+    more, the position and clock by iterated least squares over the pseudoranges (each
+    weighted by its 1-sigma: the slot's, else ``section``'s zenith figure by elevation),
+    then the velocity and clock drift from the range rates, every epoch at once.
+    Returns ``(t, lla (N, 3) [rad, rad, m], ENU velocity (N, 3) [m/s], position 1-sigma
+    (3,) east/north/up [m], velocity 1-sigma (3,) [m/s])`` of the epochs solved (both
+    solved: four range rates too), the 1-sigma the median over them of each row's
+    1-sigma times the DOP."""
+    t = np.asarray(series.t, dtype=float)
+    z = np.asarray(series.z, dtype=float).reshape(len(t), SLOTS, len(FIELDS))
+    S, V = z[..., SX:SZ + 1], z[..., SVX:SVZ + 1]
+    pr, rr = z[..., PR], z[..., RR]
+    ok = np.isfinite(z[..., PRN]) & np.isfinite(S).all(-1) & np.isfinite(pr)
+    okr = ok & np.isfinite(V).all(-1) & np.isfinite(rr)
+    x = np.zeros((len(t), 4))  # (from the Earth's centre: a few iterations to converge)
+    solved = ok.sum(axis=1) >= 4
+    sig_pr = np.where(np.isfinite(z[..., SPR]), z[..., SPR], section.sigma_pseudorange_m)
+    sig_rr = np.where(np.isfinite(z[..., SRR]), z[..., SRR], section.sigma_range_rate_mps)
+
+    def solve(G, w, y, good):
+        A = np.einsum("nsi,ns,nsj->nij", G, w, G)
+        b = np.einsum("nsi,ns,ns->ni", G, w, y)
+        out = np.full((len(t), 4), np.nan)
+        out[good] = np.linalg.solve(A[good], b[good][..., None])[..., 0]
+        return out, A
+
+    with np.errstate(invalid="ignore", divide="ignore"):
+        for _ in range(10):
+            d = np.where(ok[..., None], S - x[:, None, :3], 1.0)
+            rho = np.linalg.norm(d, axis=-1)
+            u = d / rho[..., None]
+            G = np.concatenate([-u, np.ones((*u.shape[:2], 1))], axis=-1)
+            dx, A = solve(G, np.where(ok, 1.0 / sig_pr**2, 0.0),
+                          np.where(ok, pr - rho - x[:, 3:], 0.0), solved)
+            x[solved] += dx[solved]
+        vd, Av = solve(G, np.where(okr, 1.0 / sig_rr**2, 0.0),
+                       np.where(okr, rr - np.einsum("nsi,nsi->ns", u, np.nan_to_num(V)), 0.0),
+                       solved & (okr.sum(axis=1) >= 4))
+    good = solved & np.isfinite(vd[:, 0])
+    if not good.any():
+        return t[good], np.zeros((0, 3)), np.zeros((0, 3)), np.full(3, np.nan), \
+            np.full(3, np.nan)
+    lla = earth.ecef_to_llh(x[good, :3])
+    Cne = earth.enu_to_ecef(lla[:, 0], lla[:, 1])
+    vel = np.einsum("nji,nj->ni", Cne, vd[good, :3])
+    # 1-sigma: the rows' own times the dilution, in ENU (median over the epochs)
+    Q = np.linalg.inv(A[good])[:, :3, :3]
+    Qv = np.linalg.inv(Av[good])[:, :3, :3]
+    s_pos = np.sqrt(np.median(np.einsum("nji,njk,nkl->nil", Cne, Q, Cne).diagonal(
+        axis1=1, axis2=2), axis=0))
+    s_vel = np.sqrt(np.median(np.einsum("nji,njk,nkl->nil", Cne, Qv, Cne).diagonal(
+        axis1=1, axis2=2), axis=0))
+    return t[good], lla, vel, s_pos, s_vel
+
+
 def figure(series, solution, excluded=()):
     """``gnss_raw.png`` of ``fednav process`` as a :class:`~matplotlib.figure.Figure`:
     the satellites above the mask at each epoch the solution covers (the satellites
@@ -842,6 +899,7 @@ SPEC = SensorSpec(
                 "clock states)", GnssRawConfig, SatelliteRanges,
     columns=tuple(Column(f"s{k:02d}_{f}") for k in range(SLOTS) for f in FIELDS),
     label="raw GNSS", sparse=True, valid=has_satellite, report=report, figure=figure,
+    start=single_point_fixes,
     files_doc="a u-blox .ubx raw log (RXM-RAWX, RXM-SFRBX), a RINEX observation file with "
               "its navigation file beside it (GPS time [s] since 1980-01-06)",
     columns_doc=f"{SLOTS} satellite slots `sNN_`: " + ", ".join(f"`{f}`" for f in FIELDS))

@@ -61,6 +61,12 @@ def fix_sensor(names=None) -> str | None:
                  if n in SENSORS and SENSORS[n].fixes), None)
 
 
+def start_sensor(names) -> str | None:
+    """The first of ``names`` whose recording can start a run without a fix sensor's
+    fixes (:attr:`SensorSpec.start`: the raw GNSS's single-point solutions), or None."""
+    return next((n for n in names if n in SENSORS and SENSORS[n].start is not None), None)
+
+
 def label(name: str | None) -> str:
     """How messages name sensor ``name`` (its spec's ``label``, else the name; None:
     the sensor whose fixes start a run, :func:`fix_sensor`)."""

@@ -253,6 +253,10 @@ class SensorSpec:
     #: ``(t, local filter, unit, statistic)``; the raw GNSS: satellites, DOP,
     #: exclusions), written as ``NAME.png`` by ``fednav process``
     figure: object = None
+    #: recorded data: a function ``(series, section) -> (t, lla, ENU velocity, position
+    #: 1-sigma ENU, velocity 1-sigma)`` of fixes a recording without a fix sensor's (and
+    #: without ``initial:``) starts from (the raw GNSS: its single-point solutions)
+    start: object = None
 
     @property
     def fixes_position(self) -> bool:
