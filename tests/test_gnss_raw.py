@@ -680,6 +680,9 @@ def test_fednav_process_flies_a_simulated_raw_receiver(tmp_path):
     assert r.exit_code == 0, r.output
     assert (out / "gnss_raw.obs").is_file() and (out / "gnss_raw.nav").is_file()
     assert not (out / "gnss_raw.csv").exists()
+    r = CliRunner().invoke(app, ["simulate", str(design), "--mode", "INS/GNSS (tight)",
+                                 "--max-time", "200", "--out", str(out)])
+    assert r.exit_code == 0, r.output  # (again into its own folder: its files replaced)
     r = CliRunner().invoke(app, ["process", "csv", "--config", str(out / "system.yaml"),
                                  "--out", str(out / "processed")])
     assert r.exit_code == 0, r.output
@@ -727,6 +730,45 @@ def test_single_point_fixes_from_the_receivers_own_rows(flown):
     np.testing.assert_allclose(np.sqrt(np.mean((vel - tr["vel"]) ** 2, axis=0)), s_vel,
                                rtol=0.3)
     assert 1.0 < s_pos[0] < 6.0 and s_pos[2] > s_pos[0] and 0.02 < s_vel[0] < 0.5
+
+
+def test_without_doppler_the_start_takes_the_positions_alone(flown):
+    """A receiver file without Doppler (range rates NaN): single-point positions, no
+    velocity (the start then takes it from their differences)."""
+    from dataclasses import replace
+
+    from fednav.sensors.gnss_raw import single_point_fixes
+
+    scn, data, _ = flown
+    s = data.series["gnss_raw"]
+    z = s.z.reshape(len(s.t), SLOTS, len(FIELDS)).copy()
+    z[:, :, RR] = np.nan
+    t, lla, vel, s_pos, s_vel = single_point_fixes(
+        replace(s, z=z.reshape(len(s.t), -1)), scn.system_for(scn.modes[1]).sensors["gnss_raw"])
+    n = np.isfinite(z[:, :, PRN]).sum(axis=1)
+    np.testing.assert_array_equal(t, s.t[n >= 4])
+    assert vel is None and np.isnan(s_vel).all() and 1.0 < s_pos[0] < 6.0
+
+
+def test_outages_are_on_the_imus_clock_for_a_file_in_gps_time(flown):
+    """outages_s of a raw receiver whose file is in GPS time (time_offset_s): the
+    measurements inside the window on the IMU's clock are withheld, not those of GPS
+    time 10-30 s."""
+    from fednav.io.data import SensorData
+    from fednav.process.run import withheld_inputs
+
+    scn, data, _ = flown
+    s = data.series["gnss_raw"]
+    system = scn.system_for(scn.modes[1])
+    off = -1.0e9
+    gps = SensorData("gnss_raw", "rover.obs", s.t - off, s.z)
+    cfg = system.model_copy(update={"sensors": system.sensors.replace(
+        gnss_raw=system.sensors["gnss_raw"].model_copy(
+            update={"time_offset_s": off, "outages_s": [(10.0, 30.0)]}))})
+    got = withheld_inputs(cfg, {"gnss_raw": gps})["gnss_raw"]
+    kept = got.adjusted(cfg.sensors["gnss_raw"]).t
+    assert not np.any((kept >= 10.0) & (kept < 30.0))
+    assert len(s.t) - len(kept) == np.sum((s.t >= 10.0) & (s.t < 30.0)) > 0
 
 
 def test_a_start_from_fewer_than_four_satellites_is_one_line(flown):

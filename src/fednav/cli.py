@@ -422,7 +422,7 @@ def _campaign_writes(rel: Path) -> bool:
 def _simulate_writes(rel: Path) -> bool:
     """Whether ``simulate`` writes ``rel`` in its folder (a sensor CSV or .mat each, the
     reference, the config it writes)."""
-    return len(rel.parts) == 1 and (rel.suffix in (".csv", ".mat", ".txt", ".nav")
+    return len(rel.parts) == 1 and (rel.suffix in (".csv", ".mat", ".txt", ".nav", ".obs")
                                     or rel.name in ("process.yaml", "system.yaml",
                                                     "kf-gins.yaml"))
 

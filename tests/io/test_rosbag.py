@@ -509,6 +509,28 @@ def test_ros1_walk_is_rosbags_reading(tmp_path, compression):
     _same_recording(rec, _any_reading(path))
 
 
+def test_a_renamed_ros1_topic_is_its_record_headers(tmp_path):
+    """A ROS 1 connection record holds its topic twice: in its record header and in the
+    connection header it carries (the original one, when a bag was written with its
+    topics renamed); the record header's is the topic, as rosbags reads it."""
+    from rosbags.highlevel import AnyReader
+
+    _, p = _bag(tmp_path, ros1=True)
+    data = bytearray(p.read_bytes())
+    key = b"topic=/imu/data"
+    at = [i for i in range(len(data)) if data.startswith(key, i)]
+    assert len(at) >= 2 and len(at) % 2 == 0
+    for i in at[::2]:  # (each record's header comes before its connection header)
+        data[i:i + len(key)] = b"topic=/imu/dat2"
+    renamed = tmp_path / "renamed.bag"
+    renamed.write_bytes(bytes(data))
+    with AnyReader([renamed]) as r:
+        assert "/imu/dat2" in r.topics
+    rec = read_rosbag(renamed, topics={"imu": "/imu/dat2"})
+    assert rec.quality["storage_reader"] == "ros1" and "/imu/dat2" in rec.topics
+    assert len(rec.imu.t) == 400
+
+
 def test_a_ros1_bag_the_walk_cannot_read_falls_back_to_rosbags(tmp_path):
     """A connection whose type is not the standard definition (its MD5 sum) is read by
     ``rosbags`` with the bag's own definition; a bag whose records do not add up is

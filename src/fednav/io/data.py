@@ -29,7 +29,10 @@ def file_bytes(path: Path) -> np.ndarray:
     as they are touched (a fresh 50 MB copy costs 10-100 ms of page faults alone)."""
     if Path(path).stat().st_size == 0:
         return np.zeros(0, np.uint8)
-    return np.asarray(np.memmap(path, np.uint8, mode="r"))
+    try:
+        return np.asarray(np.memmap(path, np.uint8, mode="r"))
+    except (OSError, ValueError):  # (a file system that cannot map files: read it)
+        return np.fromfile(path, np.uint8)
 
 
 def import_for(path, module: str, what: str, extra: str = "formats"):

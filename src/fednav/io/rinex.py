@@ -259,14 +259,15 @@ def _calendar(t: float) -> tuple:
 
 
 def write_rinex_obs(path, t, sv, obs: dict, *, approx_xyz=None, marker: str = "FEDNAV",
-                    program: str = "fednav") -> Path:
+                    program: str = "fednav", overwrite: bool = False) -> Path:
     """A RINEX 2.11 GPS observation file: epochs ``t`` (N,) GPS time [s], satellites
     ``sv`` (M,) (``G01`` ...), ``obs`` code -> (N, M) values (``C1`` pseudorange [m],
     ``D1`` Doppler [Hz], ``S1`` C/N0 [dB-Hz], ``L1`` phase [cycles]; NaN: not observed),
-    ``approx_xyz`` the antenna's position ECEF [m].  An existing file is never
-    overwritten (:class:`DataError`).  What :func:`read_rinex_obs` reads back."""
+    ``approx_xyz`` the antenna's position ECEF [m].  An existing file is not overwritten
+    (:class:`DataError`) unless ``overwrite`` (a file the caller wrote itself before:
+    ``fednav simulate`` into its own folder).  What :func:`read_rinex_obs` reads back."""
     path = Path(path)
-    if path.exists():
+    if path.exists() and not overwrite:
         raise DataError(f"{path}: exists; fednav does not overwrite a file")
     t = np.asarray(t, dtype=float)
     codes = list(obs)
@@ -315,13 +316,15 @@ def write_rinex_obs(path, t, sv, obs: dict, *, approx_xyz=None, marker: str = "F
     return path
 
 
-def write_rinex_nav(path, eph: Ephemerides, *, program: str = "fednav") -> Path:
+def write_rinex_nav(path, eph: Ephemerides, *, program: str = "fednav",
+                    overwrite: bool = False) -> Path:
     """A RINEX 2.11 GPS navigation file of the broadcast ephemerides ``eph`` (one record
     per row; its Klobuchar coefficients, where it has them, as ``ION ALPHA`` / ``ION
     BETA``): what :func:`read_rinex_nav` reads back, and RTKLIB or any RINEX reader
-    takes.  An existing file is never overwritten (:class:`DataError`)."""
+    takes.  An existing file is not overwritten (:class:`DataError`) unless ``overwrite``
+    (as :func:`write_rinex_obs`)."""
     path = Path(path)
-    if path.exists():
+    if path.exists() and not overwrite:
         raise DataError(f"{path}: exists; fednav does not overwrite a file")
 
     def h(text: str, label: str) -> str:
@@ -359,14 +362,16 @@ def write_rinex_nav(path, eph: Ephemerides, *, program: str = "fednav") -> Path:
     return path
 
 
-def write_raw_receiver(folder, series, truth, section) -> tuple[list[Path], str, dict]:
+def write_raw_receiver(folder, series, truth, section,
+                       overwrite: bool = False) -> tuple[list[Path], str, dict]:
     """A simulated raw receiver (``gnss_raw``: its series, the truth it flew, its system
     section) as the files a real one gives: ``gnss_raw.obs`` (RINEX 2.11 observations in
     GPS time: ``C1`` the L1 pseudorange with the satellite clock, the troposphere
     (Saastamoinen at the true position) and the ionosphere (Klobuchar, where the
     ephemerides carry coefficients) put back, what :func:`read_raw_gnss` takes out
     again; ``D1`` the Doppler [Hz]) and ``gnss_raw.nav`` (the sky's broadcast
-    ephemerides, :func:`write_rinex_nav`).  Returns the files, the one to name in the
+    ephemerides, :func:`write_rinex_nav`; ``overwrite``: as theirs).  Returns the files,
+    the one to name in the
     system description's ``files:`` and the section's keys that go with it
     (``time_offset_s``: the files' GPS time back onto the simulation's clock)."""
     from ..core import earth
@@ -407,8 +412,9 @@ def write_raw_receiver(folder, series, truth, section) -> tuple[list[Path], str,
         delay = delay + klobuchar(eph.iono, lla[:, None, 0], lla[:, None, 1], az, el,
                                   np.mod(gps[:, None], WEEK_S))
     obs = {"C1": pr - C * clk + delay, "D1": (C * drift - rr) * F_L1 / C}
-    files = [write_rinex_obs(folder / "gnss_raw.obs", gps, sv, obs, approx_xyz=r[0]),
-             write_rinex_nav(folder / "gnss_raw.nav", eph)]
+    files = [write_rinex_obs(folder / "gnss_raw.obs", gps, sv, obs, approx_xyz=r[0],
+                             overwrite=overwrite),
+             write_rinex_nav(folder / "gnss_raw.nav", eph, overwrite=overwrite)]
     return files, "gnss_raw.obs", {"time_offset_s": -start}
 
 

@@ -10,7 +10,7 @@ records of its messages and connections, uncompressed, bz2 or lz4), a connection
 header and the indexes.  :func:`read` walks the records with one compiled loop
 (:func:`_walk`) per chunk, reading each record's ``op``, ``conn`` and ``time`` from its
 header; the connections' few records are read in Python.  The indexes are not needed:
-the walk finds every message (a bag whose recording was cut, without its index, too).
+the walk finds every message (a bag closed without its index, but whole, too).
 ``rosbags`` reads the same file at ~6 us a message.  What this module does not know (a
 compression it has no decompressor for, records that do not add up) is a
 :class:`Ros1BagError`: the bag reader then falls back to ``rosbags``.
@@ -150,7 +150,9 @@ def read(path: Path) -> tuple[Messages, dict[int, dict[str, bytes]]]:
         for i in np.flatnonzero(r_ops == OP_CONNECTION).tolist():
             head = fields(buf[r_hoffs[i]:r_hoffs[i] + r_hlens[i]].tobytes())
             conn = fields(buf[r_doffs[i]:r_doffs[i] + r_dlens[i]].tobytes())
-            connections[int(r_conns[i])] = {"topic": head.get("topic", b""), **conn}
+            # (the record header's topic: the connection header's may be the original
+            # of a renamed topic)
+            connections[int(r_conns[i])] = {**conn, "topic": head.get("topic", b"")}
     channels = {c: (f["topic"].decode("utf-8", "replace"),
                     normalize_msgtype(f.get("type", b"").decode("ascii", "replace")), "ros1")
                 for c, f in connections.items()}

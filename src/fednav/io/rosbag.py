@@ -392,8 +392,9 @@ class _SqliteBag:
                 con = sqlite3.connect(f"{f.resolve().as_uri()}?mode=ro&immutable=1",
                                       uri=True)
                 try:
-                    ids = dict(con.execute("SELECT name, id FROM topics").fetchall())
-                    types = dict(con.execute("SELECT name, type FROM topics").fetchall())
+                    ids: dict = {}
+                    for name, mt, tid in con.execute("SELECT name, type, id FROM topics"):
+                        ids.setdefault((name, mt), []).append(tid)
                 finally:
                     con.close()
             except (sp.SqliteFormatError, sqlite3.Error) as e:
@@ -402,9 +403,10 @@ class _SqliteBag:
                 raise _NoFastPath(f"{f}: messages columns {table.columns}")
             k, v = table.kind, table.value
             for t, msgtype in wanted.items():
-                if t not in ids or types[t] != msgtype:
+                if (t, msgtype) not in ids:
                     continue
-                rows = np.flatnonzero((v[:, 1] == ids[t]) & (k[:, 1] == sp.INTEGER))
+                rows = np.flatnonzero(np.isin(v[:, 1], ids[(t, msgtype)])
+                                      & (k[:, 1] == sp.INTEGER))
                 if not len(rows):
                     continue
                 if (np.any(k[rows, 2] != sp.INTEGER) or np.any(k[rows, 3] != sp.BLOB)

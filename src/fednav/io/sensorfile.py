@@ -55,7 +55,8 @@ OWN_FORMATS = {"gnss_raw": _raw_gnss_file}
 def _raw_gnss_writer(folder, series, truth, section):
     from .rinex import write_raw_receiver
 
-    return write_raw_receiver(folder, series, truth, section)
+    # (fednav simulate's folder: its own files of an earlier run are replaced, as its CSVs)
+    return write_raw_receiver(folder, series, truth, section, overwrite=True)
 
 
 #: sensor -> a writer of a simulated recording in the sensor's own file formats (what a

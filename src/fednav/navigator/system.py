@@ -26,6 +26,7 @@ here.  Errors are one line naming the key (and the file).
 from __future__ import annotations
 
 import warnings
+from pathlib import Path
 from typing import Literal
 
 import numpy as np
@@ -516,13 +517,13 @@ def load_system(source) -> System:
     if isinstance(source, System):
         return source
     if isinstance(source, dict):
-        data, where = source, "system description"
+        data, where, folder = source, "system description", None
     else:
         data = read_mapping(source, "system description")
-        where = f"system description file {source}"
+        where, folder = f"system description file {source}", Path(source).parent
     if _SCENARIO_KEYS & set(data):
         data = {k: v for k, v in data.items() if k in System.model_fields}
-    return validate(data, System, where)
+    return validate(data, System, where, folder)  # (paths relative to its folder)
 
 
 #: Keys that make a file a scenario (a system description plus flight and experiment).

@@ -573,10 +573,14 @@ OUTPUT_NAMES = ("solution.csv", "solution_smoothed.csv", "solution.parquet",
 
 def would_overwrite(out: Path, path: Path) -> bool:
     """Whether writing ``process``'s outputs into ``out`` would replace ``path``."""
+    from ..sensors import registry
+
     path, out = Path(path).resolve(), Path(out).resolve()
     return path.parent == out and (path.name in OUTPUT_NAMES
                                    or (path.name.startswith("errors_")
-                                       and path.suffix in (".csv", ".png")))
+                                       and path.suffix in (".csv", ".png"))
+                                   or (path.suffix == ".png"  # (a sensor's own figure)
+                                       and path.stem in registry.SENSORS))
 
 
 def write(out: Path, res: ProcessResult, ref: Reference | None, inputs: dict,

@@ -166,7 +166,8 @@ def _start_fixes(name: str, d: Series, cfg: System):
     if not len(t):
         raise DataError(f"{d.source}: no epoch with four satellites (pseudoranges and "
                         f"range rates) to start from; give the initial state (initial:)")
-    lever = np.zeros(3) if section.lever_m is None else np.asarray(section.lever_m, float)
+    lever = section.lever()
+    s_vel = np.where(np.isfinite(s_vel), s_vel, 1.0)  # (positions only: not used)
     fixes = FixData(f"{d.source} (single-point solutions)", t, lla, vel, s_pos, s_vel, lever)
     kind = registry.spec(registry.fix_sensor()).config
     return fixes, kind.model_validate({"lever_m": lever.tolist(),
@@ -826,9 +827,17 @@ def recordings(sensors: Mapping[str, Series] | None, cfg: System) -> dict[str, S
 
 def withheld_inputs(cfg: System, sensors: dict[str, Series]) -> dict[str, Series]:
     """The recordings without the measurements inside their sensor's ``outages_s``
-    (:func:`fednav.process.outages.withhold`)."""
-    return {n: outages.withhold(d, outages.windows_of(cfg, n), n)
-            for n, d in sensors.items()}
+    (:func:`fednav.process.outages.withhold`).  The windows are on the IMU's clock: a
+    recording whose section shifts its stamps (``time_offset_s``, applied later by its
+    ``adjusted``: a receiver's files in GPS time) is withheld on its own stamps, the
+    windows shifted back alike."""
+    out = {}
+    for n, d in sensors.items():
+        sec = own_section(n, cfg)
+        off = float(getattr(sec, "time_offset_s", 0.0) or 0.0)
+        out[n] = outages.withhold(d, [(a - off, b - off)
+                                      for a, b in outages.windows_of(cfg, n)], n)
+    return out
 
 
 def flown_fixes(fixes: FixData | None, system: System) -> FixData | None:

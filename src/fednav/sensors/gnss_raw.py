@@ -462,9 +462,11 @@ def single_point_fixes(series, section):
     weighted by its 1-sigma: the slot's, else ``section``'s zenith figure by elevation),
     then the velocity and clock drift from the range rates, every epoch at once.
     Returns ``(t, lla (N, 3) [rad, rad, m], ENU velocity (N, 3) [m/s], position 1-sigma
-    (3,) east/north/up [m], velocity 1-sigma (3,) [m/s])`` of the epochs solved (both
-    solved: four range rates too), the 1-sigma the median over them of each row's
-    1-sigma times the DOP."""
+    (3,) east/north/up [m], velocity 1-sigma (3,) [m/s])`` of the epochs solved, the
+    1-sigma the median over them of each row's 1-sigma times the DOP; without range
+    rates at four satellites (a receiver file without Doppler) in most epochs, the
+    positions alone (velocity None, its 1-sigma NaN: the start takes the velocity from
+    the positions' differences)."""
     t = np.asarray(series.t, dtype=float)
     z = np.asarray(series.z, dtype=float).reshape(len(t), SLOTS, len(FIELDS))
     S, V = z[..., SX:SZ + 1], z[..., SVX:SVZ + 1]
@@ -495,21 +497,23 @@ def single_point_fixes(series, section):
         vd, Av = solve(G, np.where(okr, 1.0 / sig_rr**2, 0.0),
                        np.where(okr, rr - np.einsum("nsi,nsi->ns", u, np.nan_to_num(V)), 0.0),
                        solved & (okr.sum(axis=1) >= 4))
-    good = solved & np.isfinite(vd[:, 0])
+    moving = np.isfinite(vd[:, 0])
+    with_vel = (moving & solved).sum() >= 0.5 * solved.sum()
+    good = solved & moving if with_vel else solved
     if not good.any():
-        return t[good], np.zeros((0, 3)), np.zeros((0, 3)), np.full(3, np.nan), \
-            np.full(3, np.nan)
+        return t[good], np.zeros((0, 3)), None, np.full(3, np.nan), np.full(3, np.nan)
     lla = earth.ecef_to_llh(x[good, :3])
     Cne = earth.enu_to_ecef(lla[:, 0], lla[:, 1])
+
+    def enu_sigma(A):  # (the rows' own 1-sigma through the dilution, median over epochs)
+        Q = np.linalg.inv(A[good])[:, :3, :3]
+        return np.sqrt(np.median(np.einsum("nji,njk,nkl->nil", Cne, Q, Cne).diagonal(
+            axis1=1, axis2=2), axis=0))
+
+    if not with_vel:
+        return t[good], lla, None, enu_sigma(A), np.full(3, np.nan)
     vel = np.einsum("nji,nj->ni", Cne, vd[good, :3])
-    # 1-sigma: the rows' own times the dilution, in ENU (median over the epochs)
-    Q = np.linalg.inv(A[good])[:, :3, :3]
-    Qv = np.linalg.inv(Av[good])[:, :3, :3]
-    s_pos = np.sqrt(np.median(np.einsum("nji,njk,nkl->nil", Cne, Q, Cne).diagonal(
-        axis1=1, axis2=2), axis=0))
-    s_vel = np.sqrt(np.median(np.einsum("nji,njk,nkl->nil", Cne, Qv, Cne).diagonal(
-        axis1=1, axis2=2), axis=0))
-    return t[good], lla, vel, s_pos, s_vel
+    return t[good], lla, vel, enu_sigma(A), enu_sigma(Av)
 
 
 def figure(series, solution, excluded=()):
