@@ -418,8 +418,11 @@ class _SqliteBag:
 
 
 def _joined(parts: dict[str, list[_Raw]]) -> dict[str, _Raw]:
-    """Each topic's messages of several files as one :class:`_Raw` (the buffers of more
-    than one file joined; none: empty)."""
+    """Each topic's messages of several files as one :class:`_Raw`: one file's in place;
+    those of several files copied back to back (only the topic's messages: not the files,
+    which may hold gigabytes of images); none: empty."""
+    from .rosmsg import gather
+
     out = {}
     for t, ps in parts.items():
         if len(ps) == 1:
@@ -429,12 +432,9 @@ def _joined(parts: dict[str, list[_Raw]]) -> dict[str, _Raw]:
             out[t] = _Raw(np.zeros(0, np.int64), np.zeros(0, np.uint8),
                           np.zeros(0, np.int64))
             continue
-        bufs = list({id(p.buf): p.buf for p in ps}.values())
-        base = dict(zip((id(b) for b in bufs),
-                        np.cumsum([0] + [len(b) for b in bufs[:-1]]).tolist(), strict=True))
-        out[t] = _Raw(np.concatenate([p.bag_ns for p in ps]), np.concatenate(bufs),
-                      np.concatenate([p.lens for p in ps]),
-                      np.concatenate([p.at() + base[id(p.buf)] for p in ps]))
+        out[t] = _Raw(np.concatenate([p.bag_ns for p in ps]),
+                      np.concatenate([gather(p.buf, p.at(), p.lens) for p in ps]),
+                      np.concatenate([p.lens for p in ps]))
     return out
 
 

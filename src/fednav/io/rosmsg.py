@@ -61,6 +61,22 @@ def _records(buf, starts, lens, cdr, sizes, counts, places, width, order):
     return out, -1, 0, -1
 
 
+@numba.njit(cache=True)
+def _gather(buf, starts, lens):
+    out = np.empty(lens.sum(), np.uint8)
+    q = 0
+    for i in range(len(starts)):
+        out[q:q + lens[i]] = buf[starts[i]:starts[i] + lens[i]]
+        q += lens[i]
+    return out
+
+
+def gather(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray) -> np.ndarray:
+    """The messages at ``starts`` (N,) of lengths ``lens`` (N,) in ``buf`` back to back
+    (uint8): what several files' messages of one topic become (not the files)."""
+    return _gather(buf, np.asarray(starts, np.int64), np.asarray(lens, np.int64))
+
+
 def records(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, cdr: bool,
             fields: list[tuple[np.dtype | None, int, bool]]):
     """The wanted fields of the messages at ``starts`` (N,) of lengths ``lens`` (N,) in
