@@ -509,6 +509,18 @@ def test_ros1_walk_is_rosbags_reading(tmp_path, compression):
     _same_recording(rec, _any_reading(path))
 
 
+def test_the_drivers_own_orientation_is_noted_not_used(tmp_path):
+    """An Imu whose orientation covariance is known (its first element neither -1 nor 0)
+    carries the driver's orientation: a note says it is not used; -1 says nothing."""
+    t, gyro, accel, _, _ = _rest()
+    for cov0, noted in ((-1.0, False), (0.0, False), (1e-4, True)):
+        b = Bag()
+        b.imu("/imu/data", t, gyro, accel, orientation_cov0=cov0)
+        rec = read_rosbag(b.write(tmp_path / f"o{cov0}", "mcap"))
+        assert any("orientation (the driver's own estimate) not used" in n
+                   for n in rec.notes) == noted, cov0
+
+
 def test_a_renamed_ros1_topic_is_its_record_headers(tmp_path):
     """A ROS 1 connection record holds its topic twice: in its record header and in the
     connection header it carries (the original one, when a bag was written with its

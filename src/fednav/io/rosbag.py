@@ -136,7 +136,10 @@ def _xyz(v):
 #: not read, skipped by its size).
 LAYOUTS = {
     IMU: (("orientation", "f8", 4, None),
-          ("orientation_covariance", "f8", 9, lambda m: m.orientation_covariance),
+          # (its first element says whether the driver estimates the orientation: -1
+          # or 0 unknown; the other eight are not read)
+          ("orientation_covariance", "f8", 1, lambda m: m.orientation_covariance[:1]),
+          ("orientation_covariance_rest", "f8", 8, None),
           ("angular_velocity", "f8", 3, lambda m: _xyz(m.angular_velocity)),
           ("angular_velocity_covariance", "f8", 9, None),
           ("linear_acceleration", "f8", 3, lambda m: _xyz(m.linear_acceleration)),
@@ -649,7 +652,7 @@ def _imu(m: _Topic, times: _Times, max_bridge_s: float, quality: dict,
                         f"message(s): an IMU needs 2 or more")
     imu = ImuData(m.src, t, flu_to_rfu(m.d["angular_velocity"][rows]),
                   flu_to_rfu(m.d["linear_acceleration"][rows]), max_bridge_s=max_bridge_s)
-    if not np.all(_unknown(m.d["orientation_covariance"])):
+    if np.any(~np.isin(m.d["orientation_covariance"][:, 0], (-1.0, 0.0))):
         notes.append(f"imu: {m.topic}: orientation (the driver's own estimate) not used")
     notes.append(f"imu: {m.topic}: the messages' covariances are not used: the IMU noise "
                  f"figures are the system description's (imu:)")
