@@ -93,7 +93,12 @@ def test_a_tree_several_levels_deep_with_overflowing_blobs(tmp_path, page_size):
                 max_size=300),
        st.sampled_from([512, 4096]))
 def test_any_rows_read_as_sql_reads_them(tmp_path_factory, rows, page_size):
-    _check(_db(tmp_path_factory.mktemp("h") / "a.db", rows, page_size))
+    got = _check(_db(tmp_path_factory.mktemp("h") / "a.db", rows, page_size))
+    assert len(got.kind) == len(rows)
+    assert [int(got.value[i, 1]) if got.kind[i, 1] == INTEGER else None
+            for i in range(len(rows))] == [a for a, _ in rows]
+    assert [NULL if b is None else (TEXT if isinstance(b, str) else BLOB)
+            for _, b in rows] == got.kind[:, 2].tolist()
 
 
 def test_rows_from_before_a_column_was_added_are_null_there(tmp_path):

@@ -72,6 +72,8 @@ from .satellites import (
     Ephemerides,
     azimuth_elevation,
     dilution,
+    earth_turned,
+    epoch_least_squares,
     klobuchar,
     nearest_ephemeris,
     read_navigation,
@@ -479,11 +481,9 @@ def single_point_fixes(series, section):
     sig_rr = np.where(np.isfinite(z[..., SRR]), z[..., SRR], section.sigma_range_rate_mps)
 
     def solve(G, w, y, good):
-        A = np.einsum("nsi,ns,nsj->nij", G, w, G)
-        b = np.einsum("nsi,ns,ns->ni", G, w, y)
-        out = np.full((len(t), 4), np.nan)
-        out[good] = np.linalg.solve(A[good], b[good][..., None])[..., 0]
-        return out, A
+        dx, A = epoch_least_squares(G, w, y, good)
+        dx[~good] = np.nan
+        return dx, A
 
     with np.errstate(invalid="ignore", divide="ignore"):
         for _ in range(10):
@@ -559,15 +559,6 @@ def figure(series, solution, excluded=()):
         ax.legend(loc="upper right", fontsize=8)
     fig.tight_layout()
     return fig
-
-
-def earth_turned(a, tau):
-    """ECEF vectors ``a`` (..., 3) of the frame at a signal's transmission in the frame at
-    its reception ``tau`` [s] later (...,): turned by the Earth's rotation ``OMEGA_E tau``
-    about z (the Sagnac correction)."""
-    c, s = np.cos(OMEGA_E * tau), np.sin(OMEGA_E * tau)
-    return np.stack([c * a[..., 0] + s * a[..., 1], -s * a[..., 0] + c * a[..., 1],
-                     a[..., 2]], axis=-1)
 
 
 def light_time(eph, t, r, iterations: int = 3):

@@ -147,6 +147,28 @@ def satellite_states(eph, idx, t_tx, l1_only: bool = True):
     return pos, vel, np.where(ok, clock, np.nan), np.where(ok, drift, np.nan)
 
 
+def earth_turned(a, tau):
+    """ECEF vectors ``a`` (..., 3) of the frame at a signal's transmission in the frame at
+    its reception ``tau`` [s] later (...,): turned by the Earth's rotation ``OMEGA_E tau``
+    about z (the Sagnac correction)."""
+    c, s = np.cos(OMEGA_E * tau), np.sin(OMEGA_E * tau)
+    return np.stack([c * a[..., 0] + s * a[..., 1], -s * a[..., 0] + c * a[..., 1],
+                     a[..., 2]], axis=-1)
+
+
+def epoch_least_squares(H, w, y, enough):
+    """Weighted least squares of every epoch at once: rows ``H`` (N, M, k), weights ``w``
+    (N, M) (0: no row), residuals ``y`` (N, M); the epochs ``enough`` (N,) solved.
+    Returns the corrections (N, k) (zero where not solved) and the normal matrices
+    (N, k, k) (their inverses: the solutions' covariances)."""
+    Hw = H * w[..., None]
+    A = np.einsum("nmi,nmj->nij", Hw, H) + 1e-9 * np.eye(H.shape[-1])
+    b = np.einsum("nmi,nm->ni", Hw, y)
+    dx = np.zeros(b.shape)
+    dx[enough] = np.linalg.solve(A[enough], b[enough][..., None])[..., 0]
+    return dx, A
+
+
 def azimuth_elevation(rx_lla, rx_xyz, sat_xyz):
     """Azimuth (from north, clockwise) and elevation [rad] of satellites ``sat_xyz``
     (..., 3) seen from a receiver at ``rx_xyz`` (..., 3) ECEF [m], ``rx_lla`` its
@@ -277,11 +299,8 @@ def single_point(t, pr, sv, eph, *, l1_only: bool = True, iono: bool = True,
         t_tx = t_tx - np.nan_to_num(clk)
         pos, _, clk, _ = satellite_states(eph, idx, t_tx, l1_only)
         rx = x[:, None, :3]
-        rng0 = np.linalg.norm(pos - rx, axis=-1)
-        th = OMEGA_E * rng0 / C  # the Earth turns while the signal travels (Sagnac)
-        c, s = np.cos(th), np.sin(th)
-        rot = np.stack([c * pos[..., 0] + s * pos[..., 1], -s * pos[..., 0]
-                        + c * pos[..., 1], pos[..., 2]], axis=-1)
+        # (the Earth turns while the signal travels: Sagnac)
+        rot = earth_turned(pos, np.linalg.norm(pos - rx, axis=-1) / C)
         los = rot - rx
         rho = np.linalg.norm(los, axis=-1)
         lla = earth.ecef_to_llh(x[:, :3]) if it else np.zeros((N, 3))
@@ -300,12 +319,8 @@ def single_point(t, pr, sv, eph, *, l1_only: bool = True, iono: bool = True,
         # (a satellite without a usable ephemeris is NaN: zero rows, not NaN, in the sums)
         H = np.where((w > 0)[..., None], H, 0.0)
         v = np.where(w > 0, pr - model, 0.0)
-        Hw = H * w[..., None]
-        A = np.einsum("nmi,nmj->nij", Hw, H) + 1e-9 * np.eye(4)
-        b = np.einsum("nmi,nm->ni", Hw, v)
         enough = (w > 0).sum(axis=1) >= 4
-        dx = np.zeros((N, 4))
-        dx[enough] = np.linalg.solve(A[enough], b[enough][..., None])[..., 0]
+        dx, _ = epoch_least_squares(H, w, v, enough)
         x = x + dx
         if it and np.all(np.abs(dx[enough, :3]) < 1e-4):
             break
