@@ -437,60 +437,68 @@ def _noise_option(cfg, noise: str):
 def _run_process(read, imu, gnss, velocity, ref, smooth, out, config, output_rate,
                  files: dict | None = None, force: bool = False, fmt: str = "csv",
                  export: str | None = None, noise: str | None = None) -> None:
-    from .core.atomic import clear_results
-    from .core.config import load_model
-    from .navigator.system import System
-    from .process import output as process_output
-    from .process.run import process
+    from .core.drawer import Drawer
 
     out = _output_folder(out)
+    # forked first: it loads matplotlib and the plots' modules while the data are read
+    with Drawer(preload=("fednav.process.output",)) as drawer:
+        from .core.atomic import clear_results
+        from .core.config import load_model
+        from .navigator.system import System
+        from .process import output as process_output
+        from .process.run import process
 
-    def refuse_overwrite(paths: dict) -> None:
-        for name, p in paths.items():
-            if p is not None and process_output.would_overwrite(out, Path(p)):
-                raise ValueError(f"--out {out}: writing there would overwrite the {name} "
-                                 f"file {p}, an input; choose another output folder")
+        def refuse_overwrite(paths: dict) -> None:
+            for name, p in paths.items():
+                if p is not None and process_output.would_overwrite(out, Path(p)):
+                    raise ValueError(f"--out {out}: writing there would overwrite the "
+                                     f"{name} file {p}, an input; choose another "
+                                     f"output folder")
 
-    try:
-        refuse_overwrite({"imu": imu, "gnss": gnss, "velocity": velocity, **(files or {}),
-                          "reference": ref, "config": config})
-        fmt = process_output.check_format(fmt)  # (before the work: a missing extra)
-        from .process.export import check_exports, write_exports
+        try:
+            refuse_overwrite({"imu": imu, "gnss": gnss, "velocity": velocity,
+                              **(files or {}), "reference": ref, "config": config})
+            fmt = process_output.check_format(fmt)  # (before the work: a missing extra)
+            from .process.export import check_exports, write_exports
 
-        kinds = check_exports(export)
-        rate = process_output.parse_rate(output_rate)
-        cfg = System() if config is None else load_model(config, System, "processing config")
-        if rate is None and cfg.output_rate_hz is not None:
-            rate = cfg.output_rate_hz
-        data = read(cfg)
-        cfg = data.get("system", cfg)  # (a reader that completes the description)
-        if noise is not None:
-            cfg = _noise_option(cfg, noise)
-        # the files read (the options', else those the description lists)
-        paths = {"imu": imu, "gnss": gnss, "velocity": velocity, **(files or {}),
-                 "reference": ref, **data.get("paths", {})}
-        refuse_overwrite(paths)  # (and the files the description lists)
-        clear_results(out)
-        since = _kernel_cache.compile_seconds()
-        res = process(data["imu"], _series(data), cfg, smooth=smooth, force=force)
-        compiled = _less_compile(res, since)
-        res.warnings[:0] = data.get("warnings", [])
-        files = process_output.write(out, res, data["ref"], {
-            **{n: None if f is None else str(f) for n, f in paths.items()},
-            "config": None if config is None else str(config), "smooth": smooth,
-            "output_rate_hz": process_output.DEFAULT_OUTPUT_RATE_HZ if rate is None else rate,
-            "format": fmt}, rate, data["sensors"].get("gnss"), data.get("others"), fmt)
-        if kinds:  # (before summary.json, the last file)
-            files[-1:-1] = write_exports(out, process_output.decimate(res.forward, rate),
-                                         kinds, res.outages)
-    except (FednavError, ValueError) as e:
-        if _state["debug"]:
-            raise
-        typer.echo(f"error: {e}", err=True)
-        raise typer.Exit(2) from None
-    s = json.loads(files[-1].read_text())
-    _print_process(s, compiled)
-    console.print(f"wrote {', '.join(str(f) for f in files)}")
+            kinds = check_exports(export)
+            rate = process_output.parse_rate(output_rate)
+            cfg = (System() if config is None
+                   else load_model(config, System, "processing config"))
+            if rate is None and cfg.output_rate_hz is not None:
+                rate = cfg.output_rate_hz
+            data = read(cfg)
+            cfg = data.get("system", cfg)  # (a reader that completes the description)
+            if noise is not None:
+                cfg = _noise_option(cfg, noise)
+            # the files read (the options', else those the description lists)
+            paths = {"imu": imu, "gnss": gnss, "velocity": velocity, **(files or {}),
+                     "reference": ref, **data.get("paths", {})}
+            refuse_overwrite(paths)  # (and the files the description lists)
+            clear_results(out)
+            since = _kernel_cache.compile_seconds()
+            res = process(data["imu"], _series(data), cfg, smooth=smooth, force=force)
+            compiled = _less_compile(res, since)
+            res.warnings[:0] = data.get("warnings", [])
+            files = process_output.write(out, res, data["ref"], {
+                **{n: None if f is None else str(f) for n, f in paths.items()},
+                "config": None if config is None else str(config), "smooth": smooth,
+                "output_rate_hz": (process_output.DEFAULT_OUTPUT_RATE_HZ if rate is None
+                                   else rate),
+                "format": fmt}, rate, data["sensors"].get("gnss"), data.get("others"), fmt,
+                drawer)
+            if kinds:  # (before summary.json, the last file)
+                files[-1:-1] = write_exports(out,
+                                             process_output.decimate(res.forward, rate),
+                                             kinds, res.outages)
+        except (FednavError, ValueError) as e:
+            if _state["debug"]:
+                raise
+            typer.echo(f"error: {e}", err=True)
+            raise typer.Exit(2) from None
+        s = json.loads(files[-1].read_text())
+        _print_process(s, compiled)
+        console.print(f"wrote {', '.join(str(f) for f in files)}")
 
 
 def _ulog_reader(log: Path):

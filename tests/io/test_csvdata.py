@@ -59,3 +59,52 @@ def test_time_going_backwards(tmp_path):
     cols["t_s"][7] = cols["t_s"][5]
     with pytest.raises(DataError, match="'t_s' is not increasing at row 7"):
         read_imu_csv(write_csv(tmp_path / "imu.csv", cols))
+
+
+def test_pyarrow_and_pandas_read_a_file_alike(tmp_path):
+    """The fast reader (pyarrow) and the explaining one (pandas) give the same columns:
+    a byte-order mark, spaces after the commas, empty cells, nan and inf, a text column
+    beside the numbers."""
+    from fednav.io import csvdata
+
+    p = tmp_path / "g.csv"
+    p.write_text("\ufefft_s, lat_deg, lon_deg,h_m,note\n"
+                 "0.0, 45.1, 7.25,,a\n0.2,nan,7.3,inf,b\n0.4, 45.2 , -7.3e-1,-inf,\n",
+                 encoding="utf-8")
+    numbers = {"t_s", "lat_deg", "lon_deg", "h_m"}
+    fast = csvdata._arrow_columns(p, numbers)
+    slow = csvdata._pandas_columns(p, str(p), numbers)
+    assert fast is not None and fast.names == slow.names
+    assert fast.names == ["t_s", "lat_deg", "lon_deg", "h_m", "note"]
+    assert fast.rows == slow.rows == 3
+    for c in numbers:
+        np.testing.assert_array_equal(fast.column(c), slow.column(c))
+    np.testing.assert_array_equal(fast.column("h_m"), [np.nan, np.inf, -np.inf])
+    assert "note" not in fast and "note" not in slow  # (named, not held)
+
+
+def test_text_in_a_number_column_is_explained_by_pandas(tmp_path):
+    from fednav.io import csvdata
+
+    p = tmp_path / "imu.csv"
+    p.write_text("t_s,gyro_x_radps\n0.0,0.1\n0.01,zero\n")
+    assert csvdata._arrow_columns(p, {"t_s", "gyro_x_radps"}) is None
+    with pytest.raises(DataError, match=r"column 'gyro_x_radps' has a non-numeric value "
+                                        r"'zero' at data row 2"):
+        csvdata._read(p, "IMU", ("t_s",), ("gyro_x_radps",))
+
+
+def test_reading_csv_files_leaves_pandas_unimported(tmp_path):
+    """pyarrow reads the files; pandas (0.3 s of a command's start) is not imported."""
+    import subprocess
+    import sys
+
+    p = tmp_path / "imu.csv"
+    p.write_text("t_s,gyro_x_radps,gyro_y_radps,gyro_z_radps,accel_x_mps2,accel_y_mps2,"
+                 "accel_z_mps2\n" + "".join(f"{0.01 * i},0,0,0,0,0,9.8\n" for i in range(50)))
+    code = ("import sys; from fednav.io import read_imu_csv; "
+            f"imu = read_imu_csv({str(p)!r}); assert len(imu.t) == 50; "
+            "print('pandas' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.split()
+    assert out == ["False"]

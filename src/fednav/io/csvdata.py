@@ -18,7 +18,6 @@ import warnings
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from ..core import units
 from ..core.atomic import write_bytes, write_text
@@ -44,9 +43,101 @@ VEL_SIGMA_COLUMNS = ("sigma_vE_mps", "sigma_vN_mps", "sigma_vU_mps")
 EULER_COLUMNS = ("pitch_deg", "roll_deg", "heading_deg")
 
 
+class Columns:
+    """A CSV file's columns by name: every numeric column as a float array (empty cells,
+    ``nan``: NaN), ``names`` in the file's order (text columns named, not held)."""
+
+    def __init__(self, names: list[str], data: dict[str, np.ndarray], rows: int):
+        self.names, self._data, self.rows = names, data, rows
+
+    def __contains__(self, name) -> bool:
+        return name in self._data
+
+    def column(self, name: str) -> np.ndarray:
+        """Column ``name`` as floats (N,)."""
+        return self._data[name]
+
+    def stack(self, names) -> np.ndarray:
+        """Columns ``names`` side by side (N, len(names))."""
+        return np.column_stack([self._data[c] for c in names])
+
+    def has(self, names) -> bool:
+        return all(c in self._data for c in names)
+
+
+def _arrow_columns(path: Path, numbers: set) -> Columns | None:
+    """The file by pyarrow's CSV reader (multithreaded; with it a command does not
+    import pandas, 0.3 s of its start): None where pyarrow is not installed or the
+    file holds anything :func:`_pandas_columns` has to explain (a row of another
+    width, text in a column of numbers, a repeated column name)."""
+    try:
+        import pyarrow as pa
+        import pyarrow.csv as pc
+    except ImportError:
+        return None
+    try:
+        tab = pc.read_csv(path)
+    except (pa.ArrowException, OSError):
+        return None
+    names = [c.strip() for c in tab.column_names]  # (', ' separators: pandas' too)
+    if len(set(names)) < len(names):
+        return None
+    data = {}
+    for name, col in zip(names, tab.columns, strict=True):
+        if pa.types.is_integer(col.type) or pa.types.is_floating(col.type) \
+                or pa.types.is_null(col.type):
+            data[name] = _floats(col.cast(pa.float64()))
+        elif name in numbers:
+            return None
+    return Columns(names, data, tab.num_rows)
+
+
+def _floats(col) -> np.ndarray:
+    """A pyarrow float64 column as a new float array, nulls (empty cells) NaN — read
+    from its buffers: pyarrow's own ``to_numpy`` imports pandas, which this reader
+    spares a command."""
+    out = []
+    for c in col.chunks:
+        n, off = len(c), c.offset
+        valid, data = c.buffers()
+        if data is None:  # (a column of empty cells only)
+            out.append(np.full(n, np.nan))
+            continue
+        x = np.frombuffer(data, np.float64, count=n, offset=off * 8)
+        if c.null_count:
+            bits = np.unpackbits(np.frombuffer(valid, np.uint8), bitorder="little")
+            x = np.where(bits[off:off + n].astype(bool), x, np.nan)
+        out.append(x)
+    return np.concatenate(out) if out else np.empty(0)
+
+
+def _pandas_columns(path: Path, src: str, numbers: set) -> Columns:
+    """The file by pandas, every refusal one line naming the file, column and row."""
+    import pandas as pd
+
+    try:
+        df = pd.read_csv(path, skipinitialspace=True, encoding="utf-8-sig")
+    except Exception as e:  # pandas raises several types for unreadable content
+        msg = str(e).strip().splitlines()[-1] if str(e).strip() else type(e).__name__
+        raise DataError(f"{src}: not a readable CSV file ({msg})") from None
+    data = {}
+    for c in df.columns:
+        v = pd.to_numeric(df[c], errors="coerce")
+        # empty cells, NaN and inf are faulty samples (the data policy screens them);
+        # text that is not a number means the file is not what it claims to be
+        text = v.isna().to_numpy() & df[c].notna().to_numpy()
+        if not text.any():
+            data[c] = v.to_numpy(dtype=float)
+        elif c in numbers:
+            i = int(np.argmax(text))
+            raise DataError(f"{src}: column '{c}' has a non-numeric value "
+                            f"{str(df[c].iloc[i])[:20]!r} at data row {i + 1}")
+    return Columns([str(c) for c in df.columns], data, len(df))
+
+
 def _read(path, kind: str, required: tuple, numeric: tuple = (),
-          expected: tuple | None = None) -> tuple[str, pd.DataFrame]:
-    """The CSV file as a DataFrame: ``required`` columns present, they and the known
+          expected: tuple | None = None) -> tuple[str, Columns]:
+    """The CSV file's :class:`Columns`: ``required`` columns present, they and the known
     optional ones (and ``numeric``) numbers; one-line :class:`DataError` s."""
     path = Path(path)
     require_file(path, kind)
@@ -63,45 +154,22 @@ def _read(path, kind: str, required: tuple, numeric: tuple = (),
         if sep in header and "," not in header:
             raise DataError(f"{src}: columns are separated by {name}: fednav's CSV files "
                             f"use ','")
-    try:
-        df = pd.read_csv(path, skipinitialspace=True, encoding="utf-8-sig")
-    except Exception as e:  # pandas raises several types for unreadable content
-        msg = str(e).strip().splitlines()[-1] if str(e).strip() else type(e).__name__
-        raise DataError(f"{src}: not a readable CSV file ({msg})") from None
-    missing = [c for c in required if c not in df.columns]
+    numbers = set(required + numeric + VEL_COLUMNS + EULER_COLUMNS + VEL_SIGMA_COLUMNS)
+    df = _arrow_columns(path, numbers) or _pandas_columns(path, src, numbers)
+    missing = [c for c in required if c not in df.names]
     if missing:
         raise DataError(f"{src}: missing column(s) {', '.join(missing)} "
-                        f"(have {', '.join(map(str, df.columns))})")
-    if df.empty:
+                        f"(have {', '.join(df.names)})")
+    if not df.rows:
         raise DataError(f"{src}: no data rows (header only)")
-    for c in df.columns:
-        if c in required or c in numeric or c in VEL_COLUMNS + EULER_COLUMNS + VEL_SIGMA_COLUMNS:
-            v = pd.to_numeric(df[c], errors="coerce")
-            # empty cells, NaN and inf are faulty samples (the data policy screens them);
-            # text that is not a number means the file is not what it claims to be
-            text = v.isna().to_numpy() & df[c].notna().to_numpy()
-            if text.any():
-                i = int(np.argmax(text))
-                raise DataError(f"{src}: column '{c}' has a non-numeric value "
-                                f"{str(df[c].iloc[i])[:20]!r} at data row {i + 1}")
-            df[c] = v
-    t = df["t_s"].to_numpy(dtype=float)
     if kind == "IMU":
-        check_time(src, t, "t_s")
+        check_time(src, df.column("t_s"), "t_s")
     return src, df
 
 
-def _cols(df, names) -> np.ndarray:
-    return df[list(names)].to_numpy(dtype=float)
-
-
-def _has(df, names) -> bool:
-    return all(c in df.columns for c in names)
-
-
-def _arrival(df) -> np.ndarray | None:
+def _arrival(df: Columns) -> np.ndarray | None:
     """The optional ``t_arrival_s`` column (when each row reached the navigator)."""
-    return df["t_arrival_s"].to_numpy(float) if "t_arrival_s" in df.columns else None
+    return df.column("t_arrival_s") if "t_arrival_s" in df else None
 
 
 def read_imu_csv(path, max_bridge_s: float = 0.1, mounting=None) -> ImuData:
@@ -138,24 +206,24 @@ def read_imu_csv(path, max_bridge_s: float = 0.1, mounting=None) -> ImuData:
     """
     src, df = _read(path, "IMU", ("t_s",), numeric=IMU_COLUMNS[1:] + INCREMENT_COLUMNS,
                     expected=IMU_COLUMNS)
-    t = df["t_s"].to_numpy(float)
-    if _has(df, INCREMENT_COLUMNS):
-        imu = ImuData.from_increments(src, t, _cols(df, INCREMENT_COLUMNS[:3]),
-                                      _cols(df, INCREMENT_COLUMNS[3:]),
+    t = df.column("t_s")
+    if df.has(INCREMENT_COLUMNS):
+        imu = ImuData.from_increments(src, t, df.stack(INCREMENT_COLUMNS[:3]),
+                                      df.stack(INCREMENT_COLUMNS[3:]),
                                       max_bridge_s=max_bridge_s)
         return imu if mounting is None else imu.remount(mounting)
-    missing = [c for c in IMU_COLUMNS if c not in df.columns]
+    missing = [c for c in IMU_COLUMNS if c not in df.names]
     if missing:
         raise DataError(f"{src}: missing column(s) {', '.join(missing)} (have "
-                        f"{', '.join(map(str, df.columns))}; increments instead of rates: "
+                        f"{', '.join(df.names)}; increments instead of rates: "
                         f"dtheta_x_rad ... dv_z_mps)")
-    imu = ImuData(src, t, _cols(df, IMU_COLUMNS[1:4]), _cols(df, IMU_COLUMNS[4:7]),
+    imu = ImuData(src, t, df.stack(IMU_COLUMNS[1:4]), df.stack(IMU_COLUMNS[4:7]),
                   max_bridge_s=max_bridge_s)
     return imu if mounting is None else imu.remount(mounting)
 
 
 def _lla(df) -> np.ndarray:
-    p = _cols(df, POS_COLUMNS)
+    p = df.stack(POS_COLUMNS)
     return np.column_stack([units.deg(p[:, 0]), units.deg(p[:, 1]), p[:, 2]])
 
 
@@ -211,32 +279,32 @@ def read_gnss_csv(path, sigma_pos_enu=None, sigma_vel=(0.1, 0.1, 0.1),
     src, df = _read(path, "GNSS", ("t_s",),
                     numeric=POS_COLUMNS + GNSS_SIGMA_COLUMNS + ("t_arrival_s",),
                     expected=("t_s",) + POS_COLUMNS + VEL_COLUMNS)
-    has_pos, has_vel = _has(df, POS_COLUMNS), _has(df, VEL_COLUMNS)
+    has_pos, has_vel = df.has(POS_COLUMNS), df.has(VEL_COLUMNS)
     partial = [g for g in (POS_COLUMNS, VEL_COLUMNS)
-               if not _has(df, g) and any(c in df.columns for c in g)]
-    have = ", ".join(map(str, df.columns))
+               if not df.has(g) and any(c in df.names for c in g)]
+    have = ", ".join(df.names)
     if partial:
-        missing = [c for c in partial[0] if c not in df.columns]
+        missing = [c for c in partial[0] if c not in df.names]
         raise DataError(f"{src}: missing column(s) {', '.join(missing)} (have {have})")
     if not has_pos and not has_vel:
         raise DataError(f"{src}: missing column(s) {', '.join(POS_COLUMNS)} and/or "
                         f"{', '.join(VEL_COLUMNS)} (a GNSS file has positions, velocities or "
                         f"both; have {have})")
-    n = len(df)
+    n = df.rows
     lla = _lla(df) if has_pos else None
-    vel = _cols(df, VEL_COLUMNS) if has_vel else None
+    vel = df.stack(VEL_COLUMNS) if has_vel else None
     sig = None
     want = [c for c, used in zip(GNSS_SIGMA_COLUMNS, [has_pos] * 3 + [has_vel] * 3,
                                  strict=True) if used]
-    given = [c for c in want if c in df.columns]
+    given = [c for c in want if c in df.names]
     if given:
         if len(given) != len(want):
             raise DataError(f"{src}: 1-sigma columns are all of {', '.join(want)} or none; "
                             f"missing {', '.join(c for c in want if c not in given)}")
         sig = np.ones((n, 6))
         for j, c in enumerate(GNSS_SIGMA_COLUMNS):
-            if c in df.columns and c in want:
-                sig[:, j] = df[c].to_numpy(float)
+            if c in df.names and c in want:
+                sig[:, j] = df.column(c)
     if sigma_pos is not None:  # the old keyword, reordered
         warnings.warn("read_gnss_csv(sigma_pos=[north, east, up]) is now "
                       "read_gnss_csv(sigma_pos_enu=[east, north, up]): read and reordered "
@@ -245,7 +313,7 @@ def read_gnss_csv(path, sigma_pos_enu=None, sigma_vel=(0.1, 0.1, 0.1),
     # (a system description's values as they are: one value for three axes, None for
     # what it leaves out)
     pos = _three(5.0 if sigma_pos_enu is None else sigma_pos_enu)
-    return GnssData(src, df["t_s"].to_numpy(float), lla, vel,
+    return GnssData(src, df.column("t_s"), lla, vel,
                     sigma_vel=_three(0.1 if sigma_vel is None else sigma_vel),
                     lever=_three(0.0 if lever is None else lever), sigma_rows=sig,
                     t_arrival=_arrival(df), sigma_pos_enu=pos)
@@ -262,10 +330,10 @@ def read_velocity_csv(path, lever=(0.0, 0.0, 0.0)) -> VelocityData:
     """Velocity CSV (ENU m/s with per-axis 1-sigma)."""
     src, df = _read(path, "velocity", ("t_s",) + VEL_COLUMNS + VEL_SIGMA_COLUMNS,
                     numeric=("t_arrival_s",))
-    sig = _cols(df, VEL_SIGMA_COLUMNS)
-    cov = np.zeros((len(df), 3, 3))
+    sig = df.stack(VEL_SIGMA_COLUMNS)
+    cov = np.zeros((df.rows, 3, 3))
     cov[:, np.arange(3), np.arange(3)] = sig**2
-    return VelocityData(src, df["t_s"].to_numpy(float), _cols(df, VEL_COLUMNS), cov,
+    return VelocityData(src, df.column("t_s"), df.stack(VEL_COLUMNS), cov,
                         np.asarray(lever), t_arrival=_arrival(df))
 
 
@@ -292,8 +360,8 @@ def read_reference_csv(path) -> Reference:
         One line naming the file and what is wrong.
     """
     src, df = _read(path, "reference", ("t_s",) + POS_COLUMNS + VEL_COLUMNS)
-    euler = units.deg(_cols(df, EULER_COLUMNS)) if _has(df, EULER_COLUMNS) else None
-    return Reference(src, df["t_s"].to_numpy(float), _lla(df), _cols(df, VEL_COLUMNS), euler)
+    euler = units.deg(df.stack(EULER_COLUMNS)) if df.has(EULER_COLUMNS) else None
+    return Reference(src, df.column("t_s"), _lla(df), df.stack(VEL_COLUMNS), euler)
 
 
 def write_csv(path, columns: dict[str, np.ndarray], decimals: dict[str, int] | None = None,

@@ -27,7 +27,6 @@ import warnings
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from ..core import units
 from .data import (
@@ -53,6 +52,8 @@ def read_table(path, kind: str, columns: tuple[int, ...]) -> tuple[str, np.ndarr
     path = Path(path)
     require_file(path, f"KF-GINS {kind}")
     src = str(path)
+    import pandas as pd  # (here only: 0.3 s of the start of a command that reads no text)
+
     try:
         df = pd.read_csv(path, sep=r"\s+", header=None, comment="#", dtype=float,
                          engine="c")

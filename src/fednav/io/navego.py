@@ -12,7 +12,6 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-import scipy.io
 
 from ..core import attitude as att
 from .data import (
@@ -70,6 +69,8 @@ def _load(path, kind: str):
     """The one struct in a NaveGo .mat file."""
     path = Path(path)
     require_file(path, kind)
+    import scipy.io
+
     try:
         d = scipy.io.loadmat(path, squeeze_me=True, struct_as_record=False)
     except Exception as e:  # scipy raises several types for non-MAT content

@@ -101,21 +101,21 @@ def read_sensor_csv(name: str, path) -> SensorData:
     alt = spec.alternative
     optional = (ARRIVAL,) + sig_cols + (alt[0] if alt else ())
     src, df = _read(path, f"{name} sensor", ("t_s",), numeric=optional + head[1:])
-    have = set(df.columns)
+    have = set(df.names)
     absent = tuple(j for j, c in enumerate(spec.columns)
                    if c.absent is not None and c.name not in have)
     if all(c.name in have or j in absent for j, c in enumerate(spec.columns)):
-        z = np.column_stack([df[c.name].to_numpy(float) * c.to_si if j not in absent
-                             else np.full(len(df), np.nan)
+        z = np.column_stack([df.column(c.name) * c.to_si if j not in absent
+                             else np.full(df.rows, np.nan)
                              for j, c in enumerate(spec.columns)])
     elif alt and all(c in have for c in alt[0]):
-        z = np.asarray(alt[1](df[list(alt[0])].to_numpy(float)), dtype=float)
+        z = np.asarray(alt[1](df.stack(alt[0])), dtype=float)
     else:
         missing = [c for c in head if c not in have]
         other = f" (or {', '.join(alt[0])})" if alt else ""
         raise DataError(f"{src}: missing column(s) {', '.join(missing)}{other} "
-                        f"(have {', '.join(map(str, df.columns))})")
-    t = df["t_s"].to_numpy(float)
+                        f"(have {', '.join(df.names)})")
+    t = df.column("t_s")
     want = list(dict.fromkeys(c for j, c in enumerate(sig_cols) if j not in absent))
     given = [c in have for c in want]
     sig = None
@@ -124,12 +124,12 @@ def read_sensor_csv(name: str, path) -> SensorData:
             lack = [c for c, g in zip(want, given, strict=True) if not g]
             raise DataError(f"{src}: 1-sigma columns are all of {', '.join(want)} or "
                             f"none; missing {', '.join(lack)}")
-        sig = np.column_stack([df[c.sigma_column[0]].to_numpy(float) * c.sigma_column[1]
-                               if j not in absent else np.ones(len(df))
+        sig = np.column_stack([df.column(c.sigma_column[0]) * c.sigma_column[1]
+                               if j not in absent else np.ones(df.rows)
                                for j, c in enumerate(spec.columns)])
     ta = None
     if ARRIVAL in have:
-        ta = df[ARRIVAL].to_numpy(float)
+        ta = df.column(ARRIVAL)
     used = [j for j in range(z.shape[1]) if j not in absent]
     ok = np.isfinite(t) if spec.sparse else np.isfinite(z[:, used]).all(axis=1) & \
         np.isfinite(t)

@@ -41,7 +41,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from pydantic import Field
-from scipy.special import ndtr, ndtri
 
 from ..core.attitude import wrap_pi
 from ..core.config import _Model
@@ -50,11 +49,15 @@ from ..core.earth import llh_difference_enu
 
 def q_function(x):
     """The standard normal tail ``Q(x) = P(X > x)``."""
+    from scipy.special import ndtr  # (scipy.special: 0.1 s of every command's start)
+
     return ndtr(-np.asarray(x, dtype=float))
 
 
 def q_inverse(p):
     """``Q⁻¹(p)``: the ``x`` with ``Q(x) = p``."""
+    from scipy.special import ndtri
+
     return -ndtri(np.asarray(p, dtype=float))
 
 

@@ -5,10 +5,10 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from ..core import plots, units
 from ..core.atomic import replacing, write_json
+from ..core.drawer import Drawer
 from ..io.csvdata import write_csv
 from ..io.data import Reference
 from ..navigator.solution import consistency as _consistency
@@ -127,6 +127,8 @@ def write_solution(path: Path, sol: Solution) -> Path:
     path = Path(path)
     if path.suffix == ".parquet":
         check_format("parquet")
+        import pandas as pd
+
         with replacing(path) as tmp:
             pd.DataFrame(cols).to_parquet(tmp, index=False, compression="zstd")
         return path
@@ -486,10 +488,12 @@ def track_figure(res: ProcessResult, fixes, ref: Reference | None):
         m = (f.t > t0) & (f.t < t1)
         over.append((*en(f.lla[m]), "r-", dict(lw=2.4, label="forward in GNSS outage"
                                                 if i == 0 else None)))
-    if f.fdi:
-        log = pd.DataFrame(f.fdi, columns=["t", "local", "nis", "dof", "thr", "isolated"])
-        for name, marker in zip(log.local.unique(), "x+*^vo<>sd", strict=False):
-            t_iso = log.t[(log.local == name) & log.isolated].to_numpy(dtype=float)
+    if f.fdi:  # (t, local, nis, dof, threshold, isolated) per measurement
+        t_fdi = np.array([r[0] for r in f.fdi], dtype=float)
+        local = np.array([r[1] for r in f.fdi])
+        isolated = np.array([bool(r[5]) for r in f.fdi])
+        for name, marker in zip(dict.fromkeys(local.tolist()), "x+*^vo<>sd", strict=False):
+            t_iso = t_fdi[(local == name) & isolated]
             if len(t_iso):
                 i = np.clip(np.searchsorted(f.t, t_iso), 0, len(f.t) - 1)
                 over.append((*en(f.lla[i]), marker, dict(ms=5, color="m",
@@ -585,48 +589,71 @@ def would_overwrite(out: Path, path: Path) -> bool:
 
 def write(out: Path, res: ProcessResult, ref: Reference | None, inputs: dict,
           output_rate: float | str | None = None, fixes=None,
-          others: dict | None = None, fmt: str = "csv") -> list[Path]:
+          others: dict | None = None, fmt: str = "csv",
+          drawer: Drawer | None = None) -> list[Path]:
     """Write the solution file(s) at ``output_rate`` (:func:`decimate`: by default
     :data:`DEFAULT_OUTPUT_RATE_HZ`; ``"imu"`` every IMU sample), in ``fmt`` (``csv`` or
     ``parquet``), errors.csv (thinned alike), the plots and summary.json into ``out``;
     returns the files.  The
     figures of summary.json and the plots come from the full-rate solution whatever the
     output rate.  ``others``: further references by name (``errors_NAME.csv``,
-    ``errors_NAME.png``, ``against`` in the summary)."""
+    ``errors_NAME.png``, ``against`` in the summary).  ``drawer``: a
+    :class:`~fednav.core.drawer.Drawer` that draws the plots while the files are written
+    (None: drawn here, in turn)."""
     global _MEMO
     fmt = check_format(fmt)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     _MEMO = {}
     try:
-        return _write(out, res, ref, inputs, output_rate, fixes, others, fmt)
+        return _write(out, res, ref, inputs, output_rate, fixes, others, fmt,
+                      drawer or Drawer(workers=0))
     finally:
         _MEMO = None
 
 
-def _write(out, res, ref, inputs, output_rate, fixes, others, fmt) -> list[Path]:
+def _write(out, res, ref, inputs, output_rate, fixes, others, fmt,
+           drawer: Drawer) -> list[Path]:
+    if res.fixes_flown is not None:  # (the outages withheld: the plots shade them)
+        fixes = res.fixes_flown
+    # the plots first (handed to the drawer, drawn while the files below are written)
+    drawn = {"track.png": drawer.submit(plot_track, res, fixes, ref, out / "track.png")}
+    if ref is not None:
+        drawn["errors.png"] = drawer.submit(plot_errors, res, ref, out / "errors.png", fixes)
+        if res.integrity is not None:
+            from .stanford import plot_run
+
+            drawn["stanford.png"] = drawer.submit(plot_run, res, _errors(res.forward, ref),
+                                                  out / "stanford.png")
+    for name, draw in res.figures.items():  # (a sensor's own: the raw GNSS's satellites)
+        drawn[f"{name}.png"] = drawer.submit(save_drawn, draw, out / f"{name}.png")
+    for name, other in (others or {}).items():
+        drawn[f"errors_{name}.png"] = drawer.submit(plot_errors, res, other,
+                                                    out / f"errors_{name}.png", fixes,
+                                                    f"against {other.source}")
     files = []
     for name, sol in (("solution", res.forward), ("solution_smoothed", res.smoothed)):
         if sol is not None:
             files.append(write_solution(out / f"{name}.{fmt}", decimate(sol, output_rate)))
-    if res.fixes_flown is not None:  # (the outages withheld: the plots shade them)
-        fixes = res.fixes_flown
-    files.append(plot_track(res, fixes, ref, out / "track.png"))
+    files.append("track.png")
     if ref is not None:
         files.append(write_errors(res, ref, out / "errors.csv", output_rate))
-        files.append(plot_errors(res, ref, out / "errors.png", fixes))
+        files.append("errors.png")
         if res.integrity is not None:
-            from .stanford import plot_run
-
-            files.append(plot_run(res, _errors(res.forward, ref), out / "stanford.png"))
-    for name, draw in res.figures.items():  # (a sensor's own: the raw GNSS's satellites)
-        files.append(plots.save(draw(), out / f"{name}.png"))
-    for name, other in (others or {}).items():
-        files.append(write_errors(res, other, out / f"errors_{name}.csv", output_rate))
-        files.append(plot_errors(res, other, out / f"errors_{name}.png", fixes,
-                                 f"against {other.source}"))
+            files.append("stanford.png")
+    files += [f"{name}.png" for name in res.figures]
+    for name in others or {}:
+        files.append(write_errors(res, others[name], out / f"errors_{name}.csv",
+                                  output_rate))
+        files.append(f"errors_{name}.png")
     s = summary(res, ref, inputs, others)
-    p = out / "summary.json"
+    files = [drawer.result(drawn[f]) if isinstance(f, str) else f for f in files]
+    p = out / "summary.json"  # (the last file: a finished run's mark)
     write_json(p, s)
     files.append(p)
     return files
+
+
+def save_drawn(draw, path: Path) -> Path:
+    """Save the figure ``draw()`` makes to ``path``."""
+    return plots.save(draw(), path)
