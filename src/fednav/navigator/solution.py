@@ -112,7 +112,8 @@ def imu_rate(res, smooth: bool = False) -> tuple[Solution, Solution | None]:
     P_prior = Phis[1:] @ P_post[:-1] @ np.swapaxes(Phis[1:], 1, 2) + Qs[1:]
     P_prior = np.concatenate([P_post[:1], P_prior])
     cov = _interpolate_intervals(_nav_cov(P_post), _nav_cov(P_prior), n_per)
-    forward = Solution(t_rows, rows_p, rows_v, att.quat_to_euler(rows_q), *_sigmas(rows_q, cov),
+    euler = att.quat_to_euler(rows_q)
+    forward = Solution(t_rows, rows_p, rows_v, euler, *_sigmas(euler, cov),
                        rows_w, "forward", res.fdi, np.arange(0, n_rows, n_per))
     smoothed = None
     if smooth:
@@ -122,7 +123,8 @@ def imu_rate(res, smooth: bool = False) -> tuple[Solution, Solution | None]:
         correct_rows(q, v, p, np.ascontiguousarray(err))
         cs = _nav_cov(Ps)
         cov = _interpolate_intervals(cs, cs, n_per)
-        smoothed = Solution(t_rows, p, v, att.quat_to_euler(q), *_sigmas(q, cov), rows_w,
+        euler = att.quat_to_euler(q)
+        smoothed = Solution(t_rows, p, v, euler, *_sigmas(euler, cov), rows_w,
                             "smoothed", [], forward.epoch_rows)
     return forward, smoothed
 
@@ -136,9 +138,10 @@ def epoch_rate(res) -> Solution:
     st = res.states
     q = st[:, STATE_Q]
     cov = _nav_cov(res.P)
-    sd, sd_euler = _sigmas(q, cov)
+    euler = att.quat_to_euler(q)
+    sd, sd_euler = _sigmas(euler, cov)
     return Solution(res.t.copy(), st[:, STATE_LLA].copy(), st[:, STATE_VEL].copy(),
-                    att.quat_to_euler(q), sd, sd_euler, np.zeros((len(st), 3)), "forward",
+                    euler, sd, sd_euler, np.zeros((len(st), 3)), "forward",
                     res.fdi, np.arange(len(st)))
 
 
@@ -173,23 +176,28 @@ def _interpolate_intervals(post, end, n_per: int) -> np.ndarray:
     """Per-epoch quantities (N+1, ...) on the IMU rows of N intervals of ``n_per`` samples:
     row ``(k-1) n_per + m`` lies between ``post[k-1]`` (m = 0) and ``end[k]`` (m = n_per),
     linearly in time, except the epoch rows (m = n_per), which take ``post[k]``."""
-    post, end = np.asarray(post), np.asarray(end)
-    N = len(post) - 1
+    post, end = np.asarray(post, dtype=float), np.asarray(end, dtype=float)
+    N, tail = len(post) - 1, post.shape[1:]
+    out = np.empty((N * n_per + 1,) + tail)
+    out[0] = post[0]
+    rows = out[1:].reshape((N, n_per) + tail)  # (a view: written in place)
     f = (np.arange(1, n_per) / n_per).reshape((1, -1) + (1,) * (post.ndim - 1))
-    inner = (1.0 - f) * post[:-1, None] + f * end[1:, None]
-    rows = np.concatenate([inner, post[1:, None]], axis=1)
-    return np.concatenate([post[:1], rows.reshape((N * n_per,) + post.shape[1:])])
+    np.multiply(1.0 - f, post[:-1, None], out=rows[:, :-1])
+    rows[:, :-1] += f * end[1:, None]
+    rows[:, -1] = post[1:]
+    return out
 
 
-def _sigmas(q, cov) -> tuple[np.ndarray, np.ndarray]:
+def _sigmas(euler, cov) -> tuple[np.ndarray, np.ndarray]:
     """1-sigma (N, 9) of [phi (rad), dv ENU (m/s), dp ENU (m)] and of the Euler angles
-    [pitch, roll, heading] (N, 3) [rad] from :func:`_nav_cov` rows (filter units)."""
+    [pitch, roll, heading] (N, 3) [rad] from :func:`_nav_cov` rows (filter units) at the
+    attitudes ``euler`` (N, 3) [rad]."""
     sd = np.sqrt(cov[:, :9]) * em.SCALE[:9]
     s = em.SCALE[0] ** 2
     Pphi = np.empty((len(cov), 3, 3))
     Pphi[:, [0, 1, 2], [0, 1, 2]] = cov[:, :3] * s
     for j, (a, b) in zip((9, 10, 11), ((0, 1), (0, 2), (1, 2)), strict=True):
         Pphi[:, a, b] = Pphi[:, b, a] = cov[:, j] * s
-    J = att.euler_error_jacobian(att.quat_to_euler(q))
-    var = np.einsum("kij,kjl,kil->ki", J, Pphi, J)
+    J = att.euler_error_jacobian(euler)
+    var = np.sum((J @ Pphi) * J, axis=-1)  # (the diagonal of J P J^T)
     return sd, np.sqrt(np.maximum(var, 0.0))
