@@ -104,3 +104,27 @@ def test_process_outputs_drawn_in_the_worker_are_the_callers(tmp_path):
     assert {"track.png", "errors.png", "summary.json"} <= {n for n, _ in got[2]}
     for (name, a), (_, b) in zip(got[2], got[0], strict=True):
         assert a == b, name
+
+
+def sleep_then(x):
+    import time
+
+    time.sleep(0.5)
+    return x
+
+
+def test_ctrl_c_is_the_callers_and_sigterm_ends_the_worker_quietly(capfd):
+    """The worker ignores SIGINT (the command's Ctrl-C ends it through abort) and dies of
+    SIGTERM without a traceback; its jobs then run in the caller."""
+    import signal
+
+    with Drawer(workers=1) as d:
+        k = d.submit(sleep_then, 5)
+        pid = d._workers[0].proc.pid
+        os.kill(pid, signal.SIGINT)
+        assert d.result(k) == 5  # (drawn by the worker, Ctrl-C notwithstanding)
+        j = d.submit(pid_and, 6)
+        os.kill(pid, signal.SIGTERM)
+        got = d.result(j)
+        assert got[1] == 6
+    assert "Traceback" not in capfd.readouterr().err

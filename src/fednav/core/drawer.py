@@ -43,7 +43,15 @@ def warm_up(preload: tuple[str, ...] = ()) -> None:
 
 def _serve(conn, preload: tuple[str, ...]) -> None:
     """The worker's loop: warm up, then run each job received until None or the end of
-    the pipe; send back ``(True, result)`` or ``(False, exception)``."""
+    the pipe; send back ``(True, result)`` or ``(False, exception)``.  Ctrl-C is the
+    caller's to handle (it ends the worker); SIGTERM and SIGHUP end it at once, not
+    through the handlers it inherited."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    for name in ("SIGTERM", "SIGHUP"):
+        if hasattr(signal, name):
+            signal.signal(getattr(signal, name), signal.SIG_DFL)
     try:
         warm_up(preload)
     except Exception:  # (a job will meet the same problem and report it)
