@@ -110,7 +110,7 @@ def sleep_then(x):
     import time
 
     time.sleep(0.5)
-    return x
+    return os.getpid(), x
 
 
 def test_ctrl_c_is_the_callers_and_sigterm_ends_the_worker_quietly(capfd):
@@ -121,8 +121,8 @@ def test_ctrl_c_is_the_callers_and_sigterm_ends_the_worker_quietly(capfd):
     with Drawer(workers=1) as d:
         k = d.submit(sleep_then, 5)
         pid = d._workers[0].proc.pid
-        os.kill(pid, signal.SIGINT)
-        assert d.result(k) == 5  # (drawn by the worker, Ctrl-C notwithstanding)
+        os.kill(pid, signal.SIGINT)  # (at once: the worker is born ignoring it)
+        assert d.result(k) == (pid, 5)  # (drawn by the worker, Ctrl-C notwithstanding)
         j = d.submit(pid_and, 6)
         os.kill(pid, signal.SIGTERM)
         got = d.result(j)

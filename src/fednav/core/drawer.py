@@ -100,12 +100,21 @@ class _Worker:
 
     def __init__(self, preload: tuple[str, ...]):
         import multiprocessing as mp
+        import signal
 
         ctx = mp.get_context("fork")
         self.conn, child = ctx.Pipe()
         self.proc = ctx.Process(target=_serve, args=(child, preload), daemon=True,
                                 name="fednav-drawer")
-        self.proc.start()
+        try:  # (born ignoring Ctrl-C: one in its first instant would otherwise kill it)
+            old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+        except ValueError:  # (not the main thread)
+            old = None
+        try:
+            self.proc.start()
+        finally:
+            if old is not None:
+                signal.signal(signal.SIGINT, old)
         child.close()
         self.held: list[int] = []
         self.sender: threading.Thread | None = None
