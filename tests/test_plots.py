@@ -327,6 +327,25 @@ def test_track_has_start_end_outage_and_a_zoom(processed):
                                                  + frame.get_width()))
 
 
+def test_track_marks_each_local_filters_isolated_measurements(processed):
+    """The fault detection log's isolated measurements: one marker series per local
+    filter, in the order they first appear, at the solution's rows of their times."""
+    from dataclasses import replace
+
+    res, gnss, ref = processed
+    f = res.forward
+    fdi = [(100.0, "gnss", 30.0, 3, 11.3, True), (100.2, "velocity", 1.0, 3, 11.3, False),
+           (101.0, "velocity", 40.0, 3, 11.3, True), (102.0, "gnss", 25.0, 3, 11.3, True),
+           (103.0, "gnss", 1.0, 3, 11.3, False)]
+    fig = _drawn(output.track_figure(replace(res, forward=replace(f, fdi=fdi)), gnss, ref))
+    labels = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert [s for s in labels if "isolated" in s] == ["gnss isolated (2)",
+                                                      "velocity isolated (1)"]
+    main = fig.axes[0]
+    gn = next(ln for ln in main.lines if ln.get_label() == "gnss isolated (2)")
+    assert gn.get_marker() == "x" and len(gn.get_xdata()) == 2
+
+
 def test_ascent_puts_height_and_speed_on_two_axes():
     from fednav.scenarios import paper001
 
