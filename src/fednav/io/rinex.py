@@ -28,6 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core.atomic import write_text
 from ..core.errors import DataError
 from ..sensors import satellites
 from ..sensors.satellites import Ephemerides
@@ -312,8 +313,7 @@ def write_rinex_obs(path, t, sv, obs: dict, *, approx_xyz=None, marker: str = "F
             fields = ["" if not np.isfinite(v) else f"{v:14.3f}  " for v in vals[i, j]]
             for k in range(0, len(fields), 5):
                 out.append("".join(f"{f:<16}" for f in fields[k:k + 5]).rstrip() + "\n")
-    path.write_text("".join(out))
-    return path
+    return write_text(path, "".join(out))
 
 
 def write_rinex_nav(path, eph: Ephemerides, *, program: str = "fednav",
@@ -358,8 +358,7 @@ def write_rinex_nav(path, eph: Ephemerides, *, program: str = "fednav",
                     (2.0, g["health"][k], g["tgd"][k], iod),
                     (sow, 4.0)):
             out.append("   " + d(*row) + "\n")
-    path.write_text("".join(out))
-    return path
+    return write_text(path, "".join(out))
 
 
 def write_raw_receiver(folder, series, truth, section,
@@ -394,14 +393,13 @@ def write_raw_receiver(folder, series, truth, section,
     z = np.asarray(series.z, dtype=float).reshape(len(t), SLOTS, len(FIELDS))
     lla = truth.at(t)["lla"]
     r = earth.llh_to_ecef(lla[:, 0], lla[:, 1], lla[:, 2])
-    prns = sorted({int(p) for p in z[:, :, PRN][np.isfinite(z[:, :, PRN])]})
+    i, j = np.nonzero(np.isfinite(z[:, :, PRN]))  # (every epoch's occupied slots)
+    prns = np.unique(z[i, j, PRN].astype(np.int64))
     sv = np.array([f"G{p:02d}" for p in prns])
-    col = {p: j for j, p in enumerate(prns)}
+    k = np.searchsorted(prns, z[i, j, PRN].astype(np.int64))  # (each slot's satellite)
     n = (len(t), len(prns))
     pos, pr, rr = np.full((*n, 3), np.nan), np.full(n, np.nan), np.full(n, np.nan)
-    for i, j in zip(*np.nonzero(np.isfinite(z[:, :, PRN])), strict=True):
-        k = col[int(z[i, j, PRN])]
-        pos[i, k], pr[i, k], rr[i, k] = z[i, j, SX:SZ + 1], z[i, j, PR], z[i, j, RR]
+    pos[i, k], pr[i, k], rr[i, k] = z[i, j, SX:SZ + 1], z[i, j, PR], z[i, j, RR]
     gps = t + start
     tau = np.linalg.norm(pos - r[:, None, :], axis=-1) / C
     _, _, clk, drift = satellite_states(eph, nearest_ephemeris(eph, sv, gps),

@@ -489,9 +489,8 @@ def track_figure(res: ProcessResult, fixes, ref: Reference | None):
         over.append((*en(f.lla[m]), "r-", dict(lw=2.4, label="forward in GNSS outage"
                                                 if i == 0 else None)))
     if f.fdi:  # (t, local, nis, dof, threshold, isolated) per measurement
-        t_fdi = np.array([r[0] for r in f.fdi], dtype=float)
-        local = np.array([r[1] for r in f.fdi])
-        isolated = np.array([bool(r[5]) for r in f.fdi])
+        t_fdi, local, _, _, _, isolated = (np.array(c) for c in zip(*f.fdi, strict=True))
+        t_fdi, isolated = t_fdi.astype(float), isolated.astype(bool)
         for name, marker in zip(dict.fromkeys(local.tolist()), "x+*^vo<>sd", strict=False):
             t_iso = t_fdi[(local == name) & isolated]
             if len(t_iso):
