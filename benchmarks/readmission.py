@@ -15,6 +15,12 @@ each with ``filter.fdi_readmit_s`` off (None) and at its default, reporting the 
 horizontal error after 50 s, the re-admissions and the share of GNSS fixes isolated.  With
 ``../shared/data/canada-planetary`` present, the real rover with its file's IMU figures
 and ``fdi_alpha: 0.001`` (which locked the GNSS out from 6 s to the end) too.
+
+Then the same two cases **tightly coupled** (``gnss_raw``: each satellite's pseudorange and
+range rate, compared satellite by satellite as they rise and set): the car-grade drive of
+``benchmarks/tight_coupling.py`` (100 Hz MEMS, 1 Hz raw GNSS, the whole sky), the
+filter's figures 30x too small, or right with the receiver's position jumping 200 m east
+at 100 s and staying (every pseudorange moved along its line of sight).
 """
 
 from __future__ import annotations
@@ -72,6 +78,56 @@ def drive_case(seed: int, case: str):
     return imu, gnss, d.reference, system
 
 
+def tight_case(seed: int, case: str, hold):
+    """One tightly coupled run (module docstring) of ``case`` ("overconfident x30" or
+    "true fault jump200m"), ``fdi_alpha: 0.001``, ``fdi_readmit_s: hold``: the horizontal
+    error per filter epoch [m], the epochs' times [s] and the navigator's result."""
+    import tempfile
+
+    from fednav.navigator.navigator import Navigator
+    from fednav.sensors.gnss_raw import FIELDS, PR, SLOTS, SX, SZ
+    from fednav.sim.runs import _initial_state, _result, make_run_data
+    from fednav.sim.scenario import ModeConfig
+
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    import tight_coupling
+
+    folder = Path(tempfile.mkdtemp(prefix="fednav-readmit-"))
+    scn = tight_coupling._scenario(folder, 14, "tcxo")  # (the whole sky throughout)
+    data = make_run_data(scn, seed)
+    truth = scn.trajectory(None)
+    system = scn.system_for(ModeConfig(name="tight", aiding=["gnss_raw"]))
+    f = system.filter.model_copy(update={"fdi_alpha": 0.001, "fdi_readmit_s": hold})
+    system = system.model_copy(update={"filter": f})
+    if case.startswith("overconfident"):
+        k = float(case.split("x")[-1])
+        figs = ("gyro_bias_deg_h", "gyro_markov_deg_h", "gyro_arw_deg_sqrt_h",
+                "accel_bias_ug", "accel_markov_ug", "accel_vrw_ug_sqrt_hz")
+        system = system.model_copy(update={"imu": system.imu.model_copy(
+            update={n: getattr(system.imu, n) / k for n in figs})})
+    else:  # the receiver's position jumps east and stays: each pseudorange moves by -u.d
+        size = float(case.split("jump")[-1].rstrip("m"))
+        s = data.series["gnss_raw"]
+        z = s.z.reshape(len(s.t), SLOTS, len(FIELDS)).copy()
+        lla = np.column_stack([np.interp(s.t, truth.t, truth.lla[:, j]) for j in range(3)])
+        r = np.array([earth.llh_to_ecef(*p) for p in lla])
+        east = np.array([earth.enu_to_ecef(a, b)[:, 0] for a, b, _ in lla]) * size
+        u = z[:, :, SX:SZ + 1] - r[:, None, :]
+        u /= np.linalg.norm(u, axis=2)[:, :, None]
+        k = s.t >= 100.0
+        z[k, :, PR] -= np.einsum("nsj,nj->ns", u[k], east[k])  # (NaN slots stay NaN)
+        data = replace(data, series=dict(data.series, gnss_raw=replace(
+            s, z=z.reshape(len(s.t), -1))))
+    nav = Navigator(system, _initial_state(scn, truth, data), truth.dt)
+    nav.add_series(data.series["gnss_raw"])
+    m = len(truth.t) - 1
+    nav.add_imu(truth.t[:-1], dtheta=data.dtheta[:m], dv=data.dv[:m])
+    res = nav.result()
+    out = _result(scn, truth, round(scn.filter.period_s / truth.dt), res.states[1:], "t",
+                  res.sigma[1:], res.beta, res.fdi)
+    return np.hypot(out.pos[:, 0], out.pos[:, 1]), out.t, res
+
+
 def main(seeds: int = 10) -> None:
     cases = ("overconfident x30", "overconfident x100", "true fault jump200m",
              "true fault jump20m")
@@ -91,6 +147,21 @@ def main(seeds: int = 10) -> None:
                   f"{max(err):9.1f}  re-admissions {sum(n_ep):3d} "
                   f"(runs with any: {sum(n > 0 for n in n_ep)}/{seeds})  isolated "
                   f"{100 * np.mean(iso):5.1f} %")
+    print("tightly coupled (gnss_raw, car-grade MEMS, 1 Hz); max horizontal error after "
+          "100 s [m] (median, worst), at the end (median), re-admissions, isolated")
+    for case in ("overconfident x30", "true fault jump200m"):
+        for hold in (None, DEFAULT):
+            err, end, n_ep, iso = [], [], [], []
+            for seed in range(1, seeds + 1):
+                h, t, res = tight_case(seed, case, hold)
+                err.append(h[t > 100.0].max())
+                end.append(h[-1])
+                n_ep.append(len(res.readmissions))
+                iso.append(np.mean([e[5] for e in res.fdi]))
+            print(f"  {case:20s} fdi_readmit_s {hold!s:5s}: error {np.median(err):9.1f} "
+                  f"{max(err):9.1f}  end {np.median(end):8.1f}  re-admissions "
+                  f"{sum(n_ep):3d} (runs with any: {sum(n > 0 for n in n_ep)}/{seeds})  "
+                  f"isolated {100 * np.mean(iso):5.1f} %")
     if not ROVER.is_dir():
         print("rover: ../shared/data/canada-planetary not found (skipped)")
         return

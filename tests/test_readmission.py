@@ -6,6 +6,7 @@ a receiver that jumps and stays must stay isolated.  ``filter.fdi_readmit_s`` te
 two apart by the drift of the innovation since the isolation began
 (:func:`fednav.filters.federated.lockout_step`)."""
 
+import sys
 from dataclasses import replace
 from pathlib import Path
 
@@ -31,10 +32,19 @@ FIGURES = ("gyro_bias_radps", "gyro_markov_radps", "gyro_arw_rad_sqrt_s", "accel
 
 
 # ------------------------------------------------------------------ the kernel alone
-def _state(nf=2):
+def _state(nf=2, w=6):
     st = np.zeros((nf, 3))
     st[:, 0], st[:, 2] = np.nan, np.inf
-    return st, np.zeros((nf, 6)), np.zeros((nf, 6, 6)), np.array([-np.inf])
+    return (st, np.zeros((nf, w)), np.zeros((nf, w, w)), np.zeros((nf, w), dtype=np.int64),
+            np.array([-np.inf]))
+
+
+def _thr(m, alpha=0.001):
+    """The drift test's thresholds by number of rows compared, up to ``m``."""
+    return np.array([np.nan] + [drift_threshold(d, alpha) for d in range(1, m + 1)])
+
+
+KEYS2 = np.arange(2)
 
 
 def test_kernel_waits_for_the_hold_then_needs_a_drift():
@@ -42,11 +52,12 @@ def test_kernel_waits_for_the_hold_then_needs_a_drift():
     (a jump that stays) is not re-admitted, one that drifted is, with the inflation that
     gives it its expected statistic."""
     pos = np.array([True, False])
-    st, r0, S0, tp = _state()
+    st, r0, S0, k0, tp = _state()
     S, R = np.eye(2) * 2.0, np.eye(2)
-    thr = drift_threshold(2, 0.001)
-    call = lambda t, r, acc=False: lockout_step(0, t, acc, float(r @ r / 2.0), r, S, R,  # noqa
-                                            thr, LockoutState(pos, 5.0, st, r0, S0, tp))
+    thr = _thr(2)
+    call = lambda t, r, acc=False: lockout_step(  # noqa: E731
+        0, t, acc, float(r @ r / 2.0), r, S, R, KEYS2, thr,
+        LockoutState(pos, 5.0, st, r0, S0, k0, tp))
     assert call(0.0, np.zeros(2), True)[0] == 0.0 and tp[0] == 0.0
     jump = np.array([40.0, 0.0])
     assert call(1.0, jump)[0] == 0.0 and st[0, 0] == 1.0  # the reference of the run
@@ -58,26 +69,76 @@ def test_kernel_waits_for_the_hold_then_needs_a_drift():
     M = s * (S - R) + R
     assert r @ np.linalg.solve(M, r) == pytest.approx(2.0, rel=1e-9)  # NIS = m after
     # not a position source, or the guard off: never
-    lk = LockoutState(pos, 5.0, st, r0, S0, tp)
-    assert lockout_step(1, 9.0, False, 1e6, r, S, R, thr, lk)[0] == 0.0
-    assert lockout_step(0, 9.0, False, 1e6, r, S, R, thr, lk._replace(hold=np.nan))[0] == 0.0
+    lk = LockoutState(pos, 5.0, st, r0, S0, k0, tp)
+    assert lockout_step(1, 9.0, False, 1e6, r, S, R, KEYS2, thr, lk)[0] == 0.0
+    assert lockout_step(0, 9.0, False, 1e6, r, S, R, KEYS2, thr,
+                        lk._replace(hold=np.nan))[0] == 0.0
     assert drift_threshold(2, 0.001) == pytest.approx(-2 * np.log(READMIT_ALPHA), rel=1e-6)
     assert drift_threshold(2, 1e-9) > drift_threshold(2, 0.001)  # never looser than FDI
 
 
+def test_kernel_compares_rows_by_what_they_measure():
+    """A raw GNSS epoch's rows change as satellites rise and set: the drift is measured on
+    the rows both epochs hold (keys: 2 prn for a pseudorange), the lockout's start kept
+    when no row is left in common (the reference renewed)."""
+    pos = np.array([True])
+    R = np.eye(4)
+    thr = _thr(4)
+
+    def call(lk, t, keys, r):
+        r = np.asarray(r, dtype=float)
+        m = len(r)
+        return lockout_step(0, t, False, float(r @ r / 2.0), r, 2.0 * np.eye(m), R[:m, :m],
+                            np.asarray(keys, dtype=np.int64), thr, lk)
+
+    # a fault that stays (40 m on every satellite) while satellite 1 sets and 4 rises
+    lk = LockoutState(pos, 5.0, *_state(1))
+    assert call(lk, 1.0, [2, 4, 6], [40.0, 40.0, 40.0])[0] == 0.0
+    assert call(lk, 7.0, [4, 6, 8], [40.5, 40.0, 90.0])[0] == 0.0  # 8 is new: not compared
+    assert call(lk, 8.0, [6, 8, 10], [40.0, 40.0, 40.0])[0] == 0.0
+    assert call(lk, 9.0, [12, 14], [40.0, 40.0])[0] == 0.0  # nothing in common: renewed
+    assert lk.state[0, 0] == 1.0 and list(lk.k0[0, :2]) == [12, 14]
+    s, t0 = call(lk, 10.0, [14, 12, 16], [70.0, 70.0, 0.0])  # drifted since the renewal
+    assert s > 1.0 and t0 == 1.0
+    # the filter drifting (30 m on the satellites both epochs see): re-admitted at once
+    lk = LockoutState(pos, 5.0, *_state(1))
+    call(lk, 1.0, [2, 4, 6], [40.0, 40.0, 40.0])
+    assert call(lk, 7.0, [4, 6, 8], [70.0, 70.0, 70.0])[0] > 1.0
+    # rows of a position fix keep their order: the same test as before keys
+    lk = LockoutState(pos, 5.0, *_state(1))
+    call(lk, 1.0, [0, 1], [40.0, 0.0])
+    assert call(lk, 7.0, [0, 1], [40.0, 1.0])[0] == 0.0
+
+
+def test_inflation_covers_what_the_states_can_show():
+    """The inflation gives the residual its expected statistic; where the filter's part
+    ``A`` of ``S`` spans fewer dimensions than the rows (a raw GNSS epoch), the part of the
+    statistic outside it is what it is and the rest is brought to its dimension: with
+    ``A = diag(1, 0, 0)``, ``R = I`` and ``r = (10, 2, 1)``: ``100 / (s + 1) + 5 = 5 + 1``,
+    ``s = 99`` (the old target, 3, no ``s`` reaches)."""
+    from fednav.filters.federated import _inflation
+
+    R = np.eye(3)
+    r = np.array([10.0, 2.0, 1.0])
+    s = _inflation(r, np.diag([1.0, 0.0, 0.0]) + R, R, float(r @ r))
+    assert s == pytest.approx(99.0, rel=1e-9)
+    s = _inflation(r, 3.0 * R, R, float(r @ r) / 3.0)  # A = 2 I: r'r / (2 s + 1) = 3
+    assert s == pytest.approx((r @ r / 3.0 - 1.0) / 2.0, rel=1e-9)
+
+
 def test_kernel_readmits_the_most_consistent_source():
     pos = np.array([True, True])
-    st, r0, S0, tp = _state()
+    st, r0, S0, k0, tp = _state()
     S, R = np.eye(2), np.full((2, 2), np.nan)  # (R unknown: s = NIS / m)
-    thr = drift_threshold(2, 0.001)
+    thr = _thr(2)
     for f, size in ((0, 10.0), (1, 3.0)):
-        lockout_step(f, 0.0, False, size**2, np.array([size, 0.0]), S, R, thr,
-                     LockoutState(pos, 5.0, st, r0, S0, tp))
+        lockout_step(f, 0.0, False, size**2, np.array([size, 0.0]), S, R, KEYS2, thr,
+                     LockoutState(pos, 5.0, st, r0, S0, k0, tp))
     r = np.array([10.0, 60.0])  # source 0 drifted, but source 1 is more consistent
-    lk = LockoutState(pos, 5.0, st, r0, S0, tp)
-    assert lockout_step(0, 6.0, False, r @ r, r, S, R, thr, lk)[0] == 0.0
+    lk = LockoutState(pos, 5.0, st, r0, S0, k0, tp)
+    assert lockout_step(0, 6.0, False, r @ r, r, S, R, KEYS2, thr, lk)[0] == 0.0
     r1 = np.array([3.0, 40.0])
-    s, _ = lockout_step(1, 6.0, False, r1 @ r1, r1, S, R, thr, lk)
+    s, _ = lockout_step(1, 6.0, False, r1 @ r1, r1, S, R, KEYS2, thr, lk)
     assert s == pytest.approx(r1 @ r1 / 2.0)
 
 
@@ -122,7 +183,8 @@ def test_validation():
         FilterConfig(fdi_readmit_s=-1.0)
     assert FilterConfig(fdi_readmit_s=None).fdi_readmit_s is None
     assert FilterConfig().fdi_readmit_s == 5.0
-    assert sorted(k for k, s in SENSORS.items() if s.fixes_position) == ["gnss", "sar"]
+    assert sorted(k for k, s in SENSORS.items() if s.fixes_position) == ["gnss", "gnss_raw",
+                                                                          "sar"]
 
 
 def test_warning_names_each_episode():
@@ -219,3 +281,28 @@ def test_the_rover_with_its_files_figures_is_not_locked_out():
     h = _horizontal(sol, ref, after=0.0)
     assert h.max() < 30.0 and out.readmissions
     assert np.mean([e[5] for e in out.fdi]) < 0.5
+
+
+# ------------------------------------ a raw GNSS receiver (tightly coupled), issue 41
+# (the flights: benchmarks/readmission.py's tight_case)
+def _tight(case, readmit, seed=1):
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    import readmission
+
+    return readmission.tight_case(seed, case, readmit)
+
+
+def test_an_overconfident_tight_filter_is_not_locked_out():
+    """The raw GNSS is a position source the guard keeps (its satellites compared one by
+    one as they rise and set, :func:`lockout_step`'s keys): without the guard the filter
+    isolates every epoch from 151 s on and ends 16.8 km off; with it (three re-admissions,
+    the inflation reaching only what the satellites' rows can show) its largest error is
+    34 m and it ends within 1 m."""
+    h_off, _, off = _tight("overconfident x30", None)
+    h, _, on = _tight("overconfident x30", FilterConfig().fdi_readmit_s)
+    assert not off.readmissions and h_off[-1] > 1000.0
+    assert all(e[5] for e in off.fdi if e[0] > 300.0)  # locked out for good
+    assert on.readmissions and all(e["local"] == "gnss_raw" for e in on.readmissions)
+    assert h[-50:].max() < 5.0 and h.max() < 0.01 * h_off.max()
+    assert np.mean([e[5] for e in on.fdi]) < 0.1
+    assert all(np.isfinite(e["inflation"]) and e["inflation"] < 1e6 for e in on.readmissions)

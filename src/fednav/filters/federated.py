@@ -142,24 +142,57 @@ def _nis_inflated(r, A, R, s):
 
 
 @numba.njit(cache=True)
+def _unreached(r, A, R):
+    """The part of the statistic ``r' (s A + R)^-1 r`` no inflation ``s`` moves, its limit
+    as ``s`` grows (``r`` less its best fit in the range of ``A``, weighted by ``R^-1``),
+    and the dimension ``k`` of that range: (limit, k); (0, m) when ``A`` has full rank.
+    A measurement of more rows than the states it sees (a raw GNSS epoch: two rows per
+    satellite over position, velocity and clock) has such a part."""
+    m = r.shape[0]
+    w, V = np.linalg.eigh(0.5 * (A + A.T))
+    tol = 1e-12 * max(np.abs(w).max(), 1e-300)  # (above round-off)
+    k = 0
+    for i in range(m):
+        if w[i] > tol:
+            k += 1
+    if k == m:
+        return 0.0, m
+    U = np.ascontiguousarray(V[:, m - k:])  # (eigh: ascending)
+    Ut = np.ascontiguousarray(U.T)
+    Ri, ok = spd_inverse(np.ascontiguousarray(R))
+    if not ok:
+        return 0.0, m
+    rc = np.ascontiguousarray(r)
+    b = Ut @ (Ri @ rc)
+    G, ok = spd_inverse(Ut @ Ri @ U)
+    if not ok:
+        return 0.0, m
+    return max(rc @ Ri @ rc - b @ G @ b, 0.0), k
+
+
+@numba.njit(cache=True)
 def _inflation(r, S, R, nis):
     """The factor ``s`` >= 1 of the filter's part ``A = S - R`` of the innovation
     covariance ``S`` that gives the residual ``r`` its expected statistic, ``r' (s A +
-    R)^-1 r = m`` (bisection on ``ln s``; ``R`` not finite: taken as zero, ``s = NIS / m``)."""
+    R)^-1 r = m`` (bisection on ``ln s``; ``R`` not finite: taken as zero, ``s = NIS /
+    m``).  Where ``A`` spans ``k < m`` dimensions the target is the part no ``s`` moves
+    plus ``k`` (:func:`_unreached`: its expected share, ``m - k``, is what it is)."""
     m = r.shape[0]
     if not math.isfinite(R.sum()):
         return max(nis / m, 1.0)
     A = S - R
+    far, k = _unreached(r, A, R)
+    target = float(m) if k == m else far + k
     lo = 0.0
     hi = math.log(max(nis / m, 1.0))
-    while _nis_inflated(r, A, R, math.exp(hi)) > m:
+    while _nis_inflated(r, A, R, math.exp(hi)) > target:
         if hi > 80.0:
             return math.exp(hi)
         lo = hi
         hi = hi + 2.0
     for _ in range(40):
         mid = 0.5 * (lo + hi)
-        if _nis_inflated(r, A, R, math.exp(mid)) > m:
+        if _nis_inflated(r, A, R, math.exp(mid)) > target:
             lo = mid
         else:
             hi = mid
@@ -169,29 +202,50 @@ def _inflation(r, S, R, nis):
 #: The lockout guard's settings and state (:func:`lockout_step`): ``pos`` (nf,) which
 #: filters are position sources; ``hold`` [s] ``fdi_readmit_s`` (NaN: never re-admit);
 #: ``state`` (nf, 3) per filter the start [s] of its current run of isolated measurements
-#: (NaN: none), its ``m`` and the NIS/dof of its latest isolated measurement; ``r0`` (nf,
-#: w), ``S0`` (nf, w, w) the residual and covariance of the first of that run; ``t_pos``
-#: (1,) the time [s] of the last accepted position measurement.
-LockoutState = namedtuple("LockoutState", "pos hold state r0 S0 t_pos")
+#: (NaN: none), the number of rows of its reference and the NIS/dof of its latest
+#: isolated measurement; ``r0`` (nf, w), ``S0`` (nf, w, w), ``k0`` (nf, w) the residual,
+#: covariance and row keys of the reference (the run's first measurement, or the first
+#: with no row in common with it); ``t_pos`` (1,) the time [s] of the last accepted
+#: position measurement.
+LockoutState = namedtuple("LockoutState", "pos hold state r0 S0 k0 t_pos")
 
 
 @numba.njit(cache=True)
-def lockout_step(f, t, accepted, nis, r, S, R, thr_drift, lk):
+def common_rows(keys, ref):
+    """Positions in ``keys`` and in ``ref`` (int arrays, each without repeats) of the keys
+    both hold, in the order of ``keys``."""
+    a = np.empty(keys.shape[0], dtype=np.int64)
+    b = np.empty(keys.shape[0], dtype=np.int64)
+    n = 0
+    for i in range(keys.shape[0]):
+        for j in range(ref.shape[0]):
+            if keys[i] == ref[j]:
+                a[n], b[n] = i, j
+                n += 1
+                break
+    return a[:n], b[:n]
+
+
+@numba.njit(cache=True)
+def lockout_step(f, t, accepted, nis, r, S, R, keys, thr_drift, lk):
     """One local measurement through the guard against locking out the last position
     source (the same function in the Python loop and the compiled engine).
 
     ``f``: the local filter's index; ``t`` [s]: the measurement's time; ``accepted``: what
     the chi-square test decided; ``nis`` = ``r' S^-1 r`` with ``r`` (m,) and ``S`` (m, m)
     its residual and covariance, ``R`` the measurement's noise covariance (filter units;
-    not finite where the model makes its own); ``thr_drift``: the drift test's threshold
-    for ``m`` (:func:`drift_threshold`; NaN: no detection); ``lk``: the guard's settings
-    and state (:data:`LockoutState`, its arrays updated in place).
+    not finite where the model makes its own); ``keys`` (m,) what each row measures
+    (:func:`row_ids`: the rows of two measurements are compared where their keys agree,
+    so a raw GNSS epoch is compared satellite by satellite as satellites rise and set);
+    ``thr_drift`` (> m,) the drift test's threshold by number of rows compared
+    (:func:`drift_threshold`; NaN: no detection); ``lk``: the guard's settings and state
+    (:data:`LockoutState`, its arrays updated in place).
 
     Returns ``(s, t_start)``: ``s`` > 1 the factor by which to inflate every filter's
     covariance to re-admit this measurement (0: no) — the factor that gives the residual
     seen its expected statistic ``m`` (:func:`_inflation`) — and ``t_start`` [s] when the
     lockout began."""
-    pos, hold, state, r0, S0, t_pos = lk
+    pos, hold, state, r0, S0, k0, t_pos = lk
     if not pos[f]:
         return 0.0, np.nan
     m = r.shape[0]
@@ -201,26 +255,50 @@ def lockout_step(f, t, accepted, nis, r, S, R, thr_drift, lk):
         state[f, 2] = np.inf
         return 0.0, np.nan
     state[f, 2] = nis / m
-    if math.isnan(state[f, 0]) or state[f, 1] != m:
-        state[f, 0] = t
+    now, ref = common_rows(keys, k0[f, :int(state[f, 1])])
+    if math.isnan(state[f, 0]) or now.shape[0] == 0:
+        if math.isnan(state[f, 0]):  # (a run goes on through a change of reference)
+            state[f, 0] = t
         state[f, 1] = m
         r0[f, :m] = r
         S0[f, :m, :m] = S
+        k0[f, :m] = keys
         return 0.0, np.nan
     if not (t - state[f, 0] >= hold and t - t_pos[0] >= hold):
         return 0.0, np.nan
     for g in range(pos.shape[0]):  # the most consistent source: the lowest NIS/dof
         if g != f and pos[g] and not math.isnan(state[g, 0]) and state[g, 2] < state[f, 2]:
             return 0.0, np.nan
-    dr = r - r0[f, :m]
-    Inv, ok = spd_inverse(S + S0[f, :m, :m])
+    c = now.shape[0]
+    dr = np.empty(c)
+    Sd = np.empty((c, c))
+    for i in range(c):
+        dr[i] = r[now[i]] - r0[f, ref[i]]
+        for j in range(c):
+            Sd[i, j] = S[now[i], now[j]] + S0[f, ref[i], ref[j]]
+    Inv, ok = spd_inverse(Sd)
     if not ok:
         return 0.0, np.nan
     D = dr @ Inv @ dr
-    if not D > thr_drift:  # the residual moved no more than the covariance: a sensor fault
+    if not D > thr_drift[c]:  # the residual moved no more than the covariance: a fault
         return 0.0, np.nan
     # the filter, not the sensor: its covariance inflated to cover the innovation seen
     return _inflation(r, S, R, nis), max(state[f, 0], t_pos[0])
+
+
+def row_ids(model, m: int, rows=None) -> np.ndarray:
+    """What each of the ``m`` rows of a measurement of ``model`` measures, as integers
+    (:func:`lockout_step`): its ``row_ids`` (a raw GNSS epoch: satellite and kind), else
+    its row kinds (:class:`~fednav.sensors.measurement.RowModel`), else the row's
+    position; ``rows``: the rows an update kept (fault detection left a unit out)."""
+    ids = getattr(model, "row_ids", None)
+    if ids is None:
+        ids = getattr(model, "kinds", None)
+    if ids is not None and rows is not None:
+        ids = np.asarray(ids)[np.asarray(rows)]
+    if ids is None or len(ids) != m:
+        ids = np.arange(m)
+    return np.ascontiguousarray(ids, dtype=np.int64)
 
 
 class Lockout:
@@ -237,35 +315,39 @@ class Lockout:
         self.state[:, 0], self.state[:, 2] = np.nan, np.inf
         self.r0 = np.zeros((nf, width))
         self.S0 = np.zeros((nf, width, width))
+        self.k0 = np.zeros((nf, width), dtype=np.int64)
         self.t_pos = np.array([-np.inf])
         self.episodes: list[dict] = []
 
     def arrays(self) -> LockoutState:
         """The settings and state as :func:`lockout_step` takes them (the arrays
         themselves: updated in place)."""
-        return LockoutState(self.pos, self.hold, self.state, self.r0, self.S0, self.t_pos)
+        return LockoutState(self.pos, self.hold, self.state, self.r0, self.S0, self.k0,
+                            self.t_pos)
 
     @property
     def on(self) -> bool:
         return bool(self.pos.any()) and self.hold > 0.0
 
-    def track(self, f: int, t: float, accepted: bool, nis: float, r, S, R,
-              thr_drift: float):
-        """:func:`lockout_step` for filter index ``f`` (widening the state for a measurement
-        of more than its width)."""
+    def track(self, f: int, t: float, accepted: bool, nis: float, r, S, R, keys,
+              alpha: float | None):
+        """:func:`lockout_step` for filter index ``f`` with the rows' ``keys``
+        (:func:`row_ids`) and the filter's detection level ``alpha`` (None: none), widening
+        the state for a measurement of more than its width."""
         r = np.ascontiguousarray(r, dtype=float).ravel()
         if len(r) > self.r0.shape[1]:
-            w, nf = len(r), len(self.names)
-            r0, S0 = np.zeros((nf, w)), np.zeros((nf, w, w))
-            r0[:, :self.r0.shape[1]] = self.r0
-            S0[:, :self.r0.shape[1], :self.r0.shape[1]] = self.S0
-            self.r0, self.S0 = r0, S0
+            w, nf, w0 = len(r), len(self.names), self.r0.shape[1]
+            r0, S0, k0 = np.zeros((nf, w)), np.zeros((nf, w, w)), np.zeros((nf, w), np.int64)
+            r0[:, :w0], S0[:, :w0, :w0], k0[:, :w0] = self.r0, self.S0, self.k0
+            self.r0, self.S0, self.k0 = r0, S0, k0
+        thr = np.array([np.nan] + [np.nan if alpha is None else drift_threshold(d, alpha)
+                                   for d in range(1, len(r) + 1)])
         S = np.ascontiguousarray(S, dtype=float).reshape(len(r), len(r))
         R = np.asarray(R, dtype=float) if R is not None else None
         R = (np.ascontiguousarray(R).reshape(len(r), len(r))
              if R is not None and R.size == len(r) ** 2 else np.full_like(S, np.nan))
-        return lockout_step(f, float(t), bool(accepted), float(nis), r, S, R, float(thr_drift),
-                            self.arrays())
+        return lockout_step(f, float(t), bool(accepted), float(nis), r, S, R,
+                            np.ascontiguousarray(keys, dtype=np.int64), thr, self.arrays())
 
     def episode(self, f: int, t_start: float, t: float, nis_before: float, s: float,
                 nis_after: float, dof: int) -> dict:
@@ -278,13 +360,13 @@ class Lockout:
         return e
 
     def snapshot(self) -> tuple:
-        return (self.state.copy(), self.r0.copy(), self.S0.copy(), self.t_pos.copy(),
-                len(self.episodes))
+        return (self.state.copy(), self.r0.copy(), self.S0.copy(), self.k0.copy(),
+                self.t_pos.copy(), len(self.episodes))
 
     def restore(self, snap: tuple) -> None:
-        state, r0, S0, t_pos, n = snap
-        self.state, self.r0, self.S0, self.t_pos = (state.copy(), r0.copy(), S0.copy(),
-                                                    t_pos.copy())
+        state, r0, S0, k0, t_pos, n = snap
+        self.state, self.r0, self.S0, self.k0, self.t_pos = (
+            state.copy(), r0.copy(), S0.copy(), k0.copy(), t_pos.copy())
         del self.episodes[n:]
 
 
@@ -534,8 +616,8 @@ class FederatedFilter:
         lk = self.lockout
         i = lk.names.index(local)
         alpha = self.fdi_alphas[local]
-        thr_drift = np.nan if alpha is None else drift_threshold(len(inn.r), alpha)
-        s, t_start = lk.track(i, t, inn.accepted, inn.nis, inn.r, inn.S, R, thr_drift)
+        s, t_start = lk.track(i, t, inn.accepted, inn.nis, inn.r, inn.S, R,
+                              row_ids(model, len(inn.r), inn.rows), alpha)
         if not s > 0.0:
             return inn
         saved = [(g, g.x, kept_cov(g)) for g in self.filters.values()]
@@ -551,7 +633,8 @@ class FederatedFilter:
                 _set_cov(g, P)
             return inn
         self.passes[local] = self.fdi_recovery
-        lk.track(i, t, True, new.nis, new.r, new.S, R, thr_drift)
+        lk.track(i, t, True, new.nis, new.r, new.S, R, row_ids(model, len(new.r), new.rows),
+                 alpha)
         lk.episode(i, t_start, t, inn.nis, s, new.nis, len(new.r))
         return new
 

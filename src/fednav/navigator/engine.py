@@ -404,8 +404,8 @@ def lockout_guard(bank, rules, sensors, sn, view, y, R, t_log, tested):
     x1, Pn, r, Sm, ni, accepted = tested
     f = sensors.filter[sn]
     d = y.shape[0]
-    thr_drift = rules.thr_drift[f, d]
-    s_in, t_start = lockout_step(f, t_log, accepted, ni, r, Sm, R, thr_drift, rules.lk)
+    keys, thr_drift = sensors.kinds[sn, :d], rules.thr_drift[f]
+    s_in, t_start = lockout_step(f, t_log, accepted, ni, r, Sm, R, keys, thr_drift, rules.lk)
     if s_in > 0.0:
         P_saved = bank.P.copy()
         for g in range(bank.X.shape[0]):  # (Filter.inflate: a factor by sqrt(s))
@@ -413,7 +413,7 @@ def lockout_guard(bank, rules, sensors, sn, view, y, R, t_log, tested):
         x2, P2, r2, S2, n2, code = _local_update(bank, f, sensors, sn, view, y, R)
         if code == 0 and not n2 > rules.thr[f, d] and (bank.sr[f] or (
                 math.isfinite(x2.sum() + P2.sum()) and cholesky_lower(P2)[1])):
-            lockout_step(f, t_log, True, n2, r2, S2, R, thr_drift, rules.lk)
+            lockout_step(f, t_log, True, n2, r2, S2, R, keys, thr_drift, rules.lk)
             return (x2, P2, r2, S2, n2, True), s_in, t_start
         bank.P[:] = P_saved
     return (x1, Pn, r, Sm, ni, accepted), 0.0, t_start

@@ -191,6 +191,14 @@ class BoundRanges:
         return ([("gnss_raw.pr", int(g)) for g in self.groups[:m]]
                 + [("gnss_raw.rr", int(g)) for g in self.groups[m:]])
 
+    @property
+    def row_ids(self) -> np.ndarray:
+        """An integer per row, ``2 prn`` for a pseudorange and ``2 prn + 1`` for a range
+        rate: the lockout guard compares two epochs' rows satellite by satellite by it
+        (:func:`fednav.filters.federated.lockout_step`)."""
+        return 2 * np.asarray(self.groups, dtype=np.int64) + (np.arange(self.dim)
+                                                              >= len(self.sat))
+
     _cache: tuple = (None, None)
 
     def _geometry(self, nav: NavSnapshot):
@@ -267,6 +275,9 @@ class SatelliteRanges:
     own_block = "clock"
     #: the antenna's lever arm acts (:func:`fednav.sensors.measurement.mounted`)
     takes_lever = True
+    #: its satellites fix the position (:attr:`fednav.sensors.spec.SensorSpec.
+    #: fixes_position`: fault isolation may not lock it out for good)
+    fixes_position = True
     #: no fixed component of ``z`` must be finite (empty slots are NaN)
     zindex = np.zeros(0, dtype=np.int64)
     linear = True

@@ -261,9 +261,9 @@ class SensorSpec:
     @property
     def fixes_position(self) -> bool:
         """Whether it fixes the horizontal position (its ``z`` holds latitude and
-        longitude): the sources fault isolation may not lock out all at once
-        (``filter.fdi_readmit_s``)."""
-        return self.latlon is not None
+        longitude, or its model says so: a receiver's satellites): the sources fault
+        isolation may not lock out all at once (``filter.fdi_readmit_s``)."""
+        return self.latlon is not None or getattr(self.model, "fixes_position", False)
 
     @property
     def compiled(self) -> bool:
