@@ -142,6 +142,38 @@ def _nis_inflated(r, A, R, s):
 
 
 @numba.njit(cache=True)
+def _range_basis(A):
+    """Columns spanning the range of the symmetric positive semidefinite ``A`` (m, m):
+    ``L`` (m, k) of its pivoted Cholesky factorization ``A = L L'`` (rows in ``A``'s
+    order), stopped where the largest diagonal left is round-off (1e-12 of ``A``'s
+    largest)."""
+    m = A.shape[0]
+    W = A.copy()
+    L = np.zeros((m, m))
+    done = np.zeros(m, dtype=np.bool_)
+    top = 0.0
+    for i in range(m):
+        top = max(top, W[i, i])
+    k = 0
+    while k < m:
+        p, d = -1, 1e-12 * top
+        for i in range(m):
+            if not done[i] and W[i, i] > d:
+                p, d = i, W[i, i]
+        if p < 0:
+            break
+        done[p] = True
+        root = math.sqrt(d)
+        for i in range(m):
+            L[i, k] = 0.0 if done[i] and i != p else W[i, p] / root
+        for i in range(m):
+            for j in range(m):
+                W[i, j] -= L[i, k] * L[j, k]
+        k += 1
+    return np.ascontiguousarray(L[:, :k])
+
+
+@numba.njit(cache=True)
 def _unreached(r, A, R):
     """The part of the statistic ``r' (s A + R)^-1 r`` no inflation ``s`` moves, its limit
     as ``s`` grows (``r`` less its best fit in the range of ``A``, weighted by ``R^-1``),
@@ -149,25 +181,39 @@ def _unreached(r, A, R):
     A measurement of more rows than the states it sees (a raw GNSS epoch: two rows per
     satellite over position, velocity and clock) has such a part."""
     m = r.shape[0]
-    w, V = np.linalg.eigh(0.5 * (A + A.T))
-    tol = 1e-12 * max(np.abs(w).max(), 1e-300)  # (above round-off)
-    k = 0
-    for i in range(m):
-        if w[i] > tol:
-            k += 1
+    U = _range_basis(A)
+    k = U.shape[1]
     if k == m:
         return 0.0, m
-    U = np.ascontiguousarray(V[:, m - k:])  # (eigh: ascending)
-    Ut = np.ascontiguousarray(U.T)
     Ri, ok = spd_inverse(np.ascontiguousarray(R))
     if not ok:
         return 0.0, m
-    rc = np.ascontiguousarray(r)
-    b = Ut @ (Ri @ rc)
-    G, ok = spd_inverse(Ut @ Ri @ U)
+    # (loops, not BLAS products: this runs at a re-admission only, and compiles quicker)
+    w = np.zeros(m)  # R^-1 r
+    RiU = np.zeros((m, k))
+    for i in range(m):
+        for j in range(m):
+            w[i] += Ri[i, j] * r[j]
+            for c in range(k):
+                RiU[i, c] += Ri[i, j] * U[j, c]
+    full = 0.0
+    for i in range(m):
+        full += r[i] * w[i]
+    b = np.zeros(k)  # U' R^-1 r
+    G = np.zeros((k, k))  # U' R^-1 U
+    for c in range(k):
+        for i in range(m):
+            b[c] += U[i, c] * w[i]
+            for e in range(k):
+                G[c, e] += U[i, c] * RiU[i, e]
+    Gi, ok = spd_inverse(G)
     if not ok:
         return 0.0, m
-    return max(rc @ Ri @ rc - b @ G @ b, 0.0), k
+    fit = 0.0
+    for c in range(k):
+        for e in range(k):
+            fit += b[c] * Gi[c, e] * b[e]
+    return max(full - fit, 0.0), k
 
 
 @numba.njit(cache=True)
