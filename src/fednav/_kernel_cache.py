@@ -10,6 +10,11 @@ module compiles afresh (once, a minute or two) and an unchanged tree reuses its 
 folder lives under the user's cache (``$XDG_CACHE_HOME/fednav/kernels`` or
 ``~/.cache/fednav/kernels``); the few most recently used versions are kept.  A
 ``NUMBA_CACHE_DIR`` set by the user is respected.
+
+The kernels are compiled at LLVM's optimisation level :data:`OPT_LEVEL` (numba's
+``NUMBA_OPT``; numba's own default is 3) unless the user sets ``NUMBA_OPT``: level 1
+compiles a fresh install's kernels in three quarters of the time, and they run as fast
+(docs/architecture.md, "Compiling").
 """
 
 from __future__ import annotations
@@ -21,6 +26,10 @@ from pathlib import Path
 
 #: How many source versions' kernel folders are kept.
 KEEP = 4
+#: LLVM's optimisation level for the kernels (``NUMBA_OPT``) when the user sets none:
+#: ``fednav reproduce 002`` on a fresh install compiled for 62.9 s at level 1 against
+#: 86.5 s at numba's default 3, its warm run 10.6 s against 10.9 s (docs/architecture.md).
+OPT_LEVEL = "1"
 #: The folder :func:`install` chose for this source tree (None: not installed, the
 #: user's ``NUMBA_CACHE_DIR``, or none could be made).
 FOLDER: Path | None = None
@@ -42,9 +51,15 @@ def cache_root() -> Path:
 
 def install(version: str) -> Path | None:
     """Set numba's cache folder for this source tree (before any kernel is compiled or
-    loaded); returns it, or None when the user set ``NUMBA_CACHE_DIR`` or no cache
-    folder can be made (numba then keeps its default)."""
+    loaded) and its optimisation level (:data:`OPT_LEVEL`, unless the user set
+    ``NUMBA_OPT`` or numba was imported first); returns the folder, or None when the user
+    set ``NUMBA_CACHE_DIR`` or no cache folder can be made (numba then keeps its
+    default)."""
     global FOLDER
+    import sys
+
+    if "numba" not in sys.modules:  # (numba reads it once, when first imported)
+        os.environ.setdefault("NUMBA_OPT", OPT_LEVEL)  # worker processes inherit it
     if os.environ.get("NUMBA_CACHE_DIR"):
         return None
     folder = cache_root() / f"{version}-{source_hash(Path(__file__).parent)}"
@@ -54,8 +69,6 @@ def install(version: str) -> Path | None:
     except OSError:
         return None
     os.environ["NUMBA_CACHE_DIR"] = str(folder)  # worker processes inherit it
-    import sys
-
     if "numba" in sys.modules:  # (imported already: tell its config too)
         sys.modules["numba"].config.CACHE_DIR = str(folder)
     _prune(folder.parent)
