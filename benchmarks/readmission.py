@@ -89,11 +89,12 @@ def tight_case(seed: int, case: str, hold):
     from fednav.sim.runs import _initial_state, _result, make_run_data
     from fednav.sim.scenario import ModeConfig
 
-    sys.path.insert(0, str(ROOT / "benchmarks"))
+    if str(ROOT / "benchmarks") not in sys.path:
+        sys.path.insert(0, str(ROOT / "benchmarks"))
     import tight_coupling
 
-    folder = Path(tempfile.mkdtemp(prefix="fednav-readmit-"))
-    scn = tight_coupling._scenario(folder, 14, "tcxo")  # (the whole sky throughout)
+    with tempfile.TemporaryDirectory(prefix="fednav-readmit-") as folder:
+        scn = tight_coupling._scenario(Path(folder), 14, "tcxo")  # (the whole sky)
     data = make_run_data(scn, seed)
     truth = scn.trajectory(None)
     system = scn.system_for(ModeConfig(name="tight", aiding=["gnss_raw"]))

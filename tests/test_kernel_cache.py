@@ -48,6 +48,11 @@ def test_kernels_compile_at_fednavs_level_unless_the_user_sets_one(tmp_path):
     assert level(first) == ["None", "3"]  # (numba read its level before fednav came)
     env["NUMBA_OPT"] = "2"
     assert level(code) == ["2", "2"]
+    del env["NUMBA_OPT"]  # a .numba_config.yaml in the working folder: numba's file rules
+    (tmp_path / ".numba_config.yaml").write_text("opt: 2\n")
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                         text=True, cwd=tmp_path)
+    assert "KeyError: 'NUMBA_OPT'" in out.stderr
 
 
 def test_old_versions_are_pruned(tmp_path):

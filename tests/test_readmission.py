@@ -124,6 +124,9 @@ def test_inflation_covers_what_the_states_can_show():
     assert s == pytest.approx(99.0, rel=1e-9)
     s = _inflation(r, 3.0 * R, R, float(r @ r) / 3.0)  # A = 2 I: r'r / (2 s + 1) = 3
     assert s == pytest.approx((r @ r / 3.0 - 1.0) / 2.0, rel=1e-9)
+    # a residual the states cannot show at all (outside A's range): no factor helps
+    r = np.array([0.0, 5.0, 5.0])
+    assert _inflation(r, np.diag([1.0, 0.0, 0.0]) + R, R, float(r @ r)) == 0.0
 
 
 def test_kernel_readmits_the_most_consistent_source():
@@ -286,7 +289,8 @@ def test_the_rover_with_its_files_figures_is_not_locked_out():
 # ------------------------------------ a raw GNSS receiver (tightly coupled), issue 41
 # (the flights: benchmarks/readmission.py's tight_case)
 def _tight(case, readmit, seed=1):
-    sys.path.insert(0, str(ROOT / "benchmarks"))
+    if str(ROOT / "benchmarks") not in sys.path:
+        sys.path.insert(0, str(ROOT / "benchmarks"))
     import readmission
 
     return readmission.tight_case(seed, case, readmit)

@@ -12,9 +12,12 @@ folder lives under the user's cache (``$XDG_CACHE_HOME/fednav/kernels`` or
 ``NUMBA_CACHE_DIR`` set by the user is respected.
 
 The kernels are compiled at LLVM's optimisation level :data:`OPT_LEVEL` (numba's
-``NUMBA_OPT``; numba's own default is 3) unless the user sets ``NUMBA_OPT``: level 1
-compiles a fresh install's kernels in three quarters of the time, and they run as fast
-(docs/architecture.md, "Compiling").
+``NUMBA_OPT``; numba's own default is 3): level 1 compiles a fresh install's kernels in
+three quarters of the time, and they run as fast (docs/architecture.md, "Compiling").
+The level is set in the environment, so it holds for every kernel the process and its
+children compile — other packages' and the user's too — unless the user sets one
+(``NUMBA_OPT``, a ``.numba_config.yaml`` in the working folder, or numba imported before
+fednav); ``NUMBA_OPT=3`` restores numba's.
 """
 
 from __future__ import annotations
@@ -58,8 +61,11 @@ def install(version: str) -> Path | None:
     global FOLDER
     import sys
 
-    if "numba" not in sys.modules:  # (numba reads it once, when first imported)
-        os.environ.setdefault("NUMBA_OPT", OPT_LEVEL)  # worker processes inherit it
+    if "numba" not in sys.modules and not Path(".numba_config.yaml").is_file():
+        # (numba reads NUMBA_* at each compile: for every kernel compiled in this process
+        # and its children, the user's too; a user who set the level — NUMBA_OPT, a
+        # .numba_config.yaml here, or numba imported first — keeps it)
+        os.environ.setdefault("NUMBA_OPT", OPT_LEVEL)
     if os.environ.get("NUMBA_CACHE_DIR"):
         return None
     folder = cache_root() / f"{version}-{source_hash(Path(__file__).parent)}"

@@ -43,13 +43,15 @@ the innovation grows faster than the covariance that should cover it — and wou
 re-admit it.  When every position source has been isolated for ``fdi_readmit_s``, the
 candidate (the isolated source with the lowest latest NIS/dof) is re-admitted when its
 innovation has *drifted* since its isolation began by more than the test allows
-(``D = dr' (S + S0)^-1 dr > chi2.ppf(1 - 1e-7, m)``, :data:`READMIT_ALPHA`; ``dr`` the
-change of the residual,
-``S``, ``S0`` the innovation covariances now and then): the filter, not the sensor, is
-wrong.  Every filter's covariance is then inflated by the factor that gives the
-residual seen its expected statistic (``r' (s HPH' + R)^-1 r = m``) and the measurement is
-applied if it passes the test with it.  A true fault — a receiver that jumps and stays —
-shows a large residual that does *not* drift beyond the covariance, and stays isolated.
+(``D = dr' (S + S0)^-1 dr > chi2.ppf(1 - 1e-7, c)``, :data:`READMIT_ALPHA`; ``dr`` the
+change of the residual over the ``c`` rows both measurements hold — compared by what
+each row measures, :func:`row_ids` — ``S``, ``S0`` the innovation covariances now and
+then): the filter, not the sensor, is wrong.  Every filter's covariance is then inflated
+by the factor that gives the residual seen its expected statistic (``r' (s HPH' + R)^-1 r
+= m``, or less the part no inflation moves where ``HPH'`` spans fewer than the ``m`` rows,
+:func:`_inflation`) and the measurement is applied if it passes the test with it.  A
+true fault — a receiver that jumps and stays — shows a large residual that does *not*
+drift beyond the covariance, and stays isolated.
 """
 
 from __future__ import annotations
@@ -142,11 +144,11 @@ def _nis_inflated(r, A, R, s):
 
 
 @numba.njit(cache=True)
-def _range_basis(A):
+def _range_basis(A, floor):
     """Columns spanning the range of the symmetric positive semidefinite ``A`` (m, m):
     ``L`` (m, k) of its pivoted Cholesky factorization ``A = L L'`` (rows in ``A``'s
     order), stopped where the largest diagonal left is round-off (1e-12 of ``A``'s
-    largest)."""
+    largest, and at least ``floor``)."""
     m = A.shape[0]
     W = A.copy()
     L = np.zeros((m, m))
@@ -156,7 +158,7 @@ def _range_basis(A):
         top = max(top, W[i, i])
     k = 0
     while k < m:
-        p, d = -1, 1e-12 * top
+        p, d = -1, max(1e-12 * top, floor)
         for i in range(m):
             if not done[i] and W[i, i] > d:
                 p, d = i, W[i, i]
@@ -181,7 +183,10 @@ def _unreached(r, A, R):
     A measurement of more rows than the states it sees (a raw GNSS epoch: two rows per
     satellite over position, velocity and clock) has such a part."""
     m = r.shape[0]
-    U = _range_basis(A)
+    big = 0.0  # (A = S - R: its round-off is that of S's largest diagonal)
+    for i in range(m):
+        big = max(big, abs(A[i, i] + R[i, i]))
+    U = _range_basis(A, 16.0 * m * 2.220446049250313e-16 * big)
     k = U.shape[1]
     if k == m:
         return 0.0, m
@@ -222,13 +227,16 @@ def _inflation(r, S, R, nis):
     covariance ``S`` that gives the residual ``r`` its expected statistic, ``r' (s A +
     R)^-1 r = m`` (bisection on ``ln s``; ``R`` not finite: taken as zero, ``s = NIS /
     m``).  Where ``A`` spans ``k < m`` dimensions the target is the part no ``s`` moves
-    plus ``k`` (:func:`_unreached`: its expected share, ``m - k``, is what it is)."""
+    plus ``k`` (:func:`_unreached`: its expected share, ``m - k``, is what it is); 0 when
+    the statistic is already at or below the target (no factor helps)."""
     m = r.shape[0]
     if not math.isfinite(R.sum()):
         return max(nis / m, 1.0)
     A = S - R
     far, k = _unreached(r, A, R)
     target = float(m) if k == m else far + k
+    if not _nis_inflated(r, A, R, 1.0) > target:  # (what is left no inflation moves)
+        return 0.0
     lo = 0.0
     hi = math.log(max(nis / m, 1.0))
     while _nis_inflated(r, A, R, math.exp(hi)) > target:
@@ -289,8 +297,8 @@ def lockout_step(f, t, accepted, nis, r, S, R, keys, thr_drift, lk):
 
     Returns ``(s, t_start)``: ``s`` > 1 the factor by which to inflate every filter's
     covariance to re-admit this measurement (0: no) — the factor that gives the residual
-    seen its expected statistic ``m`` (:func:`_inflation`) — and ``t_start`` [s] when the
-    lockout began."""
+    seen its expected statistic (:func:`_inflation`; 0 when no factor can) — and
+    ``t_start`` [s] when the lockout began."""
     pos, hold, state, r0, S0, k0, t_pos = lk
     if not pos[f]:
         return 0.0, np.nan
@@ -336,14 +344,15 @@ def row_ids(model, m: int, rows=None) -> np.ndarray:
     """What each of the ``m`` rows of a measurement of ``model`` measures, as integers
     (:func:`lockout_step`): its ``row_ids`` (a raw GNSS epoch: satellite and kind), else
     its row kinds (:class:`~fednav.sensors.measurement.RowModel`), else the row's
-    position; ``rows``: the rows an update kept (fault detection left a unit out)."""
+    position among ``m`` (never paired with a row of a measurement of another size);
+    ``rows``: the rows an update kept (fault detection left a unit out)."""
     ids = getattr(model, "row_ids", None)
     if ids is None:
         ids = getattr(model, "kinds", None)
     if ids is not None and rows is not None:
         ids = np.asarray(ids)[np.asarray(rows)]
     if ids is None or len(ids) != m:
-        ids = np.arange(m)
+        ids = np.arange(m) + (m << 20)
     return np.ascontiguousarray(ids, dtype=np.int64)
 
 
@@ -386,8 +395,9 @@ class Lockout:
             r0, S0, k0 = np.zeros((nf, w)), np.zeros((nf, w, w)), np.zeros((nf, w), np.int64)
             r0[:, :w0], S0[:, :w0, :w0], k0[:, :w0] = self.r0, self.S0, self.k0
             self.r0, self.S0, self.k0 = r0, S0, k0
-        thr = np.array([np.nan] + [np.nan if alpha is None else drift_threshold(d, alpha)
-                                   for d in range(1, len(r) + 1)])
+        thr = np.empty(0) if accepted else np.array(  # (read only for an isolated one)
+            [np.nan] + [np.nan if alpha is None else drift_threshold(d, alpha)
+                        for d in range(1, len(r) + 1)])
         S = np.ascontiguousarray(S, dtype=float).reshape(len(r), len(r))
         R = np.asarray(R, dtype=float) if R is not None else None
         R = (np.ascontiguousarray(R).reshape(len(r), len(r))
