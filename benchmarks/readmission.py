@@ -129,40 +129,46 @@ def tight_case(seed: int, case: str, hold):
     return np.hypot(out.pos[:, 0], out.pos[:, 1]), out.t, res
 
 
-def main(seeds: int = 10) -> None:
-    cases = ("overconfident x30", "overconfident x100", "true fault jump200m",
-             "true fault jump20m")
-    print(f"fdi_readmit_s default {DEFAULT} s; {seeds} seeds; max horizontal error after "
-          f"50 s [m] (median, worst), re-admissions, GNSS isolated")
+def loose_flight(seed: int, case: str, hold):
+    """One loosely coupled run (:func:`drive_case`): largest horizontal error after 50 s
+    [m], NaN (no end figure), re-admissions, share of GNSS fixes isolated."""
+    imu, gnss, ref, system = drive_case(seed, case)
+    out, sol = flown(imu, gnss, system, hold)
+    late = ref.t > 50.0
+    return (horizontal_error(sol, ref.t[late], ref.lla[late]).max(), np.nan,
+            len(out.readmissions), np.mean([e[5] for e in out.fdi]))
+
+
+def tight_flight(seed: int, case: str, hold):
+    """One tightly coupled run (:func:`tight_case`): largest horizontal error after 100 s
+    and at the end [m], re-admissions, share of epochs isolated."""
+    h, t, res = tight_case(seed, case, hold)
+    return (h[t > 100.0].max(), h[-1], len(res.readmissions),
+            np.mean([e[5] for e in res.fdi]))
+
+
+def table(flight, cases, seeds: int, end: bool) -> None:
+    """Per case, guard off and at its default: median and worst largest error (and the
+    median at the end), re-admissions, runs with any, share isolated."""
     for case in cases:
         for hold in (None, DEFAULT):
-            err, n_ep, iso = [], [], []
-            for seed in range(1, seeds + 1):
-                imu, gnss, ref, system = drive_case(seed, case)
-                out, sol = flown(imu, gnss, system, hold)
-                late = ref.t > 50.0
-                err.append(horizontal_error(sol, ref.t[late], ref.lla[late]).max())
-                n_ep.append(len(out.readmissions))
-                iso.append(np.mean([e[5] for e in out.fdi]))
+            err, last, n_ep, iso = np.array([flight(seed, case, hold)
+                                             for seed in range(1, seeds + 1)]).T
+            tail = f"  end {np.median(last):8.1f}" if end else ""
             print(f"  {case:20s} fdi_readmit_s {hold!s:5s}: error {np.median(err):9.1f} "
-                  f"{max(err):9.1f}  re-admissions {sum(n_ep):3d} "
-                  f"(runs with any: {sum(n > 0 for n in n_ep)}/{seeds})  isolated "
-                  f"{100 * np.mean(iso):5.1f} %")
+                  f"{err.max():9.1f}{tail}  re-admissions {int(n_ep.sum()):3d} "
+                  f"(runs with any: {int((n_ep > 0).sum())}/{seeds})  isolated "
+                  f"{100 * iso.mean():5.1f} %")
+
+
+def main(seeds: int = 10) -> None:
+    print(f"fdi_readmit_s default {DEFAULT} s; {seeds} seeds; max horizontal error after "
+          f"50 s [m] (median, worst), re-admissions, GNSS isolated")
+    table(loose_flight, ("overconfident x30", "overconfident x100", "true fault jump200m",
+                         "true fault jump20m"), seeds, end=False)
     print("tightly coupled (gnss_raw, car-grade MEMS, 1 Hz); max horizontal error after "
           "100 s [m] (median, worst), at the end (median), re-admissions, isolated")
-    for case in ("overconfident x30", "true fault jump200m"):
-        for hold in (None, DEFAULT):
-            err, end, n_ep, iso = [], [], [], []
-            for seed in range(1, seeds + 1):
-                h, t, res = tight_case(seed, case, hold)
-                err.append(h[t > 100.0].max())
-                end.append(h[-1])
-                n_ep.append(len(res.readmissions))
-                iso.append(np.mean([e[5] for e in res.fdi]))
-            print(f"  {case:20s} fdi_readmit_s {hold!s:5s}: error {np.median(err):9.1f} "
-                  f"{max(err):9.1f}  end {np.median(end):8.1f}  re-admissions "
-                  f"{sum(n_ep):3d} (runs with any: {sum(n > 0 for n in n_ep)}/{seeds})  "
-                  f"isolated {100 * np.mean(iso):5.1f} %")
+    table(tight_flight, ("overconfident x30", "true fault jump200m"), seeds, end=True)
     if not ROVER.is_dir():
         print("rover: ../shared/data/canada-planetary not found (skipped)")
         return
