@@ -52,3 +52,18 @@ def test_north_turn_is_earth_rate_at_rest_and_transport_rate_moving_east():
         _, rn = earth.radii(lat)
         assert east[-1] - rest[-1] == pytest.approx(250.0 * np.tan(lat) / (rn + 100.0) * 100.0,
                                                     rel=1e-12)
+
+
+def test_one_point_gives_the_arrays_values_to_the_bit():
+    """``llh_to_ecef`` and ``enu_to_ecef`` take a quicker path for one point (a raw GNSS
+    epoch's antenna): the same arithmetic as for arrays (equal to the bit here; within
+    2 ulp allowed, for a numpy whose one-element sine took another loop)."""
+    rng = np.random.default_rng(7)
+    lat, lon = rng.uniform(-1.57, 1.57, 500), rng.uniform(-np.pi, np.pi, 500)
+    h = rng.uniform(-400.0, 2e4, 500)
+    xyz, C = earth.llh_to_ecef(lat, lon, h), earth.enu_to_ecef(lat, lon)
+    for i in range(len(lat)):
+        np.testing.assert_array_max_ulp(earth.llh_to_ecef(lat[i], lon[i], h[i]), xyz[i], 2)
+        np.testing.assert_array_max_ulp(earth.enu_to_ecef(float(lat[i]), lon[i]), C[i], 2)
+    assert earth.llh_to_ecef(0.8, 0.1, np.array([1.0, 2.0])).shape == (2, 3)
+    assert earth.enu_to_ecef(0.8, 0.1).shape == (3, 3)

@@ -812,3 +812,13 @@ def test_the_figure_shows_satellites_dop_and_exclusions(flown):
     np.testing.assert_array_equal(b.get_lines()[0].get_ydata(), pdop)
     np.testing.assert_array_equal(b.get_lines()[1].get_ydata(), hdop)
     assert np.isnan(pdop[(s.t > 151) & (s.t < 299)]).all()
+
+
+def test_the_clock_tests_median_is_numpys():
+    from fednav.sensors.gnss_raw import _median
+
+    rng = np.random.default_rng(3)
+    for n in range(1, 30):
+        v = rng.normal(size=n) * 1e3
+        assert _median(v) == float(np.median(v))
+    assert np.isnan(_median(np.array([1.0, np.nan, 2.0])))

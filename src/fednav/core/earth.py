@@ -88,10 +88,10 @@ def llh_to_ecef(lat, lon, h):
     """Geodetic latitude, longitude [rad], height [m] -> ECEF coordinates, shape (..., 3) [m]."""
     _, rn = radii(lat)
     cl, sl = np.cos(lat), np.sin(lat)
-    return np.stack(
-        [(rn + h) * cl * np.cos(lon), (rn + h) * cl * np.sin(lon), (rn * (1 - E2) + h) * sl],
-        axis=-1,
-    )
+    xyz = [(rn + h) * cl * np.cos(lon), (rn + h) * cl * np.sin(lon), (rn * (1 - E2) + h) * sl]
+    if np.ndim(xyz[0]) == 0 and np.ndim(xyz[2]) == 0:  # one point (the same values, quicker)
+        return np.array(xyz, dtype=float)
+    return np.stack(xyz, axis=-1)
 
 
 @register_jitable
@@ -138,6 +138,9 @@ def ecef_to_llh(r) -> np.ndarray:
 def enu_to_ecef(lat, lon) -> np.ndarray:
     """C_n^e (..., 3, 3): the columns are the east, north and up unit vectors in ECEF."""
     sl, cl, so, co = np.sin(lat), np.cos(lat), np.sin(lon), np.cos(lon)
+    if np.ndim(sl) == 0 and np.ndim(co) == 0:  # one point (the same values, quicker)
+        return np.array([[-so, -sl * co, cl * co], [co, -sl * so, cl * so], [0.0, cl, sl]],
+                        dtype=float)
     z = np.zeros_like(sl)
     return np.stack([np.stack([-so, -sl * co, cl * co], -1),
                      np.stack([co, -sl * so, cl * so], -1),

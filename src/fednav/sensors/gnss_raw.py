@@ -107,6 +107,16 @@ CLOCK_DRIFT_JUMP_MPS = 50.0
 CLOCKS = {"tcxo": (2e-19, 2e-20), "ocxo": (2e-25, 6e-25)}
 
 
+def _median(v) -> float:
+    """``np.median`` of a short 1-D array, to the bit (the mean of the two middle values
+    of an even count), without its general machinery (a raw epoch's clock test)."""
+    s = np.sort(v)
+    n = len(s)
+    if np.isnan(s[-1]):  # (sorted last: NaN as np.median gives it)
+        return float("nan")
+    return float(s[n // 2] if n % 2 else (s[n // 2 - 1] + s[n // 2]) / 2.0)
+
+
 def slots(z) -> np.ndarray:
     """One measurement's ``z`` as (:data:`SLOTS`, :data:`FIELDS`) rows."""
     return np.asarray(z, dtype=float).reshape(SLOTS, len(FIELDS))
@@ -200,6 +210,8 @@ class BoundRanges:
                                                               >= len(self.sat))
 
     _cache: tuple = (None, None)
+    #: (nav, :func:`_antenna` of it with ``frame``) when the one who bound the rows had it
+    antenna: tuple = (None, None)
 
     def _geometry(self, nav: NavSnapshot):
         if self._cache[0] is nav:  # (the residual and H of one update: one geometry)
@@ -209,7 +221,8 @@ class BoundRanges:
         return out
 
     def _compute(self, nav: NavSnapshot):
-        r, v, Cne, _, turn = _antenna(nav, self.lever, frame=True)
+        ant = self.antenna[1] if self.antenna[0] is nav else _antenna(nav, self.lever, True)
+        r, v, Cne, _, turn = ant
         d = self.sat[:, SX:SZ + 1] - r
         rho = np.linalg.norm(d, axis=1)
         u = d / rho[:, None]
@@ -258,9 +271,11 @@ class BoundRanges:
         k_rr[np.flatnonzero(self.use_rr)] = keep[m:]
         sat, use_rr = self.sat[k_pr], (k_rr & k_pr)[k_pr]
         rows = np.flatnonzero(keep)
-        return BoundRanges(sat, self.lever, self.n, self.ic,
-                           (self.clock[0] - self.dt * self.clock[1], self.clock[1]),
-                           self.R[np.ix_(rows, rows)], self.groups[rows], use_rr, self.dt)
+        out = BoundRanges(sat, self.lever, self.n, self.ic,
+                          (self.clock[0] - self.dt * self.clock[1], self.clock[1]),
+                          self.R[np.ix_(rows, rows)], self.groups[rows], use_rr, self.dt)
+        out.antenna = self.antenna
+        return out
 
 
 class SatelliteRanges:
@@ -289,9 +304,10 @@ class SatelliteRanges:
         #: how often :meth:`bind` moved the clock's total by a jump (:data:`CLOCK_JUMP_M`)
         self.clock_resets = 0
 
-    def satellites(self, z, nav: NavSnapshot | None = None) -> np.ndarray:
+    def satellites(self, z, nav: NavSnapshot | None = None, antenna=None) -> np.ndarray:
         """The satellite rows of ``z`` with a pseudorange (above the mask at ``nav``,
-        when given), with their 1-sigma filled in."""
+        when given; ``antenna``: :func:`_antenna` of ``nav`` when the caller has it), with
+        their 1-sigma filled in."""
         s = slots(z).copy()
         # (a satellite needs its number, position, velocity and pseudorange; a 1-sigma it
         # gives is positive)
@@ -301,7 +317,7 @@ class SatelliteRanges:
             s[s[:, SRR] <= 0.0, RR] = np.nan
         s = s[ok]
         if nav is not None and len(s):
-            r, _, _, lla = _antenna(nav, self.lever)
+            r, _, _, lla = (_antenna(nav, self.lever) if antenna is None else antenna)[:4]
             _, el = azimuth_elevation(lla, r, s[:, SX:SZ + 1])
             s = s[el >= self.mask]
             el = el[el >= self.mask]
@@ -324,17 +340,19 @@ class SatelliteRanges:
         if ic < 0:
             raise ValueError("gnss_raw: the error state has no clock block (the navigator "
                              "adds it when gnss_raw aids)")
-        sat = self.satellites(z, nav)
+        ant = _antenna(nav, self.lever, frame=True)  # (once: the mask and the rows)
+        sat = self.satellites(z, nav, ant)
         use_rr = np.isfinite(sat[:, RR])
         prn = sat[:, PRN].astype(np.int64)
         R = np.diag(np.concatenate([sat[:, SPR], sat[use_rr, SRR]]) ** 2)
         groups = np.concatenate([prn, prn[use_rr]])
         out = BoundRanges(sat, self.lever, layout.n, ic, xa[ic:ic + 2].copy(), R, groups,
                           use_rr, dt)
+        out.antenna = (nav, ant)
         if len(sat):
             y = out.residual(nav)
-            jump = float(np.median(y[:len(sat)]))
-            drift = float(np.median(y[len(sat):])) if use_rr.any() else 0.0
+            jump = _median(y[:len(sat)])
+            drift = _median(y[len(sat):]) if use_rr.any() else 0.0
             moved = False
             if abs(drift) > CLOCK_DRIFT_JUMP_MPS:  # (the first epoch's drift)
                 xa[ic + 1] -= drift
@@ -346,6 +364,7 @@ class SatelliteRanges:
                 self.clock_resets += 1
                 out = BoundRanges(sat, self.lever, layout.n, ic, xa[ic:ic + 2].copy(), R,
                                   groups, use_rr, dt)
+                out.antenna = (nav, ant)
         return out
 
 
