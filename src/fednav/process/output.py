@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 from pathlib import Path
 
 import numpy as np
@@ -615,38 +616,36 @@ def _write(out, res, ref, inputs, output_rate, fixes, others, fmt,
            drawer: Drawer) -> list[Path]:
     if res.fixes_flown is not None:  # (the outages withheld: the plots shade them)
         fixes = res.fixes_flown
-    # the plots first (handed to the drawer, drawn while the files below are written)
-    drawn = {"track.png": drawer.submit(plot_track, res, fixes, ref, out / "track.png")}
+    # the files in their order: a plot is handed to the drawer when met, a data file
+    # written after every plot was handed over (while they are drawn)
+    steps: list = []
+
+    def draw(fn, *args) -> None:
+        steps.append(("drawn", drawer.submit(fn, *args)))
+
+    def write(fn, *args) -> None:
+        steps.append(("write", functools.partial(fn, *args)))
+
+    for name, sol in (("solution", res.forward), ("solution_smoothed", res.smoothed)):
+        if sol is not None:
+            write(write_solution, out / f"{name}.{fmt}", decimate(sol, output_rate))
+    draw(plot_track, res, fixes, ref, out / "track.png")
     if ref is not None:
-        drawn["errors.png"] = drawer.submit(plot_errors, res, ref, out / "errors.png", fixes)
+        write(write_errors, res, ref, out / "errors.csv", output_rate)
+        draw(plot_errors, res, ref, out / "errors.png", fixes)
         if res.integrity is not None:
             from .stanford import plot_run
 
-            drawn["stanford.png"] = drawer.submit(plot_run, res, _errors(res.forward, ref),
-                                                  out / "stanford.png")
-    for name, draw in res.figures.items():  # (a sensor's own: the raw GNSS's satellites)
-        drawn[f"{name}.png"] = drawer.submit(save_drawn, draw, out / f"{name}.png")
+            draw(plot_run, res, _errors(res.forward, ref), out / "stanford.png")
+    for name, figure in res.figures.items():  # (a sensor's own: the raw GNSS's satellites)
+        draw(save_drawn, figure, out / f"{name}.png")
     for name, other in (others or {}).items():
-        drawn[f"errors_{name}.png"] = drawer.submit(plot_errors, res, other,
-                                                    out / f"errors_{name}.png", fixes,
-                                                    f"against {other.source}")
-    files = []
-    for name, sol in (("solution", res.forward), ("solution_smoothed", res.smoothed)):
-        if sol is not None:
-            files.append(write_solution(out / f"{name}.{fmt}", decimate(sol, output_rate)))
-    files.append("track.png")
-    if ref is not None:
-        files.append(write_errors(res, ref, out / "errors.csv", output_rate))
-        files.append("errors.png")
-        if res.integrity is not None:
-            files.append("stanford.png")
-    files += [f"{name}.png" for name in res.figures]
-    for name in others or {}:
-        files.append(write_errors(res, others[name], out / f"errors_{name}.csv",
-                                  output_rate))
-        files.append(f"errors_{name}.png")
+        write(write_errors, res, other, out / f"errors_{name}.csv", output_rate)
+        draw(plot_errors, res, other, out / f"errors_{name}.png", fixes,
+             f"against {other.source}")
+    done = [(how, step() if how == "write" else step) for how, step in steps]
     s = summary(res, ref, inputs, others)
-    files = [drawer.result(drawn[f]) if isinstance(f, str) else f for f in files]
+    files = [drawer.result(v) if how == "drawn" else v for how, v in done]
     p = out / "summary.json"  # (the last file: a finished run's mark)
     write_json(p, s)
     files.append(p)
