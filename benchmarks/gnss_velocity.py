@@ -1,7 +1,7 @@
 """Does the GNSS velocity help, and does taking its latency out? Every dataset at hand
 (docs/real-data.md, "The GNSS velocity and its latency").
 
-    python benchmarks/gnss_velocity.py [--only drive,rover,car] [--work DIR]
+    python benchmarks/gnss_velocity.py [--only drive,rover,car,gis,cost] [--work DIR]
 
 Each dataset is processed with ``fednav process``'s defaults three ways:
 
@@ -27,7 +27,13 @@ same data would give).
   ``examples/canada-planetary.yaml``.
 * ``car`` — fednav's simulated ``examples/car-drive.yaml`` (true figures), GNSS alone,
   its velocities on time and 0.1 s late (a lag the simulation adds: what the default's
-  rule must take out).
+  rule must take out).  Its 1.5 m fixes are too noisy for the positions' differences,
+  and its few speed changes too few for the INS (``fednav.process.latency``).
+* ``gis`` — gnss-ins-sim (Aceinna's generator, not fednav's) simulating a 10-min
+  stop-and-go town drive (:func:`stop_and_go_motion`) with ``kfgins_peer``'s industrial
+  IMU, its receiver at 5 Hz with 1.5/1.5/3 m positions, the velocities on time and
+  0.1 s late.
+* ``cost`` — ``process``'s run time with and without the check against the INS.
 """
 
 from __future__ import annotations
@@ -45,6 +51,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from noise_identification import SHARED, significance  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
+#: the gnss-ins-sim case's position noise, east/north/up [m]: too noisy for the positions'
+#: differences to see a latency
+GIS_NOISY_M = (1.5, 1.5, 3.0)
 #: the three ways (module docstring) and the GNSS section's settings of each
 WAYS = {"position": {"measures": "position"},
         "stamped": {"measures": "position_velocity", "velocity_latency_s": 0.0},
@@ -82,9 +91,10 @@ def _print(name: str, cols, rows: dict, errs: dict, notes: list[str]) -> None:
 def _note(way: str, res) -> str:
     q = res.data_quality
     seen = q.get("gnss_velocity_latency_seen_s")
-    lat = ("" if seen is None else
-           f"; latency seen {seen:+.3f} s (+-{q.get('gnss_velocity_latency_sigma_s', 0):.3f}),"
-           f" taken out {q.get('gnss_velocity_latency_applied_s', 0.0):.3f} s")
+    by = q.get("gnss_velocity_latency_seen_by")
+    lat = ("" if seen is None or by is None else
+           f"; latency seen {seen:+.3f} s (+-{q['gnss_velocity_latency_sigma_s']:.3f} by "
+           f"the {by}), taken out {q['gnss_velocity_latency_applied_s']:.3f} s")
     nis = ", ".join(f"{k} {v['nis_per_dof']:.2f}" for k, v in res.consistency.items())
     return f"{way}: NIS/dof {nis}{lat}"
 
@@ -94,7 +104,7 @@ def drive(work: Path) -> None:
 
     from fednav.io import read_rtklib_pos
     from fednav.process.kfgins import read_kfgins
-    from fednav.process.run import process, velocity_latency
+    from fednav.process.run import ins_velocity_latency, process, velocity_latency
 
     if not kp.DRIVE.is_dir():
         print(f"no {kp.DRIVE}: the real drive is skipped\n")
@@ -109,7 +119,9 @@ def drive(work: Path) -> None:
                     sigma_rows=pos.sigma_rows[keep], lever=folder_fixes.lever, quality={})
     # the reference velocities are the receiver's, late by the latency its positions
     # show: scored at their time of validity (the velocity of t is the one stamped t + L)
-    lag, _ = velocity_latency(pos)
+    lag, sigma = velocity_latency(pos)
+    ins = ins_velocity_latency(d["imu"], {**d["sensors"], "gnss": fixes},
+                               _way(d["system"], "default"))
     tr = case.ref["t"]
     case.ref.update({k: np.interp(tr + lag, tr, case.ref[k]) for k in ("vn", "ve", "vd")})
     rows, errs, notes = {}, {}, []
@@ -119,6 +131,9 @@ def drive(work: Path) -> None:
             rows[f"{way} {part}"] = np.sqrt(np.nanmean(e ** 2, axis=0))
             errs.setdefault(part, (t, {}))[1][way] = e
         notes.append(_note(way, res))
+    notes.append(f"the latency against the INS (a pass on the positions alone): "
+                 f"{ins[0]:+.3f} s (+-{ins[1]:.3f}); from the positions' differences "
+                 f"{lag:+.3f} s (+-{sigma:.3f})")
     _print("real drive (rtklibexplorer drive_0708), forward, GNSS withheld in 11 x 15 s",
            ("N", "E", "D", "vN", "vE", "vD"), rows, errs, notes)
 
@@ -176,14 +191,104 @@ def car(work: Path) -> None:
                          gc.lever_m)
     imu = read_imu_csv(folder / "imu.csv", cfg.imu.max_bridge_s)
     ref = read_reference_csv(folder / "reference.csv")
-    late = replace(gnss, vel=np.column_stack([np.interp(gnss.t - 0.1, gnss.t, gnss.vel[:, j])
-                                              for j in range(3)]), quality={})
-    for label, g in (("on time", gnss), ("0.1 s late", late)):
+    for label, g in (("on time", gnss), ("0.1 s late", _late(gnss, 0.1))):
         _navego_like(f"car-drive (fednav's simulator), GNSS velocities {label}", imu,
                      {"gnss": g}, cfg, ref)
 
 
-CASES = {"drive": drive, "rover": rover, "car": car}
+def _late(fixes, lag: float):
+    """``fixes`` with its velocities ``lag`` seconds old (interpolated between fixes)."""
+    return replace(fixes, vel=np.column_stack([np.interp(fixes.t - lag, fixes.t,
+                                                         fixes.vel[:, j])
+                                               for j in range(3)]), quality={})
+
+
+def stop_and_go_motion(seconds: float = 600.0, seed: int = 11) -> str:
+    """gnss-ins-sim's motion commands (type 1: rates and body accelerations held for a
+    duration) for a town drive from 8 m/s: the speed changing every 1-4 s (up to
+    1.5 m/s^2, between 3 and 15 m/s) with turns between (6-12 s at up to 9 deg/s), the
+    speed changes a receiver's latency shows in (``fednav.process.latency``)."""
+    rng = np.random.default_rng(seed)
+    lines, v, t = [], 8.0, 0.0
+    while t < seconds:
+        d = round(float(rng.uniform(1.0, 4.0)), 1)
+        a = float(np.clip(rng.uniform(-1.5, 1.5), (3.0 - v) / d, (15.0 - v) / d))
+        lines.append(f"1,0,0,0,{a:.4f},0,0,{d},1")
+        v, t = v + a * d, t + d
+        if rng.uniform() < 0.3:
+            d = round(float(rng.uniform(6.0, 12.0)), 1)
+            lines.append(f"1,{rng.uniform(-9.0, 9.0):.4f},0,0,0,0,0,{d},1")
+            t += d
+    return "\n".join(lines) + "\n"
+
+
+def gis(work: Path) -> None:
+    import kfgins_peer as kp
+    from moving_start import imu_figures
+
+    from fednav import load_system
+    from fednav.io import read_gnss_ins_sim
+    from fednav.process.gnss_ins_sim import gnss_ins_sim_system
+
+    src = kp.gis_source(None)
+    if src is None:
+        print("no gnss-ins-sim source tree ($GNSS_INS_SIM): its drive is skipped\n")
+        return
+    folder = work / "gis-noisy"
+    if not (folder / "time.csv").is_file():
+        saved = kp.GIS_GPS, kp.MOTION_INIT, kp.MOTION
+        kp.GIS_GPS = {**kp.GIS_GPS, "stdp": list(GIS_NOISY_M), "rate_hz": 50.0}
+        kp.MOTION_INIT, kp.MOTION = "32.0,120.0,100.0,8,0,0,30,0,0", stop_and_go_motion()
+        try:
+            kp.simulate_gis(src, folder)
+        finally:
+            kp.GIS_GPS, kp.MOTION_INIT, kp.MOTION = saved
+    rec = read_gnss_ins_sim(folder)
+    system, series, _ = gnss_ins_sim_system(rec, load_system({"imu": imu_figures(
+        kp.GIS_IMU)}))
+    g = series["gnss"]  # (50 Hz: each 5 Hz fix takes the velocity simulated lag earlier,
+    for lag in (0.0, 0.1):  # its own noise kept, where interpolating would average it)
+        k = int(round(lag * 50.0))
+        i = np.arange(max(k, 9), len(g.t), 10)
+        fixes = replace(g, t=g.t[i], lla=g.lla[i], vel=g.vel[i - k], quality={},
+                        sigma_rows=None if g.sigma_rows is None else g.sigma_rows[i])
+        _navego_like(f"gnss-ins-sim 10-min stop-and-go, {GIS_NOISY_M[0]} m positions at "
+                     f"5 Hz, velocities {lag} s late", rec.imu, {**series, "gnss": fixes},
+                     system, rec.ref)
+
+
+def cost(work: Path) -> None:
+    """``process``'s run time with and without the check against the INS (best of 3,
+    alternated in one process) on the rover (file's figures) and a 152 s simulated car
+    drive (1.5 m fixes): what the pass on the positions alone costs."""
+    import time
+
+    import fednav.process.run as pr
+    from fednav import System
+    from fednav.io import read_navego_gnss, read_navego_imu
+    from fednav.sim.drives import car_drive
+
+    cases = {}
+    data = SHARED / "canada-planetary"
+    if data.is_dir():
+        cases["rover"] = (read_navego_imu(data / "imu_planetary.mat"),
+                          {"gnss": read_navego_gnss(data / "gnss_planetary.mat")}, System())
+    d = car_drive(30.0, 10.0, seed=5, static_s=60.0)
+    cases["car, 152 s"] = (d.imu, {"gnss": d.gnss}, d.system)
+    checked = pr.with_ins_latency
+    for name, (imu, sensors, system) in cases.items():
+        best = {}
+        for way in ("without", "with") * 3:
+            pr.with_ins_latency = checked if way == "with" else (lambda i, s, c, p: p)
+            t0 = time.perf_counter()
+            pr.process(imu, sensors, system, force=True)
+            best[way] = min(best.get(way, np.inf), time.perf_counter() - t0)
+        pr.with_ins_latency = checked
+        print(f"{name}: process {best['without']:.3f} s without the check against the "
+              f"INS, {best['with']:.3f} s with it ({best['with'] / best['without']:.2f}x)")
+
+
+CASES = {"drive": drive, "rover": rover, "car": car, "gis": gis, "cost": cost}
 
 
 def main() -> None:

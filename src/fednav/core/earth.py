@@ -170,9 +170,15 @@ def lever_arm_point(lla, vel, C, omega, lever):
     (..., 3, 3) and body rate ``omega`` (..., 3) [rad/s]: ``move_enu(lla, C l)`` and
     ``vel + C (omega x l)``."""
     lever = np.asarray(lever, dtype=float)
-    lla = move_enu(lla, C @ lever)
-    vel = vel + np.einsum("...ij,...j->...i", C, np.cross(omega, lever))
-    return lla, vel
+    return move_enu(lla, C @ lever), lever_arm_velocity(vel, C, omega, lever)
+
+
+def lever_arm_velocity(vel, C, omega, lever) -> np.ndarray:
+    """ENU velocity of a point at ``lever`` (body right-forward-up, m) from the IMU with
+    ENU velocity ``vel`` (..., 3), attitude ``C`` = C_b^n (..., 3, 3) and body rate
+    ``omega`` (..., 3) [rad/s]: ``vel + C (omega x l)``."""
+    return vel + np.einsum("...ij,...j->...i", C, np.cross(omega, np.asarray(lever,
+                                                                         dtype=float)))
 
 
 def llh_difference_enu(lat, lon, h, lat_ref, lon_ref, h_ref):

@@ -135,8 +135,8 @@ def with_velocity_latency(cfg: System, name: str | None, fixes) -> tuple[System,
     leaves it to the data (None): the latency :func:`velocity_latency` sees from the
     positions when it is confident (positive, beyond :data:`LATENCY_WARN_S` and three
     of its sigmas), else 0.  Returns the system, the data quality
-    (``<name>_velocity_latency_seen_s``, ``_sigma_s``, ``_applied_s`` [s]) and a line
-    saying what was taken out."""
+    (``<name>_velocity_latency_seen_s``, ``_sigma_s``, ``_applied_s`` [s], ``_seen_by``:
+    ``positions``) and a line saying what was taken out."""
     sc = None if fixes is None else own_section(name, cfg)
     if sc is None or getattr(sc, "velocity_latency_s", 0.0) is not None:
         return cfg, {}, []
@@ -149,11 +149,88 @@ def with_velocity_latency(cfg: System, name: str | None, fixes) -> tuple[System,
         return cfg, {}, []
     quality = {f"{name}_velocity_latency_seen_s": round(lat[0], 3),
                f"{name}_velocity_latency_sigma_s": round(lat[1], 3),
-               f"{name}_velocity_latency_applied_s": applied}
+               f"{name}_velocity_latency_applied_s": applied,
+               f"{name}_velocity_latency_seen_by": "positions"}
     said = ([f"{fixes.source}: the {registry.label(name)} velocity lags its positions by "
              f"{lat[0]:+.3f} s (+-{lat[1]:.3f} s, from the positions' differences): taken "
              f"out (sensors.{name}.velocity_latency_s: 0 keeps the stamps)"] if take else [])
     return cfg, quality, said
+
+
+#: the positions' differences resolve a latency when their sigma is at most this [s] (a
+#: latency at the warning threshold is then three sigmas out); else the INS is asked
+LATENCY_RESOLVED_S = LATENCY_WARN_S / 3.0
+
+
+def with_ins_latency(imu: ImuData, sensors: dict, cfg: System, prep: Prepared) -> Prepared:
+    """``prep`` again with the fix sensor's velocity latency the INS sees
+    (:mod:`fednav.process.latency`) taken out, where the positions' differences could not
+    tell it (:func:`with_velocity_latency`: noisy positions) and the section leaves it to
+    the data: one pass flying the positions alone, smoothed, gives the antenna's velocity,
+    and a lag beyond :data:`LATENCY_WARN_S` and three of its sigmas is taken out and
+    said.
+
+    The INS runs on the IMU's clock, so what it sees is the velocity's lag against the
+    IMU: the velocity's own latency, or the receiver's whole output (positions too)
+    stamped late.  Under noisy positions the two are hardly told apart (a position late
+    by ``L`` is ``L v`` off, which the filter mostly takes for its own error: the NIS of
+    the positions alone moved by ``L`` changed by 1 % on a 152 s drive), while the
+    velocities' timing is what costs (measured in docs/real-data.md): so the velocities
+    are moved, and the line names ``time_offset_s``, which moves the positions too.  The
+    data quality gets what was seen (``<name>_velocity_latency_seen_s``, ``_sigma_s``,
+    ``_applied_s``, ``_seen_by``: ``INS``).  Otherwise ``prep``."""
+    name = registry.fix_sensor(sensors)
+    fixes = sensors.get(name)
+    sc = None if fixes is None else own_section(name, cfg)
+    if (sc is None or getattr(sc, "velocity_latency_s", 0.0) is not None
+            or fixes.vel is None or fixes.lla is None or name not in prep.series
+            or getattr(prep.system.sensors[name], "measures", None) != "position_velocity"
+            or prep.system.filter.state != "error"):
+        return prep
+    sigma = prep.quality.get(f"{name}_velocity_latency_sigma_s")
+    if sigma is not None and sigma <= LATENCY_RESOLVED_S:
+        return prep
+    lat = ins_velocity_latency(imu, sensors, cfg)
+    if lat is None:
+        return prep
+    take = lat[0] > max(LATENCY_WARN_S, 3.0 * lat[1])
+    applied = round(lat[0], 3) if take else 0.0
+    if take:
+        prep = prepare(imu, sensors, cfg.model_copy(update={"sensors": cfg.sensors.replace(
+            **{name: sc.model_copy(update={"velocity_latency_s": applied})})}))
+        prep.warnings.insert(0, f"{fixes.source}: the {registry.label(name)} velocity lags "
+                                f"the INS by {lat[0]:+.3f} s (+-{lat[1]:.3f} s, against a "
+                                f"pass on the positions alone): taken out "
+                                f"(sensors.{name}.velocity_latency_s: 0 keeps the stamps); "
+                                f"if the receiver stamps its positions as late, "
+                                f"sensors.{name}.time_offset_s: "
+                                f"{sc.time_offset_s - applied:+.3f} moves them too")
+    prep.quality.update({f"{name}_velocity_latency_seen_s": round(lat[0], 3),
+                         f"{name}_velocity_latency_sigma_s": round(lat[1], 3),
+                         f"{name}_velocity_latency_applied_s": applied,
+                         f"{name}_velocity_latency_seen_by": "INS"})
+    return prep
+
+
+def ins_velocity_latency(imu: ImuData, sensors: dict, cfg: System
+                         ) -> tuple[float, float] | None:
+    """The fix sensor's velocity latency [s] and its 1-sigma [s] against the INS
+    (:func:`fednav.process.latency.velocity_latency_ins`): ``cfg`` flown with the
+    positions alone (its section's ``measures: position``), and the receiver's velocities
+    (``time_offset_s`` applied) fitted to that smoothed solution's antenna velocity.  None
+    where that cannot tell (see there)."""
+    from .latency import antenna_velocity, velocity_latency_ins
+
+    name = registry.fix_sensor(sensors)
+    sc = own_section(name, cfg)
+    alone = prepare(imu, sensors, cfg.model_copy(update={"sensors": cfg.sensors.replace(
+        **{name: sc.model_copy(update={"measures": "position",
+                                       "velocity_latency_s": 0.0})})}))
+    res = alone.feed(alone.navigator(record_rows=True, record_covariance=True)).result()
+    sol = imu_rate(res, smooth=True)[1]
+    d = alone.series[name]
+    return velocity_latency_ins(d.t, d.z[:, 3:6], sol.t,
+                                antenna_velocity(sol, alone.system.sensors[name].lever_m))
 
 
 def _start_fixes(name: str, d: Series, cfg: System):
@@ -897,7 +974,7 @@ def process(imu: ImuData, sensors: Mapping[str, Series], cfg: System | None = No
     imu = mounted_imu(imu, cfg.imu.mounting)
     sensors = withheld_inputs(cfg, recordings(sensors, cfg))
     fixes = sensors.get(registry.fix_sensor(sensors))
-    prep = prepare(imu, sensors, cfg)
+    prep = with_ins_latency(imu, sensors, cfg, prepare(imu, sensors, cfg))
     noise = nav = None
     if prep.system.noise != "as-given" and prep.system.filter.state == "error":
         from .identify import identify

@@ -167,7 +167,8 @@ class GnssConfig(SensorConfig):
     ``time_offset_s`` added to the file's time stamps, and ``velocity_latency_s``: how
     much older than its stamp each velocity is [s] (a receiver's Doppler velocity lagging
     its position); None (default): the latency ``fednav process`` sees from the
-    positions (``gnss_velocity_latency_seen_s`` and its 1-sigma), taken out when it is
+    positions (``gnss_velocity_latency_seen_s`` and its 1-sigma) or, where they are too
+    noisy to tell, against the INS of a pass on the positions alone, taken out when it is
     confident (beyond 0.05 s and three sigmas), else none; 0: the stamps as they are.
     The old key ``sigma_pos_m`` ([north, east, up]) is read as ``sigma_pos_enu_m``,
     reordered, with a ``FutureWarning``.

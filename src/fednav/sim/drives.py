@@ -90,6 +90,36 @@ def car_drive(heading_deg: float = 30.0, speed_mps: float = 0.0, seed: int = 1,
     next(s for s in segments if s["name"] == "brake")["accel_mps2"] = brake
     if static_s > 0.0:
         segments.insert(0, {"name": "static", "duration_s": static_s})
+    return drive_of(segments, heading_deg, speed_mps, seed, imu, imu_period_s, gnss)
+
+
+def stop_and_go(seed: int = 1, duration_s: float = 300.0, imu: dict | None = None,
+                gnss: dict | None = None) -> Drive:
+    """A town drive of ``duration_s``: from 8 m/s, speeding up and slowing down every few
+    seconds (1–4 s at up to 1.5 m/s^2, between 3 and 15 m/s) with turns between (6–12 s at
+    up to 9 deg/s; every duration a whole tenth of a second) — the speed changes a car's
+    receiver latency shows in (a cruise at one speed hides it;
+    :mod:`fednav.process.latency`).  Drawn by a ``numpy.random.Generator`` of ``seed``;
+    IMU and GNSS as :func:`car_drive`."""
+    rng = np.random.default_rng(seed)
+    segments, v, t = [], 8.0, 0.0
+    while t < duration_s:
+        d = round(float(rng.uniform(1.0, 4.0)), 1)
+        a = float(np.clip(rng.uniform(-1.5, 1.5), (3.0 - v) / d, (15.0 - v) / d))
+        segments.append({"name": "speed", "duration_s": d, "accel_mps2": a})
+        v, t = v + a * d, t + d
+        if rng.uniform() < 0.3:
+            d = round(float(rng.uniform(6.0, 12.0)), 1)
+            segments.append({"name": "turn", "duration_s": d,
+                             "heading_rate_deg_s": float(rng.uniform(-9.0, 9.0))})
+            t += d
+    return drive_of(segments, float(rng.uniform(0.0, 360.0)), 8.0, seed, imu, 0.01, gnss)
+
+
+def drive_of(segments: list[dict], heading_deg: float, speed_mps: float, seed: int,
+             imu: dict | None, imu_period_s: float, gnss: dict | None) -> Drive:
+    """The :class:`Drive` of ``segments`` (:class:`~fednav.sim.scenario.SegmentConfig`
+    keys) from ``heading_deg`` and ``speed_mps``, IMU and GNSS as :func:`car_drive`."""
     cfg = DatasetConfig(
         name="car-drive", seed=seed, imu_period_s=imu_period_s,
         start=StartConfig(lat_deg=51.05, lon_deg=-114.07, h_m=1050.0, speed_mps=speed_mps,
@@ -129,4 +159,5 @@ def heading_containment(sol, reference: Reference, rows=None) -> tuple[float, fl
     return float(np.mean(ratio <= 3.0)), float(ratio.max())
 
 
-__all__ = ["ADIS16405", "ADIS16488", "Drive", "car_drive", "heading_containment"]
+__all__ = ["ADIS16405", "ADIS16488", "Drive", "car_drive", "drive_of", "heading_containment",
+           "stop_and_go"]
