@@ -309,6 +309,16 @@ def dcm_to_rotvec_rows(C, out):
 
 
 @numba.njit(cache=True, inline="always")
+def rotation_compensated_s(ax, ay, az, bx, by, bz, sx, sy, sz):
+    """The velocity increment ``b`` of an interval (body axes at its start, m/s) with the
+    rotation compensation ``a x b / 2`` of the interval's angle increment ``a`` [rad] and
+    the sculling term ``s`` (:func:`coning_sculling_s`)."""
+    return (bx + 0.5 * (ay * bz - az * by) + sx,
+            by + 0.5 * (az * bx - ax * bz) + sy,
+            bz + 0.5 * (ax * by - ay * bx) + sz)
+
+
+@numba.njit(cache=True, inline="always")
 def coning_sculling_s(ax, ay, az, bx, by, bz, pax, pay, paz, pbx, pby, pbz, has_prev):
     """Two-sample coning and sculling: the rotation vector of the current angle increment
     ``a`` corrected by ``a_prev x a / 12``, and the sculling term

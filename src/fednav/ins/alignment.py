@@ -11,12 +11,17 @@ Post-processing may look ahead, so fednav aligns as a surveyor would
   1 s margin before motion) find the static period at the start.
 * **Levelling.**  Over a static period of 2 s or more the mean specific force is the
   reaction to gravity: pitch and roll follow (:func:`coarse_level`).  Otherwise, in
-  motion, the mean specific force over the first 2 s (at least 5 GNSS periods) is the
-  mean acceleration there — ``(v_end - v_start) / T`` from the GNSS velocity, turned into
-  the vehicle's frame by its course — plus the gravity reaction
-  (:func:`level_in_motion`); the sigma holds the acceleration's uncertainty.  A vehicle
-  pulling away at 1 m/s^2 is then levelled to ~0.2 deg instead of 5.8 deg off.  Either
-  way the mean accelerometer bias is inseparable from the tilt: levelling makes the
+  motion, where the heading at the start is known (the GNSS course carried back by the
+  gyro, or the config's), the specific force integrated in the start's body frame (the
+  gyros carry the frame) matches the GNSS velocity's change plus gravity over a window of
+  up to 20 s that the gyro bias allows (:func:`velocity_match_level`: 12 s for a
+  20 deg/h gyro); else the mean specific force over the first 2 s (at least 5 GNSS
+  periods) is the mean acceleration there — ``(v_end - v_start) / T`` from the GNSS
+  velocity, turned into the vehicle's frame by its course — plus the gravity reaction
+  (:func:`level_in_motion`).  The sigma holds the velocities' and the carried frame's
+  uncertainty.  A vehicle pulling away at 1 m/s^2 is then levelled to ~0.05-0.2 deg
+  instead of 5.8 deg off.  Either way the mean accelerometer bias is inseparable from
+  the tilt: levelling makes the
   computed horizontal specific force match, so the tilt error is ``phiE = -(C nabla)_N /
   g``, ``phiN = (C nabla)_E / g`` (``C = C_b^n``), a correlation the initial covariance
   carries.
@@ -49,6 +54,7 @@ import numpy as np
 
 from ..core import attitude as att
 from ..core import earth, units
+from . import strapdown
 from .stops import stationary
 
 #: GNSS horizontal speed [m/s] above which the vehicle counts as moving.
@@ -61,6 +67,11 @@ MIN_STATIC = 2.0
 #: :data:`LEVEL_EPOCHS` GNSS periods.
 LEVEL_SECONDS = 2.0
 LEVEL_EPOCHS = 5
+#: Longest window [s] of the in-motion levelling by velocity matching
+#: (:func:`velocity_match_level`), and its ends' span [s]: the fixes of the first and the
+#: last second are averaged.
+LEVEL_MAX_S = 20.0
+LEVEL_END_S = 1.0
 #: Largest 1-sigma [rad] of one GNSS epoch's course (velocity sigma / speed) that the
 #: heading uses: 20 deg (speed above 2.9 sigma_v), where the course's error is still
 #: close to Gaussian; many such epochs average to a heading.
@@ -269,6 +280,94 @@ def heading_from_course(t_imu, gyro, up_b, gyro_bias, t_fix, vel_fix, t0: float,
                          follows)
 
 
+def to_level_frame(v, heading: float) -> np.ndarray:
+    """ENU vector ``v`` in the level frame of ``heading`` [rad, from north toward east]:
+    right, forward, up."""
+    c, s_ = np.cos(heading), np.sin(heading)
+    return np.array([v[0] * c - v[1] * s_, v[0] * s_ + v[1] * c, v[2]])
+
+
+def velocity_match_level(imu, fixes, t0: float, i0: int, dt: float, heading: float,
+                         heading_sigma: float, gyro_bias_sigma: float, gyro_arw: float,
+                         accel_noise: float, accel_bias_sigma: float):
+    """Pitch and roll at ``t0`` (IMU sample ``i0``) of a vehicle in motion, by matching
+    the specific force integrated in the start's body frame with the GNSS velocity's
+    change over a window of up to :data:`LEVEL_MAX_S`, and their 1-sigma [rad].
+
+    Over ``[t0, t]`` the velocity changes by ``C0 alpha(t) - gamma(t)``: ``alpha`` the
+    specific force integrated in the body frame at ``t0`` (the gyros carry the frame:
+    :func:`fednav.ins.strapdown.body_frame_velocity`), ``C0 = C_b^n(t0)`` sought, and
+    ``gamma`` gravity, Coriolis and the navigation frame's own turn (``w_in x g t^2 /
+    2``); the antenna's velocity adds ``C0 R(t) (w x l)`` (``R``: the carried frame, ``l``
+    the lever arm), taken into ``alpha``.  Means over the fixes of the window's first and
+    last second match ``C0 dalpha = beta``; the two directions with the ``heading`` at
+    ``t0`` give pitch and roll (:func:`level_in_motion`).  The gyros carry the frame, so
+    the window that gives the best tilt balances the GNSS velocity's noise over it
+    (``sqrt(2/n) sigma_v / T``) against the carried frame's error (``gyro_bias_sigma T /
+    2``):
+    ``T = sqrt(2 sqrt2 sigma_v / (g b_g))``, between :data:`LEVEL_SECONDS` and
+    :data:`LEVEL_MAX_S` (12 s for a 20 deg/h gyro under 0.05 m/s velocities, 4 s at
+    200 deg/h).  Fixes without a velocity or position are left out.  Returns ``(euler
+    [pitch, roll, 0], tilt sigma, T)`` or None where the window has no fixes at both
+    ends."""
+    ok = np.isfinite(fixes.vel).all(axis=1) & np.isfinite(fixes.lla).all(axis=1)
+    tf, vf, llaf = fixes.t[ok], fixes.vel[ok], fixes.lla[ok]  # (fixes without a value out)
+    if len(tf) < 2:
+        return None
+    lat, h = float(llaf[0, 0]), float(llaf[0, 2])
+    g = earth.gravity(lat, h)
+    sv = float(np.max(np.asarray(fixes.sigma_vel, dtype=float)[:2]))
+    T = float(np.sqrt(2.0 * np.sqrt(2.0) * sv / (g * max(gyro_bias_sigma, 1e-9))))
+    T = min(max(T, LEVEL_SECONDS), LEVEL_MAX_S, float(tf[-1]) - t0,
+            float(imu.t[-1]) - t0)
+    w = min(LEVEL_END_S, 0.25 * T)
+    first = (tf >= t0 - 1e-9) & (tf <= t0 + w)
+    last = (tf >= t0 + T - w) & (tf <= t0 + T + 1e-9)
+    if T < LEVEL_SECONDS - 1e-9 or not first.any() or not last.any():
+        return None
+    n = min(int(round(T / dt)), len(imu.t) - 1 - i0)
+    span = slice(i0 + 1, i0 + n + 1)  # the samples of the intervals after t0
+    alpha, q = np.zeros((n + 1, 3)), np.zeros((n + 1, 4))
+    q[0, 0] = 1.0
+    strapdown.body_frame_velocity(imu.gyro[span] * dt, imu.accel[span] * dt, alpha[1:],
+                                  q[1:])
+    t_alpha = imu.t[i0:i0 + n + 1]
+    # the antenna's velocity is the IMU's plus C (w x l): in the start's frame R (w x l)
+    lever = np.asarray(fixes.lever, dtype=float)
+    w_in = (earth.earth_rate(lat)
+            + earth.transport_rate(lat, h, vf[first].mean(axis=0)))
+    cor = np.cross(2.0 * earth.earth_rate(llaf[:, 0])
+                   + earth.transport_rate(llaf[:, 0], llaf[:, 2], vf), vf)
+    cum = np.vstack([np.zeros(3), np.cumsum(0.5 * (cor[1:] + cor[:-1])
+                                            * np.diff(tf)[:, None], axis=0)])
+    up_g = np.array([0.0, 0.0, g])
+
+    def mean(sel):  # [alpha, v + cor integral + g tau + w_in x g tau^2 / 2] over the fixes
+        tau = tf[sel] - t0
+        a = np.column_stack([np.interp(tf[sel], t_alpha, alpha[:, j]) for j in range(3)])
+        k = np.clip(np.searchsorted(t_alpha, tf[sel] - 0.5 * dt), 0, n)
+        a += np.einsum("nij,nj->ni", att.quat_to_dcm(q[k]),
+                       np.cross(imu.gyro[i0 + k], lever))
+        b = (vf[sel] + cum[sel] + tau[:, None] * up_g
+             + np.outer(0.5 * tau**2, np.cross(w_in, up_g)))
+        return a.mean(axis=0), b.mean(axis=0)
+
+    (a0, b0), (a1, b1) = mean(first), mean(last)
+    d_alpha, beta = a1 - a0, b1 - b0
+    euler = level_in_motion(d_alpha, to_level_frame(beta, heading))
+    if not np.all(np.isfinite(euler)):
+        return None
+    span_t = float(np.mean(tf[last]) - np.mean(tf[first]))
+    s_dv = sv * np.sqrt(1.0 / first.sum() + 1.0 / last.sum())
+    tilt_sigma = float(np.sqrt((accel_bias_sigma / g) ** 2 + (s_dv / (g * span_t)) ** 2
+                               + (accel_noise / np.sqrt(span_t) / g) ** 2
+                               + (gyro_bias_sigma * span_t / 2.0) ** 2
+                               + gyro_arw**2 * span_t / 3.0
+                               + (np.hypot(beta[0], beta[1]) / (g * span_t)
+                                  * heading_sigma) ** 2))
+    return euler, tilt_sigma, T
+
+
 def align(imu, fixes, t0: float, i0: int, dt: float, gyro_arw: float, accel_noise: float,
           accel_bias_sigma: float, file_euler=None, file_sigma=None,
           coarse_seconds: float = 1.0, heading_override: float | None = None,
@@ -336,19 +435,32 @@ def align(imu, fixes, t0: float, i0: int, dt: float, gyro_arw: float, accel_nois
         tilt_sigma = np.hypot(accel_bias_sigma / g, accel_noise / np.sqrt(T_static) / g)
         report["levelling"] = f"static {T_static:.1f} s"
     elif fixes.vel is not None and (hc is None or hc.follows):
-        # In motion: the mean specific force over the first seconds is the mean
-        # acceleration (from the GNSS velocity) plus the gravity reaction, the
-        # acceleration turned into the vehicle's frame by its course.
-        if heading_at_T is None:  # hardly moving yet: the acceleration is along the vehicle
-            a_level = np.array([0.0, a_h if a_h > 3.0 * max(s_a[:2]) else 0.0, a[2]])
+        # In motion, where the heading at t0 is known (the config's, or the GNSS course
+        # carried back by the gyro): the specific force integrated in the start's body
+        # frame matches the GNSS velocity's change over a window the gyros can carry.
+        head = ((heading_override, units.deg(2.0)) if heading_override is not None
+                else None if hc is None else (hc.heading, hc.sigma))
+        matched = None if head is None else velocity_match_level(
+            imu, fixes, t0, i0, dt, head[0], head[1], gyro_bias_sigma, gyro_arw,
+            accel_noise, accel_bias_sigma)
+        if matched is not None:
+            euler, tilt_sigma, T_m = matched
+            report["levelling"] = (f"in motion {T_m:.1f} s (the specific force against the "
+                                   f"GNSS velocity's change)")
         else:
-            c, s_ = np.cos(heading_at_T), np.sin(heading_at_T)
-            a_level = np.array([a[0] * c - a[1] * s_, a[0] * s_ + a[1] * c, a[2]])
-        euler = level_in_motion(imu.accel[i0:i0 + n].mean(axis=0), a_level + [0.0, 0.0, g])
-        tilt_sigma = np.sqrt((accel_bias_sigma / g) ** 2 + (max(s_a[:2]) / g) ** 2
-                             + (accel_noise / np.sqrt(T) / g) ** 2)
-        report["levelling"] = (f"in motion {T:.1f} s (mean acceleration {a_h:.2f} m/s^2 "
-                               f"from the GNSS velocity)")
+            # The mean specific force over the first seconds is the mean acceleration
+            # (from the GNSS velocity) plus the gravity reaction, the acceleration turned
+            # into the vehicle's frame by its course.
+            if heading_at_T is None:  # hardly moving yet: along the vehicle
+                a_level = np.array([0.0, a_h if a_h > 3.0 * max(s_a[:2]) else 0.0, a[2]])
+            else:
+                a_level = to_level_frame(a, heading_at_T)
+            euler = level_in_motion(imu.accel[i0:i0 + n].mean(axis=0),
+                                    a_level + [0.0, 0.0, g])
+            tilt_sigma = np.sqrt((accel_bias_sigma / g) ** 2 + (max(s_a[:2]) / g) ** 2
+                                 + (accel_noise / np.sqrt(T) / g) ** 2)
+            report["levelling"] = (f"in motion {T:.1f} s (mean acceleration {a_h:.2f} "
+                                   f"m/s^2 from the GNSS velocity)")
     elif file_euler is not None:
         euler = np.array(file_euler, dtype=float)
         sig = np.array(file_sigma if file_sigma is not None else units.deg([2.0, 2.0, 10.0]),

@@ -39,7 +39,13 @@ import numba
 import numpy as np
 
 from ..core import attitude, earth
-from ..core.kernels import coning_sculling_s, quat_mul_s, quat_to_dcm_s, rotvec_to_quat_s
+from ..core.kernels import (
+    coning_sculling_s,
+    quat_mul_s,
+    quat_to_dcm_s,
+    rotation_compensated_s,
+    rotvec_to_quat_s,
+)
 from ..core.kernels import quat_mul as _qmul
 from ..core.kernels import quat_to_dcm as _q2dcm
 from ..core.kernels import rotvec_to_quat as _rv2q
@@ -121,9 +127,7 @@ def mechanize(state, dtheta, dv, dt, h_ref, loop, out_q, out_v, out_p):
         # Coning and sculling (current + previous sample).
         fx, fy, fz, sx, sy, sz = coning_sculling_s(ax, ay, az, bx, by, bz, px, py, pz,
                                                    ux, uy, uz, has_prev)
-        cx = bx + 0.5 * (ay * bz - az * by) + sx
-        cy = by + 0.5 * (az * bx - ax * bz) + sy
-        cz = bz + 0.5 * (ax * by - ay * bx) + sz
+        cx, cy, cz = rotation_compensated_s(ax, ay, az, bx, by, bz, sx, sy, sz)
         # C_b^n from the quaternion.
         c00, c01, c02, c10, c11, c12, c20, c21, c22 = quat_to_dcm_s(q0, q1, q2, q3)
         ne = c00 * cx + c01 * cy + c02 * cz
@@ -178,6 +182,38 @@ def mechanize(state, dtheta, dv, dt, h_ref, loop, out_q, out_v, out_p):
     state[19] = 1.0
     state[20] = b_int
     state[21] = dh
+
+
+@numba.njit(cache=True)
+def body_frame_velocity(dtheta, dv, out, out_q):
+    """The specific force integrated in the body frame of the first sample's start, held
+    fixed in inertial space: ``out[k] = sum_{i<=k} C_{b_i}^{b_0} dv_i`` [m/s] (``C``: the
+    attitude at the start of interval ``i`` relative to it, from the angle increments
+    alone — gyros measure the inertial rate; the velocity increments rotation-compensated
+    and sculling-corrected as :func:`mechanize` does), and ``out_q[k]`` the attitude at
+    the end of interval ``k`` (quaternion ``q_b^{b0}``).  ``dtheta``, ``dv`` (N, 3) [rad,
+    m/s], body right-forward-up; ``out`` (N, 3), ``out_q`` (N, 4).  In-motion levelling
+    matches it with the GNSS velocity's change (:func:`fednav.ins.alignment.align`)."""
+    q0, q1, q2, q3 = 1.0, 0.0, 0.0, 0.0
+    px = py = pz = ux = uy = uz = 0.0
+    ex = ey = ez = 0.0
+    for k in range(dtheta.shape[0]):
+        ax, ay, az = dtheta[k, 0], dtheta[k, 1], dtheta[k, 2]
+        bx, by, bz = dv[k, 0], dv[k, 1], dv[k, 2]
+        fx, fy, fz, sx, sy, sz = coning_sculling_s(ax, ay, az, bx, by, bz, px, py, pz,
+                                                   ux, uy, uz, k > 0)
+        cx, cy, cz = rotation_compensated_s(ax, ay, az, bx, by, bz, sx, sy, sz)
+        c00, c01, c02, c10, c11, c12, c20, c21, c22 = quat_to_dcm_s(q0, q1, q2, q3)
+        ex += c00 * cx + c01 * cy + c02 * cz
+        ey += c10 * cx + c11 * cy + c12 * cz
+        ez += c20 * cx + c21 * cy + c22 * cz
+        out[k, 0], out[k, 1], out[k, 2] = ex, ey, ez
+        r0, r1, r2, r3 = rotvec_to_quat_s(fx, fy, fz)
+        q0, q1, q2, q3 = quat_mul_s(q0, q1, q2, q3, r0, r1, r2, r3)
+        qn = math.sqrt(q0 ** 2 + q1 ** 2 + q2 ** 2 + q3 ** 2)
+        q0, q1, q2, q3 = q0 / qn, q1 / qn, q2 / qn, q3 / qn
+        out_q[k, 0], out_q[k, 1], out_q[k, 2], out_q[k, 3] = q0, q1, q2, q3
+        px, py, pz, ux, uy, uz = ax, ay, az, bx, by, bz
 
 
 @numba.njit(cache=True)
