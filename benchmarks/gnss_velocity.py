@@ -30,7 +30,7 @@ same data would give).
   rule must take out).  Its 1.5 m fixes are too noisy for the positions' differences,
   and its few speed changes too few for the INS (``fednav.process.latency``).
 * ``gis`` — gnss-ins-sim (Aceinna's generator, not fednav's) simulating a 10-min
-  stop-and-go town drive (:func:`stop_and_go_motion`) with ``kfgins_peer``'s industrial
+  town drive (:func:`town_motion`) with ``kfgins_peer``'s industrial
   IMU, its receiver at 5 Hz with 1.5/1.5/3 m positions, the velocities on time and
   0.1 s late.
 * ``cost`` — ``process``'s run time with and without the check against the INS.
@@ -203,7 +203,7 @@ def _late(fixes, lag: float):
                                                for j in range(3)]), quality={})
 
 
-def stop_and_go_motion(seconds: float = 600.0, seed: int = 11) -> str:
+def town_motion(seconds: float = 600.0, seed: int = 11) -> str:
     """gnss-ins-sim's motion commands (type 1: rates and body accelerations held for a
     duration) for a town drive from 8 m/s: the speed changing every 1-4 s (up to
     1.5 m/s^2, between 3 and 15 m/s) with turns between (6-12 s at up to 9 deg/s), the
@@ -238,7 +238,7 @@ def gis(work: Path) -> None:
     if not (folder / "time.csv").is_file():
         saved = kp.GIS_GPS, kp.MOTION_INIT, kp.MOTION
         kp.GIS_GPS = {**kp.GIS_GPS, "stdp": list(GIS_NOISY_M), "rate_hz": 50.0}
-        kp.MOTION_INIT, kp.MOTION = "32.0,120.0,100.0,8,0,0,30,0,0", stop_and_go_motion()
+        kp.MOTION_INIT, kp.MOTION = "32.0,120.0,100.0,8,0,0,30,0,0", town_motion()
         try:
             kp.simulate_gis(src, folder)
         finally:
@@ -252,7 +252,7 @@ def gis(work: Path) -> None:
         i = np.arange(max(k, 9), len(g.t), 10)
         fixes = replace(g, t=g.t[i], lla=g.lla[i], vel=g.vel[i - k], quality={},
                         sigma_rows=None if g.sigma_rows is None else g.sigma_rows[i])
-        _navego_like(f"gnss-ins-sim 10-min stop-and-go, {GIS_NOISY_M[0]} m positions at "
+        _navego_like(f"gnss-ins-sim 10-min town drive, {GIS_NOISY_M[0]} m positions at "
                      f"5 Hz, velocities {lag} s late", rec.imu, {**series, "gnss": fixes},
                      system, rec.ref)
 

@@ -70,7 +70,7 @@ def _lagged(d, lag: float, every: int = 10):
 
 
 def test_process_takes_out_a_latency_the_noisy_positions_cannot_see():
-    """fednav's simulated stop-and-go town drive (300 s; 1.5 m fixes at 5 Hz, antenna
+    """fednav's simulated town drive (300 s; 1.5 m fixes at 5 Hz, antenna
     1.2 m above and 1 m behind the IMU) with velocities 0.1 s late: the positions'
     differences cannot tell (their sigma above 0.1 s); a smoothed pass on the positions
     alone sees it against the INS (measured 0.086 +- 0.005 s; on time -0.011 +- 0.004:
@@ -79,9 +79,9 @@ def test_process_takes_out_a_latency_the_noisy_positions_cannot_see():
     velocities (measured forward N/E 0.28/0.42 m, vN/vE 0.046/0.054 m/s with the stamps
     kept; 0.15/0.13 m, 0.019/0.020 m/s taken out; 0.17/0.11 m, 0.021/0.019 m/s on time);
     on time, nothing is taken out."""
-    from fednav.sim.drives import stop_and_go
+    from fednav.sim.drives import town_drive
 
-    d = stop_and_go(2, 300.0, gnss={"period_s": 0.02, "lever_m": (0.3, -1.0, 1.2)})
+    d = town_drive(2, 300.0, gnss={"period_s": 0.02, "lever_m": (0.3, -1.0, 1.2)})
     late, on_time = _lagged(d, 0.1), _lagged(d, 0.0)
     assert velocity_latency(late) is None  # (the positions' differences give up)
     res = process(d.imu, {"gnss": late}, d.system)
@@ -124,13 +124,13 @@ def test_a_cruise_at_one_speed_says_nothing():
 
 def test_a_whole_stream_late_is_taken_out_by_its_velocities_and_the_offset_named():
     """The receiver's whole output stamped 0.1 s late (positions too: a logger stamping on
-    arrival) on the stop-and-go drive: the INS sees the velocities late, which are
+    arrival) on the town drive: the INS sees the velocities late, which are
     moved, and the line names the time offset that moves the positions too; applied, it
     leaves nothing to say."""
     from fednav.sim import corruptions as cr
-    from fednav.sim.drives import stop_and_go
+    from fednav.sim.drives import town_drive
 
-    d = stop_and_go(2, 300.0)
+    d = town_drive(2, 300.0)
     imu, gnss = cr.time_offset(0.1).apply(d.imu, d.gnss)
     said = [w for w in process(imu, {"gnss": gnss}, d.system).warnings if "lags the INS" in w]
     assert len(said) == 1, said

@@ -12,7 +12,9 @@ Post-processing may look ahead, so fednav aligns as a surveyor would
 * **Levelling.**  Over a static period of 2 s or more the mean specific force is the
   reaction to gravity: pitch and roll follow (:func:`coarse_level`).  Otherwise, in
   motion, where the heading at the start is known (the GNSS course carried back by the
-  gyro, or the config's), the specific force integrated in the start's body frame (the
+  gyro, or the config's) and the receiver gives velocities (not ones from position
+  differences, one-sided at the start), the specific force integrated in the start's
+  body frame (the
   gyros carry the frame) matches the GNSS velocity's change plus gravity over a window of
   up to 20 s that the gyro bias allows (:func:`velocity_match_level`: 12 s for a
   20 deg/h gyro); else the mean specific force over the first 2 s (at least 5 GNSS
@@ -307,16 +309,20 @@ def velocity_match_level(imu, fixes, t0: float, i0: int, dt: float, heading: flo
     2``):
     ``T = sqrt(2 sqrt2 sigma_v / (g b_g))``, between :data:`LEVEL_SECONDS` and
     :data:`LEVEL_MAX_S` (12 s for a 20 deg/h gyro under 0.05 m/s velocities, 4 s at
-    200 deg/h).  Fixes without a velocity or position are left out.  Returns ``(euler
-    [pitch, roll, 0], tilt sigma, T)`` or None where the window has no fixes at both
-    ends."""
+    200 deg/h; the noise term taken for one fix per end, a window longer than the optimum
+    for several, whose drift the sigma carries).  Fixes without a velocity or position are
+    left out.  Returns ``(euler [pitch, roll, 0], tilt sigma, T, M)`` — ``M`` the mean
+    of the carried frame ``R`` over the window, through which a constant accelerometer
+    bias enters (``C0 M`` replaces ``C0`` in the tilt/bias coupling) — or None where the
+    window has no fixes at both ends."""
     ok = np.isfinite(fixes.vel).all(axis=1) & np.isfinite(fixes.lla).all(axis=1)
     tf, vf, llaf = fixes.t[ok], fixes.vel[ok], fixes.lla[ok]  # (fixes without a value out)
     if len(tf) < 2:
         return None
+    s_fix = _horizontal_sigma(fixes, np.flatnonzero(ok))
     lat, h = float(llaf[0, 0]), float(llaf[0, 2])
     g = earth.gravity(lat, h)
-    sv = float(np.max(np.asarray(fixes.sigma_vel, dtype=float)[:2]))
+    sv = float(np.median(s_fix))
     T = float(np.sqrt(2.0 * np.sqrt(2.0) * sv / (g * max(gyro_bias_sigma, 1e-9))))
     T = min(max(T, LEVEL_SECONDS), LEVEL_MAX_S, float(tf[-1]) - t0,
             float(imu.t[-1]) - t0)
@@ -332,6 +338,9 @@ def velocity_match_level(imu, fixes, t0: float, i0: int, dt: float, heading: flo
     strapdown.body_frame_velocity(imu.gyro[span] * dt, imu.accel[span] * dt, alpha[1:],
                                   q[1:])
     t_alpha = imu.t[i0:i0 + n + 1]
+    # a constant accelerometer bias enters alpha as (integral of R) bias
+    R = att.quat_to_dcm(q)
+    R_int = np.concatenate([np.zeros((1, 3, 3)), np.cumsum(R[:-1] * dt, axis=0)])
     # the antenna's velocity is the IMU's plus C (w x l): in the start's frame R (w x l)
     lever = np.asarray(fixes.lever, dtype=float)
     w_in = (earth.earth_rate(lat)
@@ -350,22 +359,23 @@ def velocity_match_level(imu, fixes, t0: float, i0: int, dt: float, heading: flo
                        np.cross(imu.gyro[i0 + k], lever))
         b = (vf[sel] + cum[sel] + tau[:, None] * up_g
              + np.outer(0.5 * tau**2, np.cross(w_in, up_g)))
-        return a.mean(axis=0), b.mean(axis=0)
+        return a.mean(axis=0), b.mean(axis=0), R_int[k].mean(axis=0)
 
-    (a0, b0), (a1, b1) = mean(first), mean(last)
+    (a0, b0, r0), (a1, b1, r1) = mean(first), mean(last)
     d_alpha, beta = a1 - a0, b1 - b0
     euler = level_in_motion(d_alpha, to_level_frame(beta, heading))
     if not np.all(np.isfinite(euler)):
         return None
     span_t = float(np.mean(tf[last]) - np.mean(tf[first]))
-    s_dv = sv * np.sqrt(1.0 / first.sum() + 1.0 / last.sum())
+    s_dv = np.sqrt(np.mean(s_fix[first] ** 2) / first.sum()
+                   + np.mean(s_fix[last] ** 2) / last.sum())
     tilt_sigma = float(np.sqrt((accel_bias_sigma / g) ** 2 + (s_dv / (g * span_t)) ** 2
                                + (accel_noise / np.sqrt(span_t) / g) ** 2
                                + (gyro_bias_sigma * span_t / 2.0) ** 2
                                + gyro_arw**2 * span_t / 3.0
                                + (np.hypot(beta[0], beta[1]) / (g * span_t)
                                   * heading_sigma) ** 2))
-    return euler, tilt_sigma, T
+    return euler, tilt_sigma, T, (r1 - r0) / span_t
 
 
 def align(imu, fixes, t0: float, i0: int, dt: float, gyro_arw: float, accel_noise: float,
@@ -384,6 +394,7 @@ def align(imu, fixes, t0: float, i0: int, dt: float, gyro_arw: float, accel_nois
     """
     report: dict = {}
     warnings: list[str] = []
+    bias_frame = None  # (velocity matching: the carried frame's mean, C0 M)
     still = stationary(imu.gyro[i0:], imu.accel[i0:], dt, gyro_arw, accel_noise,
                        gyro_bias_sigma)
     T_static = (static_span(fixes.t, fixes.vel, t0, imu.t[i0:], still)
@@ -440,11 +451,13 @@ def align(imu, fixes, t0: float, i0: int, dt: float, gyro_arw: float, accel_nois
         # frame matches the GNSS velocity's change over a window the gyros can carry.
         head = ((heading_override, units.deg(2.0)) if heading_override is not None
                 else None if hc is None else (hc.heading, hc.sigma))
+        if velocity_decorrelation_s > COURSE_DECORRELATION_S:
+            head = None  # velocities from position differences: one-sided at the start
         matched = None if head is None else velocity_match_level(
             imu, fixes, t0, i0, dt, head[0], head[1], gyro_bias_sigma, gyro_arw,
             accel_noise, accel_bias_sigma)
         if matched is not None:
-            euler, tilt_sigma, T_m = matched
+            euler, tilt_sigma, T_m, bias_frame = matched
             report["levelling"] = (f"in motion {T_m:.1f} s (the specific force against the "
                                    f"GNSS velocity's change)")
         else:
@@ -520,7 +533,8 @@ def align(imu, fixes, t0: float, i0: int, dt: float, gyro_arw: float, accel_nois
     C = att.euler_to_dcm(euler)
     # Levelling zeroes the computed horizontal specific force (less the known
     # acceleration): g phiN = (C nabla)_E, -g phiE = (C nabla)_N.
-    tilt_bias = np.vstack([-C[1], C[0]]) / g if report["levelling"] != "file" else None
+    Cb = C if bias_frame is None else C @ bias_frame  # (velocity matching: C0 M)
+    tilt_bias = np.vstack([-Cb[1], Cb[0]]) / g if report["levelling"] != "file" else None
     gyro_bias = gyro_bias_sigma_out = None
     if static:
         # Static gyro mean = bias + C_n^b w_ie (now with the heading).

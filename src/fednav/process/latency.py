@@ -12,7 +12,8 @@ at the antenna ``s_a(t)`` (IMU-rate [m/s]), a receiver's velocity stamped ``t`` 
     s_gnss(t) = s_a(t - L) + noise,
 
 and ``L`` is its least-squares fit (Gauss-Newton on ``ds_a/dL = -(speed rate)``; an
-epoch whose residual lies beyond 5 robust sigmas, a receiver's glitch, is left out).
+epoch whose residual at the current ``L`` lies beyond 5 robust sigmas, a receiver's
+glitch, is left out).
 
 The speed, not the velocity vector: a heading error of the INS turns its velocity as a
 latency does in a steady turn (``L a = psi x v``, both across the track), and that
@@ -98,12 +99,13 @@ def velocity_latency_ins(t, vel, t_sol, v_ant) -> tuple[float, float] | None:
     def fit(L):  # the residual and its derivative d s_a(t - L) / dL = -(speed rate)
         return z - at(t - L), (at(t - L - h) - at(t - L + h)) / (2 * h)
 
-    L, keep = 0.0, np.ones(len(t), dtype=bool)
-    for it in range(8):
+    L = 0.0
+    for _ in range(12):
         e, J = fit(L)
-        if it == 0:  # the gate, from the residuals at no latency and a robust scale
-            scale = 1.4826 * np.median(np.abs(e - np.median(e)))
-            keep = np.abs(e - np.median(e)) <= GATE * max(float(scale), 1e-6)
+        # the gate at the current latency (at L = 0 the residuals hold the signal, -L
+        # times the speed rate, and a gate there would cut the speed changes themselves)
+        scale = 1.4826 * np.median(np.abs(e - np.median(e)))
+        keep = np.abs(e - np.median(e)) <= GATE * max(float(scale), 1e-6)
         jj = float(np.sum(J[keep] ** 2))
         if jj <= 0.0:
             return None
@@ -114,6 +116,8 @@ def velocity_latency_ins(t, vel, t_sol, v_ant) -> tuple[float, float] | None:
         if abs(step) < 1e-5:
             break
     e, J = fit(L)
+    scale = 1.4826 * np.median(np.abs(e - np.median(e)))
+    keep = np.abs(e - np.median(e)) <= GATE * max(float(scale), 1e-6)
     g = np.bincount(block[keep], weights=J[keep] * e[keep])
     jb = np.bincount(block[keep], weights=J[keep] ** 2)
     jj = float(jb.sum())

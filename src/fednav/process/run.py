@@ -165,8 +165,9 @@ LATENCY_RESOLVED_S = LATENCY_WARN_S / 3.0
 def with_ins_latency(imu: ImuData, sensors: dict, cfg: System, prep: Prepared) -> Prepared:
     """``prep`` again with the fix sensor's velocity latency the INS sees
     (:mod:`fednav.process.latency`) taken out, where the positions' differences could not
-    tell it (:func:`with_velocity_latency`: noisy positions) and the section leaves it to
-    the data: one pass flying the positions alone, smoothed, gives the antenna's velocity,
+    tell it (:func:`with_velocity_latency`: noisy positions, no estimate or one whose
+    sigma is above :data:`LATENCY_RESOLVED_S`, none taken out) and the section leaves it
+    to the data: one pass flying the positions alone, smoothed, gives the antenna's velocity,
     and a lag beyond :data:`LATENCY_WARN_S` and three of its sigmas is taken out and
     said.
 
@@ -188,8 +189,9 @@ def with_ins_latency(imu: ImuData, sensors: dict, cfg: System, prep: Prepared) -
             or prep.system.filter.state != "error"):
         return prep
     sigma = prep.quality.get(f"{name}_velocity_latency_sigma_s")
-    if sigma is not None and sigma <= LATENCY_RESOLVED_S:
-        return prep
+    if ((sigma is not None and sigma <= LATENCY_RESOLVED_S)
+            or prep.quality.get(f"{name}_velocity_latency_applied_s", 0.0) > 0.0):
+        return prep  # (resolved by the positions, or taken out by them already)
     lat = ins_velocity_latency(imu, sensors, cfg)
     if lat is None:
         return prep

@@ -93,14 +93,15 @@ def car_drive(heading_deg: float = 30.0, speed_mps: float = 0.0, seed: int = 1,
     return drive_of(segments, heading_deg, speed_mps, seed, imu, imu_period_s, gnss)
 
 
-def stop_and_go(seed: int = 1, duration_s: float = 300.0, imu: dict | None = None,
+def town_drive(seed: int = 1, duration_s: float = 300.0, imu: dict | None = None,
                 gnss: dict | None = None) -> Drive:
-    """A town drive of ``duration_s``: from 8 m/s, speeding up and slowing down every few
-    seconds (1–4 s at up to 1.5 m/s^2, between 3 and 15 m/s) with turns between (6–12 s at
-    up to 9 deg/s; every duration a whole tenth of a second) — the speed changes a car's
-    receiver latency shows in (a cruise at one speed hides it;
-    :mod:`fednav.process.latency`).  Drawn by a ``numpy.random.Generator`` of ``seed``;
-    IMU and GNSS as :func:`car_drive`."""
+    """A town drive of about ``duration_s`` (its last segment may run up to 16 s over):
+    from 8 m/s, speeding up and slowing down every few seconds (1–4 s at up to 1.5 m/s^2,
+    between 3 and 15 m/s, never to a stop) with turns between (6–12 s at up to 9 deg/s;
+    every duration a whole tenth of a second) — the speed changes a car's receiver
+    latency shows in (a cruise at one speed hides it; :mod:`fednav.process.latency`).
+    Drawn by a ``numpy.random.Generator`` of ``seed``; IMU and GNSS as
+    :func:`car_drive`."""
     rng = np.random.default_rng(seed)
     segments, v, t = [], 8.0, 0.0
     while t < duration_s:
@@ -160,4 +161,4 @@ def heading_containment(sol, reference: Reference, rows=None) -> tuple[float, fl
 
 
 __all__ = ["ADIS16405", "ADIS16488", "Drive", "car_drive", "drive_of", "heading_containment",
-           "stop_and_go"]
+           "town_drive"]
