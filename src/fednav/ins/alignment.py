@@ -282,6 +282,14 @@ def heading_from_course(t_imu, gyro, up_b, gyro_bias, t_fix, vel_fix, t0: float,
                          follows)
 
 
+def coriolis(lla, vel) -> np.ndarray:
+    """The Coriolis and transport terms of the ENU velocity's rate, ``(2 w_ie + w_en) x v``
+    [m/s^2], at each fix's ``lla`` (N, 3) and ENU velocity ``vel`` (N, 3): the part of the
+    specific force a levelling takes out with the acceleration."""
+    return np.cross(2.0 * earth.earth_rate(lla[:, 0])
+                    + earth.transport_rate(lla[:, 0], lla[:, 2], vel), vel)
+
+
 def to_level_frame(v, heading: float) -> np.ndarray:
     """ENU vector ``v`` in the level frame of ``heading`` [rad, from north toward east]:
     right, forward, up."""
@@ -345,8 +353,7 @@ def velocity_match_level(imu, fixes, t0: float, i0: int, dt: float, heading: flo
     lever = np.asarray(fixes.lever, dtype=float)
     w_in = (earth.earth_rate(lat)
             + earth.transport_rate(lat, h, vf[first].mean(axis=0)))
-    cor = np.cross(2.0 * earth.earth_rate(llaf[:, 0])
-                   + earth.transport_rate(llaf[:, 0], llaf[:, 2], vf), vf)
+    cor = coriolis(llaf, vf)
     cum = np.vstack([np.zeros(3), np.cumsum(0.5 * (cor[1:] + cor[:-1])
                                             * np.diff(tf)[:, None], axis=0)])
     up_g = np.array([0.0, 0.0, g])
@@ -355,8 +362,7 @@ def velocity_match_level(imu, fixes, t0: float, i0: int, dt: float, heading: flo
         tau = tf[sel] - t0
         a = np.column_stack([np.interp(tf[sel], t_alpha, alpha[:, j]) for j in range(3)])
         k = np.clip(np.searchsorted(t_alpha, tf[sel] - 0.5 * dt), 0, n)
-        a += np.einsum("nij,nj->ni", att.quat_to_dcm(q[k]),
-                       np.cross(imu.gyro[i0 + k], lever))
+        a += np.einsum("nij,nj->ni", R[k], np.cross(imu.gyro[i0 + k], lever))
         b = (vf[sel] + cum[sel] + tau[:, None] * up_g
              + np.outer(0.5 * tau**2, np.cross(w_in, up_g)))
         return a.mean(axis=0), b.mean(axis=0), R_int[k].mean(axis=0)
@@ -435,9 +441,7 @@ def align(imu, fixes, t0: float, i0: int, dt: float, gyro_arw: float, accel_nois
         # velocity's rate, (2 w_ie + w_en) x v (0.036 m/s^2, 0.2 deg of roll, at 250 m/s
         # and 45 deg; 0.6 m/s^2 near the pole): their mean over the window, from each
         # fix's (near a pole v turns by degrees within it)
-        cor = np.cross(2.0 * earth.earth_rate(fixes.lla[:, 0])
-                       + earth.transport_rate(fixes.lla[:, 0], fixes.lla[:, 2], fixes.vel),
-                       fixes.vel)
+        cor = coriolis(fixes.lla, fixes.vel)
         tw = np.linspace(t0, t0 + T, 101)
         a = a + np.array([np.interp(tw, fixes.t, cor[:, j]).mean() for j in range(3)])
         a_h = float(np.hypot(a[0], a[1]))

@@ -99,13 +99,16 @@ def velocity_latency_ins(t, vel, t_sol, v_ant) -> tuple[float, float] | None:
     def fit(L):  # the residual and its derivative d s_a(t - L) / dL = -(speed rate)
         return z - at(t - L), (at(t - L - h) - at(t - L + h)) / (2 * h)
 
+    def gate(e):  # within GATE robust sigmas of the residuals' median
+        d = np.abs(e - np.median(e))
+        return d <= GATE * max(1.4826 * float(np.median(d)), 1e-6)
+
     L = 0.0
     for _ in range(12):
         e, J = fit(L)
         # the gate at the current latency (at L = 0 the residuals hold the signal, -L
         # times the speed rate, and a gate there would cut the speed changes themselves)
-        scale = 1.4826 * np.median(np.abs(e - np.median(e)))
-        keep = np.abs(e - np.median(e)) <= GATE * max(float(scale), 1e-6)
+        keep = gate(e)
         jj = float(np.sum(J[keep] ** 2))
         if jj <= 0.0:
             return None
@@ -116,8 +119,7 @@ def velocity_latency_ins(t, vel, t_sol, v_ant) -> tuple[float, float] | None:
         if abs(step) < 1e-5:
             break
     e, J = fit(L)
-    scale = 1.4826 * np.median(np.abs(e - np.median(e)))
-    keep = np.abs(e - np.median(e)) <= GATE * max(float(scale), 1e-6)
+    keep = gate(e)
     g = np.bincount(block[keep], weights=J[keep] * e[keep])
     jb = np.bincount(block[keep], weights=J[keep] ** 2)
     jj = float(jb.sum())

@@ -143,8 +143,7 @@ def with_velocity_latency(cfg: System, name: str | None, fixes) -> tuple[System,
     lat = velocity_latency(fixes)
     take = lat is not None and lat[0] > max(LATENCY_WARN_S, 3.0 * lat[1])
     applied = round(lat[0], 3) if take else 0.0
-    cfg = cfg.model_copy(update={"sensors": cfg.sensors.replace(**{name: sc.model_copy(
-        update={"velocity_latency_s": applied})})})
+    cfg = with_section(cfg, name, sc, velocity_latency_s=applied)
     if lat is None:
         return cfg, {}, []
     quality = {f"{name}_velocity_latency_seen_s": round(lat[0], 3),
@@ -198,8 +197,7 @@ def with_ins_latency(imu: ImuData, sensors: dict, cfg: System, prep: Prepared) -
     take = lat[0] > max(LATENCY_WARN_S, 3.0 * lat[1])
     applied = round(lat[0], 3) if take else 0.0
     if take:
-        prep = prepare(imu, sensors, cfg.model_copy(update={"sensors": cfg.sensors.replace(
-            **{name: sc.model_copy(update={"velocity_latency_s": applied})})}))
+        prep = prepare(imu, sensors, with_section(cfg, name, sc, velocity_latency_s=applied))
         prep.warnings.insert(0, f"{fixes.source}: the {registry.label(name)} velocity lags "
                                 f"the INS by {lat[0]:+.3f} s (+-{lat[1]:.3f} s, against a "
                                 f"pass on the positions alone): taken out "
@@ -225,9 +223,8 @@ def ins_velocity_latency(imu: ImuData, sensors: dict, cfg: System
 
     name = registry.fix_sensor(sensors)
     sc = own_section(name, cfg)
-    alone = prepare(imu, sensors, cfg.model_copy(update={"sensors": cfg.sensors.replace(
-        **{name: sc.model_copy(update={"measures": "position",
-                                       "velocity_latency_s": 0.0})})}))
+    alone = prepare(imu, sensors, with_section(cfg, name, sc, measures="position",
+                                               velocity_latency_s=0.0))
     res = alone.feed(alone.navigator(record_rows=True, record_covariance=True)).result()
     sol = imu_rate(res, smooth=True)[1]
     d = alone.series[name]
@@ -252,6 +249,13 @@ def _start_fixes(name: str, d: Series, cfg: System):
     return fixes, kind.model_validate({"lever_m": lever.tolist(),
                                        "sigma_pos_enu_m": s_pos.tolist(),
                                        "sigma_vel_mps": s_vel.tolist()})
+
+
+def with_section(cfg: System, name: str, section, **update) -> System:
+    """``cfg`` with sensor ``name``'s ``section`` (its own, :func:`own_section`) updated by
+    ``update``."""
+    return cfg.model_copy(update={"sensors": cfg.sensors.replace(
+        **{name: section.model_copy(update=update)})})
 
 
 def own_section(name: str, cfg: System):
