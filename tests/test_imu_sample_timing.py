@@ -1,16 +1,16 @@
-"""The IMU sample convention at the seam between the readers and the navigator.
+"""The IMU sample convention at the seams between the simulator, the readers and the
+navigator.
 
-A file's IMU row stamped ``t`` holds the increment over the interval that *ends* at ``t``
-(docs/data-formats.md), and fednav's simulator writes it so: the strapdown fed the
-samples after the start from the true state follows the truth to 2e-7 m/s.  The
-navigator, fed by :meth:`fednav.process.run.Prepared.feed` (what ``fednav process``
-runs), takes the sample stamped at the start as the first interval's, so it integrates
-every sample one period late: with a perfect IMU and no measurement it equals the
-strapdown fed from the start's own sample to 1e-14 m/s, 11 mm/s off the truth within
-30 s of a town drive.  Found at the end of a stop (it explains the INS's -0.01 s
-latency on fednav's own drive, ``tests/test_velocity_latency_ins.py``); the fix moves
-every recorded-data figure and golden, so it is the next stop's, measured on every data
-set.  This test fails (strict xfail) until then, and passes when the seam is mended."""
+:class:`fednav.io.ImuData` and the navigator take a sample's rates to hold over the
+interval that *starts* at its stamp (a rates file's convention; an increments file,
+stamped at the interval's end as loggers stamp it, is moved to the start by
+:meth:`~fednav.io.ImuData.from_increments`, docs/data-formats.md).  Until this was
+pinned, fednav's own simulator stamped its rates at the interval's *end*: every
+simulated drive (``fednav simulate``, the car and town drives) was integrated one IMU
+period late, 11 mm/s off the truth within 30 s of a perfect IMU with no aiding (and the
+INS saw a -0.011 s GNSS velocity latency that was this period).  These tests pin each
+seam with a perfect IMU: the simulated samples, and the navigator fed by what ``fednav
+process`` prepares."""
 
 from dataclasses import replace
 
@@ -25,30 +25,48 @@ from fednav.sim.drives import town_drive
 PERFECT = {"random_bias": False, "gyro_bias_deg_h": 0.0, "gyro_markov_deg_h": 0.0,
            "gyro_markov_tau_s": 100.0, "gyro_arw_deg_sqrt_h": 0.0, "accel_bias_ug": 0.0,
            "accel_markov_ug": 0.0, "accel_markov_tau_s": 100.0, "accel_vrw_ug_sqrt_hz": 0.0}
+N = 3000  # samples compared (30 s at 100 Hz)
 
 
-def _free_runs():
-    d = town_drive(2, 40.0, imu=PERFECT)
-    prep = prepare(d.imu, {"gnss": d.gnss}, d.system)
-    i = int(np.searchsorted(d.reference.t, prep.initial.t - 1e-9))
+@pytest.fixture(scope="module")
+def drive():
+    return town_drive(2, 40.0, imu=PERFECT)
+
+
+def _free_run(d, imu):
+    """The navigator fed by ``prepare`` from the true state at its start, no
+    measurement (a free INS): its velocity rows and the truth at the same stamps."""
+    prep = prepare(imu, {"gnss": d.gnss}, d.system)
+    i = int(np.argmin(np.abs(d.reference.t - prep.initial.t)))
+    assert abs(d.reference.t[i] - prep.initial.t) < 1e-9
     prep.initial = replace(prep.initial, lla=d.reference.lla[i], vel=d.reference.vel[i],
                            euler=d.reference.euler[i], gyro_bias=None)
     nav = prep.navigator(record_rows=True, record_covariance=True)
-    nav.add_imu(prep.t, prep.gyro, prep.accel)  # (no measurement: a free INS)
-    n = 3000
-    truth = d.reference.vel[i + 1:i + 1 + n]
-    return d, prep, i, nav.result().rows["vel"][1:n + 1], truth
+    nav.add_imu(prep.t, prep.gyro, prep.accel)
+    return nav.result().rows["vel"][1:N + 1], d.reference.vel[i + 1:i + 1 + N]
 
 
-def test_the_simulated_samples_are_increments_ending_at_their_stamps():
-    d, prep, i, _, truth = _free_runs()
-    sd = Strapdown(d.reference.lla[i], d.reference.vel[i], d.reference.euler[i], prep.dt)
-    v = sd.run(prep.gyro[1:] * prep.dt, prep.accel[1:] * prep.dt)["vel"][:len(truth)]
-    assert np.abs(v - truth).max() < 1e-6
+def test_the_simulated_samples_hold_from_their_stamps(drive):
+    d = drive
+    dt = d.imu.period()
+    assert d.imu.t[0] == d.reference.t[0] == 0.0  # (the simulation's start)
+    sd = Strapdown(d.reference.lla[0], d.reference.vel[0], d.reference.euler[0], dt)
+    v = sd.run(d.imu.gyro[:N] * dt, d.imu.accel[:N] * dt)["vel"]
+    assert np.abs(v - d.reference.vel[1:N + 1]).max() < 1e-6
 
 
-@pytest.mark.xfail(strict=True, reason="the navigator integrates each IMU sample one "
-                   "period late (the next stop's: every recorded-data figure moves)")
-def test_the_navigator_integrates_each_sample_over_the_interval_ending_at_its_stamp():
-    _, _, _, v, truth = _free_runs()
+def test_the_navigator_integrates_each_sample_over_its_own_interval(drive):
+    v, truth = _free_run(drive, drive.imu)
     assert np.abs(v - truth).max() < 1e-5
+
+
+def test_increments_stamped_at_their_end_are_refused_not_integrated_late(drive):
+    """A stream that passes a logger's stamps (the end of each interval) as they are:
+    its first sample lies a period after the start, one line says so and how to pass
+    them (rather than a silent period of lag)."""
+    prep = prepare(drive.imu, {"gnss": drive.gnss}, drive.system)
+    nav = prep.navigator()
+    dt = prep.dt
+    with pytest.raises(ValueError, match=r"first sample is stamped .* passed at t - dt"):
+        nav.add_imu(prep.t[:10] + dt, dtheta=prep.gyro[:10] * dt, dv=prep.accel[:10] * dt)
+    nav.add_imu(prep.t[:10], dtheta=prep.gyro[:10] * dt, dv=prep.accel[:10] * dt)  # (so)

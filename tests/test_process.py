@@ -23,14 +23,15 @@ LEVER = np.array([0.6, -1.2, 0.4])  # antenna: right, aft, up of the IMU [m]
 def simulated_imu(truth, rng, *initial) -> ImuData:
     """The truth's increments with a MEMS IMU's errors (50 deg/h and 2 mg biases, 0.2
     deg/sqrt(h), 1e-3 m/s/sqrt(s)) and those figures; ``initial``: the file's initial
-    attitude and its sigma, if any."""
+    attitude and its sigma, if any.  Sample ``k`` covers ``[t_k, t_k+1]``: stamped
+    ``t_k``, where its rates start to hold (ImuData's convention)."""
     sim = SimImuErrors(gyro_bias=units.deg_per_h(50.0), accel_bias=units.milli_g(2.0),
                        gyro_arw=units.deg_per_sqrt_h(0.2), accel_vrw=1e-3)
     dth, dv, _ = corrupt_imu(truth.dtheta, truth.dv, truth.dt, sim, rng)
     errs = ImuErrors(*[np.full(3, v) for v in (units.deg_per_sqrt_h(0.2), 1e-3,
                                                units.deg_per_h(50.0), units.milli_g(2.0),
                                                1e-6, 1e-5, 1000.0, 1000.0)])
-    return ImuData("sim-imu", truth.t[1:], dth / truth.dt, dv / truth.dt, errs, *initial)
+    return ImuData("sim-imu", truth.t[:-1], dth / truth.dt, dv / truth.dt, errs, *initial)
 
 
 def make_flight():
@@ -41,7 +42,7 @@ def make_flight():
     truth = generate(np.array([units.deg(45.0), units.deg(-75.0), 50.0]), 7.0,
                      [0.0, 0.0, units.deg(45.0)], segs, 0.01)
     rng = np.random.default_rng(7)
-    imu = simulated_imu(truth, rng, truth.euler[1] + units.deg(np.array([0.5, -0.5, 2.0])),
+    imu = simulated_imu(truth, rng, truth.euler[0] + units.deg(np.array([0.5, -0.5, 2.0])),
                         units.deg(np.array([1.0, 1.0, 3.0])))
     tg = np.arange(0.2, truth.t[-1], 0.2)
     tr = truth.at(tg)

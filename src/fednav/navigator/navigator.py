@@ -777,8 +777,11 @@ class Navigator:
     def add_imu(self, t, gyro=None, accel=None, *, dtheta=None, dv=None) -> None:
         """Add IMU sample(s): rates, or increments over each sample's interval.
 
-        Time stamps on the grid ``t0 + i dt`` (within 1e-3 of a period,
-        :data:`fednav.io.data.UNIFORM_TOLERANCE`) are taken as its samples.  Stamps that
+        A sample stamped ``t`` holds over the interval that *starts* at ``t`` (the first
+        sample is stamped ``t0``; docs/conventions.md): a logger's increments, stamped at
+        the end of their interval, are passed at ``t - dt``.  Time stamps on the grid
+        ``t0 + i dt`` (within 1e-3 of a period, :data:`fednav.io.data.UNIFORM_TOLERANCE`)
+        are taken as its samples.  Stamps that
         jitter — real-time stamps, a clock that drifts from the nominal period — are
         integrated onto the grid as :func:`fednav.io.data.regular_imu` does for a file:
         each sample's rates hold over its own interval, from its stamp to the next one,
@@ -878,7 +881,9 @@ class Navigator:
         if prev is None and not abs(t[0] - self.t0) < 0.5 * self.dt:
             raise ValueError(f"add_imu: the first sample is stamped {t[0]:.6f} s, the "
                              f"navigator starts at {self.t0:.6f} s (a stamp may lie up to "
-                             f"half an IMU period, {0.5 * self.dt:g} s, from it)")
+                             f"half an IMU period, {0.5 * self.dt:g} s, from it; a "
+                             f"sample is stamped where its interval starts: increments "
+                             f"stamped at its end, as loggers do, are passed at t - dt)")
         bad = ~(d > 0.0) | (d >= 2.0 * self.dt)
         if prev is None:
             bad[0] = False

@@ -136,9 +136,11 @@ class DatasetConfig(_Model):
 @dataclass
 class Dataset:
     """One realisation: IMU ``t`` (N,), ``gyro`` [rad/s] and ``accel`` [m/s^2] (body
-    RFU); GNSS ``gnss_t``, antenna ``gnss_lla`` [rad, rad, m] and ENU ``gnss_vel``;
-    optional velocity sensor ``vel_t``, ``vel`` (ENU at its lever point); reference of
-    the IMU at every IMU sample ``ref_lla``, ``ref_vel``, ``ref_euler``; and the config."""
+    RFU; sample ``k``'s rates hold over ``[t_k, t_k + dt]``, from its stamp); GNSS
+    ``gnss_t``, antenna ``gnss_lla`` [rad, rad, m] and ENU ``gnss_vel`` (the last fix may
+    lie at the last sample's end, past the reference); optional velocity sensor
+    ``vel_t``, ``vel`` (ENU at its lever point); reference of the IMU at every IMU
+    sample's stamp ``ref_lla``, ``ref_vel``, ``ref_euler``; and the config."""
 
     cfg: DatasetConfig
     t: np.ndarray
@@ -206,8 +208,11 @@ def simulate_dataset(cfg: DatasetConfig) -> Dataset:
             vv = vv + gauss_markov(len(vi), step * dt, vc.markov_sigma_mps, vc.markov_tau_s,
                                    np.random.default_rng((cfg.seed, 3)))
         vt = tr.t[vi]
-    return Dataset(cfg, tr.t[1:], dth / dt, dv / dt, tr.t[gi], lla, vel, vt, vv,
-                   tr.lla[1:], tr.vel[1:], tr.euler[1:], imu_state)
+    # sample k's increments cover [t_k, t_k+1]: as rates they are stamped t_k, where
+    # they start (ImuData's and the rates file's convention, docs/data-formats.md), and
+    # the reference is the truth at the same stamps
+    return Dataset(cfg, tr.t[:-1], dth / dt, dv / dt, tr.t[gi], lla, vel, vt, vv,
+                   tr.lla[:-1], tr.vel[:-1], tr.euler[:-1], imu_state)
 
 
 def process_config(ds: Dataset) -> dict:

@@ -123,8 +123,8 @@ def recorded(tr: Trajectory, rng: np.random.Generator, imu_errors: bool = True,
     errs = ImuErrors(*[np.full(3, v) for v in (units.deg_per_sqrt_h(0.05), 2e-4,
                                                units.deg_per_h(1.0), units.milli_g(0.1), 1e-7,
                                                1e-6, 1000.0, 1000.0)])
-    imu = ImuData("sim-imu", tr.t[1:], dth / tr.dt, dv / tr.dt, errs,
-                  tr.euler[1] + units.deg(np.array([0.05, -0.05, 0.2])),
+    imu = ImuData("sim-imu", tr.t[:-1], dth / tr.dt, dv / tr.dt, errs,  # (from the stamp)
+                  tr.euler[0] + units.deg(np.array([0.05, -0.05, 0.2])),
                   units.deg(np.array([0.1, 0.1, 0.5])))
     tg = np.arange(1.0, tr.t[-1], 1.0)
     g = tr.at(tg)
