@@ -227,16 +227,18 @@ OFFSET_SEARCH_S = 30.0
 
 
 #: An offset :func:`time_offset` finds is a warning beyond this [s] (or half a GNSS
-#: period): the course departs from the heading systematically (the antenna's lever arm,
-#: body roll, the angle of attack in banked turns), which moved the estimate by up to
-#: 0.25 s on data with no offset (docs/real-data.md, "Independent data").
+#: period): the course departs from the heading systematically (body roll, the angle of
+#: attack in banked turns; the antenna's lever arm is taken out), which moved the
+#: estimate by up to 0.25 s on data with no offset (docs/real-data.md, "Independent
+#: data").
 OFFSET_WARN_S = 0.3
 
 
 def time_offset(imu: ImuData, fixes: FixData, step: float = 0.01) -> float | None:
     """The GNSS-IMU time offset [s] the data show, to add to the GNSS time stamps (as
     ``sensors.<name>.time_offset_s``): the shift of the GNSS course that best matches the
-    heading the gyro integrates (about the mean specific force's axis, at rest "up"),
+    heading the gyro integrates (about the mean specific force's axis, at rest "up"; the
+    course of the IMU's point: the antenna's lever arm taken out),
     searched over +-:data:`OFFSET_SEARCH_S` in ``step`` s — None when the vehicle turns
     too little while moving (less than 30 deg of course change above 2 m/s) for the
     offset to be observable."""
@@ -256,6 +258,18 @@ def time_offset(imu: ImuData, fixes: FixData, step: float = 0.01) -> float | Non
     # a stop) its turns are unseen, so each stretch takes the 2 pi branch nearest the
     # gyro's heading (unwrapped across a 300 deg turn in an outage it read 25 s offset)
     course = np.arctan2(fixes.vel[moving, 0], fixes.vel[moving, 1])
+    lever = np.asarray(getattr(fixes, "lever", np.zeros(3)), dtype=float)
+    if np.any(lever):
+        # the antenna's velocity holds the arm's, C (w x lever): in a turn an antenna
+        # behind the IMU runs a course lagging the heading by about lever / speed (0.14 s
+        # at 7 m/s, 1 m behind); taken out with the course as the heading (level, no
+        # sideslip; a sample's rates hold from its stamp: at mid-interval)
+        w = np.column_stack([np.interp(tg, imu.t + 0.5 * dt, imu.gyro[:, a])
+                             for a in range(3)])
+        u = np.cross(w, lever)  # body right-forward-up [m/s]
+        s, c = np.sin(course), np.cos(course)
+        course = np.arctan2(fixes.vel[moving, 0] - (u[:, 0] * c + u[:, 1] * s),
+                            fixes.vel[moving, 1] - (u[:, 1] * c - u[:, 0] * s))
     cuts = np.flatnonzero(np.diff(tg) > 2.0) + 1
     h0 = np.interp(tg, imu.t, heading)
     offset = None  # (the gyro heading's unknown start against the course: the first
