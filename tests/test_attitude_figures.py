@@ -6,7 +6,7 @@ import io
 
 import pytest
 
-from fednav.campaign.report import (
+from fednav.campaign.numbers import (
     ARCSEC_BELOW_DEG,
     attitude_unit,
     format_attitude,

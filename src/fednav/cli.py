@@ -664,7 +664,7 @@ def _print_process(s: dict, compiled_s: float = 0.0) -> None:
     from rich.markup import escape
 
     from .campaign.explain import label
-    from .campaign.report import format_attitude, is_attitude_deg
+    from .campaign.numbers import format_attitude, is_attitude_deg
 
     what = {"rmse": "RMSE of the forward solution", "rmse_smoothed": "RMSE smoothed"}
     blocks = [(f"{what[key]} against the reference", s[key])

@@ -364,9 +364,9 @@ def tables_frame(summary: dict):
 
 def _formatter(q: str, value):
     """``(x, fmt) -> text`` for the figures of a cell of quantity ``q`` holding ``value``:
-    an attitude in the value's unit (:func:`~fednav.campaign.report.format_attitude`:
+    an attitude in the value's unit (:func:`~fednav.campaign.numbers.format_attitude`:
     arc-seconds below 0.01°), anything else ``fmt(x)``."""
-    from .report import format_attitude, is_attitude_deg
+    from .numbers import format_attitude, is_attitude_deg
 
     if is_attitude_deg(q):
         return lambda x, fmt: format_attitude(x, unit_of=value, fmt=fmt)
@@ -374,7 +374,7 @@ def _formatter(q: str, value):
 
 
 def _pm(cell: dict, q: str = "") -> str:
-    from .report import format_number
+    from .numbers import format_number
 
     v, h = cell.get("value"), cell.get("ci95")
     num = _formatter(q, v)
@@ -422,7 +422,7 @@ SHORT = {"horizontal_position_m": "horizontal [m]", "height_m": "height [m]",
 def _short_pm(cell: dict, q: str = "") -> str:
     """``value ±ci`` with the half-width to two significant figures (console); an
     attitude in arc-seconds below 0.01° (:func:`_formatter`)."""
-    from .report import format_number
+    from .numbers import format_number
 
     v, h = cell.get("value"), cell.get("ci95")
     num = _formatter(q, v)
@@ -431,7 +431,7 @@ def _short_pm(cell: dict, q: str = "") -> str:
 
 def _two(h: float) -> str:
     """A half-width to two significant figures (whole from 10 up)."""
-    from .report import format_number
+    from .numbers import format_number
 
     return format_number(h) if abs(h) >= 10 else f"{h:#.2g}".rstrip(".")
 
@@ -501,7 +501,7 @@ def spread_figure(runs_series: list[dict], windows: list[dict], name: str = ""):
     from matplotlib.patches import Patch
 
     from ..core import plots
-    from .report import format_number
+    from .numbers import format_number
 
     modes = list(runs_series[0])
     panels = (("horizontal_position_m", "horizontal position error", "m"),

@@ -72,7 +72,7 @@ def _num(x, key: str = "", unit_of=None) -> str:
     """A number for a cell; of an attitude key (:func:`~fednav.campaign.report.
     is_attitude_deg`) in arc-seconds below 0.01° (in the unit of ``unit_of`` [deg] when
     given: a CI in its value's)."""
-    from .report import format_attitude, format_number, is_attitude_deg
+    from .numbers import format_attitude, format_number, is_attitude_deg
 
     if x is None or isinstance(x, bool) or not isinstance(x, int | float):
         return "–" if x is None else escape(str(x))
