@@ -216,6 +216,23 @@ def test_cli_runs_the_folder_and_writes_the_nav_file(tmp_path, drive):
     assert r.exit_code == 0 and "imunoise.corrtime" in r.output
 
 
+def test_the_command_does_not_import_pandas(tmp_path, drive):
+    """``fednav process kfgins`` reads plain text with numpy and prints its tables without
+    the campaign reports: pandas is not imported (0.25 s of a 1.7 s command; issue 39).
+    A file pandas must explain still gets its one line (test_bad_folders_...)."""
+    import subprocess
+    import sys
+
+    cfg = write_folder(tmp_path / "d", drive, seconds=20.0)
+    code = ("import sys; from fednav.cli import app; "
+            f"app(['process', 'kfgins', {str(cfg.parent)!r}, '--out', "
+            f"{str(tmp_path / 'out')!r}], standalone_mode=False); "
+            "print('pandas' in sys.modules)")
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr[-2000:]
+    assert res.stdout.strip().splitlines()[-1] == "False", res.stdout[-2000:]
+
+
 def test_known_initial_errors_are_taken_out_of_the_increments(tmp_path, drive):
     cfg = write_folder(tmp_path / "d", drive, initgyrbias=[36.0, 0.0, 0.0],
                        initaccscale=[0.0, 0.0, 1000.0])
