@@ -42,7 +42,9 @@ def main() -> None:
         d = car_drive(h, v, seed=seed, imu=ADIS16405 if grade == "16405" else ADIS16488,
                       static_s=static, accel_mps2=acc)
         res = process(d.imu, {"gnss": d.gnss}, d.system)
-        e0 = res.forward.euler[0] - d.reference.euler[0]
+        i = int(np.searchsorted(d.reference.t, res.forward.t[0] - 1e-9))  # (the start's
+        # own epoch: the first fix, not the simulation's first sample)
+        e0 = res.forward.euler[0] - d.reference.euler[i]
         e0[2] = np.angle(np.exp(1j * e0[2]))
         ratio0 = np.abs(e0) / res.forward.sigma_euler[0]
         inside, most = heading_containment(res.forward, d.reference)

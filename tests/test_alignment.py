@@ -165,7 +165,9 @@ def test_stand_still_detector():
 
 
 def _start_errors(d, res):
-    e = res.forward.euler[0] - d.reference.euler[0]
+    i = int(np.searchsorted(d.reference.t, res.forward.t[0] - 1e-9))  # (the start's epoch)
+    assert abs(d.reference.t[i] - res.forward.t[0]) < 1e-9
+    e = res.forward.euler[0] - d.reference.euler[i]
     e[2] = np.angle(np.exp(1j * e[2]))
     return np.abs(e) / res.forward.sigma_euler[0]
 

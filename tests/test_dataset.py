@@ -55,9 +55,16 @@ def test_csv_layout_reads_back_unchanged(short, tmp_path):
 
 
 def test_navego_layout_reads_back_in_fednav_frames(short, tmp_path):
-    """FRD/NED and NaveGo's roll-pitch-yaw convert back to fednav's RFU/ENU exactly."""
+    """FRD/NED and NaveGo's roll-pitch-yaw convert back to fednav's RFU/ENU exactly;
+    the IMU's stamps written at each interval's end (as NaveGo integrates them) come
+    back at its start."""
+    import scipy.io
+
     write_navego_dataset(short, tmp_path)
     imu = read_navego_imu(tmp_path / "imu.mat")
+    written = scipy.io.loadmat(tmp_path / "imu.mat")["imu"]["t"][0, 0].ravel()
+    np.testing.assert_allclose(written, short.t + short.cfg.imu_period_s, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(imu.t, short.t, rtol=0, atol=1e-9)
     np.testing.assert_allclose(imu.gyro, short.gyro, atol=1e-15)
     np.testing.assert_allclose(imu.accel, short.accel, atol=1e-12)
     np.testing.assert_allclose(imu.errors.gyro_arw, units.deg_per_sqrt_h(2.0))

@@ -233,6 +233,20 @@ def test_the_command_does_not_import_pandas(tmp_path, drive):
     assert res.stdout.strip().splitlines()[-1] == "False", res.stdout[-2000:]
 
 
+@pytest.mark.parametrize(("text", "message"), [
+    ("1 2 3 4 5 6 7\n1 2 3 4 5 6\n1 2 3 4 5 6 7 8\n", "Expected 7 fields in line 3"),
+    ("1 2 3 4 5 6 7\n2 nan 3 4 5 6 7\n", "row 2 has fewer numbers")])
+def test_rows_that_numpy_would_take_wrongly_are_refused(tmp_path, text, message):
+    """Rows of other widths whose numbers add up to whole rows, and 'nan' text: refused
+    with pandas' line, as before the numpy reader."""
+    from fednav.io.kfgins import read_table
+
+    f = tmp_path / "imu.txt"
+    f.write_text(text)
+    with pytest.raises(DataError, match=message):
+        read_table(f, "IMU", (7,))
+
+
 def test_known_initial_errors_are_taken_out_of_the_increments(tmp_path, drive):
     cfg = write_folder(tmp_path / "d", drive, initgyrbias=[36.0, 0.0, 0.0],
                        initaccscale=[0.0, 0.0, 1000.0])

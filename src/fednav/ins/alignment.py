@@ -340,7 +340,7 @@ def velocity_match_level(imu, fixes, t0: float, i0: int, dt: float, heading: flo
     if T < LEVEL_SECONDS - 1e-9 or not first.any() or not last.any():
         return None
     n = min(int(round(T / dt)), len(imu.t) - 1 - i0)
-    span = slice(i0 + 1, i0 + n + 1)  # the samples of the intervals after t0
+    span = slice(i0, i0 + n)  # the samples of the intervals after t0 (each from its stamp)
     alpha, q = np.zeros((n + 1, 3)), np.zeros((n + 1, 4))
     q[0, 0] = 1.0
     strapdown.body_frame_velocity(imu.gyro[span] * dt, imu.accel[span] * dt, alpha[1:],

@@ -83,32 +83,21 @@ def read_table(path, kind: str, columns: tuple[int, ...]) -> tuple[str, np.ndarr
 
 
 def _plain_table(path: Path) -> np.ndarray | None:
-    """A file of rows of numbers, every row as wide as the first, separated by white
-    space, without comments or blank lines, as a (rows, columns) float array read by
-    numpy's C parser (correctly rounded, as ``strtod``; no pandas import); None for any
-    other file (:func:`read_table` then reads it with pandas, which names what is
-    wrong)."""
+    """A file of rows of finite numbers, every row as wide as the first, separated by
+    white space (``#`` comments and blank lines skipped), as a (rows, columns) float
+    array read by numpy's C parser (no pandas import); None for any other file
+    (:func:`read_table` then reads it with pandas, which names what is wrong)."""
     import warnings
 
     try:
-        text = path.read_text()
-    except (UnicodeDecodeError, OSError):
+        with warnings.catch_warnings():  # (an empty file warns)
+            warnings.simplefilter("ignore", UserWarning)
+            a = np.loadtxt(path, ndmin=2, comments="#")
+    except (ValueError, UnicodeDecodeError, OSError):
         return None
-    text = text.strip()
-    if not text or "#" in text:
+    if not a.size or not np.isfinite(a).all():
         return None
-    width = len(text[:text.find("\n") if "\n" in text else len(text)].split())
-    rows = text.count("\n") + 1
-    with warnings.catch_warnings():  # (text that is not a number: a ValueError, or a
-        # warning and a short array, by numpy's version)
-        warnings.simplefilter("ignore", DeprecationWarning)
-        try:
-            a = np.fromstring(text, sep=" ")
-        except ValueError:
-            return None
-    if not width or a.size != rows * width:
-        return None
-    return a.reshape(rows, width)
+    return a
 
 
 def _window(t: np.ndarray, start_s: float | None, end_s: float | None) -> np.ndarray:

@@ -114,6 +114,10 @@ def _frd(v):
 def read_navego_imu(path, max_bridge_s: float = 0.1, mounting=None) -> ImuData:
     """NaveGo IMU struct: ``t``, ``fb``, ``wb`` (FRD) and the error figures.
 
+    NaveGo stamps a sample at the end of the interval it integrates it over; the samples
+    come back stamped where their intervals start (fednav's convention: the stamps move
+    back by one period).
+
     Error figures (NaveGo names, SI): ``arw`` [rad/s/sqrt(Hz)], ``vrw`` [m/s^2/sqrt(Hz)],
     turn-on biases ``gb_sta``/``ab_sta``, bias instabilities ``gb_dyn``/``ab_dyn`` with
     correlation times ``gb_corr``/``ab_corr``.  fednav takes the biases as 1-sigma figures
@@ -147,6 +151,12 @@ def read_navego_imu(path, max_bridge_s: float = 0.1, mounting=None) -> ImuData:
             sigma = np.abs(err[[1, 0, 2]])  # [roll, pitch, yaw] -> [pitch, roll, heading]
     imu = ImuData(src, t, wb @ FRD_TO_RFU.T, fb @ FRD_TO_RFU.T, errors, euler, sigma,
                   max_bridge_s=max_bridge_s, mounting=FRD_TO_RFU, mounting_name="FRD")
+    # NaveGo integrates sample i over [t(i-1), t(i)] (ins_gnss.m: dti = t(i) - t(i-1)
+    # with wb(i), fb(i)): stamped at its interval's end, where fednav holds a sample
+    # from its stamp (docs/conventions.md). Moved back by one period after the checks
+    # (their lines name the file's own stamps; jittered stamps: to within the jitter)
+    if len(imu.t) > 1:
+        imu.t = imu.t - imu.period()
     return imu if mounting is None else imu.remount(mounting)
 
 

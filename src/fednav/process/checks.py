@@ -53,7 +53,8 @@ def _track_correlation(imu: ImuData, fixes: FixData | None, R) -> np.ndarray | N
     if moving.sum() < 10 or np.std(a_track[moving]) < 0.05:
         return None  # (a vehicle at constant speed says nothing)
     f = mt.rotate_rows(imu.accel, R)
-    cum = np.vstack([np.zeros(2), np.cumsum(f[1:, :2] * np.diff(imu.t)[:, None], axis=0)])
+    # (a sample holds from its stamp: the integral to t_k is of the samples before k)
+    cum = np.vstack([np.zeros(2), np.cumsum(f[:-1, :2] * np.diff(imu.t)[:, None], axis=0)])
     fi = np.column_stack([np.interp(tg, imu.t, cum[:, j]) for j in range(2)])
     f_mean = np.diff(fi, axis=0) / np.diff(tg)[:, None]
     out = np.zeros(2)
@@ -254,35 +255,42 @@ def time_offset(imu: ImuData, fixes: FixData, step: float = 0.01) -> float | Non
     dt = imu.period()
     heading = -np.concatenate([[0.0], np.cumsum(imu.gyro[:-1] @ up) * dt])  # (gyro bias
     # and Earth rate drift slowly: a straight-line trend is removed from the misfit below)
-    # The course unwrapped within each stretch of moving fixes; across a gap (an outage,
-    # a stop) its turns are unseen, so each stretch takes the 2 pi branch nearest the
-    # gyro's heading (unwrapped across a 300 deg turn in an outage it read 25 s offset)
-    course = np.arctan2(fixes.vel[moving, 0], fixes.vel[moving, 1])
     lever = np.asarray(getattr(fixes, "lever", np.zeros(3)), dtype=float)
-    if np.any(lever):
-        # the antenna's velocity holds the arm's, C (w x lever): in a turn an antenna
-        # behind the IMU runs a course lagging the heading by about lever / speed (0.14 s
-        # at 7 m/s, 1 m behind); taken out with the course as the heading (level, no
-        # sideslip; a sample's rates hold from its stamp: at mid-interval)
-        w = np.column_stack([np.interp(tg, imu.t + 0.5 * dt, imu.gyro[:, a])
-                             for a in range(3)])
-        u = np.cross(w, lever)  # body right-forward-up [m/s]
-        s, c = np.sin(course), np.cos(course)
-        course = np.arctan2(fixes.vel[moving, 0] - (u[:, 0] * c + u[:, 1] * s),
-                            fixes.vel[moving, 1] - (u[:, 1] * c - u[:, 0] * s))
     cuts = np.flatnonzero(np.diff(tg) > 2.0) + 1
     h0 = np.interp(tg, imu.t, heading)
-    offset = None  # (the gyro heading's unknown start against the course: the first
-    # stretch's, whatever its size)
-    for a, b in zip(np.r_[0, cuts], np.r_[cuts, len(tg)], strict=True):
-        c = np.unwrap(course[a:b])
-        d = float(np.median(h0[a:b] - c))
-        offset = d if offset is None else offset
-        course[a:b] = c + 2 * np.pi * np.round((d - offset) / (2 * np.pi))
-    if fixes.lla is not None:
+    turn = (earth.north_turn(fixes.t, fixes.lla, fixes.vel)[moving]
+            if fixes.lla is not None else 0.0)
+
+    def course_at(shift: float) -> np.ndarray:
+        """The course of the IMU's point, the fixes taken ``shift`` s after their stamps."""
+        course = np.arctan2(fixes.vel[moving, 0], fixes.vel[moving, 1])
+        if np.any(lever):
+            # the antenna's velocity holds the arm's, C (w x lever): in a turn an antenna
+            # behind the IMU runs a course lagging the heading by about lever / speed
+            # (0.14 s at 7 m/s, 1 m behind); taken out with the course as the heading
+            # (level, no sideslip), the rate where the fix is taken to be (a sample's
+            # rates hold from its stamp: at mid-interval)
+            w = np.column_stack([np.interp(tg + shift, imu.t + 0.5 * dt, imu.gyro[:, a])
+                                 for a in range(3)])
+            u = np.cross(w, lever)  # body right-forward-up [m/s]
+            s, c = np.sin(course), np.cos(course)
+            course = np.arctan2(fixes.vel[moving, 0] - (u[:, 0] * c + u[:, 1] * s),
+                                fixes.vel[moving, 1] - (u[:, 1] * c - u[:, 0] * s))
+        # unwrapped within each stretch of moving fixes; across a gap (an outage, a stop)
+        # its turns are unseen, so each stretch takes the 2 pi branch nearest the gyro's
+        # heading (unwrapped across a 300 deg turn in an outage it read 25 s offset)
+        offset = None  # (the gyro heading's unknown start against the course: the first
+        # stretch's, whatever its size)
+        for a, b in zip(np.r_[0, cuts], np.r_[cuts, len(tg)], strict=True):
+            c = np.unwrap(course[a:b])
+            d = float(np.median(h0[a:b] - c))
+            offset = d if offset is None else offset
+            course[a:b] = c + 2 * np.pi * np.round((d - offset) / (2 * np.pi))
         # the course is measured from north, which turns while the gyro sees none of it
         # (near the pole a false offset of 30 s)
-        course = course - earth.north_turn(fixes.t, fixes.lla, fixes.vel)[moving]
+        return course - turn
+
+    course = course_at(0.0)
     if np.ptp(course) < np.radians(30.0):
         return None
     x = tg - tg.mean()
@@ -305,6 +313,8 @@ def time_offset(imu: ImuData, fixes: FixData, step: float = 0.01) -> float | Non
     coarse = best(np.arange(-OFFSET_SEARCH_S, OFFSET_SEARCH_S + 0.05, 0.1))
     if coarse is None:
         return None
+    if np.any(lever):  # (the arm's rate where the coarse search puts the fixes)
+        course = course_at(coarse)
     return best(np.arange(coarse - 0.2, coarse + 0.2 + step / 2, step))
 
 
@@ -423,7 +433,7 @@ def check_units(imu: ImuData, fixes: FixData | None) -> list[str]:
         dt = np.diff(tg)
         c_rate = -np.diff(course) / dt  # heading from north toward east: yaw rate = -dpsi/dt
         moving = (speed[1:] > 2.0) & (speed[:-1] > 2.0) & (dt < 5.0)
-        yaw = np.cumsum(np.r_[0.0, (imu.gyro[1:] @ up) * np.diff(imu.t)])
+        yaw = np.cumsum(np.r_[0.0, (imu.gyro[:-1] @ up) * np.diff(imu.t)])
         g_rate = (np.interp(tg[1:], imu.t, yaw) - np.interp(tg[:-1], imu.t, yaw)) / dt
         inside = (tg[:-1] >= imu.t[0]) & (tg[1:] <= imu.t[-1])
         turning = moving & inside & (np.abs(c_rate) > np.radians(3.0))

@@ -302,7 +302,8 @@ def write_navego_dataset(ds: Dataset, out) -> list[Path]:
     rng = np.random.default_rng(cfg.seed + 7919)
     ini = np.array([r0, p0, y0]) + err * rng.standard_normal(3)
     structs = {
-        "imu": {"t": ds.t, "wb": ds.gyro @ M.T, "fb": ds.accel @ M.T,
+        # (NaveGo integrates wb(i), fb(i) over [t(i-1), t(i)]: stamped at the end)
+        "imu": {"t": ds.t + cfg.imu_period_s, "wb": ds.gyro @ M.T, "fb": ds.accel @ M.T,
                 "arw": f["gyro_arw_rad_sqrt_s"] * one, "vrw": f["accel_vrw_mps_sqrt_s"] * one,
                 "gb_sta": f["gyro_bias_radps"] * one, "ab_sta": f["accel_bias_mps2"] * one,
                 "gb_dyn": f["gyro_markov_radps"] * one, "ab_dyn": f["accel_markov_mps2"] * one,
