@@ -407,3 +407,33 @@ def test_innovation_records_carry_h_and_epoch_alike_in_both_engines(tmp_path):
     assert np.abs(a[5].H[:, 0:3]).max() > 0  # (the lever arm's attitude coupling)
     t_epoch = out["compiled"].t[a[5].epoch]
     assert 0.0 <= t_epoch - a[5].t < prep.n_per * prep.dt + 1e-9
+
+
+def test_a_low_nis_where_the_filter_fills_its_innovations_is_said_so():
+    """A NIS/dof below the band means a sensor sigma larger than its data's only where the
+    measurement noise dominates the innovations' predicted covariance; where the filter's
+    own uncertainty fills it (a short recording, an uncertain start) the line says that
+    instead.  Both PX4 sample logs are of the first kind (own share 0.14 and 0.09 of the
+    GNSS noise in the median: their receivers' sigmas are what is large)."""
+    from types import SimpleNamespace
+
+    from fednav.navigator.record import InnovationRecord
+    from fednav.navigator.system import System
+    from fednav.process.identify import kept_because, own_share
+
+    R = np.eye(3)
+
+    def rec(local, own):
+        return InnovationRecord(local, 0.0, np.zeros(3), (1.0 + own) * R, R, 1.0, True)
+
+    out = SimpleNamespace(innovations=[rec("gnss", 4.0), rec("gnss", 2.0), rec("gnss", 3.0),
+                                       rec("baro", 0.1)])
+    own = own_share(out)
+    assert own == pytest.approx({"gnss": 3.0, "baro": 0.1})
+    said = kept_because({"gnss": 0.01}, System(), own)
+    assert "own uncertainty fills" in said and "gnss 3x its noise" in said
+    assert "likelier cause" not in said
+    said = kept_because({"gnss": 0.01, "baro": 0.02}, System(), own)
+    assert "likelier cause for baro" in said and "innovations of gnss" in said
+    assert "likelier cause)" in kept_because({"baro": 0.02}, System(), own)
+    assert "consistent" in kept_because({"baro": 1.0}, System(), own)

@@ -561,7 +561,7 @@ def identify(imu: ImuData, prep, progress=None, force: bool = False):
     if not nis0:
         why = "no innovations recorded (no aiding sensor, or a centralized filter)"
     elif not any(v > hi for v in nis0.values()):  # (nothing says the figures are small)
-        why = kept_because(nis0, prep.system)
+        why = kept_because(nis0, prep.system, own_share(out0))
     elif max(nis0.values()) > NIS_REFUSE and not force:
         why = (f"NIS/dof above {NIS_REFUSE:g}: the data are more likely wrong than the "
                f"figures (--force identifies)")
@@ -661,17 +661,44 @@ def local_types(system: System) -> list[str]:
     return [f.type, *(c.type for c in f.locals.values() if c.type)]
 
 
-def kept_because(nis: dict[str, float], system: System) -> str:
+def kept_because(nis: dict[str, float], system: System,
+                 own: dict[str, float] | None = None) -> str:
     """Why the given figures are flown when no local filter's NIS/dof is above the
-    health band."""
+    health band; ``own``: each local filter's :func:`own_share` (a NIS/dof below the
+    band where the filter's own uncertainty fills its innovations says little about the
+    sensor's sigma)."""
     lo, hi = system.health.nis_band
     low = [k for k, v in nis.items() if v < lo]
     if not low:
         return (f"every NIS/dof inside {lo:g}..{hi:g}: the given figures are consistent "
                 f"with the recording")
-    return (f"NIS/dof of {', '.join(low)} below {lo:g} and none above {hi:g}: the given "
-            f"figures are never lowered (a sensor sigma larger than its data's is the "
-            f"likelier cause)")
+    own = own or {}
+    prior = [k for k in low if own.get(k, 0.0) > 1.0]
+    said = (f"NIS/dof of {', '.join(low)} below {lo:g} and none above {hi:g}: the given "
+            f"figures are never lowered")
+    if len(prior) == len(low):
+        return (f"{said} (the filter's own uncertainty fills those innovations — "
+                f"{', '.join(f'{k} {own[k]:.3g}x its noise' for k in prior)} in the "
+                f"median — so they say little about the sensors' sigmas: a recording too "
+                f"short, or a start too uncertain, to judge them)")
+    rest = [k for k in low if k not in prior]
+    return (f"{said} (a sensor sigma larger than its data's is the likelier cause"
+            + (f" for {', '.join(rest)}; the filter's own uncertainty fills the "
+               f"innovations of {', '.join(prior)}" if prior else "") + ")")
+
+
+def own_share(out) -> dict[str, float]:
+    """Per local filter, the median over its innovations of ``tr(S - R) / tr(R)``: how
+    large the filter's own uncertainty (``H P H'``) is against the measurement noise in
+    the innovations' predicted covariance ``S = H P H' + R`` [-]."""
+    shares: dict[str, list] = {}
+    for r in out.innovations or ():
+        R = np.asarray(r.R, dtype=float)
+        tr = float(np.trace(R))
+        if not np.isfinite(tr) or tr <= 0.0:
+            continue
+        shares.setdefault(r.local, []).append(float(np.trace(r.S)) / tr - 1.0)
+    return {k: float(np.median(v)) for k, v in shares.items() if v}
 
 
 def before_all(out) -> dict[str, float]:
