@@ -297,7 +297,9 @@ def write_navego_dataset(ds: Dataset, out) -> list[Path]:
     f = process_config(ds)["imu"]  # the figures, SI; no correlation time: 1e9 s in NaveGo
     M = FRD_TO_RFU  # RFU -> FRD and ENU -> NED (its own inverse)
     one = np.ones(3)
-    r0, p0, y0 = fednav_euler_to_navego(ds.ref_euler[0])
+    # (NaveGo's state starts at its first IMU stamp, the first sample's end: the truth
+    # one sample in)
+    r0, p0, y0 = fednav_euler_to_navego(ds.ref_euler[min(1, len(ds.ref_euler) - 1)])
     err = units.deg(np.asarray(cfg.initial_attitude_error_deg))[[1, 0, 2]]  # roll, pitch, yaw
     rng = np.random.default_rng(cfg.seed + 7919)
     ini = np.array([r0, p0, y0]) + err * rng.standard_normal(3)
