@@ -13,7 +13,9 @@ IMU on *this* vehicle are estimated from it, with the given figures as prior and
    report says why: a description the recording does not contradict is not re-tuned,
    and one whose innovations are only *smaller* than predicted points at a sensor sigma
    larger than its data's (a conservative receiver), not at the IMU — the given figures
-   are never lowered.
+   are never lowered.  Where the filter's own uncertainty fills those innovations
+   (:func:`own_share` above 1: a short recording, an uncertain start) the report says
+   that instead: they then say little about the sensor's sigma.
 2. **E-step.**  The forward filter and the RTS smoother over the recording give, for
    every filter interval, the expected outer product of the process noise given every
    measurement, ``W_k`` (:func:`fednav.filters.smoother.noise_moments`; Shumway &
