@@ -207,18 +207,13 @@ def town_motion(seconds: float = 600.0, seed: int = 11) -> str:
     """gnss-ins-sim's motion commands (type 1: rates and body accelerations held for a
     duration) for a town drive from 8 m/s: the speed changing every 1-4 s (up to
     1.5 m/s^2, between 3 and 15 m/s) with turns between (6-12 s at up to 9 deg/s), the
-    speed changes a receiver's latency shows in (``fednav.process.latency``)."""
-    rng = np.random.default_rng(seed)
-    lines, v, t = [], 8.0, 0.0
-    while t < seconds:
-        d = round(float(rng.uniform(1.0, 4.0)), 1)
-        a = float(np.clip(rng.uniform(-1.5, 1.5), (3.0 - v) / d, (15.0 - v) / d))
-        lines.append(f"1,0,0,0,{a:.4f},0,0,{d},1")
-        v, t = v + a * d, t + d
-        if rng.uniform() < 0.3:
-            d = round(float(rng.uniform(6.0, 12.0)), 1)
-            lines.append(f"1,{rng.uniform(-9.0, 9.0):.4f},0,0,0,0,0,{d},1")
-            t += d
+    speed changes a receiver's latency shows in (``fednav.process.latency``): the
+    segments of :func:`fednav.sim.drives.town_segments`."""
+    from fednav.sim.drives import town_segments
+
+    lines = [f"1,0,0,0,{s['accel_mps2']:.4f},0,0,{s['duration_s']},1" if s["name"] == "speed"
+             else f"1,{s['heading_rate_deg_s']:.4f},0,0,0,0,0,{s['duration_s']},1"
+             for s in town_segments(np.random.default_rng(seed), seconds)]
     return "\n".join(lines) + "\n"
 
 

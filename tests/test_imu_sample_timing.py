@@ -70,3 +70,16 @@ def test_increments_stamped_at_their_end_are_refused_not_integrated_late(drive):
     with pytest.raises(ValueError, match=r"first sample is stamped .* passed at t - dt"):
         nav.add_imu(prep.t[:10] + dt, dtheta=prep.gyro[:10] * dt, dv=prep.accel[:10] * dt)
     nav.add_imu(prep.t[:10], dtheta=prep.gyro[:10] * dt, dv=prep.accel[:10] * dt)  # (so)
+
+
+def test_the_convention_in_code_integrates_and_centres_each_sample():
+    """fednav.core.samples: a sample held from its stamp adds ``x_k (t_k+1 - t_k)`` from
+    the next stamp on; as a point it stands at its interval's middle."""
+    from fednav.core.samples import held_integral, midpoints
+
+    t = np.array([0.0, 0.1, 0.3, 0.4])
+    x = np.array([[1.0, 2.0], [3.0, 4.0], [5.0, 6.0], [7.0, 8.0]])
+    np.testing.assert_allclose(held_integral(t, x), [[0, 0], [0.1, 0.2], [0.7, 1.0],
+                                                     [1.2, 1.6]])
+    np.testing.assert_allclose(held_integral(t, x[:, 0]), [0, 0.1, 0.7, 1.2])
+    np.testing.assert_allclose(midpoints(np.arange(4) * 0.01), np.arange(4) * 0.01 + 0.005)

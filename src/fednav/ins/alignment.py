@@ -56,6 +56,7 @@ import numpy as np
 
 from ..core import attitude as att
 from ..core import earth, units
+from ..core.samples import held_integral
 from . import strapdown
 from .stops import stationary
 
@@ -241,7 +242,7 @@ def heading_from_course(t_imu, gyro, up_b, gyro_bias, t_fix, vel_fix, t0: float,
     ok = np.sort(ok[order[first]])
     w_c = gyro - gyro_bias
     # Heading rate = -(yaw rate about up); integrate from t0 (rectangle rule per sample).
-    dpsi = -np.concatenate([[0.0], np.cumsum((w_c @ up_b)[:-1] * np.diff(t_imu))])
+    dpsi = -held_integral(t_imu, w_c @ up_b)
     w = np.column_stack([np.interp(t_fix[ok], t_imu, w_c[:, j]) for j in range(3)])
     side = np.cross(w, np.asarray(lever, dtype=float)) @ np.cross(
         np.array([0.0, 1.0, 0.0]), up_b)  # (w x l) along the body's level right axis

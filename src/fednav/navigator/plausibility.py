@@ -34,6 +34,7 @@ import numpy as np
 from ..core import attitude as att
 from ..core import earth, kernels, units
 from ..core.kernels import dcm_of_sincos
+from ..core.samples import midpoints
 from ..ins import stops
 from ..ins.alignment import coarse_level
 from ..sensors.registry import label
@@ -634,8 +635,7 @@ def imu_fix_offset(solution, imu, fixes, window_s: float = OFFSET_WINDOW_S,
     # a sample's specific force holds over [t, t + dt]: as a point of the interpolated
     # signal it is its interval's mean, at the midpoint (at its stamp it read every fix
     # half a period late: 0.01 s on a 100 Hz drive)
-    mid = imu.t + 0.5 * imu.period()
-    V = _antenna_velocity(t, mid, imu.accel, solution.lla, solution.euler,
+    V = _antenna_velocity(t, midpoints(imu.t), imu.accel, solution.lla, solution.euler,
                           solution.omega, np.asarray(fixes.lever, dtype=float))
     tg = fixes.t
     period = median_step(tg) if len(tg) > 1 else np.inf

@@ -17,6 +17,7 @@ from pydantic import BaseModel
 
 from ..core import earth
 from ..core import mounting as mt
+from ..core.samples import held_integral, midpoints
 from ..io.data import DataError, FixData, ImuData
 from ..sensors import registry
 from ..sensors.imu import FIGURES
@@ -53,8 +54,7 @@ def _track_correlation(imu: ImuData, fixes: FixData | None, R) -> np.ndarray | N
     if moving.sum() < 10 or np.std(a_track[moving]) < 0.05:
         return None  # (a vehicle at constant speed says nothing)
     f = mt.rotate_rows(imu.accel, R)
-    # (a sample holds from its stamp: the integral to t_k is of the samples before k)
-    cum = np.vstack([np.zeros(2), np.cumsum(f[:-1, :2] * np.diff(imu.t)[:, None], axis=0)])
+    cum = held_integral(imu.t, f[:, :2])
     fi = np.column_stack([np.interp(tg, imu.t, cum[:, j]) for j in range(2)])
     f_mean = np.diff(fi, axis=0) / np.diff(tg)[:, None]
     out = np.zeros(2)
@@ -252,8 +252,8 @@ def time_offset(imu: ImuData, fixes: FixData, step: float = 0.01) -> float | Non
     tg = fixes.t[moving]
     up = np.mean(imu.accel, axis=0)
     up /= max(np.linalg.norm(up), 1e-12)
-    dt = imu.period()
-    heading = -np.concatenate([[0.0], np.cumsum(imu.gyro[:-1] @ up) * dt])  # (gyro bias
+    mid = midpoints(imu.t)
+    heading = -held_integral(imu.t, imu.gyro @ up)  # (gyro bias
     # and Earth rate drift slowly: a straight-line trend is removed from the misfit below)
     lever = np.asarray(getattr(fixes, "lever", np.zeros(3)), dtype=float)
     cuts = np.flatnonzero(np.diff(tg) > 2.0) + 1
@@ -270,7 +270,7 @@ def time_offset(imu: ImuData, fixes: FixData, step: float = 0.01) -> float | Non
             # (0.14 s at 7 m/s, 1 m behind); taken out with the course as the heading
             # (level, no sideslip), the rate where the fix is taken to be (a sample's
             # rates hold from its stamp: at mid-interval)
-            w = np.column_stack([np.interp(tg + shift, imu.t + 0.5 * dt, imu.gyro[:, a])
+            w = np.column_stack([np.interp(tg + shift, mid, imu.gyro[:, a])
                                  for a in range(3)])
             u = np.cross(w, lever)  # body right-forward-up [m/s]
             s, c = np.sin(course), np.cos(course)
@@ -433,7 +433,7 @@ def check_units(imu: ImuData, fixes: FixData | None) -> list[str]:
         dt = np.diff(tg)
         c_rate = -np.diff(course) / dt  # heading from north toward east: yaw rate = -dpsi/dt
         moving = (speed[1:] > 2.0) & (speed[:-1] > 2.0) & (dt < 5.0)
-        yaw = np.cumsum(np.r_[0.0, (imu.gyro[:-1] @ up) * np.diff(imu.t)])
+        yaw = held_integral(imu.t, imu.gyro @ up)
         g_rate = (np.interp(tg[1:], imu.t, yaw) - np.interp(tg[:-1], imu.t, yaw)) / dt
         inside = (tg[:-1] >= imu.t[0]) & (tg[1:] <= imu.t[-1])
         turning = moving & inside & (np.abs(c_rate) > np.radians(3.0))

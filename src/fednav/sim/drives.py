@@ -103,6 +103,15 @@ def town_drive(seed: int = 1, duration_s: float = 300.0, imu: dict | None = None
     Drawn by a ``numpy.random.Generator`` of ``seed``; IMU and GNSS as
     :func:`car_drive`."""
     rng = np.random.default_rng(seed)
+    segments = town_segments(rng, duration_s)
+    return drive_of(segments, float(rng.uniform(0.0, 360.0)), 8.0, seed, imu, 0.01, gnss)
+
+
+def town_segments(rng: np.random.Generator, duration_s: float) -> list[dict]:
+    """:func:`town_drive`'s segments (:class:`~fednav.sim.scenario.SegmentConfig` keys)
+    for a drive from 8 m/s, drawn from ``rng``: ``speed`` segments (``accel_mps2``) and
+    ``turn`` segments (``heading_rate_deg_s``), each ``duration_s`` a whole tenth of a
+    second (another generator's motion can be written from them)."""
     segments, v, t = [], 8.0, 0.0
     while t < duration_s:
         d = round(float(rng.uniform(1.0, 4.0)), 1)
@@ -114,7 +123,7 @@ def town_drive(seed: int = 1, duration_s: float = 300.0, imu: dict | None = None
             segments.append({"name": "turn", "duration_s": d,
                              "heading_rate_deg_s": float(rng.uniform(-9.0, 9.0))})
             t += d
-    return drive_of(segments, float(rng.uniform(0.0, 360.0)), 8.0, seed, imu, 0.01, gnss)
+    return segments
 
 
 def drive_of(segments: list[dict], heading_deg: float, speed_mps: float, seed: int,
@@ -161,4 +170,4 @@ def heading_containment(sol, reference: Reference, rows=None) -> tuple[float, fl
 
 
 __all__ = ["ADIS16405", "ADIS16488", "Drive", "car_drive", "drive_of", "heading_containment",
-           "town_drive"]
+           "town_drive", "town_segments"]
