@@ -28,7 +28,9 @@ class Growing:
 
     def _room(self, m: int) -> None:
         if self.n + m > len(self.a):
-            cap = max(2 * len(self.a), self.n + m)
+            # a quarter more than asked: the epoch or two after a block fits without
+            # copying it (np.empty's untouched pages cost no memory)
+            cap = max(2 * len(self.a), self.n + m + (self.n + m) // 4)
             a = self._new(cap)
             a[:self.n] = self.a[:self.n]
             self.a = a
