@@ -145,6 +145,26 @@ def test_the_folded_chain_smooths_as_the_whole_one():
     np.testing.assert_allclose(Psf, Ps[chain.epochs], rtol=1e-9, atol=1e-15)
 
 
+def test_a_chain_measured_every_epoch_folds_to_itself():
+    """Where every epoch took a measurement (fixes at the filter's rate) the folded chain
+    is the recorded one: the short cut gives what the composition gives."""
+    from fednav.process.identify import fold
+
+    rng = np.random.default_rng(1)
+    N, n = 40, 6
+    Phi = np.eye(n) + 0.1 * rng.standard_normal((N + 1, n, n))
+    M = rng.standard_normal((N + 1, 2, n, n))
+    Phi[0], M[0] = 0.0, 0.0
+    A, acc = fold(Phi, M, np.arange(1, N + 1))
+    np.testing.assert_array_equal(A, Phi)
+    np.testing.assert_array_equal(acc, M)
+    # the general composition (a last group of two intervals forces it) on the others
+    A2, acc2 = fold(Phi, M, np.r_[np.arange(1, N - 1), N])
+    np.testing.assert_allclose(A2[:N - 1], A[:N - 1], rtol=0, atol=1e-15)
+    np.testing.assert_allclose(acc2[:N - 1], acc[:N - 1], rtol=0, atol=1e-15)
+    np.testing.assert_allclose(A2[N - 1], Phi[N] @ Phi[N - 1], rtol=1e-12)
+
+
 def test_each_figures_folded_part_is_its_intervals_carried_to_the_end():
     """noise_parts (rank-3 terms carried back from each group's end, the driven rows
     only) equals each interval's whole discrete part (the filter's trapezoid) folded

@@ -442,8 +442,10 @@ def _discretize(p, C, q, T, scale):
     A = F * (0.5 * T)
     A2 = matmul_sparse(A, A)
     half = np.eye(n) + A + matmul_sparse(A2, np.eye(n) / 2.0 + A / 6.0 + A2 / 24.0)
-    Phi = matmul_sparse(half, half)
-    Qd = 0.5 * (matmul_sparse(Phi, matmul_sparse(Qc, Phi.T)) + Qc) * T
+    # (half and Phi are a third non-zero: the dense products are BLAS's, a quarter of
+    # the interval's cost less than skipping their zeros by hand)
+    Phi = half @ half
+    Qd = 0.5 * (Phi @ matmul_sparse(Qc, Phi.T) + Qc) * T
     for i in range(n):
         for j in range(n):
             Phi[i, j] *= scale[j] / scale[i]

@@ -795,12 +795,15 @@ class CompiledLoop:
                 lk.episode(int(lg[j, 1]), out_re[j, 0], lg[j, 0], out_re[j, 1], out_re[j, 2],
                            lg[j, 2], int(lg[j, 3]))
             log.n += M
-            if self.innovations:
-                for j in range(M):
-                    d = int(lg[j, 3])
-                    m = self.meas[m_sens[j]]
-                    rec.innovations.append(InnovationRecord(
-                        m.name, float(lg[j, 0]), out_r[j, :d].copy(), out_S[j, :d, :d].copy(),
-                        m.R[m_idx[j]], float(out_bm[j]), bool(lg[j, 5]),
-                        out_H[j, :d].copy(), int(m_epoch[j])))
+            if self.innovations:  # (views of this run's own arrays: nothing else writes
+                # them; each sensor's R read once)
+                names = [m.name for m in self.meas]
+                Rs = [m.R for m in self.meas]
+                cols = zip(lg[:M, 3].astype(np.int64).tolist(), m_sens.tolist(),
+                           m_idx.tolist(), lg[:M, 0].tolist(), out_bm[:M].tolist(),
+                           (lg[:M, 5] != 0.0).tolist(), m_epoch.tolist(), strict=True)
+                rec.innovations.extend(
+                    InnovationRecord(names[s], t, out_r[j, :d], out_S[j, :d, :d], Rs[s][i], b,
+                                     a, out_H[j, :d], e)
+                    for j, (d, s, i, t, b, a, e) in enumerate(cols))
         self.k = k1
