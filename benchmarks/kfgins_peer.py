@@ -57,7 +57,9 @@ GNSS on) and over every reference epoch from ``starttime`` on ("all"), for fedna
 KF-GINS and fednav/KF-GINS per column (below 1: fednav better); the number of reference
 epochs in brackets; then each window's horizontal RMSE.  Wall time: each whole process,
 best of ``--repeat`` runs alternated, fednav's kernels compiled beforehand (its first run,
-which compiles them once per installed version, is timed apart: :func:`pin_fednav`).
+which compiles them once per installed version, is timed apart: :func:`pin_fednav`), and
+beside them the floor of any numba program (:func:`run_floor`: a fresh Python calling
+one cached trivial kernel), as a ratio to KF-GINS's whole run.
 
 fednav's solution is read from its ``KF_GINS_Navresult.nav`` when ``--out`` has one,
 else from ``solution.csv`` (``docs/conventions.md``).
@@ -786,11 +788,47 @@ def table(case: Case, res: dict, walls: dict) -> str:
     lines.append(f"{'wall time [s]':26s}fednav {wf:.2f}  KF-GINS {wk:.2f}  ratio {wf / wk:.1f} "
                  f"(whole process, best of {len(walls['fednav'])} alternated; the machine "
                  f"was shared)")
+    wn = min(walls["floor"])
+    lines.append(f"{'numba floor [s]':26s}{wn:.2f} = {wn / wk:.2f} x KF-GINS (a fresh Python "
+                 f"calling one cached trivial numba kernel, timed alike: what fednav pays "
+                 f"before its own work)")
     return "\n".join(lines)
 
 
+#: the floor of any numba program (:func:`run_floor`): one cached, trivial kernel
+FLOOR_KERNEL = '''import numba
+
+
+@numba.njit(cache=True)
+def one(n):
+    s = 0.0
+    for i in range(n):
+        s += i
+    return s
+'''
+
+
+def run_floor(work: Path) -> float:
+    """Wall time [s] of a fresh Python that imports numba and calls one kernel from
+    numba's cache (a trivial loop, compiled by the first call here): what every
+    numba-compiled program pays before its own work — the interpreter, numba's import
+    and its first dispatch, which sets up its compiler's registries even to load a
+    cached kernel.  Timed beside the two programs, as they are."""
+    folder = work / "numba-floor"
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "floor_kernel.py").write_text(FLOOR_KERNEL)
+    env = {**os.environ, "PYTHONPATH": str(folder),
+           "NUMBA_CACHE_DIR": str(folder / "cache")}
+    cmd = [sys.executable, "-c", "import floor_kernel; floor_kernel.one(3)"]
+    if not (folder / "cache").is_dir():
+        subprocess.run(cmd, check=True, env=env)
+    t0 = time.perf_counter()
+    subprocess.run(cmd, check=True, env=env)
+    return time.perf_counter() - t0
+
+
 def compare(case: Case, binary: Path, work: Path, repeat: int) -> str:
-    walls = {"fednav": [], "KF-GINS": []}
+    walls = {"fednav": [], "KF-GINS": [], "floor": []}
     nav = {}
     log = ""
     kf_out = Path(yaml.safe_load(case.yaml.read_text())["outputpath"])
@@ -802,6 +840,7 @@ def compare(case: Case, binary: Path, work: Path, repeat: int) -> str:
         walls["KF-GINS"].append(w)
         w, nav["fednav"], log = run_fednav(case, work / f"fednav-out-{case.folder.name}")
         walls["fednav"].append(w)
+        walls["floor"].append(run_floor(work))
     res = {"n": {}, "per_window": {}}
     for who in ("fednav", "KF-GINS"):
         e, t = errors(read_solution(nav[who]), case)
