@@ -166,6 +166,22 @@ def test_result_gives_the_imu_rate_solution_and_consistency(drive):
     assert np.all(res.smoothed.sigma[1:-1] <= res.forward.sigma[1:-1] * (1 + 1e-9))
 
 
+def test_the_motion_alone_is_the_solutions_motion(drive):
+    """imu_rate(sigmas=False) (what the velocity-latency pass reads) gives the same
+    forward and smoothed motion, bit for bit, and NaN sigmas."""
+    from fednav.navigator.solution import imu_rate
+
+    prep = _prep(drive, 60.0)
+    out = prep.feed(prep.navigator(record_rows=True, record_covariance=True)).result()
+    full = imu_rate(out, smooth=True)
+    lean = imu_rate(out, smooth=True, sigmas=False)
+    for a, b in zip(full, lean, strict=True):
+        for k in ("t", "lla", "vel", "euler", "omega"):
+            np.testing.assert_array_equal(getattr(a, k), getattr(b, k))
+        assert np.isnan(b.sigma).all() and np.isnan(b.sigma_euler).all()
+        assert b.sigma.shape == a.sigma.shape and b.sigma_euler.shape == a.sigma_euler.shape
+
+
 def test_bad_stream_input_is_one_line(drive):
     prep = _prep(drive, 10.0)
     nav = prep.navigator()

@@ -226,7 +226,7 @@ def ins_velocity_latency(imu: ImuData, sensors: dict, cfg: System
     alone = prepare(imu, sensors, with_section(cfg, name, sc, measures="position",
                                                velocity_latency_s=0.0))
     res = alone.feed(alone.navigator(record_rows=True, record_covariance=True)).result()
-    sol = imu_rate(res, smooth=True)[1]
+    sol = imu_rate(res, smooth=True, sigmas=False)[1]  # (the motion: no 1-sigma read)
     d = alone.series[name]
     return velocity_latency_ins(d.t, d.z[:, 3:6], sol.t,
                                 antenna_velocity(sol, alone.system.sensors[name].lever_m))
