@@ -17,7 +17,8 @@ user's files would be.  Timed warm (a first run compiles), best of ``--repeat``:
 
 Targets (issue 24): forward <= 3 x the strapdown and <= 0.33 x FilterPy's 2 400 steps;
 smoother <= 2 x forward; tune <= 5 x forward per filter run and <= 5 x FilterPy's 2 400
-steps; blocks of 100 within 1.5 x batch per sample, single samples within 20 x.
+steps; blocks of 100 within 1.5 x batch per sample (issue 39: 1.25 x), single samples
+within 20 x.
 """
 
 from __future__ import annotations
@@ -164,7 +165,8 @@ def main() -> None:
     per = t_batch / len(prep.t)
     print(f"navigator: one block {t_batch:.3f} s ({per * 1e6:.2f} us/sample; "
           f"solution {t_fwd - t_batch:.3f} s more); blocks of 100 "
-          f"{t_b100 / t_batch:.2f} x batch per sample (target <= 1.5); one sample at a time "
+          f"{t_b100 / t_batch:.2f} x batch per sample (target <= 1.25, issue 39); "
+          f"one sample at a time "
           f"{t_one / t_batch:.1f} x (target <= 20), {len(prep.t) / t_one:.0f} samples/s; "
           f"results equal to the batch's")
     del solution

@@ -154,10 +154,11 @@ def test_a_chain_measured_every_epoch_folds_to_itself():
     N, n = 40, 6
     Phi = np.eye(n) + 0.1 * rng.standard_normal((N + 1, n, n))
     M = rng.standard_normal((N + 1, 2, n, n))
-    Phi[0], M[0] = 0.0, 0.0
     A, acc = fold(Phi, M, np.arange(1, N + 1))
-    np.testing.assert_array_equal(A, Phi)
-    np.testing.assert_array_equal(acc, M)
+    np.testing.assert_array_equal(A[1:], Phi[1:])
+    np.testing.assert_array_equal(acc[1:], M[1:])
+    assert not A[0].any() and not acc[0].any()  # (entry 0 unused: zero, as composed)
+    assert not np.shares_memory(A, Phi) and not np.shares_memory(acc, M)
     # the general composition (a last group of two intervals forces it) on the others
     A2, acc2 = fold(Phi, M, np.r_[np.arange(1, N - 1), N])
     np.testing.assert_allclose(A2[:N - 1], A[:N - 1], rtol=0, atol=1e-15)

@@ -709,8 +709,6 @@ class CompiledLoop:
     def run(self, k0: int, k1: int, dtheta, dv, h_ref, m_epoch, m_sens, m_idx) -> None:
         """Epochs ``k0 + 1 .. k1`` with their IMU data and measurements, in application
         order: epoch, sensor position in aiding order, index into that sensor's."""
-        from ..filters import FilterError
-
         n_ep = k1 - k0
         if n_ep <= 0:
             return
@@ -768,6 +766,8 @@ class CompiledLoop:
         code, k, f = run_epochs(k0, n_ep, ins, Imu(dtheta, dv, h_ref), bank, rules,
                                 self.sensors, Batch(m_epoch, m_sens, m_t, m_z, m_R), eo, mo)
         if code:
+            from ..filters import FilterError
+
             phase, why = FAILURES[code]
             if code == 1:
                 raise FilterError(f"strapdown INS at step {k}: {why}")
@@ -795,8 +795,10 @@ class CompiledLoop:
                 lk.episode(int(lg[j, 1]), out_re[j, 0], lg[j, 0], out_re[j, 1], out_re[j, 2],
                            lg[j, 2], int(lg[j, 3]))
             log.n += M
-            if self.innovations:  # (views of this run's own arrays: nothing else writes
-                # them; each sensor's R read once)
+            if self.innovations:  # (read-only views of this run's own arrays; each
+                # sensor's R read once)
+                for a in (out_r, out_S, out_H):
+                    a.flags.writeable = False
                 names = [m.name for m in self.meas]
                 Rs = [m.R for m in self.meas]
                 cols = zip(lg[:M, 3].astype(np.int64).tolist(), m_sens.tolist(),

@@ -29,7 +29,7 @@ class Growing:
     def _room(self, m: int) -> None:
         if self.n + m > len(self.a):
             # a quarter more than asked: the epoch or two after a block fits without
-            # copying it (np.empty's untouched pages cost no memory)
+            # copying it (for fill=None, np.empty's untouched pages cost no memory)
             cap = max(2 * len(self.a), self.n + m + (self.n + m) // 4)
             a = self._new(cap)
             a[:self.n] = self.a[:self.n]
@@ -67,7 +67,9 @@ class InnovationRecord(NamedTuple):
     the innovation covariance of the equivalent centralized filter), whether the
     update was applied, the rows' ``H`` (d, n; filter units) and the ``epoch`` whose
     update took it (the index of :class:`Record`'s entries); ``H`` None and ``epoch`` -1
-    in a record made elsewhere (a test's, an older pickle's)."""
+    in a record made elsewhere (a test's, an older pickle's).  The compiled engine's
+    ``r``, ``S`` and ``H`` are read-only views of its run's arrays (one run's records
+    share them: a record kept keeps its run's)."""
 
     local: str
     t: float

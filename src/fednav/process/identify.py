@@ -373,7 +373,7 @@ def fold(Phi, M, ends) -> tuple[np.ndarray, np.ndarray]:
     starts = np.r_[0, ends[:-1]]
     length = ends - starts
     G, n = len(ends), Phi.shape[1]
-    if G == len(Phi) - 1 and (length == 1).all():  # (every epoch its own group: as they are)
+    if G == len(Phi) - 1 == len(M) - 1 and (length == 1).all():  # (each epoch its group)
         A, acc = Phi.copy(), M.copy()
         A[0], acc[0] = 0.0, 0.0
         return A, acc
