@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 from pydantic import BaseModel
 
+from ..core import attitude as att
 from ..core import earth
 from ..core import mounting as mt
 from ..core.samples import held_integral, midpoints
@@ -272,10 +273,9 @@ def time_offset(imu: ImuData, fixes: FixData, step: float = 0.01) -> float | Non
             # rates hold from its stamp: at mid-interval)
             w = np.column_stack([np.interp(tg + shift, mid, imu.gyro[:, a])
                                  for a in range(3)])
-            u = np.cross(w, lever)  # body right-forward-up [m/s]
-            s, c = np.sin(course), np.cos(course)
-            course = np.arctan2(fixes.vel[moving, 0] - (u[:, 0] * c + u[:, 1] * s),
-                                fixes.vel[moving, 1] - (u[:, 1] * c - u[:, 0] * s))
+            level = att.euler_to_dcm(np.column_stack([np.zeros((len(tg), 2)), course]))
+            v = fixes.vel[moving] - earth.lever_arm_velocity(0.0, level, w, lever)
+            course = np.arctan2(v[:, 0], v[:, 1])
         # unwrapped within each stretch of moving fixes; across a gap (an outage, a stop)
         # its turns are unseen, so each stretch takes the 2 pi branch nearest the gyro's
         # heading (unwrapped across a 300 deg turn in an outage it read 25 s offset)

@@ -697,14 +697,17 @@ def own_share(out) -> dict[str, float]:
     """Per local filter, the median over its innovations of ``tr(S - R) / tr(R)``: how
     large the filter's own uncertainty (``H P H'``) is against the measurement noise in
     the innovations' predicted covariance ``S = H P H' + R`` [-]."""
-    shares: dict[str, list] = {}
+    groups: dict[tuple[str, int], list] = {}  # (stacked by local filter and rows)
     for r in out.innovations or ():
-        R = np.asarray(r.R, dtype=float)
-        tr = float(np.trace(R))
-        if not np.isfinite(tr) or tr <= 0.0:
-            continue
-        shares.setdefault(r.local, []).append(float(np.trace(r.S)) / tr - 1.0)
-    return {k: float(np.median(v)) for k, v in shares.items() if v}
+        groups.setdefault((r.local, len(r.r)), []).append(r)
+    shares: dict[str, list] = {}
+    for (local, _), recs in groups.items():
+        tr = np.trace(np.array([r.R for r in recs], dtype=float), axis1=1, axis2=2)
+        trs = np.trace(np.array([r.S for r in recs], dtype=float), axis1=1, axis2=2)
+        ok = np.isfinite(tr) & (tr > 0.0)
+        shares.setdefault(local, []).append(trs[ok] / tr[ok] - 1.0)
+    return {k: float(np.median(np.concatenate(v))) for k, v in shares.items()
+            if sum(map(len, v))}
 
 
 def before_all(out) -> dict[str, float]:
