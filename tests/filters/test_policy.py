@@ -13,10 +13,10 @@ from fednav.filters import policy
 
 SRC = Path(__file__).resolve().parents[2] / "src" / "fednav"
 RULES = ("fdi_gate", "fdi_passes", "is_accepted", "adapt_qlog", "adapted_qd",
-         "fused_q_scale", "adaptive_shares", "validity_sample")
+         "fused_q_scale", "adaptive_shares", "validity_sample", "leave_one_out")
 #: who calls which rule
 CALLERS = {"filters/federated.py": {"fdi_gate", "fdi_passes", "adapt_qlog", "adapted_qd",
-                                    "fused_q_scale", "adaptive_shares"},
+                                    "fused_q_scale", "adaptive_shares", "leave_one_out"},
            "navigator/engine.py": set(RULES),
            "navigator/loop.py": {"validity_sample"}}
 
@@ -68,6 +68,28 @@ def test_recovery_needs_consecutive_passes():
     assert seen == [False, False, False, False, False, True]
     assert passes == rec
     assert policy.fdi_passes(np.nan, np.inf, 5, 1, 1e9) == 5  # detection off: untouched
+
+
+def test_leave_one_out_finds_the_unit_that_explains_the_failure():
+    """Three satellites of two rows each, correlated through a common clock: a 40-sigma
+    error on satellite 12's rows fails the test; leaving 12 out passes (its statistic
+    is the one of the rows left, r_k' S_kk^-1 r_k, against the threshold of their
+    count), no other unit does; one unit, or no unit whose removal passes: none."""
+    from fednav.core.stats import chi2_ppf
+
+    groups = np.array([5, 12, 30, 5, 12, 30], dtype=np.int64)
+    S = np.eye(6) + 0.5  # (a shared clock: every row correlated)
+    r = np.array([0.3, 40.0, -0.2, 0.1, 38.0, 0.4])
+    thr = np.array([np.nan] + [chi2_ppf(0.999, d) for d in range(1, 7)])
+    u, stat, keep = policy.leave_one_out(r, S, groups, thr)
+    k = groups != 12
+    assert u == 12 and np.array_equal(keep, k)
+    assert stat == pytest.approx(r[k] @ np.linalg.solve(S[np.ix_(k, k)], r[k]), rel=1e-12)
+    assert stat <= thr[4]
+    r[0] = 40.0  # two satellites faulty: no single one explains it
+    assert policy.leave_one_out(r, S, groups, thr)[0] == -1
+    one = np.array([7, 7], dtype=np.int64)
+    assert policy.leave_one_out(r[:2], S[:2, :2], one, thr)[0] == -1
 
 
 def test_q_adaptation_steps_within_its_bounds():

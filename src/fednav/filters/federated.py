@@ -390,11 +390,7 @@ class Lockout:
         (:func:`row_ids`) and the filter's detection level ``alpha`` (None: none), widening
         the state for a measurement of more than its width."""
         r = np.ascontiguousarray(r, dtype=float).ravel()
-        if len(r) > self.r0.shape[1]:
-            w, nf, w0 = len(r), len(self.names), self.r0.shape[1]
-            r0, S0, k0 = np.zeros((nf, w)), np.zeros((nf, w, w)), np.zeros((nf, w), np.int64)
-            r0[:, :w0], S0[:, :w0, :w0], k0[:, :w0] = self.r0, self.S0, self.k0
-            self.r0, self.S0, self.k0 = r0, S0, k0
+        self.widen(len(r))
         thr = np.empty(0) if accepted else np.array(  # (read only for an isolated one)
             [np.nan] + [np.nan if alpha is None else drift_threshold(d, alpha)
                         for d in range(1, len(r) + 1)])
@@ -404,6 +400,15 @@ class Lockout:
              if R is not None and R.size == len(r) ** 2 else np.full_like(S, np.nan))
         return lockout_step(f, float(t), bool(accepted), float(nis), r, S, R,
                             np.ascontiguousarray(keys, dtype=np.int64), thr, self.arrays())
+
+    def widen(self, w: int) -> None:
+        """Room for measurements of ``w`` rows (the state kept as it is)."""
+        w0 = self.r0.shape[1]
+        if w > w0:
+            nf = len(self.names)
+            r0, S0, k0 = np.zeros((nf, w)), np.zeros((nf, w, w)), np.zeros((nf, w), np.int64)
+            r0[:, :w0], S0[:, :w0, :w0], k0[:, :w0] = self.r0, self.S0, self.k0
+            self.r0, self.S0, self.k0 = r0, S0, k0
 
     def episode(self, f: int, t_start: float, t: float, nis_before: float, s: float,
                 nis_after: float, dof: int) -> dict:
@@ -641,28 +646,20 @@ class FederatedFilter:
         :attr:`excluded`); ``inn`` itself when no single unit explains the failure or the
         measurement is one unit.  Fault detection and exclusion of one satellite, not the
         receiver (RAIM's leave-one-out, on the filter's predicted innovation)."""
-        groups = np.asarray(model.groups)
-        units = np.unique(groups)
-        if len(units) < 2:
-            return inn
+        groups = np.ascontiguousarray(model.groups, dtype=np.int64)
         r, S = np.asarray(inn.r, dtype=float), np.asarray(inn.S, dtype=float)
-        best = None
-        for u in units:
-            keep = groups != u
-            rk = r[keep]
-            stat = float(rk @ np.linalg.solve(S[np.ix_(keep, keep)], rk))
-            if stat <= self.threshold(int(keep.sum()), local) and (
-                    best is None or stat < best[0]):
-                best = (stat, u, keep)
-        if best is None:
+        u, stat, keep = policy.leave_one_out(
+            np.ascontiguousarray(r), np.ascontiguousarray(S), groups,
+            np.array([self.threshold(d, local) if d else np.nan
+                      for d in range(len(r) + 1)]))
+        if u < 0:
             return inn
-        stat, u, keep = best
         rows = np.flatnonzero(keep)
         new = f.update(np.asarray(y, dtype=float)[rows], model.subset(keep), nav,
                        np.asarray(R, dtype=float)[np.ix_(rows, rows)],
                        gate=self.threshold(len(rows), local))
         if new.accepted:
-            self.excluded.append((t, local, int(u), stat))
+            self.excluded.append((t, local, int(u), float(stat)))
             return new._replace(rows=rows)
         return inn
 

@@ -8,7 +8,8 @@ call, so that the two cannot drift apart.
   chi-square threshold, or ``-1`` (test only: the filter is recovering from an
   isolation and comes back after ``recovery`` passes in a row) — and
   :func:`fdi_passes` the count of passes after the test; :func:`is_accepted` the
-  decision.
+  decision; :func:`leave_one_out` the unit (a raw GNSS epoch's satellite) whose removal
+  explains a failed test (fault detection and exclusion of one satellite).
 * **Process-noise adaptation** (``filter.q_adaptation``): :func:`adapt_qlog` moves a
   filter's ``ln s`` by the step times its NIS/dof excess after an accepted measurement,
   :func:`adapted_qd` scales the white part of ``Qd`` by ``s``, and
@@ -31,6 +32,8 @@ import math
 
 import numba
 import numpy as np
+
+from ..core.kernels import cholesky_lower
 
 
 @numba.njit(cache=True)
@@ -63,6 +66,47 @@ def fdi_passes(threshold, gate, passes, recovery, nis):
     if gate == -1.0:
         return passes + 1 if nis <= threshold else 0
     return recovery if is_accepted(nis, gate) else 0
+
+
+@numba.njit(cache=True)
+def leave_one_out(r, S, groups, thresholds):
+    """The unit to leave out of a measurement that failed its test: ``r`` (m,) its
+    residual, ``S`` (m, m) its covariance, ``groups`` (m,) the unit of each row (a raw
+    GNSS epoch's satellite: its two rows go together), ``thresholds`` the chi-square
+    threshold by number of rows.  Of the units whose removal passes the test of the rows
+    left (``r_k' S_kk^-1 r_k``: the same prior, no second prediction), the one that leaves
+    the smallest statistic.  Returns (unit, statistic, rows kept); unit -1 when none
+    passes or the measurement is one unit (RAIM's leave-one-out on the filter's predicted
+    innovation)."""
+    units = np.unique(groups)
+    best, best_stat = -1, np.inf
+    best_keep = np.ones(groups.shape[0], dtype=np.bool_)
+    if units.shape[0] < 2:
+        return best, np.nan, best_keep
+    for u in units:
+        keep = groups != u
+        idx = np.flatnonzero(keep)
+        c = idx.shape[0]
+        Sk = np.empty((c, c))
+        rk = np.empty(c)
+        for i in range(c):
+            rk[i] = r[idx[i]]
+            for j in range(c):
+                Sk[i, j] = S[idx[i], idx[j]]
+        L, ok = cholesky_lower(Sk)
+        if not ok:
+            continue
+        stat = 0.0  # |L^-1 r_k|^2
+        w = np.empty(c)
+        for i in range(c):
+            s = rk[i]
+            for j in range(i):
+                s -= L[i, j] * w[j]
+            w[i] = s / L[i, i]
+            stat += w[i] * w[i]
+        if stat <= thresholds[c] and stat < best_stat:
+            best, best_stat, best_keep = u, stat, keep
+    return best, (best_stat if best >= 0 else np.nan), best_keep
 
 
 @numba.njit(cache=True)

@@ -44,6 +44,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import NamedTuple
 
+import numba
 import numpy as np
 
 
@@ -193,6 +194,20 @@ class StateLayout:
             if j >= 0:
                 F[i, j - N_CORE] = 1.0
         return scipy.linalg.expm(F * T) if m else np.zeros((0, 0))
+
+
+@numba.njit(cache=True)
+def follow_mean(transition, xa) -> None:
+    """The optional states' totals ``xa[18:]`` (SI) moved in place by their mean
+    transition over an epoch (:meth:`StateLayout.transition`): the Python loop's and the
+    compiled engine's one rule."""
+    m = transition.shape[0]
+    old = xa[N_CORE:N_CORE + m].copy()
+    for i in range(m):
+        s = 0.0
+        for j in range(m):
+            s += transition[i, j] * old[j]
+        xa[N_CORE + i] = s
 
 
 #: The 18-state model.

@@ -50,10 +50,18 @@ from ..filters.square_root import NOISE_Q, NOISE_R, REASONS, not_psd
 from ..filters.ukf import predict_moments, sigma_points, sigma_update
 from ..ins import error_model as em
 from ..ins.error_model import interval_model, propagate_points, white_qd
+from ..ins.states import follow_mean
 from ..ins.strapdown import compensate, correct_state, mechanize
-from ..sensors.measurement import RowModel, bias_columns, row_jacobian, row_predict, row_residual
+from ..sensors import satellite_rows as satrows
+from ..sensors.measurement import (
+    RowModel,
+    View,
+    bias_columns,
+    row_jacobian,
+    row_predict,
+    row_residual,
+)
 from .record import Growing, InnovationRecord, Record
-from .system import state_layout
 
 #: Filter families the engine runs: the filter registry's names -> (time update,
 #: measurement update) 0 Kalman (linear covariance, nonlinear mean) / 1 unscented.
@@ -76,6 +84,12 @@ FAILURES = {1: ("", "navigation state became non-finite"),
             14: ("", "covariance is not positive definite")}
 #: How a measurement's residual meets the INS (``TimingConfig.delay_compensation``).
 HOWS = {"none": 0, "interpolate": 1}
+#: The engine's row stages, by a measurement model's ``engine_rows`` (a
+#: :class:`~fednav.sensors.measurement.RowModel`: ``rows``): 0 the row kernels of
+#: :mod:`fednav.sensors.measurement` (fixed rows), 1 a raw GNSS epoch's satellites
+#: (:mod:`fednav.sensors.satellite_rows`: as many rows as satellites, the receiver clock,
+#: fault detection and exclusion of one satellite).
+ROWS = {"rows": 0, "satellites": 1}
 
 
 def why_not_compiled(system, sensors: list, specs: dict) -> str | None:
@@ -89,8 +103,6 @@ def why_not_compiled(system, sensors: list, specs: dict) -> str | None:
         return "federation without reset"
     if system.constraint is not None:
         return f"the {system.constraint} constraint"
-    if state_layout(system).coupled:
-        return "optional states that integrate one another (the receiver clock)"
     types = {f.type_of(a) for a in sensors} | ({f.type} if f.master else set())
     for t in sorted(types):
         if t not in FAMILIES:
@@ -99,7 +111,8 @@ def why_not_compiled(system, sensors: list, specs: dict) -> str | None:
         if not specs[a].compiled:
             return f"sensor '{a}' (its model is Python)"
         model = system.sensors[a].measurement_model()
-        if model.dim > 6 or (len(model.zindex) and int(max(model.zindex)) >= 6):
+        if isinstance(model, RowModel) and (
+                model.dim > 6 or (len(model.zindex) and int(max(model.zindex)) >= 6)):
             return f"sensor '{a}' (more than 6 rows or values)"
         how = system.sensors[a].timing.delay_compensation
         if how not in HOWS:
@@ -162,11 +175,11 @@ def _biased_rows(bias, X, Z):
 
 #: The INS and its error model, flown in place: ``state`` (the INS), ``comp`` (gyro and
 #: accelerometer compensation), ``xa`` (the optional error states' totals, SI,
-#: :mod:`fednav.ins.states`; their ``decay`` per epoch; the states' filter units
-#: ``scale``), the baro loop's ``gains``, ``cst`` = [dt, T, t0, k1, k2, 1/tau_g, 1/tau_a,
-#: q_step, ln max q scale], the error model's ``noise`` vector, ``nsub`` sub-steps of
-#: the error propagation and ``n_per`` IMU samples per epoch.
-Ins = namedtuple("Ins", "state comp xa decay scale gains cst noise nsub n_per")
+#: :mod:`fednav.ins.states`; ``trans`` their mean transition over an epoch; the states'
+#: filter units ``scale``), the baro loop's ``gains``, ``cst`` = [dt, T, t0, k1, k2,
+#: 1/tau_g, 1/tau_a, q_step, ln max q scale], the error model's ``noise`` vector,
+#: ``nsub`` sub-steps of the error propagation and ``n_per`` IMU samples per epoch.
+Ins = namedtuple("Ins", "state comp xa trans scale gains cst noise nsub n_per")
 #: The filters (locals, then the master): estimates ``X``, covariances ``P`` (the lower
 #: factor ``S``, ``P = S S'``, of a filter ``sr[f]`` in the square-root form), sharing
 #: factors ``beta``, ln process-noise scales ``qlog`` (adapted in place), FDI ``passes``,
@@ -181,8 +194,11 @@ Rules = namedtuple("Rules", "thr recovery sharing thr_drift lk")
 #: Per aiding sensor: its local filter, how its delay is met (:data:`HOWS`), dimension,
 #: the rows of its model (kinds, value index), its geometry ((S, 4, 3): the lever arm in
 #: its axes, then its mounting ``C_s^b``, :attr:`~fednav.sensors.measurement.RowModel.
-#: geometry`), whether it is linear and its rows' bias columns (:func:`_biased_rows`).
-Sensors = namedtuple("Sensors", "filter how dim kinds zi geom linear bias")
+#: geometry`), whether it is linear, its rows' bias columns (:func:`_biased_rows`), its
+#: row stage (:data:`ROWS`) and that stage's figures ``par`` (S, 4) (satellites: the
+#: elevation mask [rad], zenith 1-sigma of a pseudorange [m] and a range rate [m/s], the
+#: clock block's first column).
+Sensors = namedtuple("Sensors", "filter how dim kinds zi geom linear bias kind par")
 #: The measurements of a run of epochs in the order they are applied: epoch index,
 #: sensor, time of validity [s], value, noise covariance (filter units).
 Batch = namedtuple("Batch", "epoch sens t z R")
@@ -190,17 +206,22 @@ Batch = namedtuple("Batch", "epoch sens t z R")
 Imu = namedtuple("Imu", "dtheta dv h_ref")
 #: Outputs per epoch (``Phi``, ``Qd``, ``dx`` and ``rows`` of zero length: not kept).
 EpochOut = namedtuple("EpochOut", "states P beta Phi Qd dx rows")
-#: Outputs per measurement: NIS, accepted, threshold, the time logged, (of zero length
-#: unless asked for) residual, its covariance and the filter's share; ``re`` (M, 3):
-#: lockout start, NIS before and inflation of a re-admission, inflation 0 where none.
-MeasOut = namedtuple("MeasOut", "nis acc thr tlog r S bm re H")
+#: Outputs per measurement: NIS, accepted, threshold, the time logged, the rows used
+#: (``dof``; 0: none, no satellite above the mask), (of zero length unless asked for)
+#: residual, its covariance, the filter's share, ``H`` and the rows' noise ``R``; ``re``
+#: (M, 3): lockout start, NIS before and inflation of a re-admission, inflation 0 where
+#: none; ``ex`` (M, 3): the unit fault detection left out (-1: none), its statistic, and
+#: whether the receiver clock's totals moved by a jump (:func:`fednav.sensors.
+#: satellite_rows.bind`).
+MeasOut = namedtuple("MeasOut", "nis acc thr tlog dof r S bm re H R ex")
+#: One measurement's rows (:func:`measurement_rows`): residual ``y``, noise ``R``, ``H``
+#: when the row stage gives it (zero rows: the row kernels'), each row's ``keys`` for the
+#: lockout guard and its unit (``groups``; empty: one unit) for fault exclusion.
+Rows = namedtuple("Rows", "y R H keys groups")
 #: One interval as the mechanization flew it: compensated increments, attitude, velocity
 #: and position after each sample, the mean rate [rad/s]; buffers for the INS a
 #: measurement compares with (position, velocity, attitude quaternion).
 Interval = namedtuple("Interval", "dth dvc rq rv rp omega lla vel q")
-#: The INS a measurement's rows compare with, in the sensor's axes: position, velocity,
-#: attitude ``C M``, rate ``M' omega``.
-View = namedtuple("View", "lla vel C omega")
 
 
 @numba.njit(cache=True, inline="always")
@@ -218,15 +239,18 @@ def rows_jacobian(sensors, sn, view, H):
 
 
 @numba.njit(cache=True)
-def _local_update(bank, f, sensors, sn, view, y, R):
+def _local_update(bank, f, sensors, sn, view, y, R, Hg):
     """Measurement update of local filter ``f`` with a measurement of sensor ``sn``
     (residual ``y`` against the INS ``view``, covariance ``R``): Kalman (Joseph form) or
     unscented by its family; a factored filter (``bank.sr[f]``: ``P`` is its lower factor
     ``S``) through the square-root kernels, :mod:`fednav.filters.square_root`; the rows'
-    sensor-bias columns, :func:`_biased_rows`.  Returns (x, P or S, residual, its
-    covariance, NIS, failure code 0 / 4 / 7 / 8 / 10 / 11 / 13)."""
+    sensor-bias columns, :func:`_biased_rows`.  ``Hg``: the rows' ``H`` of a linear model
+    whose stage gave it (the satellites'), else of zero rows (the row kernels').  Returns
+    (x, P or S, residual, its covariance, NIS, failure code 0 / 4 / 7 / 8 / 10 / 11 /
+    13)."""
     x, P, sr = bank.X[f], bank.P[f], bank.sr[f]
     d, n = y.shape[0], x.shape[0]
+    given = Hg.shape[0] > 0
     kinds, lever, bias = sensors.kinds[sn, :d], sensors.geom[sn, 0], sensors.bias[sn, :d]
     lla, vel, C, omega = view.lla, view.vel, view.C, view.omega
     Rs = R
@@ -235,9 +259,12 @@ def _local_update(bank, f, sensors, sn, view, y, R):
         if not ok:
             return x, P, y, R, np.nan, 13
     if bank.fam[f, 1] == 0:
-        H = np.zeros((d, n))
-        rows_jacobian(sensors, sn, view, H)
-        if sensors.linear[sn]:
+        if given:
+            H = Hg
+        else:
+            H = np.zeros((d, n))
+            rows_jacobian(sensors, sn, view, H)
+        if given or sensors.linear[sn]:
             yhat = H @ x
         else:
             Z = np.empty((1, d))
@@ -253,18 +280,24 @@ def _local_update(bank, f, sensors, sn, view, y, R):
         return x1, Pn, r, Sm, ni, 0 if ok else 4
     if sr:
         Sg, _ = srk.ukf_points(x, P, math.sqrt(bank.c[f]))
-        Z = np.empty((Sg.shape[0], d))
-        row_predict(kinds, lla, vel, C, omega, lever, Sg, Z)
-        _biased_rows(bias, Sg, Z)
+        if given:
+            Z = satrows.points_rows(Sg, Hg)
+        else:
+            Z = np.empty((Sg.shape[0], d))
+            row_predict(kinds, lla, vel, C, omega, lever, Sg, Z)
+            _biased_rows(bias, Sg, Z)
         x1, Sn, Sm, ni, code, r = srk.sr_ukf_update(Z, P, bank.Wm[f][1], bank.cm[f], x, y,
                                                     Rs)
         return x1, Sn, r, Sm, ni, _sr_code(code, ni)
     Sg = sigma_points(x, P, bank.c[f])
     if Sg.shape[0] == 0:
         return x, P, y, R, np.nan, 7
-    Z = np.empty((Sg.shape[0], d))
-    row_predict(kinds, lla, vel, C, omega, lever, Sg, Z)
-    _biased_rows(bias, Sg, Z)
+    if given:
+        Z = satrows.points_rows(Sg, Hg)
+    else:
+        Z = np.empty((Sg.shape[0], d))
+        row_predict(kinds, lla, vel, C, omega, lever, Sg, Z)
+        _biased_rows(bias, Sg, Z)
     x1, Pn, r, Sm, ni, ok = sigma_update(Sg, Z, bank.Wm[f], bank.Wc[f], x, P, y, R)
     return x1, Pn, r, Sm, ni, 0 if ok and math.isfinite(ni) else 4
 
@@ -296,8 +329,8 @@ def interval_errors(ins, bank, s0, iv):
     params, Cm, Phi, Qd0 = interval_model(s0, ins.state, iv.dvc.sum(axis=0),
                                           iv.dth.sum(axis=0), T, ins.cst[3], ins.cst[4],
                                           ins.cst[5], ins.cst[6], ins.noise, ins.scale)
-    for j in range(18, ins.xa.shape[0]):  # the optional totals follow their mean
-        ins.xa[j] *= ins.decay[j]
+    if ins.trans.shape[0]:  # the optional totals follow their mean
+        follow_mean(ins.trans, ins.xa)
     Qw = Qd0
     Qrec = Qd0
     if q_step > 0.0:  # the fused prior's (FederatedFilter.q_scale_fused)
@@ -394,68 +427,130 @@ def ins_at_validity(ins, iv, s0, how, t, k):
 
 
 @numba.njit(cache=True, inline="always")
-def lockout_guard(bank, rules, sensors, sn, view, y, R, t_log, tested):
+def lockout_guard(bank, rules, sensors, sn, view, rows, t_log, tested):
     """Stage 3c, the lockout guard (:func:`fednav.filters.federated.lockout_step`, the
-    Python loop's too) on measurement ``y`` (covariance ``R``) of sensor ``sn``, ``tested``
-    = (x, P, r, S, NIS, accepted) as the local update and the gate left it.  When the
-    guard re-admits, every filter's covariance is inflated and the update made again.
-    Returns ``tested`` as it then stands, the inflation (0: none) and the lockout's
-    start [s]."""
+    Python loop's too) on a measurement's ``rows`` (:data:`Rows`) of sensor ``sn``,
+    ``tested`` = (x, P, r, S, NIS, accepted) as the local update and the gate left it.
+    When the guard re-admits, every filter's covariance is inflated and the update made
+    again.  Returns ``tested`` as it then stands, the inflation (0: none) and the
+    lockout's start [s]."""
     x1, Pn, r, Sm, ni, accepted = tested
     f = sensors.filter[sn]
+    y, R = rows.y, rows.R
     d = y.shape[0]
-    keys, thr_drift = sensors.kinds[sn, :d], rules.thr_drift[f]
-    s_in, t_start = lockout_step(f, t_log, accepted, ni, r, Sm, R, keys, thr_drift, rules.lk)
+    s_in, t_start = lockout_step(f, t_log, accepted, ni, r, Sm, R, rows.keys,
+                                 rules.thr_drift[f], rules.lk)
     if s_in > 0.0:
         P_saved = bank.P.copy()
         for g in range(bank.X.shape[0]):  # (Filter.inflate: a factor by sqrt(s))
             bank.P[g] = bank.P[g] * (math.sqrt(s_in) if bank.sr[g] else s_in)
-        x2, P2, r2, S2, n2, code = _local_update(bank, f, sensors, sn, view, y, R)
+        x2, P2, r2, S2, n2, code = _local_update(bank, f, sensors, sn, view, y, R, rows.H)
         if code == 0 and not n2 > rules.thr[f, d] and (bank.sr[f] or (
                 math.isfinite(x2.sum() + P2.sum()) and cholesky_lower(P2)[1])):
-            lockout_step(f, t_log, True, n2, r2, S2, R, keys, thr_drift, rules.lk)
+            lockout_step(f, t_log, True, n2, r2, S2, R, rows.keys, rules.thr_drift[f],
+                         rules.lk)
             return (x2, P2, r2, S2, n2, True), s_in, t_start
         bank.P[:] = P_saved
     return (x1, Pn, r, Sm, ni, accepted), 0.0, t_start
 
 
+@numba.njit(cache=True)
+def _take(A, rows):
+    """``A[rows][:, rows]`` (a covariance's rows and columns kept)."""
+    c = rows.shape[0]
+    out = np.empty((c, c))
+    for i in range(c):
+        for j in range(c):
+            out[i, j] = A[rows[i], rows[j]]
+    return out
+
+
+@numba.njit(cache=True, inline="always")
+def measurement_rows(m, k, ins, sensors, sn, view, batch, mo):
+    """Stage 3b, the rows of measurement ``m`` (epoch ``k``) of sensor ``sn`` against the
+    INS ``view`` in its axes, by its row stage (:data:`ROWS`): the row kernels
+    (:func:`~fednav.sensors.measurement.row_residual`, the sensor's bias estimate taken
+    out of its value; noise from the batch), or a raw GNSS epoch's satellites
+    (:func:`fednav.sensors.satellite_rows.bind`, the Python model's own function: the
+    satellites above the mask, the receiver clock's jump test on the totals, the rows at
+    the measurement's time).  Returns its :data:`Rows`."""
+    n = ins.scale.shape[0]
+    if sensors.kind[sn] == 1:
+        par = sensors.par[sn]
+        ic = int(par[3])
+        dt = batch.t[m] - (ins.cst[2] + ins.cst[1] * k) if sensors.how[sn] == 1 else 0.0
+        sat, y, H, moved = satrows.bind(batch.z[m, :satrows.WIDTH], view, sensors.geom[sn, 0],
+                                        ins.xa[ic:ic + 2], dt, par[:3], n, ic)
+        R, groups, keys = satrows.noise(sat)
+        mo.ex[m, 2] = 1.0 if moved else 0.0
+        return Rows(y, R, H, keys, groups)
+    d = sensors.dim[sn]
+    bias = sensors.bias[sn, :d]
+    y = np.empty(d)
+    row_residual(sensors.kinds[sn, :d], sensors.zi[sn, :d], view.lla, view.vel, view.C,
+                 view.omega, batch.z[m], sensors.geom[sn, 0], y)
+    for rb in range(d):  # the sensor's bias estimate taken out of its value
+        if bias[rb] >= 0:
+            y[rb] += ins.xa[bias[rb]]
+    return Rows(y, batch.R[m, :d, :d].copy(), np.empty((0, n)), sensors.kinds[sn, :d].copy(),
+                np.empty(0, dtype=np.int64))
+
+
 @numba.njit(cache=True, inline="always")
 def apply_measurement(m, k, ins, iv, s0, bank, rules, sensors, batch, mo):
     """Stage 3, measurement update: measurement ``m`` of the batch (epoch ``k``) — its
-    residual against the INS at its time of validity in its sensor's axes (the sensor's
-    bias estimate taken out), its local filter's update, the chi-square test
-    (:func:`fednav.filters.policy.fdi_gate`, the Python federated filter's rule), the
+    rows against the INS at its time of validity in its sensor's axes
+    (:func:`measurement_rows`), its local filter's update, the chi-square test
+    (:func:`fednav.filters.policy.fdi_gate`, the Python federated filter's rule), a
+    failed test of several units answered by leaving one out
+    (:func:`fednav.filters.policy.leave_one_out`, the update made with the rest), the
     lockout guard, the Q adaptation; ``mo`` filled.  Returns (failure code, filter)."""
     sn = batch.sens[m]
-    f, d = sensors.filter[sn], sensors.dim[sn]
+    f = sensors.filter[sn]
     C, t_log = ins_at_validity(ins, iv, s0, sensors.how[sn], batch.t[m], k)
     # the INS as the sensor sees it: its axes' attitude C M, the rate in them
     # (sensors.measurement.sensor_frame)
     C, om = _sensor_frame(C, iv.omega, sensors.geom[sn])
     view = View(iv.lla, iv.vel, C, om)
-    bias = sensors.bias[sn, :d]
-    y = np.empty(d)
-    row_residual(sensors.kinds[sn, :d], sensors.zi[sn, :d], iv.lla, iv.vel, C, om,
-                 batch.z[m], sensors.geom[sn, 0], y)
-    for rb in range(d):  # the sensor's bias estimate taken out of its value
-        if bias[rb] >= 0:
-            y[rb] += ins.xa[bias[rb]]
-    R = batch.R[m, :d, :d].copy()
-    x1, Pn, r, Sm, ni, code = _local_update(bank, f, sensors, sn, view, y, R)
+    rw = measurement_rows(m, k, ins, sensors, sn, view, batch, mo)
+    y, R, Hg, groups = rw.y, rw.R, rw.H, rw.groups
+    d = y.shape[0]
+    mo.dof[m] = d
+    if d == 0:  # (no satellite above the mask: no update, nothing logged)
+        return 0, -1
+    x1, Pn, r, Sm, ni, code = _local_update(bank, f, sensors, sn, view, y, R, Hg)
     if code:
         return code, f
     th = rules.thr[f, d]
     gate = policy.fdi_gate(th, bank.passes[f], rules.recovery)
     accepted = policy.is_accepted(ni, gate)
+    rows = np.arange(d)
+    mo.ex[m, 0] = -1.0
+    if not accepted and 0.0 <= gate < np.inf and groups.shape[0] > 0:
+        # (FederatedFilter._exclude: one unit left out, the rest tested again)
+        u, stat, keep = policy.leave_one_out(r, Sm, groups, rules.thr[f])
+        if u >= 0:
+            kept = np.flatnonzero(keep)
+            x2, P2, r2, S2, n2, code = _local_update(bank, f, sensors, sn, view, y[kept],
+                                                     _take(R, kept), Hg[kept])
+            if code:
+                return code, f
+            if policy.is_accepted(n2, rules.thr[f, kept.shape[0]]):
+                x1, Pn, r, Sm, ni, accepted = x2, P2, r2, S2, n2, True
+                rows = kept
+                mo.ex[m, 0], mo.ex[m, 1] = u, stat
+        th = rules.thr[f, rows.shape[0]]
     bank.passes[f] = policy.fdi_passes(th, gate, bank.passes[f], rules.recovery, ni)
     mo.re[m, 2] = 0.0
     if rules.lk.pos[f] and rules.lk.hold > 0.0:
-        tested, s_in, t_start = lockout_guard(bank, rules, sensors, sn, view, y, R, t_log,
+        tested, s_in, t_start = lockout_guard(bank, rules, sensors, sn, view, rw, t_log,
                                               (x1, Pn, r, Sm, ni, accepted))
         if s_in > 0.0:  # re-admitted
             mo.re[m, 0], mo.re[m, 1], mo.re[m, 2] = t_start, ni, s_in
             x1, Pn, r, Sm, ni, accepted = tested
             bank.passes[f] = rules.recovery
+            rows = np.arange(d)
+    du = rows.shape[0]
     if accepted:  # (a factor's kernel checked it already)
         if not bank.sr[f] and not math.isfinite(x1.sum() + Pn.sum()):
             return 8, f
@@ -464,16 +559,22 @@ def apply_measurement(m, k, ins, iv, s0, bank, rules, sensors, batch, mo):
         bank.X[f] = x1
         bank.P[f] = Pn
         if ins.cst[7] > 0.0:
-            bank.qlog[f] = policy.adapt_qlog(bank.qlog[f], ins.cst[7], ni, d, ins.cst[8])
+            bank.qlog[f] = policy.adapt_qlog(bank.qlog[f], ins.cst[7], ni, du, ins.cst[8])
     mo.nis[m] = ni
     mo.acc[m] = 1.0 if accepted else 0.0
     mo.thr[m] = th
     mo.tlog[m] = t_log
+    mo.dof[m] = du
     if mo.r.shape[0] > 0:  # the innovations themselves, when asked for
-        mo.r[m, :d] = r
-        mo.S[m, :d, :d] = Sm
+        mo.r[m, :du] = r
+        mo.S[m, :du, :du] = Sm
         mo.bm[m] = bank.beta[f]
-        rows_jacobian(sensors, sn, view, mo.H[m, :d])
+        if Hg.shape[0] > 0:
+            for i in range(du):
+                mo.H[m, i] = Hg[rows[i]]
+        else:
+            rows_jacobian(sensors, sn, view, mo.H[m, :d])
+        mo.R[m, :du, :du] = _take(R, rows)
     return 0, -1
 
 
@@ -628,38 +729,52 @@ class CompiledLoop:
             if hasattr(f, "Wm"):
                 self.c[i], self.Wm[i], self.Wc[i] = f.c, f.Wm, f.Wc
                 self.cm[i] = f.Wc.sum() - 2.0
-        self.thr = np.full((nf, 7), np.nan)
-        self.thr_drift = np.full((nf, 7), np.nan)  # (the lockout guard's, drift_threshold)
+        for m in meas:
+            if not isinstance(m.model, RowModel) and getattr(m.model, "engine_rows",
+                                                             None) not in ROWS:
+                raise ValueError(f"sensor '{m.name}': its model has no compiled rows")
+        sat = [ROWS[getattr(m.model, "engine_rows", "rows")] == 1 for m in meas]
+        #: rows and values a measurement has at most
+        own = [m.model for m, s in zip(meas, sat, strict=True) if s]
+        D = self.D = max([6] + [model.max_rows for model in own])
+        self.W = max([6] + [model.width for model in own])
+        self.thr = np.full((nf, D + 1), np.nan)
+        self.thr_drift = np.full((nf, D + 1), np.nan)  # (the lockout guard's)
         for i, k in enumerate(self.names):
             a = fed.fdi_alphas.get(k)
             if a is not None:
-                from ..core.stats import chi2_ppf
-
-                self.thr[i, 1:] = [float(chi2_ppf(1.0 - a, d)) for d in range(1, 7)]
-                self.thr_drift[i, 1:] = [drift_threshold(d, a) for d in range(1, 7)]
+                self.thr[i, 1:] = [fed.threshold(d, k) for d in range(1, D + 1)]
+                self.thr_drift[i, 1:] = [drift_threshold(d, a) for d in range(1, D + 1)]
         self.recovery = int(fed.fdi_recovery)
         self.lockout = fed.lockout  # (its state arrays are flown in place)
+        self.lockout.widen(D)
         self.sharing = {"equal": 0, "fixed": 1, "adaptive": 2}[fed.sharing]
-        # Per sensor (aiding order): its local filter, how, rows, lever, linearity.
-        for m in meas:
-            if not isinstance(m.model, RowModel):
-                raise ValueError(f"sensor '{m.name}': its model is not a row model")
+        # Per sensor (aiding order): its local filter, how, rows, lever, linearity, its row
+        # stage and that stage's figures.
         S = len(meas)
-        kinds, zi = np.zeros((S, 6), dtype=np.int64), np.zeros((S, 6), dtype=np.int64)
-        bias = np.full((S, 6), -1, dtype=np.int64)
+        kinds, zi = np.zeros((S, D), dtype=np.int64), np.zeros((S, D), dtype=np.int64)
+        bias = np.full((S, D), -1, dtype=np.int64)
+        geom, par = np.zeros((S, 4, 3)), np.zeros((S, 4))
         for j, m in enumerate(meas):
+            if sat[j]:  # (a raw GNSS epoch's: the antenna's lever arm, no mounting)
+                geom[j] = np.vstack([m.model.lever, np.eye(3)])
+                par[j] = np.r_[m.model.figures, core.layout.start(m.model.own_block)]
+                continue
             kinds[j, :m.model.dim] = m.model.kinds
             zi[j, :m.model.dim] = m.model.zindex
             bias[j, :m.model.dim] = bias_columns(core.layout, m.model)
+            geom[j] = np.asarray(m.model.geometry).reshape(4, 3)
         self.sensors = Sensors(
             np.array([self.names.index(m.name) for m in meas], dtype=np.int64),
             np.array([HOWS[m.how] for m in meas], dtype=np.int64),
-            np.array([m.model.dim for m in meas], dtype=np.int64), kinds, zi,
-            np.array([m.model.geometry for m in meas]).reshape(S, 4, 3),
-            np.array([m.model.linear for m in meas], dtype=np.bool_), bias)
+            np.array([0 if s else m.model.dim for m, s in zip(meas, sat, strict=True)],
+                     dtype=np.int64),
+            kinds, zi, geom,
+            np.array([bool(m.model.linear) for m in meas], dtype=np.bool_), bias,
+            np.array(sat, dtype=np.int64), par)
         self.comp = np.r_[core.comp_g, core.comp_a]
         self.xa = core.xa  # (flown in place)
-        self.decay = core.layout.decay(self.T)
+        self.trans = np.ascontiguousarray(core.layout.transition(self.T), dtype=float)
         self.scale = core.scale
         self.gains = core.ins.baro_loop
         k1, k2, itg, ita, noise = em.model_constants(core.noise, core.baro_gains, core.baro_q,
@@ -682,12 +797,31 @@ class CompiledLoop:
         self._outs = [r.states, r.P, r.beta] + ([r.Phi, r.Qd, r.dx] if record_cov else [])
         self._none_rows = np.empty((0, 13))
         self._none_cov = (np.empty((0, n, n)), np.empty((0, n, n)), np.empty((0, n)))
-        self._none_inn = (np.empty((0, 6)), np.empty((0, 6, 6)), np.empty(0),
-                          np.empty((0, 6, n)))
+        self._none_inn = (np.empty((0, D)), np.empty((0, D, D)), np.empty(0),
+                          np.empty((0, D, n)), np.empty((0, D, D)))
 
     def q_scales(self) -> dict[str, float]:
         """Each filter's process-noise scale now (1: the figures')."""
         return {k: float(np.exp(v)) for k, v in zip(self.names, self.qlog, strict=True)}
+
+    def _satellites_after(self, M, lg, m_sens, m_idx, m_epoch, out_re, out_ex, inn):
+        """What a run's raw GNSS epochs leave besides the log: the satellites fault
+        detection left out (:attr:`FederatedFilter.excluded`), the receiver clock's jumps
+        (the model's ``clock_resets``), and the epochs with no satellite above the mask
+        taken out of the log and the records (the Python loop logs nothing for them)."""
+        for j in np.flatnonzero(out_ex[:M, 0] >= 0.0).tolist():
+            self.fed.excluded.append((float(lg[j, 0]), self.names[self.sensors.filter[
+                m_sens[j]]], int(out_ex[j, 0]), float(out_ex[j, 1])))
+        for s, m in enumerate(self.meas):
+            if self.sensors.kind[s]:
+                m.model.clock_resets += int(out_ex[:M, 2][m_sens == s].sum())
+        keep = lg[:M, 3] > 0.0
+        if keep.all():
+            return M, m_sens, m_idx, m_epoch, out_re, inn
+        k = np.flatnonzero(keep)
+        lg[:len(k)] = lg[:M][k]
+        inn = tuple(a[k] if len(a) else a for a in inn)
+        return len(k), m_sens[k], m_idx[k], m_epoch[k], out_re[k], inn
 
     @property
     def comp_g(self) -> np.ndarray:
@@ -713,9 +847,10 @@ class CompiledLoop:
         if n_ep <= 0:
             return
         M = len(m_idx)
+        D = self.D
         m_t = np.empty(M)
-        m_z = np.zeros((M, 6))
-        m_R = np.zeros((M, 6, 6))
+        m_z = np.zeros((M, self.W))
+        m_R = np.zeros((M, D, D))
         if M:
             for s, m in enumerate(self.meas):
                 sel = m_sens == s if len(self.meas) > 1 else slice(None)
@@ -747,22 +882,23 @@ class CompiledLoop:
         # columns of at least two rows: always strided views, one compiled signature
         lg = log.a[j0:j0 + max(M, 2)]
         if self.innovations:
-            out_r, out_S, out_bm = np.zeros((M, 6)), np.zeros((M, 6, 6)), np.empty(M)
-            out_H = np.zeros((M, 6, len(self.X[0])))
+            out_r, out_S, out_bm = np.zeros((M, D)), np.zeros((M, D, D)), np.empty(M)
+            out_H, out_R = np.zeros((M, D, len(self.X[0]))), np.zeros((M, D, D))
         else:
-            out_r, out_S, out_bm, out_H = self._none_inn
+            out_r, out_S, out_bm, out_H, out_R = self._none_inn
         out_re = np.zeros((max(M, 1), 3))
+        out_ex = np.zeros((max(M, 1), 3))
         lk = self.lockout
         core = self.core
-        ins = Ins(core.state, self.comp, self.xa, self.decay, self.scale, self.gains, self.cst,
+        ins = Ins(core.state, self.comp, self.xa, self.trans, self.scale, self.gains, self.cst,
                   self.noise_vec, core.nsub, self.n_per)
         bank = Bank(self.X, self.P, self.beta, self.qlog, self.passes, self.fam, self.sr,
                     self.c, self.Wm, self.Wc, self.cm)
         rules = Rules(self.thr, self.recovery, self.sharing, self.thr_drift, lk.arrays())
         eo = EpochOut(rec.states.a[e0:e0 + n_ep], rec.P.a[e0:e0 + n_ep],
                       rec.beta.a[e0 - 1:e0 - 1 + n_ep], out_Phi, out_Qd, out_dx, out_rows)
-        mo = MeasOut(lg[:, 2], lg[:, 5], lg[:, 4], lg[:, 0], out_r, out_S, out_bm, out_re,
-                     out_H)
+        mo = MeasOut(lg[:, 2], lg[:, 5], lg[:, 4], lg[:, 0], lg[:, 3], out_r, out_S, out_bm,
+                     out_re, out_H, out_R, out_ex)
         code, k, f = run_epochs(k0, n_ep, ins, Imu(dtheta, dv, h_ref), bank, rules,
                                 self.sensors, Batch(m_epoch, m_sens, m_t, m_z, m_R), eo, mo)
         if code:
@@ -788,24 +924,26 @@ class CompiledLoop:
         if n_rows:
             rec.rows.n += n_rows
         self.Pg = rec.P.a[rec.P.n - 1]
+        if M and self.sensors.kind.any():
+            M, m_sens, m_idx, m_epoch, out_re, (out_r, out_S, out_bm, out_H, out_R) = \
+                self._satellites_after(M, lg, m_sens, m_idx, m_epoch, out_re, out_ex,
+                                       (out_r, out_S, out_bm, out_H, out_R))
         if M:
             lg[:M, 1] = self.sensors.filter[m_sens]
-            lg[:M, 3] = self.sensors.dim[m_sens]
             for j in np.flatnonzero(out_re[:M, 2] > 0.0).tolist():  # re-admissions (few)
                 lk.episode(int(lg[j, 1]), out_re[j, 0], lg[j, 0], out_re[j, 1], out_re[j, 2],
                            lg[j, 2], int(lg[j, 3]))
             log.n += M
             if self.innovations:  # (read-only views of this run's own arrays; each
                 # sensor's R read once)
-                for a in (out_r, out_S, out_H):
+                for a in (out_r, out_S, out_H, out_R):
                     a.flags.writeable = False
                 names = [m.name for m in self.meas]
-                Rs = [m.R for m in self.meas]
                 cols = zip(lg[:M, 3].astype(np.int64).tolist(), m_sens.tolist(),
-                           m_idx.tolist(), lg[:M, 0].tolist(), out_bm[:M].tolist(),
+                           lg[:M, 0].tolist(), out_bm[:M].tolist(),
                            (lg[:M, 5] != 0.0).tolist(), m_epoch.tolist(), strict=True)
                 rec.innovations.extend(
-                    InnovationRecord(names[s], t, out_r[j, :d], out_S[j, :d, :d], Rs[s][i], b,
-                                     a, out_H[j, :d], e)
-                    for j, (d, s, i, t, b, a, e) in enumerate(cols))
+                    InnovationRecord(names[s], t, out_r[j, :d], out_S[j, :d, :d],
+                                     out_R[j, :d, :d], b, a, out_H[j, :d], e)
+                    for j, (d, s, t, b, a, e) in enumerate(cols))
         self.k = k1

@@ -37,7 +37,7 @@ import numpy as np
 from ..core import earth
 from ..filters import FederatedFilter, FilterError, LinearModel, make_filter, policy
 from ..ins import error_model as em
-from ..ins.states import CORE, N_CORE, StateLayout
+from ..ins.states import CORE, StateLayout, follow_mean
 from ..ins.strapdown import STATE_LLA, STATE_Q, STATE_VEL, compensate, quat_to_dcm_nb
 from ..sensors import NavSnapshot, StackedModel, WindConstraint
 from ..sensors.delays import InsIncrements, curve_fit_value
@@ -194,7 +194,7 @@ class ErrorStateCore:
                                    self.baro_gains, self.baro_q, self.nsub,
                                    dth.sum(axis=0), self.layout)
         if len(self._transition):  # the optional totals follow their mean dynamics
-            self.xa[N_CORE:] = self._transition @ self.xa[N_CORE:]
+            follow_mean(self._transition, self.xa)
         fed.predict(proc)
         rows = None
         if record:

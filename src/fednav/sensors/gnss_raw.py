@@ -51,18 +51,30 @@ from pydantic import Field, ValidationInfo, field_validator
 
 from ..core import earth, units
 from ..core.config import simulation_only
-from ..ins.error_model import N_STATES
 from .base import MeasurementSeries, flight_times
-from .measurement import (
-    POS_E,
-    POS_N,
-    POS_U,
-    VEL_E,
-    VEL_N,
-    VEL_U,
-    NavSnapshot,
-    row_jacobian,
-    sensor_frame,
+from .measurement import NavSnapshot, View
+from .satellite_rows import (
+    FIELDS,
+    MAX_ROWS,
+    PR,
+    PRN,
+    RR,
+    SLOTS,
+    SPR,
+    SRR,
+    SVX,
+    SVZ,
+    SX,
+    SZ,
+    WIDTH,
+    antenna,
+    antenna_rows,
+    bind,
+    elevation_sigma,
+    median,
+    noise,
+    points_rows,
+    usable,
 )
 from .satellites import (
     F_L1,
@@ -84,37 +96,11 @@ from .satellites import (
 from .satellites import C as LIGHT
 from .spec import Column, SensorConfig, SensorSpec
 
-#: The values of one satellite's slot of ``z``.
-FIELDS = ("prn", "x_m", "y_m", "z_m", "vx_mps", "vy_mps", "vz_mps", "pr_m", "rr_mps",
-          "sigma_pr_m", "sigma_rr_mps")
-(PRN, SX, SY, SZ, SVX, SVY, SVZ, PR, RR, SPR, SRR) = range(len(FIELDS))
-#: Satellites one measurement holds at most (GPS above a 5 deg mask: 8 to 13).
-SLOTS = 14
-WIDTH = SLOTS * len(FIELDS)
-
-#: A pseudorange residual whose median over an epoch's satellites is larger than this [m]
-#: (3.3 us) is the receiver clock's jump (receivers that keep their bias within a
-#: millisecond jump by 1 ms, 300 km): the clock's total moves by it before the update
-#: (:meth:`SatelliteRanges.bind`); an INS this far off in height has no solution left.
-CLOCK_JUMP_M = 1000.0
-#: Likewise the clock's drift [m/s] from the median range-rate residual: a free-running
-#: crystal drifts by up to a few ppm (the GSI stations' receivers: +418 and -323 m/s),
-#: beyond the drift's 1-sigma at the start; past this the first epoch with Dopplers sets it.
-CLOCK_DRIFT_JUMP_MPS = 50.0
-
 #: Receiver clocks' Allan-variance coefficients (h0, h_-2) [s, 1/s] (Brown and Hwang,
 #: table 9.1): a temperature-compensated and an oven-controlled crystal oscillator.
 CLOCKS = {"tcxo": (2e-19, 2e-20), "ocxo": (2e-25, 6e-25)}
-
-
-def _median(v) -> float:
-    """``np.median`` of a short 1-D array, to the bit (the mean of the two middle values
-    of an even count), without its general machinery (a raw epoch's clock test)."""
-    s = np.sort(v)
-    n = len(s)
-    if np.isnan(s[-1]):  # (sorted last: NaN as np.median gives it)
-        return float("nan")
-    return float(s[n // 2] if n % 2 else (s[n // 2 - 1] + s[n // 2]) / 2.0)
+#: ``np.median`` to the bit (the clock test's, :func:`fednav.sensors.satellite_rows.median`)
+_median = median
 
 
 def slots(z) -> np.ndarray:
@@ -141,57 +127,49 @@ def pack(rows) -> np.ndarray:
     return out.ravel()
 
 
-def elevation_sigma(sigma_zenith, el):
-    """1-sigma at elevation ``el`` [rad] of a ranging error of 1-sigma ``sigma_zenith``
-    at the zenith: ``sigma sqrt((1 + 1 / sin^2 el) / 2)`` (RTKLIB's weighting, equal
-    parts constant and elevation-dependent)."""
-    s = np.sin(np.maximum(el, np.radians(1.0)))
-    return sigma_zenith * np.sqrt(0.5 * (1.0 + 1.0 / (s * s)))
-
-
 def _antenna(nav: NavSnapshot, lever, frame: bool = False):
     """ECEF position and velocity of the antenna, C_n^e there and its latitude,
-    longitude and height; with ``frame`` also d(C_n^e v)/d(east, north) [1/s] (3, 2):
-    how the ECEF velocity of a fixed ENU velocity turns with the local frame as the
-    position moves (a term of 1e-6 per second)."""
-    lla, vel = np.asarray(nav.lla, dtype=float), np.asarray(nav.vel, dtype=float)
-    if np.any(lever):
-        omega = np.zeros(3) if nav.omega_b is None else np.asarray(nav.omega_b, float)
-        lla, vel = earth.lever_arm_point(lla, vel, np.asarray(nav.C, dtype=float), omega,
-                                         lever)
-    Cne = earth.enu_to_ecef(lla[0], lla[1])
-    out = earth.llh_to_ecef(*lla), Cne @ vel, Cne, lla
-    if not frame:
-        return out
-    sl, cl = np.sin(lla[0]), np.cos(lla[0])
-    so, co = np.sin(lla[1]), np.cos(lla[1])
-    d_lat = np.array([[0, -cl * co, -sl * co], [0, -cl * so, -sl * so], [0, -sl, cl]])
-    d_lon = np.array([[-co, sl * so, -cl * so], [-so, -sl * co, cl * co], [0, 0, 0]])
-    rm, rn = earth.radii(lla[0])
-    return out + (np.column_stack([d_lon @ vel / ((rn + lla[2]) * cl),
-                                   d_lat @ vel / (rm + lla[2])]),)
+    longitude and height; with ``frame`` also d(C_n^e v)/d(east, north) [1/s] (3, 2)
+    (:func:`fednav.sensors.satellite_rows.antenna`)."""
+    out = antenna(_view(nav), np.ascontiguousarray(lever, dtype=float))
+    return out if frame else out[:4]
+
+
+def _view(nav: NavSnapshot) -> View:
+    """The INS of ``nav`` as the compiled rows take it: position, velocity, C_b^n, body
+    rate (zero when not given)."""
+    return View(np.ascontiguousarray(nav.lla, dtype=float),
+                np.ascontiguousarray(nav.vel, dtype=float),
+                np.ascontiguousarray(nav.C, dtype=float),
+                np.zeros(3) if nav.omega_b is None else np.ascontiguousarray(nav.omega_b,
+                                                                             dtype=float))
 
 
 class BoundRanges:
-    """The rows of one measurement (see the module docstring) over an error state of
-    ``n`` columns whose clock bias and drift are columns ``ic``, ``ic + 1``, with the
-    clock totals ``clock`` = (cb, cd) [m, m/s]: ``dim`` rows, pseudoranges of the
-    satellites first, then their range rates; ``groups`` the satellite of each row;
-    ``R`` their noise [m^2, (m/s)^2]."""
+    """The rows of one measurement (see the module docstring): the satellites ``sat``
+    used (rows of :data:`FIELDS`; a NaN range rate: no range-rate row) over an error
+    state of ``n`` columns whose clock bias and drift are columns ``ic``, ``ic + 1``, with
+    the clock totals ``clock`` = (cb, cd) [m, m/s] of the filter epoch, the measurement
+    valid ``dt`` [s] after it.  ``dim`` rows, pseudoranges of the satellites first, then
+    their range rates; ``groups`` the satellite of each row; ``R`` their noise [m^2,
+    (m/s)^2].  The rows are :func:`fednav.sensors.satellite_rows.rows`, the compiled
+    engine's own."""
 
     linear = True
 
-    def __init__(self, sat, lever, n: int, ic: int, clock, R, groups, use_rr,
-                 dt: float = 0.0):
-        self.sat, self.lever, self.n, self.ic = sat, lever, int(n), int(ic)
-        self.dt = float(dt)
-        clock = np.asarray(clock, dtype=float)
-        # (the clock at the measurement's time: the totals' cb + dt cd)
-        self.clock = np.array([clock[0] + self.dt * clock[1], clock[1]])
-        self.R = R
-        self.groups = groups
-        self.use_rr = use_rr
-        self.dim = len(groups)
+    def __init__(self, sat, lever, n: int, ic: int, clock, dt: float = 0.0):
+        self.sat = np.ascontiguousarray(sat, dtype=float)
+        self.lever = np.ascontiguousarray(lever, dtype=float)
+        self.n, self.ic, self.dt = int(n), int(ic), float(dt)
+        self.clock = np.array(clock, dtype=float)
+        self.R, self.groups, self._ids = noise(self.sat)
+        self.dim = len(self.groups)
+        self._cache = (None, None)
+
+    @property
+    def use_rr(self) -> np.ndarray:
+        """Which satellites have a range-rate row."""
+        return np.isfinite(self.sat[:, RR])
 
     @property
     def row_keys(self) -> list:
@@ -206,60 +184,23 @@ class BoundRanges:
         """An integer per row, ``2 prn`` for a pseudorange and ``2 prn + 1`` for a range
         rate: the lockout guard compares two epochs' rows satellite by satellite by it
         (:func:`fednav.filters.federated.lockout_step`)."""
-        return 2 * np.asarray(self.groups, dtype=np.int64) + (np.arange(self.dim)
-                                                              >= len(self.sat))
+        return self._ids
 
-    _cache: tuple = (None, None)
-    #: (nav, :func:`_antenna` of it with ``frame``) when the one who bound the rows had it
-    antenna: tuple = (None, None)
-
-    def _geometry(self, nav: NavSnapshot):
-        if self._cache[0] is nav:  # (the residual and H of one update: one geometry)
-            return self._cache[1]
-        out = self._compute(nav)
-        self._cache = (nav, out)
-        return out
-
-    def _compute(self, nav: NavSnapshot):
-        ant = self.antenna[1] if self.antenna[0] is nav else _antenna(nav, self.lever, True)
-        r, v, Cne, _, turn = ant
-        d = self.sat[:, SX:SZ + 1] - r
-        rho = np.linalg.norm(d, axis=1)
-        u = d / rho[:, None]
-        w = self.sat[:, SVX:SVZ + 1] - v
-        rhod = np.einsum("ij,ij->i", u, w)
-        return rho, u, w, rhod, Cne, turn
+    def _rows(self, nav: NavSnapshot):
+        """(residual, H) against ``nav`` (the residual and H of one update: one call)."""
+        if self._cache[0] is not nav:
+            self._cache = (nav, antenna_rows(self.sat, _view(nav), self.lever, self.clock,
+                                             self.dt, self.n, self.ic))
+        return self._cache[1]
 
     def residual(self, nav: NavSnapshot, z=None) -> np.ndarray:
-        rho, u, w, rhod, _, _ = self._geometry(nav)
-        pr = rho + self.clock[0] - self.sat[:, PR]
-        rr = rhod + self.clock[1] - self.sat[:, RR]
-        return np.concatenate([pr, rr[self.use_rr]])
+        return self._rows(nav)[0]
 
     def H(self, nav: NavSnapshot) -> np.ndarray:
-        rho, u, w, rhod, Cne, turn = self._geometry(nav)
-        C, omega = sensor_frame(np.asarray(nav.C, dtype=float), np.zeros(3) if
-                                nav.omega_b is None else np.asarray(nav.omega_b, float),
-                                None)
-        J = np.zeros((6, N_STATES))  # antenna position (E, N, U) and velocity errors
-        kinds = np.array([POS_E, POS_N, POS_U, VEL_E, VEL_N, VEL_U], dtype=np.int64)
-        row_jacobian(kinds, np.asarray(nav.lla, float), np.asarray(nav.vel, float), C,
-                     omega, np.ascontiguousarray(self.lever, dtype=float), J)
-        un = u @ Cne  # line of sight in ENU
-        gn = ((w - rhod[:, None] * u) / rho[:, None]) @ Cne
-        gn[:, :2] += u @ turn  # (the antenna's ECEF velocity turns with its frame)
-        m = len(rho)
-        H = np.zeros((self.dim, self.n))
-        H[:m, :N_STATES] = -un @ J[:3]
-        H[:m, self.ic] = -1.0
-        H[:m, self.ic + 1] = -self.dt  # (the bias at t: its error dcb + dt dcd)
-        k = np.flatnonzero(self.use_rr)
-        H[m:, :N_STATES] = -un[k] @ J[3:] - gn[k] @ J[:3]
-        H[m:, self.ic + 1] = -1.0
-        return H
+        return self._rows(nav)[1]
 
     def h(self, X, nav: NavSnapshot) -> np.ndarray:
-        return np.atleast_2d(X) @ self.H(nav).T
+        return points_rows(np.ascontiguousarray(np.atleast_2d(X), dtype=float), self.H(nav))
 
     def subset(self, keep) -> BoundRanges:
         """These rows less those not in ``keep`` (a satellite's two rows go together when
@@ -269,13 +210,9 @@ class BoundRanges:
         k_pr = keep[:m]
         k_rr = np.zeros(m, dtype=bool)
         k_rr[np.flatnonzero(self.use_rr)] = keep[m:]
-        sat, use_rr = self.sat[k_pr], (k_rr & k_pr)[k_pr]
-        rows = np.flatnonzero(keep)
-        out = BoundRanges(sat, self.lever, self.n, self.ic,
-                          (self.clock[0] - self.dt * self.clock[1], self.clock[1]),
-                          self.R[np.ix_(rows, rows)], self.groups[rows], use_rr, self.dt)
-        out.antenna = self.antenna
-        return out
+        sat = self.sat[k_pr].copy()
+        sat[~k_rr[k_pr], RR] = np.nan
+        return BoundRanges(sat, self.lever, self.n, self.ic, self.clock, self.dt)
 
 
 class SatelliteRanges:
@@ -283,7 +220,9 @@ class SatelliteRanges:
     one measurement — how many depends on the satellites it holds — over the filter's
     error state with its ``clock`` block (:attr:`own_block`).  ``sigma_pr``,
     ``sigma_rr``: the zenith 1-sigma of a pseudorange [m] and a range rate [m/s] for
-    satellites whose slot gives none; ``mask``: the elevation mask [rad]."""
+    satellites whose slot gives none; ``mask``: the elevation mask [rad].  The compiled
+    engine runs it (:attr:`engine_rows`) with the same functions,
+    :mod:`fednav.sensors.satellite_rows`."""
 
     kind = "gnss_raw"
     #: the optional error-state block the measurement needs (:mod:`fednav.ins.states`)
@@ -296,35 +235,28 @@ class SatelliteRanges:
     #: no fixed component of ``z`` must be finite (empty slots are NaN)
     zindex = np.zeros(0, dtype=np.int64)
     linear = True
+    #: the compiled engine's rows of this model (:data:`fednav.navigator.engine.ROWS`)
+    engine_rows = "satellites"
+    #: rows and values of ``z`` one measurement has at most
+    max_rows, width = MAX_ROWS, WIDTH
 
     def __init__(self, sigma_pr: float = 3.0, sigma_rr: float = 0.1,
                  mask: float = float(units.deg(10.0))):
         self.sigma_pr, self.sigma_rr, self.mask = float(sigma_pr), float(sigma_rr), mask
         self.lever = np.zeros(3)
-        #: how often :meth:`bind` moved the clock's total by a jump (:data:`CLOCK_JUMP_M`)
+        #: how often :meth:`bind` moved the clock's total by a jump
         self.clock_resets = 0
 
-    def satellites(self, z, nav: NavSnapshot | None = None, antenna=None) -> np.ndarray:
-        """The satellite rows of ``z`` with a pseudorange (above the mask at ``nav``,
-        when given; ``antenna``: :func:`_antenna` of ``nav`` when the caller has it), with
-        their 1-sigma filled in."""
-        s = slots(z).copy()
-        # (a satellite needs its number, position, velocity and pseudorange; a 1-sigma it
-        # gives is positive)
-        ok = np.isfinite(s[:, PRN:PR + 1]).all(axis=1)
-        with np.errstate(invalid="ignore"):
-            ok &= ~(s[:, SPR] <= 0.0)
-            s[s[:, SRR] <= 0.0, RR] = np.nan
-        s = s[ok]
-        if nav is not None and len(s):
-            r, _, _, lla = (_antenna(nav, self.lever) if antenna is None else antenna)[:4]
-            _, el = azimuth_elevation(lla, r, s[:, SX:SZ + 1])
-            s = s[el >= self.mask]
-            el = el[el >= self.mask]
-            for col, sig in ((SPR, self.sigma_pr), (SRR, self.sigma_rr)):
-                miss = ~np.isfinite(s[:, col])
-                s[miss, col] = elevation_sigma(sig, el[miss])
-        return s
+    @property
+    def figures(self) -> np.ndarray:
+        """(mask [rad], sigma_pr [m], sigma_rr [m/s]) as the compiled engine takes them."""
+        return np.array([self.mask, self.sigma_pr, self.sigma_rr])
+
+    def satellites(self, z, nav: NavSnapshot) -> np.ndarray:
+        """The satellite rows of ``z`` with a pseudorange above the mask at ``nav``, with
+        their 1-sigma filled in (:func:`fednav.sensors.satellite_rows.usable`)."""
+        return usable(np.ascontiguousarray(z, dtype=float), _antenna(nav, self.lever, True),
+                      self.figures)
 
     def bind(self, z, nav: NavSnapshot, layout, xa, dt: float = 0.0) -> BoundRanges:
         """The rows of measurement ``z`` against the INS ``nav``, over the error state of
@@ -332,41 +264,21 @@ class SatelliteRanges:
         ``xa`` (read now) — totals of the filter epoch, ``dt`` [s] after which the
         measurement is valid (negative: before; the rows take the clock there, ``cb + dt
         cd``, and its error ``dcb + dt dcd``).  When the median pseudorange residual
-        exceeds :data:`CLOCK_JUMP_M` the clock's total in ``xa`` moves by it first (a
+        exceeds ``CLOCK_JUMP_M`` the clock's total in ``xa`` moves by it first (a
         receiver's millisecond clock jump, or the first epoch's bias), and the drift's by
-        the median range-rate residual beyond :data:`CLOCK_DRIFT_JUMP_MPS` (counted in
-        :attr:`clock_resets`)."""
+        the median range-rate residual beyond ``CLOCK_DRIFT_JUMP_MPS`` (counted in
+        :attr:`clock_resets`; :func:`fednav.sensors.satellite_rows.bind`)."""
         ic = layout.start(self.own_block)
         if ic < 0:
             raise ValueError("gnss_raw: the error state has no clock block (the navigator "
                              "adds it when gnss_raw aids)")
-        ant = _antenna(nav, self.lever, frame=True)  # (once: the mask and the rows)
-        sat = self.satellites(z, nav, ant)
-        use_rr = np.isfinite(sat[:, RR])
-        prn = sat[:, PRN].astype(np.int64)
-        R = np.diag(np.concatenate([sat[:, SPR], sat[use_rr, SRR]]) ** 2)
-        groups = np.concatenate([prn, prn[use_rr]])
-        out = BoundRanges(sat, self.lever, layout.n, ic, xa[ic:ic + 2].copy(), R, groups,
-                          use_rr, dt)
-        out.antenna = (nav, ant)
-        if len(sat):
-            y = out.residual(nav)
-            jump = _median(y[:len(sat)])
-            drift = _median(y[len(sat):]) if use_rr.any() else 0.0
-            moved = False
-            if abs(drift) > CLOCK_DRIFT_JUMP_MPS:  # (the first epoch's drift)
-                xa[ic + 1] -= drift
-                moved = True
-            if abs(jump) > CLOCK_JUMP_M:  # (the clock jumped, or the first epoch's bias)
-                xa[ic] -= jump
-                moved = True
-            if moved:
-                self.clock_resets += 1
-                out = BoundRanges(sat, self.lever, layout.n, ic, xa[ic:ic + 2].copy(), R,
-                                  groups, use_rr, dt)
-                out.antenna = (nav, ant)
+        clock = xa[ic:ic + 2]  # (a view: moved in place)
+        sat, y, H, moved = bind(np.ascontiguousarray(z, dtype=float), _view(nav),
+                                self.lever, clock, float(dt), self.figures, layout.n, ic)
+        self.clock_resets += int(moved)
+        out = BoundRanges(sat, self.lever, layout.n, ic, clock, dt)
+        out._cache = (nav, (y, H))
         return out
-
 
 
 # ------------------------------------------------------------------ a receiver's files

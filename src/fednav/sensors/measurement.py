@@ -19,6 +19,7 @@ numbers from one source.  A sensor that measures something else writes its own m
 
 from __future__ import annotations
 
+from collections import namedtuple
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -46,6 +47,12 @@ from ..ins.states import StateLayout
 _COLUMN = np.array([6, 7, 8, 3, 4, 5, -1, -1, -1, -1, -1, -1, -1, -1, -1])
 #: rad/s per deg/h (the residual unit of the rate rows: the gyro drift's filter unit)
 _DEG_H = float(SCALE[9])
+
+
+#: The INS a measurement's rows compare with, as compiled code takes it (in the sensor's
+#: axes): position [rad, rad, m], ENU velocity [m/s], attitude ``C`` (C_b^n, or ``C M``
+#: in a mounted sensor's axes), body rate [rad/s] (``M' omega``).
+View = namedtuple("View", "lla vel C omega")
 
 
 @dataclass

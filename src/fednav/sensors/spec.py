@@ -180,7 +180,8 @@ class SensorSpec:
     option; ``summary``: one line for the docs and ``--help``; ``config``: its section;
     ``model``: its measurement model's class (a
     :class:`~fednav.sensors.measurement.RowModel` runs in the navigator's compiled engine,
-    any other model in its Python loop); ``columns``: its CSV file after ``t_s`` (one per
+    as does a model naming its compiled rows, ``engine_rows``; any other model in its
+    Python loop); ``columns``: its CSV file after ``t_s`` (one per
     component of ``z``, in order); ``aiding``: whether it can feed a local filter (air
     data only constrains); ``angles``: components of ``z`` that are angles (unwrapped
     before curve fitting); ``latlon``: components holding latitude and longitude (faults
@@ -267,8 +268,9 @@ class SensorSpec:
 
     @property
     def compiled(self) -> bool:
-        """Whether its model runs in the navigator's compiled engine."""
-        return issubclass(self.model, RowModel)
+        """Whether its model runs in the navigator's compiled engine (a row model, or a
+        model with compiled rows of its own: ``engine_rows``, the raw GNSS's)."""
+        return issubclass(self.model, RowModel) or hasattr(self.model, "engine_rows")
 
     def check_geometry(self, cfg: SensorConfig) -> str | None:
         """Why ``cfg``'s lever arm or mounting cannot act on this sensor (one line naming
