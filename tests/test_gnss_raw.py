@@ -854,11 +854,8 @@ def test_both_engines_fly_the_satellites_alike(flown, tmp_path, monkeypatch, cas
 
     scn, data, _ = flown
     aiding = ["gnss_raw", "gnss"] if case == "federated" else ["gnss_raw"]
-    more = {"interpolate": "timing: {latency_s: 0.3, delay_compensation: interpolate},",
-            # (the unscented update P - K S K' loses definiteness against the clock's
-            # default 1-sigma of 300 km, in both engines: the Kalman forms' Joseph update
-            # and the square-root form do not)
-            "ukf": "clock_bias_sigma_m: 1.0e4,"}.get(case)
+    more = {"interpolate": "timing: {latency_s: 0.3, delay_compensation: "
+                           "interpolate},"}.get(case)
     if more:
         path = tmp_path / "design.yaml"
         path.write_text(DESIGN.replace("gnss_raw: {period_s: 1.0,",
