@@ -38,6 +38,8 @@ from collections import namedtuple
 
 import numba
 import numpy as np
+from numba.core import types
+from numba.extending import overload
 
 from ..core import earth
 from ..core.kernels import cholesky_lower
@@ -197,7 +199,8 @@ Rules = namedtuple("Rules", "thr recovery sharing thr_drift lk")
 #: geometry`), whether it is linear, its rows' bias columns (:func:`_biased_rows`), its
 #: row stage (:data:`ROWS`) and that stage's figures ``par`` (S, 4) (satellites: the
 #: elevation mask [rad], zenith 1-sigma of a pseudorange [m] and a range rate [m/s], the
-#: clock block's first column).
+#: clock block's first column; None in a system without: its engine then does not
+#: compile the satellites' stage).
 Sensors = namedtuple("Sensors", "filter how dim kinds zi geom linear bias kind par")
 #: The measurements of a run of epochs in the order they are applied: epoch index,
 #: sensor, time of validity [s], value, noise covariance (filter units).
@@ -465,6 +468,56 @@ def _take(A, rows):
     return out
 
 
+def satellite_rows(par, m, k, ins, sensors, sn, view, batch, mo):
+    """The rows of a raw GNSS epoch (:func:`fednav.sensors.satellite_rows.bind`: the
+    satellites above the mask, the receiver clock's jump test on the totals, the rows at
+    the measurement's time) as :data:`Rows`; ``par``: ``sensors.par``.  Compiled code
+    only (:func:`_satellite_rows`)."""
+    raise NotImplementedError("compiled code only")
+
+
+@overload(satellite_rows, inline="always")
+def _satellite_rows(par, m, k, ins, sensors, sn, view, batch, mo):
+    """:func:`satellite_rows` for a system with a raw GNSS sensor; for one without
+    (``par`` None), a stub never run — the engine of such a system does not compile
+    the satellites' functions (8 s of a first run)."""
+    if isinstance(par, types.NoneType):
+        def stub(par, m, k, ins, sensors, sn, view, batch, mo):
+            return Rows(np.empty(0), np.empty((0, 0)), np.empty((0, ins.scale.shape[0])),
+                        np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64))
+        return stub
+
+    def rows(par, m, k, ins, sensors, sn, view, batch, mo):
+        p = par[sn]
+        ic = int(p[3])
+        dt = batch.t[m] - (ins.cst[2] + ins.cst[1] * k) if sensors.how[sn] == 1 else 0.0
+        sat, y, H, moved = satrows.bind(batch.z[m, :satrows.WIDTH], view, sensors.geom[sn, 0],
+                                        ins.xa[ic:ic + 2], dt, p[:3], ins.scale.shape[0],
+                                        ic)
+        R, groups, keys = satrows.noise(sat)
+        mo.ex[m, 2] = 1.0 if moved else 0.0
+        return Rows(y, R, H, keys, groups)
+    return rows
+
+
+def leave_one_out(par, r, S, groups, thresholds):
+    """:func:`fednav.filters.policy.leave_one_out` in a system with a raw GNSS sensor
+    (``par``: ``sensors.par``); none left out in one without.  Compiled code only."""
+    raise NotImplementedError("compiled code only")
+
+
+@overload(leave_one_out, inline="always")
+def _leave_one_out(par, r, S, groups, thresholds):
+    if isinstance(par, types.NoneType):
+        def stub(par, r, S, groups, thresholds):
+            return -1, np.nan, np.ones(groups.shape[0], dtype=np.bool_)
+        return stub
+
+    def impl(par, r, S, groups, thresholds):
+        return policy.leave_one_out(r, S, groups, thresholds)
+    return impl
+
+
 @numba.njit(cache=True, inline="always")
 def measurement_rows(m, k, ins, sensors, sn, view, batch, mo):
     """Stage 3b, the rows of measurement ``m`` (epoch ``k``) of sensor ``sn`` against the
@@ -476,14 +529,7 @@ def measurement_rows(m, k, ins, sensors, sn, view, batch, mo):
     the measurement's time).  Returns its :data:`Rows`."""
     n = ins.scale.shape[0]
     if sensors.kind[sn] == 1:
-        par = sensors.par[sn]
-        ic = int(par[3])
-        dt = batch.t[m] - (ins.cst[2] + ins.cst[1] * k) if sensors.how[sn] == 1 else 0.0
-        sat, y, H, moved = satrows.bind(batch.z[m, :satrows.WIDTH], view, sensors.geom[sn, 0],
-                                        ins.xa[ic:ic + 2], dt, par[:3], n, ic)
-        R, groups, keys = satrows.noise(sat)
-        mo.ex[m, 2] = 1.0 if moved else 0.0
-        return Rows(y, R, H, keys, groups)
+        return satellite_rows(sensors.par, m, k, ins, sensors, sn, view, batch, mo)
     d = sensors.dim[sn]
     bias = sensors.bias[sn, :d]
     y = np.empty(d)
@@ -528,7 +574,7 @@ def apply_measurement(m, k, ins, iv, s0, bank, rules, sensors, batch, mo):
     mo.ex[m, 0] = -1.0
     if not accepted and 0.0 <= gate < np.inf and groups.shape[0] > 0:
         # (FederatedFilter._exclude: one unit left out, the rest tested again)
-        u, stat, keep = policy.leave_one_out(r, Sm, groups, rules.thr[f])
+        u, stat, keep = leave_one_out(sensors.par, r, Sm, groups, rules.thr[f])
         if u >= 0:
             kept = np.flatnonzero(keep)
             x2, P2, r2, S2, n2, code = _local_update(bank, f, sensors, sn, view, y[kept],
@@ -771,7 +817,7 @@ class CompiledLoop:
                      dtype=np.int64),
             kinds, zi, geom,
             np.array([bool(m.model.linear) for m in meas], dtype=np.bool_), bias,
-            np.array(sat, dtype=np.int64), par)
+            np.array(sat, dtype=np.int64), par if any(sat) else None)
         self.comp = np.r_[core.comp_g, core.comp_a]
         self.xa = core.xa  # (flown in place)
         self.trans = np.ascontiguousarray(core.layout.transition(self.T), dtype=float)
