@@ -825,7 +825,9 @@ def test_the_clock_tests_median_is_numpys():
 
 
 def _faulty(data, step_m=60.0):
-    """``data`` with a ``step_m`` step on one satellite's pseudoranges from 60 to 120 s."""
+    """``data`` with a ``step_m`` step on one satellite's pseudoranges from 60 to 120 s, a
+    millisecond clock jump at 200 s, and three epochs (41-43 s) whose one satellite is
+    below the horizon (no row: nothing updated or logged)."""
     from dataclasses import replace
 
     s = data.series["gnss_raw"]
@@ -834,6 +836,8 @@ def _faulty(data, step_m=60.0):
     hit = ((s.t >= 60) & (s.t < 120))[:, None] & (z[:, :, PRN] == bad)
     z[:, :, PR] += np.where(hit, step_m, 0.0)
     z[s.t >= 200.0, :, PR] += 299792.458  # (and a millisecond clock jump)
+    z[40:43, 1:] = np.nan
+    z[40:43, 0, 1:4] *= -1.0
     return replace(data, series=dict(data.series, gnss_raw=replace(s, z=z.reshape(
         len(s.t), -1))))
 
@@ -883,3 +887,37 @@ def test_both_engines_fly_the_satellites_alike(flown, tmp_path, monkeypatch, cas
         np.testing.assert_array_equal(a.fdi[col], b.fdi[col], err_msg=col)
     assert a.excluded == b.excluded and len(a.excluded) > 30
     assert a.nis == b.nis
+    assert not np.isin(data.series["gnss_raw"].t[40:43],
+                       a.fdi.t[a.fdi.local == "gnss_raw"]).any()
+
+
+def test_the_compiled_satellites_fed_in_blocks_are_the_batch(flown):
+    """The stream: the IMU in blocks of 137 samples (the engine's runs then end anywhere,
+    epochs with no satellite above the horizon among them) gives the batch's solution,
+    log and exclusions, bit for bit."""
+    from fednav.navigator.navigator import Navigator
+    from fednav.sim import runs
+    from fednav.sim.scenario import ModeConfig
+
+    scn, data, _ = flown
+    data = _faulty(data)
+    system = scn.system_for(ModeConfig(name="tight", aiding=["gnss_raw"]))
+    truth = scn.trajectory(None)
+    s = data.series["gnss_raw"]
+    out = []
+    for block in (None, 137):
+        nav = Navigator(system, runs._initial_state(scn, truth, data), truth.dt,
+                        record_rows=False, record_covariance=False)
+        assert nav.engine == "compiled"
+        nav.add_series(s)
+        m = len(truth.t) - 1
+        step = block or m
+        for a in range(0, m, step):
+            b = min(a + step, m)
+            nav.add_imu(truth.t[a:b], dtheta=data.dtheta[a:b], dv=data.dv[a:b])
+        out.append(nav.result())
+    a, b = out
+    np.testing.assert_array_equal(a.states, b.states)
+    assert a.fdi == b.fdi and a.excluded == b.excluded and len(a.excluded) > 30
+    t = np.array([e[0] for e in a.fdi])
+    assert not np.isin(s.t[40:43], t).any() and len(t) > 250  # (no row: nothing logged)

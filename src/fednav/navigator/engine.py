@@ -562,6 +562,7 @@ def apply_measurement(m, k, ins, iv, s0, bank, rules, sensors, batch, mo):
     y, R, Hg, groups = rw.y, rw.R, rw.H, rw.groups
     d = y.shape[0]
     mo.dof[m] = d
+    mo.ex[m, 0] = -1.0
     if d == 0:  # (no satellite above the mask: no update, nothing logged)
         return 0, -1
     x1, Pn, r, Sm, ni, code = _local_update(bank, f, sensors, sn, view, y, R, Hg)
@@ -571,7 +572,6 @@ def apply_measurement(m, k, ins, iv, s0, bank, rules, sensors, batch, mo):
     gate = policy.fdi_gate(th, bank.passes[f], rules.recovery)
     accepted = policy.is_accepted(ni, gate)
     rows = np.arange(d)
-    mo.ex[m, 0] = -1.0
     if not accepted and 0.0 <= gate < np.inf and groups.shape[0] > 0:
         # (FederatedFilter._exclude: one unit left out, the rest tested again)
         u, stat, keep = leave_one_out(sensors.par, r, Sm, groups, rules.thr[f])
