@@ -186,8 +186,10 @@ Ins = namedtuple("Ins", "state comp xa trans scale gains cst noise nsub n_per")
 #: factor ``S``, ``P = S S'``, of a filter ``sr[f]`` in the square-root form), sharing
 #: factors ``beta``, ln process-noise scales ``qlog`` (adapted in place), FDI ``passes``,
 #: ``fam`` (nf, 2) each filter's time/measurement-update family (:data:`FAMILIES`) and its
-#: unscented constants ``c``, ``Wm``, ``Wc``, ``cm`` (``sum Wc - 2``).
-Bank = namedtuple("Bank", "X P beta qlog passes fam sr c Wm Wc cm")
+#: unscented constants ``c``, ``Wm``, ``Wc``, ``cm`` (``sum Wc - 2``); ``factored``: ``sr``
+#: when a filter is in the square-root form, else None (its engine then does not compile
+#: the square-root kernels: :func:`factored_update`).
+Bank = namedtuple("Bank", "X P beta qlog passes fam sr c Wm Wc cm factored")
 #: Fault detection, sharing and the lockout guard: ``thr`` (nf, 7) each filter's
 #: chi-square threshold by dof (NaN: no detection), ``recovery``, ``sharing`` (0 equal,
 #: 1 fixed, 2 adaptive), ``thr_drift`` (nf, 7) the lockout guard's drift thresholds and
@@ -242,67 +244,182 @@ def rows_jacobian(sensors, sn, view, H):
 
 
 @numba.njit(cache=True)
+def _kalman_rows(bank, f, sensors, sn, view, y, Hg):
+    """``H`` of a measurement of sensor ``sn`` against the INS ``view`` (given ``Hg``, else
+    the row kernels' with the rows' sensor-bias columns) and its residual ``y - h(x)``
+    at local filter ``f``'s estimate (``H x`` for a linear model)."""
+    x = bank.X[f]
+    d, n = y.shape[0], x.shape[0]
+    given = Hg.shape[0] > 0
+    if given:
+        H = Hg
+    else:
+        H = np.zeros((d, n))
+        rows_jacobian(sensors, sn, view, H)
+    if given or sensors.linear[sn]:
+        yhat = H @ x
+    else:
+        Z = np.empty((1, d))
+        xr = x.copy().reshape(1, n)
+        row_predict(sensors.kinds[sn, :d], view.lla, view.vel, view.C, view.omega,
+                    sensors.geom[sn, 0], xr, Z)
+        _biased_rows(sensors.bias[sn, :d], xr, Z)
+        yhat = Z[0]
+    return H, y - yhat
+
+
+@numba.njit(cache=True)
+def _point_rows(sensors, sn, view, Sg, d, Hg):
+    """The ``d`` rows of sensor ``sn`` at the sigma points ``Sg`` against the INS
+    ``view``: ``Sg H'`` of a given ``Hg``, else the row kernels' with the sensor-bias
+    columns."""
+    if Hg.shape[0] > 0:
+        return satrows.points_rows(Sg, Hg)
+    Z = np.empty((Sg.shape[0], d))
+    row_predict(sensors.kinds[sn, :d], view.lla, view.vel, view.C, view.omega,
+                sensors.geom[sn, 0], Sg, Z)
+    _biased_rows(sensors.bias[sn, :d], Sg, Z)
+    return Z
+
+
+@numba.njit(cache=True)
 def _local_update(bank, f, sensors, sn, view, y, R, Hg):
     """Measurement update of local filter ``f`` with a measurement of sensor ``sn``
     (residual ``y`` against the INS ``view``, covariance ``R``): Kalman (Joseph form) or
     unscented by its family; a factored filter (``bank.sr[f]``: ``P`` is its lower factor
-    ``S``) through the square-root kernels, :mod:`fednav.filters.square_root`; the rows'
-    sensor-bias columns, :func:`_biased_rows`.  ``Hg``: the rows' ``H`` of a linear model
-    whose stage gave it (the satellites'), else of zero rows (the row kernels').  Returns
-    (x, P or S, residual, its covariance, NIS, failure code 0 / 4 / 7 / 8 / 10 / 11 /
-    13)."""
-    x, P, sr = bank.X[f], bank.P[f], bank.sr[f]
-    d, n = y.shape[0], x.shape[0]
-    given = Hg.shape[0] > 0
-    kinds, lever, bias = sensors.kinds[sn, :d], sensors.geom[sn, 0], sensors.bias[sn, :d]
-    lla, vel, C, omega = view.lla, view.vel, view.C, view.omega
-    Rs = R
-    if sr:
-        Rs, ok = srk.psd_sqrt(R)
-        if not ok:
-            return x, P, y, R, np.nan, 13
+    ``S``) through :func:`factored_update`; the rows' sensor-bias columns,
+    :func:`_biased_rows`.  ``Hg``: the rows' ``H`` of a linear model whose stage gave it
+    (the satellites'), else of zero rows (the row kernels').  Returns (x, P or S,
+    residual, its covariance, NIS, failure code 0 / 4 / 7 / 8 / 10 / 11 / 13)."""
+    if bank.sr[f]:
+        return factored_update(bank.factored, bank, f, sensors, sn, view, y, R, Hg)
+    x, P = bank.X[f], bank.P[f]
     if bank.fam[f, 1] == 0:
-        if given:
-            H = Hg
-        else:
-            H = np.zeros((d, n))
-            rows_jacobian(sensors, sn, view, H)
-        if given or sensors.linear[sn]:
-            yhat = H @ x
-        else:
-            Z = np.empty((1, d))
-            xr = x.copy().reshape(1, n)
-            row_predict(kinds, lla, vel, C, omega, lever, xr, Z)
-            _biased_rows(bias, xr, Z)
-            yhat = Z[0]
-        r = y - yhat
-        if sr:
-            x1, Sn, Sm, ni, code = srk.sr_kf_update(x, P, H, r, Rs)
-            return x1, Sn, r, Sm, ni, _sr_code(code, ni)
+        H, r = _kalman_rows(bank, f, sensors, sn, view, y, Hg)
         x1, Pn, Sm, ni, ok = joseph_update(x, P, H, r, R)
         return x1, Pn, r, Sm, ni, 0 if ok else 4
-    if sr:
-        Sg, _ = srk.ukf_points(x, P, math.sqrt(bank.c[f]))
-        if given:
-            Z = satrows.points_rows(Sg, Hg)
-        else:
-            Z = np.empty((Sg.shape[0], d))
-            row_predict(kinds, lla, vel, C, omega, lever, Sg, Z)
-            _biased_rows(bias, Sg, Z)
-        x1, Sn, Sm, ni, code, r = srk.sr_ukf_update(Z, P, bank.Wm[f][1], bank.cm[f], x, y,
-                                                    Rs)
-        return x1, Sn, r, Sm, ni, _sr_code(code, ni)
     Sg = sigma_points(x, P, bank.c[f])
     if Sg.shape[0] == 0:
         return x, P, y, R, np.nan, 7
-    if given:
-        Z = satrows.points_rows(Sg, Hg)
-    else:
-        Z = np.empty((Sg.shape[0], d))
-        row_predict(kinds, lla, vel, C, omega, lever, Sg, Z)
-        _biased_rows(bias, Sg, Z)
+    Z = _point_rows(sensors, sn, view, Sg, y.shape[0], Hg)
     x1, Pn, r, Sm, ni, ok = sigma_update(Sg, Z, bank.Wm[f], bank.Wc[f], x, P, y, R)
     return x1, Pn, r, Sm, ni, 0 if ok and math.isfinite(ni) else 4
+
+
+@numba.njit(cache=True)
+def _factored_update(bank, f, sensors, sn, view, y, R, Hg):
+    """:func:`_local_update` of a filter in the square-root form (``P`` is its lower
+    factor ``S``): the kernels of :mod:`fednav.filters.sr_kernels` that
+    :mod:`fednav.filters.square_root` calls."""
+    x, P = bank.X[f], bank.P[f]
+    Rs, ok = srk.psd_sqrt(R)
+    if not ok:
+        return x, P, y, R, np.nan, 13
+    if bank.fam[f, 1] == 0:
+        H, r = _kalman_rows(bank, f, sensors, sn, view, y, Hg)
+        x1, Sn, Sm, ni, code = srk.sr_kf_update(x, P, H, r, Rs)
+        return x1, Sn, r, Sm, ni, _sr_code(code, ni)
+    Sg, _ = srk.ukf_points(x, P, math.sqrt(bank.c[f]))
+    Z = _point_rows(sensors, sn, view, Sg, y.shape[0], Hg)
+    x1, Sn, Sm, ni, code, r = srk.sr_ukf_update(Z, P, bank.Wm[f][1], bank.cm[f], x, y, Rs)
+    return x1, Sn, r, Sm, ni, _sr_code(code, ni)
+
+
+# What a system uses is compiled, not what it might: the square-root form's kernels and the
+# raw GNSS satellites' stage sit behind numba overloads that give a stub (never run) when
+# the system has no such part (``Bank.factored``, ``Sensors.par`` None).  The overloads
+# are not inlined: ``inline="always"`` on them corrupted the square-root path's values
+# (tests/test_square_root_engine.py, on a fresh kernel cache).
+def factored_update(factored, bank, f, sensors, sn, view, y, R, Hg):
+    """The square-root form's measurement update (:func:`_factored_update`) where the
+    system has a factored filter (``factored``: ``bank.factored``); in one without, a stub
+    never run — its engine does not compile the square-root kernels (a fifth of a first
+    run's compiling).  Compiled code only."""
+    raise NotImplementedError("compiled code only")
+
+
+@overload(factored_update)
+def _factored_update_typed(factored, bank, f, sensors, sn, view, y, R, Hg):
+    if isinstance(factored, types.NoneType):
+        def stub(factored, bank, f, sensors, sn, view, y, R, Hg):
+            return bank.X[f], bank.P[f], y, R, np.nan, 13
+        return stub
+
+    def impl(factored, bank, f, sensors, sn, view, y, R, Hg):
+        return _factored_update(bank, f, sensors, sn, view, y, R, Hg)
+    return impl
+
+
+@numba.njit(cache=True)
+def _factored_predict(ins, bank, f, Phi, Qd, adapted, Lq0, params, Cm):
+    """Time update of filter ``f`` in the square-root form (the factor,
+    ``SquareRootKalmanFilter`` / ``SquareRootSigma.predict``) with its noise ``Qd``
+    (``adapted``: its own; else the factor ``Lq0`` of the shared one, made once and
+    returned).  Returns (failure code, ``Lq0``)."""
+    T, n = ins.cst[1], bank.X.shape[1]
+    if adapted or Lq0.shape[0] == 0:
+        Lq, ok = srk.psd_sqrt(Qd)
+        if not ok:
+            return 12, Lq0
+        if not adapted:
+            Lq0 = Lq
+    else:
+        Lq = Lq0
+    sq = math.sqrt(1.0 / bank.beta[f])
+    if bank.fam[f, 0] == 0:
+        x1 = propagate_points(bank.X[f].copy().reshape(1, n), T, ins.nsub, params, Cm,
+                              ins.scale)[0]
+        Sn, ok = srk.sr_propagate(Phi, bank.P[f], Lq, sq)
+        if not ok or not math.isfinite(x1.sum()):
+            return 3, Lq0
+    else:
+        Xs, _ = srk.ukf_points(bank.X[f], bank.P[f], math.sqrt(bank.c[f]))
+        x1, Sn, code = srk.sr_sigma_predict(
+            propagate_points(Xs, T, ins.nsub, params, Cm, ins.scale), bank.Wm[f],
+            bank.Wc[f], Lq, sq)
+        if code != srk.OK:
+            return 9 if code == srk.DOWNDATE else 3, Lq0
+    bank.X[f] = x1
+    bank.P[f] = Sn
+    return 0, Lq0
+
+
+def factored_predict(factored, ins, bank, f, Phi, Qd, adapted, Lq0, params, Cm):
+    """:func:`_factored_predict` where the system has a factored filter; a stub never run
+    in one without (:func:`factored_update`).  Compiled code only."""
+    raise NotImplementedError("compiled code only")
+
+
+@overload(factored_predict)
+def _factored_predict_typed(factored, ins, bank, f, Phi, Qd, adapted, Lq0, params, Cm):
+    if isinstance(factored, types.NoneType):
+        def stub(factored, ins, bank, f, Phi, Qd, adapted, Lq0, params, Cm):
+            return 0, Lq0
+        return stub
+
+    def impl(factored, ins, bank, f, Phi, Qd, adapted, Lq0, params, Cm):
+        return _factored_predict(ins, bank, f, Phi, Qd, adapted, Lq0, params, Cm)
+    return impl
+
+
+def factored_fusion(factored, X, S):
+    """Square-root information fusion of the factors ``S`` (``sr_fuse``, then the fused
+    covariance ``S_g S_g'``) where the system has a factored filter; a stub never run in
+    one without.  Compiled code only."""
+    raise NotImplementedError("compiled code only")
+
+
+@overload(factored_fusion)
+def _factored_fusion_typed(factored, X, S):
+    if isinstance(factored, types.NoneType):
+        def stub(factored, X, S):
+            return X[0].copy(), S[0].copy(), S[0].copy(), np.zeros(X.shape[0]), 0
+        return stub
+
+    def impl(factored, X, S):
+        xg, Sg, traces, bad = srk.sr_fuse(X, S)
+        return xg, srk.factor_product(Sg), Sg, traces, bad
+    return impl
 
 
 @numba.njit(cache=True, inline="always")
@@ -356,30 +473,10 @@ def time_update(ins, bank, Phi, Qd0, Qw, params, Cm):
         adapted = q_step > 0.0 and bank.qlog[f] > 0.0
         Qd = policy.adapted_qd(Qd0, Qw, bank.qlog[f]) if adapted else Qd0
         if bank.sr[f]:  # the factor (SquareRootKalmanFilter / SquareRootSigma.predict)
-            if adapted or Lq0.shape[0] == 0:
-                Lq, ok = srk.psd_sqrt(Qd)
-                if not ok:
-                    return 12, f
-                if not adapted:
-                    Lq0 = Lq
-            else:
-                Lq = Lq0
-            sq = math.sqrt(q_scale)
-            if bank.fam[f, 0] == 0:
-                x1 = propagate_points(bank.X[f].copy().reshape(1, n), T, ins.nsub, params, Cm,
-                                      ins.scale)[0]
-                Sn, ok = srk.sr_propagate(Phi, bank.P[f], Lq, sq)
-                if not ok or not math.isfinite(x1.sum()):
-                    return 3, f
-            else:
-                Xs, _ = srk.ukf_points(bank.X[f], bank.P[f], math.sqrt(bank.c[f]))
-                x1, Sn, code = srk.sr_sigma_predict(
-                    propagate_points(Xs, T, ins.nsub, params, Cm, ins.scale), bank.Wm[f],
-                    bank.Wc[f], Lq, sq)
-                if code != srk.OK:
-                    return 9 if code == srk.DOWNDATE else 3, f
-            bank.X[f] = x1
-            bank.P[f] = Sn
+            code, Lq0 = factored_predict(bank.factored, ins, bank, f, Phi, Qd, adapted, Lq0,
+                                         params, Cm)
+            if code:
+                return code, f
         elif bank.fam[f, 0] == 0:  # Kalman: the mean through the nonlinear model
             x1 = propagate_points(bank.X[f].copy().reshape(1, n), T, ins.nsub, params, Cm,
                                   ins.scale)[0]
@@ -476,7 +573,7 @@ def satellite_rows(par, m, k, ins, sensors, sn, view, batch, mo):
     raise NotImplementedError("compiled code only")
 
 
-@overload(satellite_rows, inline="always")
+@overload(satellite_rows)
 def _satellite_rows(par, m, k, ins, sensors, sn, view, batch, mo):
     """:func:`satellite_rows` for a system with a raw GNSS sensor; for one without
     (``par`` None), a stub never run — the engine of such a system does not compile
@@ -500,14 +597,14 @@ def _satellite_rows(par, m, k, ins, sensors, sn, view, batch, mo):
     return rows
 
 
-def leave_one_out(par, r, S, groups, thresholds):
+def left_out_unit(par, r, S, groups, thresholds):
     """:func:`fednav.filters.policy.leave_one_out` in a system with a raw GNSS sensor
     (``par``: ``sensors.par``); none left out in one without.  Compiled code only."""
     raise NotImplementedError("compiled code only")
 
 
-@overload(leave_one_out, inline="always")
-def _leave_one_out(par, r, S, groups, thresholds):
+@overload(left_out_unit)
+def _left_out_unit(par, r, S, groups, thresholds):
     if isinstance(par, types.NoneType):
         def stub(par, r, S, groups, thresholds):
             return -1, np.nan, np.ones(groups.shape[0], dtype=np.bool_)
@@ -574,7 +671,7 @@ def apply_measurement(m, k, ins, iv, s0, bank, rules, sensors, batch, mo):
     rows = np.arange(d)
     if not accepted and 0.0 <= gate < np.inf and groups.shape[0] > 0:
         # (FederatedFilter._exclude: one unit left out, the rest tested again)
-        u, stat, keep = leave_one_out(sensors.par, r, Sm, groups, rules.thr[f])
+        u, stat, keep = left_out_unit(sensors.par, r, Sm, groups, rules.thr[f])
         if u >= 0:
             kept = np.flatnonzero(keep)
             x2, P2, r2, S2, n2, code = _local_update(bank, f, sensors, sn, view, y[kept],
@@ -635,8 +732,7 @@ def fuse_reset(bank, sharing, out_P):
     nf = bank.X.shape[0]
     all_sr = bank.sr.all()
     if all_sr:
-        xg, Sg, traces, bad = srk.sr_fuse(bank.X, bank.P)
-        Pg = srk.factor_product(Sg)
+        xg, Pg, Sg, traces, bad = factored_fusion(bank.factored, bank.X, bank.P)
     else:
         Ps = bank.P
         if bank.sr.any():
@@ -939,7 +1035,7 @@ class CompiledLoop:
         ins = Ins(core.state, self.comp, self.xa, self.trans, self.scale, self.gains, self.cst,
                   self.noise_vec, core.nsub, self.n_per)
         bank = Bank(self.X, self.P, self.beta, self.qlog, self.passes, self.fam, self.sr,
-                    self.c, self.Wm, self.Wc, self.cm)
+                    self.c, self.Wm, self.Wc, self.cm, self.sr if self.sr.any() else None)
         rules = Rules(self.thr, self.recovery, self.sharing, self.thr_drift, lk.arrays())
         eo = EpochOut(rec.states.a[e0:e0 + n_ep], rec.P.a[e0:e0 + n_ep],
                       rec.beta.a[e0 - 1:e0 - 1 + n_ep], out_Phi, out_Qd, out_dx, out_rows)
