@@ -160,7 +160,7 @@ class StateLayout:
     @property
     def coupled(self) -> bool:
         """Whether a state integrates another (:meth:`drivers`): the totals then follow
-        :meth:`transition`, not :meth:`decay` alone."""
+        :meth:`transition`, not each its own decay alone."""
         return bool((self.drivers() >= 0).any())
 
     def model_vector(self) -> np.ndarray:
@@ -176,15 +176,9 @@ class StateLayout:
         """1-sigma of every optional state (SI): their P0."""
         return self._per_state(lambda s, t: s)
 
-    def decay(self, T: float) -> np.ndarray:
-        """``exp(-T / tau)`` of every state over an interval ``T`` [s] (1 for the 18 and
-        for random constants): how the totals kept beside the INS follow their mean."""
-        itau = self._per_state(lambda s, t: 0.0 if np.isinf(t) else 1.0 / t)
-        return np.r_[np.ones(N_CORE), np.exp(-T * itau)]
-
     def transition(self, T: float) -> np.ndarray:
         """The optional states' mean transition over ``T`` [s], ``expm(F_opt T)`` (m, m):
-        :meth:`decay`'s diagonal, and a driven state's integral of its driver (the clock's
+        ``exp(-T / tau)`` on the diagonal, and a driven state's integral of its driver (the clock's
         ``cb += T cd``)."""
         import scipy.linalg
 

@@ -15,9 +15,12 @@ are run as they become ready, with the same operations as in one batch.
 (:func:`ins_at_validity`, the local update, the gate, :func:`lockout_guard`),
 :func:`fuse_reset`, :func:`feed_back`, :func:`record_epoch`.  The stages are inlined into
 it by numba (``inline="always"``: one compiled function, as quick to compile as one
-written whole).  What the federated filter decides — the chi-square gate and recovery,
-the Q adaptation, sharing, the sample nearest a time of validity — is
-:mod:`fednav.filters.policy`, which the Python federated filter calls too.
+written whole); the parts a system may lack — the square-root form's kernels, the raw
+GNSS satellites' stage — are numba overloads compiled only for a system that has them
+(a stub otherwise).  What the federated filter decides — the chi-square gate and
+recovery, the satellite a failed test leaves out, the Q adaptation, sharing, the sample
+nearest a time of validity — is :mod:`fednav.filters.policy`, which the Python
+federated filter calls too.
 
 A system runs here when every part has a compiled form (:func:`why_not_compiled` says
 which does not): local filters of the Kalman (``kf``, ``ekf``), unscented (``ukf``) or
@@ -25,10 +28,10 @@ simplified unscented (``sukf``) family in either form, per filter (``form:
 square_root``: the filter's lower Cholesky factor ``S`` is what is carried, flown with
 the kernels of :mod:`fednav.filters.sr_kernels` that :mod:`fednav.filters.square_root`
 calls, fused in the square-root information form when every filter is factored; the
-record holds ``S S'``), fusion-reset federation, sensors with row models,
-measurements used at their time of validity (``interpolate``) or at the epoch
-(``none``), no constraint.  Every other system runs the Python loop; the test suite flies
-both on the same data and finds them equal.
+record holds ``S S'``), fusion-reset federation, sensors with row models and raw GNSS
+(:mod:`fednav.sensors.satellite_rows`), measurements used at their time of validity
+(``interpolate``) or at the epoch (``none``), no constraint.  Every other system runs the
+Python loop; the test suite flies both on the same data and finds them equal.
 """
 
 from __future__ import annotations
@@ -190,12 +193,13 @@ Ins = namedtuple("Ins", "state comp xa trans scale gains cst noise nsub n_per")
 #: when a filter is in the square-root form, else None (its engine then does not compile
 #: the square-root kernels: :func:`factored_update`).
 Bank = namedtuple("Bank", "X P beta qlog passes fam sr c Wm Wc cm factored")
-#: Fault detection, sharing and the lockout guard: ``thr`` (nf, 7) each filter's
+#: Fault detection, sharing and the lockout guard: ``thr`` (nf, D + 1) each filter's
 #: chi-square threshold by dof (NaN: no detection), ``recovery``, ``sharing`` (0 equal,
-#: 1 fixed, 2 adaptive), ``thr_drift`` (nf, 7) the lockout guard's drift thresholds and
+#: 1 fixed, 2 adaptive), ``thr_drift`` (nf, D + 1) the lockout guard's drift thresholds and
 #: ``lk`` its settings and state (:data:`fednav.filters.federated.LockoutState`).
 Rules = namedtuple("Rules", "thr recovery sharing thr_drift lk")
-#: Per aiding sensor: its local filter, how its delay is met (:data:`HOWS`), dimension,
+#: Per aiding sensor: its local filter, how its delay is met (:data:`HOWS`), dimension
+#: (0 for raw GNSS: as many rows as satellites),
 #: the rows of its model (kinds, value index), its geometry ((S, 4, 3): the lever arm in
 #: its axes, then its mounting ``C_s^b``, :attr:`~fednav.sensors.measurement.RowModel.
 #: geometry`), whether it is linear, its rows' bias columns (:func:`_biased_rows`), its
@@ -444,7 +448,8 @@ def interval_errors(ins, bank, s0, iv):
     """Stage 2a, the error model of the interval from ``s0`` to the INS now: (its
     nonlinear transition's ``params`` and ``Cm``, ``Phi``, ``Qd``, the white part ``Qw``
     of ``Qd`` when Q adapts, the fused prior's ``Qd`` the record keeps); the optional
-    states' totals decayed to their mean."""
+    states' totals moved by their mean transition (:func:`fednav.ins.states.
+    follow_mean`)."""
     T, q_step = ins.cst[1], ins.cst[7]
     params, Cm, Phi, Qd0 = interval_model(s0, ins.state, iv.dvc.sum(axis=0),
                                           iv.dth.sum(axis=0), T, ins.cst[3], ins.cst[4],
@@ -946,6 +951,16 @@ class CompiledLoop:
         """Each filter's process-noise scale now (1: the figures')."""
         return {k: float(np.exp(v)) for k, v in zip(self.names, self.qlog, strict=True)}
 
+    def _rows_at_most(self, m_z, m_sens) -> int:
+        """The most rows a measurement of this run can have: a row model's, or two per
+        satellite of a raw GNSS epoch (its slots' numbers)."""
+        D = int(self.sensors.dim.max(initial=1))
+        for s in np.flatnonzero(self.sensors.kind).tolist():
+            z = m_z[m_sens == s, :satrows.WIDTH].reshape(-1, satrows.SLOTS, satrows.NF)
+            if len(z):
+                D = max(D, 2 * int(np.isfinite(z[:, :, satrows.PRN]).sum(axis=1).max()))
+        return D
+
     def _satellites_after(self, M, lg, m_sens, m_idx, m_epoch, out_re, out_ex, inn):
         """What a run's raw GNSS epochs leave besides the log: the satellites fault
         detection left out (:attr:`FederatedFilter.excluded`), the receiver clock's jumps
@@ -989,20 +1004,19 @@ class CompiledLoop:
         if n_ep <= 0:
             return
         M = len(m_idx)
-        D = self.D
         m_t = np.empty(M)
         m_z = np.zeros((M, self.W))
-        m_R = np.zeros((M, D, D))
+        m_R = np.zeros((M, 6, 6))  # (the row models'; a satellite stage makes its own)
         if M:
             for s, m in enumerate(self.meas):
                 sel = m_sens == s if len(self.meas) > 1 else slice(None)
                 ii = m_idx[sel]
                 if not len(ii):
                     continue
-                d, dz = m.R.shape[1], m.z.shape[1]
+                d, dz = min(m.R.shape[1], 6), m.z.shape[1]
                 m_t[sel] = m.t[ii]
                 m_z[sel, :dz] = m.z[ii]
-                m_R[sel, :d, :d] = m.R[ii]
+                m_R[sel, :d, :d] = m.R[ii][:, :d, :d]
         rec = self.rec
         e0 = rec.states.n
         for g in self._outs:
@@ -1023,7 +1037,8 @@ class CompiledLoop:
         log._room(M + 2)
         # columns of at least two rows: always strided views, one compiled signature
         lg = log.a[j0:j0 + max(M, 2)]
-        if self.innovations:
+        if self.innovations:  # (as many rows as this run's measurements have)
+            D = self._rows_at_most(m_z, m_sens)
             out_r, out_S, out_bm = np.zeros((M, D)), np.zeros((M, D, D)), np.empty(M)
             out_H, out_R = np.zeros((M, D, len(self.X[0]))), np.zeros((M, D, D))
         else:

@@ -16,11 +16,12 @@ removed, the range rate [m/s] (``-lambda`` times the Doppler, the satellite cloc
 removed), and the 1-sigma of both (NaN: the section's ``sigma_*`` scaled by elevation).
 An empty slot is NaN.  The reader of a recording (RINEX, u-blox) builds these with the
 broadcast ephemeris (:mod:`fednav.sensors.satellites`); the simulator with its
-constellation.  The model itself is geometry alone, so one compiled-free model serves
-both.
+constellation.  The model itself is geometry alone, so one model serves both, and its
+rows are compiled functions (:mod:`fednav.sensors.satellite_rows`) that the navigator's
+compiled engine calls too.
 
 **Model** (ECEF; ``r``, ``v`` the antenna's position and velocity — the INS's moved by
-the lever arm, :func:`fednav.core.earth.lever_arm_point` — ``u = (r_s - r) / rho`` the
+the lever arm, :func:`fednav.sensors.satellite_rows.antenna` — ``u = (r_s - r) / rho`` the
 line of sight, ``cb``, ``cd`` the receiver clock's bias [m] and drift [m/s], the error
 states of the ``clock`` block (:mod:`fednav.ins.states`), whose totals the navigator keeps
 beside the INS)::
@@ -103,11 +104,6 @@ from .spec import Column, SensorConfig, SensorSpec
 CLOCKS = {"tcxo": (2e-19, 2e-20), "ocxo": (2e-25, 6e-25)}
 #: ``np.median`` to the bit (the clock test's, :func:`fednav.sensors.satellite_rows.median`)
 _median = median
-
-
-def slots(z) -> np.ndarray:
-    """One measurement's ``z`` as (:data:`SLOTS`, :data:`FIELDS`) rows."""
-    return np.asarray(z, dtype=float).reshape(SLOTS, len(FIELDS))
 
 
 def has_satellite(z) -> np.ndarray:
