@@ -329,29 +329,35 @@ def _factored_update(bank, f, sensors, sn, view, y, R, Hg):
     return x1, Sn, r, Sm, ni, _sr_code(code, ni)
 
 
-# What a system uses is compiled, not what it might: the square-root form's kernels and the
-# raw GNSS satellites' stage sit behind numba overloads that give a stub (never run) when
-# the system has no such part (``Bank.factored``, ``Sensors.par`` None).  The overloads
-# are not inlined: ``inline="always"`` on them corrupted the square-root path's values
-# (tests/test_square_root_engine.py, on a fresh kernel cache).
-def factored_update(factored, bank, f, sensors, sn, view, y, R, Hg):
-    """The square-root form's measurement update (:func:`_factored_update`) where the
-    system has a factored filter (``factored``: ``bank.factored``); in one without, a stub
-    never run — its engine does not compile the square-root kernels (a fifth of a first
-    run's compiling).  Compiled code only."""
-    raise NotImplementedError("compiled code only")
+def compiled_if(impl, stub):
+    """A function called as ``f(part, *args)`` that runs ``impl(*args)`` when ``part`` is
+    not None and ``stub(*args)`` when it is — from Python, and in compiled code by the
+    *type* of ``part``, so that the engine of a system without the part compiles only
+    the stub (cheap; never run there).  What a system uses is compiled, not what it
+    might: the square-root form's kernels (``part``: ``Bank.factored``) and the raw GNSS
+    satellites' stage (``Sensors.par``).  The overload is not inlined: numba's
+    ``inline="always"`` on such overloads corrupted the square-root path's values
+    (``tests/test_square_root_engine.py``, on a fresh kernel cache)."""
+    def dispatch(part, *args):
+        return (stub if part is None else impl)(*args)
+
+    @overload(dispatch)
+    def _typed(part, *args):
+        chosen = stub if isinstance(part, types.NoneType) else impl
+
+        def call(part, *args):
+            return chosen(*args)
+        return call
+    return dispatch
 
 
-@overload(factored_update)
-def _factored_update_typed(factored, bank, f, sensors, sn, view, y, R, Hg):
-    if isinstance(factored, types.NoneType):
-        def stub(factored, bank, f, sensors, sn, view, y, R, Hg):
-            return bank.X[f], bank.P[f], y, R, np.nan, 13
-        return stub
+@numba.njit(cache=True)
+def _no_update(bank, f, sensors, sn, view, y, R, Hg):
+    return bank.X[f], bank.P[f], y, R, np.nan, 13
 
-    def impl(factored, bank, f, sensors, sn, view, y, R, Hg):
-        return _factored_update(bank, f, sensors, sn, view, y, R, Hg)
-    return impl
+
+#: :func:`_factored_update` where the system has a factored filter (``Bank.factored``).
+factored_update = compiled_if(_factored_update, _no_update)
 
 
 @numba.njit(cache=True)
@@ -388,42 +394,27 @@ def _factored_predict(ins, bank, f, Phi, Qd, adapted, Lq0, params, Cm):
     return 0, Lq0
 
 
-def factored_predict(factored, ins, bank, f, Phi, Qd, adapted, Lq0, params, Cm):
-    """:func:`_factored_predict` where the system has a factored filter; a stub never run
-    in one without (:func:`factored_update`).  Compiled code only."""
-    raise NotImplementedError("compiled code only")
+@numba.njit(cache=True)
+def _no_predict(ins, bank, f, Phi, Qd, adapted, Lq0, params, Cm):
+    return 0, Lq0
 
 
-@overload(factored_predict)
-def _factored_predict_typed(factored, ins, bank, f, Phi, Qd, adapted, Lq0, params, Cm):
-    if isinstance(factored, types.NoneType):
-        def stub(factored, ins, bank, f, Phi, Qd, adapted, Lq0, params, Cm):
-            return 0, Lq0
-        return stub
-
-    def impl(factored, ins, bank, f, Phi, Qd, adapted, Lq0, params, Cm):
-        return _factored_predict(ins, bank, f, Phi, Qd, adapted, Lq0, params, Cm)
-    return impl
+@numba.njit(cache=True)
+def _sr_fusion(X, S):
+    """Square-root information fusion of the factors ``S`` (``sr_fuse``), with the fused
+    covariance ``S_g S_g'``: (x_g, P_g, S_g, traces, bad)."""
+    xg, Sg, traces, bad = srk.sr_fuse(X, S)
+    return xg, srk.factor_product(Sg), Sg, traces, bad
 
 
-def factored_fusion(factored, X, S):
-    """Square-root information fusion of the factors ``S`` (``sr_fuse``, then the fused
-    covariance ``S_g S_g'``) where the system has a factored filter; a stub never run in
-    one without.  Compiled code only."""
-    raise NotImplementedError("compiled code only")
+@numba.njit(cache=True)
+def _no_fusion(X, S):
+    return X[0].copy(), S[0].copy(), S[0].copy(), np.zeros(X.shape[0]), 0
 
 
-@overload(factored_fusion)
-def _factored_fusion_typed(factored, X, S):
-    if isinstance(factored, types.NoneType):
-        def stub(factored, X, S):
-            return X[0].copy(), S[0].copy(), S[0].copy(), np.zeros(X.shape[0]), 0
-        return stub
-
-    def impl(factored, X, S):
-        xg, Sg, traces, bad = srk.sr_fuse(X, S)
-        return xg, srk.factor_product(Sg), Sg, traces, bad
-    return impl
+#: :func:`_factored_predict` and :func:`_sr_fusion` where the system has a factored filter.
+factored_predict = compiled_if(_factored_predict, _no_predict)
+factored_fusion = compiled_if(_sr_fusion, _no_fusion)
 
 
 @numba.njit(cache=True, inline="always")
@@ -570,54 +561,41 @@ def _take(A, rows):
     return out
 
 
-def satellite_rows(par, m, k, ins, sensors, sn, view, batch, mo):
+@numba.njit(cache=True)
+def _satellite_rows(m, k, ins, sensors, sn, view, batch, mo):
     """The rows of a raw GNSS epoch (:func:`fednav.sensors.satellite_rows.bind`: the
     satellites above the mask, the receiver clock's jump test on the totals, the rows at
-    the measurement's time) as :data:`Rows`; ``par``: ``sensors.par``.  Compiled code
-    only (:func:`_satellite_rows`)."""
-    raise NotImplementedError("compiled code only")
+    the measurement's time) as :data:`Rows`."""
+    p = sensors.par[sn]
+    ic = int(p[3])
+    dt = batch.t[m] - (ins.cst[2] + ins.cst[1] * k) if sensors.how[sn] == 1 else 0.0
+    sat, y, H, moved = satrows.bind(batch.z[m, :satrows.WIDTH], view, sensors.geom[sn, 0],
+                                    ins.xa[ic:ic + 2], dt, p[:3], ins.scale.shape[0], ic)
+    R, groups, keys = satrows.noise(sat)
+    mo.ex[m, 2] = 1.0 if moved else 0.0
+    return Rows(y, R, H, keys, groups)
 
 
-@overload(satellite_rows)
-def _satellite_rows(par, m, k, ins, sensors, sn, view, batch, mo):
-    """:func:`satellite_rows` for a system with a raw GNSS sensor; for one without
-    (``par`` None), a stub never run — the engine of such a system does not compile
-    the satellites' functions (8 s of a first run)."""
-    if isinstance(par, types.NoneType):
-        def stub(par, m, k, ins, sensors, sn, view, batch, mo):
-            return Rows(np.empty(0), np.empty((0, 0)), np.empty((0, ins.scale.shape[0])),
-                        np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64))
-        return stub
-
-    def rows(par, m, k, ins, sensors, sn, view, batch, mo):
-        p = par[sn]
-        ic = int(p[3])
-        dt = batch.t[m] - (ins.cst[2] + ins.cst[1] * k) if sensors.how[sn] == 1 else 0.0
-        sat, y, H, moved = satrows.bind(batch.z[m, :satrows.WIDTH], view, sensors.geom[sn, 0],
-                                        ins.xa[ic:ic + 2], dt, p[:3], ins.scale.shape[0],
-                                        ic)
-        R, groups, keys = satrows.noise(sat)
-        mo.ex[m, 2] = 1.0 if moved else 0.0
-        return Rows(y, R, H, keys, groups)
-    return rows
+@numba.njit(cache=True)
+def _no_rows(m, k, ins, sensors, sn, view, batch, mo):
+    return Rows(np.empty(0), np.empty((0, 0)), np.empty((0, ins.scale.shape[0])),
+                np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64))
 
 
-def left_out_unit(par, r, S, groups, thresholds):
-    """:func:`fednav.filters.policy.leave_one_out` in a system with a raw GNSS sensor
-    (``par``: ``sensors.par``); none left out in one without.  Compiled code only."""
-    raise NotImplementedError("compiled code only")
+@numba.njit(cache=True)
+def _left_out(r, S, groups, thresholds):
+    return policy.leave_one_out(r, S, groups, thresholds)
 
 
-@overload(left_out_unit)
-def _left_out_unit(par, r, S, groups, thresholds):
-    if isinstance(par, types.NoneType):
-        def stub(par, r, S, groups, thresholds):
-            return -1, np.nan, np.ones(groups.shape[0], dtype=np.bool_)
-        return stub
+@numba.njit(cache=True)
+def _none_left_out(r, S, groups, thresholds):
+    return -1, np.nan, np.ones(groups.shape[0], dtype=np.bool_)
 
-    def impl(par, r, S, groups, thresholds):
-        return policy.leave_one_out(r, S, groups, thresholds)
-    return impl
+
+#: The satellites' stage and :func:`fednav.filters.policy.leave_one_out` where the system
+#: has a raw GNSS sensor (``Sensors.par``).
+satellite_rows = compiled_if(_satellite_rows, _no_rows)
+left_out_unit = compiled_if(_left_out, _none_left_out)
 
 
 @numba.njit(cache=True, inline="always")

@@ -77,7 +77,6 @@ from .satellite_rows import (  # noqa: F401  (the clock test's thresholds, for t
     median,
     noise,
     points_rows,
-    usable,
 )
 from .satellites import (
     F_L1,
@@ -249,12 +248,6 @@ class SatelliteRanges:
     def figures(self) -> np.ndarray:
         """(mask [rad], sigma_pr [m], sigma_rr [m/s]) as the compiled engine takes them."""
         return np.array([self.mask, self.sigma_pr, self.sigma_rr])
-
-    def satellites(self, z, nav: NavSnapshot) -> np.ndarray:
-        """The satellite rows of ``z`` with a pseudorange above the mask at ``nav``, with
-        their 1-sigma filled in (:func:`fednav.sensors.satellite_rows.usable`)."""
-        return usable(np.ascontiguousarray(z, dtype=float), _antenna(nav, self.lever, True),
-                      self.figures)
 
     def bind(self, z, nav: NavSnapshot, layout, xa, dt: float = 0.0) -> BoundRanges:
         """The rows of measurement ``z`` against the INS ``nav``, over the error state of
