@@ -12,10 +12,12 @@ from collections.abc import Callable
 
 
 def run_seeds(fn: Callable | list[Callable], args: list, jobs: int = 1,
-              progress: Callable | None = None, campaign=None) -> list:
+              progress: Callable | None = None, campaign=None,
+              plan: str | None = None) -> list:
     """``[fn(a) for a in args]`` in order, with ``jobs`` worker processes (Dask), reusing
     and filling the ``campaign`` store when one is given; ``progress()`` after each.
-    ``fn`` may be a list: one function per unit."""
+    ``fn`` may be a list: one function per unit; ``plan``: the units' kernel plan
+    (:func:`fednav.campaign.store.run_units`)."""
     from .store import run_units
 
-    return run_units(fn, args, jobs, progress, campaign)
+    return run_units(fn, args, jobs, progress, campaign, plan)

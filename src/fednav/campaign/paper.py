@@ -45,6 +45,9 @@ class Paper(ABC):
     """
 
     number: str = ""
+    #: The name of the units' kernel plan (:mod:`fednav.campaign.kernel_plan`; None:
+    #: none), compiled by one worker on a first run.
+    kernel_plan: str | None = None
     tables: dict = {}
     titles: dict = {}
     options: tuple[str, ...] = ()
@@ -81,7 +84,7 @@ class Paper(ABC):
         """Fly every unit (reusing those stored in ``campaign``) and summarize."""
         work = self.units(scn, runs, seed, max_time, **options)
         results = run_seeds([u.fn for u in work], [u.args for u in work], jobs, progress,
-                            campaign)
+                            campaign, self.kernel_plan)
         return self.summarize(scn, runs, seed, max_time, results, **options)
 
     # ---------------------------------------------------------------------- outputs

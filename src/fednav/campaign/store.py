@@ -46,6 +46,7 @@ import numpy as np
 
 from ..core.atomic import output_error, write_bytes, write_json
 from ..core.errors import FednavError, check_stop
+from . import kernel_plan
 
 
 class CampaignError(FednavError, ValueError):
@@ -178,12 +179,15 @@ def _single_threaded() -> None:
 
 
 def run_units(fn: Callable, args: list, jobs: int = 1, progress: Callable | None = None,
-              campaign: Campaign | None = None) -> list:
+              campaign: Campaign | None = None, plan: str | None = None) -> list:
     """``[fn(a) for a in args]`` in order; units already in ``campaign`` are read back,
     the others computed (in this process, on a local Dask cluster of ``jobs`` worker
     processes, or on the campaign's Dask scheduler) and stored as they finish;
     ``progress()`` after each unit, reused or computed.  ``fn`` may be a list, one
-    function per unit (units are submitted in order: put the long ones first)."""
+    function per unit (units are submitted in order: put the long ones first).
+    ``plan``: the name of the units' kernel plan (:mod:`fednav.campaign.kernel_plan`): on a first
+    run with local workers, one of them compiles it from the leaves up while another
+    flies the first unit, instead of both compiling the same kernels at once."""
     fns = list(fn) if isinstance(fn, list | tuple) else [fn] * len(args)
     keys = [work_key(f, a) for f, a in zip(fns, args, strict=True)]
     out: list = [None] * len(args)
@@ -221,10 +225,15 @@ def run_units(fn: Callable, args: list, jobs: int = 1, progress: Callable | None
         client, cluster, _ = _start_client(None, jobs)
         own = (client, cluster)
     try:
+        warm = None  # (held: a future let go is cancelled)
+        if plan and address is None and jobs >= 2 and len(todo) > 1 and kernel_plan.needed():
+            warm = client.submit(kernel_plan.compile_plan, plan, key=f"kernel-plan-{plan}",
+                                 pure=False, priority=1)
         futs = {client.submit(fns[i], args[i], key=f"{fns[i].__name__}-{keys[i]}",
                               pure=False): i for i in todo}
         for fut in as_completed(futs):
             done(futs[fut], fut.result())
+        del warm
     finally:
         if own is not None:
             own[0].close()

@@ -277,6 +277,7 @@ class Paper002(Paper):
     the others fly runs), then the Monte Carlo runs of Tables 2-3."""
 
     number = PAPER
+    kernel_plan = "paper002"
     tables = PAPER_TABLES
     titles = TABLE_TITLES
     options = ("t4_runs",)

@@ -1,0 +1,121 @@
+"""A first run's kernels compiled by two processes: the plan of what a command compiles.
+
+numba compiles a kernel's callees while it types the kernel, one after the other: the
+navigator's engine (``run_epochs``) compiles some ninety functions in one process, and
+the two workers of a campaign each compile all of them at the same time.  A *plan* is
+the list of fednav kernels, with their argument types, that a command compiled on a
+fresh kernel cache, in the order numba started them (:func:`record`).  On a first run
+one worker flies its unit (numba going down from the top kernel) while another compiles
+the plan from its end (:func:`compile_plan`, from the leaves up), each saving what it
+compiled in the shared kernel cache and loading what the other saved there; the two meet
+in the middle, and the first worker then compiles the top kernel alone.
+
+A plan is a pickle of numba types kept beside this module (``kernel_plans/NAME.pkl``),
+recorded by ``python tests/make_kernel_plan.py NAME`` (on an empty kernel cache) and
+checked by the test suite (``tests/test_kernel_plan.py``: a plan that no longer matches
+what its command compiles is reported stale).  It only ever saves time: an entry numba
+cannot read or compile is skipped, and a kernel compiled from the plan with other
+argument types than the command then uses is a specialisation nobody calls (the command
+compiles its own).
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+import pickle
+from pathlib import Path
+
+#: Where the plans are kept.
+PLANS = Path(__file__).resolve().parent / "kernel_plans"
+#: Kernels a plan does not compile: the top ones (each command's own, compiled by the
+#: worker that flies it: they hold every callee, and the plan's worker would only compile
+#: them a second time).
+TOPS = {("fednav.navigator.engine", "run_epochs")}
+
+
+def record(run) -> list[tuple]:
+    """Call ``run()`` (e.g. a command, in this process) and return the fednav kernels
+    numba compiled for it, as (module, the module's name for the kernel, argument types),
+    in the order numba started them (kernels no module names — numba overloads — left
+    out: their callers compile them).  Meant for a process whose kernel cache is
+    empty."""
+    import sys
+
+    from numba.core import event
+
+    order: list[tuple] = []
+
+    class Listener(event.Listener):
+        def on_start(self, ev):
+            d = ev.data.get("dispatcher")
+            module = getattr(getattr(d, "py_func", None), "__module__", "")
+            if not module.startswith("fednav."):
+                return
+            # (the compiled form of a Python function has a name of its own: radii_nb)
+            name = next((k for k, v in vars(sys.modules[module]).items() if v is d), None)
+            if name is not None:
+                order.append((module, name, tuple(ev.data["args"])))
+
+        def on_end(self, ev):
+            pass
+
+    listener = Listener()
+    event.register("numba:compile", listener)
+    try:
+        run()
+    finally:
+        event.unregister("numba:compile", listener)
+    seen: set = set()
+    return [e for e in order if not (e in seen or seen.add(e))]
+
+
+def load(name: str, numba_version: bool = False):
+    """The plan ``name``'s kernels (None: there is none, or this numba cannot read it);
+    with ``numba_version``: (kernels, the version of numba that recorded them)."""
+    try:
+        with open(PLANS / f"{name}.pkl", "rb") as fh:
+            kept = pickle.load(fh)
+        kernels, version = kept["kernels"], kept["numba"]
+    except Exception:  # (a plan written by another numba: no plan, no harm)
+        return (None, None) if numba_version else None
+    return (kernels, version) if numba_version else kernels
+
+
+def needed() -> bool:
+    """Whether a plan would help now: numba's cache folder is known and holds none of the
+    top kernels (:data:`TOPS`: a first run of this source tree)."""
+    folder = os.environ.get("NUMBA_CACHE_DIR")
+    if not folder or not Path(folder).is_dir():
+        return False
+    return not any(next(Path(folder).rglob(f"*{q}-*.nbi"), None) for _, q in TOPS)
+
+
+def compile_plan(name: str) -> int:
+    """Compile plan ``name`` from its end (the leaves first), each kernel saved in the
+    kernel cache or loaded from it where another process saved it first; the top kernels
+    (:data:`TOPS`) left to the process that flies the command.  Returns how many entries
+    were compiled or loaded (0: no plan)."""
+    plan = load(name) or []
+    done = 0
+    for module, qualname, types in reversed(plan):
+        if (module, qualname) in TOPS:
+            continue
+        try:
+            kernel = getattr(importlib.import_module(module), qualname)
+            kernel.compile(types)
+        except Exception:  # (a plan older than the code: that entry is of no use)
+            continue
+        done += 1
+    return done
+
+
+def write(name: str, plan: list[tuple]) -> Path:
+    """Keep ``plan`` (:func:`record`) as plan ``name``, with numba's version."""
+    import numba
+
+    PLANS.mkdir(exist_ok=True)
+    path = PLANS / f"{name}.pkl"
+    path.write_bytes(pickle.dumps({"numba": numba.__version__, "kernels": plan},
+                                  protocol=4))
+    return path
