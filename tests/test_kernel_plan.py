@@ -5,6 +5,7 @@ import os
 import pickle
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -36,11 +37,13 @@ def test_the_plan_is_what_its_command_compiles(tmp_path):
     import numba
 
     fresh = pickle.loads(out.read_bytes())
-    kept, version = kernel_plan.load("paper002", numba_version=True)
-    assert kept is not None, "no paper002 plan (python tests/make_kernel_plan.py paper002)"
-    if version != numba.__version__:  # (another numba may compile other helpers)
+    version = kernel_plan.recorded_with("paper002")
+    assert version is not None, "no paper002 plan (python tests/make_kernel_plan.py paper002)"
+    if version != numba.__version__:  # (the plan is not used: load() gives None)
         pytest.skip(f"the paper002 kernel plan was recorded with numba {version}, this is "
-                    f"{numba.__version__}: record it again (tests/make_kernel_plan.py)")
+                    f"{numba.__version__}, so it is not used: record it again "
+                    f"(tests/make_kernel_plan.py)")
+    kept = kernel_plan.load("paper002")
     gone = [e[:2] for e in kept if e not in fresh]
     new = [e[:2] for e in fresh if e not in kept]
     assert fresh == kept, (f"the paper002 kernel plan is stale (run python tests/"
@@ -61,42 +64,75 @@ def test_a_plan_compiles_from_its_end_and_skips_what_it_cannot(tmp_path, monkeyp
     monkeypatch.setattr(kernel_plan, "PLANS", tmp_path)
     kernel_plan.write("t", plan)
     assert kernel_plan.load("t") == plan
-    assert kernel_plan.load("t", numba_version=True)[1] == __import__("numba").__version__
+    assert kernel_plan.recorded_with("t") == __import__("numba").__version__
     assert kernel_plan.compile_plan("t") == 1
     assert (typeof(a),) in kernels.cholesky_lower.signatures
     assert kernel_plan.compile_plan("none") == 0  # no plan, no harm
     (tmp_path / "bad.pkl").write_bytes(b"not a pickle")
     assert kernel_plan.load("bad") is None and kernel_plan.compile_plan("bad") == 0
-    assert kernel_plan.load("bad", numba_version=True) == (None, None)
+    assert kernel_plan.recorded_with("bad") is None
+    # a plan recorded by another numba is not used
+    (tmp_path / "old.pkl").write_bytes(pickle.dumps({"numba": "0.1", "kernels": plan}))
+    assert kernel_plan.recorded_with("old") == "0.1" and kernel_plan.load("old") is None
+    # asked to stop, it stops before the next kernel
+    assert kernel_plan.compile_plan("t", stop=lambda: True) == 0
 
 
 def test_a_plan_is_needed_until_the_top_kernel_is_in_the_cache(tmp_path, monkeypatch):
-    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    index = kernel_plan._index_of("fednav.navigator.engine", "run_epochs")
+    assert index is not None and index.name.startswith("engine.run_epochs-")
+    assert index.suffix == ".nbi"
+    fake = tmp_path / "engine.run_epochs-1.py311.nbi"
+    monkeypatch.setattr(kernel_plan, "_index_of", lambda module, name: fake)
     assert kernel_plan.needed()
-    sub = tmp_path / "fednav" / "navigator"
-    sub.mkdir(parents=True)
-    (sub / "engine.other-10.py311.nbi").write_bytes(b"")
-    assert kernel_plan.needed()
-    (sub / "engine.run_epochs-900.py311.nbi").write_bytes(b"")
+    fake.write_bytes(b"")
     assert not kernel_plan.needed()
-    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "absent"))
-    assert not kernel_plan.needed()
+    monkeypatch.setattr(kernel_plan, "_index_of", lambda module, name: None)
+    assert not kernel_plan.needed()  # (numba does not say: no plan)
 
 
 def _square(x):
+    time.sleep(0.2)  # (the plan's worker has its turn before the units are done)
     return x * x
 
 
-def _mark(name):  # (a worker's compile_plan: leaves its name where the test looks)
+def _mark(name, stop=None):  # (a worker's compile_plan: leaves its name where looked for)
     Path(name).write_text("compiled")
     return 1
 
 
-@pytest.mark.parametrize("needed", [True, False])
-def test_a_worker_compiles_the_plan_on_a_first_run_only(tmp_path, monkeypatch, needed):
+@pytest.mark.parametrize("needed, jobs, units, plan, submitted", [
+    (True, 2, 3, True, True),
+    (False, 2, 3, True, False),  # not a first run
+    (True, 1, 3, True, False),  # no second worker
+    (True, 2, 1, True, False),  # one unit: flown in this process
+    (True, 2, 3, False, False)])  # no plan
+def test_a_worker_compiles_the_plan_on_a_first_run_only(tmp_path, monkeypatch, needed, jobs,
+                                                        units, plan, submitted):
     mark = tmp_path / "plan-compiled"
     monkeypatch.setattr(kernel_plan, "needed", lambda: needed)
-    monkeypatch.setattr(kernel_plan, "compile_plan", lambda name: _mark(name))
-    out = run_units(_square, [1, 2, 3], jobs=2, plan=str(mark))
-    assert out == [1, 4, 9]
-    assert mark.exists() == needed
+    monkeypatch.setattr(kernel_plan, "compile_plan", _mark)  # (the workers are forked)
+    out = run_units(_square, list(range(1, units + 1)), jobs=jobs,
+                    plan=str(mark) if plan else None)
+    assert out == [x * x for x in range(1, units + 1)]
+    assert mark.exists() == submitted
+
+
+def test_paper_002_hands_its_plan_to_the_campaign(monkeypatch):
+    from fednav.campaign import paper
+    from fednav.scenarios.paper002 import Paper002
+
+    assert Paper002.kernel_plan == "paper002" and kernel_plan.load("paper002")
+    seen = {}
+
+    def run_seeds(fns, args, jobs, progress, campaign, plan=None):
+        seen["plan"] = plan
+        raise RuntimeError("enough")
+
+    monkeypatch.setattr(paper, "run_seeds", run_seeds)
+    p = Paper002()
+    with pytest.raises(RuntimeError, match="enough"):
+        p.reproduce(p.load_scenario(), 1, 1)
+    assert seen["plan"] == "paper002"
+    pyproject = (ROOT / "pyproject.toml").read_text()
+    assert '"campaign/kernel_plans/*.pkl"' in pyproject  # (in the wheel too)

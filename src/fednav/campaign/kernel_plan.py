@@ -13,16 +13,16 @@ in the middle, and the first worker then compiles the top kernel alone.
 A plan is a pickle of numba types kept beside this module (``kernel_plans/NAME.pkl``),
 recorded by ``python tests/make_kernel_plan.py NAME`` (on an empty kernel cache) and
 checked by the test suite (``tests/test_kernel_plan.py``: a plan that no longer matches
-what its command compiles is reported stale).  It only ever saves time: an entry numba
-cannot read or compile is skipped, and a kernel compiled from the plan with other
-argument types than the command then uses is a specialisation nobody calls (the command
-compiles its own).
+what its command compiles is reported stale).  A plan recorded with another version of
+numba is not used (:func:`load`); an entry that cannot be read or compiled is skipped;
+an entry whose argument types the command no longer uses compiles a specialisation
+nobody calls — time lost on the plan's worker, never a result changed (the command
+compiles what it calls itself).
 """
 
 from __future__ import annotations
 
 import importlib
-import os
 import pickle
 from pathlib import Path
 
@@ -70,37 +70,64 @@ def record(run) -> list[tuple]:
     return [e for e in order if not (e in seen or seen.add(e))]
 
 
-def load(name: str, numba_version: bool = False):
-    """The plan ``name``'s kernels (None: there is none, or this numba cannot read it);
-    with ``numba_version``: (kernels, the version of numba that recorded them)."""
+def _kept(name: str) -> dict | None:
     try:
         with open(PLANS / f"{name}.pkl", "rb") as fh:
             kept = pickle.load(fh)
-        kernels, version = kept["kernels"], kept["numba"]
-    except Exception:  # (a plan written by another numba: no plan, no harm)
-        return (None, None) if numba_version else None
-    return (kernels, version) if numba_version else kernels
+        return {"numba": kept["numba"], "kernels": kept["kernels"]}
+    except Exception:  # (none, or written by a numba that cannot be read here)
+        return None
+
+
+def recorded_with(name: str) -> str | None:
+    """The version of numba that recorded plan ``name`` (None: no readable plan)."""
+    kept = _kept(name)
+    return None if kept is None else kept["numba"]
+
+
+def load(name: str) -> list[tuple] | None:
+    """The plan ``name``'s kernels; None when there is none, or it was recorded with
+    another version of numba (which may compile other helpers, or type arguments
+    otherwise: a worker would compile kernels that nobody calls)."""
+    import numba
+
+    kept = _kept(name)
+    if kept is None or kept["numba"] != numba.__version__:
+        return None
+    return kept["kernels"]
+
+
+def _index_of(module: str, name: str) -> Path | None:
+    """Where numba keeps the index of kernel ``module.name``'s cached machine code (None:
+    this numba does not say)."""
+    try:
+        kernel = getattr(importlib.import_module(module), name)
+        return Path(kernel._cache._cache_file._index_path)
+    except Exception:
+        return None
 
 
 def needed() -> bool:
-    """Whether a plan would help now: numba's cache folder is known and holds none of the
-    top kernels (:data:`TOPS`: a first run of this source tree)."""
-    folder = os.environ.get("NUMBA_CACHE_DIR")
-    if not folder or not Path(folder).is_dir():
-        return False
-    return not any(next(Path(folder).rglob(f"*{q}-*.nbi"), None) for _, q in TOPS)
+    """Whether a plan would help now: none of the top kernels (:data:`TOPS`) is in
+    numba's kernel cache yet (a first run of this source tree); False when numba does not
+    say where its cache is."""
+    paths = [_index_of(*top) for top in TOPS]
+    return all(p is not None and not p.exists() for p in paths)
 
 
-def compile_plan(name: str) -> int:
+def compile_plan(name: str, stop=None) -> int:
     """Compile plan ``name`` from its end (the leaves first), each kernel saved in the
     kernel cache or loaded from it where another process saved it first; the top kernels
-    (:data:`TOPS`) left to the process that flies the command.  Returns how many entries
-    were compiled or loaded (0: no plan)."""
+    (:data:`TOPS`) left to the process that flies the command.  ``stop()`` (optional),
+    asked before each kernel: True gives up (the command is done).  Returns how many
+    entries were compiled or loaded (0: no plan)."""
     plan = load(name) or []
     done = 0
     for module, qualname, types in reversed(plan):
         if (module, qualname) in TOPS:
             continue
+        if stop is not None and stop():
+            break
         try:
             kernel = getattr(importlib.import_module(module), qualname)
             kernel.compile(types)

@@ -224,21 +224,36 @@ def run_units(fn: Callable, args: list, jobs: int = 1, progress: Callable | None
     else:
         client, cluster, _ = _start_client(None, jobs)
         own = (client, cluster)
+    stop = warm = None  # (the future held: one let go is cancelled)
     try:
-        warm = None  # (held: a future let go is cancelled)
-        if plan and address is None and jobs >= 2 and len(todo) > 1 and kernel_plan.needed():
-            warm = client.submit(kernel_plan.compile_plan, plan, key=f"kernel-plan-{plan}",
-                                 pure=False, priority=1)
+        if plan and address is None and kernel_plan.needed():  # (local workers: 2 or more)
+            from uuid import uuid4
+
+            from distributed import Event
+
+            stop = Event(f"kernel-plan-{plan}-{uuid4().hex}", client=client)
+            warm = client.submit(_compile_plan, plan, stop.name, key=stop.name, pure=False,
+                                 priority=1)
         futs = {client.submit(fns[i], args[i], key=f"{fns[i].__name__}-{keys[i]}",
                               pure=False): i for i in todo}
         for fut in as_completed(futs):
             done(futs[fut], fut.result())
-        del warm
     finally:
+        if stop is not None:  # (the plan given up at its next kernel, if still going)
+            stop.set()
+            del warm
         if own is not None:
             own[0].close()
             own[1].close()
     return out
+
+
+def _compile_plan(plan: str, stop: str) -> int:
+    """A worker's :func:`fednav.campaign.kernel_plan.compile_plan`, given up when the Dask
+    event ``stop`` is set (the units done)."""
+    from distributed import Event
+
+    return kernel_plan.compile_plan(plan, stop=Event(stop).is_set)
 
 
 #: Signals a terminal, a job manager or ``kill`` sends to stop a campaign: the local
