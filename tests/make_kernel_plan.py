@@ -11,24 +11,38 @@ import sys
 import tempfile
 from pathlib import Path
 
-#: The command each plan records (``fednav`` arguments; ``OUT``: a fresh output folder).
-COMMANDS = {"paper002": ["reproduce", "002", "--runs", "1", "--jobs", "1", "--fresh",
-                         "--out", "OUT"]}
+ROOT = Path(__file__).resolve().parents[1]
+#: Per plan: the ``fednav`` commands that make its inputs, then the command it records
+#: (``OUT``: a fresh folder; ``EXAMPLES``: the clone's examples).
+COMMANDS = {
+    "paper002": ([], ["reproduce", "002", "--runs", "1", "--jobs", "1", "--fresh", "--out",
+                      "OUT/run"]),
+    # the README's second command: a simulated car drive processed from its files
+    "process-csv": ([["simulate", "EXAMPLES/car-drive.yaml", "--out", "OUT/sim"]],
+                    ["process", "csv", "--imu", "OUT/sim/imu.csv", "--gnss", "OUT/sim/gnss.csv",
+                     "--velocity", "OUT/sim/velocity.csv", "--ref", "OUT/sim/reference.csv",
+                     "--config", "OUT/sim/process.yaml", "--smooth", "--out", "OUT/processed"]),
+}
 
 
 def run_command(name: str, out: Path):
-    """A function that runs plan ``name``'s command in this process."""
+    """Make plan ``name``'s inputs under ``out`` and return a function that runs its
+    command in this process."""
     from typer.testing import CliRunner
 
     from fednav.cli import app
 
-    args = [str(out) if a == "OUT" else a for a in COMMANDS[name]]
-
-    def run():
+    def invoke(args):
+        args = [a.replace("OUT", str(out)).replace("EXAMPLES", str(ROOT / "examples"))
+                for a in args]
         res = CliRunner().invoke(app, args)
         if res.exit_code != 0:
             raise RuntimeError(f"fednav {' '.join(args)} failed: {res.output[-500:]}")
-    return run
+
+    setup, command = COMMANDS[name]
+    for args in setup:
+        invoke(args)
+    return lambda: invoke(command)
 
 
 def main() -> None:
@@ -41,7 +55,7 @@ def main() -> None:
     from fednav.campaign import kernel_plan
 
     with tempfile.TemporaryDirectory() as tmp:
-        plan = kernel_plan.record(run_command(sys.argv[1], Path(tmp) / "out"))
+        plan = kernel_plan.record(run_command(sys.argv[1], Path(tmp)))
     print(kernel_plan.write(sys.argv[1], plan), f"({len(plan)} kernels)")
 
 

@@ -19,35 +19,37 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.mark.slow
-def test_the_plan_is_what_its_command_compiles(tmp_path):
-    """Recorded again on an empty kernel cache, the paper-002 plan is the one kept (else
-    it is stale: ``python tests/make_kernel_plan.py paper002``)."""
+@pytest.mark.parametrize("name", ["paper002", "process-csv"])
+def test_the_plan_is_what_its_command_compiles(tmp_path, name):
+    """Recorded again on an empty kernel cache, each plan is the one kept (else it is
+    stale: ``python tests/make_kernel_plan.py NAME``)."""
+    import numba
+
     cache = tmp_path / "cache"
     cache.mkdir()
     code = ("import pickle, sys\n"
             "sys.path.insert(0, sys.argv[1])\n"
             "from make_kernel_plan import run_command\n"
             "from fednav.campaign import kernel_plan\n"
-            "plan = kernel_plan.record(run_command('paper002', __import__('pathlib')"
-            ".Path(sys.argv[2])))\n"
-            "open(sys.argv[3], 'wb').write(pickle.dumps(plan))\n")
+            "plan = kernel_plan.record(run_command(sys.argv[2], __import__('pathlib')"
+            ".Path(sys.argv[3])))\n"
+            "open(sys.argv[4], 'wb').write(pickle.dumps(plan))\n")
     out = tmp_path / "plan.pkl"
-    subprocess.run([sys.executable, "-c", code, str(ROOT / "tests"), str(tmp_path / "o"),
-                    str(out)], check=True, env=dict(os.environ, NUMBA_CACHE_DIR=str(cache)))
-    import numba
-
+    subprocess.run([sys.executable, "-c", code, str(ROOT / "tests"), name,
+                    str(tmp_path / "o"), str(out)], check=True,
+                   env=dict(os.environ, NUMBA_CACHE_DIR=str(cache)))
     fresh = pickle.loads(out.read_bytes())
-    version = kernel_plan.recorded_with("paper002")
-    assert version is not None, "no paper002 plan (python tests/make_kernel_plan.py paper002)"
+    version = kernel_plan.recorded_with(name)
+    assert version is not None, f"no {name} plan (python tests/make_kernel_plan.py {name})"
     if version != numba.__version__:  # (the plan is not used: load() gives None)
-        pytest.skip(f"the paper002 kernel plan was recorded with numba {version}, this is "
+        pytest.skip(f"the {name} kernel plan was recorded with numba {version}, this is "
                     f"{numba.__version__}, so it is not used: record it again "
                     f"(tests/make_kernel_plan.py)")
-    kept = kernel_plan.load("paper002")
+    kept = kernel_plan.load(name)
     gone = [e[:2] for e in kept if e not in fresh]
     new = [e[:2] for e in fresh if e not in kept]
-    assert fresh == kept, (f"the paper002 kernel plan is stale (run python tests/"
-                           f"make_kernel_plan.py paper002 on an empty NUMBA_CACHE_DIR): "
+    assert fresh == kept, (f"the {name} kernel plan is stale (run python tests/"
+                           f"make_kernel_plan.py {name} on an empty NUMBA_CACHE_DIR): "
                            f"not compiled any more {gone}, not in the plan {new}")
     assert len(kept) > 50 and ("fednav.navigator.engine", "run_epochs") in {
         e[:2] for e in kept}
@@ -89,6 +91,10 @@ def test_a_plan_is_needed_until_the_top_kernel_is_in_the_cache(tmp_path, monkeyp
     assert not kernel_plan.needed()
     monkeypatch.setattr(kernel_plan, "_index_of", lambda module, name: None)
     assert not kernel_plan.needed()  # (numba does not say: no plan)
+    monkeypatch.setattr(kernel_plan, "_index_of", lambda module, name: tmp_path / "none")
+    seen = []
+    assert kernel_plan.record(lambda: seen.append(kernel_plan.needed())) == []
+    assert seen == [False] and kernel_plan.needed()  # (none while a plan is recorded)
 
 
 def _square(x):
@@ -136,3 +142,40 @@ def test_paper_002_hands_its_plan_to_the_campaign(monkeypatch):
     assert seen["plan"] == "paper002"
     pyproject = (ROOT / "pyproject.toml").read_text()
     assert '"campaign/kernel_plans/*.pkl"' in pyproject  # (in the wheel too)
+
+
+@pytest.mark.parametrize("needed", [True, False])
+def test_a_one_process_command_has_the_plan_compiled_beside_it(monkeypatch, needed):
+    monkeypatch.setattr(kernel_plan, "needed", lambda: needed)
+    monkeypatch.setattr(kernel_plan, "load", lambda name: [("m", "k", ())])
+    with kernel_plan.beside("process-csv") as proc:
+        if needed and len(os.sched_getaffinity(0)) > 1:
+            assert proc is not None and proc.args[0] == sys.executable
+            assert "compile_plan('process-csv')" in proc.args[-1]
+        else:
+            assert proc is None
+    if proc is not None:  # (stopped, or done, when the command is)
+        assert proc.poll() is not None
+
+
+def test_fednav_process_compiles_its_plan_beside_it(tmp_path, monkeypatch):
+    """``fednav process`` reads and flies with the process-csv plan beside it."""
+    from contextlib import contextmanager
+
+    from typer.testing import CliRunner
+
+    from fednav.cli import app
+
+    entered = []
+
+    @contextmanager
+    def beside(name):
+        entered.append(name)
+        yield None
+
+    monkeypatch.setattr(kernel_plan, "beside", beside)
+    r = CliRunner().invoke(app, ["process", "csv", "--imu", str(tmp_path / "missing.csv"),
+                                 "--gnss", str(tmp_path / "g.csv"), "--out",
+                                 str(tmp_path / "out")])
+    assert r.exit_code == 2 and "not found" in r.output  # (refused inside the block)
+    assert entered == ["process-csv"] and kernel_plan.load("process-csv")

@@ -437,11 +437,14 @@ def _noise_option(cfg, noise: str):
 def _run_process(read, imu, gnss, velocity, ref, smooth, out, config, output_rate,
                  files: dict | None = None, force: bool = False, fmt: str = "csv",
                  export: str | None = None, noise: str | None = None) -> None:
+    from .campaign import kernel_plan
     from .core.drawer import Drawer
 
     out = _output_folder(out)
-    # forked first: it loads matplotlib and the plots' modules while the data are read
-    with Drawer(preload=("fednav.process.output",)) as drawer:
+    # forked first: it loads matplotlib and the plots' modules while the data are read;
+    # on a first run a second process compiles the kernels from the leaves up
+    with Drawer(preload=("fednav.process.output",)) as drawer, \
+            kernel_plan.beside("process-csv"):
         from .core.atomic import clear_results
         from .core.config import load_model
         from .navigator.system import System

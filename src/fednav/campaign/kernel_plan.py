@@ -23,7 +23,9 @@ compiles what it calls itself).
 from __future__ import annotations
 
 import importlib
+import os
 import pickle
+from contextlib import contextmanager
 from pathlib import Path
 
 #: Where the plans are kept.
@@ -32,6 +34,9 @@ PLANS = Path(__file__).resolve().parent / "kernel_plans"
 #: worker that flies it: they hold every callee, and the plan's worker would only compile
 #: them a second time).
 TOPS = {("fednav.navigator.engine", "run_epochs")}
+#: True while :func:`record` runs (no plan compiled beside the command it records: the
+#: command would load what the plan compiled, and the record would miss it).
+_recording = False
 
 
 def record(run) -> list[tuple]:
@@ -60,11 +65,14 @@ def record(run) -> list[tuple]:
         def on_end(self, ev):
             pass
 
+    global _recording
     listener = Listener()
     event.register("numba:compile", listener)
+    _recording = True
     try:
         run()
     finally:
+        _recording = False
         event.unregister("numba:compile", listener)
     seen: set = set()
     return [e for e in order if not (e in seen or seen.add(e))]
@@ -110,7 +118,9 @@ def _index_of(module: str, name: str) -> Path | None:
 def needed() -> bool:
     """Whether a plan would help now: none of the top kernels (:data:`TOPS`) is in
     numba's kernel cache yet (a first run of this source tree); False when numba does not
-    say where its cache is."""
+    say where its cache is, or while a plan is recorded."""
+    if _recording:
+        return False
     paths = [_index_of(*top) for top in TOPS]
     return all(p is not None and not p.exists() for p in paths)
 
@@ -135,6 +145,31 @@ def compile_plan(name: str, stop=None) -> int:
             continue
         done += 1
     return done
+
+
+@contextmanager
+def beside(name: str):
+    """While the block runs, a second process compiles plan ``name`` (on a first run:
+    :func:`needed`; and only where this process may use more than one CPU): for a command
+    that flies in one process.  The process is stopped when the block ends (numba writes
+    each cached kernel whole, under a temporary name first)."""
+    import subprocess
+    import sys
+
+    proc = None
+    cpus = (len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
+            else os.cpu_count() or 1)
+    if cpus > 1 and load(name) and needed():
+        proc = subprocess.Popen(
+            [sys.executable, "-c", "from fednav.campaign.kernel_plan import compile_plan; "
+                                   f"compile_plan({name!r})"],
+            stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        yield proc
+    finally:
+        if proc is not None and proc.poll() is None:
+            proc.terminate()
+            proc.wait()
 
 
 def write(name: str, plan: list[tuple]) -> Path:
