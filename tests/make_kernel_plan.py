@@ -7,6 +7,7 @@ Run it after a change of the engine's records or kernels' arguments (the test su
 """
 
 import os
+import pickle
 import sys
 import tempfile
 from pathlib import Path
@@ -46,17 +47,27 @@ def run_command(name: str, out: Path):
 
 
 def main() -> None:
-    if len(sys.argv) != 2 or sys.argv[1] not in COMMANDS:
-        sys.exit(f"usage: python tests/make_kernel_plan.py {{{','.join(COMMANDS)}}}")
-    cache = os.environ.get("NUMBA_CACHE_DIR")
-    if not cache or any(Path(cache).rglob("*.nbi")):
-        sys.exit("set NUMBA_CACHE_DIR to an empty folder (a plan is what a first run "
-                 "compiles)")
+    """``make_kernel_plan.py NAME [--to FILE]``: record plan NAME and keep it (or, with
+    ``--to``, pickle the kernels to FILE: the test suite's check)."""
+    args = sys.argv[1:]
+    to = None
+    if len(args) == 3 and args[1] == "--to":
+        args, to = args[:1], Path(args[2])
+    if len(args) != 1 or args[0] not in COMMANDS:
+        sys.exit(f"usage: python tests/make_kernel_plan.py {{{','.join(COMMANDS)}}} "
+                 f"[--to FILE]")
+    from fednav import _kernel_cache
     from fednav.campaign import kernel_plan
 
+    if not os.environ.get("NUMBA_CACHE_DIR") or not _kernel_cache.cold():
+        sys.exit("set NUMBA_CACHE_DIR to an empty folder (a plan is what a first run "
+                 "compiles)")
     with tempfile.TemporaryDirectory() as tmp:
-        plan = kernel_plan.record(run_command(sys.argv[1], Path(tmp)))
-    print(kernel_plan.write(sys.argv[1], plan), f"({len(plan)} kernels)")
+        plan = kernel_plan.record(run_command(args[0], Path(tmp)))
+    if to is not None:
+        to.write_bytes(pickle.dumps(plan))
+        return
+    print(kernel_plan.write(args[0], plan), f"({len(plan)} kernels)")
 
 
 if __name__ == "__main__":

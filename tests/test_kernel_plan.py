@@ -27,16 +27,9 @@ def test_the_plan_is_what_its_command_compiles(tmp_path, name):
 
     cache = tmp_path / "cache"
     cache.mkdir()
-    code = ("import pickle, sys\n"
-            "sys.path.insert(0, sys.argv[1])\n"
-            "from make_kernel_plan import run_command\n"
-            "from fednav.campaign import kernel_plan\n"
-            "plan = kernel_plan.record(run_command(sys.argv[2], __import__('pathlib')"
-            ".Path(sys.argv[3])))\n"
-            "open(sys.argv[4], 'wb').write(pickle.dumps(plan))\n")
     out = tmp_path / "plan.pkl"
-    subprocess.run([sys.executable, "-c", code, str(ROOT / "tests"), name,
-                    str(tmp_path / "o"), str(out)], check=True,
+    subprocess.run([sys.executable, str(ROOT / "tests" / "make_kernel_plan.py"), name,
+                    "--to", str(out)], check=True,
                    env=dict(os.environ, NUMBA_CACHE_DIR=str(cache)))
     fresh = pickle.loads(out.read_bytes())
     version = kernel_plan.recorded_with(name)

@@ -74,8 +74,7 @@ def record(run) -> list[tuple]:
     finally:
         _recording = False
         event.unregister("numba:compile", listener)
-    seen: set = set()
-    return [e for e in order if not (e in seen or seen.add(e))]
+    return list(dict.fromkeys(order))  # (each kernel once, in order)
 
 
 def _kept(name: str) -> dict | None:
