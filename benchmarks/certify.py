@@ -17,7 +17,8 @@ The studies (in this process, seeds 1..N; docs/certificate.md quotes their outpu
   land-all modes, with their R floor in the nominal R's metric (``R >= r_floor
   R_nominal``; the floor of ``r_floor`` times the smallest eigenvalue it replaced gave
   position NEES of tens to thousands with a GNSS receiver);
-* ``pf`` — the particle filter at 1000 (the registered default), 4000 and 16000 particles;
+* ``pf`` — the particle filter at 1000 (its default), 4000 and 16000 particles, without
+  and with its progressive correction (``filter.pf``);
 * ``airdata`` — the wind constraint with air data every 0.1 s and every 1 s (each sample
   used once), with one local filter and with two (the constraint in each with R / beta);
 * ``baro`` — the barometer with its lever arm, as a filter measurement only and with the
@@ -101,23 +102,29 @@ def study_adaptive(runs: int) -> None:
 
 
 def study_pf(runs: int) -> None:
-    from fednav.filters import registry
-    from fednav.filters.particle import ParticleFilter
+    """The particle filter at 1000 (its default), 4000 and 16000 particles, without and
+    with its progressive correction (``filter.pf``; on by default since 2026-11-30)."""
+    base = cf.system_for
+    for progressive in (False, True):
+        for n in (1000, 4000, 16000):
+            def system_for(mode, filter_type, form, data, _n=n, _p=progressive):
+                s = base(mode, filter_type, form, data)
+                pf = s.filter.pf.model_copy(update={"particles": _n,
+                                                    "progressive_correction": _p})
+                return s.model_copy(update={"filter": s.filter.model_copy(
+                    update={"pf": pf})})
 
-    for n in (1000, 4000, 16000):
-        cls = type(f"PF{n}", (ParticleFilter,), {"__init__": lambda self, x0, P0, name="pf",
-                                                  _n=n, **kw: ParticleFilter.__init__(
-                                                      self, x0, P0, name,
-                                                      **{"n_particles": _n, **kw})})
-        registry.register(f"pf{n}", cls)
-        try:
-            for m in ("gnss", "baro", "star"):
-                t0 = time.perf_counter()
-                s = _summary(_mode(m), f"pf{n}", runs, duration=cf.QUICK_DURATION_S)
-                print(f"pf {n:6d} particles {m:6s} ({time.perf_counter() - t0:.0f} s, "
-                      f"{cf.QUICK_DURATION_S:g} s flights) {s}", flush=True)
-        finally:
-            registry.unregister(f"pf{n}")
+            cf.system_for = system_for
+            try:
+                for m in ("gnss", "baro", "star"):
+                    t0 = time.perf_counter()
+                    s = _summary(_mode(m), "pf", runs, duration=cf.QUICK_DURATION_S)
+                    print(f"pf {n:6d} particles, progressive correction "
+                          f"{'on ' if progressive else 'off'} {m:6s} "
+                          f"({time.perf_counter() - t0:.0f} s, "
+                          f"{cf.QUICK_DURATION_S:g} s flights) {s}", flush=True)
+            finally:
+                cf.system_for = base
 
 
 def study_airdata(runs: int) -> None:

@@ -86,6 +86,11 @@ WALK = {
     "filter.fdi_recovery": ("named", 3),
     "filter.fdi_readmit_s": ("named", 2.0),
     "filter.grid_level": ("named", 2),
+    "filter.pf.particles": ("named", 500),
+    "filter.pf.resample_threshold": ("named", 0.8),
+    "filter.pf.roughening": ("named", 0.2),
+    "filter.pf.progressive_correction": ("named", False),
+    "filter.pf.seed": ("named", 3),
     "filter.accel_bias": ("acts", "gauss_markov"),
     "filter.q_adaptation": ("acts", {"time_constant_s": 10.0, "max_scale": 100.0}),
     "filter.states": ("refused", ["gyro_scale"]),  # (it needs imu.gyro_scale_ppm)

@@ -458,3 +458,19 @@ def test_a_low_nis_where_the_filter_fills_its_innovations_is_said_so():
     assert "likelier cause for baro" in said and "innovations of gnss" in said
     assert "likelier cause)" in kept_because({"baro": 0.02}, System(), own)
     assert "consistent" in kept_because({"baro": 1.0}, System(), own)
+
+
+def test_the_kept_figures_line_has_no_empty_statistics():
+    """A filter whose covariance the identification cannot use (a particle filter) keeps
+    the given figures: the console's line says why, without an empty ': ;' where the
+    NIS would be."""
+    from fednav.process.identify import noise_lines
+
+    s = {"prior": {}, "identified": {}, "nis_per_dof_before": {},
+         "nis_per_dof_after": {}, "accepted": False, "passes": 1,
+         "why_not": "local filter type pf: its covariance is not a Kalman filter's"}
+    (line,) = noise_lines(s)
+    assert ": ;" not in line and line.endswith("Kalman filter's; noise: as-given skips "
+                                               "this check)")
+    s["nis_per_dof_before"] = {"gnss": 1.5}
+    assert "Kalman filter's: gnss 1.50; noise" in noise_lines(s)[0]

@@ -78,8 +78,10 @@ def make_filter(name: str, x0, P0, common: dict | None = None, form: str = "stan
 
     ``options`` go to the filter's constructor as they are (an option it does not take is
     an error); ``common`` are settings a system gives every filter (the sigma-point
-    ``alpha``, ``beta``, ``kappa``, the sparse grid's ``level`` ...): each goes to the
-    filters whose constructor takes it.  ``form``: ``standard`` (the covariance) or
+    ``alpha``, ``beta``, ``kappa``, the sparse grid's ``level``, the particle filter's
+    ``n_particles``, ``resample_threshold``, ``roughening``, ``progressive`` and ``rng``):
+    each goes to the filters whose constructor takes it (a filter registered later whose
+    constructor takes one of these names receives it).  ``form``: ``standard`` (the covariance) or
     ``square_root`` (its Cholesky factor, :mod:`fednav.filters.square_root`)."""
     cls = filter_class(name, form)
     if common:

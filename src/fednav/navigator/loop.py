@@ -110,10 +110,14 @@ def build_federation(system, names: list[str], P0: np.ndarray, n: int) -> Federa
     """The local filters (one per name) and the master of ``system``'s federated filter."""
     f = system.filter
 
-    common = {"alpha": f.alpha, "beta": f.beta, "kappa": f.kappa, "level": f.grid_level}
+    common = {"alpha": f.alpha, "beta": f.beta, "kappa": f.kappa, "level": f.grid_level,
+              **f.pf.options()}
+    # each particle filter a random stream of its own (the master's the last)
+    streams = iter(np.random.SeedSequence(f.pf.seed).spawn(len(names) + 1))
 
     def one(ftype, what, form):
-        flt = make_filter(ftype, np.zeros(n), P0, common, form=form)
+        rng = np.random.default_rng(next(streams))
+        flt = make_filter(ftype, np.zeros(n), P0, {**common, "rng": rng}, form=form)
         flt.name = f"{ftype} {what}"
         return flt
 

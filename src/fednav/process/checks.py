@@ -19,6 +19,7 @@ from ..core import attitude as att
 from ..core import earth
 from ..core import mounting as mt
 from ..core.samples import held_integral, midpoints
+from ..filters.particle import PROGRESSIVE_ESS
 from ..io.data import DataError, FixData, ImuData
 from ..sensors import registry
 from ..sensors.imu import FIGURES
@@ -124,10 +125,22 @@ _BY_TYPE = {"alpha": ({"ukf", "sukf", "cukf", "raukf"}, "a sigma-point filter (u
 def _conditional(cfg) -> list[str]:
     """Keys that act only with another setting, given without it."""
     f, out = cfg.filter, []
-    types = {f.type} | {lc.type for lc in f.locals.values() if lc.type is not None}
+    types = f.types()
     for key, (need, what) in _BY_TYPE.items():
         if key in f.model_fields_set and not types & need:
             out.append(f"filter.{key} (acts with {what})")
+    if "pf" not in types:
+        out += [f"filter.pf.{k} (acts with a particle filter: filter.type or a local "
+                f"filter's type pf)" for k in sorted(f.pf.model_fields_set)]
+    elif f.pf.roughening > 0.0 and f.pf.resample_threshold == 0.0:
+        out.append("filter.pf.roughening (acts after a resampling: resample_threshold 0 "
+                   "never resamples)")
+    elif (f.pf.roughening > 0.0 and f.pf.progressive_correction
+          and f.pf.resample_threshold <= PROGRESSIVE_ESS):
+        out.append(f"filter.pf.roughening (acts after a resampling: the progressive "
+                   f"correction keeps at least {PROGRESSIVE_ESS:g} of the particles "
+                   f"effective, so a resample_threshold of {PROGRESSIVE_ESS:g} or less "
+                   f"never resamples)")
     if "fixed_factors" in f.model_fields_set and f.sharing != "fixed":
         out.append("filter.fixed_factors (acts with filter.sharing: fixed)")
     if f.fdi_alpha is None:

@@ -156,9 +156,9 @@ def noise_lines(s: dict) -> list[str]:
     nis = ", ".join(f"{k} {v:.2f} -> {s['nis_per_dof_after'].get(k, float('nan')):.2f}"
                     for k, v in s["nis_per_dof_before"].items())
     if not s["accepted"] and s["passes"] == 1:  # (consistent: nothing identified)
-        return [f"IMU noise: the given figures flown ({s['why_not']}: "
-                + ", ".join(f"{k} {v:.2f}" for k, v in s["nis_per_dof_before"].items())
-                + "; noise: as-given skips this check)"]
+        nis = ", ".join(f"{k} {v:.2f}" for k, v in s["nis_per_dof_before"].items())
+        return [f"IMU noise: the given figures flown ({s['why_not']}"
+                + (f": {nis}" if nis else "") + "; noise: as-given skips this check)"]
     if s["accepted"]:
         head = "IMU noise identified from the recording"
     else:

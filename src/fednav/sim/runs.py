@@ -153,6 +153,11 @@ def run_mode(scn: Scenario, aiding: list[str], data: RunData, mode: str = "",
     system = scn.system_for(ModeConfig(name=mode or "mode", aiding=list(aiding),
                                        filter=filter_type, delay_compensation=delay,
                                        constraint=constraint))
+    if "pf" in system.filter.types():  # the particle filters' draws differ run to run
+        pf = system.filter.pf
+        pf = pf.model_copy(update={"seed": [*np.atleast_1d(pf.seed).tolist(), data.seed]})
+        system = system.model_copy(update={"filter": system.filter.model_copy(
+            update={"pf": pf})})
     feed = feed_order(aiding, system)
     need = system.roles().get("constraint")
     if need is not None and need not in data.series:
