@@ -9,6 +9,8 @@ SINS/CNS/SAR with federated UKF local filters):
   ``filterpy.kalman.UnscentedKalmanFilter`` with the same sigma-point settings, the same
   process (fednav's compiled error transition, called per sigma point as FilterPy does)
   and the same measurement functions — measured in this invocation; and the ratio;
+* FilterPy's 14 400 bare 16-state UKF steps (a linear process, three position-like
+  measurements), and the campaign's wall time as a ratio to them (issue 39's yardstick);
 * the wall time of an N-run campaign with the default local Dask workers, the CPU seconds
   of its parent process and of its workers, its serial parts (before the workers start,
   after the last unit), and the import time of the command line.
@@ -102,6 +104,28 @@ def filterpy_replay(steps, alpha=1e-3, beta=2.0, kappa=0.0):
     return total
 
 
+def filterpy_bare(steps: int = 14_400, n: int = 16, m: int = 3) -> float:
+    """Seconds FilterPy's UKF takes for ``steps`` bare steps (a predict and an update
+    each) of an ``n``-state filter with a linear process and ``m`` position-like
+    measurements: issue 39's yardstick for campaign throughput (a 1000-run
+    ``fednav reproduce 002`` at most 17.6 times these 14 400 steps)."""
+    from filterpy.kalman import MerweScaledSigmaPoints
+    from filterpy.kalman import UnscentedKalmanFilter as FPUKF
+
+    rng = np.random.default_rng(0)
+    F = np.eye(n) + 0.01 * np.diag(np.ones(n - 1), 1)
+    f = FPUKF(dim_x=n, dim_z=m, dt=1.0,
+              points=MerweScaledSigmaPoints(n, alpha=1e-3, beta=2.0, kappa=0.0),
+              fx=lambda x, dt: F @ x, hx=lambda x: x[:m])
+    f.Q, f.R = 1e-4 * np.eye(n), np.eye(m)
+    z = rng.standard_normal((steps, m))
+    t0 = time.perf_counter()
+    for k in range(steps):
+        f.predict()
+        f.update(z[k])
+    return time.perf_counter() - t0
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--runs", type=int, default=20, help="runs of the campaign timing")
@@ -139,6 +163,10 @@ def main():
         t = time.perf_counter() - t0
         got = json.loads(cpu.read_text())
     (parent, workers), m = got["cpu"], got["marks"]
+    t_bare = min(filterpy_bare() for _ in range(2))
+    print(f"FilterPy, 14 400 bare 16-state UKF steps: {t_bare:.2f} s (best of 2); the "
+          f"campaign below / these = x{t / t_bare:.1f} (issue 39: at most x17.6 for "
+          f"--runs 1000)")
     print(f"fednav reproduce 002 --runs {args.runs} --jobs {jobs}: {t:.1f} s wall "
           f"(Tables 1-4, includes start-up and the 3 Table-4 runs); CPU: parent "
           f"{parent:.1f} s (imports, dispatch, storing runs, tables, plot), workers "
