@@ -132,15 +132,13 @@ def _conditional(cfg) -> list[str]:
     if "pf" not in types:
         out += [f"filter.pf.{k} (acts with a particle filter: filter.type or a local "
                 f"filter's type pf)" for k in sorted(f.pf.model_fields_set)]
-    elif f.pf.roughening > 0.0 and f.pf.resample_threshold == 0.0:
-        out.append("filter.pf.roughening (acts after a resampling: resample_threshold 0 "
-                   "never resamples)")
-    elif (f.pf.roughening > 0.0 and f.pf.progressive_correction
-          and f.pf.resample_threshold <= PROGRESSIVE_ESS):
-        out.append(f"filter.pf.roughening (acts after a resampling: the progressive "
-                   f"correction keeps at least {PROGRESSIVE_ESS:g} of the particles "
-                   f"effective, so a resample_threshold of {PROGRESSIVE_ESS:g} or less "
-                   f"never resamples)")
+    elif f.pf.roughening > 0.0 and (f.pf.resample_threshold == 0.0 or (
+            f.pf.progressive_correction and f.pf.resample_threshold <= PROGRESSIVE_ESS)):
+        # (the progressive correction keeps at least PROGRESSIVE_ESS of them effective)
+        out.append(f"filter.pf.roughening (acts after a resampling, which a "
+                   f"resample_threshold of {f.pf.resample_threshold:g} never starts"
+                   + (" with progressive_correction" if f.pf.resample_threshold else "")
+                   + ")")
     if "fixed_factors" in f.model_fields_set and f.sharing != "fixed":
         out.append("filter.fixed_factors (acts with filter.sharing: fixed)")
     if f.fdi_alpha is None:
